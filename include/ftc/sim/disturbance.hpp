@@ -1,0 +1,37 @@
+#pragma once
+// Additive disturbance Δ(t) on the accelerations (SPEC §2): per axis a sum of sinusoids
+// Δ_i(t) = Σ amplitude · shape(frequency · t + phase), shape ∈ {sin, cos}, in rad/s².
+#include <string>
+#include <vector>
+
+#include "ftc/sim/input_error.hpp"
+#include "ftc/sim/types.hpp"
+
+namespace ftc::sim {
+
+enum class Shape { sin, cos };
+const char* to_string(Shape s);
+
+struct DisturbanceTerm {
+  int axis = 1;            // 1-based axis index, 1..3
+  Shape shape = Shape::sin;
+  double amplitude = 0.0;  // rad/s²
+  double frequency = 0.0;  // rad/s
+  double phase = 0.0;      // rad
+
+  std::vector<FieldError> validate(const std::string& path) const;
+};
+
+class Disturbance {
+ public:
+  Disturbance() = default;
+  explicit Disturbance(std::vector<DisturbanceTerm> terms);
+
+  Vec3 operator()(double t) const;
+  const std::vector<DisturbanceTerm>& terms() const { return terms_; }
+
+ private:
+  std::vector<DisturbanceTerm> terms_;
+};
+
+}  // namespace ftc::sim

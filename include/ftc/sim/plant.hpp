@@ -1,0 +1,32 @@
+#pragma once
+// The plant concept of the paper (eq. 1): a second-order system
+//
+//     dX1/dt = X2
+//     dX2/dt = f(X) + G(X) u + Δ(t)
+//
+// with X1, X2 in R^n and u in R^m the applied actuator outputs. The simulator and the
+// model-based controllers see a plant only through this interface.
+#include <string>
+
+#include "ftc/sim/types.hpp"
+
+namespace ftc::sim {
+
+class Plant {
+ public:
+  virtual ~Plant() = default;
+
+  int n() const { return kAxes; }
+  int m() const { return kActuators; }
+
+  // Drift term f(X), rad/s².
+  virtual Vec3 f(const State& x) const = 0;
+  // Input matrix G(X), rad/s² per unit of actuator output.
+  virtual Mat34 G(const State& x) const = 0;
+  // Moore–Penrose right inverse G⁺ = Gᵀ(GGᵀ)⁻¹, so that G G⁺ = I_n.
+  virtual Mat43 G_pinv(const State& x) const = 0;
+
+  virtual std::string model() const = 0;
+};
+
+}  // namespace ftc::sim

@@ -1,0 +1,35 @@
+#pragma once
+// Element-wise helpers of sliding-mode control.
+//
+//   sig^a(x) = |x|^a sign(x)          (sig^a(0) = 0)
+//   sigm(s)  = tanh(θ s / 2)          (= (e^{θs} - 1)/(e^{θs} + 1), the paper's smooth sign, but
+//                                      without overflow for large θ s)
+//   C(X)     = c2 sig^α2(X2) + c1 sig^α1(X1)      the full-order surface term (eq. 8)
+#include <cmath>
+
+#include "ftc/sim/types.hpp"
+
+namespace ftc::sim {
+
+inline double sig(double x, double a) {
+  if (x == 0.0) return 0.0;
+  return std::copysign(std::pow(std::abs(x), a), x);
+}
+
+inline Vec3 sig(const Vec3& x, double a) {
+  return Vec3(sig(x[0], a), sig(x[1], a), sig(x[2], a));
+}
+
+inline Vec3 sigm(const Vec3& s, double theta) {
+  const double k = 0.5 * theta;
+  return Vec3(std::tanh(k * s[0]), std::tanh(k * s[1]), std::tanh(k * s[2]));
+}
+
+inline Vec3 fosm_term(const Vec3& X1, const Vec3& X2, double c1, double c2, double alpha1,
+                      double alpha2) {
+  Vec3 c = c2 * sig(X2, alpha2);
+  c += c1 * sig(X1, alpha1);
+  return c;
+}
+
+}  // namespace ftc::sim

@@ -1,0 +1,12 @@
+#pragma once
+// Output files: written to a temporary file in the same directory and renamed into place, so a
+// reader never sees a half-written file and a crash leaves the previous version intact.
+#include <filesystem>
+#include <string_view>
+
+namespace ftc::tune {
+
+// Creates parent directories as needed. Throws std::runtime_error on I/O failure.
+void write_file_atomic(const std::filesystem::path& path, std::string_view content);
+
+}  // namespace ftc::tune

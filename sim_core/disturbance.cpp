@@ -1,0 +1,32 @@
+#include "ftc/sim/disturbance.hpp"
+
+#include <cmath>
+#include <utility>
+
+#include "checks.hpp"
+
+namespace ftc::sim {
+
+std::vector<FieldError> DisturbanceTerm::validate(const std::string& path) const {
+  std::vector<FieldError> errs;
+  detail::check_int_range(errs, path + "/axis", axis, 1, kAxes);
+  detail::check_finite(errs, path + "/amplitude", amplitude);
+  detail::check_finite(errs, path + "/frequency", frequency);
+  detail::check_finite(errs, path + "/phase", phase);
+  return errs;
+}
+
+const char* to_string(Shape s) { return s == Shape::sin ? "sin" : "cos"; }
+
+Disturbance::Disturbance(std::vector<DisturbanceTerm> terms) : terms_(std::move(terms)) {}
+
+Vec3 Disturbance::operator()(double t) const {
+  Vec3 d = Vec3::Zero();
+  for (const DisturbanceTerm& term : terms_) {
+    const double arg = term.frequency * t + term.phase;
+    d[term.axis - 1] += term.amplitude * (term.shape == Shape::sin ? std::sin(arg) : std::cos(arg));
+  }
+  return d;
+}
+
+}  // namespace ftc::sim

@@ -1,0 +1,88 @@
+#include "ftc/sim/faults.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "checks.hpp"
+
+namespace ftc::sim {
+
+const char* to_string(FaultType t) {
+  switch (t) {
+    case FaultType::bias: return "bias";
+    case FaultType::loss_of_effectiveness: return "loss_of_effectiveness";
+    case FaultType::stuck: return "stuck";
+  }
+  return "?";
+}
+
+const char* to_string(FaultProfileType t) {
+  return t == FaultProfileType::abrupt ? "abrupt" : "incipient";
+}
+
+
+double FaultProfile::rho(double tau) const {
+  if (tau < 0.0) return 0.0;
+  if (type == FaultProfileType::abrupt) return 1.0;
+  return 1.0 - std::exp(-rate * tau);
+}
+
+std::vector<FieldError> Fault::validate(const std::string& path) const {
+  std::vector<FieldError> errs;
+  detail::check_int_range(errs, path + "/actuator", actuator, 1, kActuators);
+  detail::check_non_negative(errs, path + "/onset", onset);
+  if (profile.type == FaultProfileType::incipient)
+    detail::check_positive(errs, path + "/profile/rate", profile.rate);
+  switch (type) {
+    case FaultType::bias:
+      detail::check_finite(errs, path + "/offset", offset);
+      detail::check_finite(errs, path + "/amplitude", amplitude);
+      detail::check_finite(errs, path + "/frequency", frequency);
+      detail::check_finite(errs, path + "/phase", phase);
+      break;
+    case FaultType::loss_of_effectiveness:
+      detail::check_range(errs, path + "/fraction", fraction, 0.0, 1.0);
+      break;
+    case FaultType::stuck:
+      detail::check_finite(errs, path + "/value", value);
+      break;
+  }
+  return errs;
+}
+
+FaultSet::FaultSet(std::vector<Fault> faults, std::optional<double> saturation)
+    : faults_(std::move(faults)), saturation_(saturation) {}
+
+FaultEffect FaultSet::effect(double t) const {
+  FaultEffect e;
+  for (const Fault& f : faults_) {
+    const double rho = f.profile.rho(t - f.onset);
+    if (rho == 0.0) continue;
+    const int j = f.actuator - 1;
+    switch (f.type) {
+      case FaultType::bias:
+        e.offset[j] += rho * (f.offset + f.amplitude * std::cos(f.frequency * t + f.phase));
+        break;
+      case FaultType::loss_of_effectiveness:
+        e.gain[j] -= rho * f.fraction;
+        break;
+      case FaultType::stuck:  // δu = value - u_d
+        e.gain[j] -= rho;
+        e.offset[j] += rho * f.value;
+        break;
+    }
+  }
+  return e;
+}
+
+Vec4 FaultSet::apply(const FaultEffect& e, const Vec4& u_d) const {
+  Vec4 u = e.gain.cwiseProduct(u_d) + e.offset;
+  if (saturation_) {
+    const double m = *saturation_;
+    for (int j = 0; j < kActuators; ++j) u[j] = std::clamp(u[j], -m, m);
+  }
+  return u;
+}
+
+}  // namespace ftc::sim

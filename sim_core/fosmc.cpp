@@ -1,0 +1,26 @@
+#include "ftc/sim/fosmc.hpp"
+
+#include "ftc/sim/sliding.hpp"
+#include "checks.hpp"
+
+namespace ftc::sim {
+
+Fosmc::Fosmc(const ControllerConfig& config, const Plant& plant, double sample_time)
+    : config_(detail::checked_config(config, sample_time)), plant_(plant), Ts_(sample_time) {}
+
+Vec4 Fosmc::step(const Measurement& m) {
+  const ControllerConfig& c = config_;
+  const State x = (State() << m.X1, m.X2).finished();
+  const Vec3 fx = m.f ? *m.f : plant_.f(x);
+  const Vec3 C = fosm_term(m.X1, m.X2, c.c1, c.c2, c.alpha1, c.alpha2);
+  const Vec3 sF = m.a + C;
+
+  Vec3 v = fx + C;
+  v += ur_;
+  const Vec4 u = -(plant_.G_pinv(x) * v);
+
+  ur_ += (Ts_ * c.switching_gain) * sigm(sF, c.theta);
+  return u;
+}
+
+}  // namespace ftc::sim

@@ -1,0 +1,32 @@
+#include "ftc/sim/pi_fosmc.hpp"
+
+#include "ftc/sim/sliding.hpp"
+#include "checks.hpp"
+
+namespace ftc::sim {
+
+PiFosmc::PiFosmc(const ControllerConfig& config, const Plant& plant, double sample_time)
+    : config_(detail::checked_config(config, sample_time)), plant_(plant), Ts_(sample_time) {}
+
+// The operations are ordered as in Fosmc::step so that Kp = 1, Ki = 0 reproduces FOSMC bit for
+// bit (x + 0·I = x and 1·sF = sF are exact in IEEE arithmetic).
+Vec4 PiFosmc::step(const Measurement& m) {
+  const ControllerConfig& c = config_;
+  const State x = (State() << m.X1, m.X2).finished();
+  const Vec3 fx = m.f ? *m.f : plant_.f(x);
+  const Vec3 C = fosm_term(m.X1, m.X2, c.c1, c.c2, c.alpha1, c.alpha2);
+  const Vec3 sF = m.a + C;
+  Vec3 sPI = c.Kp * sF;
+  sPI += c.Ki * I_;
+
+  Vec3 v = fx + C;
+  v += (c.Ki / c.Kp) * I_;
+  v += ur_;
+  const Vec4 u = -(plant_.G_pinv(x) * v);
+
+  I_ += Ts_ * sF;
+  ur_ += (Ts_ * c.switching_gain) * sigm(sPI, c.theta);
+  return u;
+}
+
+}  // namespace ftc::sim

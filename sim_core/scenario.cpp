@@ -1,0 +1,59 @@
+#include "ftc/sim/scenario.hpp"
+
+#include <cmath>
+
+#include "checks.hpp"
+
+namespace ftc::sim {
+
+std::vector<FieldError> Scenario::validate(const std::string& path) const {
+  std::vector<FieldError> errs;
+  if (name.empty()) errs.push_back({path + "/name", "must not be empty"});
+  detail::check_positive(errs, path + "/duration", duration);
+  detail::check_positive(errs, path + "/sample_time", sample_time);
+  if (std::isfinite(duration) && std::isfinite(sample_time) && duration > 0 && sample_time > 0) {
+    const double n = std::round(duration / sample_time);
+    if (n < 1 || std::abs(n * sample_time - duration) > 1e-9 * duration)
+      errs.push_back({path + "/duration", "must be a whole multiple of sample_time " +
+                                              detail::fmt_num(sample_time) + " (got " +
+                                              detail::fmt_num(duration) + ")"});
+    else if (n > 1e9)
+      errs.push_back({path + "/duration", "needs more than 1e9 samples"});
+  }
+  detail::check_int_range(errs, path + "/substeps", substeps, 1, 1000);
+  for (int i = 0; i < kStates; ++i)
+    detail::check_finite(errs, path + "/initial_state/" + std::to_string(i), initial_state[i]);
+  for (std::size_t i = 0; i < disturbance.size(); ++i) {
+    auto e = disturbance[i].validate(path + "/disturbance/" + std::to_string(i));
+    errs.insert(errs.end(), e.begin(), e.end());
+  }
+  for (std::size_t i = 0; i < faults.size(); ++i) {
+    auto e = faults[i].validate(path + "/faults/" + std::to_string(i));
+    errs.insert(errs.end(), e.begin(), e.end());
+  }
+  if (saturation) detail::check_positive(errs, path + "/saturation", *saturation);
+  return errs;
+}
+
+Scenario Scenario::paper() {
+  Scenario s;
+  s.disturbance = {{1, Shape::sin, 0.5, 1.0, 0.0},
+                   {2, Shape::cos, 0.5, 2.0, 0.0},
+                   {3, Shape::sin, 0.5, 3.0, 0.0}};
+  Fault bias;
+  bias.actuator = 1;
+  bias.type = FaultType::bias;
+  bias.onset = 10.0;
+  bias.offset = 5.0;
+  bias.amplitude = 15.0;
+  bias.frequency = 1.0;
+  Fault loe;
+  loe.actuator = 2;
+  loe.type = FaultType::loss_of_effectiveness;
+  loe.onset = 20.0;
+  loe.fraction = 0.8;
+  s.faults = {bias, loe};
+  return s;
+}
+
+}  // namespace ftc::sim

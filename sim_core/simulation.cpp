@@ -1,0 +1,122 @@
+#include "ftc/sim/simulation.hpp"
+
+#include <array>
+#include <cmath>
+
+#include "ftc/sim/integrator.hpp"
+
+namespace ftc::sim {
+namespace {
+
+// Δ(t) and the fault effect depend on time only. RK4 asks for them at t, t + h/2 (twice) and
+// t + h, and the acceleration sensor at t again, so a few remembered instants remove most of
+// the trigonometry from the loop.
+class ExogenousCache {
+ public:
+  struct Entry {
+    double t = std::numeric_limits<double>::quiet_NaN();
+    Vec3 disturbance = Vec3::Zero();
+    FaultEffect fault;
+  };
+
+  ExogenousCache(const Disturbance& d, const FaultSet& f) : dist_(d), faults_(f) {}
+
+  const Entry& at(double t) {
+    for (const Entry& e : slots_)
+      if (e.t == t) return e;
+    Entry& e = slots_[next_];
+    next_ = (next_ + 1) % slots_.size();
+    e.t = t;
+    e.disturbance = dist_(t);
+    e.fault = faults_.effect(t);
+    return e;
+  }
+
+ private:
+  const Disturbance& dist_;
+  const FaultSet& faults_;
+  std::array<Entry, 3> slots_{};
+  std::size_t next_ = 0;
+};
+
+bool out_of_bounds(const State& x) {
+  for (int i = 0; i < kStates; ++i)
+    if (!(std::abs(x[i]) <= kDivergenceBound)) return true;  // also catches NaN
+  return false;
+}
+
+}  // namespace
+
+SimulationResult simulate(const Plant& plant, Controller& controller, const Scenario& scenario,
+                          const SimulationOptions& options) {
+  throw_if_errors("scenario " + scenario.name, scenario.validate(""));
+
+  const Disturbance disturbance(scenario.disturbance);
+  const FaultSet faults(scenario.faults, scenario.saturation);
+  ExogenousCache exo(disturbance, faults);
+
+  std::vector<double> onsets;
+  onsets.reserve(scenario.faults.size());
+  for (const Fault& f : scenario.faults) onsets.push_back(f.onset);
+  MetricsAccumulator metrics(scenario.sample_time, options.window, options.extra_windows,
+                             std::move(onsets));
+
+  const double Ts = scenario.sample_time;
+  const double h = Ts / scenario.substeps;
+  const std::int64_t N = scenario.samples();
+
+  SimulationResult result;
+  if (options.record_every > 0) result.trajectory.reserve(N / options.record_every + 1);
+
+  controller.reset();
+  State x = scenario.initial_state;
+  Vec4 u_prev = Vec4::Zero();
+  Vec4 u_held = Vec4::Zero();
+
+  // dX/dt with the command u_held under the faults and disturbance of time t.
+  const auto accel = [&](const State& s, const Vec3& fs, const ExogenousCache::Entry& e,
+                         const Vec4& u_d) -> Vec3 {
+    Vec3 a = fs + plant.G(s) * faults.apply(e.fault, u_d);
+    a += e.disturbance;
+    return a;
+  };
+  const auto deriv = [&](double t, const State& s) -> State {
+    const Vec3 fs = plant.f(s);
+    State d;
+    d << s.tail<kAxes>(), accel(s, fs, exo.at(t), u_held);
+    return d;
+  };
+
+  std::int64_t k = 0;
+  for (; k < N; ++k) {
+    const double t = static_cast<double>(k) * Ts;
+    const Vec3 fx = plant.f(x);
+    const ExogenousCache::Entry& e0 = exo.at(t);
+    const Vec3 a = accel(x, fx, e0, u_prev);
+
+    const Vec4 u = controller.step(Measurement{t, x.head<kAxes>(), x.tail<kAxes>(), a, &fx});
+    metrics.sample(t, x, u);
+    if (options.record_every > 0 && k % options.record_every == 0)
+      result.trajectory.push_back({t, x, u, faults.apply(exo.at(t).fault, u)});
+
+    u_held = u;
+    // Stage 1 of the first substep is at (t, X): f(X) and Δ(t) are already known.
+    State k1;
+    k1 << x.tail<kAxes>(), accel(x, fx, exo.at(t), u);
+    x = rk4_step(x, t, h, k1, deriv);
+    for (int j = 1; j < scenario.substeps; ++j) x = rk4_step(x, t + j * h, h, deriv);
+    u_prev = u;
+
+    if (out_of_bounds(x)) {
+      metrics.mark_diverged(t + Ts);
+      ++k;
+      break;
+    }
+  }
+  result.samples = k;
+  result.final_state = x;
+  result.metrics = metrics.result();
+  return result;
+}
+
+}  // namespace ftc::sim

@@ -1,0 +1,94 @@
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_runner.hpp"
+
+using nlohmann::json;
+using namespace ftc::testing;
+
+TEST(Cli, SimulateWritesMetricsAndTrajectory) {
+  const auto dir = fresh_dir("simulate");
+  const CliResult r = run_cli("simulate jobs/table1.json --out '" + dir.string() + "'", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("fitness J ="), std::string::npos) << r.out;
+
+  const json m = json::parse(slurp(dir / "metrics.json"));
+  for (const char* key : {"controller", "objective", "fitness", "scenarios"})
+    EXPECT_TRUE(m.contains(key)) << key;
+  EXPECT_EQ(m["controller"]["type"], "pi_fosmc");
+  EXPECT_EQ(m["controller"]["Kp"], 20.0);
+  ASSERT_EQ(m["scenarios"].size(), 1u);
+  const json& s = m["scenarios"][0];
+  for (const char* key : {"name", "ise", "iae", "itae", "max_abs_u", "control_tv",
+                          "peak_error_after_fault", "diverged"})
+    EXPECT_TRUE(s.contains(key)) << key;
+  EXPECT_EQ(s["name"], "paper");
+  EXPECT_EQ(s["peak_error_after_fault"].size(), 2u);
+  EXPECT_FALSE(s["diverged"].get<bool>());
+  EXPECT_GT(s["ise"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(m["fitness"].get<double>(), 1.0 / m["objective"].get<double>());
+
+  std::istringstream csv(slurp(dir / "trajectory.csv"));
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "time,x1,x2,x3,x4,x5,x6,ud1,ud2,ud3,ud4,u1,u2,u3,u4");
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 3000);  // 30 s every 10 ms
+}
+
+TEST(Cli, SimulateOtherControllerWithOverrides) {
+  const auto dir = fresh_dir("simulate-nftsmc");
+  const CliResult r = run_cli("simulate jobs/table1.json --controller nftsmc --set sigma1=12 --set "
+                              "theta=500 --record-every 0.1 --out '" + dir.string() + "'",
+                              dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json m = json::parse(slurp(dir / "metrics.json"));
+  EXPECT_EQ(m["controller"]["type"], "nftsmc");
+  EXPECT_EQ(m["controller"]["sigma1"], 12.0);
+  EXPECT_EQ(m["controller"]["theta"], 500.0);
+  EXPECT_EQ(m["controller"]["sigma2"], 5.0);  // Table 1 default
+}
+
+TEST(Cli, InvalidJobExitsTwoNamingFileAndPath) {
+  const auto dir = fresh_dir("invalid");
+  {
+    std::ofstream bad(dir / "bad.json");
+    bad << R"({"schema": "ftctune.job/1", "name": "bad", "scenarios": [{"name": "s", "duration": 1,
+              "sample_time": -1}], "controller": {"type": "fosmc"}})";
+  }
+  const CliResult r = run_cli("simulate '" + (dir / "bad.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("bad.json: /scenarios/0/sample_time: must be > 0"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
+TEST(Cli, BadOverrideExitsTwo) {
+  const auto dir = fresh_dir("badset");
+  CliResult r = run_cli("simulate jobs/table1.json --set Kq=3 --out '" + dir.string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--set: Kq: is not a parameter of controller pi_fosmc"), std::string::npos) << r.err;
+  r = run_cli("simulate jobs/table1.json --set Kp=-1 --out '" + dir.string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("Kp: must be > 0"), std::string::npos) << r.err;
+}
+
+TEST(Cli, MissingFileAndUsageErrorsExitTwo) {
+  const auto dir = fresh_dir("usage");
+  CliResult r = run_cli("simulate no-such-job.json", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("no-such-job.json: cannot open"), std::string::npos) << r.err;
+  r = run_cli("frobnicate", dir);
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST(Cli, VersionAndHelp) {
+  const auto dir = fresh_dir("version");
+  CliResult r = run_cli("--version", dir);
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("ftctune "), std::string::npos);
+  r = run_cli("--help", dir);
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("simulate"), std::string::npos);
+}

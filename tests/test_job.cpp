@@ -1,0 +1,188 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "ftc/tune/job.hpp"
+
+using nlohmann::json;
+using namespace ftc;
+
+namespace {
+
+json table1() {
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/table1.json");
+  return json::parse(in);
+}
+
+struct BadCase {
+  const char* what;
+  std::function<void(json&)> mutate;
+  const char* path;
+  const char* message;  // substring of the error message
+};
+
+// Returns every error of parsing `j`.
+std::vector<FieldError> errors_of(const json& j) {
+  try {
+    tune::parse_job(j, "job.json");
+  } catch (const InputError& e) {
+    return e.errors();
+  }
+  return {};
+}
+
+}  // namespace
+
+TEST(JobLoader, LoadsTable1WithPaperDefaults) {
+  const tune::Job job = tune::load_job(std::string(FTC_SOURCE_DIR) + "/jobs/table1.json");
+  EXPECT_EQ(job.name, "table1");
+  ASSERT_EQ(job.scenarios.size(), 1u);
+  const sim::Scenario& s = job.scenarios[0];
+  EXPECT_EQ(s.samples(), 30000);
+  EXPECT_EQ(s.faults.size(), 2u);
+  EXPECT_EQ(s.faults[1].type, sim::FaultType::loss_of_effectiveness);
+  EXPECT_EQ(job.controller.type, sim::ControllerType::pi_fosmc);
+  EXPECT_DOUBLE_EQ(job.controller.resolved_alpha1(), 9.0 / 23.0);
+  ASSERT_EQ(job.compare.size(), 2u);
+  EXPECT_EQ(job.compare[0].label, "NFTSMC");
+  EXPECT_EQ(job.compare[0].controller.p, 9.0);
+  ASSERT_TRUE(job.tuning.has_value());
+  EXPECT_EQ(job.tuning->algorithm.evaluations(), 110);
+  EXPECT_EQ(job.tuning->parameters[0].name, "Kp");
+  EXPECT_EQ(job.tuning->parameters[1].upper, 50.0);
+  EXPECT_EQ(job.steps_per_evaluation(), 30000);
+}
+
+TEST(JobLoader, FillsDefaultsForOmittedKeys) {
+  const json j = {{"schema", "ftctune.job/1"},
+                  {"name", "minimal"},
+                  {"scenarios", {{{"name", "s"}, {"duration", 2}}}},
+                  {"controller", {{"type", "fosmc"}}}};
+  const tune::Job job = tune::parse_job(j, "minimal");
+  EXPECT_EQ(job.scenarios[0].sample_time, 1e-3);
+  EXPECT_EQ(job.scenarios[0].substeps, 1);
+  EXPECT_EQ(job.plant.spacecraft.inertia[0], 20.0);
+  EXPECT_EQ(job.plant.spacecraft.orbital_rate, 1.1e-3);
+  EXPECT_EQ(job.controller.c2, 9.0);
+  EXPECT_EQ(job.objective.metric, sim::Metric::ise);
+  EXPECT_FALSE(job.tuning.has_value());
+}
+
+TEST(JobLoader, CanonicalJsonRoundTrips) {
+  const tune::Job job = tune::parse_job(table1(), "table1");
+  const json once = tune::to_json(job);
+  const json twice = tune::to_json(tune::parse_job(once, "resolved"));
+  EXPECT_EQ(once.dump(), twice.dump());
+  EXPECT_EQ(once["controller"]["alpha1"].get<double>(), 0.5625 / (2 - 0.5625));
+}
+
+TEST(JobLoader, RejectsBadInputWithJsonPath) {
+  const std::vector<BadCase> cases = {
+      {"unknown top-level key", [](json& j) { j["colour"] = "red"; }, "/colour", "unknown key"},
+      {"unknown scenario key", [](json& j) { j["scenarios"][0]["durration"] = 3; },
+       "/scenarios/0/durration", "unknown key"},
+      {"wrong type", [](json& j) { j["scenarios"][0]["duration"] = "30"; }, "/scenarios/0/duration",
+       "expected a number, got a string"},
+      {"negative sample time", [](json& j) { j["scenarios"][0]["sample_time"] = -0.001; },
+       "/scenarios/0/sample_time", "must be > 0"},
+      {"duration not a multiple of Ts", [](json& j) { j["scenarios"][0]["sample_time"] = 0.007; },
+       "/scenarios/0/duration", "whole multiple of sample_time"},
+      {"p even", [](json& j) { j["compare"][0]["p"] = 8; }, "/compare/0/p", "positive odd integer"},
+      {"p/q outside (1,2)", [](json& j) { j["compare"][0]["p"] = 15; }, "/compare/0/p",
+       "p/q must be in (1, 2)"},
+      {"alpha not above p/q", [](json& j) { j["compare"][0]["alpha"] = 1.2; }, "/compare/0/alpha",
+       "greater than p/q"},
+      {"alpha2 = 1", [](json& j) { j["controller"]["alpha2"] = 1; }, "/controller/alpha2",
+       "open interval (0, 1)"},
+      {"Kp = 0", [](json& j) { j["controller"]["Kp"] = 0; }, "/controller/Kp", "must be > 0"},
+      {"actuator 5", [](json& j) { j["scenarios"][0]["faults"][0]["actuator"] = 5; },
+       "/scenarios/0/faults/0/actuator", "1..4"},
+      {"bounds reversed", [](json& j) { j["tuning"]["parameters"]["Kp"] = {60, 50}; },
+       "/tuning/parameters/Kp", "lower bound 60 is above upper bound 50"},
+      {"unknown tuned parameter", [](json& j) { j["tuning"]["parameters"]["Kd"] = {0, 1}; },
+       "/tuning/parameters/Kd", "is not a parameter of controller pi_fosmc"},
+      {"bound outside field range", [](json& j) { j["tuning"]["parameters"]["Kp"] = {-1, 50}; },
+       "/tuning/parameters/Kp/0", "outside the valid range of Kp"},
+      {"wrong schema", [](json& j) { j["schema"] = "ftctune.job/2"; }, "/schema", "ftctune.job/1"},
+      {"field of another controller type", [](json& j) { j["controller"]["sigma1"] = 3; },
+       "/controller/sigma1", "does not apply to controller type pi_fosmc"},
+      {"unknown controller type", [](json& j) { j["controller"]["type"] = "pid"; },
+       "/controller/type", "unknown controller type"},
+      {"fraction above 1", [](json& j) { j["scenarios"][0]["faults"][1]["fraction"] = 1.5; },
+       "/scenarios/0/faults/1/fraction", "[0, 1]"},
+      {"key of another fault type", [](json& j) { j["scenarios"][0]["faults"][0]["fraction"] = 0.5; },
+       "/scenarios/0/faults/0/fraction", "unknown key"},
+      {"window past the end", [](json& j) { j["objective"]["window"] = {0, 40}; },
+       "/objective/window/1", "after the end of scenario"},
+      {"population 0", [](json& j) { j["tuning"]["algorithm"]["population"] = 0; },
+       "/tuning/algorithm/population", "1.."},
+      {"missing scenarios", [](json& j) { j.erase("scenarios"); }, "/scenarios", "is required"},
+      {"short initial state", [](json& j) { j["scenarios"][0]["initial_state"] = {1, 2, 3, 4, 5}; },
+       "/scenarios/0/initial_state", "array of 6 numbers"},
+      {"incipient without rate",
+       [](json& j) { j["scenarios"][0]["faults"][0]["profile"] = {{"type", "incipient"}}; },
+       "/scenarios/0/faults/0/profile/rate", "is required"},
+      {"unsafe name", [](json& j) { j["name"] = "../x"; }, "/name", "letters, digits"},
+      {"substeps 0", [](json& j) { j["scenarios"][0]["substeps"] = 0; }, "/scenarios/0/substeps",
+       "1..1000"},
+      {"fractional integer", [](json& j) { j["scenarios"][0]["substeps"] = 1.5; },
+       "/scenarios/0/substeps", "expected an integer"},
+      {"negative seed", [](json& j) { j["tuning"]["seed"] = -3; }, "/tuning/seed",
+       "non-negative integer"},
+      {"integer parameter tuned",
+       [](json& j) {
+         j["controller"] = {{"type", "adaptive_neural_pi_fosmc"}};
+         j["tuning"]["parameters"] = {{"nodes", {1, 9}}};
+       },
+       "/tuning/parameters/nodes", "cannot be tuned"},
+      {"loudness above 1", [](json& j) { j["tuning"]["algorithm"]["loudness"] = 1.5; },
+       "/tuning/algorithm/loudness", "(0, 1]"},
+      {"disturbance shape", [](json& j) { j["scenarios"][0]["disturbance"][0]["shape"] = "square"; },
+       "/scenarios/0/disturbance/0/shape", "\"sin\" or \"cos\""},
+  };
+  for (const BadCase& c : cases) {
+    json j = table1();
+    c.mutate(j);
+    const std::vector<FieldError> errs = errors_of(j);
+    ASSERT_FALSE(errs.empty()) << c.what << ": accepted";
+    bool found = false;
+    for (const FieldError& e : errs)
+      found = found || (e.path == c.path && e.message.find(c.message) != std::string::npos);
+    std::string all;
+    for (const FieldError& e : errs) all += "\n  " + to_string(e);
+    EXPECT_TRUE(found) << c.what << ": expected " << c.path << " ~ " << c.message << ", got" << all;
+  }
+}
+
+TEST(JobLoader, ReportsEveryErrorAtOnce) {
+  json j = table1();
+  j["controller"]["Kp"] = -1;
+  j["scenarios"][0]["sample_time"] = 0;
+  j["extra"] = true;
+  try {
+    tune::parse_job(j, "job.json");
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.errors().size(), 3u);
+    EXPECT_NE(std::string(e.what()).find("job.json: "), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("(and 2 more)"), std::string::npos);
+  }
+}
+
+TEST(JobLoader, SyntaxErrorNamesLine) {
+  try {
+    tune::parse_job_text("{\n  \"schema\": \"ftctune.job/1\",\n  \"name\": \n}", "broken.json");
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("broken.json: invalid JSON"), std::string::npos) << what;
+    EXPECT_NE(what.find("line 4"), std::string::npos) << what;
+  }
+}
+
+TEST(JobLoader, MissingFileIsInputError) {
+  EXPECT_THROW(tune::load_job("/nonexistent/job.json"), InputError);
+}

@@ -1,0 +1,31 @@
+#pragma once
+// Shared pieces of the ftctune command line. Each command registers its CLI11 subcommand and
+// returns the function that runs it once the arguments are parsed.
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ftc/sim/controller_config.hpp"
+#include "ftc/tune/job.hpp"
+
+namespace ftc::cli {
+
+struct Globals {
+  bool quiet = false;
+};
+
+using Action = std::function<int()>;
+
+void add_simulate_command(CLI::App& app, const Globals& g, Action& action);
+
+// The controller selected by --controller TYPE (Table 1 defaults) or the job's own, with
+// --set KEY=VALUE overrides; throws InputError (source "--set") naming the offending key.
+sim::ControllerConfig select_controller(const tune::Job& job, const std::string& type,
+                                        const std::vector<std::string>& sets);
+
+// Default output directory of a job: out/<job name>.
+std::filesystem::path default_out_dir(const tune::Job& job);
+
+}  // namespace ftc::cli

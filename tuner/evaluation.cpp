@@ -1,0 +1,94 @@
+#include "ftc/tune/evaluation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+namespace ftc::tune {
+
+using nlohmann::json;
+
+sim::SimulationOptions simulation_options(const Job& job, const sim::Scenario& scenario,
+                                          std::int64_t record_every) {
+  sim::SimulationOptions o;
+  o.window = job.objective.window;
+  o.record_every = record_every;
+  std::vector<double> cuts;
+  for (const sim::Fault& f : scenario.faults)
+    if (f.onset > 0 && f.onset < scenario.duration) cuts.push_back(f.onset);
+  std::sort(cuts.begin(), cuts.end());
+  cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+  double start = 0.0;
+  for (double c : cuts) {
+    o.extra_windows.push_back({start, c});
+    start = c;
+  }
+  o.extra_windows.push_back({start, scenario.duration});
+  return o;
+}
+
+sim::SimulationResult simulate_scenario(const Job& job, const sim::Plant& plant,
+                                        const sim::ControllerConfig& controller,
+                                        std::size_t scenario, std::int64_t record_every) {
+  const sim::Scenario& s = job.scenarios.at(scenario);
+  auto c = sim::make_controller(controller, plant, s.sample_time);
+  return sim::simulate(plant, *c, s, simulation_options(job, s, record_every));
+}
+
+double aggregate_objective(const ObjectiveConfig& objective, std::span<const sim::Metrics> runs) {
+  double acc = 0.0;
+  for (const sim::Metrics& m : runs) {
+    const double v = m.objective(objective.metric);
+    acc = objective.aggregate == Aggregate::mean ? acc + v : std::max(acc, v);
+  }
+  if (objective.aggregate == Aggregate::mean && !runs.empty()) acc /= static_cast<double>(runs.size());
+  return acc;
+}
+
+double fitness_of(double objective) {
+  if (!std::isfinite(objective) || objective < 0) return 0.0;
+  if (objective == 0.0) return std::numeric_limits<double>::infinity();
+  return 1.0 / objective;
+}
+
+Evaluation evaluate(const Job& job, const sim::Plant& plant, const sim::ControllerConfig& controller) {
+  Evaluation e;
+  for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
+    e.scenarios.push_back(simulate_scenario(job, plant, controller, i).metrics);
+    e.diverged = e.diverged || e.scenarios.back().diverged;
+  }
+  e.objective = aggregate_objective(job.objective, e.scenarios);
+  e.fitness = e.diverged ? 0.0 : fitness_of(e.objective);
+  return e;
+}
+
+namespace {
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+json window_json(const sim::Window& w) {
+  return json::array({w.t0, finite_or_null(w.t1)});
+}
+}  // namespace
+
+json metrics_json(const sim::Metrics& m) {
+  json j;
+  j["window"] = window_json(m.window);
+  j["ise"] = finite_or_null(m.errors.ise);
+  j["iae"] = finite_or_null(m.errors.iae);
+  j["itae"] = finite_or_null(m.errors.itae);
+  j["max_abs_u"] = m.max_abs_u;
+  j["control_tv"] = m.control_tv;
+  j["peak_error_after_fault"] = json::array();
+  for (double v : m.peak_error_after_fault) j["peak_error_after_fault"].push_back(finite_or_null(v));
+  j["diverged"] = m.diverged;
+  if (m.diverged) j["diverged_at"] = m.diverged_at;
+  j["segments"] = json::array();
+  for (std::size_t i = 0; i < m.extra.size(); ++i)
+    j["segments"].push_back({{"window", window_json(m.extra_windows[i])},
+                             {"ise", finite_or_null(m.extra[i].ise)},
+                             {"iae", finite_or_null(m.extra[i].iae)},
+                             {"itae", finite_or_null(m.extra[i].itae)}});
+  return j;
+}
+
+}  // namespace ftc::tune

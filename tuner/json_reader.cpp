@@ -1,0 +1,159 @@
+#include "json_reader.hpp"
+
+#include <cmath>
+
+namespace ftc::tune::detail {
+
+using nlohmann::json;
+
+std::string json_type_name(const json& j) {
+  if (j.is_number()) return "a number";
+  if (j.is_string()) return "a string";
+  if (j.is_boolean()) return "a boolean";
+  if (j.is_null()) return "null";
+  if (j.is_array()) return "an array";
+  if (j.is_object()) return "an object";
+  return j.type_name();
+}
+
+std::string pointer_escape(const std::string& key) {
+  std::string s;
+  for (char c : key) {
+    if (c == '~') s += "~0";
+    else if (c == '/') s += "~1";
+    else s += c;
+  }
+  return s;
+}
+
+bool json_to_int(const json& v, long long& out) {
+  if (v.is_number_integer()) {
+    out = v.is_number_unsigned() ? static_cast<long long>(v.get<std::uint64_t>())
+                                 : v.get<long long>();
+    return true;
+  }
+  if (v.is_number_float()) {
+    const double d = v.get<double>();
+    if (std::isfinite(d) && d == std::floor(d) && std::abs(d) < 9e15) {
+      out = static_cast<long long>(d);
+      return true;
+    }
+  }
+  return false;
+}
+
+ObjectReader::ObjectReader(const json& j, std::string path, std::vector<FieldError>& errors)
+    : obj_(j.is_object() ? &j : nullptr), path_(std::move(path)), errors_(errors) {
+  if (!obj_) errors_.push_back({path_, "expected an object, got " + json_type_name(j)});
+}
+
+bool ObjectReader::has(const char* key) const { return obj_ && obj_->contains(key); }
+
+const json* ObjectReader::get(const char* key, bool required) {
+  if (!obj_) return nullptr;
+  seen_.insert(key);
+  auto it = obj_->find(key);
+  if (it == obj_->end()) {
+    if (required) errors_.push_back({path(key), "is required"});
+    return nullptr;
+  }
+  return &*it;
+}
+
+void ObjectReader::type_error(const char* key, const char* expected, const json& v) {
+  errors_.push_back({path(key), std::string("expected ") + expected + ", got " + json_type_name(v)});
+}
+
+bool ObjectReader::number(const char* key, double& out, bool required) {
+  const json* v = get(key, required);
+  if (!v) return false;
+  if (!v->is_number()) {
+    type_error(key, "a number", *v);
+    return false;
+  }
+  out = v->get<double>();
+  return true;
+}
+
+bool ObjectReader::integer(const char* key, int& out, bool required) {
+  const json* v = get(key, required);
+  if (!v) return false;
+  long long i = 0;
+  if (!json_to_int(*v, i) || i < -2147483647LL || i > 2147483647LL) {
+    type_error(key, "an integer", *v);
+    return false;
+  }
+  out = static_cast<int>(i);
+  return true;
+}
+
+bool ObjectReader::uint64(const char* key, std::uint64_t& out, bool required) {
+  const json* v = get(key, required);
+  if (!v) return false;
+  if (v->is_number_unsigned()) {
+    out = v->get<std::uint64_t>();
+    return true;
+  }
+  long long i = 0;
+  if (!json_to_int(*v, i) || i < 0) {
+    type_error(key, "a non-negative integer", *v);
+    return false;
+  }
+  out = static_cast<std::uint64_t>(i);
+  return true;
+}
+
+bool ObjectReader::string(const char* key, std::string& out, bool required) {
+  const json* v = get(key, required);
+  if (!v) return false;
+  if (!v->is_string()) {
+    type_error(key, "a string", *v);
+    return false;
+  }
+  out = v->get<std::string>();
+  return true;
+}
+
+bool ObjectReader::numbers(const char* key, double* out, std::size_t n, bool required) {
+  const json* v = get(key, required);
+  if (!v) return false;
+  if (!v->is_array() || v->size() != n) {
+    errors_.push_back({path(key), "expected an array of " + std::to_string(n) + " numbers, got " +
+                                      (v->is_array() ? "an array of " + std::to_string(v->size())
+                                                     : json_type_name(*v))});
+    return false;
+  }
+  bool ok = true;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(*v)[i].is_number()) {
+      errors_.push_back({path(key) + "/" + std::to_string(i),
+                         "expected a number, got " + json_type_name((*v)[i])});
+      ok = false;
+    } else {
+      out[i] = (*v)[i].get<double>();
+    }
+  }
+  return ok;
+}
+
+std::vector<std::string> ObjectReader::keys() const {
+  std::vector<std::string> k;
+  if (obj_)
+    for (auto it = obj_->begin(); it != obj_->end(); ++it) k.push_back(it.key());
+  return k;
+}
+
+const json* ObjectReader::child(const char* key, bool required) { return get(key, required); }
+
+void ObjectReader::finish() {
+  if (!obj_) return;
+  for (auto it = obj_->begin(); it != obj_->end(); ++it) {
+    if (seen_.count(it.key())) continue;
+    std::string allowed;
+    for (const std::string& k : seen_) allowed += (allowed.empty() ? "" : ", ") + k;
+    errors_.push_back({path_ + "/" + pointer_escape(it.key()),
+                       "unknown key (allowed here: " + allowed + ")"});
+  }
+}
+
+}  // namespace ftc::tune::detail

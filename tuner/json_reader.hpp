@@ -1,0 +1,57 @@
+#pragma once
+// Strict reading of JSON objects for the file loaders: every accessor records a FieldError
+// (with the JSON path) instead of throwing, and finish() reports keys nobody asked for.
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "ftc/sim/input_error.hpp"
+
+namespace ftc::tune::detail {
+
+std::string json_type_name(const nlohmann::json& j);
+std::string pointer_escape(const std::string& key);
+
+class ObjectReader {
+ public:
+  // Records an error when `j` is not an object; all reads then do nothing.
+  ObjectReader(const nlohmann::json& j, std::string path, std::vector<FieldError>& errors);
+
+  bool ok() const { return obj_ != nullptr; }
+  bool has(const char* key) const;
+  std::string path(const char* key) const { return path_ + "/" + pointer_escape(key); }
+
+  // Each returns true when the key was present with the right type (out is then set).
+  bool number(const char* key, double& out, bool required = false);
+  bool integer(const char* key, int& out, bool required = false);
+  bool uint64(const char* key, std::uint64_t& out, bool required = false);
+  bool string(const char* key, std::string& out, bool required = false);
+  // Fixed-length array of numbers.
+  bool numbers(const char* key, double* out, std::size_t n, bool required = false);
+  // The raw child (marked as read); nullptr when absent (an error if required).
+  const nlohmann::json* child(const char* key, bool required = false);
+
+  // Marks a key as handled by the caller (so finish() does not report it).
+  void mark_seen(const std::string& key) { seen_.insert(key); }
+  // Keys of the object in document order.
+  std::vector<std::string> keys() const;
+
+  // Unknown keys become errors listing the allowed ones.
+  void finish();
+
+ private:
+  const nlohmann::json* get(const char* key, bool required);
+  void type_error(const char* key, const char* expected, const nlohmann::json& v);
+
+  const nlohmann::json* obj_;
+  std::string path_;
+  std::vector<FieldError>& errors_;
+  std::set<std::string> seen_;
+};
+
+// Integral check for JSON numbers: 3 and 3.0 are integers, 3.5 is not.
+bool json_to_int(const nlohmann::json& v, long long& out);
+
+}  // namespace ftc::tune::detail
