@@ -20,13 +20,31 @@ const char* to_string(Shape s) { return s == Shape::sin ? "sin" : "cos"; }
 
 Disturbance::Disturbance(std::vector<DisturbanceTerm> terms) : terms_(std::move(terms)) {}
 
-Vec3 Disturbance::operator()(double t) const {
+namespace {
+template <class SinCos>
+Vec3 sum_terms(const std::vector<DisturbanceTerm>& terms, double t, SinCos&& sincos) {
   Vec3 d = Vec3::Zero();
-  for (const DisturbanceTerm& term : terms_) {
-    const double arg = term.frequency * t + term.phase;
-    d[term.axis - 1] += term.amplitude * (term.shape == Shape::sin ? std::sin(arg) : std::cos(arg));
+  for (std::size_t i = 0; i < terms.size(); ++i) {
+    const DisturbanceTerm& term = terms[i];
+    double s, c;
+    sincos(i, term.frequency * t + term.phase, s, c);
+    d[term.axis - 1] += term.amplitude * (term.shape == Shape::sin ? s : c);
   }
   return d;
+}
+}  // namespace
+
+Vec3 Disturbance::operator()(double t) const {
+  return sum_terms(terms_, t, [](std::size_t, double x, double& s, double& c) {
+    s = std::sin(x);
+    c = std::cos(x);
+  });
+}
+
+Vec3 Disturbance::operator()(double t, std::span<SinCosTracker> trackers) const {
+  return sum_terms(terms_, t, [&](std::size_t i, double x, double& s, double& c) {
+    trackers[i].eval(x, s, c);
+  });
 }
 
 }  // namespace ftc::sim

@@ -1,6 +1,5 @@
 #include "ftc/sim/faults.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -54,15 +53,18 @@ std::vector<FieldError> Fault::validate(const std::string& path) const {
 FaultSet::FaultSet(std::vector<Fault> faults, std::optional<double> saturation)
     : faults_(std::move(faults)), saturation_(saturation) {}
 
-FaultEffect FaultSet::effect(double t) const {
+namespace {
+template <class Cos>
+FaultEffect combine(const std::vector<Fault>& faults, double t, Cos&& cosine) {
   FaultEffect e;
-  for (const Fault& f : faults_) {
+  for (std::size_t i = 0; i < faults.size(); ++i) {
+    const Fault& f = faults[i];
     const double rho = f.profile.rho(t - f.onset);
     if (rho == 0.0) continue;
     const int j = f.actuator - 1;
     switch (f.type) {
       case FaultType::bias:
-        e.offset[j] += rho * (f.offset + f.amplitude * std::cos(f.frequency * t + f.phase));
+        e.offset[j] += rho * (f.offset + f.amplitude * cosine(i, f.frequency * t + f.phase));
         break;
       case FaultType::loss_of_effectiveness:
         e.gain[j] -= rho * f.fraction;
@@ -75,14 +77,18 @@ FaultEffect FaultSet::effect(double t) const {
   }
   return e;
 }
+}  // namespace
 
-Vec4 FaultSet::apply(const FaultEffect& e, const Vec4& u_d) const {
-  Vec4 u = e.gain.cwiseProduct(u_d) + e.offset;
-  if (saturation_) {
-    const double m = *saturation_;
-    for (int j = 0; j < kActuators; ++j) u[j] = std::clamp(u[j], -m, m);
-  }
-  return u;
+FaultEffect FaultSet::effect(double t) const {
+  return combine(faults_, t, [](std::size_t, double x) { return std::cos(x); });
+}
+
+FaultEffect FaultSet::effect(double t, std::span<SinCosTracker> trackers) const {
+  return combine(faults_, t, [&](std::size_t i, double x) {
+    double s, c;
+    trackers[i].eval(x, s, c);
+    return c;
+  });
 }
 
 }  // namespace ftc::sim

@@ -19,7 +19,8 @@ class ExogenousCache {
     FaultEffect fault;
   };
 
-  ExogenousCache(const Disturbance& d, const FaultSet& f) : dist_(d), faults_(f) {}
+  ExogenousCache(const Disturbance& d, const FaultSet& f)
+      : dist_(d), faults_(f), dist_trig_(d.terms().size()), fault_trig_(f.faults().size()) {}
 
   const Entry& at(double t) {
     for (const Entry& e : slots_)
@@ -27,14 +28,15 @@ class ExogenousCache {
     Entry& e = slots_[next_];
     next_ = (next_ + 1) % slots_.size();
     e.t = t;
-    e.disturbance = dist_(t);
-    e.fault = faults_.effect(t);
+    e.disturbance = dist_(t, dist_trig_);
+    e.fault = faults_.effect(t, fault_trig_);
     return e;
   }
 
  private:
   const Disturbance& dist_;
   const FaultSet& faults_;
+  std::vector<SinCosTracker> dist_trig_, fault_trig_;  // sized once, before the loop
   std::array<Entry, 3> slots_{};
   std::size_t next_ = 0;
 };
@@ -69,19 +71,26 @@ SimulationResult simulate(const Plant& plant, Controller& controller, const Scen
   if (options.record_every > 0) result.trajectory.reserve(N / options.record_every + 1);
 
   controller.reset();
-  State x = scenario.initial_state;
+  const State x0 = scenario.initial_state;
+  State x = x0;
   Vec4 u_prev = Vec4::Zero();
   Vec4 u_held = Vec4::Zero();
 
-  // dX/dt with the command u_held under the faults and disturbance of time t.
+  const bool constant_G = plant.input_matrix_is_constant();
+  const Mat34 G0 = plant.G(x0);
+  // dX2/dt = f(X) + G(X) u + Δ(t), with u the command u_d after the faults of time t.
   const auto accel = [&](const State& s, const Vec3& fs, const ExogenousCache::Entry& e,
                          const Vec4& u_d) -> Vec3 {
-    Vec3 a = fs + plant.G(s) * faults.apply(e.fault, u_d);
+    const Vec4 u = faults.apply(e.fault, u_d);
+    Vec3 a = fs;
+    if (constant_G) a.noalias() += G0 * u;
+    else a.noalias() += plant.G(s) * u;
     a += e.disturbance;
     return a;
   };
+  PlantWorkspace ws;
   const auto deriv = [&](double t, const State& s) -> State {
-    const Vec3 fs = plant.f(s);
+    const Vec3 fs = plant.f(s, ws);
     State d;
     d << s.tail<kAxes>(), accel(s, fs, exo.at(t), u_held);
     return d;
@@ -90,7 +99,7 @@ SimulationResult simulate(const Plant& plant, Controller& controller, const Scen
   std::int64_t k = 0;
   for (; k < N; ++k) {
     const double t = static_cast<double>(k) * Ts;
-    const Vec3 fx = plant.f(x);
+    const Vec3 fx = plant.f(x, ws);
     const ExogenousCache::Entry& e0 = exo.at(t);
     const Vec3 a = accel(x, fx, e0, u_prev);
 
@@ -103,8 +112,15 @@ SimulationResult simulate(const Plant& plant, Controller& controller, const Scen
     // Stage 1 of the first substep is at (t, X): f(X) and Δ(t) are already known.
     State k1;
     k1 << x.tail<kAxes>(), accel(x, fx, exo.at(t), u);
-    x = rk4_step(x, t, h, k1, deriv);
-    for (int j = 1; j < scenario.substeps; ++j) x = rk4_step(x, t + j * h, h, deriv);
+    // The last stage of the sample ends at t_{k+1} = (k+1)·Ts, the very instant (bit for bit)
+    // at which the next sample's sensor reads, so the disturbance and faults there are reused.
+    const double t_next = static_cast<double>(k + 1) * Ts;
+    const int S = scenario.substeps;
+    x = rk4_step(x, t, h, k1, deriv, S == 1 ? t_next : t + h);
+    for (int j = 1; j < S; ++j) {
+      const double tj = t + j * h;
+      x = rk4_step(x, tj, h, deriv(tj, x), deriv, j == S - 1 ? t_next : tj + h);
+    }
     u_prev = u;
 
     if (out_of_bounds(x)) {

@@ -83,6 +83,14 @@ TEST(Cli, MissingFileAndUsageErrorsExitTwo) {
   EXPECT_EQ(r.exit_code, 2);
 }
 
+TEST(Cli, QuietFlagAfterSubcommand) {
+  const auto dir = fresh_dir("quiet");
+  const CliResult r = run_cli("simulate jobs/table1.json -q --out '" + dir.string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_TRUE(std::filesystem::exists(dir / "metrics.json"));
+}
+
 TEST(Cli, VersionAndHelp) {
   const auto dir = fresh_dir("version");
   CliResult r = run_cli("--version", dir);

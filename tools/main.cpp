@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   CLI::App app{"ftctune: offline tuning of fault-tolerant sliding-mode controllers"};
   app.set_version_flag("--version", std::string(ftc::kToolName) + " " + ftc::kVersion);
   app.require_subcommand(1);
+  app.fallthrough();  // global flags such as -q may also follow the subcommand
   ftc::cli::Globals globals;
   app.add_flag("-q,--quiet", globals.quiet, "Only errors on stderr");
 

@@ -1,10 +1,12 @@
 #pragma once
 // Additive disturbance Δ(t) on the accelerations (SPEC §2): per axis a sum of sinusoids
 // Δ_i(t) = Σ amplitude · shape(frequency · t + phase), shape ∈ {sin, cos}, in rad/s².
+#include <span>
 #include <string>
 #include <vector>
 
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/sincos.hpp"
 #include "ftc/sim/types.hpp"
 
 namespace ftc::sim {
@@ -28,6 +30,8 @@ class Disturbance {
   explicit Disturbance(std::vector<DisturbanceTerm> terms);
 
   Vec3 operator()(double t) const;
+  // The same, with one caller-owned tracker per term for stepping t in small increments.
+  Vec3 operator()(double t, std::span<SinCosTracker> trackers) const;
   const std::vector<DisturbanceTerm>& terms() const { return terms_; }
 
  private:

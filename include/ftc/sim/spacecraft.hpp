@@ -20,7 +20,9 @@ class Spacecraft final : public Plant {
   explicit Spacecraft(const SpacecraftParams& params = {});
 
   Vec3 f(const State& x) const override;
+  Vec3 f(const State& x, PlantWorkspace& ws) const override;
   Mat34 G(const State&) const override { return G_; }
+  bool input_matrix_is_constant() const override { return true; }
   Mat43 G_pinv(const State&) const override { return G_pinv_; }
   std::string model() const override { return "spacecraft"; }
 
@@ -30,6 +32,8 @@ class Spacecraft final : public Plant {
   static Mat34 distribution_matrix();
 
  private:
+  Vec3 f_trig(const State& x, const double (&s)[3], const double (&c)[3]) const;
+
   SpacecraftParams params_;
   double kx_, ky_, kz_;  // (Iy-Iz)/Ix, (Iz-Ix)/Iy, (Ix-Iy)/Iz
   Mat34 G_;
