@@ -19,6 +19,8 @@ struct Globals {
 using Action = std::function<int()>;
 
 void add_simulate_command(CLI::App& app, const Globals& g, Action& action);
+void add_run_command(CLI::App& app, const Globals& g, Action& action);
+void add_validate_command(CLI::App& app, const Globals& g, Action& action);
 
 // The controller selected by --controller TYPE (Table 1 defaults) or the job's own, with
 // --set KEY=VALUE overrides; throws InputError (source "--set") naming the offending key.

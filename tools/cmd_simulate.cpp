@@ -7,7 +7,9 @@
 #include <string>
 
 #include "cli.hpp"
+#include "ftc/runtime/gains.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/controller_json.hpp"
 #include "ftc/tune/evaluation.hpp"
 #include "ftc/tune/files.hpp"
 #include "ftc/version.hpp"
@@ -21,6 +23,7 @@ struct SimulateOptions {
   std::string job;
   std::string controller;
   std::vector<std::string> sets;
+  std::string gains;
   std::string out;
   double record_interval = 0.01;
 };
@@ -56,7 +59,21 @@ std::string fmt(double v, const char* f = "%.4g") {
 int run_simulate(const SimulateOptions& o, const Globals& g) {
   namespace fs = std::filesystem;
   const tune::Job job = tune::load_job(o.job);
-  const sim::ControllerConfig controller = select_controller(job, o.controller, o.sets);
+  sim::ControllerConfig controller;
+  if (!o.gains.empty()) {
+    if (!o.controller.empty() || !o.sets.empty())
+      throw InputError("--gains", "", "cannot be combined with --controller or --set");
+    const runtime::Gains gains = runtime::read_gains(o.gains);
+    for (std::size_t i = 0; i < job.scenarios.size(); ++i)
+      if (job.scenarios[i].sample_time != gains.sample_time)
+        throw InputError(o.gains, "/sample_time",
+                         "the gains were tuned for Ts = " + std::to_string(gains.sample_time) +
+                             " s, but scenario \"" + job.scenarios[i].name + "\" samples at Ts = " +
+                             std::to_string(job.scenarios[i].sample_time) + " s");
+    controller = gains.controller;
+  } else {
+    controller = select_controller(job, o.controller, o.sets);
+  }
   if (!(o.record_interval > 0))
     throw InputError("--record-every", "", "must be > 0 seconds");
   const auto plant = job.plant.make();
@@ -122,6 +139,7 @@ void add_simulate_command(CLI::App& app, const Globals& g, Action& action) {
                   "Controller type with its Table 1 defaults instead of the job's controller "
                   "(nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)");
   sub->add_option("--set", opts->sets, "Override a controller parameter, KEY=VALUE (repeatable)");
+  sub->add_option("--gains", opts->gains, "Simulate the controller of a gains file (ftctune.gains/1)");
   sub->add_option("--out", opts->out, "Output directory (default out/<job name>)");
   sub->add_option("--record-every", opts->record_interval,
                   "Trajectory sampling interval in seconds (default 0.01)");

@@ -19,7 +19,9 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", globals.quiet, "Only errors on stderr");
 
   ftc::cli::Action action;
+  ftc::cli::add_run_command(app, globals, action);
   ftc::cli::add_simulate_command(app, globals, action);
+  ftc::cli::add_validate_command(app, globals, action);
 
   try {
     app.parse(argc, argv);

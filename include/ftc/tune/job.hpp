@@ -16,6 +16,7 @@
 #include "ftc/sim/plant.hpp"
 #include "ftc/sim/scenario.hpp"
 #include "ftc/sim/spacecraft.hpp"
+#include "ftc/tune/controller_json.hpp"
 
 namespace ftc::tune {
 
@@ -99,13 +100,8 @@ Job load_job(const std::filesystem::path& file);
 // Resolved JSON forms (every default filled in). Keys come out sorted, so dump() of these is
 // canonical.
 nlohmann::json to_json(const Job& job);
-nlohmann::json to_json(const sim::ControllerConfig& c);
 nlohmann::json to_json(const PlantConfig& p);
 nlohmann::json to_json(const ObjectiveConfig& o);
 nlohmann::json to_json(const sim::Scenario& s);
-
-// Controller object of a job file (used for --set overrides and gains files too).
-sim::ControllerConfig parse_controller(const nlohmann::json& j, const std::string& path,
-                                       std::vector<FieldError>& errors);
 
 }  // namespace ftc::tune

@@ -1,0 +1,64 @@
+#pragma once
+// The Bat algorithm (paper §5, Appendix A) in the generational form of the ftctune spec.
+//
+// Per bat i: position x_i, velocity v_i, loudness A_i, pulse rate r_i, fitness J_i; x* the best
+// position found. Initialisation: x_i ~ U(lb, ub), v_i ~ U(0, 1)^d, A_i = A0, r_i = r0, and the
+// population is evaluated as one batch. Each iteration t = 1..T, with x* as it was at the start:
+//
+//   f_i = f_min + (f_max - f_min) β,  β ~ U(0, 1)
+//   v_i += (x* - x_i) f_i                    (eq. 37 with the sign that moves bats toward x*)
+//   c_i  = clamp(x_i + v_i)
+//   if U(0,1) > r_i:  c_i = clamp(x* + ε Ā),  ε ~ U(-1, 1)^d, Ā the mean loudness   (eq. 39)
+//
+// then all c_i are evaluated as one batch and, in bat order,
+//
+//   if U(0,1) < A_i and J(c_i) ≥ J_i:  x_i = c_i, J_i = J(c_i), A_i *= loudness_decay,
+//                                       r_i = r0 (1 - exp(-pulse_rate_growth · t))   (eqs. 40, 41)
+//   if J(c_i) > J(x*):  x* = c_i   (whether or not the bat accepted it: the best point found is
+//                                   never lost)
+//
+// Random numbers are drawn in exactly this order: for initialisation, per bat x_i then v_i; per
+// iteration, per bat β, the pulse test and (if taken) ε; then per bat the loudness test.
+#include "ftc/tune/optimizer.hpp"
+#include "ftc/tune/rng.hpp"
+
+namespace ftc::tune {
+
+// The frequency move of one bat: v += (best - x) f, returns clamp(x + v). Public for testing.
+Decision bat_frequency_move(const SearchSpace& space, const Decision& x, Decision& v,
+                            const Decision& best, double f);
+
+class BatAlgorithm final : public Optimizer {
+ public:
+  struct Bat {
+    Decision x, v;
+    double loudness = 0.0, pulse_rate = 0.0, fitness = 0.0;
+  };
+
+  BatAlgorithm(const AlgorithmConfig& config, std::uint64_t seed, const SearchSpace& space);
+
+  void initialize(BatchEvaluator& evaluator) override;
+  void iterate(BatchEvaluator& evaluator) override;
+  int iteration() const override { return t_; }
+  int iterations() const override { return config_.iterations; }
+  const std::vector<HistoryRow>& history() const override { return history_; }
+
+  const std::vector<Bat>& bats() const { return bats_; }
+  const Decision& best() const { return best_; }
+  double best_fitness() const { return best_fitness_; }
+
+ private:
+  void record();
+
+  AlgorithmConfig config_;
+  SearchSpace space_;
+  Rng rng_;
+  std::vector<Bat> bats_;
+  Decision best_;
+  double best_fitness_ = 0.0;
+  int t_ = -1;
+  std::int64_t evaluations_ = 0;
+  std::vector<HistoryRow> history_;
+};
+
+}  // namespace ftc::tune

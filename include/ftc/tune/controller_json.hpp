@@ -1,0 +1,22 @@
+#pragma once
+// The JSON form of a controller, shared by job files, gains files and --set overrides:
+// {"type": "pi_fosmc", "c1": 10, ...}; every field optional with its Table 1 default, fields of
+// other controller types rejected.
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
+
+#include "ftc/sim/controller_config.hpp"
+#include "ftc/sim/input_error.hpp"
+
+namespace ftc::tune {
+
+// Parses a controller object at JSON path `path`; problems are appended to `errors` (ranges are
+// checked by ControllerConfig::validate, not here).
+sim::ControllerConfig parse_controller(const nlohmann::json& j, const std::string& path,
+                                       std::vector<FieldError>& errors);
+
+// Every parameter of the controller's type, α1 resolved; integer fields as integers.
+nlohmann::json to_json(const sim::ControllerConfig& c);
+
+}  // namespace ftc::tune

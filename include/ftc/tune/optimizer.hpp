@@ -1,0 +1,53 @@
+#pragma once
+// Population optimisers that maximise fitness over a SearchSpace, one generation at a time:
+// initialize() evaluates the first population (iteration 0), iterate() one further generation.
+// All random numbers are drawn on the calling thread in a fixed order, so a run is determined by
+// its settings and seed, whatever the evaluator does in parallel.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "ftc/tune/batch_evaluator.hpp"
+#include "ftc/tune/job.hpp"
+#include "ftc/tune/search_space.hpp"
+
+namespace ftc::tune {
+
+struct HistoryRow {
+  int iteration = 0;          // 0 = the initial population
+  double best_fitness = 0.0;  // J(x*) after this iteration
+  Decision best;              // x*
+  double mean_loudness = 0.0;    // Bat algorithm only (NaN for random search)
+  double mean_pulse_rate = 0.0;  // Bat algorithm only (NaN for random search)
+  std::int64_t evaluations = 0;  // so far
+};
+
+struct OptimizationResult {
+  Decision best;
+  double best_fitness = 0.0;
+  std::vector<HistoryRow> history;
+  std::int64_t evaluations = 0;
+  bool completed = false;  // false when the observer stopped the run early
+};
+
+class Optimizer {
+ public:
+  virtual ~Optimizer() = default;
+  virtual void initialize(BatchEvaluator& evaluator) = 0;
+  virtual void iterate(BatchEvaluator& evaluator) = 0;
+  virtual int iteration() const = 0;   // completed iterations (0 after initialize)
+  virtual int iterations() const = 0;  // T
+  virtual const std::vector<HistoryRow>& history() const = 0;
+};
+
+std::unique_ptr<Optimizer> make_optimizer(const AlgorithmConfig& config, std::uint64_t seed,
+                                          const SearchSpace& space);
+
+// Called after every iteration (including 0); returning false stops the run.
+using IterationObserver = std::function<bool(const HistoryRow&)>;
+
+OptimizationResult run_optimizer(Optimizer& optimizer, BatchEvaluator& evaluator,
+                                 const IterationObserver& observer = {});
+
+}  // namespace ftc::tune

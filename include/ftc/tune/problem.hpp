@@ -1,0 +1,46 @@
+#pragma once
+// The tuning problem of a job: a decision vector names values of the controller fields listed
+// under tuning.parameters; a candidate is scored by simulating every scenario of the job and
+// taking the objective of SPEC §6 (metric in the window, aggregated over scenarios); fitness
+// J = 1/objective, 0 when a scenario diverged. Immutable after construction, so any number of
+// threads may evaluate candidates at once.
+#include <cstddef>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "ftc/sim/controller_config.hpp"
+#include "ftc/sim/metrics.hpp"
+#include "ftc/sim/plant.hpp"
+#include "ftc/tune/evaluation.hpp"
+#include "ftc/tune/job.hpp"
+#include "ftc/tune/search_space.hpp"
+
+namespace ftc::tune {
+
+class TuningProblem {
+ public:
+  // Throws InputError when the job has no tuning section or does not validate.
+  explicit TuningProblem(Job job);
+
+  const Job& job() const { return job_; }
+  const sim::Plant& plant() const { return *plant_; }
+  const SearchSpace& space() const { return space_; }
+  std::size_t scenarios() const { return job_.scenarios.size(); }
+
+  // The job's controller with the tuned fields set from x (in space().names order).
+  sim::ControllerConfig controller_for(std::span<const double> x) const;
+  // One scenario with one controller. Never throws for a diverging run.
+  sim::Metrics simulate(const sim::ControllerConfig& controller, std::size_t scenario) const;
+  // Objective and fitness from the metrics of every scenario.
+  Evaluation score(std::vector<sim::Metrics> per_scenario) const;
+
+ private:
+  Job job_;
+  std::unique_ptr<sim::Plant> plant_;
+  SearchSpace space_;
+  std::vector<double sim::ControllerConfig::*> members_;  // one per coordinate
+};
+
+}  // namespace ftc::tune

@@ -1,0 +1,66 @@
+#pragma once
+// A whole tuning run, as `ftctune run` (and the service) perform it: optimise the tuned
+// parameters of the job's controller, then simulate side by side the job's `compare`
+// controllers, the job's own controller (the baseline) and the tuned one, and build the output
+// documents. Nothing here reads the clock or the host, so the gains file depends only on the
+// job and the seed; run metadata is the caller's.
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ftc/sim/controller_config.hpp"
+#include "ftc/tune/job.hpp"
+#include "ftc/tune/optimizer.hpp"
+#include "ftc/tune/parallel_evaluator.hpp"
+
+namespace ftc::tune {
+
+inline constexpr const char* kGainsSchema = "ftctune.gains/1";
+
+struct RunOptions {
+  int threads = 0;                     // <= 0: all hardware threads
+  std::optional<std::uint64_t> seed;   // overrides tuning.seed
+  IterationObserver observer;          // progress; return false to stop
+};
+
+struct ComparedController {
+  std::string label;
+  std::string role;  // "compare", "baseline" (the job's controller) or "tuned"
+  sim::ControllerConfig controller;
+  CandidateOutcome outcome;
+};
+
+struct TuningOutcome {
+  Job job;
+  std::string job_sha256;  // of the canonical JSON of the job as given
+  std::uint64_t seed = 0;
+  OptimizationResult optimization;
+  std::vector<std::pair<std::string, double>> tuned;
+  sim::ControllerConfig tuned_controller;
+  std::vector<ComparedController> comparison;  // compare entries, then baseline, then tuned
+  int threads = 0;
+  std::int64_t simulations = 0;
+
+  const ComparedController& baseline() const { return comparison[comparison.size() - 2]; }
+  const ComparedController& best() const { return comparison.back(); }
+};
+
+// Throws InputError for a job that cannot be tuned.
+TuningOutcome tune(const Job& job, const RunOptions& options = {});
+
+std::string canonical_job_sha256(const Job& job);
+std::string display_name(sim::ControllerType t);  // "PI-FOSMC", ...
+
+nlohmann::json gains_document(const TuningOutcome& r);
+std::string history_csv(const TuningOutcome& r);
+nlohmann::json comparison_document(const TuningOutcome& r);
+std::string comparison_markdown(const TuningOutcome& r);
+
+// Writes gains.json, history.csv, comparison.json and comparison.md into `dir`, each atomically.
+void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir);
+
+}  // namespace ftc::tune

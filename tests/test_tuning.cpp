@@ -1,0 +1,225 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "cli_runner.hpp"
+#include "ftc/runtime/gains.hpp"
+#include "ftc/sim/simulation.hpp"
+#include "ftc/tune/parallel_evaluator.hpp"
+#include "ftc/tune/problem.hpp"
+#include "ftc/tune/tuning_run.hpp"
+#include "short_job.hpp"
+
+using nlohmann::json;
+using namespace ftc;
+using namespace ftc::testing;
+
+namespace {
+tune::Job short_job() { return tune::parse_job(short_table1_job(), "short"); }
+tune::RunOptions with(int threads, std::optional<std::uint64_t> seed = std::nullopt) {
+  tune::RunOptions o;
+  o.threads = threads;
+  o.seed = seed;
+  return o;
+}
+}  // namespace
+
+TEST(TuningProblem, MapsDecisionOntoNamedFields) {
+  json j = short_table1_job();
+  j["tuning"]["parameters"] = {{"Ki", {0, 50}}, {"c2", {1, 20}}, {"Kp", {1, 50}}};
+  const tune::TuningProblem p(tune::parse_job(j, "x"));
+  ASSERT_EQ(p.space().names, (std::vector<std::string>{"c2", "Kp", "Ki"}));  // field-table order
+  const sim::ControllerConfig c = p.controller_for(std::vector<double>{7.5, 3.0, 11.0});
+  EXPECT_EQ(c.c2, 7.5);
+  EXPECT_EQ(c.Kp, 3.0);
+  EXPECT_EQ(c.Ki, 11.0);
+  EXPECT_EQ(c.c1, 10.0);  // untouched
+}
+
+TEST(TuningProblem, RequiresTuningSection) {
+  json j = short_table1_job();
+  j.erase("tuning");
+  EXPECT_THROW(tune::TuningProblem(tune::parse_job(j, "x")), InputError);
+}
+
+TEST(ParallelEvaluator, DivergingOrThrowingCandidateScoresZero) {
+  const tune::TuningProblem p(short_job());
+  tune::ParallelEvaluator ev(p, 2);
+  sim::ControllerConfig good = p.job().controller;
+  sim::ControllerConfig unstable = good;
+  unstable.c2 = 1e5;  // far beyond what 1 ms sampling can stabilise
+  sim::ControllerConfig invalid = good;
+  invalid.Kp = -1;  // make_controller throws inside the task
+  const auto out = ev.evaluate_controllers({good, unstable, invalid});
+  EXPECT_GT(out[0].evaluation.fitness, 0.0);
+  EXPECT_TRUE(out[1].evaluation.diverged);
+  EXPECT_EQ(out[1].evaluation.fitness, 0.0);
+  EXPECT_EQ(out[2].evaluation.fitness, 0.0);
+  EXPECT_NE(out[2].error.find("Kp"), std::string::npos) << out[2].error;
+}
+
+TEST(TuningRun, FinishesWhenSomeCandidatesDiverge) {
+  json j = short_table1_job();
+  j["tuning"]["parameters"] = {{"c2", {1, 1e5}}};
+  const tune::TuningOutcome r = tune::tune(tune::parse_job(j, "x"), with(2));
+  EXPECT_EQ(r.optimization.evaluations, 9);
+  EXPECT_GT(r.optimization.best_fitness, 0.0);
+}
+
+TEST(TuningRun, GainsIdenticalForOneAndTwoThreads) {
+  const tune::Job job = short_job();
+  const std::string one = tune::gains_document(tune::tune(job, with(1))).dump();
+  const std::string two = tune::gains_document(tune::tune(job, with(2))).dump();
+  EXPECT_EQ(one, two);
+}
+
+TEST(TuningRun, OtherSeedOtherHistory) {
+  const tune::Job job = short_job();
+  const tune::TuningOutcome a = tune::tune(job, with(2));
+  const tune::TuningOutcome b = tune::tune(job, with(2, 2));
+  EXPECT_EQ(b.seed, 2u);
+  EXPECT_NE(a.optimization.history.front().best, b.optimization.history.front().best);
+}
+
+TEST(TuningRun, TunedFitnessIsReproducedByComparison) {
+  const tune::TuningOutcome r = tune::tune(short_job(), with(2));
+  EXPECT_EQ(r.best().role, "tuned");
+  EXPECT_EQ(r.best().outcome.evaluation.fitness, r.optimization.best_fitness);
+  EXPECT_EQ(r.baseline().controller.Kp, 20.0);
+  EXPECT_EQ(r.comparison.size(), 4u);
+  EXPECT_EQ(r.comparison[0].label, "NFTSMC");
+  EXPECT_EQ(r.simulations, 9 + 4);
+}
+
+TEST(GainsFile, RoundTripAndReproducesTunedMetrics) {
+  const tune::TuningOutcome r = tune::tune(short_job(), with(2));
+  const json doc = tune::gains_document(r);
+  EXPECT_EQ(doc["schema"], "ftctune.gains/1");
+  EXPECT_EQ(doc["job"]["sha256"].get<std::string>().size(), 64u);
+  EXPECT_EQ(doc["history"].size(), 3u);
+  const runtime::Gains g = runtime::parse_gains(doc, "gains.json");
+  EXPECT_EQ(g.controller.Kp, r.tuned_controller.Kp);
+  EXPECT_EQ(g.controller.Ki, r.tuned_controller.Ki);
+  ASSERT_EQ(g.tuned.size(), 2u);
+  EXPECT_EQ(g.tuned[0].first, "Ki");  // JSON objects come back key-sorted
+  EXPECT_EQ(g.sample_time, 0.001);
+
+  // The runtime-loaded controller reproduces the tuned run bit for bit.
+  const tune::Job& job = r.job;
+  const auto plant = job.plant.make();
+  auto c = runtime::make_controller(g, *plant, 0.001);
+  const sim::SimulationResult sr =
+      sim::simulate(*plant, *c, job.scenarios[0], tune::simulation_options(job, job.scenarios[0]));
+  EXPECT_EQ(sr.metrics.errors.ise, r.best().outcome.evaluation.scenarios[0].errors.ise);
+}
+
+TEST(GainsFile, LoaderRejectsBadFilesClearly) {
+  const json doc = tune::gains_document(tune::tune(short_job(), with(2)));
+  const auto message = [](const json& d) {
+    try {
+      runtime::parse_gains(d, "g.json");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  json other = doc;
+  other["schema"] = "ftctune.gains/2";
+  EXPECT_NE(message(other).find("/schema: this file is \"ftctune.gains/2\", expected \"ftctune.gains/1\""),
+            std::string::npos) << message(other);
+  json missing = doc;
+  missing.erase("sample_time");
+  EXPECT_NE(message(missing).find("/sample_time: is required"), std::string::npos) << message(missing);
+  json extra = doc;
+  extra["notes"] = "x";
+  EXPECT_NE(message(extra).find("/notes: unknown key"), std::string::npos);
+  json mismatch = doc;
+  mismatch["tuned"]["Kp"] = 99.0;
+  EXPECT_NE(message(mismatch).find("/tuned/Kp: value 99 differs from /controller/Kp"), std::string::npos)
+      << message(mismatch);
+  json bad_value = doc;
+  bad_value["controller"]["Kp"] = 0;
+  EXPECT_NE(message(bad_value).find("/controller/Kp"), std::string::npos);
+
+  const runtime::Gains g = runtime::parse_gains(doc, "g.json");
+  const sim::Spacecraft plant;
+  try {
+    runtime::make_controller(g, plant, 0.002);
+    FAIL() << "accepted a sample-time mismatch";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("tuned for Ts = 0.001 s, but the controller is to run at Ts = 0.002 s"),
+              std::string::npos) << e.what();
+  }
+}
+
+TEST(Cli, RunWritesGainsIdenticalAcrossThreadCounts) {
+  const auto dir = fresh_dir("run");
+  {
+    std::ofstream f(dir / "job.json");
+    f << short_table1_job().dump(2);
+  }
+  const std::string job = "'" + (dir / "job.json").string() + "'";
+  const CliResult a = run_cli("run " + job + " --threads 1 --out '" + (dir / "t1").string() + "'", dir);
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  EXPECT_NE(a.err.find("iteration 2/2: best J ="), std::string::npos) << a.err;
+  const CliResult b = run_cli("run " + job + " --threads 2 -q --out '" + (dir / "t2").string() + "'", dir);
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_EQ(b.err, "");  // --quiet
+  for (const char* f : {"gains.json", "history.csv", "comparison.json", "comparison.md", "run.json"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "t1" / f)) << f;
+  EXPECT_EQ(slurp(dir / "t1" / "gains.json"), slurp(dir / "t2" / "gains.json"));
+  EXPECT_EQ(json::parse(slurp(dir / "t2" / "run.json"))["threads"], 2);
+  EXPECT_EQ(json::parse(slurp(dir / "t1" / "run.json"))["threads"], 1);
+
+  std::istringstream hist(slurp(dir / "t1" / "history.csv"));
+  std::string header;
+  std::getline(hist, header);
+  EXPECT_EQ(header, "iteration,best_fitness,Kp,Ki,mean_loudness,mean_pulse_rate,evaluations");
+  const std::string md = slurp(dir / "t1" / "comparison.md");
+  for (const char* label : {"| NFTSMC", "| FOSMC", "| PI-FOSMC (job)", "| optimal PI-FOSMC"})
+    EXPECT_NE(md.find(label), std::string::npos) << label;
+
+  // The loaded gains drive `simulate` to the tuned objective.
+  const CliResult s = run_cli("simulate " + job + " --gains '" + (dir / "t1" / "gains.json").string() +
+                              "' -q --out '" + (dir / "sim").string() + "'", dir);
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const json g = json::parse(slurp(dir / "t1" / "gains.json"));
+  const json m = json::parse(slurp(dir / "sim" / "metrics.json"));
+  EXPECT_EQ(m["objective"], g["objective"]["value"]);
+  EXPECT_EQ(m["controller"]["Kp"], g["controller"]["Kp"]);
+}
+
+TEST(Cli, ValidateSummarisesOrListsEveryError) {
+  const auto dir = fresh_dir("validate");
+  CliResult r = run_cli("validate jobs/table1.json", dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("110 evaluations x 1 scenario, 30000 simulated steps per evaluation"),
+            std::string::npos) << r.out;
+  json bad = short_table1_job();
+  bad["controller"]["Kp"] = 0;
+  bad["tuning"]["parameters"]["Kp"] = {60, 50};
+  bad["scenarios"][0]["faults"][0]["actuator"] = 7;
+  {
+    std::ofstream f(dir / "bad.json");
+    f << bad.dump();
+  }
+  r = run_cli("validate '" + (dir / "bad.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("3 problems"), std::string::npos) << r.err;
+  for (const char* p : {"/controller/Kp", "/tuning/parameters/Kp", "/scenarios/0/faults/0/actuator"})
+    EXPECT_NE(r.err.find(p), std::string::npos) << p;
+}
+
+TEST(Cli, RunWithoutTuningSectionExitsTwo) {
+  const auto dir = fresh_dir("notuning");
+  json j = short_table1_job();
+  j.erase("tuning");
+  {
+    std::ofstream f(dir / "job.json");
+    f << j.dump();
+  }
+  const CliResult r = run_cli("run '" + (dir / "job.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("/tuning: is required by ftctune run"), std::string::npos) << r.err;
+}

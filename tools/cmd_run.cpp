@@ -1,0 +1,131 @@
+// ftctune run JOB: tune the job's controller and write the gains file and its companions.
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <nlohmann/json.hpp>
+
+#include "cli.hpp"
+#include "ftc/tune/controller_json.hpp"
+#include "ftc/tune/files.hpp"
+#include "ftc/tune/tuning_run.hpp"
+#include "ftc/version.hpp"
+#include "progress.hpp"
+
+namespace ftc::cli {
+namespace {
+
+using nlohmann::json;
+
+struct RunCliOptions {
+  std::string job;
+  std::string out;
+  int threads = 0;
+  std::optional<std::uint64_t> seed;
+};
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string hostname() {
+  char buf[256] = {};
+  if (::gethostname(buf, sizeof buf - 1) != 0) return "unknown";
+  return buf;
+}
+
+std::string params_text(const std::vector<std::string>& names, const tune::Decision& x) {
+  std::string s;
+  char buf[64];
+  for (std::size_t i = 0; i < names.size() && i < x.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%s%s = %.5g", i ? ", " : "", names[i].c_str(), x[i]);
+    s += buf;
+  }
+  return s;
+}
+
+int run_tuning(const RunCliOptions& o, const Globals& g) {
+  namespace fs = std::filesystem;
+  using clock = std::chrono::steady_clock;
+  const tune::Job job = tune::load_job(o.job);
+  if (!job.tuning)
+    throw InputError(o.job, "/tuning", "is required by ftctune run (what should be tuned?)");
+  const fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
+  const std::int64_t total = job.tuning->algorithm.evaluations();
+  std::vector<std::string> names;
+  for (const tune::ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
+
+  const std::string started = utc_now();
+  const auto t0 = clock::now();
+  ProgressBar bar(!g.quiet);
+  tune::RunOptions ro;
+  ro.threads = o.threads;
+  ro.seed = o.seed;
+  ro.observer = [&](const tune::HistoryRow& h) {
+    const double elapsed = std::chrono::duration<double>(clock::now() - t0).count();
+    const double eta = h.evaluations > 0 ? elapsed * static_cast<double>(total - h.evaluations) /
+                                               static_cast<double>(h.evaluations)
+                                         : 0.0;
+    bar.clear();
+    spdlog::info("iteration {}/{}: best J = {:.6g} ({}), {}/{} evaluations, {:.1f} s elapsed, ETA {:.1f} s",
+                 h.iteration, job.tuning->algorithm.iterations, h.best_fitness,
+                 params_text(names, h.best), h.evaluations, total, elapsed, eta);
+    bar.draw(h.evaluations, total, elapsed);
+    return true;
+  };
+  spdlog::info("tuning {} of job {}: {} evaluations of {} scenario(s), {} algorithm",
+               fmt::join(names, ", "), job.name, total, job.scenarios.size(),
+               tune::to_string(job.tuning->algorithm.type));
+  const tune::TuningOutcome r = tune::tune(job, ro);
+  bar.clear();
+  const double wall = std::chrono::duration<double>(clock::now() - t0).count();
+
+  tune::write_outputs(r, out);
+  const json run = {{"started_at", started},
+                    {"host", hostname()},
+                    {"threads", r.threads},
+                    {"wall_seconds", wall},
+                    {"simulations", r.simulations},
+                    {"job_file", o.job},
+                    {"seed", r.seed},
+                    {"generator", {{"name", kToolName}, {"version", kVersion}}}};
+  tune::write_file_atomic(out / "run.json", run.dump(2) + "\n");
+
+  if (r.optimization.best_fitness == 0.0)
+    spdlog::warn("every candidate diverged: the gains file holds a diverging controller");
+  if (!g.quiet) {
+    std::printf("tuned %s: %s\n", tune::display_name(job.controller.type).c_str(),
+                params_text(names, r.optimization.best).c_str());
+    std::printf("  fitness J = %.6g (job's own controller: %.6g), %s = %.6g\n",
+                r.optimization.best_fitness, r.baseline().outcome.evaluation.fitness,
+                sim::to_string(job.objective.metric), r.best().outcome.evaluation.objective);
+    std::printf("  %lld simulations on %d thread%s in %.2f s\n",
+                static_cast<long long>(r.simulations), r.threads, r.threads == 1 ? "" : "s", wall);
+    std::printf("  wrote %s/{gains.json, history.csv, comparison.json, comparison.md, run.json}\n",
+                out.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app, const Globals& g, Action& action) {
+  auto opts = std::make_shared<RunCliOptions>();
+  CLI::App* sub = app.add_subcommand("run", "Tune a job's controller and write the gains file");
+  sub->add_option("job", opts->job, "Job file (ftctune.job/1)")->required();
+  sub->add_option("--out", opts->out, "Output directory (default out/<job name>)");
+  sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--seed", opts->seed, "Seed instead of the job's tuning.seed");
+  sub->callback([&action, &g, opts] { action = [&g, opts] { return run_tuning(*opts, g); }; });
+}
+
+}  // namespace ftc::cli

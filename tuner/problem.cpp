@@ -1,0 +1,41 @@
+#include "ftc/tune/problem.hpp"
+
+#include <utility>
+
+namespace ftc::tune {
+
+TuningProblem::TuningProblem(Job job) : job_(std::move(job)) {
+  std::vector<FieldError> errs = job_.validate();
+  if (!job_.tuning) errs.push_back({"/tuning", "is required to tune"});
+  throw_if_errors("job " + job_.name, std::move(errs));
+  plant_ = job_.plant.make();
+  for (const ParameterBounds& b : job_.tuning->parameters) {
+    const sim::ControllerField* f = sim::find_controller_field(b.name);
+    space_.names.push_back(b.name);
+    space_.lower.push_back(b.lower);
+    space_.upper.push_back(b.upper);
+    members_.push_back(f->member);  // validate() made sure the field exists and is tunable
+  }
+}
+
+sim::ControllerConfig TuningProblem::controller_for(std::span<const double> x) const {
+  sim::ControllerConfig c = job_.controller;
+  for (std::size_t j = 0; j < members_.size(); ++j) c.*members_[j] = x[j];
+  return c;
+}
+
+sim::Metrics TuningProblem::simulate(const sim::ControllerConfig& controller,
+                                     std::size_t scenario) const {
+  return simulate_scenario(job_, *plant_, controller, scenario).metrics;
+}
+
+Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
+  Evaluation e;
+  e.scenarios = std::move(per_scenario);
+  for (const sim::Metrics& m : e.scenarios) e.diverged = e.diverged || m.diverged;
+  e.objective = aggregate_objective(job_.objective, e.scenarios);
+  e.fitness = e.diverged ? 0.0 : fitness_of(e.objective);
+  return e;
+}
+
+}  // namespace ftc::tune

@@ -1,0 +1,210 @@
+#include "ftc/tune/tuning_run.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "ftc/tune/controller_json.hpp"
+#include "ftc/tune/files.hpp"
+#include "ftc/tune/problem.hpp"
+#include "ftc/tune/sha256.hpp"
+#include "ftc/version.hpp"
+
+namespace ftc::tune {
+
+using nlohmann::json;
+
+namespace {
+
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+std::string fmt(double v, const char* f = "%.4g") {
+  if (std::isnan(v)) return "–";
+  if (std::isinf(v)) return "inf";
+  char buf[40];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+json named(const std::vector<std::string>& names, const Decision& x) {
+  json j = json::object();
+  for (std::size_t i = 0; i < names.size() && i < x.size(); ++i) j[names[i]] = x[i];
+  return j;
+}
+
+}  // namespace
+
+std::string display_name(sim::ControllerType t) {
+  switch (t) {
+    case sim::ControllerType::nftsmc: return "NFTSMC";
+    case sim::ControllerType::fosmc: return "FOSMC";
+    case sim::ControllerType::pi_fosmc: return "PI-FOSMC";
+    case sim::ControllerType::adaptive_neural_pi_fosmc: return "adaptive neural PI-FOSMC";
+  }
+  return "?";
+}
+
+std::string canonical_job_sha256(const Job& job) { return sha256_hex(to_json(job).dump()); }
+
+TuningOutcome tune(const Job& job, const RunOptions& options) {
+  TuningOutcome r;
+  r.job = job;
+  r.job_sha256 = canonical_job_sha256(job);
+  const TuningProblem problem(job);
+  r.seed = options.seed.value_or(job.tuning->seed);
+
+  ParallelEvaluator evaluator(problem, options.threads);
+  r.threads = evaluator.threads();
+  auto optimizer = make_optimizer(job.tuning->algorithm, r.seed, problem.space());
+  r.optimization = run_optimizer(*optimizer, evaluator, options.observer);
+
+  r.tuned_controller = problem.controller_for(r.optimization.best);
+  for (std::size_t j = 0; j < problem.space().names.size(); ++j)
+    r.tuned.emplace_back(problem.space().names[j], r.optimization.best[j]);
+
+  std::vector<sim::ControllerConfig> controllers;
+  for (const CompareEntry& c : job.compare) {
+    r.comparison.push_back({c.label, "compare", c.controller, {}});
+    controllers.push_back(c.controller);
+  }
+  const std::string name = display_name(job.controller.type);
+  r.comparison.push_back({name + " (job)", "baseline", job.controller, {}});
+  controllers.push_back(job.controller);
+  r.comparison.push_back({"optimal " + name, "tuned", r.tuned_controller, {}});
+  controllers.push_back(r.tuned_controller);
+
+  const std::vector<CandidateOutcome> outcomes = evaluator.evaluate_controllers(controllers);
+  for (std::size_t i = 0; i < outcomes.size(); ++i) r.comparison[i].outcome = outcomes[i];
+  r.simulations = evaluator.simulations();
+  return r;
+}
+
+json gains_document(const TuningOutcome& r) {
+  const Job& job = r.job;
+  const json job_json = to_json(job);
+  json g;
+  g["schema"] = kGainsSchema;
+  g["controller"] = to_json(r.tuned_controller);
+  g["tuned"] = json::object();
+  for (const auto& [name, value] : r.tuned) g["tuned"][name] = value;
+  g["sample_time"] = job.scenarios.front().sample_time;
+  g["plant"] = to_json(job.plant);
+  json objective = to_json(job.objective);
+  objective["value"] = finite_or_null(r.best().outcome.evaluation.objective);
+  g["objective"] = objective;
+  g["fitness"] = finite_or_null(r.optimization.best_fitness);
+  const ComparedController& base = r.baseline();
+  g["baseline"] = {{"controller", to_json(base.controller)},
+                   {"objective", finite_or_null(base.outcome.evaluation.objective)},
+                   {"fitness", finite_or_null(base.outcome.evaluation.fitness)}};
+  json optimizer = job_json["tuning"]["algorithm"];
+  optimizer["seed"] = r.seed;
+  optimizer["evaluations"] = r.optimization.evaluations;
+  optimizer["completed"] = r.optimization.completed;
+  g["optimizer"] = optimizer;
+  std::vector<std::string> names;
+  for (const auto& t : r.tuned) names.push_back(t.first);
+  g["history"] = json::array();
+  for (const HistoryRow& h : r.optimization.history)
+    g["history"].push_back({{"iteration", h.iteration},
+                            {"best_fitness", finite_or_null(h.best_fitness)},
+                            {"best", named(names, h.best)},
+                            {"mean_loudness", finite_or_null(h.mean_loudness)},
+                            {"mean_pulse_rate", finite_or_null(h.mean_pulse_rate)},
+                            {"evaluations", h.evaluations}});
+  g["job"] = {{"name", job.name}, {"sha256", r.job_sha256}};
+  g["generator"] = {{"name", kToolName}, {"version", kVersion}};
+  return g;
+}
+
+std::string history_csv(const TuningOutcome& r) {
+  std::string s = "iteration,best_fitness";
+  for (const auto& t : r.tuned) s += "," + t.first;
+  s += ",mean_loudness,mean_pulse_rate,evaluations\n";
+  char buf[48];
+  const auto cell = [&](double v) {
+    if (std::isnan(v)) return std::string(",");
+    std::snprintf(buf, sizeof buf, ",%.17g", v);
+    return std::string(buf);
+  };
+  for (const HistoryRow& h : r.optimization.history) {
+    s += std::to_string(h.iteration) + cell(h.best_fitness);
+    for (double v : h.best) s += cell(v);
+    s += cell(h.mean_loudness) + cell(h.mean_pulse_rate) + "," + std::to_string(h.evaluations) + "\n";
+  }
+  return s;
+}
+
+json comparison_document(const TuningOutcome& r) {
+  json doc;
+  doc["job"] = r.job.name;
+  doc["objective"] = to_json(r.job.objective);
+  doc["scenarios"] = json::array();
+  for (const sim::Scenario& s : r.job.scenarios) doc["scenarios"].push_back(s.name);
+  doc["controllers"] = json::array();
+  for (const ComparedController& c : r.comparison) {
+    json cj;
+    cj["label"] = c.label;
+    cj["role"] = c.role;
+    cj["controller"] = to_json(c.controller);
+    cj["objective"] = finite_or_null(c.outcome.evaluation.objective);
+    cj["fitness"] = finite_or_null(c.outcome.evaluation.fitness);
+    if (!c.outcome.error.empty()) cj["error"] = c.outcome.error;
+    cj["scenarios"] = json::array();
+    for (std::size_t i = 0; i < c.outcome.evaluation.scenarios.size(); ++i) {
+      json m = metrics_json(c.outcome.evaluation.scenarios[i]);
+      m["name"] = r.job.scenarios[i].name;
+      cj["scenarios"].push_back(m);
+    }
+    doc["controllers"].push_back(cj);
+  }
+  return doc;
+}
+
+std::string comparison_markdown(const TuningOutcome& r) {
+  std::ostringstream o;
+  const Job& job = r.job;
+  o << "# " << job.name << ": controllers compared\n\n";
+  o << "Tuned:";
+  for (const auto& [name, value] : r.tuned) o << " " << name << " = " << fmt(value, "%.6g");
+  o << " (fitness J = " << fmt(r.optimization.best_fitness, "%.6g") << ", " << r.optimization.evaluations
+    << " evaluations, seed " << r.seed << ").\n\n";
+  o << "Objective: " << sim::to_string(job.objective.metric) << " over ["
+    << fmt(job.objective.window.t0) << ", "
+    << (std::isfinite(job.objective.window.t1) ? fmt(job.objective.window.t1) : std::string("end"))
+    << ") s, " << to_string(job.objective.aggregate) << " over scenarios.\n";
+  for (std::size_t s = 0; s < job.scenarios.size(); ++s) {
+    const sim::Scenario& sc = job.scenarios[s];
+    o << "\n## Scenario " << sc.name << "\n\n";
+    const sim::Metrics& first = r.comparison.front().outcome.evaluation.scenarios.at(s);
+    o << "| controller | ISE | IAE | ITAE | max \\|u_d\\| | control TV |";
+    for (const sim::Window& w : first.extra_windows)
+      o << " ISE [" << fmt(w.t0) << ", " << fmt(w.t1) << ") |";
+    for (std::size_t f = 0; f < first.fault_onsets.size(); ++f)
+      o << " peak ‖e‖ after fault " << f + 1 << " |";
+    o << "\n|---|---:|---:|---:|---:|---:|";
+    for (std::size_t k = 0; k < first.extra_windows.size() + first.fault_onsets.size(); ++k) o << "---:|";
+    o << "\n";
+    for (const ComparedController& c : r.comparison) {
+      const sim::Metrics& m = c.outcome.evaluation.scenarios.at(s);
+      o << "| " << c.label << (m.diverged ? " (diverged)" : "") << " | " << fmt(m.errors.ise) << " | "
+        << fmt(m.errors.iae) << " | " << fmt(m.errors.itae) << " | " << fmt(m.max_abs_u) << " | "
+        << fmt(m.control_tv) << " |";
+      for (const sim::ErrorIntegrals& e : m.extra) o << " " << fmt(e.ise) << " |";
+      for (double p : m.peak_error_after_fault) o << " " << fmt(p) << " |";
+      o << "\n";
+    }
+  }
+  o << "\nISE in rad²·s, IAE in rad·s, ITAE in rad·s², peak errors in rad; control TV = Σ‖u_k − u_{k−1}‖ "
+       "(chattering).\n";
+  return o.str();
+}
+
+void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir) {
+  write_file_atomic(dir / "gains.json", gains_document(r).dump(2) + "\n");
+  write_file_atomic(dir / "history.csv", history_csv(r));
+  write_file_atomic(dir / "comparison.json", comparison_document(r).dump(2) + "\n");
+  write_file_atomic(dir / "comparison.md", comparison_markdown(r));
+}
+
+}  // namespace ftc::tune
