@@ -13,7 +13,7 @@ namespace {
 SearchSpace box(std::size_t d, double lo, double hi) {
   SearchSpace s;
   for (std::size_t j = 0; j < d; ++j) {
-    s.names.push_back(std::to_string(j + 1).insert(0, "x"));
+    s.names.push_back(std::string(1, static_cast<char>('a' + j)));  // a, b, c, ...
     s.lower.push_back(lo);
     s.upper.push_back(hi);
   }
