@@ -6,6 +6,7 @@
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
 #include "ftc/sim/simulation.hpp"
+#include "ftc/sim/spacecraft.hpp"
 #include "ftc/tune/parallel_evaluator.hpp"
 #include "ftc/tune/problem.hpp"
 #include "ftc/tune/tuning_run.hpp"
@@ -222,4 +223,24 @@ TEST(Cli, RunWithoutTuningSectionExitsTwo) {
   const CliResult r = run_cli("run '" + (dir / "job.json").string() + "'", dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("/tuning: is required by ftctune run"), std::string::npos) << r.err;
+}
+
+// The README's "Using the gains in flight software" example, verbatim but for the file name.
+TEST(Runtime, ReadmeExampleLoadsAndSteps) {
+  const auto dir = fresh_dir("runtime");
+  tune::write_outputs(tune::tune(short_job(), with(2)), dir);
+  const std::string file = (dir / "gains.json").string();
+  const double t = 0.0;
+  const ftc::sim::Vec3 X1(0.1, -0.2, 0.3), X2(0.0, 0.1, 0.0), a(0.0, 0.0, 0.0);
+
+  const ftc::sim::Spacecraft plant({.inertia = {20, 17, 15}, .orbital_rate = 1.1e-3});
+  std::unique_ptr<ftc::sim::Controller> ctl =
+      ftc::runtime::load_controller(file, plant, /*sample_time=*/0.001);  // throws ftc::InputError
+  ctl->reset();
+  ftc::sim::Vec4 u_d = ctl->step(t, X1, X2, a);
+
+  EXPECT_TRUE(u_d.allFinite());
+  EXPECT_NE(u_d, ftc::sim::Vec4::Zero());
+  EXPECT_THROW(ftc::runtime::load_controller(file, plant, 0.002), ftc::InputError);
+  EXPECT_THROW(ftc::runtime::load_controller(dir / "missing.json", plant, 0.001), ftc::InputError);
 }

@@ -1,5 +1,6 @@
 // ftctune run JOB: tune the job's controller and write the gains file and its companions.
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -34,6 +35,11 @@ std::string utc_now() {
   char buf[32];
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
   return buf;
+}
+
+long max_rss_kib() {
+  rusage ru{};
+  return ::getrusage(RUSAGE_SELF, &ru) == 0 ? ru.ru_maxrss : -1;
 }
 
 std::string hostname() {
@@ -94,6 +100,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
                     {"threads", r.threads},
                     {"wall_seconds", wall},
                     {"simulations", r.simulations},
+                    {"max_rss_kib", max_rss_kib()},
                     {"job_file", o.job},
                     {"seed", r.seed},
                     {"generator", {{"name", kToolName}, {"version", kVersion}}}};

@@ -1,0 +1,77 @@
+// Whole tuning runs in process (what `ftctune run` does minus file output).
+//   BM_TuneTable1/threads:N      the Table 1 job, 110 evaluations + 4 comparison runs
+//   BM_TuneScaling/M/T/S         population M, iterations T, S copies of the scenario, 2 threads
+// max_rss_MiB is the process high-water mark after the case: run small to large, it stays flat
+// when memory does not grow with the job.
+#include <benchmark/benchmark.h>
+#include <sys/resource.h>
+
+#include <string>
+
+#include "ftc/tune/job.hpp"
+#include "ftc/tune/tuning_run.hpp"
+
+using namespace ftc;
+
+namespace {
+
+tune::Job table1() { return tune::load_job(std::string(FTC_SOURCE_DIR) + "/jobs/table1.json"); }
+
+double max_rss_mib() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return static_cast<double>(ru.ru_maxrss) / 1024.0;
+}
+
+void BM_TuneTable1(benchmark::State& state) {
+  const tune::Job job = table1();
+  tune::RunOptions o;
+  o.threads = static_cast<int>(state.range(0));
+  double J = 0;
+  for (auto _ : state) J += tune::tune(job, o).optimization.best_fitness;
+  benchmark::DoNotOptimize(J);
+  state.counters["max_rss_MiB"] = max_rss_mib();
+}
+BENCHMARK(BM_TuneTable1)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)
+    ->UseRealTime()->Iterations(1)->Repetitions(5)->ReportAggregatesOnly(true);
+
+void BM_TuneScaling(benchmark::State& state) {
+  tune::Job job = table1();
+  job.compare.clear();
+  job.tuning->algorithm.population = static_cast<int>(state.range(0));
+  job.tuning->algorithm.iterations = static_cast<int>(state.range(1));
+  const sim::Scenario base = job.scenarios.front();
+  job.scenarios.clear();
+  for (int s = 0; s < state.range(2); ++s) {
+    job.scenarios.push_back(base);
+    job.scenarios.back().name = "copy" + std::to_string(s);
+  }
+  tune::RunOptions o;
+  o.threads = 2;
+  double J = 0;
+  for (auto _ : state) J += tune::tune(job, o).optimization.best_fitness;
+  benchmark::DoNotOptimize(J);
+  const double sims = static_cast<double>(job.tuning->algorithm.evaluations() + 2) *
+                      static_cast<double>(job.scenarios.size());
+  state.counters["simulations"] = sims;
+  // Seconds of wall time per simulation (shown with a unit prefix, e.g. 8.6m = 8.6 ms).
+  state.counters["s_per_simulation"] =
+      benchmark::Counter(sims, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["max_rss_MiB"] = max_rss_mib();
+}
+BENCHMARK(BM_TuneScaling)
+    ->ArgNames({"M", "T", "S"})
+    ->Args({10, 10, 1})
+    ->Args({20, 10, 1})
+    ->Args({40, 10, 1})
+    ->Args({10, 20, 1})
+    ->Args({10, 40, 1})
+    ->Args({10, 10, 2})
+    ->Args({10, 10, 4})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+}  // namespace
+
+BENCHMARK_MAIN();
