@@ -244,3 +244,21 @@ TEST(Runtime, ReadmeExampleLoadsAndSteps) {
   EXPECT_THROW(ftc::runtime::load_controller(file, plant, 0.002), ftc::InputError);
   EXPECT_THROW(ftc::runtime::load_controller(dir / "missing.json", plant, 0.001), ftc::InputError);
 }
+
+TEST(TuningRun, ResumedRunGivesTheSameGainsFile) {
+  const tune::Job job = short_job();
+  const std::string uninterrupted = tune::gains_document(tune::tune(job, with(2))).dump();
+  std::string checkpoint;
+  tune::RunOptions stop = with(1);
+  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o) {
+    checkpoint = o.state().dump();
+    return h.iteration < 1;
+  };
+  const tune::TuningOutcome partial = tune::tune(job, stop);
+  EXPECT_FALSE(partial.completed());
+  EXPECT_TRUE(partial.comparison.empty());
+  const json state = json::parse(checkpoint);
+  tune::RunOptions resume = with(2);
+  resume.resume = &state;
+  EXPECT_EQ(tune::gains_document(tune::tune(job, resume)).dump(), uninterrupted);
+}

@@ -75,7 +75,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   tune::RunOptions ro;
   ro.threads = o.threads;
   ro.seed = o.seed;
-  ro.observer = [&](const tune::HistoryRow& h) {
+  ro.observer = [&](const tune::HistoryRow& h, const tune::Optimizer&) {
     const double elapsed = std::chrono::duration<double>(clock::now() - t0).count();
     const double eta = h.evaluations > 0 ? elapsed * static_cast<double>(total - h.evaluations) /
                                                static_cast<double>(h.evaluations)

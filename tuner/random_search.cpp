@@ -33,6 +33,25 @@ void RandomSearch::generation(BatchEvaluator& evaluator) {
   history_.push_back(std::move(row));
 }
 
+nlohmann::json RandomSearch::state() const {
+  nlohmann::json history = nlohmann::json::array();
+  for (const HistoryRow& h : history_) history.push_back(to_json(h));
+  return {{"algorithm", "random"}, {"t", t_}, {"evaluations", evaluations_},
+          {"rng", rng_.save()},    {"best", best_}, {"best_fitness", exact(best_fitness_)},
+          {"history", history}};
+}
+
+void RandomSearch::restore(const nlohmann::json& s) {
+  if (s.at("algorithm") != "random") throw std::invalid_argument("checkpoint is not a random-search state");
+  t_ = s.at("t").get<int>();
+  evaluations_ = s.at("evaluations").get<std::int64_t>();
+  rng_.load(s.at("rng").get<std::string>());
+  best_ = s.at("best").get<Decision>();
+  best_fitness_ = exact_double(s.at("best_fitness"), std::numeric_limits<double>::infinity());
+  history_.clear();
+  for (const nlohmann::json& h : s.at("history")) history_.push_back(history_row_from_json(h));
+}
+
 void RandomSearch::initialize(BatchEvaluator& evaluator) {
   t_ = 0;
   generation(evaluator);

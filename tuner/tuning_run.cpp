@@ -56,7 +56,11 @@ TuningOutcome tune(const Job& job, const RunOptions& options) {
   ParallelEvaluator evaluator(problem, options.threads);
   r.threads = evaluator.threads();
   auto optimizer = make_optimizer(job.tuning->algorithm, r.seed, problem.space());
-  r.optimization = run_optimizer(*optimizer, evaluator, options.observer);
+  r.optimization = run_optimizer(*optimizer, evaluator, options.observer, options.resume);
+  if (!r.optimization.completed) {
+    r.simulations = evaluator.simulations();
+    return r;
+  }
 
   r.tuned_controller = problem.controller_for(r.optimization.best);
   for (std::size_t j = 0; j < problem.space().names.size(); ++j)

@@ -42,6 +42,8 @@ class BatAlgorithm final : public Optimizer {
   int iteration() const override { return t_; }
   int iterations() const override { return config_.iterations; }
   const std::vector<HistoryRow>& history() const override { return history_; }
+  nlohmann::json state() const override;
+  void restore(const nlohmann::json& state) override;
 
   const std::vector<Bat>& bats() const { return bats_; }
   const Decision& best() const { return best_; }

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "ftc/tune/batch_evaluator.hpp"
@@ -39,15 +40,31 @@ class Optimizer {
   virtual int iteration() const = 0;   // completed iterations (0 after initialize)
   virtual int iterations() const = 0;  // T
   virtual const std::vector<HistoryRow>& history() const = 0;
+
+  // The complete state after the last iteration, random-number engine included, as JSON with
+  // exact (round-trip) doubles. restore() continues from it exactly as if never interrupted.
+  virtual nlohmann::json state() const = 0;
+  virtual void restore(const nlohmann::json& state) = 0;
 };
 
 std::unique_ptr<Optimizer> make_optimizer(const AlgorithmConfig& config, std::uint64_t seed,
                                           const SearchSpace& space);
 
-// Called after every iteration (including 0); returning false stops the run.
-using IterationObserver = std::function<bool(const HistoryRow&)>;
+// Called after every iteration (including 0); returning false stops the run. The optimizer is
+// passed so that a caller can checkpoint its state().
+using IterationObserver = std::function<bool(const HistoryRow&, const Optimizer&)>;
 
+// Runs to the last iteration or until the observer says stop. With `resume` (a state() saved
+// earlier) it continues from there instead of initialising.
 OptimizationResult run_optimizer(Optimizer& optimizer, BatchEvaluator& evaluator,
-                                 const IterationObserver& observer = {});
+                                 const IterationObserver& observer = {},
+                                 const nlohmann::json* resume = nullptr);
+
+// HistoryRow <-> JSON, shared by checkpoints.
+nlohmann::json to_json(const HistoryRow& row);
+HistoryRow history_row_from_json(const nlohmann::json& j);
+// Exact doubles through JSON: non-finite values are written as null and read back as NaN/inf.
+nlohmann::json exact(double v);
+double exact_double(const nlohmann::json& j, double if_null);
 
 }  // namespace ftc::tune

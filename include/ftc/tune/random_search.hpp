@@ -16,6 +16,8 @@ class RandomSearch final : public Optimizer {
   int iteration() const override { return t_; }
   int iterations() const override { return config_.iterations; }
   const std::vector<HistoryRow>& history() const override { return history_; }
+  nlohmann::json state() const override;
+  void restore(const nlohmann::json& state) override;
 
  private:
   void generation(BatchEvaluator& evaluator);

@@ -4,6 +4,8 @@
 // libraries. Same seed, same sequence, on any platform.
 #include <cstdint>
 #include <random>
+#include <sstream>
+#include <string>
 
 namespace ftc::tune {
 
@@ -14,8 +16,16 @@ class Rng {
   double uniform() { return static_cast<double>(gen_() >> 11) * 0x1.0p-53; }  // [0, 1)
   double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
 
-  std::mt19937_64& engine() { return gen_; }  // for saving and restoring the state
-  const std::mt19937_64& engine() const { return gen_; }
+  // The engine's full state as text (the standard's textual representation) and back.
+  std::string save() const {
+    std::ostringstream o;
+    o << gen_;
+    return o.str();
+  }
+  void load(const std::string& state) {
+    std::istringstream in(state);
+    in >> gen_;
+  }
 
  private:
   std::mt19937_64 gen_;

@@ -25,6 +25,7 @@ struct RunOptions {
   int threads = 0;                     // <= 0: all hardware threads
   std::optional<std::uint64_t> seed;   // overrides tuning.seed
   IterationObserver observer;          // progress; return false to stop
+  const nlohmann::json* resume = nullptr;  // an Optimizer::state() to continue from
 };
 
 struct ComparedController {
@@ -44,12 +45,14 @@ struct TuningOutcome {
   std::vector<ComparedController> comparison;  // compare entries, then baseline, then tuned
   int threads = 0;
   std::int64_t simulations = 0;
+  bool completed() const { return optimization.completed; }
 
   const ComparedController& baseline() const { return comparison[comparison.size() - 2]; }
   const ComparedController& best() const { return comparison.back(); }
 };
 
-// Throws InputError for a job that cannot be tuned.
+// Throws InputError for a job that cannot be tuned. When the observer stops the run early, the
+// comparison is skipped and the outcome is not completed().
 TuningOutcome tune(const Job& job, const RunOptions& options = {});
 
 std::string canonical_job_sha256(const Job& job);
