@@ -21,6 +21,8 @@ using Action = std::function<int()>;
 void add_simulate_command(CLI::App& app, const Globals& g, Action& action);
 void add_run_command(CLI::App& app, const Globals& g, Action& action);
 void add_validate_command(CLI::App& app, const Globals& g, Action& action);
+void add_serve_command(CLI::App& app, const Globals& g, Action& action);
+void add_client_commands(CLI::App& app, const Globals& g, Action& action);
 
 // The controller selected by --controller TYPE (Table 1 defaults) or the job's own, with
 // --set KEY=VALUE overrides; throws InputError (source "--set") naming the offending key.
@@ -29,5 +31,6 @@ sim::ControllerConfig select_controller(const tune::Job& job, const std::string&
 
 // Default output directory of a job: out/<job name>.
 std::filesystem::path default_out_dir(const tune::Job& job);
+std::filesystem::path default_out_dir_for(const std::string& job_name);
 
 }  // namespace ftc::cli

@@ -52,8 +52,6 @@ sim::ControllerConfig select_controller(const tune::Job& job, const std::string&
   return c;
 }
 
-std::filesystem::path default_out_dir(const tune::Job& job) {
-  return std::filesystem::path("out") / job.name;
-}
+std::filesystem::path default_out_dir(const tune::Job& job) { return default_out_dir_for(job.name); }
 
 }  // namespace ftc::cli

@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   ftc::cli::add_run_command(app, globals, action);
   ftc::cli::add_simulate_command(app, globals, action);
   ftc::cli::add_validate_command(app, globals, action);
+  ftc::cli::add_serve_command(app, globals, action);
+  ftc::cli::add_client_commands(app, globals, action);
 
   try {
     app.parse(argc, argv);

@@ -429,7 +429,12 @@ Job parse_job(const json& j, const std::string& source) {
   if (const json* t = r.child("tuning")) job.tuning = parse_tuning(*t, "/tuning", errs);
   r.finish();
 
-  append(errs, job.validate());
+  // Range checks only where parsing found nothing: a missing or mistyped field is reported once.
+  for (FieldError& e : job.validate()) {
+    bool known = false;
+    for (const FieldError& p : errs) known = known || p.path == e.path;
+    if (!known) errs.push_back(std::move(e));
+  }
   throw_if_errors(source, std::move(errs));
   return job;
 }

@@ -204,11 +204,15 @@ std::string comparison_markdown(const TuningOutcome& r) {
   return o.str();
 }
 
+std::map<std::string, std::string> output_files(const TuningOutcome& r) {
+  return {{"gains.json", gains_document(r).dump(2) + "\n"},
+          {"history.csv", history_csv(r)},
+          {"comparison.json", comparison_document(r).dump(2) + "\n"},
+          {"comparison.md", comparison_markdown(r)}};
+}
+
 void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir) {
-  write_file_atomic(dir / "gains.json", gains_document(r).dump(2) + "\n");
-  write_file_atomic(dir / "history.csv", history_csv(r));
-  write_file_atomic(dir / "comparison.json", comparison_document(r).dump(2) + "\n");
-  write_file_atomic(dir / "comparison.md", comparison_markdown(r));
+  for (const auto& [name, content] : output_files(r)) write_file_atomic(dir / name, content);
 }
 
 }  // namespace ftc::tune

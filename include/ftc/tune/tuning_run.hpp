@@ -6,6 +6,7 @@
 // job and the seed; run metadata is the caller's.
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -63,7 +64,10 @@ std::string history_csv(const TuningOutcome& r);
 nlohmann::json comparison_document(const TuningOutcome& r);
 std::string comparison_markdown(const TuningOutcome& r);
 
-// Writes gains.json, history.csv, comparison.json and comparison.md into `dir`, each atomically.
+// The result files of a completed run, name → content: gains.json, history.csv,
+// comparison.json and comparison.md. The CLI and the service both write exactly these bytes.
+std::map<std::string, std::string> output_files(const TuningOutcome& r);
+// Writes output_files() into `dir`, each atomically.
 void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir);
 
 }  // namespace ftc::tune

@@ -1,0 +1,103 @@
+#pragma once
+// The tuning service's durable store: one SQLite database (WAL mode, synchronous=FULL) in the
+// store directory. Jobs, their progress, optimiser checkpoints and result files live in it, and
+// every state change is one committed transaction, so a killed server loses nothing that was
+// acknowledged. Thread-safe (one connection behind a mutex).
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+struct sqlite3;
+
+namespace ftc::tune {
+
+enum class JobStatus { queued, running, succeeded, failed, cancelled };
+const char* to_string(JobStatus s);
+std::optional<JobStatus> job_status_from_string(std::string_view s);
+inline bool is_terminal(JobStatus s) {
+  return s == JobStatus::succeeded || s == JobStatus::failed || s == JobStatus::cancelled;
+}
+
+struct JobRecord {
+  std::string id;
+  std::int64_t seq = 0;  // submission order
+  std::string name;
+  JobStatus status = JobStatus::queued;
+  std::string created_at, started_at, finished_at, updated_at;  // UTC ISO 8601, "" = not yet
+  int iteration = -1;  // last completed optimiser iteration, -1 = none
+  int iterations = 0;
+  std::int64_t evaluations = 0;
+  std::int64_t total_evaluations = 0;
+  std::optional<double> best_fitness;
+  nlohmann::json best = nlohmann::json::object();  // parameter name → value
+  std::string error;
+  bool cancel_requested = false;
+  int attempts = 0;  // how many times a worker started it
+};
+
+struct Submission {
+  std::string job_json;  // canonical JSON of the validated job
+  std::string name;
+  int iterations = 0;
+  std::int64_t total_evaluations = 0;
+  std::optional<std::string> idempotency_key;
+};
+
+class JobStore {
+ public:
+  explicit JobStore(const std::filesystem::path& directory);
+  ~JobStore();
+  JobStore(const JobStore&) = delete;
+  JobStore& operator=(const JobStore&) = delete;
+
+  const std::filesystem::path& database() const { return db_path_; }
+
+  // A new queued job; with an idempotency key already used, the existing job and false.
+  std::pair<JobRecord, bool> submit(const Submission& s);
+  std::optional<JobRecord> get(const std::string& id);
+  std::string job_json(const std::string& id);
+  // Newest first.
+  std::vector<JobRecord> list(std::optional<JobStatus> status, int limit, int offset);
+  std::int64_t count(std::optional<JobStatus> status);
+
+  // Oldest queued job, now running (attempts + 1); none when the queue is empty.
+  std::optional<JobRecord> claim_next();
+  // Progress and optimiser checkpoint after an iteration, in one transaction.
+  void record_progress(const std::string& id, int iteration, std::int64_t evaluations,
+                       double best_fitness, const nlohmann::json& best, const std::string& checkpoint);
+  std::optional<std::string> checkpoint(const std::string& id);
+
+  void finish_succeeded(const std::string& id, const std::map<std::string, std::string>& artifacts);
+  void finish_failed(const std::string& id, const std::string& error);
+  void finish_cancelled(const std::string& id);
+  void requeue(const std::string& id);  // back to the queue, checkpoint kept
+  // Queued: cancelled at once. Running: flagged, the worker stops after its iteration.
+  // Returns the record after the change, or nullopt for an unknown id.
+  std::optional<JobRecord> request_cancel(const std::string& id);
+  bool cancel_requested(const std::string& id);
+
+  // At start-up: jobs left running by a crash go back to the queue. Returns how many.
+  int recover();
+  std::optional<std::string> artifact(const std::string& id, const std::string& name);
+
+ private:
+  class Statement;
+  void exec(const char* sql);
+  template <class F>
+  auto transaction(F&& body);
+
+  std::filesystem::path db_path_;
+  int lock_fd_ = -1;
+  sqlite3* db_ = nullptr;
+  std::mutex mutex_;
+};
+
+}  // namespace ftc::tune

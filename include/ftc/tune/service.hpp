@@ -1,0 +1,58 @@
+#pragma once
+// The tuning service behind `ftctune serve`: an HTTP/JSON API (cpp-httplib) in front of a
+// durable SQLite job store, and worker threads that run queued jobs in submission order with the
+// same tuner as `ftctune run`. See the README's "Running the service" for the API.
+//
+// Durability: a job's progress and optimiser checkpoint are committed after every iteration, so
+// after a crash start() puts running jobs back in the queue and they resume from their last
+// iteration, ending with the same gains file an uninterrupted run gives. stop() (SIGTERM)
+// stops accepting requests, lets each running job finish its current iteration, checkpoints
+// it back into the queue, and returns.
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ftc/sim/input_error.hpp"
+
+namespace ftc::tune {
+
+struct ServiceOptions {
+  std::string bind = "127.0.0.1";
+  int port = 8080;  // 0: any free port (start() returns it)
+  std::filesystem::path store = "ftctune-store";
+  int concurrent_jobs = 1;
+  int threads = 0;                     // TBB threads per job; <= 0: all cores
+  std::optional<std::string> token;    // when set, every request needs "Authorization: Bearer <token>"
+  std::size_t max_body_bytes = 1 << 20;
+  double max_steps = 2e9;              // budget: evaluations × simulated steps per evaluation
+
+  // Every bad option, e.g. a non-loopback bind without a token.
+  std::vector<FieldError> validate() const;
+};
+
+bool is_loopback(const std::string& host);
+
+class TuningService {
+ public:
+  // Opens (or creates) the store; throws std::runtime_error when it is locked by another server.
+  explicit TuningService(ServiceOptions options);
+  ~TuningService();
+  TuningService(const TuningService&) = delete;
+  TuningService& operator=(const TuningService&) = delete;
+
+  // Recovers crashed jobs, binds, starts the listener and the workers; returns the bound port.
+  int start();
+  // Graceful shutdown, see above. Idempotent.
+  void stop();
+
+  int recovered_jobs() const;  // jobs put back in the queue by start()
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ftc::tune

@@ -1,0 +1,268 @@
+// Client commands of the tuning service: submit, status, fetch, cancel, jobs.
+// Server from --server, else $FTCTUNE_SERVER, else http://127.0.0.1:8080; token from $FTCTUNE_TOKEN.
+#include "cli.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/files.hpp"
+
+// After the project's headers (Eigen): httplib.h pulls in <resolv.h> and its `_res` macro.
+#include <httplib.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+namespace ftc::cli {
+namespace {
+
+using nlohmann::json;
+
+struct ClientOptions {
+  std::string server;
+  bool json_output = false;
+};
+
+// A connection problem: one line, exit 1.
+struct Unreachable : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+// The server answered with an error status.
+struct ServerError : std::runtime_error {
+  ServerError(int s, const std::string& m) : std::runtime_error(m), status(s) {}
+  int status;
+};
+
+class Api {
+ public:
+  explicit Api(const ClientOptions& o) {
+    url_ = o.server;
+    if (url_.empty()) {
+      const char* env = std::getenv("FTCTUNE_SERVER");
+      url_ = env && *env ? env : "http://127.0.0.1:8080";
+    }
+    while (!url_.empty() && url_.back() == '/') url_.pop_back();
+    client_ = std::make_unique<httplib::Client>(url_);
+    if (!client_->is_valid()) throw InputError("--server", "", "not a valid server URL: " + url_);
+    client_->set_connection_timeout(5, 0);
+    client_->set_read_timeout(30, 0);
+    if (const char* token = std::getenv("FTCTUNE_TOKEN"); token && *token) client_->set_bearer_token_auth(token);
+  }
+
+  const std::string& url() const { return url_; }
+
+  std::string get(const std::string& path) { return check(client_->Get(path.c_str()), path); }
+  std::string post(const std::string& path, const std::string& body) {
+    return check(client_->Post(path.c_str(), body, "application/json"), path);
+  }
+
+ private:
+  std::string check(const httplib::Result& r, const std::string& path) {
+    if (!r)
+      throw Unreachable("cannot reach the ftctune server at " + url_ + " (" + httplib::to_string(r.error()) + ")");
+    if (r->status >= 400) {
+      std::string msg = "HTTP " + std::to_string(r->status) + " from " + path;
+      const json body = json::parse(r->body, nullptr, false);
+      if (body.is_object() && body.contains("error")) {
+        msg = body["error"].value("message", msg);
+        if (body["error"].contains("details") && body["error"]["details"].is_array())
+          for (const json& d : body["error"]["details"])
+            if (d.is_object() && d.contains("path") && d.size() == 2)
+              msg += "\n  " + d["path"].get<std::string>() + ": " + d["message"].get<std::string>();
+      }
+      throw ServerError(r->status, msg);
+    }
+    return r->body;
+  }
+
+  std::string url_;
+  std::unique_ptr<httplib::Client> client_;
+};
+
+std::string describe(const json& j) {
+  const json& p = j["progress"];
+  std::string s = j["id"].get<std::string>() + "  " + j["name"].get<std::string>() + "  " +
+                  j["status"].get<std::string>();
+  if (!p["iteration"].is_null())
+    s += "  iteration " + std::to_string(p["iteration"].get<int>()) + "/" + std::to_string(p["iterations"].get<int>());
+  s += "  " + std::to_string(p["evaluations"].get<long long>()) + "/" +
+       std::to_string(p["total_evaluations"].get<long long>()) + " evaluations";
+  if (!p["best_fitness"].is_null()) {
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "  best J = %.6g", p["best_fitness"].get<double>());
+    s += buf;
+    for (auto it = p["best"].begin(); it != p["best"].end(); ++it) {
+      std::snprintf(buf, sizeof buf, " %s = %.5g", it.key().c_str(), it.value().get<double>());
+      s += buf;
+    }
+  }
+  if (!j["error"].is_null()) s += "\n  error: " + j["error"].get<std::string>();
+  return s;
+}
+
+// Runs a client action, mapping failures to one line and an exit code.
+int guarded(const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const Unreachable& e) {
+    std::fprintf(stderr, "ftctune: error: %s\n", e.what());
+    return 1;
+  } catch (const ServerError& e) {
+    std::fprintf(stderr, "ftctune: error: %s\n", e.what());
+    return e.status >= 500 ? 1 : 2;
+  }
+}
+
+void print_json(const std::string& body) { std::printf("%s\n", json::parse(body).dump(2).c_str()); }
+
+int fetch_gains(Api& api, const std::string& id, const std::string& out, const std::string& name, bool quiet) {
+  const std::string gains = api.get("/v1/jobs/" + id + "/gains");
+  const std::filesystem::path file = out.empty() ? default_out_dir_for(name) / "gains.json" : std::filesystem::path(out);
+  tune::write_file_atomic(file, gains);
+  if (!quiet) std::printf("wrote %s\n", file.c_str());
+  return 0;
+}
+
+}  // namespace
+
+std::filesystem::path default_out_dir_for(const std::string& job_name) {
+  return std::filesystem::path("out") / job_name;
+}
+
+void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
+  auto o = std::make_shared<ClientOptions>();
+  const auto common = [o](CLI::App* sub) {
+    sub->add_option("--server", o->server, "Server URL (default $FTCTUNE_SERVER or http://127.0.0.1:8080)");
+    sub->add_flag("--json", o->json_output, "Print the server's JSON");
+  };
+
+  {
+    auto job = std::make_shared<std::string>();
+    auto wait = std::make_shared<bool>(false);
+    auto out = std::make_shared<std::string>();
+    CLI::App* sub = app.add_subcommand("submit", "Submit a tuning job to the service");
+    sub->add_option("job", *job, "Job file (ftctune.job/1)")->required();
+    sub->add_flag("--wait", *wait, "Follow the progress, then fetch the gains file");
+    sub->add_option("-o,--output", *out, "With --wait: where to write the gains (default out/<job name>/gains.json)");
+    common(sub);
+    sub->callback([&action, &g, o, job, wait, out] {
+      action = [&g, o, job, wait, out] {
+        return guarded([&] {
+          std::ifstream in(*job, std::ios::binary);
+          if (!in) throw InputError(*job, "", "cannot open the job file");
+          std::stringstream ss;
+          ss << in.rdbuf();
+          Api api(*o);
+          const json created = json::parse(api.post("/v1/jobs", ss.str()));
+          const std::string id = created["id"];
+          if (o->json_output && !*wait) print_json(created.dump());
+          else std::printf("%s\n", id.c_str());
+          std::fflush(stdout);
+          if (!*wait) return 0;
+          int last_iteration = -2;
+          while (true) {
+            const json j = json::parse(api.get("/v1/jobs/" + id));
+            const std::string status = j["status"];
+            const int it = j["progress"]["iteration"].is_null() ? -1 : j["progress"]["iteration"].get<int>();
+            if (it != last_iteration && !g.quiet) {
+              std::fprintf(stderr, "%s\n", describe(j).c_str());
+              last_iteration = it;
+            }
+            if (status == "succeeded") return fetch_gains(api, id, *out, j["name"], g.quiet);
+            if (status == "failed" || status == "cancelled") {
+              std::fprintf(stderr, "ftctune: job %s %s\n", id.c_str(), status.c_str());
+              return 1;
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(200));
+          }
+        });
+      };
+    });
+  }
+  {
+    auto id = std::make_shared<std::string>();
+    CLI::App* sub = app.add_subcommand("status", "Show a job's status and progress");
+    sub->add_option("id", *id, "Job id")->required();
+    common(sub);
+    sub->callback([&action, o, id] {
+      action = [o, id] {
+        return guarded([&] {
+          Api api(*o);
+          const std::string body = api.get("/v1/jobs/" + *id);
+          if (o->json_output) print_json(body);
+          else std::printf("%s\n", describe(json::parse(body)).c_str());
+          return 0;
+        });
+      };
+    });
+  }
+  {
+    auto id = std::make_shared<std::string>();
+    auto out = std::make_shared<std::string>();
+    CLI::App* sub = app.add_subcommand("fetch", "Download a finished job's gains file");
+    sub->add_option("id", *id, "Job id")->required();
+    sub->add_option("-o,--output", *out, "Output file (default out/<job name>/gains.json)");
+    common(sub);
+    sub->callback([&action, &g, o, id, out] {
+      action = [&g, o, id, out] {
+        return guarded([&] {
+          Api api(*o);
+          const json j = json::parse(api.get("/v1/jobs/" + *id));
+          return fetch_gains(api, *id, *out, j["name"], g.quiet);
+        });
+      };
+    });
+  }
+  {
+    auto id = std::make_shared<std::string>();
+    CLI::App* sub = app.add_subcommand("cancel", "Cancel a queued or running job");
+    sub->add_option("id", *id, "Job id")->required();
+    common(sub);
+    sub->callback([&action, o, id] {
+      action = [o, id] {
+        return guarded([&] {
+          Api api(*o);
+          const std::string body = api.post("/v1/jobs/" + *id + "/cancel", "");
+          if (o->json_output) print_json(body);
+          else {
+            const json j = json::parse(body);
+            std::printf("%s %s\n", id->c_str(),
+                        j["status"] == "cancelled" ? "cancelled" : "will stop after its current iteration");
+          }
+          return 0;
+        });
+      };
+    });
+  }
+  {
+    auto status = std::make_shared<std::string>();
+    auto limit = std::make_shared<int>(20);
+    CLI::App* sub = app.add_subcommand("jobs", "List jobs, newest first");
+    sub->add_option("--status", *status, "Only jobs in this status");
+    sub->add_option("--limit", *limit, "How many (default 20)");
+    common(sub);
+    sub->callback([&action, o, status, limit] {
+      action = [o, status, limit] {
+        return guarded([&] {
+          Api api(*o);
+          std::string path = "/v1/jobs?limit=" + std::to_string(*limit);
+          if (!status->empty()) path += "&status=" + *status;
+          const std::string body = api.get(path);
+          if (o->json_output) {
+            print_json(body);
+            return 0;
+          }
+          const json j = json::parse(body);
+          for (const json& job : j["jobs"]) std::printf("%s\n", describe(job).c_str());
+          std::printf("(%zu of %lld)\n", j["jobs"].size(), j["total"].get<long long>());
+          return 0;
+        });
+      };
+    });
+  }
+}
+
+}  // namespace ftc::cli

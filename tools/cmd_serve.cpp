@@ -1,0 +1,83 @@
+// ftctune serve: the tuning service. SIGTERM or SIGINT shut it down gracefully.
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "cli.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/service.hpp"
+
+namespace ftc::cli {
+namespace {
+
+struct ServeOptions {
+  tune::ServiceOptions service;
+  std::string token_file;
+  std::size_t max_body_kib = 1024;
+};
+
+std::string read_token(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError("--token-file", "", "cannot read " + file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string t = ss.str();
+  while (!t.empty() && std::isspace(static_cast<unsigned char>(t.back()))) t.pop_back();
+  while (!t.empty() && std::isspace(static_cast<unsigned char>(t.front()))) t.erase(0, 1);
+  return t;
+}
+
+int run_serve(ServeOptions o) {
+  if (!o.token_file.empty()) o.service.token = read_token(o.token_file);
+  o.service.max_body_bytes = o.max_body_kib * 1024;
+
+  // Block the shutdown signals in every thread (the workers inherit the mask); this thread
+  // waits for them with sigwait.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  tune::TuningService service(o.service);
+  int port = 0;
+  try {
+    port = service.start();
+  } catch (const std::runtime_error& e) {
+    std::fprintf(stderr, "ftctune: error: %s\n", e.what());
+    return 1;
+  }
+  std::printf("ftctune serve: listening on http://%s:%d (store %s, %d concurrent job%s%s)\n",
+              o.service.bind.c_str(), port, o.service.store.c_str(), o.service.concurrent_jobs,
+              o.service.concurrent_jobs == 1 ? "" : "s", o.service.token ? ", token required" : "");
+  std::fflush(stdout);
+
+  int sig = 0;
+  sigwait(&signals, &sig);
+  spdlog::info("{}: stopping; running jobs are checkpointed and stay queued", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+  service.stop();
+  spdlog::info("stopped");
+  return 0;
+}
+
+}  // namespace
+
+void add_serve_command(CLI::App& app, const Globals&, Action& action) {
+  auto o = std::make_shared<ServeOptions>();
+  CLI::App* sub = app.add_subcommand("serve", "Run the tuning service (HTTP API, durable job store)");
+  sub->add_option("--bind", o->service.bind, "Address to listen on (default 127.0.0.1)");
+  sub->add_option("--port", o->service.port, "Port (default 8080; 0 = any free port)");
+  sub->add_option("--store", o->service.store, "Store directory (default ./ftctune-store)");
+  sub->add_option("--concurrent-jobs", o->service.concurrent_jobs, "Jobs run at once (default 1)");
+  sub->add_option("--threads", o->service.threads, "Threads per job (default: all cores)");
+  sub->add_option("--token-file", o->token_file, "File holding the bearer token every request must carry");
+  sub->add_option("--max-body-kib", o->max_body_kib, "Largest accepted request body in KiB (default 1024)");
+  sub->add_option("--max-steps", o->service.max_steps,
+                  "Largest accepted job: evaluations x simulated steps per evaluation (default 2e9)");
+  sub->callback([&action, o] { action = [o] { return run_serve(*o); }; });
+}
+
+}  // namespace ftc::cli

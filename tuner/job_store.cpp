@@ -1,0 +1,418 @@
+#include "ftc/tune/job_store.hpp"
+
+#include <fcntl.h>
+#include <sqlite3.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <random>
+#include <stdexcept>
+
+namespace ftc::tune {
+
+namespace {
+
+std::string now_iso() {
+  using namespace std::chrono;
+  const auto now = system_clock::now();
+  const std::time_t t = system_clock::to_time_t(now);
+  const auto ms = duration_cast<milliseconds>(now.time_since_epoch()).count() % 1000;
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms));
+  return buf;
+}
+
+std::string new_id() {
+  static thread_local std::mt19937_64 gen{std::random_device{}()};
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(gen()));
+  return buf;
+}
+
+constexpr const char* kSchema = R"sql(
+CREATE TABLE IF NOT EXISTS jobs (
+  seq               INTEGER PRIMARY KEY AUTOINCREMENT,
+  id                TEXT NOT NULL UNIQUE,
+  name              TEXT NOT NULL,
+  status            TEXT NOT NULL,
+  job_json          TEXT NOT NULL,
+  idempotency_key   TEXT UNIQUE,
+  created_at        TEXT NOT NULL,
+  started_at        TEXT NOT NULL DEFAULT '',
+  finished_at       TEXT NOT NULL DEFAULT '',
+  updated_at        TEXT NOT NULL,
+  iteration         INTEGER NOT NULL DEFAULT -1,
+  iterations        INTEGER NOT NULL,
+  evaluations       INTEGER NOT NULL DEFAULT 0,
+  total_evaluations INTEGER NOT NULL,
+  best_fitness      REAL,
+  best              TEXT NOT NULL DEFAULT '{}',
+  error             TEXT NOT NULL DEFAULT '',
+  cancel_requested  INTEGER NOT NULL DEFAULT 0,
+  attempts          INTEGER NOT NULL DEFAULT 0,
+  checkpoint        TEXT
+);
+CREATE INDEX IF NOT EXISTS jobs_by_status ON jobs(status, seq);
+CREATE TABLE IF NOT EXISTS artifacts (
+  job_id  TEXT NOT NULL,
+  name    TEXT NOT NULL,
+  content BLOB NOT NULL,
+  PRIMARY KEY (job_id, name)
+);
+)sql";
+
+constexpr const char* kColumns =
+    "id, seq, name, status, created_at, started_at, finished_at, updated_at, iteration, "
+    "iterations, evaluations, total_evaluations, best_fitness, best, error, cancel_requested, "
+    "attempts";
+
+}  // namespace
+
+const char* to_string(JobStatus s) {
+  switch (s) {
+    case JobStatus::queued: return "queued";
+    case JobStatus::running: return "running";
+    case JobStatus::succeeded: return "succeeded";
+    case JobStatus::failed: return "failed";
+    case JobStatus::cancelled: return "cancelled";
+  }
+  return "?";
+}
+
+std::optional<JobStatus> job_status_from_string(std::string_view s) {
+  for (JobStatus j : {JobStatus::queued, JobStatus::running, JobStatus::succeeded,
+                      JobStatus::failed, JobStatus::cancelled})
+    if (s == to_string(j)) return j;
+  return std::nullopt;
+}
+
+// A prepared statement; binds by 1-based index, steps, reads columns, finalizes on scope exit.
+class JobStore::Statement {
+ public:
+  Statement(sqlite3* db, const char* sql) : db_(db) {
+    if (sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr) != SQLITE_OK) fail("prepare");
+  }
+  ~Statement() { sqlite3_finalize(stmt_); }
+  Statement& bind(int i, const std::string& v) {
+    sqlite3_bind_text(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+    return *this;
+  }
+  Statement& bind_blob(int i, const std::string& v) {
+    sqlite3_bind_blob(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+    return *this;
+  }
+  Statement& bind(int i, std::int64_t v) {
+    sqlite3_bind_int64(stmt_, i, v);
+    return *this;
+  }
+  Statement& bind(int i, double v) {
+    sqlite3_bind_double(stmt_, i, v);
+    return *this;
+  }
+  Statement& bind_null(int i) {
+    sqlite3_bind_null(stmt_, i);
+    return *this;
+  }
+  bool step() {  // true while a row is available
+    const int rc = sqlite3_step(stmt_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    fail("step");
+  }
+  std::string text(int c) const {
+    const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, c));
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, c))) : std::string();
+  }
+  std::string blob(int c) const {
+    const auto* p = static_cast<const char*>(sqlite3_column_blob(stmt_, c));
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, c))) : std::string();
+  }
+  std::int64_t integer(int c) const { return sqlite3_column_int64(stmt_, c); }
+  bool is_null(int c) const { return sqlite3_column_type(stmt_, c) == SQLITE_NULL; }
+  double real(int c) const { return sqlite3_column_double(stmt_, c); }
+
+  JobRecord record() const {
+    JobRecord r;
+    r.id = text(0);
+    r.seq = integer(1);
+    r.name = text(2);
+    r.status = job_status_from_string(text(3)).value_or(JobStatus::failed);
+    r.created_at = text(4);
+    r.started_at = text(5);
+    r.finished_at = text(6);
+    r.updated_at = text(7);
+    r.iteration = static_cast<int>(integer(8));
+    r.iterations = static_cast<int>(integer(9));
+    r.evaluations = integer(10);
+    r.total_evaluations = integer(11);
+    if (!is_null(12)) r.best_fitness = real(12);
+    r.best = nlohmann::json::parse(text(13), nullptr, false);
+    r.error = text(14);
+    r.cancel_requested = integer(15) != 0;
+    r.attempts = static_cast<int>(integer(16));
+    return r;
+  }
+
+ private:
+  [[noreturn]] void fail(const char* what) const {
+    throw std::runtime_error(std::string("job store: ") + what + ": " + sqlite3_errmsg(db_));
+  }
+  sqlite3* db_;
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+JobStore::JobStore(const std::filesystem::path& directory) {
+  std::filesystem::create_directories(directory);
+  // One server per store: two would run the same queue and jobs twice.
+  const std::string lock = (directory / "lock").string();
+  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock_fd_ < 0 || ::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    if (lock_fd_ >= 0) ::close(lock_fd_);
+    throw std::runtime_error("the store " + directory.string() + " is in use by another server");
+  }
+  db_path_ = directory / "ftctune.db";
+  if (sqlite3_open_v2(db_path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+                      nullptr) != SQLITE_OK) {
+    const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    ::close(lock_fd_);
+    throw std::runtime_error("cannot open " + db_path_.string() + ": " + msg);
+  }
+  sqlite3_busy_timeout(db_, 5000);
+  exec("PRAGMA journal_mode=WAL");
+  exec("PRAGMA synchronous=FULL");
+  exec(kSchema);
+}
+
+JobStore::~JobStore() {
+  sqlite3_close(db_);
+  if (lock_fd_ >= 0) ::close(lock_fd_);
+}
+
+void JobStore::exec(const char* sql) {
+  char* err = nullptr;
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+    const std::string msg = err ? err : "unknown error";
+    sqlite3_free(err);
+    throw std::runtime_error(std::string("job store: ") + msg);
+  }
+}
+
+template <class F>
+auto JobStore::transaction(F&& body) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  exec("BEGIN IMMEDIATE");
+  try {
+    if constexpr (std::is_void_v<decltype(body())>) {
+      body();
+      exec("COMMIT");
+    } else {
+      auto result = body();
+      exec("COMMIT");
+      return result;
+    }
+  } catch (...) {
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+}
+
+std::pair<JobRecord, bool> JobStore::submit(const Submission& s) {
+  return transaction([&] {
+    if (s.idempotency_key) {
+      Statement q(db_, (std::string("SELECT ") + kColumns + " FROM jobs WHERE idempotency_key = ?").c_str());
+      q.bind(1, *s.idempotency_key);
+      if (q.step()) return std::make_pair(q.record(), false);
+    }
+    const std::string now = now_iso();
+    const std::string id = new_id();
+    Statement ins(db_,
+                  "INSERT INTO jobs (id, name, status, job_json, idempotency_key, created_at, "
+                  "updated_at, iterations, total_evaluations) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?)");
+    ins.bind(1, id).bind(2, s.name).bind(3, s.job_json);
+    if (s.idempotency_key) ins.bind(4, *s.idempotency_key);
+    else ins.bind_null(4);
+    ins.bind(5, now).bind(6, now).bind(7, std::int64_t{s.iterations}).bind(8, s.total_evaluations);
+    ins.step();
+    Statement q(db_, (std::string("SELECT ") + kColumns + " FROM jobs WHERE id = ?").c_str());
+    q.bind(1, id);
+    q.step();
+    return std::make_pair(q.record(), true);
+  });
+}
+
+std::optional<JobRecord> JobStore::get(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, (std::string("SELECT ") + kColumns + " FROM jobs WHERE id = ?").c_str());
+  q.bind(1, id);
+  if (!q.step()) return std::nullopt;
+  return q.record();
+}
+
+std::string JobStore::job_json(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "SELECT job_json FROM jobs WHERE id = ?");
+  q.bind(1, id);
+  return q.step() ? q.text(0) : std::string();
+}
+
+std::vector<JobRecord> JobStore::list(std::optional<JobStatus> status, int limit, int offset) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::string sql = std::string("SELECT ") + kColumns + " FROM jobs";
+  if (status) sql += " WHERE status = ?";
+  sql += " ORDER BY seq DESC LIMIT ? OFFSET ?";
+  Statement q(db_, sql.c_str());
+  int i = 1;
+  if (status) q.bind(i++, std::string(to_string(*status)));
+  q.bind(i, std::int64_t{limit});
+  q.bind(i + 1, std::int64_t{offset});
+  std::vector<JobRecord> out;
+  while (q.step()) out.push_back(q.record());
+  return out;
+}
+
+std::int64_t JobStore::count(std::optional<JobStatus> status) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, status ? "SELECT COUNT(*) FROM jobs WHERE status = ?" : "SELECT COUNT(*) FROM jobs");
+  if (status) q.bind(1, std::string(to_string(*status)));
+  q.step();
+  return q.integer(0);
+}
+
+std::optional<JobRecord> JobStore::claim_next() {
+  return transaction([&]() -> std::optional<JobRecord> {
+    Statement q(db_, "SELECT id FROM jobs WHERE status = 'queued' ORDER BY seq LIMIT 1");
+    if (!q.step()) return std::nullopt;
+    const std::string id = q.text(0);
+    const std::string now = now_iso();
+    Statement u(db_,
+                "UPDATE jobs SET status = 'running', attempts = attempts + 1, updated_at = ?, "
+                "started_at = CASE WHEN started_at = '' THEN ? ELSE started_at END WHERE id = ?");
+    u.bind(1, now).bind(2, now).bind(3, id);
+    u.step();
+    Statement r(db_, (std::string("SELECT ") + kColumns + " FROM jobs WHERE id = ?").c_str());
+    r.bind(1, id);
+    r.step();
+    return r.record();
+  });
+}
+
+void JobStore::record_progress(const std::string& id, int iteration, std::int64_t evaluations,
+                               double best_fitness, const nlohmann::json& best,
+                               const std::string& checkpoint) {
+  transaction([&] {
+    Statement u(db_,
+                "UPDATE jobs SET iteration = ?, evaluations = ?, best_fitness = ?, best = ?, "
+                "checkpoint = ?, updated_at = ? WHERE id = ?");
+    u.bind(1, std::int64_t{iteration}).bind(2, evaluations);
+    if (std::isfinite(best_fitness)) u.bind(3, best_fitness);
+    else u.bind_null(3);
+    u.bind(4, best.dump()).bind(5, checkpoint).bind(6, now_iso()).bind(7, id);
+    u.step();
+  });
+}
+
+std::optional<std::string> JobStore::checkpoint(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "SELECT checkpoint FROM jobs WHERE id = ?");
+  q.bind(1, id);
+  if (!q.step() || q.is_null(0)) return std::nullopt;
+  return q.text(0);
+}
+
+void JobStore::finish_succeeded(const std::string& id,
+                                const std::map<std::string, std::string>& artifacts) {
+  transaction([&] {
+    for (const auto& [name, content] : artifacts) {
+      Statement a(db_, "INSERT OR REPLACE INTO artifacts (job_id, name, content) VALUES (?, ?, ?)");
+      a.bind(1, id).bind(2, name).bind_blob(3, content);
+      a.step();
+    }
+    const std::string now = now_iso();
+    Statement u(db_,
+                "UPDATE jobs SET status = 'succeeded', finished_at = ?, updated_at = ?, "
+                "checkpoint = NULL WHERE id = ?");
+    u.bind(1, now).bind(2, now).bind(3, id);
+    u.step();
+  });
+}
+
+void JobStore::finish_failed(const std::string& id, const std::string& error) {
+  transaction([&] {
+    const std::string now = now_iso();
+    Statement u(db_,
+                "UPDATE jobs SET status = 'failed', error = ?, finished_at = ?, updated_at = ? "
+                "WHERE id = ?");
+    u.bind(1, error).bind(2, now).bind(3, now).bind(4, id);
+    u.step();
+  });
+}
+
+void JobStore::finish_cancelled(const std::string& id) {
+  transaction([&] {
+    const std::string now = now_iso();
+    Statement u(db_,
+                "UPDATE jobs SET status = 'cancelled', finished_at = ?, updated_at = ?, "
+                "checkpoint = NULL WHERE id = ?");
+    u.bind(1, now).bind(2, now).bind(3, id);
+    u.step();
+  });
+}
+
+void JobStore::requeue(const std::string& id) {
+  transaction([&] {
+    Statement u(db_, "UPDATE jobs SET status = 'queued', updated_at = ? WHERE id = ? AND status = 'running'");
+    u.bind(1, now_iso()).bind(2, id);
+    u.step();
+  });
+}
+
+std::optional<JobRecord> JobStore::request_cancel(const std::string& id) {
+  return transaction([&]() -> std::optional<JobRecord> {
+    const std::string now = now_iso();
+    Statement q(db_, "UPDATE jobs SET status = 'cancelled', finished_at = ?, updated_at = ?, "
+                     "cancel_requested = 1 WHERE id = ? AND status = 'queued'");
+    q.bind(1, now).bind(2, now).bind(3, id);
+    q.step();
+    Statement r(db_, "UPDATE jobs SET cancel_requested = 1, updated_at = ? WHERE id = ? AND status = 'running'");
+    r.bind(1, now).bind(2, id);
+    r.step();
+    Statement s(db_, (std::string("SELECT ") + kColumns + " FROM jobs WHERE id = ?").c_str());
+    s.bind(1, id);
+    if (!s.step()) return std::nullopt;
+    return s.record();
+  });
+}
+
+bool JobStore::cancel_requested(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "SELECT cancel_requested FROM jobs WHERE id = ?");
+  q.bind(1, id);
+  return q.step() && q.integer(0) != 0;
+}
+
+int JobStore::recover() {
+  return transaction([&] {
+    Statement u(db_, "UPDATE jobs SET status = 'queued', updated_at = ? WHERE status = 'running'");
+    u.bind(1, now_iso());
+    u.step();
+    return sqlite3_changes(db_);
+  });
+}
+
+std::optional<std::string> JobStore::artifact(const std::string& id, const std::string& name) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "SELECT content FROM artifacts WHERE job_id = ? AND name = ?");
+  q.bind(1, id).bind(2, name);
+  if (!q.step()) return std::nullopt;
+  return q.blob(0);
+}
+
+}  // namespace ftc::tune
