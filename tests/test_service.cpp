@@ -1,0 +1,420 @@
+#include <gtest/gtest.h>
+
+#include "ftc/tune/service.hpp"
+#include "ftc/tune/tuning_run.hpp"
+#include "cli_runner.hpp"
+#include "server_process.hpp"
+#include "short_job.hpp"
+
+// After the project's headers (Eigen): httplib.h pulls in <resolv.h> and its `_res` macro.
+#include <arpa/inet.h>
+#include <httplib.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+
+#include <atomic>
+#include <chrono>
+#include <set>
+#include <thread>
+
+using nlohmann::json;
+using namespace ftc;
+using namespace ftc::testing;
+using namespace std::chrono_literals;
+
+namespace {
+
+// Tiny: 2 bats × 1 iteration on 50 ms of simulated time.
+json tiny_job(const std::string& name = "tiny") {
+  json j = short_table1_job();
+  j["name"] = name;
+  j["scenarios"][0]["duration"] = 0.05;
+  j["scenarios"][0]["faults"][0]["onset"] = 0.01;
+  j["scenarios"][0]["faults"][1]["onset"] = 0.03;
+  j["objective"]["window"] = {0, 0.05};
+  j["tuning"]["algorithm"]["population"] = 2;
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  return j;
+}
+
+// Long enough to be caught running: 8 bats × 60 iterations on 10 s (about 1.5 s on 2 threads).
+json long_job(const std::string& name = "long") {
+  json j = short_table1_job();
+  j["name"] = name;
+  j["scenarios"][0]["duration"] = 10;
+  j["objective"]["window"] = {0, 10};
+  j["tuning"]["algorithm"]["population"] = 8;
+  j["tuning"]["algorithm"]["iterations"] = 60;
+  return j;
+}
+
+std::string expected_gains(const json& job) {
+  tune::RunOptions o;
+  o.threads = 2;
+  return tune::output_files(tune::tune(tune::parse_job(job, "expected"), o)).at("gains.json");
+}
+
+struct Service {
+  explicit Service(tune::ServiceOptions o = {}) : dir(fresh_dir("service")) {
+    o.port = 0;
+    o.store = dir / "store";
+    if (o.threads == 0) o.threads = 2;
+    service = std::make_unique<tune::TuningService>(o);
+    port = service->start();
+    client = std::make_unique<httplib::Client>("127.0.0.1", port);
+    client->set_read_timeout(30, 0);
+  }
+  json submit(const json& job, int expected_status = 201) {
+    auto r = client->Post("/v1/jobs", job.dump(), "application/json");
+    EXPECT_TRUE(r);
+    EXPECT_EQ(r->status, expected_status) << r->body;
+    return json::parse(r->body);
+  }
+  json get(const std::string& path) {
+    auto r = client->Get(path.c_str());
+    EXPECT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << path << ": " << r->body;
+    return json::parse(r->body);
+  }
+  // Polls until the job is in a terminal state (or the deadline passes); returns the last view.
+  json wait_done(const std::string& id, std::chrono::seconds deadline = 60s) {
+    const auto end = std::chrono::steady_clock::now() + deadline;
+    json j;
+    do {
+      j = get("/v1/jobs/" + id);
+      const std::string s = j["status"];
+      if (s == "succeeded" || s == "failed" || s == "cancelled") return j;
+      std::this_thread::sleep_for(10ms);
+    } while (std::chrono::steady_clock::now() < end);
+    ADD_FAILURE() << "job " << id << " did not finish: " << j.dump();
+    return j;
+  }
+  std::filesystem::path dir;
+  std::unique_ptr<tune::TuningService> service;
+  int port = 0;
+  std::unique_ptr<httplib::Client> client;
+};
+
+void expect_error(const httplib::Result& r, int status, const std::string& code) {
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, status) << r->body;
+  const json body = json::parse(r->body, nullptr, false);
+  ASSERT_TRUE(body.is_object()) << r->body;
+  EXPECT_EQ(body["error"]["code"], code) << r->body;
+  EXPECT_TRUE(body["error"]["message"].is_string());
+  EXPECT_TRUE(body["error"]["details"].is_array() || body["error"]["details"].is_object());
+}
+
+}  // namespace
+
+TEST(Service, LifecycleGivesTheSameGainsAsRun) {
+  Service s;
+  const json job = short_table1_job();
+  const json created = s.submit(job);
+  EXPECT_EQ(created["status"], "queued");
+  const std::string id = created["id"];
+  EXPECT_EQ(created["links"]["gains"], "/v1/jobs/" + id + "/gains");
+
+  std::set<std::string> seen;
+  int last_iteration = -1;
+  json view;
+  for (int i = 0; i < 6000; ++i) {
+    view = s.get("/v1/jobs/" + id);
+    seen.insert(view["status"].get<std::string>());
+    if (!view["progress"]["iteration"].is_null()) {
+      const int it = view["progress"]["iteration"];
+      EXPECT_GE(it, last_iteration);  // progress only moves forward
+      last_iteration = it;
+    }
+    if (view["status"] == "succeeded") break;
+    std::this_thread::sleep_for(5ms);
+  }
+  ASSERT_EQ(view["status"], "succeeded") << view.dump();
+  EXPECT_EQ(view["progress"]["iteration"], 2);
+  EXPECT_EQ(view["progress"]["evaluations"], 9);
+  EXPECT_TRUE(view["progress"]["best"].contains("Kp"));
+  EXPECT_FALSE(view["started_at"].is_null());
+  EXPECT_FALSE(view["finished_at"].is_null());
+  EXPECT_EQ(view["attempts"], 1);
+
+  auto gains = s.client->Get(("/v1/jobs/" + id + "/gains").c_str());
+  ASSERT_TRUE(gains);
+  EXPECT_EQ(gains->status, 200);
+  EXPECT_EQ(gains->body, expected_gains(job));  // byte for byte what `ftctune run` writes
+
+  auto csv = s.client->Get(("/v1/jobs/" + id + "/history").c_str());
+  EXPECT_EQ(csv->body.substr(0, 22), "iteration,best_fitness");
+  EXPECT_EQ(s.get("/v1/jobs/" + id + "/history?format=json").size(), 3u);
+  EXPECT_EQ(s.get("/v1/jobs/" + id + "/comparison")["controllers"].size(), 4u);
+  auto md = s.client->Get(("/v1/jobs/" + id + "/comparison?format=md").c_str());
+  EXPECT_NE(md->body.find("| optimal PI-FOSMC"), std::string::npos);
+
+  const std::string second = s.submit(tiny_job())["id"];
+  s.wait_done(second);
+  const json all = s.get("/v1/jobs");
+  ASSERT_EQ(all["jobs"].size(), 2u);
+  EXPECT_EQ(all["jobs"][0]["id"], second);  // newest first
+  EXPECT_EQ(s.get("/v1/jobs?status=succeeded&limit=1")["jobs"].size(), 1u);
+  EXPECT_EQ(s.get("/v1/jobs?status=succeeded&limit=1&offset=1")["jobs"][0]["id"], id);
+  EXPECT_EQ(s.get("/v1/jobs?status=queued")["total"], 0);
+  EXPECT_EQ(s.get("/healthz")["status"], "ok");
+}
+
+TEST(Service, CancelsQueuedAndRunningJobs) {
+  Service s;
+  const std::string running = s.submit(long_job())["id"];
+  const std::string queued = s.submit(tiny_job())["id"];
+
+  auto r = s.client->Post(("/v1/jobs/" + queued + "/cancel").c_str(), "", "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 202);
+  EXPECT_EQ(json::parse(r->body)["status"], "cancelled");
+
+  json view;
+  for (int i = 0; i < 2000; ++i) {
+    view = s.get("/v1/jobs/" + running);
+    if (view["status"] == "running" && !view["progress"]["iteration"].is_null()) break;
+    std::this_thread::sleep_for(5ms);
+  }
+  ASSERT_EQ(view["status"], "running");
+  const auto asked = std::chrono::steady_clock::now();
+  r = s.client->Post(("/v1/jobs/" + running + "/cancel").c_str(), "", "application/json");
+  EXPECT_EQ(r->status, 202);
+  const json done = s.wait_done(running);
+  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
+  EXPECT_EQ(done["status"], "cancelled");
+  EXPECT_LT(done["progress"]["iteration"].get<int>(), 60);
+  EXPECT_LT(took, 1.0) << "a running job must stop within one iteration (~25 ms here)";
+
+  const json q = s.get("/v1/jobs/" + queued);
+  EXPECT_EQ(q["status"], "cancelled");
+  EXPECT_TRUE(q["started_at"].is_null());  // it never started
+  EXPECT_EQ(q["attempts"], 0);
+  expect_error(s.client->Get(("/v1/jobs/" + running + "/gains").c_str()), 409, "not_ready");
+  expect_error(s.client->Post(("/v1/jobs/" + running + "/cancel").c_str(), "", "application/json"), 409,
+               "conflict");
+}
+
+TEST(Service, RejectsBadRequestsWithJsonErrors) {
+  tune::ServiceOptions o;
+  o.max_body_bytes = 16 * 1024;
+  o.max_steps = 1e6;
+  Service s(o);
+  auto& c = *s.client;
+
+  expect_error(c.Post("/v1/jobs", "{not json", "application/json"), 400, "invalid_json");
+  json bad = tiny_job();
+  bad["controller"]["Kp"] = -1;
+  bad["scenarios"][0]["faults"][0]["actuator"] = 9;
+  auto r = c.Post("/v1/jobs", bad.dump(), "application/json");
+  expect_error(r, 400, "invalid_job");
+  std::set<std::string> paths;
+  const json body = json::parse(r->body);
+  for (const json& d : body["error"]["details"]) paths.insert(d["path"]);
+  EXPECT_TRUE(paths.count("/controller/Kp")) << r->body;
+  EXPECT_TRUE(paths.count("/scenarios/0/faults/0/actuator"));
+  json no_tuning = tiny_job();
+  no_tuning.erase("tuning");
+  expect_error(c.Post("/v1/jobs", no_tuning.dump(), "application/json"), 400, "invalid_job");
+
+  expect_error(c.Post("/v1/jobs", std::string(20 * 1024, ' '), "application/json"), 413, "payload_too_large");
+  r = c.Post("/v1/jobs", short_table1_job().dump(), "application/json");  // 9 × 5000 steps… fits
+  EXPECT_EQ(r->status, 201) << r->body;
+  r = c.Post("/v1/jobs", long_job().dump(), "application/json");  // 488 × 10000 = 4.9e6 > 1e6
+  expect_error(r, 400, "job_too_large");
+  EXPECT_NE(json::parse(r->body)["error"]["message"].get<std::string>().find("4.88 times the server's budget"),
+            std::string::npos) << r->body;
+
+  expect_error(c.Get("/v1/jobs/0123456789abcdef"), 404, "not_found");
+  expect_error(c.Get("/v1/jobs/0123456789abcdef/gains"), 404, "not_found");
+  expect_error(c.Post("/v1/jobs/0123456789abcdef/cancel", "", "application/json"), 404, "not_found");
+  expect_error(c.Get("/v2/anything"), 404, "not_found");
+  r = c.Delete("/v1/jobs");
+  expect_error(r, 405, "method_not_allowed");
+  EXPECT_EQ(r->get_header_value("Allow"), "GET, POST");
+  expect_error(c.Put("/healthz", "", "text/plain"), 405, "method_not_allowed");
+  expect_error(c.Get("/v1/jobs?status=done"), 400, "invalid_parameter");
+  expect_error(c.Get("/v1/jobs?limit=0"), 400, "invalid_parameter");
+
+  // Idempotency: the same key returns the same job; the key with another job is a conflict.
+  httplib::Headers key = {{"Idempotency-Key", "abc-1"}};
+  r = c.Post("/v1/jobs", key, tiny_job().dump(), "application/json");
+  ASSERT_EQ(r->status, 201);
+  const std::string id = json::parse(r->body)["id"];
+  r = c.Post("/v1/jobs", key, tiny_job().dump(), "application/json");
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(json::parse(r->body)["id"], id);
+  expect_error(c.Post("/v1/jobs", key, tiny_job("other").dump(), "application/json"), 409,
+               "idempotency_conflict");
+
+  // A client that disconnects in the middle of a request leaves the server serving.
+  for (const char* partial : {"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Length: 5000\r\n\r\n{\"sche",
+                              "GET /v1/jo"}) {
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<uint16_t>(s.port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    ASSERT_GT(::send(fd, partial, std::strlen(partial), 0), 0);
+    ::close(fd);
+  }
+  EXPECT_EQ(s.get("/healthz")["status"], "ok");
+  EXPECT_EQ(s.get("/v1/jobs")["total"], 2);  // nothing was created by the broken requests
+}
+
+TEST(Service, TokenIsRequiredWhenConfigured) {
+  tune::ServiceOptions o;
+  o.token = "s3cret-token";
+  Service s(o);
+  expect_error(s.client->Get("/healthz"), 401, "unauthorized");
+  httplib::Client wrong("127.0.0.1", s.port);
+  wrong.set_bearer_token_auth("s3cret-tokem");
+  expect_error(wrong.Get("/v1/jobs"), 401, "unauthorized");
+  httplib::Client right("127.0.0.1", s.port);
+  right.set_bearer_token_auth("s3cret-token");
+  auto r = right.Get("/v1/jobs");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+
+  tune::ServiceOptions open;
+  open.bind = "0.0.0.0";
+  const auto errs = open.validate();
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_NE(errs[0].message.find("without --token-file"), std::string::npos);
+  EXPECT_THROW(tune::TuningService{open}, InputError);
+}
+
+TEST(Service, StoreIsLockedAgainstASecondServer) {
+  Service s;
+  tune::ServiceOptions o;
+  o.store = s.dir / "store";
+  EXPECT_THROW(tune::TuningService{o}, std::runtime_error);
+}
+
+TEST(Service, FiftyConcurrentSubmissionsAllComplete) {
+  Service s;
+  std::vector<std::string> ids(50);
+  std::atomic<int> failures{0};
+  std::vector<std::thread> clients;
+  for (int t = 0; t < 8; ++t)
+    clients.emplace_back([&, t] {
+      httplib::Client c("127.0.0.1", s.port);
+      for (int i = t; i < 50; i += 8) {
+        auto r = c.Post("/v1/jobs", tiny_job("tiny" + std::to_string(i)).dump(), "application/json");
+        if (!r || r->status != 201) {
+          ++failures;
+          continue;
+        }
+        ids[static_cast<std::size_t>(i)] = json::parse(r->body)["id"];
+      }
+    });
+  for (std::thread& t : clients) t.join();
+  EXPECT_EQ(failures.load(), 0);
+  EXPECT_EQ(std::set<std::string>(ids.begin(), ids.end()).size(), 50u);
+  for (const std::string& id : ids) EXPECT_EQ(s.wait_done(id)["status"], "succeeded") << id;
+  EXPECT_EQ(s.get("/v1/jobs?status=succeeded")["total"], 50);
+}
+
+TEST(Service, RecoversFromSigkillWithoutLosingOrRepeatingJobs) {
+  const auto dir = fresh_dir("sigkill");
+  const std::vector<json> jobs = {long_job("a"), long_job("b"), tiny_job("c")};
+  std::vector<std::string> ids;
+  std::string killed;
+  {
+    ServerProcess server(dir / "store", dir / "serve.log");
+    httplib::Client c("127.0.0.1", server.port());
+    for (const json& j : jobs) {
+      auto r = c.Post("/v1/jobs", j.dump(), "application/json");
+      ASSERT_TRUE(r && r->status == 201);
+      ids.push_back(json::parse(r->body)["id"]);
+    }
+    // Kill it while the first job is in the middle of its run.
+    for (int i = 0; i < 4000 && killed.empty(); ++i) {
+      auto r = c.Get(("/v1/jobs/" + ids[0]).c_str());
+      const json v = json::parse(r->body);
+      if (v["status"] == "running" && !v["progress"]["iteration"].is_null() &&
+          v["progress"]["iteration"].get<int>() >= 3)
+        killed = ids[0];
+      else
+        std::this_thread::sleep_for(2ms);
+    }
+    ASSERT_FALSE(killed.empty()) << "never saw the job running";
+    EXPECT_EQ(server.signal_and_wait(SIGKILL), -SIGKILL);
+  }
+  ServerProcess server(dir / "store", dir / "serve.log");
+  httplib::Client c("127.0.0.1", server.port());
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    json v;
+    for (int i = 0; i < 6000; ++i) {
+      v = json::parse(c.Get(("/v1/jobs/" + ids[k]).c_str())->body);
+      if (v["status"] != "queued" && v["status"] != "running") break;
+      std::this_thread::sleep_for(10ms);
+    }
+    ASSERT_EQ(v["status"], "succeeded") << v.dump();
+    EXPECT_EQ(v["attempts"], k == 0 ? 2 : 1) << "job " << k;
+    EXPECT_EQ(c.Get(("/v1/jobs/" + ids[k] + "/gains").c_str())->body, expected_gains(jobs[k])) << "job " << k;
+  }
+  EXPECT_EQ(json::parse(c.Get("/v1/jobs")->body)["total"], 3);
+}
+
+TEST(Service, SigtermCheckpointsTheRunningJobAndExits) {
+  const auto dir = fresh_dir("sigterm");
+  const json job = long_job();
+  std::string id;
+  {
+    ServerProcess server(dir / "store", dir / "serve.log");
+    httplib::Client c("127.0.0.1", server.port());
+    id = json::parse(c.Post("/v1/jobs", job.dump(), "application/json")->body)["id"];
+    for (int i = 0; i < 4000; ++i) {
+      const json v = json::parse(c.Get(("/v1/jobs/" + id).c_str())->body);
+      if (v["status"] == "running" && !v["progress"]["iteration"].is_null()) break;
+      std::this_thread::sleep_for(2ms);
+    }
+    EXPECT_EQ(server.signal_and_wait(SIGTERM), 0);
+  }
+  ServerProcess server(dir / "store", dir / "serve.log");
+  httplib::Client c("127.0.0.1", server.port());
+  json v;
+  for (int i = 0; i < 6000; ++i) {
+    v = json::parse(c.Get(("/v1/jobs/" + id).c_str())->body);
+    if (v["status"] == "succeeded") break;
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_EQ(v["status"], "succeeded") << v.dump();
+  EXPECT_EQ(v["attempts"], 2);
+  EXPECT_EQ(c.Get(("/v1/jobs/" + id + "/gains").c_str())->body, expected_gains(job));
+}
+
+TEST(Cli, ClientCommandsTalkToTheService) {
+  Service s;
+  const auto dir = fresh_dir("client");
+  {
+    std::ofstream f(dir / "job.json");
+    f << tiny_job().dump();
+  }
+  const std::string server = " --server http://127.0.0.1:" + std::to_string(s.port);
+  CliResult r = run_cli("submit '" + (dir / "job.json").string() + "' --wait -o '" +
+                            (dir / "gains.json").string() + "'" + server, dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string id = r.out.substr(0, r.out.find('\n'));
+  EXPECT_EQ(id.size(), 16u) << r.out;
+  EXPECT_EQ(slurp(dir / "gains.json"), expected_gains(tiny_job()));
+  r = run_cli("status " + id + server, dir);
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("succeeded"), std::string::npos) << r.out;
+  r = run_cli("jobs --json" + server, dir);
+  EXPECT_EQ(json::parse(r.out)["total"], 1);
+  r = run_cli("fetch " + id + " -o '" + (dir / "again.json").string() + "'" + server, dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(slurp(dir / "again.json"), slurp(dir / "gains.json"));
+  r = run_cli("cancel " + id + server, dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("has already succeeded"), std::string::npos) << r.err;
+  r = run_cli("status ffffffffffffffff" + server, dir);
+  EXPECT_EQ(r.exit_code, 2);
+  r = run_cli("status " + id + " --server http://127.0.0.1:1", dir);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cannot reach the ftctune server at http://127.0.0.1:1"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1);
+}
