@@ -205,9 +205,20 @@ void JobStore::exec(const char* sql) {
   }
 }
 
+// `synced` commits wait for the disk (synchronous=FULL); the others (progress, checkpoints) are
+// only written to the WAL file, which survives a killed process but maybe not a power cut —
+// losing a checkpoint then just means resuming one iteration earlier.
 template <class F>
-auto JobStore::transaction(F&& body) {
+auto JobStore::transaction(F&& body, bool synced) {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (!synced) exec("PRAGMA synchronous=NORMAL");
+  struct Restore {
+    JobStore* self;
+    bool active;
+    ~Restore() {
+      if (active) sqlite3_exec(self->db_, "PRAGMA synchronous=FULL", nullptr, nullptr, nullptr);
+    }
+  } restore{this, !synced};
   exec("BEGIN IMMEDIATE");
   try {
     if constexpr (std::is_void_v<decltype(body())>) {
@@ -316,7 +327,7 @@ void JobStore::record_progress(const std::string& id, int iteration, std::int64_
     else u.bind_null(3);
     u.bind(4, best.dump()).bind(5, checkpoint).bind(6, now_iso()).bind(7, id);
     u.step();
-  });
+  }, /*synced=*/false);
 }
 
 std::optional<std::string> JobStore::checkpoint(const std::string& id) {

@@ -129,6 +129,7 @@ struct TuningService::Impl {
   std::atomic<bool> stopping{false};
   std::mutex wake_mutex;
   std::condition_variable wake;
+  std::uint64_t submissions = 0;  // bumped under wake_mutex on every submission
   int recovered = 0;
   bool started = false;
 
@@ -222,6 +223,10 @@ struct TuningService::Impl {
                         "Idempotency-Key was already used for job " + record.id + " with a different job");
     if (created) {
       spdlog::info("job {} ({}) queued", record.id, record.name);
+      {
+        std::lock_guard<std::mutex> lock(wake_mutex);
+        ++submissions;
+      }
       wake.notify_one();
     }
     res.set_header("Location", "/v1/jobs/" + record.id);
@@ -332,6 +337,11 @@ struct TuningService::Impl {
 
   void worker_loop() {
     while (!stopping) {
+      std::uint64_t seen;
+      {
+        std::lock_guard<std::mutex> lock(wake_mutex);
+        seen = submissions;
+      }
       std::optional<JobRecord> job;
       try {
         job = store.claim_next();
@@ -339,8 +349,10 @@ struct TuningService::Impl {
         spdlog::error("cannot read the queue: {}", e.what());
       }
       if (!job) {
+        // Sleep until a submission newer than our look at the queue (none is missed: `seen`
+        // was read before claim_next), or stop.
         std::unique_lock<std::mutex> lock(wake_mutex);
-        wake.wait_for(lock, std::chrono::milliseconds(250), [this] { return stopping.load(); });
+        wake.wait_for(lock, std::chrono::seconds(1), [&] { return stopping.load() || submissions != seen; });
         continue;
       }
       run(*job);
@@ -438,7 +450,10 @@ void TuningService::stop() {
   s.started = false;
   s.http.stop();
   if (s.listener.joinable()) s.listener.join();
-  s.stopping = true;
+  {
+    std::lock_guard<std::mutex> lock(s.wake_mutex);
+    s.stopping = true;
+  }
   s.wake.notify_all();
   for (std::thread& w : s.workers)
     if (w.joinable()) w.join();

@@ -1,8 +1,10 @@
 #pragma once
-// The tuning service's durable store: one SQLite database (WAL mode, synchronous=FULL) in the
-// store directory. Jobs, their progress, optimiser checkpoints and result files live in it, and
-// every state change is one committed transaction, so a killed server loses nothing that was
-// acknowledged. Thread-safe (one connection behind a mutex).
+// The tuning service's durable store: one SQLite database (WAL mode) in the store directory.
+// Jobs, their progress, optimiser checkpoints and result files live in it, and every state change
+// is one committed transaction, so a killed server loses nothing that was acknowledged.
+// Submissions, results and cancellations are synced to disk (synchronous=FULL); per-iteration
+// progress is not, which costs at most a resumed iteration after a power cut. Thread-safe (one
+// connection behind a mutex).
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -92,7 +94,7 @@ class JobStore {
   class Statement;
   void exec(const char* sql);
   template <class F>
-  auto transaction(F&& body);
+  auto transaction(F&& body, bool synced = true);
 
   std::filesystem::path db_path_;
   int lock_fd_ = -1;

@@ -1,0 +1,115 @@
+// Service measurements (issue figures), against an in-process server on a loopback port:
+//   1. overhead: Table 1 job submitted over HTTP until its gains are fetched, versus the same
+//      tuning run in process (what `ftctune run` does), median of 5 each;
+//   2. latency of GET /v1/jobs/{id} while the Table 1 job runs (p50, p99);
+//   3. submissions per second of tiny jobs from 8 client threads.
+// Run: build/tests/ftc_bench_service
+#include "ftc/tune/service.hpp"
+#include "ftc/tune/tuning_run.hpp"
+
+#include <httplib.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+
+using nlohmann::json;
+using clk = std::chrono::steady_clock;
+
+namespace {
+
+double seconds_since(clk::time_point t0) { return std::chrono::duration<double>(clk::now() - t0).count(); }
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+double percentile(std::vector<double> v, double p) {
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size())))];
+}
+
+}  // namespace
+
+int main() {
+  spdlog::set_level(spdlog::level::warn);  // the service logs every job; keep the figures readable
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/table1.json");
+  const json table1 = json::parse(in);
+  const auto store = std::filesystem::temp_directory_path() / "ftctune-bench-service";
+  std::filesystem::remove_all(store);
+
+  ftc::tune::ServiceOptions o;
+  o.port = 0;
+  o.store = store;
+  o.threads = 2;
+  ftc::tune::TuningService service(o);
+  const int port = service.start();
+  httplib::Client c("127.0.0.1", port);
+  c.set_read_timeout(60, 0);
+
+  // 1. Overhead.
+  std::vector<double> direct, via_service;
+  const ftc::tune::Job job = ftc::tune::parse_job(table1, "table1");
+  for (int rep = 0; rep < 5; ++rep) {
+    auto t0 = clk::now();
+    ftc::tune::RunOptions ro;
+    ro.threads = 2;
+    const auto files = ftc::tune::output_files(ftc::tune::tune(job, ro));
+    direct.push_back(seconds_since(t0));
+
+    t0 = clk::now();
+    const std::string id = json::parse(c.Post("/v1/jobs", table1.dump(), "application/json")->body)["id"];
+    while (json::parse(c.Get(("/v1/jobs/" + id).c_str())->body)["status"] != "succeeded")
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    const std::string gains = c.Get(("/v1/jobs/" + id + "/gains").c_str())->body;
+    via_service.push_back(seconds_since(t0));
+    if (gains != files.at("gains.json")) std::printf("MISMATCH: service gains differ from run\n");
+  }
+  const double d = median(direct), s = median(via_service);
+  std::printf("table1 in process (ftctune run):  median %.3f s of 5\n", d);
+  std::printf("table1 submit -> gains fetched:   median %.3f s of 5 (overhead %+.1f %%)\n", s, 100 * (s / d - 1));
+
+  // 2. Status latency while the job runs.
+  const std::string id = json::parse(c.Post("/v1/jobs", table1.dump(), "application/json")->body)["id"];
+  std::vector<double> latency_ms;
+  httplib::Client poller("127.0.0.1", port);
+  for (;;) {
+    const auto t0 = clk::now();
+    auto r = poller.Get(("/v1/jobs/" + id).c_str());
+    latency_ms.push_back(1000 * seconds_since(t0));
+    if (json::parse(r->body)["status"] == "succeeded") break;
+  }
+  std::printf("GET /v1/jobs/{id} during a run:   p50 %.3f ms, p99 %.3f ms over %zu requests\n",
+              percentile(latency_ms, 0.5), percentile(latency_ms, 0.99), latency_ms.size());
+
+  // 3. Submission rate of tiny jobs.
+  json tiny = table1;
+  tiny["name"] = "tiny";
+  tiny["scenarios"][0]["duration"] = 0.05;
+  tiny["objective"]["window"] = {0, 0.05};
+  tiny["tuning"]["algorithm"]["population"] = 2;
+  tiny["tuning"]["algorithm"]["iterations"] = 1;
+  const std::string body = tiny.dump();
+  constexpr int kThreads = 8, kPerThread = 25;
+  std::atomic<int> ok{0};
+  const auto t0 = clk::now();
+  std::vector<std::thread> clients;
+  for (int t = 0; t < kThreads; ++t)
+    clients.emplace_back([&] {
+      httplib::Client cc("127.0.0.1", port);
+      for (int i = 0; i < kPerThread; ++i)
+        if (auto r = cc.Post("/v1/jobs", body, "application/json"); r && r->status == 201) ++ok;
+    });
+  for (std::thread& t : clients) t.join();
+  const double took = seconds_since(t0);
+  std::printf("tiny submissions, %d threads:      %d accepted in %.3f s = %.0f per second\n", kThreads,
+              ok.load(), took, ok.load() / took);
+  service.stop();
+  std::filesystem::remove_all(store);
+  return 0;
+}
