@@ -182,61 +182,45 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
       };
     });
   }
-  {
+  // status, fetch and cancel: one job id, then a request.
+  using IdAction = std::function<int(Api&, const std::string& id)>;
+  const auto id_command = [&](const char* name, const char* help, IdAction fn) {
     auto id = std::make_shared<std::string>();
-    CLI::App* sub = app.add_subcommand("status", "Show a job's status and progress");
+    CLI::App* sub = app.add_subcommand(name, help);
     sub->add_option("id", *id, "Job id")->required();
     common(sub);
-    sub->callback([&action, o, id] {
-      action = [o, id] {
+    sub->callback([&action, o, id, fn] {
+      action = [o, id, fn] {
         return guarded([&] {
           Api api(*o);
-          const std::string body = api.get("/v1/jobs/" + *id);
-          if (o->json_output) print_json(body);
-          else std::printf("%s\n", describe(json::parse(body)).c_str());
-          return 0;
+          return fn(api, *id);
         });
       };
     });
-  }
-  {
-    auto id = std::make_shared<std::string>();
-    auto out = std::make_shared<std::string>();
-    CLI::App* sub = app.add_subcommand("fetch", "Download a finished job's gains file");
-    sub->add_option("id", *id, "Job id")->required();
-    sub->add_option("-o,--output", *out, "Output file (default out/<job name>/gains.json)");
-    common(sub);
-    sub->callback([&action, &g, o, id, out] {
-      action = [&g, o, id, out] {
-        return guarded([&] {
-          Api api(*o);
-          const json j = json::parse(api.get("/v1/jobs/" + *id));
-          return fetch_gains(api, *id, *out, j["name"], g.quiet);
-        });
-      };
-    });
-  }
-  {
-    auto id = std::make_shared<std::string>();
-    CLI::App* sub = app.add_subcommand("cancel", "Cancel a queued or running job");
-    sub->add_option("id", *id, "Job id")->required();
-    common(sub);
-    sub->callback([&action, o, id] {
-      action = [o, id] {
-        return guarded([&] {
-          Api api(*o);
-          const std::string body = api.post("/v1/jobs/" + *id + "/cancel", "");
-          if (o->json_output) print_json(body);
-          else {
-            const json j = json::parse(body);
-            std::printf("%s %s\n", id->c_str(),
-                        j["status"] == "cancelled" ? "cancelled" : "will stop after its current iteration");
-          }
-          return 0;
-        });
-      };
-    });
-  }
+    return sub;
+  };
+  id_command("status", "Show a job's status and progress", [o](Api& api, const std::string& id) {
+    const std::string body = api.get("/v1/jobs/" + id);
+    if (o->json_output) print_json(body);
+    else std::printf("%s\n", describe(json::parse(body)).c_str());
+    return 0;
+  });
+  auto out = std::make_shared<std::string>();
+  id_command("fetch", "Download a finished job's gains file", [&g, out](Api& api, const std::string& id) {
+    const json j = json::parse(api.get("/v1/jobs/" + id));
+    return fetch_gains(api, id, *out, j["name"], g.quiet);
+  })->add_option("-o,--output", *out, "Output file (default out/<job name>/gains.json)");
+  id_command("cancel", "Cancel a queued or running job", [o](Api& api, const std::string& id) {
+    const std::string body = api.post("/v1/jobs/" + id + "/cancel", "");
+    if (o->json_output) {
+      print_json(body);
+    } else {
+      const json j = json::parse(body);
+      std::printf("%s %s\n", id.c_str(),
+                  j["status"] == "cancelled" ? "cancelled" : "will stop after its current iteration");
+    }
+    return 0;
+  });
   {
     auto status = std::make_shared<std::string>();
     auto limit = std::make_shared<int>(20);

@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "json_reader.hpp"
 
@@ -10,15 +9,6 @@ namespace ftc::tune {
 
 using nlohmann::json;
 using detail::ObjectReader;
-
-namespace {
-std::string num(double v) {
-  std::ostringstream o;
-  o.precision(10);
-  o << v;
-  return o.str();
-}
-}  // namespace
 
 sim::ControllerConfig parse_controller(const json& j, const std::string& path,
                                        std::vector<FieldError>& errs) {
@@ -39,7 +29,7 @@ sim::ControllerConfig parse_controller(const json& j, const std::string& path,
     double v = 0;
     if (!r.number(f.name, v)) continue;
     if (f.integer && v != std::floor(v)) {
-      errs.push_back({r.path(f.name), "expected an integer, got " + num(v)});
+      errs.push_back({r.path(f.name), "expected an integer, got " + detail::number_text(v)});
       continue;
     }
     c.*f.member = v;

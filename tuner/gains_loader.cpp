@@ -14,13 +14,6 @@ using tune::detail::ObjectReader;
 
 namespace {
 
-std::string num(double v) {
-  std::ostringstream o;
-  o.precision(17);
-  o << v;
-  return o.str();
-}
-
 void require_kind(ObjectReader& r, const char* key, bool (json::*is)() const noexcept,
                   const char* kind, std::vector<FieldError>& errs) {
   if (const json* v = r.child(key, true); v && !((*v).*is)())
@@ -63,8 +56,8 @@ Gains parse_gains(const json& doc, const std::string& source) {
           g.tuned.emplace_back(it.key(), v);
           const double in_controller = g.controller.*f->member;
           if (in_controller != v)
-            errs.push_back({p, "value " + num(v) + " differs from /controller/" + it.key() + " = " +
-                                   num(in_controller)});
+            errs.push_back({p, "value " + tune::detail::number_text(v, 17) + " differs from /controller/" + it.key() + " = " +
+                                   tune::detail::number_text(in_controller, 17)});
         }
       }
     }
@@ -108,8 +101,8 @@ std::unique_ptr<sim::Controller> make_controller(const Gains& gains, const sim::
                                                  double sample_time) {
   if (!(std::abs(sample_time - gains.sample_time) <= 1e-12 * gains.sample_time))
     throw InputError("gains", "/sample_time",
-                     "the gains were tuned for Ts = " + num(gains.sample_time) +
-                         " s, but the controller is to run at Ts = " + num(sample_time) + " s");
+                     "the gains were tuned for Ts = " + tune::detail::number_text(gains.sample_time, 17) +
+                         " s, but the controller is to run at Ts = " + tune::detail::number_text(sample_time, 17) + " s");
   return sim::make_controller(gains.controller, plant, sample_time);
 }
 

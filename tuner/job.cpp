@@ -17,13 +17,6 @@ using detail::ObjectReader;
 
 namespace {
 
-std::string num(double v) {
-  std::ostringstream o;
-  o.precision(10);
-  o << v;
-  return o.str();
-}
-
 void append(std::vector<FieldError>& to, std::vector<FieldError> from) {
   to.insert(to.end(), std::make_move_iterator(from.begin()), std::make_move_iterator(from.end()));
 }
@@ -253,7 +246,7 @@ void check_unit(std::vector<FieldError>& errs, const std::string& path, double v
   const bool ok = std::isfinite(v) && (open_low ? v > 0 : v >= 0) && v <= 1;
   if (!ok)
     errs.push_back({path, std::string("must be in ") + (open_low ? "(0, 1]" : "[0, 1]") +
-                              " (got " + num(v) + ")"});
+                              " (got " + detail::number_text(v) + ")"});
 }
 
 }  // namespace
@@ -269,11 +262,11 @@ std::vector<FieldError> PlantConfig::validate(const std::string& path) const {
   for (int i = 0; i < 3; ++i) {
     const double v = spacecraft.inertia[i];
     if (!(std::isfinite(v) && v > 0))
-      errs.push_back({path + "/inertia/" + std::to_string(i), "must be > 0 (got " + num(v) + ")"});
+      errs.push_back({path + "/inertia/" + std::to_string(i), "must be > 0 (got " + detail::number_text(v) + ")"});
   }
   const double w = spacecraft.orbital_rate;
   if (!(std::isfinite(w) && w >= 0))
-    errs.push_back({path + "/orbital_rate", "must be >= 0 (got " + num(w) + ")"});
+    errs.push_back({path + "/orbital_rate", "must be >= 0 (got " + detail::number_text(w) + ")"});
   return errs;
 }
 
@@ -289,17 +282,17 @@ std::vector<FieldError> AlgorithmConfig::validate(const std::string& path) const
                                               std::to_string(iterations) + ")"});
   if (type != AlgorithmType::bat) return errs;
   const bool fmin_ok = std::isfinite(f_min) && f_min >= 0;
-  if (!fmin_ok) errs.push_back({path + "/f_min", "must be >= 0 (got " + num(f_min) + ")"});
+  if (!fmin_ok) errs.push_back({path + "/f_min", "must be >= 0 (got " + detail::number_text(f_min) + ")"});
   if (!std::isfinite(f_max)) errs.push_back({path + "/f_max", "must be a finite number"});
   else if (fmin_ok && f_max < f_min)
-    errs.push_back({path + "/f_max", "must be >= f_min " + num(f_min) + " (got " + num(f_max) + ")"});
+    errs.push_back({path + "/f_max", "must be >= f_min " + detail::number_text(f_min) + " (got " + detail::number_text(f_max) + ")"});
   check_unit(errs, path + "/loudness", loudness, true);
   check_unit(errs, path + "/pulse_rate", pulse_rate, false);
   if (!(std::isfinite(loudness_decay) && loudness_decay > 0 && loudness_decay < 1))
     errs.push_back({path + "/loudness_decay",
-                    "must be in the open interval (0, 1) (got " + num(loudness_decay) + ")"});
+                    "must be in the open interval (0, 1) (got " + detail::number_text(loudness_decay) + ")"});
   if (!(std::isfinite(pulse_rate_growth) && pulse_rate_growth > 0))
-    errs.push_back({path + "/pulse_rate_growth", "must be > 0 (got " + num(pulse_rate_growth) + ")"});
+    errs.push_back({path + "/pulse_rate_growth", "must be > 0 (got " + detail::number_text(pulse_rate_growth) + ")"});
   return errs;
 }
 
@@ -328,14 +321,14 @@ std::vector<FieldError> Job::validate() const {
 
   const sim::Window& w = objective.window;
   if (!std::isfinite(w.t0) || w.t0 < 0)
-    errs.push_back({"/objective/window/0", "must be >= 0 (got " + num(w.t0) + ")"});
+    errs.push_back({"/objective/window/0", "must be >= 0 (got " + detail::number_text(w.t0) + ")"});
   else if (!(w.t1 > w.t0))
-    errs.push_back({"/objective/window", "end " + num(w.t1) + " must be after start " + num(w.t0)});
+    errs.push_back({"/objective/window", "end " + detail::number_text(w.t1) + " must be after start " + detail::number_text(w.t0)});
   else if (std::isfinite(w.t1))
     for (const sim::Scenario& s : scenarios)
       if (std::isfinite(s.duration) && w.t1 > s.duration + 1e-12) {
-        errs.push_back({"/objective/window/1", "end " + num(w.t1) + " is after the end of scenario \"" +
-                                                   s.name + "\" (" + num(s.duration) + " s)"});
+        errs.push_back({"/objective/window/1", "end " + detail::number_text(w.t1) + " is after the end of scenario \"" +
+                                                   s.name + "\" (" + detail::number_text(s.duration) + " s)"});
         break;
       }
 
@@ -346,7 +339,7 @@ std::vector<FieldError> Job::validate() const {
       if (scenarios[i].sample_time != scenarios[0].sample_time)
         errs.push_back({"/scenarios/" + std::to_string(i) + "/sample_time",
                         "must equal the first scenario's sample_time " +
-                            num(scenarios[0].sample_time) + " when the job is tuned"});
+                            detail::number_text(scenarios[0].sample_time) + " when the job is tuned"});
     if (tuning->parameters.empty())
       errs.push_back({"/tuning/parameters", "must name at least one controller parameter"});
     for (const ParameterBounds& b : tuning->parameters) {
@@ -371,9 +364,9 @@ std::vector<FieldError> Job::validate() const {
         continue;
       }
       if (b.lower >= b.upper) {
-        errs.push_back({p, "lower bound " + num(b.lower) + " is " +
+        errs.push_back({p, "lower bound " + detail::number_text(b.lower) + " is " +
                                (b.lower == b.upper ? "equal to" : "above") + " upper bound " +
-                               num(b.upper)});
+                               detail::number_text(b.upper)});
         continue;
       }
       for (int k = 0; k < 2; ++k) {
@@ -381,7 +374,7 @@ std::vector<FieldError> Job::validate() const {
         const std::string msg = sim::check_controller_value(controller, *f, v);
         if (!msg.empty())
           errs.push_back({p + "/" + std::to_string(k),
-                          std::string(k == 0 ? "lower" : "upper") + " bound " + num(v) +
+                          std::string(k == 0 ? "lower" : "upper") + " bound " + detail::number_text(v) +
                               " is outside the valid range of " + b.name + ": " + msg});
       }
     }

@@ -252,19 +252,29 @@ std::pair<JobRecord, bool> JobStore::submit(const Submission& s) {
     else ins.bind_null(4);
     ins.bind(5, now).bind(6, now).bind(7, std::int64_t{s.iterations}).bind(8, s.total_evaluations);
     ins.step();
-    Statement q(db_, (std::string("SELECT ") + kColumns + " FROM jobs WHERE id = ?").c_str());
-    q.bind(1, id);
-    q.step();
-    return std::make_pair(q.record(), true);
+    return std::make_pair(*select_job(id), true);
   });
 }
 
 std::optional<JobRecord> JobStore::get(const std::string& id) {
   std::lock_guard<std::mutex> lock(mutex_);
+  return select_job(id);
+}
+
+std::optional<JobRecord> JobStore::select_job(const std::string& id) {
   Statement q(db_, (std::string("SELECT ") + kColumns + " FROM jobs WHERE id = ?").c_str());
   q.bind(1, id);
   if (!q.step()) return std::nullopt;
   return q.record();
+}
+
+void JobStore::set_finished(const std::string& id, JobStatus status, const std::string& error) {
+  const std::string now = now_iso();
+  Statement u(db_,
+              "UPDATE jobs SET status = ?, error = ?, finished_at = ?, updated_at = ?, "
+              "checkpoint = NULL WHERE id = ?");
+  u.bind(1, std::string(to_string(status))).bind(2, error).bind(3, now).bind(4, now).bind(5, id);
+  u.step();
 }
 
 std::string JobStore::job_json(const std::string& id) {
@@ -308,10 +318,7 @@ std::optional<JobRecord> JobStore::claim_next() {
                 "started_at = CASE WHEN started_at = '' THEN ? ELSE started_at END WHERE id = ?");
     u.bind(1, now).bind(2, now).bind(3, id);
     u.step();
-    Statement r(db_, (std::string("SELECT ") + kColumns + " FROM jobs WHERE id = ?").c_str());
-    r.bind(1, id);
-    r.step();
-    return r.record();
+    return select_job(id);
   });
 }
 
@@ -346,35 +353,16 @@ void JobStore::finish_succeeded(const std::string& id,
       a.bind(1, id).bind(2, name).bind_blob(3, content);
       a.step();
     }
-    const std::string now = now_iso();
-    Statement u(db_,
-                "UPDATE jobs SET status = 'succeeded', finished_at = ?, updated_at = ?, "
-                "checkpoint = NULL WHERE id = ?");
-    u.bind(1, now).bind(2, now).bind(3, id);
-    u.step();
+    set_finished(id, JobStatus::succeeded, "");
   });
 }
 
 void JobStore::finish_failed(const std::string& id, const std::string& error) {
-  transaction([&] {
-    const std::string now = now_iso();
-    Statement u(db_,
-                "UPDATE jobs SET status = 'failed', error = ?, finished_at = ?, updated_at = ? "
-                "WHERE id = ?");
-    u.bind(1, error).bind(2, now).bind(3, now).bind(4, id);
-    u.step();
-  });
+  transaction([&] { set_finished(id, JobStatus::failed, error); });
 }
 
 void JobStore::finish_cancelled(const std::string& id) {
-  transaction([&] {
-    const std::string now = now_iso();
-    Statement u(db_,
-                "UPDATE jobs SET status = 'cancelled', finished_at = ?, updated_at = ?, "
-                "checkpoint = NULL WHERE id = ?");
-    u.bind(1, now).bind(2, now).bind(3, id);
-    u.step();
-  });
+  transaction([&] { set_finished(id, JobStatus::cancelled, ""); });
 }
 
 void JobStore::requeue(const std::string& id) {
@@ -395,10 +383,7 @@ std::optional<JobRecord> JobStore::request_cancel(const std::string& id) {
     Statement r(db_, "UPDATE jobs SET cancel_requested = 1, updated_at = ? WHERE id = ? AND status = 'running'");
     r.bind(1, now).bind(2, id);
     r.step();
-    Statement s(db_, (std::string("SELECT ") + kColumns + " FROM jobs WHERE id = ?").c_str());
-    s.bind(1, id);
-    if (!s.step()) return std::nullopt;
-    return s.record();
+    return select_job(id);
   });
 }
 

@@ -1,6 +1,7 @@
 #include "json_reader.hpp"
 
 #include <cmath>
+#include <sstream>
 
 namespace ftc::tune::detail {
 
@@ -14,6 +15,13 @@ std::string json_type_name(const json& j) {
   if (j.is_array()) return "an array";
   if (j.is_object()) return "an object";
   return j.type_name();
+}
+
+std::string number_text(double v, int significant) {
+  std::ostringstream o;
+  o.precision(significant);
+  o << v;
+  return o.str();
 }
 
 std::string pointer_escape(const std::string& key) {

@@ -12,6 +12,8 @@
 namespace ftc::tune::detail {
 
 std::string json_type_name(const nlohmann::json& j);
+// A number for messages: `significant` digits (17 = exact round trip).
+std::string number_text(double v, int significant = 10);
 std::string pointer_escape(const std::string& key);
 
 class ObjectReader {

@@ -93,6 +93,9 @@ class JobStore {
  private:
   class Statement;
   void exec(const char* sql);
+  // Both expect the caller to hold the lock (inside transaction() or get()).
+  std::optional<JobRecord> select_job(const std::string& id);
+  void set_finished(const std::string& id, JobStatus status, const std::string& error);
   template <class F>
   auto transaction(F&& body, bool synced = true);
 
