@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "ftc/sim/sliding.hpp"
 #include "checks.hpp"
+#include "ftc/sim/sliding.hpp"
 
 namespace ftc::sim {
 

@@ -20,8 +20,7 @@ void check_positive(std::vector<FieldError>& errs, const std::string& path, doub
 void check_non_negative(std::vector<FieldError>& errs, const std::string& path, double v);
 void check_range(std::vector<FieldError>& errs, const std::string& path, double v, double lo,
                  double hi);  // closed [lo, hi]
-void check_int_range(std::vector<FieldError>& errs, const std::string& path, int v, int lo,
-                     int hi);
+void check_int_range(std::vector<FieldError>& errs, const std::string& path, int v, int lo, int hi);
 
 }  // namespace ftc::sim::detail
 

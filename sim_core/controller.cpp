@@ -1,10 +1,10 @@
 #include "ftc/sim/controller.hpp"
 
+#include "checks.hpp"
 #include "ftc/sim/adaptive_neural_pi_fosmc.hpp"
 #include "ftc/sim/fosmc.hpp"
 #include "ftc/sim/nftsmc.hpp"
 #include "ftc/sim/pi_fosmc.hpp"
-#include "checks.hpp"
 
 namespace ftc::sim {
 namespace detail {
@@ -26,9 +26,12 @@ ControllerConfig checked_config(const ControllerConfig& config, double sample_ti
 std::unique_ptr<Controller> make_controller(const ControllerConfig& config, const Plant& plant,
                                             double sample_time) {
   switch (config.type) {
-    case ControllerType::nftsmc: return std::make_unique<Nftsmc>(config, plant, sample_time);
-    case ControllerType::fosmc: return std::make_unique<Fosmc>(config, plant, sample_time);
-    case ControllerType::pi_fosmc: return std::make_unique<PiFosmc>(config, plant, sample_time);
+    case ControllerType::nftsmc:
+      return std::make_unique<Nftsmc>(config, plant, sample_time);
+    case ControllerType::fosmc:
+      return std::make_unique<Fosmc>(config, plant, sample_time);
+    case ControllerType::pi_fosmc:
+      return std::make_unique<PiFosmc>(config, plant, sample_time);
     case ControllerType::adaptive_neural_pi_fosmc:
       return std::make_unique<AdaptiveNeuralPiFosmc>(config, plant, sample_time);
   }

@@ -63,8 +63,7 @@ std::string check_value(const ControllerConfig& cfg, std::string_view name, doub
   }
   if (name == "alpha") {
     const double r = cfg.p / cfg.q;
-    if (std::isfinite(r) && !(v > r))
-      return "must be greater than p/q = " + fmt_num(r) + got;
+    if (std::isfinite(r) && !(v > r)) return "must be greater than p/q = " + fmt_num(r) + got;
     return "";
   }
   if (name == "nodes") {
@@ -78,10 +77,14 @@ std::string check_value(const ControllerConfig& cfg, std::string_view name, doub
 
 const char* to_string(ControllerType t) {
   switch (t) {
-    case ControllerType::nftsmc: return "nftsmc";
-    case ControllerType::fosmc: return "fosmc";
-    case ControllerType::pi_fosmc: return "pi_fosmc";
-    case ControllerType::adaptive_neural_pi_fosmc: return "adaptive_neural_pi_fosmc";
+    case ControllerType::nftsmc:
+      return "nftsmc";
+    case ControllerType::fosmc:
+      return "fosmc";
+    case ControllerType::pi_fosmc:
+      return "pi_fosmc";
+    case ControllerType::adaptive_neural_pi_fosmc:
+      return "adaptive_neural_pi_fosmc";
   }
   return "?";
 }
@@ -111,7 +114,7 @@ std::vector<FieldError> ControllerConfig::validate(const std::string& path) cons
       errs.push_back({cp, "must hold two finite numbers"});
     else if (!(centre_range[0] < centre_range[1]))
       errs.push_back({cp, "lower end " + detail::fmt_num(centre_range[0]) +
-                             " must be below upper end " + detail::fmt_num(centre_range[1])});
+                              " must be below upper end " + detail::fmt_num(centre_range[1])});
   }
   return errs;
 }

@@ -42,9 +42,8 @@ Vec3 Disturbance::operator()(double t) const {
 }
 
 Vec3 Disturbance::operator()(double t, std::span<SinCosTracker> trackers) const {
-  return sum_terms(terms_, t, [&](std::size_t i, double x, double& s, double& c) {
-    trackers[i].eval(x, s, c);
-  });
+  return sum_terms(
+      terms_, t, [&](std::size_t i, double x, double& s, double& c) { trackers[i].eval(x, s, c); });
 }
 
 }  // namespace ftc::sim

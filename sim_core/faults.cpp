@@ -9,9 +9,12 @@ namespace ftc::sim {
 
 const char* to_string(FaultType t) {
   switch (t) {
-    case FaultType::bias: return "bias";
-    case FaultType::loss_of_effectiveness: return "loss_of_effectiveness";
-    case FaultType::stuck: return "stuck";
+    case FaultType::bias:
+      return "bias";
+    case FaultType::loss_of_effectiveness:
+      return "loss_of_effectiveness";
+    case FaultType::stuck:
+      return "stuck";
   }
   return "?";
 }
@@ -19,7 +22,6 @@ const char* to_string(FaultType t) {
 const char* to_string(FaultProfileType t) {
   return t == FaultProfileType::abrupt ? "abrupt" : "incipient";
 }
-
 
 double FaultProfile::rho(double tau) const {
   if (tau < 0.0) return 0.0;

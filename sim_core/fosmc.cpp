@@ -1,7 +1,7 @@
 #include "ftc/sim/fosmc.hpp"
 
-#include "ftc/sim/sliding.hpp"
 #include "checks.hpp"
+#include "ftc/sim/sliding.hpp"
 
 namespace ftc::sim {
 

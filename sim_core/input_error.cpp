@@ -25,7 +25,8 @@ InputError::InputError(std::string source, std::vector<FieldError> errors)
       errors_(std::move(errors)) {}
 
 InputError::InputError(std::string source, std::string path, std::string message)
-    : InputError(std::move(source), std::vector<FieldError>{{std::move(path), std::move(message)}}) {}
+    : InputError(std::move(source),
+                 std::vector<FieldError>{{std::move(path), std::move(message)}}) {}
 
 void throw_if_errors(const std::string& source, std::vector<FieldError> errors) {
   if (!errors.empty()) throw InputError(source, std::move(errors));

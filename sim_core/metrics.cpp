@@ -7,9 +7,12 @@ namespace ftc::sim {
 
 const char* to_string(Metric m) {
   switch (m) {
-    case Metric::ise: return "ise";
-    case Metric::iae: return "iae";
-    case Metric::itae: return "itae";
+    case Metric::ise:
+      return "ise";
+    case Metric::iae:
+      return "iae";
+    case Metric::itae:
+      return "itae";
   }
   return "?";
 }
@@ -22,9 +25,12 @@ std::optional<Metric> metric_from_string(std::string_view s) {
 
 double ErrorIntegrals::get(Metric m) const {
   switch (m) {
-    case Metric::ise: return ise;
-    case Metric::iae: return iae;
-    case Metric::itae: return itae;
+    case Metric::ise:
+      return ise;
+    case Metric::iae:
+      return iae;
+    case Metric::itae:
+      return itae;
   }
   return ise;
 }

@@ -83,8 +83,10 @@ SimulationResult simulate(const Plant& plant, Controller& controller, const Scen
                          const Vec4& u_d) -> Vec3 {
     const Vec4 u = faults.apply(e.fault, u_d);
     Vec3 a = fs;
-    if (constant_G) a.noalias() += G0 * u;
-    else a.noalias() += plant.G(s) * u;
+    if (constant_G)
+      a.noalias() += G0 * u;
+    else
+      a.noalias() += plant.G(s) * u;
     a += e.disturbance;
     return a;
   };

@@ -10,7 +10,7 @@ namespace ftc::sim {
 
 Mat34 Spacecraft::distribution_matrix() {
   Mat34 g;
-  g << 0.67, 0.67, 0.67, 0.67,  //
+  g << 0.67, 0.67, 0.67, 0.67,   //
       0.69, -0.69, -0.69, 0.69,  //
       0.28, 0.28, -0.28, -0.28;
   return g;
@@ -62,18 +62,16 @@ Vec3 Spacecraft::f_trig(const State& x, const double (&s)[3], const double (&c)[
   const double A = c1 * s3s2 + c3 * s1;  // c1 s3 s2 + c3 s1
   const double B = c3 * c1 - s3s2 * s1;  // c3 c1 - s3 s2 s1
 
-  const double f1 =
-      w * (x6 * c3 * c2 - x5 * s3s2) +
-      kx_ * (x5 * x6 + w * (x5 * A + x6 * B - d2 * s2 * s1 * s1) +
-             w2 * (0.5 * d3 * c1 * c1 * s2 + d1 * (0.5 * c3 * c3 - 0.5 * s2 * s2 * s3 * s3 - 1.5 * c2 * c2)));
-  const double f2 =
-      w * (x6 * (s3 * c1 + c3 * s2 * s1) + x4 * A + x5 * s3c2 * s1) +
-      ky_ * (x4 * x6 + w * (x4 * s2 * (c1 * s3 + c3 * s1) - x6 * s3c2) +
-             w2 * (-0.5 * d2 * s3 * s3 * c1 - 0.5 * c2 * s1 * d3 + 1.5 * d2 * c1));
-  const double f3 =
-      w * (x6 * (s3 * s1 - c1 * c3 * s2) - x4 * B - x5 * c1 * s3c2) +
-      kz_ * (x4 * x5 + w * (x4 * B - x5 * s3c2) +
-             w2 * (-0.5 * d3 * c2 * c1 - 0.5 * s3 * s3 * s1 * d2 - 1.5 * d2 * s1));
+  const double f1 = w * (x6 * c3 * c2 - x5 * s3s2) +
+                    kx_ * (x5 * x6 + w * (x5 * A + x6 * B - d2 * s2 * s1 * s1) +
+                           w2 * (0.5 * d3 * c1 * c1 * s2 +
+                                 d1 * (0.5 * c3 * c3 - 0.5 * s2 * s2 * s3 * s3 - 1.5 * c2 * c2)));
+  const double f2 = w * (x6 * (s3 * c1 + c3 * s2 * s1) + x4 * A + x5 * s3c2 * s1) +
+                    ky_ * (x4 * x6 + w * (x4 * s2 * (c1 * s3 + c3 * s1) - x6 * s3c2) +
+                           w2 * (-0.5 * d2 * s3 * s3 * c1 - 0.5 * c2 * s1 * d3 + 1.5 * d2 * c1));
+  const double f3 = w * (x6 * (s3 * s1 - c1 * c3 * s2) - x4 * B - x5 * c1 * s3c2) +
+                    kz_ * (x4 * x5 + w * (x4 * B - x5 * s3c2) +
+                           w2 * (-0.5 * d3 * c2 * c1 - 0.5 * s3 * s3 * s1 * d2 - 1.5 * d2 * s1));
   return Vec3(f1, f2, f3);
 }
 

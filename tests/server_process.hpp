@@ -26,10 +26,12 @@ class ServerProcess {
     posix_spawn_file_actions_t fa;
     posix_spawn_file_actions_init(&fa);
     posix_spawn_file_actions_adddup2(&fa, out[1], STDOUT_FILENO);
-    posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_APPEND,
+                                     0644);
     posix_spawn_file_actions_addclose(&fa, out[0]);
     const std::string store_s = store.string();
-    std::vector<std::string> args = {FTC_CLI, "serve", "--port", "0", "--store", store_s, "--threads", "2"};
+    std::vector<std::string> args = {FTC_CLI,   "serve", "--port",    "0",
+                                     "--store", store_s, "--threads", "2"};
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);

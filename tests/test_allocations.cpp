@@ -49,4 +49,6 @@ TEST_P(AllocationFree, LoopAllocatesNothing) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Simulation, AllocationFree, ::testing::ValuesIn(kAllControllerTypes),
-                         [](const ::testing::TestParamInfo<ControllerType>& p) { return std::string(to_string(p.param)); });
+                         [](const ::testing::TestParamInfo<ControllerType>& p) {
+                           return std::string(to_string(p.param));
+                         });

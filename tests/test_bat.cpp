@@ -36,7 +36,8 @@ double rosenbrock(const Decision& x) {
 // Counts evaluations and checks every candidate against the bounds.
 class CheckingEvaluator final : public BatchEvaluator {
  public:
-  CheckingEvaluator(SearchSpace space, double (*f)(const Decision&)) : space_(std::move(space)), f_(f) {}
+  CheckingEvaluator(SearchSpace space, double (*f)(const Decision&))
+      : space_(std::move(space)), f_(f) {}
   std::vector<double> evaluate(const std::vector<Decision>& batch) override {
     std::vector<double> J;
     for (const Decision& x : batch) {
@@ -202,11 +203,10 @@ TEST(Optimizer, ObserverCanStopTheRun) {
   int calls = 0;
   CheckingEvaluator ev(box(2, -5, 5), sphere);
   auto opt = make_optimizer(bat(5, 10), 1, box(2, -5, 5));
-  const OptimizationResult r =
-      run_optimizer(*opt, ev, [&](const HistoryRow& h, const Optimizer&) {
-        ++calls;
-        return h.iteration < 3;
-      });
+  const OptimizationResult r = run_optimizer(*opt, ev, [&](const HistoryRow& h, const Optimizer&) {
+    ++calls;
+    return h.iteration < 3;
+  });
   EXPECT_EQ(calls, 4);
   EXPECT_FALSE(r.completed);
   EXPECT_EQ(r.evaluations, 20);

@@ -40,9 +40,11 @@ TEST(Cli, SimulateWritesMetricsAndTrajectory) {
 
 TEST(Cli, SimulateOtherControllerWithOverrides) {
   const auto dir = fresh_dir("simulate-nftsmc");
-  const CliResult r = run_cli("simulate jobs/table1.json --controller nftsmc --set sigma1=12 --set "
-                              "theta=500 --record-every 0.1 --out '" + dir.string() + "'",
-                              dir);
+  const CliResult r = run_cli(
+      "simulate jobs/table1.json --controller nftsmc --set sigma1=12 --set "
+      "theta=500 --record-every 0.1 --out '" +
+          dir.string() + "'",
+      dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json m = json::parse(slurp(dir / "metrics.json"));
   EXPECT_EQ(m["controller"]["type"], "nftsmc");
@@ -60,7 +62,8 @@ TEST(Cli, InvalidJobExitsTwoNamingFileAndPath) {
   }
   const CliResult r = run_cli("simulate '" + (dir / "bad.json").string() + "'", dir);
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("bad.json: /scenarios/0/sample_time: must be > 0"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("bad.json: /scenarios/0/sample_time: must be > 0"), std::string::npos)
+      << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
 }
 
@@ -68,7 +71,8 @@ TEST(Cli, BadOverrideExitsTwo) {
   const auto dir = fresh_dir("badset");
   CliResult r = run_cli("simulate jobs/table1.json --set Kq=3 --out '" + dir.string() + "'", dir);
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--set: Kq: is not a parameter of controller pi_fosmc"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--set: Kq: is not a parameter of controller pi_fosmc"), std::string::npos)
+      << r.err;
   r = run_cli("simulate jobs/table1.json --set Kp=-1 --out '" + dir.string() + "'", dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("Kp: must be > 0"), std::string::npos) << r.err;

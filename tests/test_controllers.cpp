@@ -31,7 +31,8 @@ Vec3 sgn_pow(const Vec3& x, double a) {
   return r;
 }
 Vec3 tanh_half(const Vec3& s, double theta) {
-  return Vec3(std::tanh(theta * s[0] / 2), std::tanh(theta * s[1] / 2), std::tanh(theta * s[2] / 2));
+  return Vec3(std::tanh(theta * s[0] / 2), std::tanh(theta * s[1] / 2),
+              std::tanh(theta * s[2] / 2));
 }
 
 }  // namespace
@@ -70,9 +71,10 @@ TEST_P(EveryController, ResetRestoresInitialState) {
   EXPECT_EQ(c->step(0, kX1, kX2, kA), first);
 }
 
-INSTANTIATE_TEST_SUITE_P(Controllers, EveryController,
-                         ::testing::ValuesIn(kAllControllerTypes),
-                         [](const ::testing::TestParamInfo<ControllerType>& p) { return std::string(to_string(p.param)); });
+INSTANTIATE_TEST_SUITE_P(Controllers, EveryController, ::testing::ValuesIn(kAllControllerTypes),
+                         [](const ::testing::TestParamInfo<ControllerType>& p) {
+                           return std::string(to_string(p.param));
+                         });
 
 TEST(PiFosmc, FirstTwoStepsFollowEquations) {
   const Spacecraft plant;
@@ -123,7 +125,8 @@ TEST(AdaptiveNeuralPiFosmc, FirstTwoStepsFollowEquations) {
   // k = 0: Ω = I = ur = 0, no model term at all.
   EXPECT_TRUE(c.step(0.0, kX1, kX2, kA).isApprox(-plant.G_pinv(x) * C, 1e-13));
   // After one step: Ka = 15 + Ts |sPI0| / 100, Ω = 0 (W was 0), ur = Ts (15 + 5) sigm(sPI0).
-  EXPECT_TRUE(c.adaptive_gain().isApprox(Vec3::Constant(15.0) + kTs / 100.0 * sPI0.cwiseAbs(), 1e-14));
+  EXPECT_TRUE(
+      c.adaptive_gain().isApprox(Vec3::Constant(15.0) + kTs / 100.0 * sPI0.cwiseAbs(), 1e-14));
   EXPECT_EQ(c.network_output(), Vec3::Zero());
   const Vec3 I = kTs * sF;
   const Vec3 ur = kTs * 20.0 * tanh_half(sPI0, 1000.0);

@@ -100,11 +100,20 @@ TEST(JobLoader, RejectsBadInputWithJsonPath) {
       {"Kp = 0", [](json& j) { j["controller"]["Kp"] = 0; }, "/controller/Kp", "must be > 0"},
       {"actuator 5", [](json& j) { j["scenarios"][0]["faults"][0]["actuator"] = 5; },
        "/scenarios/0/faults/0/actuator", "1..4"},
-      {"bounds reversed", [](json& j) { j["tuning"]["parameters"]["Kp"] = {60, 50}; },
+      {"bounds reversed",
+       [](json& j) {
+         j["tuning"]["parameters"]["Kp"] = {60, 50};
+       },
        "/tuning/parameters/Kp", "lower bound 60 is above upper bound 50"},
-      {"unknown tuned parameter", [](json& j) { j["tuning"]["parameters"]["Kd"] = {0, 1}; },
+      {"unknown tuned parameter",
+       [](json& j) {
+         j["tuning"]["parameters"]["Kd"] = {0, 1};
+       },
        "/tuning/parameters/Kd", "is not a parameter of controller pi_fosmc"},
-      {"bound outside field range", [](json& j) { j["tuning"]["parameters"]["Kp"] = {-1, 50}; },
+      {"bound outside field range",
+       [](json& j) {
+         j["tuning"]["parameters"]["Kp"] = {-1, 50};
+       },
        "/tuning/parameters/Kp/0", "outside the valid range of Kp"},
       {"wrong schema", [](json& j) { j["schema"] = "ftctune.job/2"; }, "/schema", "ftctune.job/1"},
       {"field of another controller type", [](json& j) { j["controller"]["sigma1"] = 3; },
@@ -113,17 +122,26 @@ TEST(JobLoader, RejectsBadInputWithJsonPath) {
        "/controller/type", "unknown controller type"},
       {"fraction above 1", [](json& j) { j["scenarios"][0]["faults"][1]["fraction"] = 1.5; },
        "/scenarios/0/faults/1/fraction", "[0, 1]"},
-      {"key of another fault type", [](json& j) { j["scenarios"][0]["faults"][0]["fraction"] = 0.5; },
+      {"key of another fault type",
+       [](json& j) { j["scenarios"][0]["faults"][0]["fraction"] = 0.5; },
        "/scenarios/0/faults/0/fraction", "unknown key"},
-      {"window past the end", [](json& j) { j["objective"]["window"] = {0, 40}; },
+      {"window past the end",
+       [](json& j) {
+         j["objective"]["window"] = {0, 40};
+       },
        "/objective/window/1", "after the end of scenario"},
       {"population 0", [](json& j) { j["tuning"]["algorithm"]["population"] = 0; },
        "/tuning/algorithm/population", "1.."},
       {"missing scenarios", [](json& j) { j.erase("scenarios"); }, "/scenarios", "is required"},
-      {"short initial state", [](json& j) { j["scenarios"][0]["initial_state"] = {1, 2, 3, 4, 5}; },
+      {"short initial state",
+       [](json& j) {
+         j["scenarios"][0]["initial_state"] = {1, 2, 3, 4, 5};
+       },
        "/scenarios/0/initial_state", "array of 6 numbers"},
       {"incipient without rate",
-       [](json& j) { j["scenarios"][0]["faults"][0]["profile"] = {{"type", "incipient"}}; },
+       [](json& j) {
+         j["scenarios"][0]["faults"][0]["profile"] = {{"type", "incipient"}};
+       },
        "/scenarios/0/faults/0/profile/rate", "is required"},
       {"unsafe name", [](json& j) { j["name"] = "../x"; }, "/name", "letters, digits"},
       {"substeps 0", [](json& j) { j["scenarios"][0]["substeps"] = 0; }, "/scenarios/0/substeps",
@@ -140,7 +158,8 @@ TEST(JobLoader, RejectsBadInputWithJsonPath) {
        "/tuning/parameters/nodes", "cannot be tuned"},
       {"loudness above 1", [](json& j) { j["tuning"]["algorithm"]["loudness"] = 1.5; },
        "/tuning/algorithm/loudness", "(0, 1]"},
-      {"disturbance shape", [](json& j) { j["scenarios"][0]["disturbance"][0]["shape"] = "square"; },
+      {"disturbance shape",
+       [](json& j) { j["scenarios"][0]["disturbance"][0]["shape"] = "square"; },
        "/scenarios/0/disturbance/0/shape", "\"sin\" or \"cos\""},
   };
   for (const BadCase& c : cases) {

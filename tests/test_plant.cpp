@@ -30,17 +30,20 @@ Vec3 paper_f(const State& x, double Ix, double Iy, double Iz, double w) {
            w * x6 * cos(x3) * cos(x1) + 0.5 * w2 * sin(2 * x3) * cos(x1) * cos(x1) * sin(x2) +
            0.5 * w2 * cos(x3) * cos(x3) * sin(2 * x1) - w * x6 * sin(x3) * sin(x2) * sin(x1) -
            0.5 * w2 * sin(x2) * sin(x2) * sin(x3) * sin(x3) * sin(2 * x1) -
-           w * sin(2 * x2) * sin(x2) * sin(x1) * sin(x1) - 1.5 * w2 * cos(x2) * cos(x2) * sin(2 * x1));
+           w * sin(2 * x2) * sin(x2) * sin(x1) * sin(x1) -
+           1.5 * w2 * cos(x2) * cos(x2) * sin(2 * x1));
   const double f2 =
-      w * x6 * sin(x3) * cos(x1) + w * x4 * cos(x3) * sin(x1) + w * x6 * cos(x3) * sin(x2) * sin(x1) +
-      w * x5 * sin(x3) * cos(x2) * sin(x1) + w * x4 * sin(x3) * sin(x2) * cos(x1) +
+      w * x6 * sin(x3) * cos(x1) + w * x4 * cos(x3) * sin(x1) +
+      w * x6 * cos(x3) * sin(x2) * sin(x1) + w * x5 * sin(x3) * cos(x2) * sin(x1) +
+      w * x4 * sin(x3) * sin(x2) * cos(x1) +
       (Iz - Ix) / Iy *
           (x4 * x6 + w * x4 * cos(x1) * sin(x3) * sin(x2) + w * x4 * cos(x3) * sin(x2) * sin(x1) -
            w * x6 * sin(x3) * cos(x2) - 0.5 * w2 * sin(2 * x2) * sin(x3) * sin(x3) * cos(x1) -
            0.5 * w2 * cos(x2) * sin(x1) * sin(2 * x3) + 1.5 * w2 * sin(2 * x2) * cos(x1));
   const double f3 =
       w * x4 * sin(x1) * sin(x3) * sin(x2) - w * x6 * cos(x1) * cos(x3) * sin(x2) -
-      w * x5 * cos(x1) * sin(x3) * cos(x2) + w * x6 * sin(x3) * sin(x1) - w * x4 * cos(x3) * cos(x1) +
+      w * x5 * cos(x1) * sin(x3) * cos(x2) + w * x6 * sin(x3) * sin(x1) -
+      w * x4 * cos(x3) * cos(x1) +
       (Ix - Iy) / Iz *
           (x4 * x5 + w * x4 * cos(x3) * cos(x1) - w * x4 * sin(x3) * sin(x2) * sin(x1) -
            w * x5 * sin(x3) * cos(x2) - 0.5 * w2 * sin(2 * x3) * cos(x2) * cos(x1) -

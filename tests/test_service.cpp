@@ -1,14 +1,5 @@
-#include <gtest/gtest.h>
-
-#include "ftc/tune/service.hpp"
-#include "ftc/tune/tuning_run.hpp"
-#include "cli_runner.hpp"
-#include "server_process.hpp"
-#include "short_job.hpp"
-
-// After the project's headers (Eigen): httplib.h pulls in <resolv.h> and its `_res` macro.
 #include <arpa/inet.h>
-#include <httplib.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 
@@ -16,6 +7,13 @@
 #include <chrono>
 #include <set>
 #include <thread>
+
+#include "cli_runner.hpp"
+#include "ftc/tune/httplib.hpp"
+#include "ftc/tune/service.hpp"
+#include "ftc/tune/tuning_run.hpp"
+#include "server_process.hpp"
+#include "short_job.hpp"
 
 using nlohmann::json;
 using namespace ftc;
@@ -181,7 +179,8 @@ TEST(Service, CancelsQueuedAndRunningJobs) {
   r = s.client->Post(("/v1/jobs/" + running + "/cancel").c_str(), "", "application/json");
   EXPECT_EQ(r->status, 202);
   const json done = s.wait_done(running);
-  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
+  const double took =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
   EXPECT_EQ(done["status"], "cancelled");
   EXPECT_LT(done["progress"]["iteration"].get<int>(), 60);
   EXPECT_LT(took, 1.0) << "a running job must stop within one iteration (~25 ms here)";
@@ -191,8 +190,8 @@ TEST(Service, CancelsQueuedAndRunningJobs) {
   EXPECT_TRUE(q["started_at"].is_null());  // it never started
   EXPECT_EQ(q["attempts"], 0);
   expect_error(s.client->Get(("/v1/jobs/" + running + "/gains").c_str()), 409, "not_ready");
-  expect_error(s.client->Post(("/v1/jobs/" + running + "/cancel").c_str(), "", "application/json"), 409,
-               "conflict");
+  expect_error(s.client->Post(("/v1/jobs/" + running + "/cancel").c_str(), "", "application/json"),
+               409, "conflict");
 }
 
 TEST(Service, RejectsBadRequestsWithJsonErrors) {
@@ -217,17 +216,21 @@ TEST(Service, RejectsBadRequestsWithJsonErrors) {
   no_tuning.erase("tuning");
   expect_error(c.Post("/v1/jobs", no_tuning.dump(), "application/json"), 400, "invalid_job");
 
-  expect_error(c.Post("/v1/jobs", std::string(20 * 1024, ' '), "application/json"), 413, "payload_too_large");
+  expect_error(c.Post("/v1/jobs", std::string(20 * 1024, ' '), "application/json"), 413,
+               "payload_too_large");
   r = c.Post("/v1/jobs", short_table1_job().dump(), "application/json");  // 9 × 5000 steps… fits
   EXPECT_EQ(r->status, 201) << r->body;
   r = c.Post("/v1/jobs", long_job().dump(), "application/json");  // 488 × 10000 = 4.9e6 > 1e6
   expect_error(r, 400, "job_too_large");
-  EXPECT_NE(json::parse(r->body)["error"]["message"].get<std::string>().find("4.88 times the server's budget"),
-            std::string::npos) << r->body;
+  EXPECT_NE(json::parse(r->body)["error"]["message"].get<std::string>().find(
+                "4.88 times the server's budget"),
+            std::string::npos)
+      << r->body;
 
   expect_error(c.Get("/v1/jobs/0123456789abcdef"), 404, "not_found");
   expect_error(c.Get("/v1/jobs/0123456789abcdef/gains"), 404, "not_found");
-  expect_error(c.Post("/v1/jobs/0123456789abcdef/cancel", "", "application/json"), 404, "not_found");
+  expect_error(c.Post("/v1/jobs/0123456789abcdef/cancel", "", "application/json"), 404,
+               "not_found");
   expect_error(c.Get("/v2/anything"), 404, "not_found");
   r = c.Delete("/v1/jobs");
   expect_error(r, 405, "method_not_allowed");
@@ -248,8 +251,8 @@ TEST(Service, RejectsBadRequestsWithJsonErrors) {
                "idempotency_conflict");
 
   // A client that disconnects in the middle of a request leaves the server serving.
-  for (const char* partial : {"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Length: 5000\r\n\r\n{\"sche",
-                              "GET /v1/jo"}) {
+  for (const char* partial :
+       {"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Length: 5000\r\n\r\n{\"sche", "GET /v1/jo"}) {
     const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
     sockaddr_in a{};
     a.sin_family = AF_INET;
@@ -301,7 +304,8 @@ TEST(Service, FiftyConcurrentSubmissionsAllComplete) {
     clients.emplace_back([&, t] {
       httplib::Client c("127.0.0.1", s.port);
       for (int i = t; i < 50; i += 8) {
-        auto r = c.Post("/v1/jobs", tiny_job("tiny" + std::to_string(i)).dump(), "application/json");
+        auto r =
+            c.Post("/v1/jobs", tiny_job("tiny" + std::to_string(i)).dump(), "application/json");
         if (!r || r->status != 201) {
           ++failures;
           continue;
@@ -353,7 +357,8 @@ TEST(Service, RecoversFromSigkillWithoutLosingOrRepeatingJobs) {
     }
     ASSERT_EQ(v["status"], "succeeded") << v.dump();
     EXPECT_EQ(v["attempts"], k == 0 ? 2 : 1) << "job " << k;
-    EXPECT_EQ(c.Get(("/v1/jobs/" + ids[k] + "/gains").c_str())->body, expected_gains(jobs[k])) << "job " << k;
+    EXPECT_EQ(c.Get(("/v1/jobs/" + ids[k] + "/gains").c_str())->body, expected_gains(jobs[k]))
+        << "job " << k;
   }
   EXPECT_EQ(json::parse(c.Get("/v1/jobs")->body)["total"], 3);
 }
@@ -395,7 +400,8 @@ TEST(Cli, ClientCommandsTalkToTheService) {
   }
   const std::string server = " --server http://127.0.0.1:" + std::to_string(s.port);
   CliResult r = run_cli("submit '" + (dir / "job.json").string() + "' --wait -o '" +
-                            (dir / "gains.json").string() + "'" + server, dir);
+                            (dir / "gains.json").string() + "'" + server,
+                        dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string id = r.out.substr(0, r.out.find('\n'));
   EXPECT_EQ(id.size(), 16u) << r.out;
@@ -415,6 +421,7 @@ TEST(Cli, ClientCommandsTalkToTheService) {
   EXPECT_EQ(r.exit_code, 2);
   r = run_cli("status " + id + " --server http://127.0.0.1:1", dir);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.err.find("cannot reach the ftctune server at http://127.0.0.1:1"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("cannot reach the ftctune server at http://127.0.0.1:1"), std::string::npos)
+      << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1);
 }

@@ -127,17 +127,21 @@ TEST(GainsFile, LoaderRejectsBadFilesClearly) {
   };
   json other = doc;
   other["schema"] = "ftctune.gains/2";
-  EXPECT_NE(message(other).find("/schema: this file is \"ftctune.gains/2\", expected \"ftctune.gains/1\""),
-            std::string::npos) << message(other);
+  EXPECT_NE(message(other).find(
+                "/schema: this file is \"ftctune.gains/2\", expected \"ftctune.gains/1\""),
+            std::string::npos)
+      << message(other);
   json missing = doc;
   missing.erase("sample_time");
-  EXPECT_NE(message(missing).find("/sample_time: is required"), std::string::npos) << message(missing);
+  EXPECT_NE(message(missing).find("/sample_time: is required"), std::string::npos)
+      << message(missing);
   json extra = doc;
   extra["notes"] = "x";
   EXPECT_NE(message(extra).find("/notes: unknown key"), std::string::npos);
   json mismatch = doc;
   mismatch["tuned"]["Kp"] = 99.0;
-  EXPECT_NE(message(mismatch).find("/tuned/Kp: value 99 differs from /controller/Kp"), std::string::npos)
+  EXPECT_NE(message(mismatch).find("/tuned/Kp: value 99 differs from /controller/Kp"),
+            std::string::npos)
       << message(mismatch);
   json bad_value = doc;
   bad_value["controller"]["Kp"] = 0;
@@ -149,8 +153,10 @@ TEST(GainsFile, LoaderRejectsBadFilesClearly) {
     runtime::make_controller(g, plant, 0.002);
     FAIL() << "accepted a sample-time mismatch";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("tuned for Ts = 0.001 s, but the controller is to run at Ts = 0.002 s"),
-              std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(
+                  "tuned for Ts = 0.001 s, but the controller is to run at Ts = 0.002 s"),
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -161,13 +167,16 @@ TEST(Cli, RunWritesGainsIdenticalAcrossThreadCounts) {
     f << short_table1_job().dump(2);
   }
   const std::string job = "'" + (dir / "job.json").string() + "'";
-  const CliResult a = run_cli("run " + job + " --threads 1 --out '" + (dir / "t1").string() + "'", dir);
+  const CliResult a =
+      run_cli("run " + job + " --threads 1 --out '" + (dir / "t1").string() + "'", dir);
   ASSERT_EQ(a.exit_code, 0) << a.err;
   EXPECT_NE(a.err.find("iteration 2/2: best J ="), std::string::npos) << a.err;
-  const CliResult b = run_cli("run " + job + " --threads 2 -q --out '" + (dir / "t2").string() + "'", dir);
+  const CliResult b =
+      run_cli("run " + job + " --threads 2 -q --out '" + (dir / "t2").string() + "'", dir);
   ASSERT_EQ(b.exit_code, 0) << b.err;
   EXPECT_EQ(b.err, "");  // --quiet
-  for (const char* f : {"gains.json", "history.csv", "comparison.json", "comparison.md", "run.json"})
+  for (const char* f :
+       {"gains.json", "history.csv", "comparison.json", "comparison.md", "run.json"})
     EXPECT_TRUE(std::filesystem::exists(dir / "t1" / f)) << f;
   EXPECT_EQ(slurp(dir / "t1" / "gains.json"), slurp(dir / "t2" / "gains.json"));
   EXPECT_EQ(json::parse(slurp(dir / "t2" / "run.json"))["threads"], 2);
@@ -182,8 +191,10 @@ TEST(Cli, RunWritesGainsIdenticalAcrossThreadCounts) {
     EXPECT_NE(md.find(label), std::string::npos) << label;
 
   // The loaded gains drive `simulate` to the tuned objective.
-  const CliResult s = run_cli("simulate " + job + " --gains '" + (dir / "t1" / "gains.json").string() +
-                              "' -q --out '" + (dir / "sim").string() + "'", dir);
+  const CliResult s =
+      run_cli("simulate " + job + " --gains '" + (dir / "t1" / "gains.json").string() +
+                  "' -q --out '" + (dir / "sim").string() + "'",
+              dir);
   ASSERT_EQ(s.exit_code, 0) << s.err;
   const json g = json::parse(slurp(dir / "t1" / "gains.json"));
   const json m = json::parse(slurp(dir / "sim" / "metrics.json"));
@@ -196,7 +207,8 @@ TEST(Cli, ValidateSummarisesOrListsEveryError) {
   CliResult r = run_cli("validate jobs/table1.json", dir);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("110 evaluations x 1 scenario, 30000 simulated steps per evaluation"),
-            std::string::npos) << r.out;
+            std::string::npos)
+      << r.out;
   json bad = short_table1_job();
   bad["controller"]["Kp"] = 0;
   bad["tuning"]["parameters"]["Kp"] = {60, 50};
@@ -208,7 +220,8 @@ TEST(Cli, ValidateSummarisesOrListsEveryError) {
   r = run_cli("validate '" + (dir / "bad.json").string() + "'", dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("3 problems"), std::string::npos) << r.err;
-  for (const char* p : {"/controller/Kp", "/tuning/parameters/Kp", "/scenarios/0/faults/0/actuator"})
+  for (const char* p :
+       {"/controller/Kp", "/tuning/parameters/Kp", "/scenarios/0/faults/0/actuator"})
     EXPECT_NE(r.err.find(p), std::string::npos) << p;
 }
 

@@ -1,12 +1,6 @@
 // Client commands of the tuning service: submit, status, fetch, cancel, jobs.
-// Server from --server, else $FTCTUNE_SERVER, else http://127.0.0.1:8080; token from $FTCTUNE_TOKEN.
-#include "cli.hpp"
-#include "ftc/sim/input_error.hpp"
-#include "ftc/tune/files.hpp"
-
-// After the project's headers (Eigen): httplib.h pulls in <resolv.h> and its `_res` macro.
-#include <httplib.h>
-
+// Server from --server, else $FTCTUNE_SERVER, else http://127.0.0.1:8080; token from
+// $FTCTUNE_TOKEN.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -15,6 +9,11 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
+
+#include "cli.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/files.hpp"
+#include "ftc/tune/httplib.hpp"
 
 namespace ftc::cli {
 namespace {
@@ -49,7 +48,8 @@ class Api {
     if (!client_->is_valid()) throw InputError("--server", "", "not a valid server URL: " + url_);
     client_->set_connection_timeout(5, 0);
     client_->set_read_timeout(30, 0);
-    if (const char* token = std::getenv("FTCTUNE_TOKEN"); token && *token) client_->set_bearer_token_auth(token);
+    if (const char* token = std::getenv("FTCTUNE_TOKEN"); token && *token)
+      client_->set_bearer_token_auth(token);
   }
 
   const std::string& url() const { return url_; }
@@ -62,7 +62,8 @@ class Api {
  private:
   std::string check(const httplib::Result& r, const std::string& path) {
     if (!r)
-      throw Unreachable("cannot reach the ftctune server at " + url_ + " (" + httplib::to_string(r.error()) + ")");
+      throw Unreachable("cannot reach the ftctune server at " + url_ + " (" +
+                        httplib::to_string(r.error()) + ")");
     if (r->status >= 400) {
       std::string msg = "HTTP " + std::to_string(r->status) + " from " + path;
       const json body = json::parse(r->body, nullptr, false);
@@ -87,7 +88,8 @@ std::string describe(const json& j) {
   std::string s = j["id"].get<std::string>() + "  " + j["name"].get<std::string>() + "  " +
                   j["status"].get<std::string>();
   if (!p["iteration"].is_null())
-    s += "  iteration " + std::to_string(p["iteration"].get<int>()) + "/" + std::to_string(p["iterations"].get<int>());
+    s += "  iteration " + std::to_string(p["iteration"].get<int>()) + "/" +
+         std::to_string(p["iterations"].get<int>());
   s += "  " + std::to_string(p["evaluations"].get<long long>()) + "/" +
        std::to_string(p["total_evaluations"].get<long long>()) + " evaluations";
   if (!p["best_fitness"].is_null()) {
@@ -118,9 +120,11 @@ int guarded(const std::function<int()>& body) {
 
 void print_json(const std::string& body) { std::printf("%s\n", json::parse(body).dump(2).c_str()); }
 
-int fetch_gains(Api& api, const std::string& id, const std::string& out, const std::string& name, bool quiet) {
+int fetch_gains(Api& api, const std::string& id, const std::string& out, const std::string& name,
+                bool quiet) {
   const std::string gains = api.get("/v1/jobs/" + id + "/gains");
-  const std::filesystem::path file = out.empty() ? default_out_dir_for(name) / "gains.json" : std::filesystem::path(out);
+  const std::filesystem::path file =
+      out.empty() ? default_out_dir_for(name) / "gains.json" : std::filesystem::path(out);
   tune::write_file_atomic(file, gains);
   if (!quiet) std::printf("wrote %s\n", file.c_str());
   return 0;
@@ -135,7 +139,8 @@ std::filesystem::path default_out_dir_for(const std::string& job_name) {
 void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
   auto o = std::make_shared<ClientOptions>();
   const auto common = [o](CLI::App* sub) {
-    sub->add_option("--server", o->server, "Server URL (default $FTCTUNE_SERVER or http://127.0.0.1:8080)");
+    sub->add_option("--server", o->server,
+                    "Server URL (default $FTCTUNE_SERVER or http://127.0.0.1:8080)");
     sub->add_flag("--json", o->json_output, "Print the server's JSON");
   };
 
@@ -146,7 +151,8 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
     CLI::App* sub = app.add_subcommand("submit", "Submit a tuning job to the service");
     sub->add_option("job", *job, "Job file (ftctune.job/1)")->required();
     sub->add_flag("--wait", *wait, "Follow the progress, then fetch the gains file");
-    sub->add_option("-o,--output", *out, "With --wait: where to write the gains (default out/<job name>/gains.json)");
+    sub->add_option("-o,--output", *out,
+                    "With --wait: where to write the gains (default out/<job name>/gains.json)");
     common(sub);
     sub->callback([&action, &g, o, job, wait, out] {
       action = [&g, o, job, wait, out] {
@@ -158,15 +164,18 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
           Api api(*o);
           const json created = json::parse(api.post("/v1/jobs", ss.str()));
           const std::string id = created["id"];
-          if (o->json_output && !*wait) print_json(created.dump());
-          else std::printf("%s\n", id.c_str());
+          if (o->json_output && !*wait)
+            print_json(created.dump());
+          else
+            std::printf("%s\n", id.c_str());
           std::fflush(stdout);
           if (!*wait) return 0;
           int last_iteration = -2;
           while (true) {
             const json j = json::parse(api.get("/v1/jobs/" + id));
             const std::string status = j["status"];
-            const int it = j["progress"]["iteration"].is_null() ? -1 : j["progress"]["iteration"].get<int>();
+            const int it =
+                j["progress"]["iteration"].is_null() ? -1 : j["progress"]["iteration"].get<int>();
             if (it != last_iteration && !g.quiet) {
               std::fprintf(stderr, "%s\n", describe(j).c_str());
               last_iteration = it;
@@ -176,7 +185,8 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
               std::fprintf(stderr, "ftctune: job %s %s\n", id.c_str(), status.c_str());
               return 1;
             }
-            std::this_thread::sleep_for(std::chrono::milliseconds(20));  // a status read costs ~0.1 ms
+            std::this_thread::sleep_for(
+                std::chrono::milliseconds(20));  // a status read costs ~0.1 ms
           }
         });
       };
@@ -201,23 +211,28 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
   };
   id_command("status", "Show a job's status and progress", [o](Api& api, const std::string& id) {
     const std::string body = api.get("/v1/jobs/" + id);
-    if (o->json_output) print_json(body);
-    else std::printf("%s\n", describe(json::parse(body)).c_str());
+    if (o->json_output)
+      print_json(body);
+    else
+      std::printf("%s\n", describe(json::parse(body)).c_str());
     return 0;
   });
   auto out = std::make_shared<std::string>();
-  id_command("fetch", "Download a finished job's gains file", [&g, out](Api& api, const std::string& id) {
-    const json j = json::parse(api.get("/v1/jobs/" + id));
-    return fetch_gains(api, id, *out, j["name"], g.quiet);
-  })->add_option("-o,--output", *out, "Output file (default out/<job name>/gains.json)");
+  id_command("fetch", "Download a finished job's gains file",
+             [&g, out](Api& api, const std::string& id) {
+               const json j = json::parse(api.get("/v1/jobs/" + id));
+               return fetch_gains(api, id, *out, j["name"], g.quiet);
+             })
+      ->add_option("-o,--output", *out, "Output file (default out/<job name>/gains.json)");
   id_command("cancel", "Cancel a queued or running job", [o](Api& api, const std::string& id) {
     const std::string body = api.post("/v1/jobs/" + id + "/cancel", "");
     if (o->json_output) {
       print_json(body);
     } else {
       const json j = json::parse(body);
-      std::printf("%s %s\n", id.c_str(),
-                  j["status"] == "cancelled" ? "cancelled" : "will stop after its current iteration");
+      std::printf(
+          "%s %s\n", id.c_str(),
+          j["status"] == "cancelled" ? "cancelled" : "will stop after its current iteration");
     }
     return 0;
   });

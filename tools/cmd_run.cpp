@@ -81,9 +81,10 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
                                                static_cast<double>(h.evaluations)
                                          : 0.0;
     bar.clear();
-    spdlog::info("iteration {}/{}: best J = {:.6g} ({}), {}/{} evaluations, {:.1f} s elapsed, ETA {:.1f} s",
-                 h.iteration, job.tuning->algorithm.iterations, h.best_fitness,
-                 params_text(names, h.best), h.evaluations, total, elapsed, eta);
+    spdlog::info(
+        "iteration {}/{}: best J = {:.6g} ({}), {}/{} evaluations, {:.1f} s elapsed, ETA {:.1f} s",
+        h.iteration, job.tuning->algorithm.iterations, h.best_fitness, params_text(names, h.best),
+        h.evaluations, total, elapsed, eta);
     bar.draw(h.evaluations, total, elapsed);
     return true;
   };

@@ -57,7 +57,8 @@ int run_serve(ServeOptions o) {
 
   int sig = 0;
   sigwait(&signals, &sig);
-  spdlog::info("{}: stopping; running jobs are checkpointed and stay queued", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+  spdlog::info("{}: stopping; running jobs are checkpointed and stay queued",
+               sig == SIGTERM ? "SIGTERM" : "SIGINT");
   service.stop();
   spdlog::info("stopped");
   return 0;
@@ -67,16 +68,20 @@ int run_serve(ServeOptions o) {
 
 void add_serve_command(CLI::App& app, const Globals&, Action& action) {
   auto o = std::make_shared<ServeOptions>();
-  CLI::App* sub = app.add_subcommand("serve", "Run the tuning service (HTTP API, durable job store)");
+  CLI::App* sub =
+      app.add_subcommand("serve", "Run the tuning service (HTTP API, durable job store)");
   sub->add_option("--bind", o->service.bind, "Address to listen on (default 127.0.0.1)");
   sub->add_option("--port", o->service.port, "Port (default 8080; 0 = any free port)");
   sub->add_option("--store", o->service.store, "Store directory (default ./ftctune-store)");
   sub->add_option("--concurrent-jobs", o->service.concurrent_jobs, "Jobs run at once (default 1)");
   sub->add_option("--threads", o->service.threads, "Threads per job (default: all cores)");
-  sub->add_option("--token-file", o->token_file, "File holding the bearer token every request must carry");
-  sub->add_option("--max-body-kib", o->max_body_kib, "Largest accepted request body in KiB (default 1024)");
-  sub->add_option("--max-steps", o->service.max_steps,
-                  "Largest accepted job: evaluations x simulated steps per evaluation (default 2e9)");
+  sub->add_option("--token-file", o->token_file,
+                  "File holding the bearer token every request must carry");
+  sub->add_option("--max-body-kib", o->max_body_kib,
+                  "Largest accepted request body in KiB (default 1024)");
+  sub->add_option(
+      "--max-steps", o->service.max_steps,
+      "Largest accepted job: evaluations x simulated steps per evaluation (default 2e9)");
   sub->callback([&action, o] { action = [o] { return run_serve(*o); }; });
 }
 

@@ -74,8 +74,7 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
   } else {
     controller = select_controller(job, o.controller, o.sets);
   }
-  if (!(o.record_interval > 0))
-    throw InputError("--record-every", "", "must be > 0 seconds");
+  if (!(o.record_interval > 0)) throw InputError("--record-every", "", "must be > 0 seconds");
   const auto plant = job.plant.make();
   const fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
 
@@ -91,7 +90,8 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
     metrics.push_back(r.metrics);
     const std::string file = i == 0 ? "trajectory.csv" : "trajectory-" + s.name + ".csv";
     tune::write_file_atomic(out / file, trajectory_csv(r.trajectory));
-    if (r.metrics.diverged) spdlog::warn("scenario {} diverged at t = {:.3f} s", s.name, r.metrics.diverged_at);
+    if (r.metrics.diverged)
+      spdlog::warn("scenario {} diverged at t = {:.3f} s", s.name, r.metrics.diverged_at);
   }
 
   bool diverged = false;
@@ -110,11 +110,12 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
   tune::write_file_atomic(out / "metrics.json", doc.dump(2) + "\n");
 
   if (!g.quiet) {
-    std::printf("%s on job %s (%s in window [%s, %s) s, %s over %zu scenario%s)\n",
-                sim::to_string(controller.type), job.name.c_str(), sim::to_string(job.objective.metric),
-                fmt(job.objective.window.t0).c_str(),
-                std::isfinite(job.objective.window.t1) ? fmt(job.objective.window.t1).c_str() : "end",
-                tune::to_string(job.objective.aggregate), metrics.size(), metrics.size() == 1 ? "" : "s");
+    std::printf(
+        "%s on job %s (%s in window [%s, %s) s, %s over %zu scenario%s)\n",
+        sim::to_string(controller.type), job.name.c_str(), sim::to_string(job.objective.metric),
+        fmt(job.objective.window.t0).c_str(),
+        std::isfinite(job.objective.window.t1) ? fmt(job.objective.window.t1).c_str() : "end",
+        tune::to_string(job.objective.aggregate), metrics.size(), metrics.size() == 1 ? "" : "s");
     std::printf("  %-16s %12s %12s %12s %10s %12s  %s\n", "scenario", "ise", "iae", "itae",
                 "max|u_d|", "control_tv", "diverged");
     for (std::size_t i = 0; i < metrics.size(); ++i) {
@@ -123,7 +124,8 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
                   fmt(m.errors.ise).c_str(), fmt(m.errors.iae).c_str(), fmt(m.errors.itae).c_str(),
                   fmt(m.max_abs_u).c_str(), fmt(m.control_tv).c_str(), m.diverged ? "yes" : "no");
     }
-    std::printf("  objective %s, fitness J = %s\n", fmt(objective, "%.6g").c_str(), fmt(fitness, "%.6g").c_str());
+    std::printf("  objective %s, fitness J = %s\n", fmt(objective, "%.6g").c_str(),
+                fmt(fitness, "%.6g").c_str());
     std::printf("  wrote %s and trajectory CSV\n", (out / "metrics.json").c_str());
   }
   return 0;
@@ -133,13 +135,15 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
 
 void add_simulate_command(CLI::App& app, const Globals& g, Action& action) {
   auto opts = std::make_shared<SimulateOptions>();
-  CLI::App* sub = app.add_subcommand("simulate", "Simulate a controller on every scenario of a job");
+  CLI::App* sub =
+      app.add_subcommand("simulate", "Simulate a controller on every scenario of a job");
   sub->add_option("job", opts->job, "Job file (ftctune.job/1)")->required();
   sub->add_option("--controller", opts->controller,
                   "Controller type with its Table 1 defaults instead of the job's controller "
                   "(nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)");
   sub->add_option("--set", opts->sets, "Override a controller parameter, KEY=VALUE (repeatable)");
-  sub->add_option("--gains", opts->gains, "Simulate the controller of a gains file (ftctune.gains/1)");
+  sub->add_option("--gains", opts->gains,
+                  "Simulate the controller of a gains file (ftctune.gains/1)");
   sub->add_option("--out", opts->out, "Output directory (default out/<job name>)");
   sub->add_option("--record-every", opts->record_interval,
                   "Trajectory sampling interval in seconds (default 0.01)");

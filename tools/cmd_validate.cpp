@@ -13,18 +13,18 @@ int run_validate(const std::string& file, const Globals& g) {
     const std::int64_t evals = job.tuning ? job.tuning->algorithm.evaluations() : 1;
     const std::int64_t steps = job.steps_per_evaluation();
     if (!g.quiet)
-      std::printf("%s: valid job \"%s\": %lld evaluation%s x %zu scenario%s, %lld simulated steps "
-                  "per evaluation, %.3g in all%s\n",
-                  file.c_str(), job.name.c_str(), static_cast<long long>(evals), evals == 1 ? "" : "s",
-                  job.scenarios.size(), job.scenarios.size() == 1 ? "" : "s",
-                  static_cast<long long>(steps), static_cast<double>(evals) * static_cast<double>(steps),
-                  job.tuning ? "" : " (no tuning section: simulate only)");
+      std::printf(
+          "%s: valid job \"%s\": %lld evaluation%s x %zu scenario%s, %lld simulated steps "
+          "per evaluation, %.3g in all%s\n",
+          file.c_str(), job.name.c_str(), static_cast<long long>(evals), evals == 1 ? "" : "s",
+          job.scenarios.size(), job.scenarios.size() == 1 ? "" : "s", static_cast<long long>(steps),
+          static_cast<double>(evals) * static_cast<double>(steps),
+          job.tuning ? "" : " (no tuning section: simulate only)");
     return 0;
   } catch (const InputError& e) {
-    std::fprintf(stderr, "ftctune: error: %s: %zu problem%s\n", e.source().c_str(), e.errors().size(),
-                 e.errors().size() == 1 ? "" : "s");
-    for (const FieldError& fe : e.errors())
-      std::fprintf(stderr, "  %s\n", to_string(fe).c_str());
+    std::fprintf(stderr, "ftctune: error: %s: %zu problem%s\n", e.source().c_str(),
+                 e.errors().size(), e.errors().size() == 1 ? "" : "s");
+    for (const FieldError& fe : e.errors()) std::fprintf(stderr, "  %s\n", to_string(fe).c_str());
     return 2;
   }
 }

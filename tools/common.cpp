@@ -12,9 +12,10 @@ sim::ControllerConfig select_controller(const tune::Job& job, const std::string&
   if (!type.empty()) {
     const auto t = sim::controller_type_from_string(type);
     if (!t)
-      throw InputError("--controller", "", "unknown controller type \"" + type +
-                                               "\" (known: nftsmc, fosmc, pi_fosmc, "
-                                               "adaptive_neural_pi_fosmc)");
+      throw InputError("--controller", "",
+                       "unknown controller type \"" + type +
+                           "\" (known: nftsmc, fosmc, pi_fosmc, "
+                           "adaptive_neural_pi_fosmc)");
     base = sim::ControllerConfig::table1(*t);
   }
   if (sets.empty()) return base;
@@ -32,8 +33,9 @@ sim::ControllerConfig select_controller(const tune::Job& job, const std::string&
       std::string names;
       for (const std::string& n : sim::controller_field_names(base.type))
         names += (names.empty() ? "" : ", ") + n;
-      errs.push_back({key, "is not a parameter of controller " + std::string(sim::to_string(base.type)) +
-                               " (parameters: " + names + ")"});
+      errs.push_back({key, "is not a parameter of controller " +
+                               std::string(sim::to_string(base.type)) + " (parameters: " + names +
+                               ")"});
       continue;
     }
     try {
@@ -52,6 +54,8 @@ sim::ControllerConfig select_controller(const tune::Job& job, const std::string&
   return c;
 }
 
-std::filesystem::path default_out_dir(const tune::Job& job) { return default_out_dir_for(job.name); }
+std::filesystem::path default_out_dir(const tune::Job& job) {
+  return default_out_dir_for(job.name);
+}
 
 }  // namespace ftc::cli

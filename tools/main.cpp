@@ -1,5 +1,6 @@
 // ftctune: tunes fault-tolerant sliding-mode controllers offline.
-// Exit codes: 0 success, 2 invalid input (one line naming the file and JSON path), 1 internal error.
+// Exit codes: 0 success, 2 invalid input (one line naming the file and JSON path), 1 internal
+// error.
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 

@@ -98,19 +98,22 @@ void BatAlgorithm::iterate(BatchEvaluator& evaluator) {
 nlohmann::json BatAlgorithm::state() const {
   nlohmann::json bats = nlohmann::json::array();
   for (const Bat& b : bats_)
-    bats.push_back({{"x", b.x}, {"v", b.v}, {"loudness", b.loudness},
-                    {"pulse_rate", b.pulse_rate}, {"fitness", exact(b.fitness)}});
+    bats.push_back({{"x", b.x},
+                    {"v", b.v},
+                    {"loudness", b.loudness},
+                    {"pulse_rate", b.pulse_rate},
+                    {"fitness", exact(b.fitness)}});
   nlohmann::json history = nlohmann::json::array();
   for (const HistoryRow& h : history_) history.push_back(to_json(h));
-  return {{"algorithm", "bat"},  {"t", t_},
-          {"evaluations", evaluations_}, {"rng", rng_.save()},
-          {"best", best_},       {"best_fitness", exact(best_fitness_)},
-          {"bats", bats},        {"history", history}};
+  return {{"algorithm", "bat"}, {"t", t_},           {"evaluations", evaluations_},
+          {"rng", rng_.save()}, {"best", best_},     {"best_fitness", exact(best_fitness_)},
+          {"bats", bats},       {"history", history}};
 }
 
 void BatAlgorithm::restore(const nlohmann::json& s) {
   constexpr double inf = std::numeric_limits<double>::infinity();
-  if (s.at("algorithm") != "bat") throw std::invalid_argument("checkpoint is not a Bat algorithm state");
+  if (s.at("algorithm") != "bat")
+    throw std::invalid_argument("checkpoint is not a Bat algorithm state");
   t_ = s.at("t").get<int>();
   evaluations_ = s.at("evaluations").get<std::int64_t>();
   rng_.load(s.at("rng").get<std::string>());
@@ -118,8 +121,9 @@ void BatAlgorithm::restore(const nlohmann::json& s) {
   best_fitness_ = exact_double(s.at("best_fitness"), inf);
   bats_.clear();
   for (const nlohmann::json& b : s.at("bats"))
-    bats_.push_back({b.at("x").get<Decision>(), b.at("v").get<Decision>(), b.at("loudness").get<double>(),
-                     b.at("pulse_rate").get<double>(), exact_double(b.at("fitness"), inf)});
+    bats_.push_back({b.at("x").get<Decision>(), b.at("v").get<Decision>(),
+                     b.at("loudness").get<double>(), b.at("pulse_rate").get<double>(),
+                     exact_double(b.at("fitness"), inf)});
   history_.clear();
   for (const nlohmann::json& h : s.at("history")) history_.push_back(history_row_from_json(h));
 }

@@ -7,8 +7,8 @@
 
 namespace ftc::tune {
 
-using nlohmann::json;
 using detail::ObjectReader;
+using nlohmann::json;
 
 sim::ControllerConfig parse_controller(const json& j, const std::string& path,
                                        std::vector<FieldError>& errs) {
@@ -19,8 +19,9 @@ sim::ControllerConfig parse_controller(const json& j, const std::string& path,
   if (!r.string("type", type, true)) return c;
   const auto t = sim::controller_type_from_string(type);
   if (!t) {
-    errs.push_back({r.path("type"), "unknown controller type \"" + type +
-                                        "\" (known: nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)"});
+    errs.push_back(
+        {r.path("type"), "unknown controller type \"" + type +
+                             "\" (known: nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)"});
     return c;
   }
   c = sim::ControllerConfig::table1(*t);
@@ -56,8 +57,10 @@ json to_json(const sim::ControllerConfig& c) {
     if (!f.applies_to(c.type)) continue;
     double v = c.*f.member;
     if (f.optional && std::isnan(v)) v = c.resolved_alpha1();
-    if (f.integer) j[f.name] = static_cast<long long>(v);
-    else j[f.name] = v;
+    if (f.integer)
+      j[f.name] = static_cast<long long>(v);
+    else
+      j[f.name] = v;
   }
   if (c.type == sim::ControllerType::adaptive_neural_pi_fosmc)
     j["centre_range"] = {c.centre_range[0], c.centre_range[1]};

@@ -42,7 +42,8 @@ double aggregate_objective(const ObjectiveConfig& objective, std::span<const sim
     const double v = m.objective(objective.metric);
     acc = objective.aggregate == Aggregate::mean ? acc + v : std::max(acc, v);
   }
-  if (objective.aggregate == Aggregate::mean && !runs.empty()) acc /= static_cast<double>(runs.size());
+  if (objective.aggregate == Aggregate::mean && !runs.empty())
+    acc /= static_cast<double>(runs.size());
   return acc;
 }
 
@@ -52,7 +53,8 @@ double fitness_of(double objective) {
   return 1.0 / objective;
 }
 
-Evaluation evaluate(const Job& job, const sim::Plant& plant, const sim::ControllerConfig& controller) {
+Evaluation evaluate(const Job& job, const sim::Plant& plant,
+                    const sim::ControllerConfig& controller) {
   Evaluation e;
   for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
     e.scenarios.push_back(simulate_scenario(job, plant, controller, i).metrics);
@@ -65,9 +67,7 @@ Evaluation evaluate(const Job& job, const sim::Plant& plant, const sim::Controll
 
 namespace {
 json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-json window_json(const sim::Window& w) {
-  return json::array({w.t0, finite_or_null(w.t1)});
-}
+json window_json(const sim::Window& w) { return json::array({w.t0, finite_or_null(w.t1)}); }
 }  // namespace
 
 json metrics_json(const sim::Metrics& m) {
@@ -79,7 +79,8 @@ json metrics_json(const sim::Metrics& m) {
   j["max_abs_u"] = m.max_abs_u;
   j["control_tv"] = m.control_tv;
   j["peak_error_after_fault"] = json::array();
-  for (double v : m.peak_error_after_fault) j["peak_error_after_fault"].push_back(finite_or_null(v));
+  for (double v : m.peak_error_after_fault)
+    j["peak_error_after_fault"].push_back(finite_or_null(v));
   j["diverged"] = m.diverged;
   if (m.diverged) j["diverged_at"] = m.diverged_at;
   j["segments"] = json::array();

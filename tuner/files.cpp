@@ -1,10 +1,11 @@
 #include "ftc/tune/files.hpp"
 
-#include <cstdio>
 #include <fcntl.h>
+#include <unistd.h>
+
+#include <cstdio>
 #include <stdexcept>
 #include <string>
-#include <unistd.h>
 
 namespace ftc::tune {
 

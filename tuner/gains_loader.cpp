@@ -17,8 +17,8 @@ namespace {
 void require_kind(ObjectReader& r, const char* key, bool (json::*is)() const noexcept,
                   const char* kind, std::vector<FieldError>& errs) {
   if (const json* v = r.child(key, true); v && !((*v).*is)())
-    errs.push_back({r.path(key), std::string("expected ") + kind + ", got " +
-                                     tune::detail::json_type_name(*v)});
+    errs.push_back({r.path(key),
+                    std::string("expected ") + kind + ", got " + tune::detail::json_type_name(*v)});
 }
 
 }  // namespace
@@ -32,8 +32,8 @@ Gains parse_gains(const json& doc, const std::string& source) {
   std::string schema;
   if (!r.string("schema", schema, true)) throw InputError(source, std::move(errs));
   if (schema != kGainsSchema)
-    throw InputError(source, "/schema", "this file is \"" + schema + "\", expected \"" +
-                                            kGainsSchema + "\"");
+    throw InputError(source, "/schema",
+                     "this file is \"" + schema + "\", expected \"" + kGainsSchema + "\"");
 
   if (const json* c = r.child("controller", true)) {
     g.controller = tune::parse_controller(*c, "/controller", errs);
@@ -56,13 +56,15 @@ Gains parse_gains(const json& doc, const std::string& source) {
           g.tuned.emplace_back(it.key(), v);
           const double in_controller = g.controller.*f->member;
           if (in_controller != v)
-            errs.push_back({p, "value " + tune::detail::number_text(v, 17) + " differs from /controller/" + it.key() + " = " +
+            errs.push_back({p, "value " + tune::detail::number_text(v, 17) +
+                                   " differs from /controller/" + it.key() + " = " +
                                    tune::detail::number_text(in_controller, 17)});
         }
       }
     }
   }
-  if (r.number("sample_time", g.sample_time, true) && !(g.sample_time > 0 && std::isfinite(g.sample_time)))
+  if (r.number("sample_time", g.sample_time, true) &&
+      !(g.sample_time > 0 && std::isfinite(g.sample_time)))
     errs.push_back({"/sample_time", "must be > 0"});
   require_kind(r, "plant", &json::is_object, "an object", errs);
   require_kind(r, "objective", &json::is_object, "an object", errs);
@@ -100,9 +102,11 @@ Gains read_gains(const std::filesystem::path& file) {
 std::unique_ptr<sim::Controller> make_controller(const Gains& gains, const sim::Plant& plant,
                                                  double sample_time) {
   if (!(std::abs(sample_time - gains.sample_time) <= 1e-12 * gains.sample_time))
-    throw InputError("gains", "/sample_time",
-                     "the gains were tuned for Ts = " + tune::detail::number_text(gains.sample_time, 17) +
-                         " s, but the controller is to run at Ts = " + tune::detail::number_text(sample_time, 17) + " s");
+    throw InputError(
+        "gains", "/sample_time",
+        "the gains were tuned for Ts = " + tune::detail::number_text(gains.sample_time, 17) +
+            " s, but the controller is to run at Ts = " +
+            tune::detail::number_text(sample_time, 17) + " s");
   return sim::make_controller(gains.controller, plant, sample_time);
 }
 

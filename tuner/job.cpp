@@ -12,8 +12,8 @@
 
 namespace ftc::tune {
 
-using nlohmann::json;
 using detail::ObjectReader;
+using nlohmann::json;
 
 namespace {
 
@@ -53,9 +53,12 @@ sim::DisturbanceTerm parse_disturbance(const json& j, const std::string& path,
   r.integer("axis", d.axis, true);
   std::string shape = "sin";
   if (r.string("shape", shape)) {
-    if (shape == "sin") d.shape = sim::Shape::sin;
-    else if (shape == "cos") d.shape = sim::Shape::cos;
-    else errs.push_back({r.path("shape"), "must be \"sin\" or \"cos\" (got \"" + shape + "\")"});
+    if (shape == "sin")
+      d.shape = sim::Shape::sin;
+    else if (shape == "cos")
+      d.shape = sim::Shape::cos;
+    else
+      errs.push_back({r.path("shape"), "must be \"sin\" or \"cos\" (got \"" + shape + "\")"});
   }
   r.number("amplitude", d.amplitude, true);
   r.number("frequency", d.frequency, true);
@@ -85,8 +88,8 @@ sim::Fault parse_fault(const json& j, const std::string& path, std::vector<Field
       f.type = sim::FaultType::stuck;
       r.number("value", f.value, true);
     } else {
-      errs.push_back({r.path("type"), "must be one of bias, loss_of_effectiveness, stuck (got \"" +
-                                          type + "\")"});
+      errs.push_back({r.path("type"),
+                      "must be one of bias, loss_of_effectiveness, stuck (got \"" + type + "\")"});
       for (const std::string& k : r.keys()) r.mark_seen(k);  // no point listing them
     }
   }
@@ -100,7 +103,8 @@ sim::Fault parse_fault(const json& j, const std::string& path, std::vector<Field
         f.profile.type = sim::FaultProfileType::incipient;
         pr.number("rate", f.profile.rate, true);
       } else {
-        errs.push_back({pr.path("type"), "must be \"abrupt\" or \"incipient\" (got \"" + ptype + "\")"});
+        errs.push_back(
+            {pr.path("type"), "must be \"abrupt\" or \"incipient\" (got \"" + ptype + "\")"});
       }
     }
     pr.finish();
@@ -123,7 +127,8 @@ std::vector<T> parse_array(const json* j, const std::string& path, std::vector<F
   return out;
 }
 
-sim::Scenario parse_scenario(const json& j, const std::string& path, std::vector<FieldError>& errs) {
+sim::Scenario parse_scenario(const json& j, const std::string& path,
+                             std::vector<FieldError>& errs) {
   sim::Scenario s;
   ObjectReader r(j, path, errs);
   r.string("name", s.name, true);
@@ -146,8 +151,10 @@ ObjectiveConfig parse_objective(const json& j, const std::string& path,
   ObjectReader r(j, path, errs);
   std::string metric;
   if (r.string("metric", metric)) {
-    if (auto m = sim::metric_from_string(metric)) o.metric = *m;
-    else errs.push_back({r.path("metric"), "must be one of ise, iae, itae (got \"" + metric + "\")"});
+    if (auto m = sim::metric_from_string(metric))
+      o.metric = *m;
+    else
+      errs.push_back({r.path("metric"), "must be one of ise, iae, itae (got \"" + metric + "\")"});
   }
   // [t0, t1] in s; t1 may be null, meaning "to the end of each scenario".
   if (const json* w = r.child("window")) {
@@ -161,9 +168,12 @@ ObjectiveConfig parse_objective(const json& j, const std::string& path,
   }
   std::string agg;
   if (r.string("aggregate", agg)) {
-    if (agg == "mean") o.aggregate = Aggregate::mean;
-    else if (agg == "max") o.aggregate = Aggregate::max;
-    else errs.push_back({r.path("aggregate"), "must be \"mean\" or \"max\" (got \"" + agg + "\")"});
+    if (agg == "mean")
+      o.aggregate = Aggregate::mean;
+    else if (agg == "max")
+      o.aggregate = Aggregate::max;
+    else
+      errs.push_back({r.path("aggregate"), "must be \"mean\" or \"max\" (got \"" + agg + "\")"});
   }
   r.finish();
   return o;
@@ -175,8 +185,8 @@ TuningConfig parse_tuning(const json& j, const std::string& path, std::vector<Fi
   if (const json* pj = r.child("parameters", true)) {
     const std::string pp = r.path("parameters");
     if (!pj->is_object()) {
-      errs.push_back({pp, "expected an object of name: [lower, upper], got " +
-                              detail::json_type_name(*pj)});
+      errs.push_back(
+          {pp, "expected an object of name: [lower, upper], got " + detail::json_type_name(*pj)});
     } else {
       for (auto it = pj->begin(); it != pj->end(); ++it) {
         ParameterBounds b;
@@ -213,9 +223,12 @@ TuningConfig parse_tuning(const json& j, const std::string& path, std::vector<Fi
     ObjectReader ar(*aj, r.path("algorithm"), errs);
     std::string type = "bat";
     if (ar.string("type", type)) {
-      if (type == "bat") a.type = AlgorithmType::bat;
-      else if (type == "random") a.type = AlgorithmType::random;
-      else errs.push_back({ar.path("type"), "must be \"bat\" or \"random\" (got \"" + type + "\")"});
+      if (type == "bat")
+        a.type = AlgorithmType::bat;
+      else if (type == "random")
+        a.type = AlgorithmType::random;
+      else
+        errs.push_back({ar.path("type"), "must be \"bat\" or \"random\" (got \"" + type + "\")"});
     }
     ar.integer("population", a.population);
     ar.integer("iterations", a.iterations);
@@ -245,8 +258,8 @@ void check_positive_int(std::vector<FieldError>& errs, const std::string& path, 
 void check_unit(std::vector<FieldError>& errs, const std::string& path, double v, bool open_low) {
   const bool ok = std::isfinite(v) && (open_low ? v > 0 : v >= 0) && v <= 1;
   if (!ok)
-    errs.push_back({path, std::string("must be in ") + (open_low ? "(0, 1]" : "[0, 1]") +
-                              " (got " + detail::number_text(v) + ")"});
+    errs.push_back({path, std::string("must be in ") + (open_low ? "(0, 1]" : "[0, 1]") + " (got " +
+                              detail::number_text(v) + ")"});
 }
 
 }  // namespace
@@ -262,7 +275,8 @@ std::vector<FieldError> PlantConfig::validate(const std::string& path) const {
   for (int i = 0; i < 3; ++i) {
     const double v = spacecraft.inertia[i];
     if (!(std::isfinite(v) && v > 0))
-      errs.push_back({path + "/inertia/" + std::to_string(i), "must be > 0 (got " + detail::number_text(v) + ")"});
+      errs.push_back({path + "/inertia/" + std::to_string(i),
+                      "must be > 0 (got " + detail::number_text(v) + ")"});
   }
   const double w = spacecraft.orbital_rate;
   if (!(std::isfinite(w) && w >= 0))
@@ -278,29 +292,35 @@ std::vector<FieldError> AlgorithmConfig::validate(const std::string& path) const
   std::vector<FieldError> errs;
   check_positive_int(errs, path + "/population", population, 100000);
   if (iterations < 0 || iterations > 100000)
-    errs.push_back({path + "/iterations", "must be an integer in 0..100000 (got " +
-                                              std::to_string(iterations) + ")"});
+    errs.push_back({path + "/iterations",
+                    "must be an integer in 0..100000 (got " + std::to_string(iterations) + ")"});
   if (type != AlgorithmType::bat) return errs;
   const bool fmin_ok = std::isfinite(f_min) && f_min >= 0;
-  if (!fmin_ok) errs.push_back({path + "/f_min", "must be >= 0 (got " + detail::number_text(f_min) + ")"});
-  if (!std::isfinite(f_max)) errs.push_back({path + "/f_max", "must be a finite number"});
+  if (!fmin_ok)
+    errs.push_back({path + "/f_min", "must be >= 0 (got " + detail::number_text(f_min) + ")"});
+  if (!std::isfinite(f_max))
+    errs.push_back({path + "/f_max", "must be a finite number"});
   else if (fmin_ok && f_max < f_min)
-    errs.push_back({path + "/f_max", "must be >= f_min " + detail::number_text(f_min) + " (got " + detail::number_text(f_max) + ")"});
+    errs.push_back({path + "/f_max", "must be >= f_min " + detail::number_text(f_min) + " (got " +
+                                         detail::number_text(f_max) + ")"});
   check_unit(errs, path + "/loudness", loudness, true);
   check_unit(errs, path + "/pulse_rate", pulse_rate, false);
   if (!(std::isfinite(loudness_decay) && loudness_decay > 0 && loudness_decay < 1))
-    errs.push_back({path + "/loudness_decay",
-                    "must be in the open interval (0, 1) (got " + detail::number_text(loudness_decay) + ")"});
+    errs.push_back({path + "/loudness_decay", "must be in the open interval (0, 1) (got " +
+                                                  detail::number_text(loudness_decay) + ")"});
   if (!(std::isfinite(pulse_rate_growth) && pulse_rate_growth > 0))
-    errs.push_back({path + "/pulse_rate_growth", "must be > 0 (got " + detail::number_text(pulse_rate_growth) + ")"});
+    errs.push_back({path + "/pulse_rate_growth",
+                    "must be > 0 (got " + detail::number_text(pulse_rate_growth) + ")"});
   return errs;
 }
 
 std::vector<FieldError> Job::validate() const {
   std::vector<FieldError> errs;
   if (!safe_name(name))
-    errs.push_back({"/name", "must be 1-100 characters of letters, digits, '_', '-', '.' "
-                             "(it names the output directory); got \"" + name + "\""});
+    errs.push_back({"/name",
+                    "must be 1-100 characters of letters, digits, '_', '-', '.' "
+                    "(it names the output directory); got \"" +
+                        name + "\""});
   append(errs, plant.validate("/plant"));
 
   if (scenarios.empty()) errs.push_back({"/scenarios", "must hold at least one scenario"});
@@ -323,12 +343,14 @@ std::vector<FieldError> Job::validate() const {
   if (!std::isfinite(w.t0) || w.t0 < 0)
     errs.push_back({"/objective/window/0", "must be >= 0 (got " + detail::number_text(w.t0) + ")"});
   else if (!(w.t1 > w.t0))
-    errs.push_back({"/objective/window", "end " + detail::number_text(w.t1) + " must be after start " + detail::number_text(w.t0)});
+    errs.push_back({"/objective/window", "end " + detail::number_text(w.t1) +
+                                             " must be after start " + detail::number_text(w.t0)});
   else if (std::isfinite(w.t1))
     for (const sim::Scenario& s : scenarios)
       if (std::isfinite(s.duration) && w.t1 > s.duration + 1e-12) {
-        errs.push_back({"/objective/window/1", "end " + detail::number_text(w.t1) + " is after the end of scenario \"" +
-                                                   s.name + "\" (" + detail::number_text(s.duration) + " s)"});
+        errs.push_back({"/objective/window/1",
+                        "end " + detail::number_text(w.t1) + " is after the end of scenario \"" +
+                            s.name + "\" (" + detail::number_text(s.duration) + " s)"});
         break;
       }
 
@@ -339,7 +361,8 @@ std::vector<FieldError> Job::validate() const {
       if (scenarios[i].sample_time != scenarios[0].sample_time)
         errs.push_back({"/scenarios/" + std::to_string(i) + "/sample_time",
                         "must equal the first scenario's sample_time " +
-                            detail::number_text(scenarios[0].sample_time) + " when the job is tuned"});
+                            detail::number_text(scenarios[0].sample_time) +
+                            " when the job is tuned"});
     if (tuning->parameters.empty())
       errs.push_back({"/tuning/parameters", "must name at least one controller parameter"});
     for (const ParameterBounds& b : tuning->parameters) {
@@ -373,9 +396,10 @@ std::vector<FieldError> Job::validate() const {
         const double v = k == 0 ? b.lower : b.upper;
         const std::string msg = sim::check_controller_value(controller, *f, v);
         if (!msg.empty())
-          errs.push_back({p + "/" + std::to_string(k),
-                          std::string(k == 0 ? "lower" : "upper") + " bound " + detail::number_text(v) +
-                              " is outside the valid range of " + b.name + ": " + msg});
+          errs.push_back({p + "/" + std::to_string(k), std::string(k == 0 ? "lower" : "upper") +
+                                                           " bound " + detail::number_text(v) +
+                                                           " is outside the valid range of " +
+                                                           b.name + ": " + msg});
       }
     }
   }
@@ -396,12 +420,14 @@ Job parse_job(const json& j, const std::string& source) {
 
   std::string schema;
   if (r.string("schema", schema, true) && schema != kJobSchema)
-    errs.push_back({"/schema", "must be \"" + std::string(kJobSchema) + "\" (got \"" + schema + "\")"});
+    errs.push_back(
+        {"/schema", "must be \"" + std::string(kJobSchema) + "\" (got \"" + schema + "\")"});
   r.string("name", job.name, true);
   if (const json* p = r.child("plant")) job.plant = parse_plant(*p, "/plant", errs);
-  job.scenarios = parse_array<sim::Scenario>(r.child("scenarios", true), "/scenarios", errs,
-                                             parse_scenario);
-  if (const json* c = r.child("controller", true)) job.controller = parse_controller(*c, "/controller", errs);
+  job.scenarios =
+      parse_array<sim::Scenario>(r.child("scenarios", true), "/scenarios", errs, parse_scenario);
+  if (const json* c = r.child("controller", true))
+    job.controller = parse_controller(*c, "/controller", errs);
   job.compare = parse_array<CompareEntry>(
       r.child("compare"), "/compare", errs,
       [](const json& cj, const std::string& p, std::vector<FieldError>& e) {
@@ -409,7 +435,8 @@ Job parse_job(const json& j, const std::string& source) {
         json body = cj;
         if (cj.is_object() && cj.contains("label")) {
           if (!cj["label"].is_string())
-            e.push_back({p + "/label", "expected a string, got " + detail::json_type_name(cj["label"])});
+            e.push_back(
+                {p + "/label", "expected a string, got " + detail::json_type_name(cj["label"])});
           else
             entry.label = cj["label"].get<std::string>();
           body.erase("label");
@@ -463,9 +490,12 @@ json to_json(const PlantConfig& p) {
 
 json to_json(const ObjectiveConfig& o) {
   json w = json::array({o.window.t0});
-  if (std::isfinite(o.window.t1)) w.push_back(o.window.t1);
-  else w.push_back(nullptr);
-  return {{"metric", sim::to_string(o.metric)}, {"window", w}, {"aggregate", to_string(o.aggregate)}};
+  if (std::isfinite(o.window.t1))
+    w.push_back(o.window.t1);
+  else
+    w.push_back(nullptr);
+  return {
+      {"metric", sim::to_string(o.metric)}, {"window", w}, {"aggregate", to_string(o.aggregate)}};
 }
 
 json to_json(const sim::Scenario& s) {
@@ -474,11 +504,14 @@ json to_json(const sim::Scenario& s) {
   j["duration"] = s.duration;
   j["sample_time"] = s.sample_time;
   j["substeps"] = s.substeps;
-  j["initial_state"] = std::vector<double>(s.initial_state.data(), s.initial_state.data() + sim::kStates);
+  j["initial_state"] =
+      std::vector<double>(s.initial_state.data(), s.initial_state.data() + sim::kStates);
   j["disturbance"] = json::array();
   for (const sim::DisturbanceTerm& d : s.disturbance)
-    j["disturbance"].push_back({{"axis", d.axis}, {"shape", sim::to_string(d.shape)},
-                                {"amplitude", d.amplitude}, {"frequency", d.frequency},
+    j["disturbance"].push_back({{"axis", d.axis},
+                                {"shape", sim::to_string(d.shape)},
+                                {"amplitude", d.amplitude},
+                                {"frequency", d.frequency},
                                 {"phase", d.phase}});
   j["faults"] = json::array();
   for (const sim::Fault& f : s.faults) {
@@ -493,8 +526,12 @@ json to_json(const sim::Scenario& s) {
         fj["frequency"] = f.frequency;
         fj["phase"] = f.phase;
         break;
-      case sim::FaultType::loss_of_effectiveness: fj["fraction"] = f.fraction; break;
-      case sim::FaultType::stuck: fj["value"] = f.value; break;
+      case sim::FaultType::loss_of_effectiveness:
+        fj["fraction"] = f.fraction;
+        break;
+      case sim::FaultType::stuck:
+        fj["value"] = f.value;
+        break;
     }
     j["faults"].push_back(fj);
   }
@@ -524,7 +561,8 @@ json to_json(const Job& job) {
     json params = json::object();
     for (const ParameterBounds& b : t.parameters) params[b.name] = {b.lower, b.upper};
     const AlgorithmConfig& a = t.algorithm;
-    json alg = {{"type", to_string(a.type)}, {"population", a.population}, {"iterations", a.iterations}};
+    json alg = {
+        {"type", to_string(a.type)}, {"population", a.population}, {"iterations", a.iterations}};
     if (a.type == AlgorithmType::bat) {
       alg["f_min"] = a.f_min;
       alg["f_max"] = a.f_max;

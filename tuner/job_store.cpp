@@ -77,11 +77,16 @@ constexpr const char* kColumns =
 
 const char* to_string(JobStatus s) {
   switch (s) {
-    case JobStatus::queued: return "queued";
-    case JobStatus::running: return "running";
-    case JobStatus::succeeded: return "succeeded";
-    case JobStatus::failed: return "failed";
-    case JobStatus::cancelled: return "cancelled";
+    case JobStatus::queued:
+      return "queued";
+    case JobStatus::running:
+      return "running";
+    case JobStatus::succeeded:
+      return "succeeded";
+    case JobStatus::failed:
+      return "failed";
+    case JobStatus::cancelled:
+      return "cancelled";
   }
   return "?";
 }
@@ -128,11 +133,13 @@ class JobStore::Statement {
   }
   std::string text(int c) const {
     const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, c));
-    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, c))) : std::string();
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, c)))
+             : std::string();
   }
   std::string blob(int c) const {
     const auto* p = static_cast<const char*>(sqlite3_column_blob(stmt_, c));
-    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, c))) : std::string();
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, c)))
+             : std::string();
   }
   std::int64_t integer(int c) const { return sqlite3_column_int64(stmt_, c); }
   bool is_null(int c) const { return sqlite3_column_type(stmt_, c) == SQLITE_NULL; }
@@ -178,7 +185,8 @@ JobStore::JobStore(const std::filesystem::path& directory) {
     throw std::runtime_error("the store " + directory.string() + " is in use by another server");
   }
   db_path_ = directory / "ftctune.db";
-  if (sqlite3_open_v2(db_path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+  if (sqlite3_open_v2(db_path_.c_str(), &db_,
+                      SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
                       nullptr) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
@@ -238,18 +246,23 @@ auto JobStore::transaction(F&& body, bool synced) {
 std::pair<JobRecord, bool> JobStore::submit(const Submission& s) {
   return transaction([&] {
     if (s.idempotency_key) {
-      Statement q(db_, (std::string("SELECT ") + kColumns + " FROM jobs WHERE idempotency_key = ?").c_str());
+      Statement q(
+          db_,
+          (std::string("SELECT ") + kColumns + " FROM jobs WHERE idempotency_key = ?").c_str());
       q.bind(1, *s.idempotency_key);
       if (q.step()) return std::make_pair(q.record(), false);
     }
     const std::string now = now_iso();
     const std::string id = new_id();
-    Statement ins(db_,
-                  "INSERT INTO jobs (id, name, status, job_json, idempotency_key, created_at, "
-                  "updated_at, iterations, total_evaluations) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?)");
+    Statement ins(
+        db_,
+        "INSERT INTO jobs (id, name, status, job_json, idempotency_key, created_at, "
+        "updated_at, iterations, total_evaluations) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?)");
     ins.bind(1, id).bind(2, s.name).bind(3, s.job_json);
-    if (s.idempotency_key) ins.bind(4, *s.idempotency_key);
-    else ins.bind_null(4);
+    if (s.idempotency_key)
+      ins.bind(4, *s.idempotency_key);
+    else
+      ins.bind_null(4);
     ins.bind(5, now).bind(6, now).bind(7, std::int64_t{s.iterations}).bind(8, s.total_evaluations);
     ins.step();
     return std::make_pair(*select_job(id), true);
@@ -301,7 +314,8 @@ std::vector<JobRecord> JobStore::list(std::optional<JobStatus> status, int limit
 
 std::int64_t JobStore::count(std::optional<JobStatus> status) {
   std::lock_guard<std::mutex> lock(mutex_);
-  Statement q(db_, status ? "SELECT COUNT(*) FROM jobs WHERE status = ?" : "SELECT COUNT(*) FROM jobs");
+  Statement q(db_,
+              status ? "SELECT COUNT(*) FROM jobs WHERE status = ?" : "SELECT COUNT(*) FROM jobs");
   if (status) q.bind(1, std::string(to_string(*status)));
   q.step();
   return q.integer(0);
@@ -325,16 +339,20 @@ std::optional<JobRecord> JobStore::claim_next() {
 void JobStore::record_progress(const std::string& id, int iteration, std::int64_t evaluations,
                                double best_fitness, const nlohmann::json& best,
                                const std::string& checkpoint) {
-  transaction([&] {
-    Statement u(db_,
-                "UPDATE jobs SET iteration = ?, evaluations = ?, best_fitness = ?, best = ?, "
-                "checkpoint = ?, updated_at = ? WHERE id = ?");
-    u.bind(1, std::int64_t{iteration}).bind(2, evaluations);
-    if (std::isfinite(best_fitness)) u.bind(3, best_fitness);
-    else u.bind_null(3);
-    u.bind(4, best.dump()).bind(5, checkpoint).bind(6, now_iso()).bind(7, id);
-    u.step();
-  }, /*synced=*/false);
+  transaction(
+      [&] {
+        Statement u(db_,
+                    "UPDATE jobs SET iteration = ?, evaluations = ?, best_fitness = ?, best = ?, "
+                    "checkpoint = ?, updated_at = ? WHERE id = ?");
+        u.bind(1, std::int64_t{iteration}).bind(2, evaluations);
+        if (std::isfinite(best_fitness))
+          u.bind(3, best_fitness);
+        else
+          u.bind_null(3);
+        u.bind(4, best.dump()).bind(5, checkpoint).bind(6, now_iso()).bind(7, id);
+        u.step();
+      },
+      /*synced=*/false);
 }
 
 std::optional<std::string> JobStore::checkpoint(const std::string& id) {
@@ -367,7 +385,9 @@ void JobStore::finish_cancelled(const std::string& id) {
 
 void JobStore::requeue(const std::string& id) {
   transaction([&] {
-    Statement u(db_, "UPDATE jobs SET status = 'queued', updated_at = ? WHERE id = ? AND status = 'running'");
+    Statement u(
+        db_,
+        "UPDATE jobs SET status = 'queued', updated_at = ? WHERE id = ? AND status = 'running'");
     u.bind(1, now_iso()).bind(2, id);
     u.step();
   });
@@ -376,11 +396,14 @@ void JobStore::requeue(const std::string& id) {
 std::optional<JobRecord> JobStore::request_cancel(const std::string& id) {
   return transaction([&]() -> std::optional<JobRecord> {
     const std::string now = now_iso();
-    Statement q(db_, "UPDATE jobs SET status = 'cancelled', finished_at = ?, updated_at = ?, "
-                     "cancel_requested = 1 WHERE id = ? AND status = 'queued'");
+    Statement q(db_,
+                "UPDATE jobs SET status = 'cancelled', finished_at = ?, updated_at = ?, "
+                "cancel_requested = 1 WHERE id = ? AND status = 'queued'");
     q.bind(1, now).bind(2, now).bind(3, id);
     q.step();
-    Statement r(db_, "UPDATE jobs SET cancel_requested = 1, updated_at = ? WHERE id = ? AND status = 'running'");
+    Statement r(
+        db_,
+        "UPDATE jobs SET cancel_requested = 1, updated_at = ? WHERE id = ? AND status = 'running'");
     r.bind(1, now).bind(2, id);
     r.step();
     return select_job(id);

@@ -27,9 +27,12 @@ std::string number_text(double v, int significant) {
 std::string pointer_escape(const std::string& key) {
   std::string s;
   for (char c : key) {
-    if (c == '~') s += "~0";
-    else if (c == '/') s += "~1";
-    else s += c;
+    if (c == '~')
+      s += "~0";
+    else if (c == '/')
+      s += "~1";
+    else
+      s += c;
   }
   return s;
 }
@@ -69,7 +72,8 @@ const json* ObjectReader::get(const char* key, bool required) {
 }
 
 void ObjectReader::type_error(const char* key, const char* expected, const json& v) {
-  errors_.push_back({path(key), std::string("expected ") + expected + ", got " + json_type_name(v)});
+  errors_.push_back(
+      {path(key), std::string("expected ") + expected + ", got " + json_type_name(v)});
 }
 
 bool ObjectReader::number(const char* key, double& out, bool required) {
@@ -159,8 +163,8 @@ void ObjectReader::finish() {
     if (seen_.count(it.key())) continue;
     std::string allowed;
     for (const std::string& k : seen_) allowed += (allowed.empty() ? "" : ", ") + k;
-    errors_.push_back({path_ + "/" + pointer_escape(it.key()),
-                       "unknown key (allowed here: " + allowed + ")"});
+    errors_.push_back(
+        {path_ + "/" + pointer_escape(it.key()), "unknown key (allowed here: " + allowed + ")"});
   }
 }
 

@@ -13,7 +13,8 @@ void RandomSearch::generation(BatchEvaluator& evaluator) {
   std::vector<Decision> batch(static_cast<std::size_t>(config_.population));
   for (Decision& x : batch) {
     x.resize(space_.dimension());
-    for (std::size_t j = 0; j < x.size(); ++j) x[j] = rng_.uniform(space_.lower[j], space_.upper[j]);
+    for (std::size_t j = 0; j < x.size(); ++j)
+      x[j] = rng_.uniform(space_.lower[j], space_.upper[j]);
   }
   const std::vector<double> J = evaluator.evaluate(batch);
   if (J.size() != batch.size()) throw std::logic_error("evaluator returned a wrong-sized batch");
@@ -36,13 +37,14 @@ void RandomSearch::generation(BatchEvaluator& evaluator) {
 nlohmann::json RandomSearch::state() const {
   nlohmann::json history = nlohmann::json::array();
   for (const HistoryRow& h : history_) history.push_back(to_json(h));
-  return {{"algorithm", "random"}, {"t", t_}, {"evaluations", evaluations_},
+  return {{"algorithm", "random"}, {"t", t_},       {"evaluations", evaluations_},
           {"rng", rng_.save()},    {"best", best_}, {"best_fitness", exact(best_fitness_)},
           {"history", history}};
 }
 
 void RandomSearch::restore(const nlohmann::json& s) {
-  if (s.at("algorithm") != "random") throw std::invalid_argument("checkpoint is not a random-search state");
+  if (s.at("algorithm") != "random")
+    throw std::invalid_argument("checkpoint is not a random-search state");
   t_ = s.at("t").get<int>();
   evaluations_ = s.at("evaluations").get<std::int64_t>();
   rng_.load(s.at("rng").get<std::string>());

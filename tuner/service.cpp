@@ -1,13 +1,5 @@
 #include "ftc/tune/service.hpp"
 
-// The project's headers (Eigen among them) before httplib.h: it pulls in <resolv.h>, whose
-// `_res` macro would break Eigen's headers.
-#include "ftc/tune/job.hpp"
-#include "ftc/tune/job_store.hpp"
-#include "ftc/tune/tuning_run.hpp"
-#include "ftc/version.hpp"
-
-#include <httplib.h>
 #include <openssl/crypto.h>
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
@@ -20,6 +12,12 @@
 #include <cstdio>
 #include <mutex>
 #include <thread>
+
+#include "ftc/tune/httplib.hpp"
+#include "ftc/tune/job.hpp"
+#include "ftc/tune/job_store.hpp"
+#include "ftc/tune/tuning_run.hpp"
+#include "ftc/version.hpp"
 
 namespace ftc::tune {
 
@@ -36,7 +34,8 @@ std::vector<FieldError> ServiceOptions::validate() const {
                                   " (not loopback) without --token-file: anyone who can reach it "
                                   "could submit jobs"});
   if (port < 0 || port > 65535) errs.push_back({"--port", "must be in 0..65535"});
-  if (concurrent_jobs < 1 || concurrent_jobs > 64) errs.push_back({"--concurrent-jobs", "must be in 1..64"});
+  if (concurrent_jobs < 1 || concurrent_jobs > 64)
+    errs.push_back({"--concurrent-jobs", "must be in 1..64"});
   if (token && token->empty()) errs.push_back({"--token-file", "the token is empty"});
   if (max_body_bytes < 1024) errs.push_back({"--max-body", "must be at least 1024 bytes"});
   if (!(max_steps > 0)) errs.push_back({"--max-steps", "must be > 0"});
@@ -45,11 +44,12 @@ std::vector<FieldError> ServiceOptions::validate() const {
 
 namespace {
 
-void send_error(httplib::Response& res, int status, const std::string& code, const std::string& message,
-                json details = json::array()) {
+void send_error(httplib::Response& res, int status, const std::string& code,
+                const std::string& message, json details = json::array()) {
   res.status = status;
-  res.set_content(json{{"error", {{"code", code}, {"message", message}, {"details", details}}}}.dump(),
-                  "application/json");
+  res.set_content(
+      json{{"error", {{"code", code}, {"message", message}, {"details", details}}}}.dump(),
+      "application/json");
 }
 
 void send_json(httplib::Response& res, int status, const json& body) {
@@ -61,8 +61,11 @@ json nullable(const std::string& s) { return s.empty() ? json(nullptr) : json(s)
 
 json job_links(const std::string& id) {
   const std::string base = "/v1/jobs/" + id;
-  return {{"self", base}, {"gains", base + "/gains"}, {"history", base + "/history"},
-          {"comparison", base + "/comparison"}, {"cancel", base + "/cancel"}};
+  return {{"self", base},
+          {"gains", base + "/gains"},
+          {"history", base + "/history"},
+          {"comparison", base + "/comparison"},
+          {"cancel", base + "/cancel"}};
 }
 
 json job_json_view(const JobRecord& r) {
@@ -107,7 +110,8 @@ std::vector<std::string> split_path(const std::string& path) {
   while (i < path.size()) {
     while (i < path.size() && path[i] == '/') ++i;
     const std::size_t j = path.find('/', i);
-    if (i < path.size()) parts.push_back(path.substr(i, j == std::string::npos ? std::string::npos : j - i));
+    if (i < path.size())
+      parts.push_back(path.substr(i, j == std::string::npos ? std::string::npos : j - i));
     i = j == std::string::npos ? path.size() : j;
   }
   return parts;
@@ -142,7 +146,8 @@ struct TuningService::Impl {
     const std::string expected = "Bearer " + *opt.token;
     const std::string got = req.get_header_value("Authorization");
     // Constant time in the token's content; only the length can leak.
-    return got.size() == expected.size() && CRYPTO_memcmp(got.data(), expected.data(), got.size()) == 0;
+    return got.size() == expected.size() &&
+           CRYPTO_memcmp(got.data(), expected.data(), got.size()) == 0;
   }
 
   void method_not_allowed(httplib::Response& res, const char* allow) {
@@ -155,10 +160,11 @@ struct TuningService::Impl {
     const std::string& m = req.method;
     if (p.size() == 1 && p[0] == "healthz") {
       if (m != "GET") return method_not_allowed(res, "GET");
-      return send_json(res, 200, {{"status", "ok"},
-                                  {"version", kVersion},
-                                  {"queued", store.count(JobStatus::queued)},
-                                  {"running", store.count(JobStatus::running)}});
+      return send_json(res, 200,
+                       {{"status", "ok"},
+                        {"version", kVersion},
+                        {"queued", store.count(JobStatus::queued)},
+                        {"running", store.count(JobStatus::running)}});
     }
     if (p.size() < 2 || p[0] != "v1" || p[1] != "jobs")
       return send_error(res, 404, "not_found", "no such resource: " + req.path);
@@ -191,8 +197,10 @@ struct TuningService::Impl {
       job = parse_job_text(req.body, "request body");
     } catch (const InputError& e) {
       json details = json::array();
-      for (const FieldError& fe : e.errors()) details.push_back({{"path", fe.path}, {"message", fe.message}});
-      const bool syntax = e.errors().size() == 1 && e.errors()[0].message.rfind("invalid JSON", 0) == 0;
+      for (const FieldError& fe : e.errors())
+        details.push_back({{"path", fe.path}, {"message", fe.message}});
+      const bool syntax =
+          e.errors().size() == 1 && e.errors()[0].message.rfind("invalid JSON", 0) == 0;
       return send_error(res, 400, syntax ? "invalid_json" : "invalid_job", e.what(), details);
     }
     if (!job.tuning)
@@ -202,8 +210,10 @@ struct TuningService::Impl {
                          static_cast<double>(job.steps_per_evaluation());
     if (steps > opt.max_steps)
       return send_error(res, 400, "job_too_large",
-                        "the job needs " + fmt_g(steps) + " simulated steps (evaluations x steps per "
-                        "evaluation), " + fmt_g(steps / opt.max_steps) + " times the server's budget of " +
+                        "the job needs " + fmt_g(steps) +
+                            " simulated steps (evaluations x steps per "
+                            "evaluation), " +
+                            fmt_g(steps / opt.max_steps) + " times the server's budget of " +
                             fmt_g(opt.max_steps),
                         json{{{"steps", steps}, {"budget", opt.max_steps}}});
 
@@ -214,13 +224,16 @@ struct TuningService::Impl {
     s.total_evaluations = job.tuning->algorithm.evaluations();
     const std::string key = req.get_header_value("Idempotency-Key");
     if (!key.empty()) {
-      if (key.size() > 200) return send_error(res, 400, "invalid_header", "Idempotency-Key is longer than 200 characters");
+      if (key.size() > 200)
+        return send_error(res, 400, "invalid_header",
+                          "Idempotency-Key is longer than 200 characters");
       s.idempotency_key = key;
     }
     const auto [record, created] = store.submit(s);
     if (!created && store.job_json(record.id) != s.job_json)
-      return send_error(res, 409, "idempotency_conflict",
-                        "Idempotency-Key was already used for job " + record.id + " with a different job");
+      return send_error(
+          res, 409, "idempotency_conflict",
+          "Idempotency-Key was already used for job " + record.id + " with a different job");
     if (created) {
       spdlog::info("job {} ({}) queued", record.id, record.name);
       {
@@ -230,8 +243,9 @@ struct TuningService::Impl {
       wake.notify_one();
     }
     res.set_header("Location", "/v1/jobs/" + record.id);
-    send_json(res, created ? 201 : 200,
-              {{"id", record.id}, {"status", to_string(record.status)}, {"links", job_links(record.id)}});
+    send_json(
+        res, created ? 201 : 200,
+        {{"id", record.id}, {"status", to_string(record.status)}, {"links", job_links(record.id)}});
   }
 
   void list(const httplib::Request& req, httplib::Response& res) {
@@ -250,15 +264,18 @@ struct TuningService::Impl {
     json jobs = json::array();
     for (const JobRecord& r : store.list(status, static_cast<int>(limit), static_cast<int>(offset)))
       jobs.push_back(job_json_view(r));
-    send_json(res, 200, {{"jobs", jobs}, {"total", store.count(status)}, {"limit", limit}, {"offset", offset}});
+    send_json(
+        res, 200,
+        {{"jobs", jobs}, {"total", store.count(status)}, {"limit", limit}, {"offset", offset}});
   }
 
   void cancel(const std::string& id, httplib::Response& res) {
     const auto before = store.get(id);
     if (!before) return send_error(res, 404, "not_found", "no job " + id);
     if (is_terminal(before->status))
-      return send_error(res, 409, "conflict", "job " + id + " has already " + to_string(before->status) +
-                                                  (before->status == JobStatus::cancelled ? "" : " "));
+      return send_error(res, 409, "conflict",
+                        "job " + id + " has already " + to_string(before->status) +
+                            (before->status == JobStatus::cancelled ? "" : " "));
     const auto after = store.request_cancel(id);
     spdlog::info("job {}: cancel requested ({})", id, to_string(after->status));
     send_json(res, 202, job_json_view(*after));
@@ -285,15 +302,19 @@ struct TuningService::Impl {
         return send_error(res, 400, "invalid_parameter", "format must be csv or json");
       }
     } else {
-      if (format == "md") res.set_content(store.artifact(id, "comparison.md").value_or(""), "text/markdown");
+      if (format == "md")
+        res.set_content(store.artifact(id, "comparison.md").value_or(""), "text/markdown");
       else if (format.empty() || format == "json")
         res.set_content(store.artifact(id, "comparison.json").value_or(""), "application/json");
-      else return send_error(res, 400, "invalid_parameter", "format must be json or md");
+      else
+        return send_error(res, 400, "invalid_parameter", "format must be json or md");
     }
   }
 
   void configure_http() {
-    const auto handler = [this](const httplib::Request& req, httplib::Response& res) { dispatch(req, res); };
+    const auto handler = [this](const httplib::Request& req, httplib::Response& res) {
+      dispatch(req, res);
+    };
     // One catch-all route per method: dispatch() tells 404 (no such resource) from 405.
     http.Get(".*", handler);
     http.Post(".*", handler);
@@ -304,7 +325,8 @@ struct TuningService::Impl {
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
       if (authorised(req)) return httplib::Server::HandlerResponse::Unhandled;
       res.set_header("WWW-Authenticate", "Bearer");
-      send_error(res, 401, "unauthorized", "a valid \"Authorization: Bearer <token>\" header is required");
+      send_error(res, 401, "unauthorized",
+                 "a valid \"Authorization: Bearer <token>\" header is required");
       return httplib::Server::HandlerResponse::Handled;
     });
     // Errors the library produces itself (413 above the body limit, 400 for a malformed
@@ -316,17 +338,18 @@ struct TuningService::Impl {
       else
         send_error(res, res.status, "http_error", "HTTP status " + std::to_string(res.status));
     });
-    http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
-      std::string what = "unknown error";
-      try {
-        std::rethrow_exception(ep);
-      } catch (const std::exception& e) {
-        what = e.what();
-      } catch (...) {
-      }
-      spdlog::error("request failed: {}", what);
-      send_error(res, 500, "internal_error", what);
-    });
+    http.set_exception_handler(
+        [](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+          std::string what = "unknown error";
+          try {
+            std::rethrow_exception(ep);
+          } catch (const std::exception& e) {
+            what = e.what();
+          } catch (...) {
+          }
+          spdlog::error("request failed: {}", what);
+          send_error(res, 500, "internal_error", what);
+        });
     http.set_payload_max_length(opt.max_body_bytes);
     http.set_read_timeout(5, 0);
     http.set_write_timeout(5, 0);
@@ -352,7 +375,8 @@ struct TuningService::Impl {
         // Sleep until a submission newer than our look at the queue (none is missed: `seen`
         // was read before claim_next), or stop.
         std::unique_lock<std::mutex> lock(wake_mutex);
-        wake.wait_for(lock, std::chrono::seconds(1), [&] { return stopping.load() || submissions != seen; });
+        wake.wait_for(lock, std::chrono::seconds(1),
+                      [&] { return stopping.load() || submissions != seen; });
         continue;
       }
       run(*job);
@@ -373,14 +397,17 @@ struct TuningService::Impl {
       if (checkpoint) {
         state = json::parse(*checkpoint);
         ro.resume = &state;
-        spdlog::info("job {} resumes after iteration {} (attempt {})", id, rec.iteration, rec.attempts);
+        spdlog::info("job {} resumes after iteration {} (attempt {})", id, rec.iteration,
+                     rec.attempts);
       } else {
         spdlog::info("job {} ({}) started", id, rec.name);
       }
       ro.observer = [&](const HistoryRow& h, const Optimizer& o) {
         json best = json::object();
-        for (std::size_t i = 0; i < names.size() && i < h.best.size(); ++i) best[names[i]] = h.best[i];
-        store.record_progress(id, h.iteration, h.evaluations, h.best_fitness, best, o.state().dump());
+        for (std::size_t i = 0; i < names.size() && i < h.best.size(); ++i)
+          best[names[i]] = h.best[i];
+        store.record_progress(id, h.iteration, h.evaluations, h.best_fitness, best,
+                              o.state().dump());
         return !stopping && !store.cancel_requested(id);
       };
       const TuningOutcome r = tune(job, ro);
@@ -392,7 +419,8 @@ struct TuningService::Impl {
         spdlog::info("job {} checkpointed and put back in the queue", id);
       } else {
         std::map<std::string, std::string> files = output_files(r);
-        const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const double wall =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         files["run.json"] = json{{"job_id", id},
                                  {"started_at", rec.started_at},
                                  {"threads", r.threads},
@@ -402,9 +430,11 @@ struct TuningService::Impl {
                                  {"max_rss_kib", max_rss_kib()},
                                  {"seed", r.seed},
                                  {"generator", {{"name", kToolName}, {"version", kVersion}}}}
-                                .dump(2) + "\n";
+                                .dump(2) +
+                            "\n";
         store.finish_succeeded(id, files);
-        spdlog::info("job {} succeeded in {:.2f} s: J = {:.6g}", id, wall, r.optimization.best_fitness);
+        spdlog::info("job {} succeeded in {:.2f} s: J = {:.6g}", id, wall,
+                     r.optimization.best_fitness);
       }
     } catch (const std::exception& e) {
       spdlog::error("job {} failed: {}", id, e.what());
@@ -427,7 +457,8 @@ TuningService::~TuningService() { stop(); }
 int TuningService::start() {
   Impl& s = *impl_;
   s.recovered = s.store.recover();
-  if (s.recovered > 0) spdlog::info("{} job(s) left running by an earlier server are queued again", s.recovered);
+  if (s.recovered > 0)
+    spdlog::info("{} job(s) left running by an earlier server are queued again", s.recovered);
   s.configure_http();
   int port = s.opt.port;
   if (port == 0) {

@@ -36,10 +36,14 @@ json named(const std::vector<std::string>& names, const Decision& x) {
 
 std::string display_name(sim::ControllerType t) {
   switch (t) {
-    case sim::ControllerType::nftsmc: return "NFTSMC";
-    case sim::ControllerType::fosmc: return "FOSMC";
-    case sim::ControllerType::pi_fosmc: return "PI-FOSMC";
-    case sim::ControllerType::adaptive_neural_pi_fosmc: return "adaptive neural PI-FOSMC";
+    case sim::ControllerType::nftsmc:
+      return "NFTSMC";
+    case sim::ControllerType::fosmc:
+      return "FOSMC";
+    case sim::ControllerType::pi_fosmc:
+      return "PI-FOSMC";
+    case sim::ControllerType::adaptive_neural_pi_fosmc:
+      return "adaptive neural PI-FOSMC";
   }
   return "?";
 }
@@ -134,7 +138,8 @@ std::string history_csv(const TuningOutcome& r) {
   for (const HistoryRow& h : r.optimization.history) {
     s += std::to_string(h.iteration) + cell(h.best_fitness);
     for (double v : h.best) s += cell(v);
-    s += cell(h.mean_loudness) + cell(h.mean_pulse_rate) + "," + std::to_string(h.evaluations) + "\n";
+    s += cell(h.mean_loudness) + cell(h.mean_pulse_rate) + "," + std::to_string(h.evaluations) +
+         "\n";
   }
   return s;
 }
@@ -171,8 +176,8 @@ std::string comparison_markdown(const TuningOutcome& r) {
   o << "# " << job.name << ": controllers compared\n\n";
   o << "Tuned:";
   for (const auto& [name, value] : r.tuned) o << " " << name << " = " << fmt(value, "%.6g");
-  o << " (fitness J = " << fmt(r.optimization.best_fitness, "%.6g") << ", " << r.optimization.evaluations
-    << " evaluations, seed " << r.seed << ").\n\n";
+  o << " (fitness J = " << fmt(r.optimization.best_fitness, "%.6g") << ", "
+    << r.optimization.evaluations << " evaluations, seed " << r.seed << ").\n\n";
   o << "Objective: " << sim::to_string(job.objective.metric) << " over ["
     << fmt(job.objective.window.t0) << ", "
     << (std::isfinite(job.objective.window.t1) ? fmt(job.objective.window.t1) : std::string("end"))
@@ -187,19 +192,21 @@ std::string comparison_markdown(const TuningOutcome& r) {
     for (std::size_t f = 0; f < first.fault_onsets.size(); ++f)
       o << " peak ‖e‖ after fault " << f + 1 << " |";
     o << "\n|---|---:|---:|---:|---:|---:|";
-    for (std::size_t k = 0; k < first.extra_windows.size() + first.fault_onsets.size(); ++k) o << "---:|";
+    for (std::size_t k = 0; k < first.extra_windows.size() + first.fault_onsets.size(); ++k)
+      o << "---:|";
     o << "\n";
     for (const ComparedController& c : r.comparison) {
       const sim::Metrics& m = c.outcome.evaluation.scenarios.at(s);
-      o << "| " << c.label << (m.diverged ? " (diverged)" : "") << " | " << fmt(m.errors.ise) << " | "
-        << fmt(m.errors.iae) << " | " << fmt(m.errors.itae) << " | " << fmt(m.max_abs_u) << " | "
-        << fmt(m.control_tv) << " |";
+      o << "| " << c.label << (m.diverged ? " (diverged)" : "") << " | " << fmt(m.errors.ise)
+        << " | " << fmt(m.errors.iae) << " | " << fmt(m.errors.itae) << " | " << fmt(m.max_abs_u)
+        << " | " << fmt(m.control_tv) << " |";
       for (const sim::ErrorIntegrals& e : m.extra) o << " " << fmt(e.ise) << " |";
       for (double p : m.peak_error_after_fault) o << " " << fmt(p) << " |";
       o << "\n";
     }
   }
-  o << "\nISE in rad²·s, IAE in rad·s, ITAE in rad·s², peak errors in rad; control TV = Σ‖u_k − u_{k−1}‖ "
+  o << "\nISE in rad²·s, IAE in rad·s, ITAE in rad·s², peak errors in rad; control TV = Σ‖u_k − "
+       "u_{k−1}‖ "
        "(chattering).\n";
   return o.str();
 }

@@ -4,10 +4,6 @@
 //   2. latency of GET /v1/jobs/{id} while the Table 1 job runs (p50, p99);
 //   3. submissions per second of tiny jobs from 8 client threads.
 // Run: build/tests/ftc_bench_service
-#include "ftc/tune/service.hpp"
-#include "ftc/tune/tuning_run.hpp"
-
-#include <httplib.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -17,12 +13,18 @@
 #include <fstream>
 #include <thread>
 
+#include "ftc/tune/httplib.hpp"
+#include "ftc/tune/service.hpp"
+#include "ftc/tune/tuning_run.hpp"
+
 using nlohmann::json;
 using clk = std::chrono::steady_clock;
 
 namespace {
 
-double seconds_since(clk::time_point t0) { return std::chrono::duration<double>(clk::now() - t0).count(); }
+double seconds_since(clk::time_point t0) {
+  return std::chrono::duration<double>(clk::now() - t0).count();
+}
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -63,7 +65,8 @@ int main() {
     direct.push_back(seconds_since(t0));
 
     t0 = clk::now();
-    const std::string id = json::parse(c.Post("/v1/jobs", table1.dump(), "application/json")->body)["id"];
+    const std::string id =
+        json::parse(c.Post("/v1/jobs", table1.dump(), "application/json")->body)["id"];
     while (json::parse(c.Get(("/v1/jobs/" + id).c_str())->body)["status"] != "succeeded")
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     const std::string gains = c.Get(("/v1/jobs/" + id + "/gains").c_str())->body;
@@ -72,10 +75,12 @@ int main() {
   }
   const double d = median(direct), s = median(via_service);
   std::printf("table1 in process (ftctune run):  median %.3f s of 5\n", d);
-  std::printf("table1 submit -> gains fetched:   median %.3f s of 5 (overhead %+.1f %%)\n", s, 100 * (s / d - 1));
+  std::printf("table1 submit -> gains fetched:   median %.3f s of 5 (overhead %+.1f %%)\n", s,
+              100 * (s / d - 1));
 
   // 2. Status latency while the job runs.
-  const std::string id = json::parse(c.Post("/v1/jobs", table1.dump(), "application/json")->body)["id"];
+  const std::string id =
+      json::parse(c.Post("/v1/jobs", table1.dump(), "application/json")->body)["id"];
   std::vector<double> latency_ms;
   httplib::Client poller("127.0.0.1", port);
   for (;;) {
@@ -107,8 +112,8 @@ int main() {
     });
   for (std::thread& t : clients) t.join();
   const double took = seconds_since(t0);
-  std::printf("tiny submissions, %d threads:      %d accepted in %.3f s = %.0f per second\n", kThreads,
-              ok.load(), took, ok.load() / took);
+  std::printf("tiny submissions, %d threads:      %d accepted in %.3f s = %.0f per second\n",
+              kThreads, ok.load(), took, ok.load() / took);
   service.stop();
   std::filesystem::remove_all(store);
   return 0;

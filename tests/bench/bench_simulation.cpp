@@ -24,8 +24,6 @@ static void BM_PaperScenario(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.iterations()) * s.samples(),
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
-BENCHMARK(BM_PaperScenario)
-    ->DenseRange(0, 3)
-    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PaperScenario)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

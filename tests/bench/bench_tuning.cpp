@@ -32,8 +32,15 @@ void BM_TuneTable1(benchmark::State& state) {
   benchmark::DoNotOptimize(J);
   state.counters["max_rss_MiB"] = max_rss_mib();
 }
-BENCHMARK(BM_TuneTable1)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)
-    ->UseRealTime()->Iterations(1)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_TuneTable1)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
 
 void BM_TuneScaling(benchmark::State& state) {
   tune::Job job = table1();
@@ -55,8 +62,8 @@ void BM_TuneScaling(benchmark::State& state) {
                       static_cast<double>(job.scenarios.size());
   state.counters["simulations"] = sims;
   // Seconds of wall time per simulation (shown with a unit prefix, e.g. 8.6m = 8.6 ms).
-  state.counters["s_per_simulation"] =
-      benchmark::Counter(sims, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["s_per_simulation"] = benchmark::Counter(
+      sims, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   state.counters["max_rss_MiB"] = max_rss_mib();
 }
 BENCHMARK(BM_TuneScaling)

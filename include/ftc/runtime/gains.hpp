@@ -26,9 +26,9 @@ namespace ftc::runtime {
 inline constexpr const char* kGainsSchema = "ftctune.gains/1";
 
 struct Gains {
-  sim::ControllerConfig controller;                    // every parameter, tuned ones included
-  std::vector<std::pair<std::string, double>> tuned;   // name → value
-  double sample_time = 0.0;                            // Ts the gains were tuned for, s
+  sim::ControllerConfig controller;                   // every parameter, tuned ones included
+  std::vector<std::pair<std::string, double>> tuned;  // name → value
+  double sample_time = 0.0;                           // Ts the gains were tuned for, s
   std::string job_name;
   std::string job_sha256;
 };

@@ -31,7 +31,7 @@ struct ControllerConfig {
   double c1 = 10.0;
   double c2 = 9.0;
   double alpha1 = std::numeric_limits<double>::quiet_NaN();  // NaN: derived, α2 / (2 - α2)
-  double alpha2 = 0.5625;                                     // 9/16
+  double alpha2 = 0.5625;                                    // 9/16
   double switching_gain = 20.0;  // K: Ξ+ζ (NFTSMC) or Π+ζ (FOSMC, PI-FOSMC)
   double theta = 1000.0;         // θ of the sigmoid sigm(s) = tanh(θ s / 2)
   double Kp = 20.0;

@@ -15,7 +15,7 @@ enum class Shape { sin, cos };
 const char* to_string(Shape s);
 
 struct DisturbanceTerm {
-  int axis = 1;            // 1-based axis index, 1..3
+  int axis = 1;  // 1-based axis index, 1..3
   Shape shape = Shape::sin;
   double amplitude = 0.0;  // rad/s²
   double frequency = 0.0;  // rad/s

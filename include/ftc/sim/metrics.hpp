@@ -35,14 +35,15 @@ struct ErrorIntegrals {
 };
 
 struct Metrics {
-  Window window;                        // the main (objective) window
-  ErrorIntegrals errors;                // in `window`
-  std::vector<Window> extra_windows;    // further windows asked for
-  std::vector<ErrorIntegrals> extra;    // one per extra window
-  double max_abs_u = 0.0;               // max_j,k |u_d,j(t_k)|
-  double control_tv = 0.0;              // Σ ‖u_k - u_{k-1}‖₂
-  std::vector<double> fault_onsets;     // s, in fault order
-  std::vector<double> peak_error_after_fault;  // max ‖e_k‖ over t_k ≥ onset, rad; NaN if never reached
+  Window window;                      // the main (objective) window
+  ErrorIntegrals errors;              // in `window`
+  std::vector<Window> extra_windows;  // further windows asked for
+  std::vector<ErrorIntegrals> extra;  // one per extra window
+  double max_abs_u = 0.0;             // max_j,k |u_d,j(t_k)|
+  double control_tv = 0.0;            // Σ ‖u_k - u_{k-1}‖₂
+  std::vector<double> fault_onsets;   // s, in fault order
+  std::vector<double>
+      peak_error_after_fault;  // max ‖e_k‖ over t_k ≥ onset, rad; NaN if never reached
   bool diverged = false;
   double diverged_at = std::numeric_limits<double>::quiet_NaN();  // s
 

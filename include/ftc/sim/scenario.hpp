@@ -15,9 +15,9 @@ namespace ftc::sim {
 
 struct Scenario {
   std::string name = "paper";
-  double duration = 30.0;      // T in s, a whole number of sample times
-  double sample_time = 1e-3;   // Ts in s: controller period and zero-order hold
-  int substeps = 1;            // RK4 steps per sample, h = Ts / substeps
+  double duration = 30.0;     // T in s, a whole number of sample times
+  double sample_time = 1e-3;  // Ts in s: controller period and zero-order hold
+  int substeps = 1;           // RK4 steps per sample, h = Ts / substeps
   State initial_state = (State() << -0.7, -0.07, 1.5, 0.3, 1.3, -0.2).finished();
   std::vector<DisturbanceTerm> disturbance;
   std::vector<Fault> faults;

@@ -37,7 +37,7 @@ struct TrajectoryRow {
 
 struct SimulationResult {
   Metrics metrics;
-  std::int64_t samples = 0;  // samples simulated (fewer than N when diverged)
+  std::int64_t samples = 0;           // samples simulated (fewer than N when diverged)
   State final_state = State::Zero();  // X at t = samples · Ts
   std::vector<TrajectoryRow> trajectory;
 };

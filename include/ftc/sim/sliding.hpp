@@ -18,9 +18,7 @@ inline double sig(double x, double a) {
   return std::copysign(std::exp(a * std::log(std::abs(x))), x);
 }
 
-inline Vec3 sig(const Vec3& x, double a) {
-  return Vec3(sig(x[0], a), sig(x[1], a), sig(x[2], a));
-}
+inline Vec3 sig(const Vec3& x, double a) { return Vec3(sig(x[0], a), sig(x[1], a), sig(x[2], a)); }
 
 inline Vec3 sigm(const Vec3& s, double theta) {
   const double k = 0.5 * theta;

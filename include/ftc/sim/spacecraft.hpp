@@ -12,7 +12,7 @@ namespace ftc::sim {
 
 struct SpacecraftParams {
   std::array<double, 3> inertia{20.0, 17.0, 15.0};  // Ix, Iy, Iz in kg·m² (not in the paper)
-  double orbital_rate = 1.1e-3;                      // ω0 in rad/s (not in the paper)
+  double orbital_rate = 1.1e-3;                     // ω0 in rad/s (not in the paper)
 };
 
 class Spacecraft final : public Plant {

@@ -35,7 +35,8 @@ struct Evaluation {
   bool diverged = false;
 };
 
-Evaluation evaluate(const Job& job, const sim::Plant& plant, const sim::ControllerConfig& controller);
+Evaluation evaluate(const Job& job, const sim::Plant& plant,
+                    const sim::ControllerConfig& controller);
 
 // Metrics of one scenario as written to metrics.json; ise/iae/itae in the objective window,
 // infinite values as null.

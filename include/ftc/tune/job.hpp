@@ -44,12 +44,12 @@ const char* to_string(AlgorithmType a);
 
 struct AlgorithmConfig {
   AlgorithmType type = AlgorithmType::bat;
-  int population = 10;            // M
-  int iterations = 10;            // T
+  int population = 10;  // M
+  int iterations = 10;  // T
   double f_min = 0.0;
   double f_max = 2.0;
-  double loudness = 0.95;         // A0
-  double pulse_rate = 0.9;        // r0
+  double loudness = 0.95;   // A0
+  double pulse_rate = 0.9;  // r0
   double loudness_decay = 0.9;
   double pulse_rate_growth = 0.9;
 

@@ -74,7 +74,8 @@ class JobStore {
   std::optional<JobRecord> claim_next();
   // Progress and optimiser checkpoint after an iteration, in one transaction.
   void record_progress(const std::string& id, int iteration, std::int64_t evaluations,
-                       double best_fitness, const nlohmann::json& best, const std::string& checkpoint);
+                       double best_fitness, const nlohmann::json& best,
+                       const std::string& checkpoint);
   std::optional<std::string> checkpoint(const std::string& id);
 
   void finish_succeeded(const std::string& id, const std::map<std::string, std::string>& artifacts);

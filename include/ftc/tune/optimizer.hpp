@@ -16,9 +16,9 @@
 namespace ftc::tune {
 
 struct HistoryRow {
-  int iteration = 0;          // 0 = the initial population
-  double best_fitness = 0.0;  // J(x*) after this iteration
-  Decision best;              // x*
+  int iteration = 0;             // 0 = the initial population
+  double best_fitness = 0.0;     // J(x*) after this iteration
+  Decision best;                 // x*
   double mean_loudness = 0.0;    // Bat algorithm only (NaN for random search)
   double mean_pulse_rate = 0.0;  // Bat algorithm only (NaN for random search)
   std::int64_t evaluations = 0;  // so far

@@ -24,10 +24,11 @@ struct ServiceOptions {
   int port = 8080;  // 0: any free port (start() returns it)
   std::filesystem::path store = "ftctune-store";
   int concurrent_jobs = 1;
-  int threads = 0;                     // TBB threads per job; <= 0: all cores
-  std::optional<std::string> token;    // when set, every request needs "Authorization: Bearer <token>"
+  int threads = 0;  // TBB threads per job; <= 0: all cores
+  std::optional<std::string>
+      token;  // when set, every request needs "Authorization: Bearer <token>"
   std::size_t max_body_bytes = 1 << 20;
-  double max_steps = 2e9;              // budget: evaluations × simulated steps per evaluation
+  double max_steps = 2e9;  // budget: evaluations × simulated steps per evaluation
 
   // Every bad option, e.g. a non-loopback bind without a token.
   std::vector<FieldError> validate() const;

@@ -23,9 +23,9 @@ namespace ftc::tune {
 inline constexpr const char* kGainsSchema = "ftctune.gains/1";
 
 struct RunOptions {
-  int threads = 0;                     // <= 0: all hardware threads
-  std::optional<std::uint64_t> seed;   // overrides tuning.seed
-  IterationObserver observer;          // progress; return false to stop
+  int threads = 0;                         // <= 0: all hardware threads
+  std::optional<std::uint64_t> seed;       // overrides tuning.seed
+  IterationObserver observer;              // progress; return false to stop
   const nlohmann::json* resume = nullptr;  // an Optimizer::state() to continue from
 };
 
