@@ -146,6 +146,12 @@ TEST(Service, LifecycleGivesTheSameGainsAsRun) {
   EXPECT_EQ(s.get("/v1/jobs/" + id + "/comparison")["controllers"].size(), 4u);
   auto md = s.client->Get(("/v1/jobs/" + id + "/comparison?format=md").c_str());
   EXPECT_NE(md->body.find("| optimal PI-FOSMC"), std::string::npos);
+  auto report = s.client->Get(("/v1/jobs/" + id + "/report").c_str());
+  ASSERT_TRUE(report);
+  EXPECT_EQ(report->status, 200);
+  EXPECT_EQ(report->get_header_value("Content-Type"), "text/html; charset=utf-8");
+  EXPECT_NE(report->body.find("data:image/png;base64,"), std::string::npos);
+  EXPECT_EQ(s.client->Get(("/v1/jobs/" + id + "/report").c_str())->body, report->body);  // kept
 
   const std::string second = s.submit(tiny_job())["id"];
   s.wait_done(second);

@@ -26,6 +26,8 @@ struct RunCliOptions {
   std::string out;
   int threads = 0;
   std::optional<std::uint64_t> seed;
+  bool report = false;
+  bool baseline = false;
 };
 
 std::string utc_now() {
@@ -96,6 +98,19 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   const double wall = std::chrono::duration<double>(clock::now() - t0).count();
 
   tune::write_outputs(r, out);
+  if (o.baseline) {
+    // Random search with the same budget and seed: what the algorithm buys (Fig. 5).
+    tune::Job random = job;
+    random.tuning->algorithm.type = tune::AlgorithmType::random;
+    tune::RunOptions rr;
+    rr.threads = o.threads;
+    rr.seed = o.seed;
+    rr.compare = false;
+    const tune::TuningOutcome b = tune::tune(random, rr);
+    tune::write_file_atomic(out / "history-random.csv", tune::history_csv(b));
+    spdlog::info("random search with the same budget: best J = {:.6g} ({})", b.optimization.best_fitness,
+                 params_text(names, b.optimization.best));
+  }
   const json run = {{"started_at", started},
                     {"host", hostname()},
                     {"threads", r.threads},
@@ -120,6 +135,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     std::printf("  wrote %s/{gains.json, history.csv, comparison.json, comparison.md, run.json}\n",
                 out.c_str());
   }
+  if (o.report) return render_run_report(out.string(), "html", g.quiet);
   return 0;
 }
 
@@ -133,6 +149,9 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
   sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--seed", opts->seed, "Seed instead of the job's tuning.seed");
+  sub->add_flag("--baseline", opts->baseline,
+                "Also run random search with the same budget (history-random.csv, drawn in Fig. 5)");
+  sub->add_flag("--report", opts->report, "Then draw the figures and report.html (ftctune report)");
   sub->callback([&action, &g, opts] { action = [&g, opts] { return run_tuning(*opts, g); }; });
 }
 

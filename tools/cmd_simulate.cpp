@@ -28,27 +28,6 @@ struct SimulateOptions {
   double record_interval = 0.01;
 };
 
-std::string trajectory_csv(const std::vector<sim::TrajectoryRow>& rows) {
-  std::string s = "time,x1,x2,x3,x4,x5,x6,ud1,ud2,ud3,ud4,u1,u2,u3,u4\n";
-  s.reserve(rows.size() * 200);
-  char buf[64];
-  for (const sim::TrajectoryRow& r : rows) {
-    std::snprintf(buf, sizeof buf, "%.6f", r.t);
-    s += buf;
-    for (int i = 0; i < sim::kStates; ++i) {
-      std::snprintf(buf, sizeof buf, ",%.9g", r.x[i]);
-      s += buf;
-    }
-    for (const sim::Vec4* v : {&r.u_d, &r.u})
-      for (int j = 0; j < sim::kActuators; ++j) {
-        std::snprintf(buf, sizeof buf, ",%.9g", (*v)[j]);
-        s += buf;
-      }
-    s += '\n';
-  }
-  return s;
-}
-
 std::string fmt(double v, const char* f = "%.4g") {
   if (!std::isfinite(v)) return "inf";
   char buf[32];
@@ -89,7 +68,7 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
     scenarios.push_back(m);
     metrics.push_back(r.metrics);
     const std::string file = i == 0 ? "trajectory.csv" : "trajectory-" + s.name + ".csv";
-    tune::write_file_atomic(out / file, trajectory_csv(r.trajectory));
+    tune::write_file_atomic(out / file, tune::trajectory_csv(r.trajectory));
     if (r.metrics.diverged)
       spdlog::warn("scenario {} diverged at t = {:.3f} s", s.name, r.metrics.diverged_at);
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
 
@@ -63,6 +64,27 @@ Evaluation evaluate(const Job& job, const sim::Plant& plant,
   e.objective = aggregate_objective(job.objective, e.scenarios);
   e.fitness = e.diverged ? 0.0 : fitness_of(e.objective);
   return e;
+}
+
+std::string trajectory_csv(const std::vector<sim::TrajectoryRow>& rows) {
+  std::string s = "time,x1,x2,x3,x4,x5,x6,ud1,ud2,ud3,ud4,u1,u2,u3,u4\n";
+  s.reserve(rows.size() * 200);
+  char buf[64];
+  for (const sim::TrajectoryRow& r : rows) {
+    std::snprintf(buf, sizeof buf, "%.6f", r.t);
+    s += buf;
+    for (int i = 0; i < sim::kStates; ++i) {
+      std::snprintf(buf, sizeof buf, ",%.9g", r.x[i]);
+      s += buf;
+    }
+    for (const sim::Vec4* v : {&r.u_d, &r.u})
+      for (int j = 0; j < sim::kActuators; ++j) {
+        std::snprintf(buf, sizeof buf, ",%.9g", (*v)[j]);
+        s += buf;
+      }
+    s += '\n';
+  }
+  return s;
 }
 
 namespace {

@@ -434,4 +434,21 @@ std::optional<std::string> JobStore::artifact(const std::string& id, const std::
   return q.blob(0);
 }
 
+std::map<std::string, std::string> JobStore::artifacts(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "SELECT name, content FROM artifacts WHERE job_id = ?");
+  q.bind(1, id);
+  std::map<std::string, std::string> out;
+  while (q.step()) out[q.text(0)] = q.blob(1);
+  return out;
+}
+
+void JobStore::put_artifact(const std::string& id, const std::string& name, const std::string& content) {
+  transaction([&] {
+    Statement a(db_, "INSERT OR REPLACE INTO artifacts (job_id, name, content) VALUES (?, ?, ?)");
+    a.bind(1, id).bind(2, name).bind_blob(3, content);
+    a.step();
+  });
+}
+
 }  // namespace ftc::tune

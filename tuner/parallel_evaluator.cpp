@@ -23,9 +23,9 @@ ParallelEvaluator::~ParallelEvaluator() = default;
 int ParallelEvaluator::threads() const { return arena_->arena.max_concurrency(); }
 
 std::vector<CandidateOutcome> ParallelEvaluator::evaluate_controllers(
-    const std::vector<sim::ControllerConfig>& controllers) {
+    const std::vector<sim::ControllerConfig>& controllers, std::int64_t record_every) {
   const std::size_t n = controllers.size(), S = problem_.scenarios();
-  std::vector<sim::Metrics> metrics(n * S);
+  std::vector<sim::SimulationResult> results(n * S);
   std::vector<std::string> errors(n * S);
 
   // One task per (candidate, scenario); grain 1 because one task is a whole simulation.
@@ -34,7 +34,7 @@ std::vector<CandidateOutcome> ParallelEvaluator::evaluate_controllers(
                       [&](const tbb::blocked_range<std::size_t>& r) {
                         for (std::size_t k = r.begin(); k != r.end(); ++k) {
                           try {
-                            metrics[k] = problem_.simulate(controllers[k / S], k % S);
+                            results[k] = problem_.simulate(controllers[k / S], k % S, record_every);
                           } catch (const std::exception& e) {
                             errors[k] = e.what();
                           } catch (...) {
@@ -47,8 +47,11 @@ std::vector<CandidateOutcome> ParallelEvaluator::evaluate_controllers(
 
   std::vector<CandidateOutcome> out(n);
   for (std::size_t i = 0; i < n; ++i) {
-    std::vector<sim::Metrics> per(metrics.begin() + static_cast<std::ptrdiff_t>(i * S),
-                                  metrics.begin() + static_cast<std::ptrdiff_t>((i + 1) * S));
+    std::vector<sim::Metrics> per;
+    for (std::size_t s = 0; s < S; ++s) {
+      per.push_back(std::move(results[i * S + s].metrics));
+      if (record_every > 0) out[i].trajectories.push_back(std::move(results[i * S + s].trajectory));
+    }
     out[i].evaluation = problem_.score(std::move(per));
     for (std::size_t s = 0; s < S; ++s)
       if (!errors[i * S + s].empty()) {

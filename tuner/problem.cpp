@@ -24,9 +24,9 @@ sim::ControllerConfig TuningProblem::controller_for(std::span<const double> x) c
   return c;
 }
 
-sim::Metrics TuningProblem::simulate(const sim::ControllerConfig& controller,
-                                     std::size_t scenario) const {
-  return simulate_scenario(job_, *plant_, controller, scenario).metrics;
+sim::SimulationResult TuningProblem::simulate(const sim::ControllerConfig& controller,
+                                              std::size_t scenario, std::int64_t record_every) const {
+  return simulate_scenario(job_, *plant_, controller, scenario, record_every);
 }
 
 Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {

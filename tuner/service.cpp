@@ -10,12 +10,16 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <mutex>
 #include <thread>
 
 #include "ftc/tune/httplib.hpp"
 #include "ftc/tune/job.hpp"
+#include "ftc/tune/files.hpp"
 #include "ftc/tune/job_store.hpp"
+#include "ftc/tune/report.hpp"
 #include "ftc/tune/tuning_run.hpp"
 #include "ftc/version.hpp"
 
@@ -136,6 +140,7 @@ struct TuningService::Impl {
   std::uint64_t submissions = 0;  // bumped under wake_mutex on every submission
   int recovered = 0;
   bool started = false;
+  std::atomic<int> report_counter{0};
 
   explicit Impl(ServiceOptions o) : opt(std::move(o)), store(opt.store) {}
 
@@ -184,7 +189,8 @@ struct TuningService::Impl {
       if (m != "POST") return method_not_allowed(res, "POST");
       return cancel(id, res);
     }
-    if (p.size() == 4 && (p[3] == "gains" || p[3] == "history" || p[3] == "comparison")) {
+    if (p.size() == 4 && (p[3] == "gains" || p[3] == "history" || p[3] == "comparison" ||
+                          p[3] == "report")) {
       if (m != "GET") return method_not_allowed(res, "GET");
       return result(req, res, id, p[3]);
     }
@@ -292,6 +298,8 @@ struct TuningService::Impl {
     const std::string format = req.has_param("format") ? req.get_param_value("format") : "";
     if (what == "gains") {
       res.set_content(store.artifact(id, "gains.json").value_or(""), "application/json");
+    } else if (what == "report") {
+      res.set_content(report(id), "text/html; charset=utf-8");
     } else if (what == "history") {
       if (format == "json") {
         const json gains = json::parse(store.artifact(id, "gains.json").value_or("{}"));
@@ -309,6 +317,28 @@ struct TuningService::Impl {
       else
         return send_error(res, 400, "invalid_parameter", "format must be json or md");
     }
+  }
+
+  // report.html of a succeeded job: drawn from its stored files on first request, then kept.
+  std::string report(const std::string& id) {
+    if (auto cached = store.artifact(id, "report.html")) return *cached;
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("ftctune-report-" + id + "-" + std::to_string(::getpid()) +
+                                                      "-" + std::to_string(report_counter++));
+    struct Cleanup {
+      fs::path dir;
+      ~Cleanup() {
+        std::error_code ec;
+        fs::remove_all(dir, ec);
+      }
+    } cleanup{dir};
+    for (const auto& [name, content] : store.artifacts(id)) write_file_atomic(dir / name, content);
+    const ReportResult r = render_report(dir, ReportOptions{});
+    std::ifstream in(r.html, std::ios::binary);
+    std::ostringstream html;
+    html << in.rdbuf();
+    store.put_artifact(id, "report.html", html.str());
+    return html.str();
   }
 
   void configure_http() {

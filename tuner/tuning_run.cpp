@@ -1,5 +1,7 @@
 #include "ftc/tune/tuning_run.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -50,6 +52,19 @@ std::string display_name(sim::ControllerType t) {
 
 std::string canonical_job_sha256(const Job& job) { return sha256_hex(to_json(job).dump()); }
 
+std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std::size_t scenario) {
+  std::string slug;
+  for (char c : r.comparison.at(controller).label) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(c));
+    if (keep) slug += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    else if (!slug.empty() && slug.back() != '-') slug += '-';
+  }
+  while (!slug.empty() && slug.back() == '-') slug.pop_back();
+  char index[24];
+  std::snprintf(index, sizeof index, "%02zu-", controller + 1);
+  return "trajectories/" + r.job.scenarios.at(scenario).name + "/" + index + slug + ".csv";
+}
+
 TuningOutcome tune(const Job& job, const RunOptions& options) {
   TuningOutcome r;
   r.job = job;
@@ -61,7 +76,7 @@ TuningOutcome tune(const Job& job, const RunOptions& options) {
   r.threads = evaluator.threads();
   auto optimizer = make_optimizer(job.tuning->algorithm, r.seed, problem.space());
   r.optimization = run_optimizer(*optimizer, evaluator, options.observer, options.resume);
-  if (!r.optimization.completed) {
+  if (!r.optimization.completed || !options.compare) {
     r.simulations = evaluator.simulations();
     return r;
   }
@@ -81,7 +96,9 @@ TuningOutcome tune(const Job& job, const RunOptions& options) {
   r.comparison.push_back({"optimal " + name, "tuned", r.tuned_controller, {}});
   controllers.push_back(r.tuned_controller);
 
-  const std::vector<CandidateOutcome> outcomes = evaluator.evaluate_controllers(controllers);
+  const auto every = std::max<std::int64_t>(
+      1, std::llround(kComparisonRecordInterval / job.scenarios.front().sample_time));
+  const std::vector<CandidateOutcome> outcomes = evaluator.evaluate_controllers(controllers, every);
   for (std::size_t i = 0; i < outcomes.size(); ++i) r.comparison[i].outcome = outcomes[i];
   r.simulations = evaluator.simulations();
   return r;
@@ -163,6 +180,8 @@ json comparison_document(const TuningOutcome& r) {
     for (std::size_t i = 0; i < c.outcome.evaluation.scenarios.size(); ++i) {
       json m = metrics_json(c.outcome.evaluation.scenarios[i]);
       m["name"] = r.job.scenarios[i].name;
+      if (i < c.outcome.trajectories.size())
+        m["trajectory"] = trajectory_file(r, static_cast<std::size_t>(&c - r.comparison.data()), i);
       cj["scenarios"].push_back(m);
     }
     doc["controllers"].push_back(cj);
@@ -212,10 +231,16 @@ std::string comparison_markdown(const TuningOutcome& r) {
 }
 
 std::map<std::string, std::string> output_files(const TuningOutcome& r) {
-  return {{"gains.json", gains_document(r).dump(2) + "\n"},
-          {"history.csv", history_csv(r)},
-          {"comparison.json", comparison_document(r).dump(2) + "\n"},
-          {"comparison.md", comparison_markdown(r)}};
+  std::map<std::string, std::string> files = {
+      {"gains.json", gains_document(r).dump(2) + "\n"},
+      {"history.csv", history_csv(r)},
+      {"job.json", to_json(r.job).dump(2) + "\n"},
+      {"comparison.json", comparison_document(r).dump(2) + "\n"},
+      {"comparison.md", comparison_markdown(r)}};
+  for (std::size_t c = 0; c < r.comparison.size(); ++c)
+    for (std::size_t s = 0; s < r.comparison[c].outcome.trajectories.size(); ++s)
+      files[trajectory_file(r, c, s)] = trajectory_csv(r.comparison[c].outcome.trajectories[s]);
+  return files;
 }
 
 void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir) {

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "ftc/sim/controller_config.hpp"
@@ -37,6 +38,9 @@ struct Evaluation {
 
 Evaluation evaluate(const Job& job, const sim::Plant& plant,
                     const sim::ControllerConfig& controller);
+
+// CSV of a recorded trajectory: time, x1..x6, ud1..ud4 (commanded), u1..u4 (applied).
+std::string trajectory_csv(const std::vector<sim::TrajectoryRow>& rows);
 
 // Metrics of one scenario as written to metrics.json; ise/iae/itae in the objective window,
 // infinite values as null.

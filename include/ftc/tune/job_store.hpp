@@ -90,6 +90,9 @@ class JobStore {
   // At start-up: jobs left running by a crash go back to the queue. Returns how many.
   int recover();
   std::optional<std::string> artifact(const std::string& id, const std::string& name);
+  std::map<std::string, std::string> artifacts(const std::string& id);
+  // Adds or replaces one artifact of a finished job (a report rendered later).
+  void put_artifact(const std::string& id, const std::string& name, const std::string& content);
 
  private:
   class Statement;

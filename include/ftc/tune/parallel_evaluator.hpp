@@ -17,6 +17,7 @@ namespace ftc::tune {
 struct CandidateOutcome {
   Evaluation evaluation;  // per-scenario metrics, objective, fitness
   std::string error;      // non-empty when a simulation threw (fitness is then 0)
+  std::vector<std::vector<sim::TrajectoryRow>> trajectories;  // per scenario, when recorded
 };
 
 class ParallelEvaluator final : public BatchEvaluator {
@@ -26,9 +27,10 @@ class ParallelEvaluator final : public BatchEvaluator {
   ~ParallelEvaluator() override;
 
   std::vector<double> evaluate(const std::vector<Decision>& batch) override;
-  // The same machinery for arbitrary controllers (comparisons, baselines).
+  // The same machinery for arbitrary controllers (comparisons, baselines); record_every > 0
+  // also keeps their trajectories (every k-th sample).
   std::vector<CandidateOutcome> evaluate_controllers(
-      const std::vector<sim::ControllerConfig>& controllers);
+      const std::vector<sim::ControllerConfig>& controllers, std::int64_t record_every = 0);
 
   int threads() const;
   const std::vector<CandidateOutcome>& last_batch() const { return last_; }

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <memory>
 #include <span>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -32,7 +33,9 @@ class TuningProblem {
   // The job's controller with the tuned fields set from x (in space().names order).
   sim::ControllerConfig controller_for(std::span<const double> x) const;
   // One scenario with one controller. Never throws for a diverging run.
-  sim::Metrics simulate(const sim::ControllerConfig& controller, std::size_t scenario) const;
+  // record_every > 0 also keeps every k-th sample of the trajectory.
+  sim::SimulationResult simulate(const sim::ControllerConfig& controller, std::size_t scenario,
+                                 std::int64_t record_every = 0) const;
   // Objective and fitness from the metrics of every scenario.
   Evaluation score(std::vector<sim::Metrics> per_scenario) const;
 

@@ -27,7 +27,11 @@ struct RunOptions {
   std::optional<std::uint64_t> seed;       // overrides tuning.seed
   IterationObserver observer;              // progress; return false to stop
   const nlohmann::json* resume = nullptr;  // an Optimizer::state() to continue from
+  bool compare = true;  // simulate the comparison controllers after tuning
 };
+
+// Trajectories of the comparison are recorded every 10 ms of simulated time.
+inline constexpr double kComparisonRecordInterval = 0.01;
 
 struct ComparedController {
   std::string label;
@@ -58,14 +62,18 @@ TuningOutcome tune(const Job& job, const RunOptions& options = {});
 
 std::string canonical_job_sha256(const Job& job);
 std::string display_name(sim::ControllerType t);  // "PI-FOSMC", ...
+// The file of a compared controller's trajectory, relative to the run directory.
+std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std::size_t scenario);
 
 nlohmann::json gains_document(const TuningOutcome& r);
 std::string history_csv(const TuningOutcome& r);
 nlohmann::json comparison_document(const TuningOutcome& r);
 std::string comparison_markdown(const TuningOutcome& r);
 
-// The result files of a completed run, name → content: gains.json, history.csv,
-// comparison.json and comparison.md. The CLI and the service both write exactly these bytes.
+// The result files of a completed run, path → content: gains.json, history.csv, job.json
+// (the resolved job), comparison.json, comparison.md and trajectories/<scenario>/<NN>-<label>.csv
+// (one per compared controller, listed in comparison.json). The CLI and the service both write
+// exactly these bytes.
 std::map<std::string, std::string> output_files(const TuningOutcome& r);
 // Writes output_files() into `dir`, each atomically.
 void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir);

@@ -1,0 +1,102 @@
+// ftctune report RUN_DIR and ftctune landscape JOB: figures engineers can look at.
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdio>
+
+#include "cli.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/report.hpp"
+
+namespace ftc::cli {
+
+int render_run_report(const std::string& dir, const std::string& format, bool quiet) {
+  tune::ReportOptions ro;
+  if (format == "html") ro.html = true;
+  else if (format == "png" || format == "svg") {
+    ro.html = false;
+    ro.format = format == "png" ? tune::FigureFormat::png : tune::FigureFormat::svg;
+  } else {
+    throw InputError("--format", "", "must be html, png or svg (got \"" + format + "\")");
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const tune::ReportResult r = tune::render_report(dir, ro);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!quiet) {
+    for (const auto& f : r.figures) std::printf("wrote %s\n", f.c_str());
+    if (!r.html.empty()) std::printf("wrote %s\n", r.html.c_str());
+  }
+  spdlog::info("report rendered in {:.2f} s", s);
+  return 0;
+}
+
+namespace {
+
+struct LandscapeCli {
+  std::string job, grid = "41x41", params, out, history, format = "png";
+  int threads = 0;
+};
+
+int run_landscape(const LandscapeCli& o, const Globals& g) {
+  namespace fs = std::filesystem;
+  const tune::Job job = tune::load_job(o.job);
+  tune::LandscapeOptions lo;
+  if (std::sscanf(o.grid.c_str(), "%dx%d", &lo.n1, &lo.n2) != 2)
+    throw InputError("--grid", "", "expected N1xN2, e.g. 41x41 (got \"" + o.grid + "\")");
+  for (std::size_t i = 0; i < o.params.size();) {
+    const std::size_t j = std::min(o.params.find(',', i), o.params.size());
+    lo.params.push_back(o.params.substr(i, j - i));
+    i = j + 1;
+  }
+  if (o.format != "png" && o.format != "svg")
+    throw InputError("--format", "", "must be png or svg (got \"" + o.format + "\")");
+  lo.format = o.format == "png" ? tune::FigureFormat::png : tune::FigureFormat::svg;
+  lo.threads = o.threads;
+  const fs::path out = o.out.empty() ? default_out_dir(job) / "landscape" : fs::path(o.out);
+  // The run's best-so-far path, when the job has been run into its default directory.
+  lo.history = o.history.empty() && fs::is_regular_file(default_out_dir(job) / "history.csv")
+                   ? default_out_dir(job) / "history.csv"
+                   : fs::path(o.history);
+  const auto t0 = std::chrono::steady_clock::now();
+  spdlog::info("evaluating a {} grid over {} ({} simulations per point)", o.grid,
+               o.params.empty() ? "the first two tuned parameters" : o.params, job.scenarios.size());
+  const tune::LandscapeResult r = tune::compute_landscape(job, out, lo);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!g.quiet) {
+    std::printf("%lld simulations in %.2f s; lowest %s = %.6g at %s = %.5g, %s = %.5g\n",
+                static_cast<long long>(r.simulations), s, sim::to_string(job.objective.metric),
+                r.best_objective, r.params[0].c_str(), r.best[0], r.params[1].c_str(), r.best[1]);
+    std::printf("wrote %s and %s\n", r.csv.c_str(), r.figure.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_report_commands(CLI::App& app, const Globals& g, Action& action) {
+  {
+    auto dir = std::make_shared<std::string>();
+    auto format = std::make_shared<std::string>("html");
+    CLI::App* sub = app.add_subcommand("report", "Draw the figures and the HTML report of a run");
+    sub->add_option("run_dir", *dir, "Output directory of `ftctune run`")->required();
+    sub->add_option("--format", *format, "html (report.html with the PNG figures inline, default), png or svg");
+    sub->callback([&action, &g, dir, format] {
+      action = [&g, dir, format] { return render_run_report(*dir, *format, g.quiet); };
+    });
+  }
+  {
+    auto o = std::make_shared<LandscapeCli>();
+    CLI::App* sub = app.add_subcommand("landscape", "Map the objective over two tuned parameters");
+    sub->add_option("job", o->job, "Job file (ftctune.job/1)")->required();
+    sub->add_option("--grid", o->grid, "Grid points, N1xN2 (default 41x41)");
+    sub->add_option("--params", o->params, "Two tuned parameters, e.g. Kp,Ki (default: the first two)");
+    sub->add_option("--out", o->out, "Output directory (default out/<job name>/landscape)");
+    sub->add_option("--history", o->history,
+                    "history.csv whose best-so-far path is drawn (default out/<job name>/history.csv if present)");
+    sub->add_option("--threads", o->threads, "Worker threads (default: all cores)");
+    sub->add_option("--format", o->format, "png (default) or svg");
+    sub->callback([&action, &g, o] { action = [&g, o] { return run_landscape(*o, g); }; });
+  }
+}
+
+}  // namespace ftc::cli
