@@ -22,9 +22,12 @@ std::filesystem::path finished_run(const std::string& name) {
   return dir / "run";
 }
 
-int count_lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+int count_lines(const std::string& s) {
+  return static_cast<int>(std::count(s.begin(), s.end(), '\n'));
+}
 
-const char* kFigures[] = {"fig3-attitude", "fig4-rates", "fig5-fitness", "fig6-inputs", "fig7-fault-zoom"};
+const char* kFigures[] = {"fig3-attitude", "fig4-rates", "fig5-fitness", "fig6-inputs",
+                          "fig7-fault-zoom"};
 
 }  // namespace
 
@@ -42,10 +45,11 @@ TEST(Report, RendersEveryFigureAndASelfContainedPage) {
   const std::string html = slurp(r.html);
   EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
   std::size_t images = 0;
-  for (std::size_t p = 0; (p = html.find("data:image/png;base64,", p)) != std::string::npos; ++p) ++images;
+  for (std::size_t p = 0; (p = html.find("data:image/png;base64,", p)) != std::string::npos; ++p)
+    ++images;
   EXPECT_EQ(images, 5u);
-  for (const char* text : {"<table", "NFTSMC", "FOSMC", "PI-FOSMC (job)", "optimal PI-FOSMC", "Tuned gains",
-                           "<td>Kp</td>", "ISE [2, 3.5)", "peak ‖e‖ after fault 2",
+  for (const char* text : {"<table", "NFTSMC", "FOSMC", "PI-FOSMC (job)", "optimal PI-FOSMC",
+                           "Tuned gains", "<td>Kp</td>", "ISE [2, 3.5)", "peak ‖e‖ after fault 2",
                            "&quot;schema&quot;: &quot;ftctune.job/1&quot;"})
     EXPECT_NE(html.find(text), std::string::npos) << text;
   EXPECT_EQ(html.find("src=\"figures/"), std::string::npos);  // nothing outside the page
@@ -102,7 +106,8 @@ TEST(Report, LandscapeGridAndHeatmap) {
     ++rows;
     double kp, ki, obj, fit;
     int div;
-    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%d", &kp, &ki, &obj, &fit, &div), 5) << line;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%d", &kp, &ki, &obj, &fit, &div), 5)
+        << line;
     EXPECT_GE(kp, 1.0);
     EXPECT_LE(kp, 50.0);
     EXPECT_NEAR(fit, 1.0 / obj, 1e-6 * fit);
@@ -114,7 +119,8 @@ TEST(Report, LandscapeGridAndHeatmap) {
   EXPECT_NE(slurp(run / "landscape" / "landscape.gp").find("history.csv"), std::string::npos);
 
   o.params = {"Kp", "c1"};
-  EXPECT_THROW(tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "l2", o), InputError);
+  EXPECT_THROW(tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "l2", o),
+               InputError);
 }
 
 TEST(Cli, ReportRejectsMissingOrBrokenRunDirectories) {
@@ -127,7 +133,8 @@ TEST(Cli, ReportRejectsMissingOrBrokenRunDirectories) {
   std::filesystem::create_directories(dir / "empty");
   r = run_cli("report '" + (dir / "empty").string() + "'", dir);
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("missing gains.json: not the output directory of `ftctune run`"), std::string::npos)
+  EXPECT_NE(r.err.find("missing gains.json: not the output directory of `ftctune run`"),
+            std::string::npos)
       << r.err;
 
   const auto run = finished_run("report-broken");
@@ -148,12 +155,13 @@ TEST(Cli, RunWithReportAndRandomBaseline) {
     std::ofstream f(dir / "job.json");
     f << short_table1_job().dump();
   }
-  const CliResult r = run_cli("run '" + (dir / "job.json").string() + "' --baseline --report -q --out '" +
-                                  (dir / "out").string() + "'",
+  const CliResult r = run_cli("run '" + (dir / "job.json").string() +
+                                  "' --baseline --report -q --out '" + (dir / "out").string() + "'",
                               dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "report.html"));
   const std::string random = slurp(dir / "out" / "history-random.csv");
   EXPECT_EQ(count_lines(random), count_lines(slurp(dir / "out" / "history.csv")));
-  EXPECT_NE(slurp(dir / "out" / "figures" / "report.gp").find("random search, same budget"), std::string::npos);
+  EXPECT_NE(slurp(dir / "out" / "figures" / "report.gp").find("random search, same budget"),
+            std::string::npos);
 }

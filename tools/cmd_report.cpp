@@ -12,7 +12,8 @@ namespace ftc::cli {
 
 int render_run_report(const std::string& dir, const std::string& format, bool quiet) {
   tune::ReportOptions ro;
-  if (format == "html") ro.html = true;
+  if (format == "html")
+    ro.html = true;
   else if (format == "png" || format == "svg") {
     ro.html = false;
     ro.format = format == "png" ? tune::FigureFormat::png : tune::FigureFormat::svg;
@@ -59,7 +60,8 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
                    : fs::path(o.history);
   const auto t0 = std::chrono::steady_clock::now();
   spdlog::info("evaluating a {} grid over {} ({} simulations per point)", o.grid,
-               o.params.empty() ? "the first two tuned parameters" : o.params, job.scenarios.size());
+               o.params.empty() ? "the first two tuned parameters" : o.params,
+               job.scenarios.size());
   const tune::LandscapeResult r = tune::compute_landscape(job, out, lo);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!g.quiet) {
@@ -79,7 +81,8 @@ void add_report_commands(CLI::App& app, const Globals& g, Action& action) {
     auto format = std::make_shared<std::string>("html");
     CLI::App* sub = app.add_subcommand("report", "Draw the figures and the HTML report of a run");
     sub->add_option("run_dir", *dir, "Output directory of `ftctune run`")->required();
-    sub->add_option("--format", *format, "html (report.html with the PNG figures inline, default), png or svg");
+    sub->add_option("--format", *format,
+                    "html (report.html with the PNG figures inline, default), png or svg");
     sub->callback([&action, &g, dir, format] {
       action = [&g, dir, format] { return render_run_report(*dir, *format, g.quiet); };
     });
@@ -89,10 +92,12 @@ void add_report_commands(CLI::App& app, const Globals& g, Action& action) {
     CLI::App* sub = app.add_subcommand("landscape", "Map the objective over two tuned parameters");
     sub->add_option("job", o->job, "Job file (ftctune.job/1)")->required();
     sub->add_option("--grid", o->grid, "Grid points, N1xN2 (default 41x41)");
-    sub->add_option("--params", o->params, "Two tuned parameters, e.g. Kp,Ki (default: the first two)");
+    sub->add_option("--params", o->params,
+                    "Two tuned parameters, e.g. Kp,Ki (default: the first two)");
     sub->add_option("--out", o->out, "Output directory (default out/<job name>/landscape)");
     sub->add_option("--history", o->history,
-                    "history.csv whose best-so-far path is drawn (default out/<job name>/history.csv if present)");
+                    "history.csv whose best-so-far path is drawn (default out/<job "
+                    "name>/history.csv if present)");
     sub->add_option("--threads", o->threads, "Worker threads (default: all cores)");
     sub->add_option("--format", o->format, "png (default) or svg");
     sub->callback([&action, &g, o] { action = [&g, o] { return run_landscape(*o, g); }; });

@@ -108,8 +108,8 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     rr.compare = false;
     const tune::TuningOutcome b = tune::tune(random, rr);
     tune::write_file_atomic(out / "history-random.csv", tune::history_csv(b));
-    spdlog::info("random search with the same budget: best J = {:.6g} ({})", b.optimization.best_fitness,
-                 params_text(names, b.optimization.best));
+    spdlog::info("random search with the same budget: best J = {:.6g} ({})",
+                 b.optimization.best_fitness, params_text(names, b.optimization.best));
   }
   const json run = {{"started_at", started},
                     {"host", hostname()},
@@ -149,8 +149,9 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
   sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--seed", opts->seed, "Seed instead of the job's tuning.seed");
-  sub->add_flag("--baseline", opts->baseline,
-                "Also run random search with the same budget (history-random.csv, drawn in Fig. 5)");
+  sub->add_flag(
+      "--baseline", opts->baseline,
+      "Also run random search with the same budget (history-random.csv, drawn in Fig. 5)");
   sub->add_flag("--report", opts->report, "Then draw the figures and report.html (ftctune report)");
   sub->callback([&action, &g, opts] { action = [&g, opts] { return run_tuning(*opts, g); }; });
 }

@@ -366,11 +366,7 @@ std::optional<std::string> JobStore::checkpoint(const std::string& id) {
 void JobStore::finish_succeeded(const std::string& id,
                                 const std::map<std::string, std::string>& artifacts) {
   transaction([&] {
-    for (const auto& [name, content] : artifacts) {
-      Statement a(db_, "INSERT OR REPLACE INTO artifacts (job_id, name, content) VALUES (?, ?, ?)");
-      a.bind(1, id).bind(2, name).bind_blob(3, content);
-      a.step();
-    }
+    for (const auto& [name, content] : artifacts) insert_artifact(id, name, content);
     set_finished(id, JobStatus::succeeded, "");
   });
 }
@@ -443,12 +439,16 @@ std::map<std::string, std::string> JobStore::artifacts(const std::string& id) {
   return out;
 }
 
-void JobStore::put_artifact(const std::string& id, const std::string& name, const std::string& content) {
-  transaction([&] {
-    Statement a(db_, "INSERT OR REPLACE INTO artifacts (job_id, name, content) VALUES (?, ?, ?)");
-    a.bind(1, id).bind(2, name).bind_blob(3, content);
-    a.step();
-  });
+void JobStore::put_artifact(const std::string& id, const std::string& name,
+                            const std::string& content) {
+  transaction([&] { insert_artifact(id, name, content); });
+}
+
+void JobStore::insert_artifact(const std::string& id, const std::string& name,
+                               const std::string& content) {
+  Statement a(db_, "INSERT OR REPLACE INTO artifacts (job_id, name, content) VALUES (?, ?, ?)");
+  a.bind(1, id).bind(2, name).bind_blob(3, content);
+  a.step();
 }
 
 }  // namespace ftc::tune

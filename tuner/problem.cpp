@@ -25,7 +25,8 @@ sim::ControllerConfig TuningProblem::controller_for(std::span<const double> x) c
 }
 
 sim::SimulationResult TuningProblem::simulate(const sim::ControllerConfig& controller,
-                                              std::size_t scenario, std::int64_t record_every) const {
+                                              std::size_t scenario,
+                                              std::int64_t record_every) const {
   return simulate_scenario(job_, *plant_, controller, scenario, record_every);
 }
 

@@ -41,7 +41,8 @@ std::string slurp(const fs::path& p) {
 std::string read_required(const fs::path& dir, const std::string& name) {
   const fs::path p = dir / name;
   if (!fs::is_regular_file(p))
-    throw InputError(dir.string(), "", "missing " + name + ": not the output directory of `ftctune run`");
+    throw InputError(dir.string(), "",
+                     "missing " + name + ": not the output directory of `ftctune run`");
   return slurp(p);
 }
 
@@ -65,11 +66,20 @@ std::string html_escape(const std::string& s) {
   std::string o;
   for (char c : s) {
     switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      default:
+        o += c;
     }
   }
   return o;
@@ -92,13 +102,15 @@ std::string fmt(double v, const char* f = "%.4g") {
 std::string terminal(FigureFormat f, int width, int height) {
   char buf[160];
   if (f == FigureFormat::png)
-    std::snprintf(buf, sizeof buf,
-                  "set terminal pngcairo size %d,%d enhanced font 'DejaVu Sans,11' background rgb 'white'\n",
-                  width, height);
+    std::snprintf(
+        buf, sizeof buf,
+        "set terminal pngcairo size %d,%d enhanced font 'DejaVu Sans,11' background rgb 'white'\n",
+        width, height);
   else
-    std::snprintf(buf, sizeof buf,
-                  "set terminal svg size %d,%d enhanced font 'DejaVu Sans,11' background rgb 'white'\n",
-                  width, height);
+    std::snprintf(
+        buf, sizeof buf,
+        "set terminal svg size %d,%d enhanced font 'DejaVu Sans,11' background rgb 'white'\n",
+        width, height);
   return buf;
 }
 
@@ -126,26 +138,30 @@ std::string onset_marks(const std::vector<double>& onsets, bool labels = true) {
   std::string s = "unset arrow; unset label\n";
   for (std::size_t i = 0; i < onsets.size(); ++i) {
     char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "set arrow from %.9g, graph 0 to %.9g, graph 1 nohead dt 2 lw 1.2 lc rgb 'gray40' front\n",
-                  onsets[i], onsets[i]);
+    std::snprintf(
+        buf, sizeof buf,
+        "set arrow from %.9g, graph 0 to %.9g, graph 1 nohead dt 2 lw 1.2 lc rgb 'gray40' front\n",
+        onsets[i], onsets[i]);
     s += buf;
     if (labels) {
-      std::snprintf(buf, sizeof buf,
-                    "set label 'fault %zu' at %.9g, graph 0.93 offset 0.5,0 textcolor rgb 'gray30' front\n",
-                    i + 1, onsets[i]);
+      std::snprintf(
+          buf, sizeof buf,
+          "set label 'fault %zu' at %.9g, graph 0.93 offset 0.5,0 textcolor rgb 'gray30' front\n",
+          i + 1, onsets[i]);
       s += buf;
     }
   }
   return s;
 }
 
-std::string series_plot(const std::vector<Series>& series, const std::string& using_expr, bool titles) {
+std::string series_plot(const std::vector<Series>& series, const std::string& using_expr,
+                        bool titles) {
   std::string s = "plot ";
   for (std::size_t i = 0; i < series.size(); ++i) {
     if (i) s += ", \\\n     ";
-    s += gp(series[i].file) + " skip 1 using " + using_expr + " with lines ls " + std::to_string(i + 1) +
-         " lw 1.4" + (titles ? " title " + gp(series[i].label) : " notitle");
+    s += gp(series[i].file) + " skip 1 using " + using_expr + " with lines ls " +
+         std::to_string(i + 1) + " lw 1.4" +
+         (titles ? " title " + gp(series[i].label) : " notitle");
   }
   return s + "\n";
 }
@@ -170,7 +186,8 @@ void run_gnuplot(const fs::path& dir_in, const std::string& script_name) {
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);
   posix_spawn_file_actions_addchdir_np(&fa, dir.c_str());
-  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
   posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
   std::string prog = "gnuplot", script = script_name;
   char* argv[] = {prog.data(), script.data(), nullptr};
@@ -178,35 +195,40 @@ void run_gnuplot(const fs::path& dir_in, const std::string& script_name) {
   const int rc = posix_spawnp(&pid, "gnuplot", &fa, nullptr, argv, environ);
   posix_spawn_file_actions_destroy(&fa);
   if (rc != 0)
-    throw std::runtime_error(std::string("cannot run gnuplot: ") + std::strerror(rc) +
-                             " (it comes with the Debian package gnuplot-nox, which tools/bootstrap installs)");
+    throw std::runtime_error(
+        std::string("cannot run gnuplot: ") + std::strerror(rc) +
+        " (it comes with the Debian package gnuplot-nox, which tools/bootstrap installs)");
   int status = 0;
   ::waitpid(pid, &status, 0);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw std::runtime_error("gnuplot failed on " + (dir / script_name).string() + ": " + slurp(log));
+    throw std::runtime_error("gnuplot failed on " + (dir / script_name).string() + ": " +
+                             slurp(log));
   fs::remove(log);
 }
 
 ReportResult render_report(const fs::path& run_dir, const ReportOptions& options) {
-  if (!fs::is_directory(run_dir))
-    throw InputError(run_dir.string(), "", "is not a directory");
+  if (!fs::is_directory(run_dir)) throw InputError(run_dir.string(), "", "is not a directory");
   const json gains = read_json(run_dir, "gains.json");
   const json comparison = read_json(run_dir, "comparison.json");
-  const Job job = parse_job_text(read_required(run_dir, "job.json"), (run_dir / "job.json").string());
+  const Job job =
+      parse_job_text(read_required(run_dir, "job.json"), (run_dir / "job.json").string());
   read_required(run_dir, "history.csv");
-  const json run = fs::is_regular_file(run_dir / "run.json") ? read_json(run_dir, "run.json") : json::object();
+  const json run =
+      fs::is_regular_file(run_dir / "run.json") ? read_json(run_dir, "run.json") : json::object();
 
   // Per scenario, the compared controllers' trajectory files.
   if (!comparison.contains("controllers") || !comparison["controllers"].is_array() ||
       comparison["controllers"].empty())
-    throw InputError((run_dir / "comparison.json").string(), "/controllers", "lists no controllers");
+    throw InputError((run_dir / "comparison.json").string(), "/controllers",
+                     "lists no controllers");
   const std::size_t S = job.scenarios.size();
   std::vector<std::vector<Series>> series(S);
   for (const json& c : comparison["controllers"]) {
     const json& sc = c.value("scenarios", json::array());
     for (std::size_t s = 0; s < S && s < sc.size(); ++s) {
       if (!sc[s].contains("trajectory"))
-        throw InputError((run_dir / "comparison.json").string(), "", "has no trajectories: re-run `ftctune run`");
+        throw InputError((run_dir / "comparison.json").string(), "",
+                         "has no trajectories: re-run `ftctune run`");
       const std::string file = sc[s]["trajectory"];
       if (!fs::is_regular_file(run_dir / file))
         throw InputError(run_dir.string(), "", "missing " + file);
@@ -264,18 +286,22 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
   {
     const std::string file = "figures/fig5-fitness" + ext;
     gpfile << terminal(fmt_fig, 1000, 600) << "set output " << gp(file) << "\n"
-           << "unset arrow; unset label\nset title 'Best fitness per iteration (paper Fig. 5)' font ',13'\n"
-           << "set xlabel 'iteration'\nset ylabel 'best fitness J = 1/objective'\nset format y '%.6g'\n"
+           << "unset arrow; unset label\nset title 'Best fitness per iteration (paper Fig. 5)' "
+              "font ',13'\n"
+           << "set xlabel 'iteration'\nset ylabel 'best fitness J = 1/objective'\nset format y "
+              "'%.6g'\n"
            << "set key inside right bottom\n"
            << "plot 'history.csv' skip 1 using 1:2 with linespoints ls 2 lw 2 pt 7 title "
-           << gp(std::string(gains["optimizer"].value("type", "bat") == "random" ? "random search"
-                                                                               : "Bat algorithm"));
+           << gp(std::string(gains["optimizer"].value("type", "bat") == "random"
+                                 ? "random search"
+                                 : "Bat algorithm"));
     if (fs::is_regular_file(run_dir / "history-random.csv"))
       gpfile << ", \\\n     'history-random.csv' skip 1 using 1:2 with linespoints ls 5 lw 2 pt 5 "
                 "title 'random search, same budget'";
     gpfile << "\nset format y\nunset title\nset key outside right top vertical box opaque\n";
-    figures.push_back({file, "Convergence", "Best fitness found after each iteration (iteration 0 "
-                                            "is the initial population)."});
+    figures.push_back({file, "Convergence",
+                       "Best fitness found after each iteration (iteration 0 "
+                       "is the initial population)."});
   }
 
   // Figure 6: commanded (and, on faulted actuators, applied) outputs per controller.
@@ -285,26 +311,30 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
     const std::size_t rows = (n + 1) / 2;
     std::set<int> faulted;
     for (const sim::Fault& f : sc0.faults) faulted.insert(f.actuator);
-    gpfile << terminal(fmt_fig, 1200, static_cast<int>(430 * rows + 60)) << "set output " << gp(file)
-           << "\nset multiplot layout " << rows << ",2 title " << gp("Actuator outputs (paper Fig. 6)" + scen)
-           << " font ',13'\n"
-           << onset_marks(onsets, false) << "set xrange [0:" << sc0.duration << "]\nset xlabel 'time [s]'\n"
-           << "set ylabel 'actuator output u'\nset key below horizontal font ',9' maxrows 2\nset bmargin 7\n";
+    gpfile << terminal(fmt_fig, 1200, static_cast<int>(430 * rows + 60)) << "set output "
+           << gp(file) << "\nset multiplot layout " << rows << ",2 title "
+           << gp("Actuator outputs (paper Fig. 6)" + scen) << " font ',13'\n"
+           << onset_marks(onsets, false) << "set xrange [0:" << sc0.duration
+           << "]\nset xlabel 'time [s]'\n"
+           << "set ylabel 'actuator output u'\nset key below horizontal font ',9' maxrows 2\nset "
+              "bmargin 7\n";
     for (std::size_t c = 0; c < n; ++c) {
       gpfile << "set title " << gp(series[0][c].label) << "\nplot ";
       for (int j = 1; j <= 4; ++j)
         gpfile << (j > 1 ? ", " : "") << gp(series[0][c].file) << " skip 1 using 1:" << 7 + j
                << " with lines ls " << j << " lw 1.1 title 'u_{d" << j << "}'";
       for (int j : faulted)
-        gpfile << ", " << gp(series[0][c].file) << " skip 1 using 1:" << 11 + j << " with lines ls " << j
-               << " lw 2 dt 2 title 'applied u_" << j << "'";
+        gpfile << ", " << gp(series[0][c].file) << " skip 1 using 1:" << 11 + j << " with lines ls "
+               << j << " lw 2 dt 2 title 'applied u_" << j << "'";
       gpfile << "\n";
     }
-    gpfile << "unset multiplot\nunset title\nunset xrange\nunset bmargin\nset key outside right top vertical box opaque\n";
-    figures.push_back({file, "Actuator outputs",
-                       "Commanded outputs u_d of each controller (solid) and, dashed in the same colour, "
-                       "the applied output of each faulted actuator (bias added, effectiveness lost). "
-                       "Fault onsets are the grey dashed lines."});
+    gpfile << "unset multiplot\nunset title\nunset xrange\nunset bmargin\nset key outside right "
+              "top vertical box opaque\n";
+    figures.push_back(
+        {file, "Actuator outputs",
+         "Commanded outputs u_d of each controller (solid) and, dashed in the same colour, "
+         "the applied output of each faulted actuator (bias added, effectiveness lost). "
+         "Fault onsets are the grey dashed lines."});
   }
 
   // Figure 7: the faulted part, where the controllers differ, on a log scale.
@@ -331,60 +361,78 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
   // report.html: figures inline, so the one file can be attached to a design review.
   std::ostringstream h;
   const std::string title = "ftctune report: " + job.name;
-  h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" << html_escape(title)
-    << "</title>\n<style>body{font-family:'DejaVu Sans',Arial,sans-serif;max-width:1200px;margin:2em auto;"
-       "color:#222}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 8px;"
+  h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>"
+    << html_escape(title)
+    << "</title>\n<style>body{font-family:'DejaVu "
+       "Sans',Arial,sans-serif;max-width:1200px;margin:2em auto;"
+       "color:#222}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid "
+       "#ccc;padding:4px 8px;"
        "text-align:right}th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}"
        "img{max-width:100%;border:1px solid #eee}pre{background:#f7f7f7;padding:1em;overflow:auto}"
        "figcaption{color:#555;margin-bottom:2em}</style></head><body>\n";
   h << "<h1>" << html_escape(title) << "</h1>\n";
-  h << "<h2>Tuned gains</h2>\n<table><tr><th>parameter</th><th>tuned</th><th>job's value</th></tr>\n";
+  h << "<h2>Tuned gains</h2>\n<table><tr><th>parameter</th><th>tuned</th><th>job's "
+       "value</th></tr>\n";
   for (auto it = gains["tuned"].begin(); it != gains["tuned"].end(); ++it)
     h << "<tr><td>" << html_escape(it.key()) << "</td><td>" << fmt(it.value().get<double>(), "%.6g")
-      << "</td><td>" << fmt(gains["baseline"]["controller"].value(it.key(), NAN), "%.6g") << "</td></tr>\n";
+      << "</td><td>" << fmt(gains["baseline"]["controller"].value(it.key(), NAN), "%.6g")
+      << "</td></tr>\n";
   const auto num_or = [](const json& j) { return j.is_number() ? j.get<double>() : NAN; };
-  h << "</table>\n<p>Fitness J = " << fmt(num_or(gains["fitness"]), "%.6g") << " (job's controller: "
-    << fmt(num_or(gains["baseline"]["fitness"]), "%.6g") << "); objective "
-    << html_escape(gains["objective"].value("metric", "")) << " = "
-    << fmt(num_or(gains["objective"]["value"]), "%.6g") << "; " << gains["optimizer"].value("evaluations", 0)
-    << " evaluations, seed " << gains["optimizer"].value("seed", 0) << ".</p>\n";
+  h << "</table>\n<p>Fitness J = " << fmt(num_or(gains["fitness"]), "%.6g")
+    << " (job's controller: " << fmt(num_or(gains["baseline"]["fitness"]), "%.6g")
+    << "); objective " << html_escape(gains["objective"].value("metric", "")) << " = "
+    << fmt(num_or(gains["objective"]["value"]), "%.6g") << "; "
+    << gains["optimizer"].value("evaluations", 0) << " evaluations, seed "
+    << gains["optimizer"].value("seed", 0) << ".</p>\n";
 
   for (std::size_t s = 0; s < S; ++s) {
-    h << "<h2>Controllers compared" << (S > 1 ? ", scenario " + html_escape(job.scenarios[s].name) : "")
-      << "</h2>\n<table><tr><th>controller</th><th>ISE</th><th>IAE</th><th>ITAE</th><th>max |u_d|</th>"
+    h << "<h2>Controllers compared"
+      << (S > 1 ? ", scenario " + html_escape(job.scenarios[s].name) : "")
+      << "</h2>\n<table><tr><th>controller</th><th>ISE</th><th>IAE</th><th>ITAE</th><th>max "
+         "|u_d|</th>"
          "<th>control TV</th>";
     const json& first = comparison["controllers"][0]["scenarios"][s];
     for (const json& seg : first.value("segments", json::array()))
-      h << "<th>ISE [" << fmt(num_or(seg["window"][0])) << ", " << fmt(num_or(seg["window"][1])) << ")</th>";
+      h << "<th>ISE [" << fmt(num_or(seg["window"][0])) << ", " << fmt(num_or(seg["window"][1]))
+        << ")</th>";
     for (std::size_t f = 0; f < first.value("peak_error_after_fault", json::array()).size(); ++f)
       h << "<th>peak ‖e‖ after fault " << f + 1 << "</th>";
     h << "</tr>\n";
     for (const json& c : comparison["controllers"]) {
       const json& m = c["scenarios"][s];
-      h << "<tr><td>" << html_escape(c.value("label", "?")) << (m.value("diverged", false) ? " (diverged)" : "")
-        << "</td><td>" << fmt(num_or(m["ise"])) << "</td><td>" << fmt(num_or(m["iae"])) << "</td><td>"
-        << fmt(num_or(m["itae"])) << "</td><td>" << fmt(num_or(m["max_abs_u"])) << "</td><td>"
-        << fmt(num_or(m["control_tv"])) << "</td>";
-      for (const json& seg : m.value("segments", json::array())) h << "<td>" << fmt(num_or(seg["ise"])) << "</td>";
-      for (const json& p : m.value("peak_error_after_fault", json::array())) h << "<td>" << fmt(num_or(p)) << "</td>";
+      h << "<tr><td>" << html_escape(c.value("label", "?"))
+        << (m.value("diverged", false) ? " (diverged)" : "") << "</td><td>" << fmt(num_or(m["ise"]))
+        << "</td><td>" << fmt(num_or(m["iae"])) << "</td><td>" << fmt(num_or(m["itae"]))
+        << "</td><td>" << fmt(num_or(m["max_abs_u"])) << "</td><td>" << fmt(num_or(m["control_tv"]))
+        << "</td>";
+      for (const json& seg : m.value("segments", json::array()))
+        h << "<td>" << fmt(num_or(seg["ise"])) << "</td>";
+      for (const json& p : m.value("peak_error_after_fault", json::array()))
+        h << "<td>" << fmt(num_or(p)) << "</td>";
       h << "</tr>\n";
     }
-    h << "</table>\n<p>ISE, IAE, ITAE over the objective window; ISE in rad²·s, peak errors in rad; control "
+    h << "</table>\n<p>ISE, IAE, ITAE over the objective window; ISE in rad²·s, peak errors in "
+         "rad; control "
          "TV = Σ‖u_k − u_{k−1}‖ measures chattering.</p>\n";
   }
 
   h << "<h2>Figures</h2>\n";
   for (const Figure& f : figures)
     h << "<figure><img alt=\"" << html_escape(f.title) << "\" src=\"data:image/png;base64,"
-      << base64(slurp(run_dir / f.file)) << "\"><figcaption>" << html_escape(f.caption) << "</figcaption></figure>\n";
+      << base64(slurp(run_dir / f.file)) << "\"><figcaption>" << html_escape(f.caption)
+      << "</figcaption></figure>\n";
 
   h << "<h2>Run</h2>\n<table>\n";
   for (auto it = run.begin(); it != run.end(); ++it)
-    h << "<tr><td>" << html_escape(it.key()) << "</td><td>" << html_escape(it.value().is_string() ? it.value().get<std::string>() : it.value().dump())
+    h << "<tr><td>" << html_escape(it.key()) << "</td><td>"
+      << html_escape(it.value().is_string() ? it.value().get<std::string>() : it.value().dump())
       << "</td></tr>\n";
-  h << "<tr><td>job SHA-256</td><td>" << html_escape(gains["job"].value("sha256", "")) << "</td></tr>\n"
-    << "<tr><td>generator</td><td>" << html_escape(gains["generator"].dump()) << "</td></tr>\n</table>\n";
-  h << "<h2>Job</h2>\n<pre>" << html_escape(read_required(run_dir, "job.json")) << "</pre>\n</body></html>\n";
+  h << "<tr><td>job SHA-256</td><td>" << html_escape(gains["job"].value("sha256", ""))
+    << "</td></tr>\n"
+    << "<tr><td>generator</td><td>" << html_escape(gains["generator"].dump())
+    << "</td></tr>\n</table>\n";
+  h << "<h2>Job</h2>\n<pre>" << html_escape(read_required(run_dir, "job.json"))
+    << "</pre>\n</body></html>\n";
   result.html = run_dir / "report.html";
   write_file_atomic(result.html, h.str());
   return result;
@@ -392,14 +440,16 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
 
 LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
                                   const LandscapeOptions& options) {
-  if (!job_in.tuning) throw InputError(job_in.name, "/tuning", "is required: it gives the parameters' bounds");
+  if (!job_in.tuning)
+    throw InputError(job_in.name, "/tuning", "is required: it gives the parameters' bounds");
   std::vector<std::string> params = options.params;
   if (params.empty())
     for (const ParameterBounds& b : job_in.tuning->parameters)
       if (params.size() < 2) params.push_back(b.name);
   if (params.size() != 2 || params[0] == params[1])
-    throw InputError("--params", "", "needs two different tuned parameters (the job tunes " +
-                                         std::to_string(job_in.tuning->parameters.size()) + ")");
+    throw InputError("--params", "",
+                     "needs two different tuned parameters (the job tunes " +
+                         std::to_string(job_in.tuning->parameters.size()) + ")");
   if (options.n1 < 2 || options.n2 < 2 || options.n1 > 1000 || options.n2 > 1000)
     throw InputError("--grid", "", "needs 2..1000 points per parameter");
 
@@ -420,8 +470,10 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   std::vector<Decision> grid;
   for (int a = 0; a < options.n1; ++a)
     for (int b = 0; b < options.n2; ++b) {
-      const double v0 = bounds[0].lower + (bounds[0].upper - bounds[0].lower) * a / (options.n1 - 1);
-      const double v1 = bounds[1].lower + (bounds[1].upper - bounds[1].lower) * b / (options.n2 - 1);
+      const double v0 =
+          bounds[0].lower + (bounds[0].upper - bounds[0].lower) * a / (options.n1 - 1);
+      const double v1 =
+          bounds[1].lower + (bounds[1].upper - bounds[1].lower) * b / (options.n2 - 1);
       grid.push_back(i0 == 0 ? Decision{v0, v1} : Decision{v1, v0});
     }
   ParallelEvaluator evaluator(problem, options.threads);
@@ -453,14 +505,17 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
 
   r.figure = out_dir / (std::string("landscape") + extension(options.format));
   std::ostringstream g;
-  g << kStyles << terminal(options.format, 1000, 800) << "set output " << gp(r.figure.filename().string())
-    << "\nset title " << gp("Objective (" + std::string(sim::to_string(job.objective.metric)) + ") of " + job.name +
-                             " over " + params[0] + " and " + params[1])
-    << " font ',13'\nset logscale cb\n" << colour_tics(r.best_objective, worst_objective) << "set cblabel "
+  g << kStyles << terminal(options.format, 1000, 800) << "set output "
+    << gp(r.figure.filename().string()) << "\nset title "
+    << gp("Objective (" + std::string(sim::to_string(job.objective.metric)) + ") of " + job.name +
+          " over " + params[0] + " and " + params[1])
+    << " font ',13'\nset logscale cb\n"
+    << colour_tics(r.best_objective, worst_objective) << "set cblabel "
     << gp(std::string(sim::to_string(job.objective.metric)) + " (log scale; lower is better)")
-    << "\nset palette rgb 33,13,10\nset xlabel " << gp(params[0]) << "\nset ylabel " << gp(params[1])
-    << "\nset xrange [" << bounds[0].lower << ":" << bounds[0].upper << "]\nset yrange [" << bounds[1].lower
-    << ":" << bounds[1].upper << "]\nset key outside top center horizontal\n"
+    << "\nset palette rgb 33,13,10\nset xlabel " << gp(params[0]) << "\nset ylabel "
+    << gp(params[1]) << "\nset xrange [" << bounds[0].lower << ":" << bounds[0].upper
+    << "]\nset yrange [" << bounds[1].lower << ":" << bounds[1].upper
+    << "]\nset key outside top center horizontal\n"
     << "plot 'landscape.csv' skip 1 using 1:2:3 with image notitle";
   if (!options.history.empty()) {
     if (!fs::is_regular_file(options.history))
@@ -476,13 +531,17 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
     };
     const int c0 = col(params[0]), c1 = col(params[1]);
     if (c0 > static_cast<int>(cols.size()) || c1 > static_cast<int>(cols.size()))
-      throw InputError(options.history.string(), "", "has no columns " + params[0] + " and " + params[1]);
+      throw InputError(options.history.string(), "",
+                       "has no columns " + params[0] + " and " + params[1]);
     const fs::path copy = out_dir / "history.csv";
-    if (fs::absolute(options.history) != fs::absolute(copy)) fs::copy_file(options.history, copy, fs::copy_options::overwrite_existing);
+    if (fs::absolute(options.history) != fs::absolute(copy))
+      fs::copy_file(options.history, copy, fs::copy_options::overwrite_existing);
     g << ", \\\n     'history.csv' skip 1 using " << c0 << ":" << c1
-      << " with linespoints lw 2.5 pt 7 ps 1.3 lc rgb 'black' title 'optimiser: best so far, by iteration'";
+      << " with linespoints lw 2.5 pt 7 ps 1.3 lc rgb 'black' title 'optimiser: best so far, by "
+         "iteration'";
   }
-  g << ", \\\n     '-' using 1:2 with points pt 6 ps 3 lw 3 lc rgb 'black' title 'best grid point'\n"
+  g << ", \\\n     '-' using 1:2 with points pt 6 ps 3 lw 3 lc rgb 'black' title 'best grid "
+       "point'\n"
     << r.best[0] << "," << r.best[1] << "\ne\n";
   write_file_atomic(out_dir / "landscape.gp", g.str());
   run_gnuplot(out_dir, "landscape.gp");

@@ -11,13 +11,13 @@
 #include <condition_variable>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
+#include "ftc/tune/files.hpp"
 #include "ftc/tune/httplib.hpp"
 #include "ftc/tune/job.hpp"
-#include "ftc/tune/files.hpp"
 #include "ftc/tune/job_store.hpp"
 #include "ftc/tune/report.hpp"
 #include "ftc/tune/tuning_run.hpp"
@@ -41,7 +41,7 @@ std::vector<FieldError> ServiceOptions::validate() const {
   if (concurrent_jobs < 1 || concurrent_jobs > 64)
     errs.push_back({"--concurrent-jobs", "must be in 1..64"});
   if (token && token->empty()) errs.push_back({"--token-file", "the token is empty"});
-  if (max_body_bytes < 1024) errs.push_back({"--max-body", "must be at least 1024 bytes"});
+  if (max_body_bytes < 1024) errs.push_back({"--max-body-kib", "must be at least 1 KiB"});
   if (!(max_steps > 0)) errs.push_back({"--max-steps", "must be > 0"});
   return errs;
 }
@@ -69,6 +69,7 @@ json job_links(const std::string& id) {
           {"gains", base + "/gains"},
           {"history", base + "/history"},
           {"comparison", base + "/comparison"},
+          {"report", base + "/report"},
           {"cancel", base + "/cancel"}};
 }
 
@@ -189,8 +190,8 @@ struct TuningService::Impl {
       if (m != "POST") return method_not_allowed(res, "POST");
       return cancel(id, res);
     }
-    if (p.size() == 4 && (p[3] == "gains" || p[3] == "history" || p[3] == "comparison" ||
-                          p[3] == "report")) {
+    if (p.size() == 4 &&
+        (p[3] == "gains" || p[3] == "history" || p[3] == "comparison" || p[3] == "report")) {
       if (m != "GET") return method_not_allowed(res, "GET");
       return result(req, res, id, p[3]);
     }
@@ -279,9 +280,11 @@ struct TuningService::Impl {
     const auto before = store.get(id);
     if (!before) return send_error(res, 404, "not_found", "no job " + id);
     if (is_terminal(before->status))
-      return send_error(res, 409, "conflict",
-                        "job " + id + " has already " + to_string(before->status) +
-                            (before->status == JobStatus::cancelled ? "" : " "));
+      return send_error(
+          res, 409, "conflict",
+          "job " + id + " has already " +
+              (before->status == JobStatus::cancelled ? std::string("been cancelled")
+                                                      : std::string(to_string(before->status))));
     const auto after = store.request_cancel(id);
     spdlog::info("job {}: cancel requested ({})", id, to_string(after->status));
     send_json(res, 202, job_json_view(*after));
@@ -323,8 +326,9 @@ struct TuningService::Impl {
   std::string report(const std::string& id) {
     if (auto cached = store.artifact(id, "report.html")) return *cached;
     namespace fs = std::filesystem;
-    const fs::path dir = fs::temp_directory_path() / ("ftctune-report-" + id + "-" + std::to_string(::getpid()) +
-                                                      "-" + std::to_string(report_counter++));
+    const fs::path dir =
+        fs::temp_directory_path() / ("ftctune-report-" + id + "-" + std::to_string(::getpid()) +
+                                     "-" + std::to_string(report_counter++));
     struct Cleanup {
       fs::path dir;
       ~Cleanup() {

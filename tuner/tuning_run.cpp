@@ -56,8 +56,10 @@ std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std:
   std::string slug;
   for (char c : r.comparison.at(controller).label) {
     const bool keep = std::isalnum(static_cast<unsigned char>(c));
-    if (keep) slug += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    else if (!slug.empty() && slug.back() != '-') slug += '-';
+    if (keep)
+      slug += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    else if (!slug.empty() && slug.back() != '-')
+      slug += '-';
   }
   while (!slug.empty() && slug.back() == '-') slug.pop_back();
   char index[24];

@@ -100,6 +100,7 @@ class JobStore {
   // Both expect the caller to hold the lock (inside transaction() or get()).
   std::optional<JobRecord> select_job(const std::string& id);
   void set_finished(const std::string& id, JobStatus status, const std::string& error);
+  void insert_artifact(const std::string& id, const std::string& name, const std::string& content);
   template <class F>
   auto transaction(F&& body, bool synced = true);
 

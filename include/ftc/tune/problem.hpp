@@ -5,9 +5,9 @@
 // J = 1/objective, 0 when a scenario diverged. Immutable after construction, so any number of
 // threads may evaluate candidates at once.
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <span>
-#include <cstdint>
 #include <string>
 #include <vector>
 

@@ -4,8 +4,8 @@
 //   fig3-attitude    x1..x3 of every compared controller against time, fault onsets marked
 //   fig4-rates       x4..x6 likewise
 //   fig5-fitness     the optimiser's best fitness per iteration (and random search, if present)
-//   fig6-inputs      commanded outputs u_d1..u_d4 per controller, applied outputs of faulted actuators
-//   fig7-fault-zoom  ‖X1‖ on a log scale over the faulted part of the run
+//   fig6-inputs      commanded outputs u_d1..u_d4 per controller, applied outputs of faulted
+//   actuators fig7-fault-zoom  ‖X1‖ on a log scale over the faulted part of the run
 // and report.html, one self-contained page with the figures inline, the comparison table, the
 // tuned gains, the job and the run metadata.
 #include <filesystem>
@@ -36,7 +36,7 @@ struct LandscapeOptions {
   int n1 = 41, n2 = 41;             // grid points per parameter
   std::vector<std::string> params;  // two tuned parameters; default: the first two of the job
   int threads = 0;
-  std::filesystem::path history;    // a history.csv whose best-so-far path is drawn on top
+  std::filesystem::path history;  // a history.csv whose best-so-far path is drawn on top
   FigureFormat format = FigureFormat::png;
 };
 

@@ -27,7 +27,7 @@ struct RunOptions {
   std::optional<std::uint64_t> seed;       // overrides tuning.seed
   IterationObserver observer;              // progress; return false to stop
   const nlohmann::json* resume = nullptr;  // an Optimizer::state() to continue from
-  bool compare = true;  // simulate the comparison controllers after tuning
+  bool compare = true;                     // simulate the comparison controllers after tuning
 };
 
 // Trajectories of the comparison are recorded every 10 ms of simulated time.
