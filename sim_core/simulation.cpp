@@ -94,7 +94,8 @@ SimulationResult simulate(const Plant& plant, Controller& controller, const Scen
   const auto deriv = [&](double t, const State& s) -> State {
     const Vec3 fs = plant.f(s, ws);
     State d;
-    d << s.tail<kAxes>(), accel(s, fs, exo.at(t), u_held);
+    d.head<kAxes>() = s.tail<kAxes>();
+    d.tail<kAxes>() = accel(s, fs, exo.at(t), u_held);
     return d;
   };
 
@@ -113,7 +114,8 @@ SimulationResult simulate(const Plant& plant, Controller& controller, const Scen
     u_held = u;
     // Stage 1 of the first substep is at (t, X): f(X) and Δ(t) are already known.
     State k1;
-    k1 << x.tail<kAxes>(), accel(x, fx, exo.at(t), u);
+    k1.head<kAxes>() = x.tail<kAxes>();
+    k1.tail<kAxes>() = accel(x, fx, e0, u);
     // The last stage of the sample ends at t_{k+1} = (k+1)·Ts, the very instant (bit for bit)
     // at which the next sample's sensor reads, so the disturbance and faults there are reused.
     const double t_next = static_cast<double>(k + 1) * Ts;
