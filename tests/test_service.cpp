@@ -326,6 +326,30 @@ TEST(Service, FiftyConcurrentSubmissionsAllComplete) {
   EXPECT_EQ(s.get("/v1/jobs?status=succeeded")["total"], 50);
 }
 
+TEST(Service, ConcurrentJobsRunSideBySideWithTheSameGains) {
+  tune::ServiceOptions o;
+  o.concurrent_jobs = 2;
+  o.threads = 1;
+  Service s(o);
+  const std::vector<json> jobs = {long_job("p"), long_job("q")};
+  std::vector<std::string> ids;
+  for (const json& j : jobs) ids.push_back(s.submit(j)["id"]);
+  bool both_running = false;
+  for (int i = 0; i < 4000 && !both_running; ++i) {
+    both_running = s.get("/v1/jobs?status=running")["total"] == 2;
+    if (!both_running) std::this_thread::sleep_for(2ms);
+  }
+  EXPECT_TRUE(both_running) << "--concurrent-jobs 2 never ran two jobs at once";
+  const std::string expected = expected_gains(jobs[0]);  // the two jobs differ only in name
+  for (const std::string& id : ids) {
+    ASSERT_EQ(s.wait_done(id)["status"], "succeeded");
+    const json got = json::parse(s.client->Get(("/v1/jobs/" + id + "/gains").c_str())->body);
+    json want = json::parse(expected);
+    EXPECT_EQ(got["tuned"], want["tuned"]);
+    EXPECT_EQ(got["history"], want["history"]);
+  }
+}
+
 TEST(Service, RecoversFromSigkillWithoutLosingOrRepeatingJobs) {
   const auto dir = fresh_dir("sigkill");
   const std::vector<json> jobs = {long_job("a"), long_job("b"), tiny_job("c")};
