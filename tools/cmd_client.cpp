@@ -157,12 +157,10 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
     sub->callback([&action, &g, o, job, wait, out] {
       action = [&g, o, job, wait, out] {
         return guarded([&] {
-          std::ifstream in(*job, std::ios::binary);
-          if (!in) throw InputError(*job, "", "cannot open the job file");
-          std::stringstream ss;
-          ss << in.rdbuf();
+          const std::optional<std::string> text = tune::read_file(*job);
+          if (!text) throw InputError(*job, "", "cannot open the job file");
           Api api(*o);
-          const json created = json::parse(api.post("/v1/jobs", ss.str()));
+          const json created = json::parse(api.post("/v1/jobs", *text));
           const std::string id = created["id"];
           if (o->json_output && !*wait)
             print_json(created.dump());

@@ -1,6 +1,5 @@
 // ftctune run JOB: tune the job's controller and write the gains file and its companions.
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -13,7 +12,6 @@
 #include "ftc/tune/controller_json.hpp"
 #include "ftc/tune/files.hpp"
 #include "ftc/tune/tuning_run.hpp"
-#include "ftc/version.hpp"
 #include "progress.hpp"
 
 namespace ftc::cli {
@@ -37,11 +35,6 @@ std::string utc_now() {
   char buf[32];
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
   return buf;
-}
-
-long max_rss_kib() {
-  rusage ru{};
-  return ::getrusage(RUSAGE_SELF, &ru) == 0 ? ru.ru_maxrss : -1;
 }
 
 std::string hostname() {
@@ -111,15 +104,10 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     spdlog::info("random search with the same budget: best J = {:.6g} ({})",
                  b.optimization.best_fitness, params_text(names, b.optimization.best));
   }
-  const json run = {{"started_at", started},
-                    {"host", hostname()},
-                    {"threads", r.threads},
-                    {"wall_seconds", wall},
-                    {"simulations", r.simulations},
-                    {"max_rss_kib", max_rss_kib()},
-                    {"job_file", o.job},
-                    {"seed", r.seed},
-                    {"generator", {{"name", kToolName}, {"version", kVersion}}}};
+  json run = tune::run_metadata(r, wall);
+  run["started_at"] = started;
+  run["host"] = hostname();
+  run["job_file"] = o.job;
   tune::write_file_atomic(out / "run.json", run.dump(2) + "\n");
 
   if (r.optimization.best_fitness == 0.0)

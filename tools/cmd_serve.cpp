@@ -8,6 +8,7 @@
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/files.hpp"
 #include "ftc/tune/service.hpp"
 
 namespace ftc::cli {
@@ -20,11 +21,9 @@ struct ServeOptions {
 };
 
 std::string read_token(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError("--token-file", "", "cannot read " + file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string t = ss.str();
+  const std::optional<std::string> text = tune::read_file(file);
+  if (!text) throw InputError("--token-file", "", "cannot read " + file);
+  std::string t = *text;
   while (!t.empty() && std::isspace(static_cast<unsigned char>(t.back()))) t.pop_back();
   while (!t.empty() && std::isspace(static_cast<unsigned char>(t.front()))) t.erase(0, 1);
   return t;

@@ -73,17 +73,15 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
       spdlog::warn("scenario {} diverged at t = {:.3f} s", s.name, r.metrics.diverged_at);
   }
 
-  bool diverged = false;
-  for (const sim::Metrics& m : metrics) diverged = diverged || m.diverged;
-  const double objective = tune::aggregate_objective(job.objective, metrics);
-  const double fitness = diverged ? 0.0 : tune::fitness_of(objective);
+  const tune::Evaluation e = tune::score(job.objective, std::move(metrics));
+  const double objective = e.objective, fitness = e.fitness;
   json doc;
   doc["generator"] = {{"name", kToolName}, {"version", kVersion}};
   doc["job"] = job.name;
   doc["plant"] = tune::to_json(job.plant);
   doc["controller"] = tune::to_json(controller);
   doc["objective_definition"] = tune::to_json(job.objective);
-  doc["objective"] = std::isfinite(objective) ? json(objective) : json(nullptr);
+  doc["objective"] = tune::json_number(objective);
   doc["fitness"] = fitness;
   doc["scenarios"] = scenarios;
   tune::write_file_atomic(out / "metrics.json", doc.dump(2) + "\n");
@@ -94,11 +92,12 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
         sim::to_string(controller.type), job.name.c_str(), sim::to_string(job.objective.metric),
         fmt(job.objective.window.t0).c_str(),
         std::isfinite(job.objective.window.t1) ? fmt(job.objective.window.t1).c_str() : "end",
-        tune::to_string(job.objective.aggregate), metrics.size(), metrics.size() == 1 ? "" : "s");
+        tune::to_string(job.objective.aggregate), e.scenarios.size(),
+        e.scenarios.size() == 1 ? "" : "s");
     std::printf("  %-16s %12s %12s %12s %10s %12s  %s\n", "scenario", "ise", "iae", "itae",
                 "max|u_d|", "control_tv", "diverged");
-    for (std::size_t i = 0; i < metrics.size(); ++i) {
-      const sim::Metrics& m = metrics[i];
+    for (std::size_t i = 0; i < e.scenarios.size(); ++i) {
+      const sim::Metrics& m = e.scenarios[i];
       std::printf("  %-16s %12s %12s %12s %10s %12s  %s\n", job.scenarios[i].name.c_str(),
                   fmt(m.errors.ise).c_str(), fmt(m.errors.iae).c_str(), fmt(m.errors.itae).c_str(),
                   fmt(m.max_abs_u).c_str(), fmt(m.control_tv).c_str(), m.diverged ? "yes" : "no");

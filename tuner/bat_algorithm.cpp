@@ -19,7 +19,7 @@ Decision bat_frequency_move(const SearchSpace& space, const Decision& x, Decisio
 
 BatAlgorithm::BatAlgorithm(const AlgorithmConfig& config, std::uint64_t seed,
                            const SearchSpace& space)
-    : config_(config), space_(space), rng_(seed) {
+    : GenerationalOptimizer(config, seed, space) {
   assert(config.type == AlgorithmType::bat);
   assert(space.dimension() > 0);
 }
@@ -48,7 +48,7 @@ void BatAlgorithm::initialize(BatchEvaluator& evaluator) {
   best_ = bats_[best].x;
   best_fitness_ = J[best];
   t_ = 0;
-  record();
+  record_iteration();
 }
 
 void BatAlgorithm::iterate(BatchEvaluator& evaluator) {
@@ -92,55 +92,38 @@ void BatAlgorithm::iterate(BatchEvaluator& evaluator) {
     }
   }
   t_ = t;
-  record();
+  record_iteration();
 }
 
 nlohmann::json BatAlgorithm::state() const {
-  nlohmann::json bats = nlohmann::json::array();
+  nlohmann::json s = common_state("bat");
+  s["bats"] = nlohmann::json::array();
   for (const Bat& b : bats_)
-    bats.push_back({{"x", b.x},
-                    {"v", b.v},
-                    {"loudness", b.loudness},
-                    {"pulse_rate", b.pulse_rate},
-                    {"fitness", exact(b.fitness)}});
-  nlohmann::json history = nlohmann::json::array();
-  for (const HistoryRow& h : history_) history.push_back(to_json(h));
-  return {{"algorithm", "bat"}, {"t", t_},           {"evaluations", evaluations_},
-          {"rng", rng_.save()}, {"best", best_},     {"best_fitness", exact(best_fitness_)},
-          {"bats", bats},       {"history", history}};
+    s["bats"].push_back({{"x", b.x},
+                         {"v", b.v},
+                         {"loudness", b.loudness},
+                         {"pulse_rate", b.pulse_rate},
+                         {"fitness", json_number(b.fitness)}});
+  return s;
 }
 
 void BatAlgorithm::restore(const nlohmann::json& s) {
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  if (s.at("algorithm") != "bat")
-    throw std::invalid_argument("checkpoint is not a Bat algorithm state");
-  t_ = s.at("t").get<int>();
-  evaluations_ = s.at("evaluations").get<std::int64_t>();
-  rng_.load(s.at("rng").get<std::string>());
-  best_ = s.at("best").get<Decision>();
-  best_fitness_ = exact_double(s.at("best_fitness"), inf);
+  restore_common(s, "bat");
   bats_.clear();
   for (const nlohmann::json& b : s.at("bats"))
     bats_.push_back({b.at("x").get<Decision>(), b.at("v").get<Decision>(),
                      b.at("loudness").get<double>(), b.at("pulse_rate").get<double>(),
-                     exact_double(b.at("fitness"), inf)});
-  history_.clear();
-  for (const nlohmann::json& h : s.at("history")) history_.push_back(history_row_from_json(h));
+                     json_number_or(b.at("fitness"), std::numeric_limits<double>::infinity())});
 }
 
-void BatAlgorithm::record() {
-  HistoryRow row;
-  row.iteration = t_;
-  row.best_fitness = best_fitness_;
-  row.best = best_;
+void BatAlgorithm::record_iteration() {
+  double loudness = 0.0, pulse_rate = 0.0;
   for (const Bat& b : bats_) {
-    row.mean_loudness += b.loudness;
-    row.mean_pulse_rate += b.pulse_rate;
+    loudness += b.loudness;
+    pulse_rate += b.pulse_rate;
   }
-  row.mean_loudness /= static_cast<double>(bats_.size());
-  row.mean_pulse_rate /= static_cast<double>(bats_.size());
-  row.evaluations = evaluations_;
-  history_.push_back(std::move(row));
+  const double n = static_cast<double>(bats_.size());
+  record(loudness / n, pulse_rate / n);
 }
 
 }  // namespace ftc::tune

@@ -54,14 +54,11 @@ double fitness_of(double objective) {
   return 1.0 / objective;
 }
 
-Evaluation evaluate(const Job& job, const sim::Plant& plant,
-                    const sim::ControllerConfig& controller) {
+Evaluation score(const ObjectiveConfig& objective, std::vector<sim::Metrics> per_scenario) {
   Evaluation e;
-  for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
-    e.scenarios.push_back(simulate_scenario(job, plant, controller, i).metrics);
-    e.diverged = e.diverged || e.scenarios.back().diverged;
-  }
-  e.objective = aggregate_objective(job.objective, e.scenarios);
+  e.scenarios = std::move(per_scenario);
+  for (const sim::Metrics& m : e.scenarios) e.diverged = e.diverged || m.diverged;
+  e.objective = aggregate_objective(objective, e.scenarios);
   e.fitness = e.diverged ? 0.0 : fitness_of(e.objective);
   return e;
 }
@@ -88,29 +85,27 @@ std::string trajectory_csv(const std::vector<sim::TrajectoryRow>& rows) {
 }
 
 namespace {
-json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-json window_json(const sim::Window& w) { return json::array({w.t0, finite_or_null(w.t1)}); }
+json window_json(const sim::Window& w) { return json::array({w.t0, json_number(w.t1)}); }
 }  // namespace
 
 json metrics_json(const sim::Metrics& m) {
   json j;
   j["window"] = window_json(m.window);
-  j["ise"] = finite_or_null(m.errors.ise);
-  j["iae"] = finite_or_null(m.errors.iae);
-  j["itae"] = finite_or_null(m.errors.itae);
+  j["ise"] = json_number(m.errors.ise);
+  j["iae"] = json_number(m.errors.iae);
+  j["itae"] = json_number(m.errors.itae);
   j["max_abs_u"] = m.max_abs_u;
   j["control_tv"] = m.control_tv;
   j["peak_error_after_fault"] = json::array();
-  for (double v : m.peak_error_after_fault)
-    j["peak_error_after_fault"].push_back(finite_or_null(v));
+  for (double v : m.peak_error_after_fault) j["peak_error_after_fault"].push_back(json_number(v));
   j["diverged"] = m.diverged;
   if (m.diverged) j["diverged_at"] = m.diverged_at;
   j["segments"] = json::array();
   for (std::size_t i = 0; i < m.extra.size(); ++i)
     j["segments"].push_back({{"window", window_json(m.extra_windows[i])},
-                             {"ise", finite_or_null(m.extra[i].ise)},
-                             {"iae", finite_or_null(m.extra[i].iae)},
-                             {"itae", finite_or_null(m.extra[i].itae)}});
+                             {"ise", json_number(m.extra[i].ise)},
+                             {"iae", json_number(m.extra[i].iae)},
+                             {"itae", json_number(m.extra[i].itae)}});
   return j;
 }
 

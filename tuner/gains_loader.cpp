@@ -5,6 +5,7 @@
 
 #include "ftc/runtime/gains.hpp"
 #include "ftc/tune/controller_json.hpp"
+#include "ftc/tune/files.hpp"
 #include "json_reader.hpp"
 
 namespace ftc::runtime {
@@ -86,17 +87,9 @@ Gains parse_gains(const json& doc, const std::string& source) {
 }
 
 Gains read_gains(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string(), "", "cannot open the gains file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  json doc;
-  try {
-    doc = json::parse(ss.str());
-  } catch (const json::parse_error& e) {
-    throw InputError(file.string(), "", std::string("invalid JSON: ") + e.what());
-  }
-  return parse_gains(doc, file.string());
+  const std::optional<std::string> text = tune::read_file(file);
+  if (!text) throw InputError(file.string(), "", "cannot open the gains file");
+  return parse_gains(tune::detail::parse_json_text(*text, file.string()), file.string());
 }
 
 std::unique_ptr<sim::Controller> make_controller(const Gains& gains, const sim::Plant& plant,

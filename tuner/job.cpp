@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "ftc/tune/controller_json.hpp"
+#include "ftc/tune/files.hpp"
 #include "json_reader.hpp"
 
 namespace ftc::tune {
@@ -460,27 +461,22 @@ Job parse_job(const json& j, const std::string& source) {
 }
 
 Job parse_job_text(const std::string& text, const std::string& source) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    std::string msg = e.what();
-    if (auto pos = msg.find("] "); msg.rfind("[json.exception", 0) == 0 && pos != std::string::npos)
-      msg = msg.substr(pos + 2);
-    throw InputError(source, "", "invalid JSON: " + msg);
-  }
-  return parse_job(j, source);
+  return parse_job(detail::parse_json_text(text, source), source);
 }
 
 Job load_job(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string(), "", "cannot open the job file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_job_text(ss.str(), file.string());
+  const std::optional<std::string> text = read_file(file);
+  if (!text) throw InputError(file.string(), "", "cannot open the job file");
+  return parse_job_text(*text, file.string());
 }
 
 // --- JSON output -----------------------------------------------------------------------------
+
+json json_number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+double json_number_or(const json& j, double if_null) {
+  return j.is_number() ? j.get<double>() : if_null;
+}
 
 json to_json(const PlantConfig& p) {
   return {{"model", p.model},

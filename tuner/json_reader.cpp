@@ -37,6 +37,17 @@ std::string pointer_escape(const std::string& key) {
   return s;
 }
 
+json parse_json_text(const std::string& text, const std::string& source) {
+  try {
+    return json::parse(text);
+  } catch (const json::parse_error& e) {
+    std::string msg = e.what();  // drop the "[json.exception.parse_error.101] " prefix
+    if (auto pos = msg.find("] "); msg.rfind("[json.exception", 0) == 0 && pos != std::string::npos)
+      msg = msg.substr(pos + 2);
+    throw InputError(source, "", "invalid JSON: " + msg);
+  }
+}
+
 bool json_to_int(const json& v, long long& out) {
   if (v.is_number_integer()) {
     out = v.is_number_unsigned() ? static_cast<long long>(v.get<std::uint64_t>())
@@ -57,8 +68,6 @@ ObjectReader::ObjectReader(const json& j, std::string path, std::vector<FieldErr
     : obj_(j.is_object() ? &j : nullptr), path_(std::move(path)), errors_(errors) {
   if (!obj_) errors_.push_back({path_, "expected an object, got " + json_type_name(j)});
 }
-
-bool ObjectReader::has(const char* key) const { return obj_ && obj_->contains(key); }
 
 const json* ObjectReader::get(const char* key, bool required) {
   if (!obj_) return nullptr;

@@ -22,7 +22,6 @@ class ObjectReader {
   ObjectReader(const nlohmann::json& j, std::string path, std::vector<FieldError>& errors);
 
   bool ok() const { return obj_ != nullptr; }
-  bool has(const char* key) const;
   std::string path(const char* key) const { return path_ + "/" + pointer_escape(key); }
 
   // Each returns true when the key was present with the right type (out is then set).
@@ -52,6 +51,10 @@ class ObjectReader {
   std::vector<FieldError>& errors_;
   std::set<std::string> seen_;
 };
+
+// Parses JSON text; a syntax error is an InputError(source) "invalid JSON: ... at line L, column
+// C".
+nlohmann::json parse_json_text(const std::string& text, const std::string& source);
 
 // Integral check for JSON numbers: 3 and 3.0 are integers, 3.5 is not.
 bool json_to_int(const nlohmann::json& v, long long& out);

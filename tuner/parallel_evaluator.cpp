@@ -52,7 +52,7 @@ std::vector<CandidateOutcome> ParallelEvaluator::evaluate_controllers(
       per.push_back(std::move(results[i * S + s].metrics));
       if (record_every > 0) out[i].trajectories.push_back(std::move(results[i * S + s].trajectory));
     }
-    out[i].evaluation = problem_.score(std::move(per));
+    out[i].evaluation = score(problem_.job().objective, std::move(per));
     for (std::size_t s = 0; s < S; ++s)
       if (!errors[i * S + s].empty()) {
         out[i].error = errors[i * S + s];

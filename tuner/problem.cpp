@@ -30,13 +30,4 @@ sim::SimulationResult TuningProblem::simulate(const sim::ControllerConfig& contr
   return simulate_scenario(job_, *plant_, controller, scenario, record_every);
 }
 
-Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
-  Evaluation e;
-  e.scenarios = std::move(per_scenario);
-  for (const sim::Metrics& m : e.scenarios) e.diverged = e.diverged || m.diverged;
-  e.objective = aggregate_objective(job_.objective, e.scenarios);
-  e.fitness = e.diverged ? 0.0 : fitness_of(e.objective);
-  return e;
-}
-
 }  // namespace ftc::tune

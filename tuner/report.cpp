@@ -21,6 +21,7 @@
 #include "ftc/tune/parallel_evaluator.hpp"
 #include "ftc/tune/problem.hpp"
 #include "ftc/tune/tuning_run.hpp"
+#include "text.hpp"
 
 extern char** environ;
 
@@ -31,19 +32,21 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 std::string read_required(const fs::path& dir, const std::string& name) {
   const fs::path p = dir / name;
-  if (!fs::is_regular_file(p))
+  std::optional<std::string> text;
+  if (fs::is_regular_file(p)) text = read_file(p);
+  if (!text)
     throw InputError(dir.string(), "",
                      "missing " + name + ": not the output directory of `ftctune run`");
-  return slurp(p);
+  return *text;
+}
+
+// A figure gnuplot has just drawn.
+std::string figure_bytes(const fs::path& file) {
+  std::optional<std::string> bytes = read_file(file);
+  if (!bytes) throw std::runtime_error("gnuplot did not write " + file.string());
+  return *bytes;
 }
 
 json read_json(const fs::path& dir, const std::string& name) {
@@ -92,13 +95,6 @@ std::string gp(const std::string& s) {
   return o + "'";
 }
 
-std::string fmt(double v, const char* f = "%.4g") {
-  if (!std::isfinite(v)) return "–";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
-
 std::string terminal(FigureFormat f, int width, int height) {
   char buf[160];
   if (f == FigureFormat::png)
@@ -120,10 +116,12 @@ const char* extension(FigureFormat f) { return f == FigureFormat::png ? ".png" :
 // is common for objectives that barely change, so place six at even log spacing.
 std::string colour_tics(double lo, double hi) {
   if (!(lo > 0) || !(hi > lo) || !std::isfinite(hi)) return "";
-  std::string s = "set cbrange [" + fmt(lo, "%.9g") + ":" + fmt(hi, "%.9g") + "]\nset cbtics (";
+  std::string s = "set cbrange [" + detail::format_number(lo, "%.9g") + ":" +
+                  detail::format_number(hi, "%.9g") + "]\nset cbtics (";
   for (int i = 0; i <= 5; ++i) {
     const double v = lo * std::pow(hi / lo, i / 5.0);
-    s += (i ? ", " : "") + std::string("'") + fmt(v, "%.5g") + "' " + fmt(v, "%.9g");
+    s += (i ? ", " : "") + std::string("'") + detail::format_number(v, "%.5g") + "' " +
+         detail::format_number(v, "%.9g");
   }
   return s + ")\n";
 }
@@ -202,7 +200,7 @@ void run_gnuplot(const fs::path& dir_in, const std::string& script_name) {
   ::waitpid(pid, &status, 0);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
     throw std::runtime_error("gnuplot failed on " + (dir / script_name).string() + ": " +
-                             slurp(log));
+                             read_file(log).value_or(""));
   fs::remove(log);
 }
 
@@ -210,8 +208,8 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
   if (!fs::is_directory(run_dir)) throw InputError(run_dir.string(), "", "is not a directory");
   const json gains = read_json(run_dir, "gains.json");
   const json comparison = read_json(run_dir, "comparison.json");
-  const Job job =
-      parse_job_text(read_required(run_dir, "job.json"), (run_dir / "job.json").string());
+  const std::string job_text = read_required(run_dir, "job.json");
+  const Job job = parse_job_text(job_text, (run_dir / "job.json").string());
   read_required(run_dir, "history.csv");
   const json run =
       fs::is_regular_file(run_dir / "run.json") ? read_json(run_dir, "run.json") : json::object();
@@ -374,14 +372,18 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
   h << "<h2>Tuned gains</h2>\n<table><tr><th>parameter</th><th>tuned</th><th>job's "
        "value</th></tr>\n";
   for (auto it = gains["tuned"].begin(); it != gains["tuned"].end(); ++it)
-    h << "<tr><td>" << html_escape(it.key()) << "</td><td>" << fmt(it.value().get<double>(), "%.6g")
-      << "</td><td>" << fmt(gains["baseline"]["controller"].value(it.key(), NAN), "%.6g")
+    h << "<tr><td>" << html_escape(it.key()) << "</td><td>"
+      << detail::format_number(it.value().get<double>(), "%.6g") << "</td><td>"
+      << detail::format_number(gains["baseline"]["controller"].value(it.key(), NAN), "%.6g")
       << "</td></tr>\n";
-  const auto num_or = [](const json& j) { return j.is_number() ? j.get<double>() : NAN; };
-  h << "</table>\n<p>Fitness J = " << fmt(num_or(gains["fitness"]), "%.6g")
-    << " (job's controller: " << fmt(num_or(gains["baseline"]["fitness"]), "%.6g")
+  // In the metrics JSON, null error integrals mean a diverged run (+inf); other nulls, a value
+  // that does not exist (a fault whose onset was never reached).
+  const auto num_or = [](const json& j) { return json_number_or(j, NAN); };
+  const auto integral = [](const json& j) { return json_number_or(j, INFINITY); };
+  h << "</table>\n<p>Fitness J = " << detail::format_number(num_or(gains["fitness"]), "%.6g")
+    << " (job's controller: " << detail::format_number(num_or(gains["baseline"]["fitness"]), "%.6g")
     << "); objective " << html_escape(gains["objective"].value("metric", "")) << " = "
-    << fmt(num_or(gains["objective"]["value"]), "%.6g") << "; "
+    << detail::format_number(num_or(gains["objective"]["value"]), "%.6g") << "; "
     << gains["optimizer"].value("evaluations", 0) << " evaluations, seed "
     << gains["optimizer"].value("seed", 0) << ".</p>\n";
 
@@ -393,22 +395,24 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
          "<th>control TV</th>";
     const json& first = comparison["controllers"][0]["scenarios"][s];
     for (const json& seg : first.value("segments", json::array()))
-      h << "<th>ISE [" << fmt(num_or(seg["window"][0])) << ", " << fmt(num_or(seg["window"][1]))
-        << ")</th>";
+      h << "<th>ISE [" << detail::format_number(num_or(seg["window"][0])) << ", "
+        << detail::format_number(num_or(seg["window"][1])) << ")</th>";
     for (std::size_t f = 0; f < first.value("peak_error_after_fault", json::array()).size(); ++f)
       h << "<th>peak ‖e‖ after fault " << f + 1 << "</th>";
     h << "</tr>\n";
     for (const json& c : comparison["controllers"]) {
       const json& m = c["scenarios"][s];
       h << "<tr><td>" << html_escape(c.value("label", "?"))
-        << (m.value("diverged", false) ? " (diverged)" : "") << "</td><td>" << fmt(num_or(m["ise"]))
-        << "</td><td>" << fmt(num_or(m["iae"])) << "</td><td>" << fmt(num_or(m["itae"]))
-        << "</td><td>" << fmt(num_or(m["max_abs_u"])) << "</td><td>" << fmt(num_or(m["control_tv"]))
-        << "</td>";
+        << (m.value("diverged", false) ? " (diverged)" : "") << "</td><td>"
+        << detail::format_number(integral(m["ise"])) << "</td><td>"
+        << detail::format_number(integral(m["iae"])) << "</td><td>"
+        << detail::format_number(integral(m["itae"])) << "</td><td>"
+        << detail::format_number(num_or(m["max_abs_u"])) << "</td><td>"
+        << detail::format_number(num_or(m["control_tv"])) << "</td>";
       for (const json& seg : m.value("segments", json::array()))
-        h << "<td>" << fmt(num_or(seg["ise"])) << "</td>";
+        h << "<td>" << detail::format_number(integral(seg["ise"])) << "</td>";
       for (const json& p : m.value("peak_error_after_fault", json::array()))
-        h << "<td>" << fmt(num_or(p)) << "</td>";
+        h << "<td>" << detail::format_number(num_or(p)) << "</td>";
       h << "</tr>\n";
     }
     h << "</table>\n<p>ISE, IAE, ITAE over the objective window; ISE in rad²·s, peak errors in "
@@ -419,7 +423,7 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
   h << "<h2>Figures</h2>\n";
   for (const Figure& f : figures)
     h << "<figure><img alt=\"" << html_escape(f.title) << "\" src=\"data:image/png;base64,"
-      << base64(slurp(run_dir / f.file)) << "\"><figcaption>" << html_escape(f.caption)
+      << base64(figure_bytes(run_dir / f.file)) << "\"><figcaption>" << html_escape(f.caption)
       << "</figcaption></figure>\n";
 
   h << "<h2>Run</h2>\n<table>\n";
@@ -431,8 +435,7 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
     << "</td></tr>\n"
     << "<tr><td>generator</td><td>" << html_escape(gains["generator"].dump())
     << "</td></tr>\n</table>\n";
-  h << "<h2>Job</h2>\n<pre>" << html_escape(read_required(run_dir, "job.json"))
-    << "</pre>\n</body></html>\n";
+  h << "<h2>Job</h2>\n<pre>" << html_escape(job_text) << "</pre>\n</body></html>\n";
   result.html = run_dir / "report.html";
   write_file_atomic(result.html, h.str());
   return result;
@@ -520,7 +523,7 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   if (!options.history.empty()) {
     if (!fs::is_regular_file(options.history))
       throw InputError(options.history.string(), "", "cannot read the history file");
-    std::istringstream hist(slurp(options.history));
+    std::istringstream hist(read_file(options.history).value_or(""));
     std::string header;
     std::getline(hist, header);
     std::vector<std::string> cols;

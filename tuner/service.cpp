@@ -2,7 +2,6 @@
 
 #include <openssl/crypto.h>
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -22,6 +21,7 @@
 #include "ftc/tune/report.hpp"
 #include "ftc/tune/tuning_run.hpp"
 #include "ftc/version.hpp"
+#include "json_reader.hpp"
 
 namespace ftc::tune {
 
@@ -122,11 +122,6 @@ std::vector<std::string> split_path(const std::string& path) {
   return parts;
 }
 
-long max_rss_kib() {
-  rusage ru{};
-  return ::getrusage(RUSAGE_SELF, &ru) == 0 ? ru.ru_maxrss : -1;
-}
-
 }  // namespace
 
 struct TuningService::Impl {
@@ -199,16 +194,23 @@ struct TuningService::Impl {
   }
 
   void submit(const httplib::Request& req, httplib::Response& res) {
-    Job job;
-    try {
-      job = parse_job_text(req.body, "request body");
-    } catch (const InputError& e) {
+    const auto bad_request = [&](const char* code, const InputError& e) {
       json details = json::array();
       for (const FieldError& fe : e.errors())
         details.push_back({{"path", fe.path}, {"message", fe.message}});
-      const bool syntax =
-          e.errors().size() == 1 && e.errors()[0].message.rfind("invalid JSON", 0) == 0;
-      return send_error(res, 400, syntax ? "invalid_json" : "invalid_job", e.what(), details);
+      send_error(res, 400, code, e.what(), details);
+    };
+    json body;
+    try {
+      body = detail::parse_json_text(req.body, "request body");
+    } catch (const InputError& e) {
+      return bad_request("invalid_json", e);
+    }
+    Job job;
+    try {
+      job = parse_job(body, "request body");
+    } catch (const InputError& e) {
+      return bad_request("invalid_job", e);
     }
     if (!job.tuning)
       return send_error(res, 400, "invalid_job", "request body: /tuning: is required to tune",
@@ -338,11 +340,9 @@ struct TuningService::Impl {
     } cleanup{dir};
     for (const auto& [name, content] : store.artifacts(id)) write_file_atomic(dir / name, content);
     const ReportResult r = render_report(dir, ReportOptions{});
-    std::ifstream in(r.html, std::ios::binary);
-    std::ostringstream html;
-    html << in.rdbuf();
-    store.put_artifact(id, "report.html", html.str());
-    return html.str();
+    const std::string html = read_file(r.html).value_or("");
+    store.put_artifact(id, "report.html", html);
+    return html;
   }
 
   void configure_http() {
@@ -455,17 +455,11 @@ struct TuningService::Impl {
         std::map<std::string, std::string> files = output_files(r);
         const double wall =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        files["run.json"] = json{{"job_id", id},
-                                 {"started_at", rec.started_at},
-                                 {"threads", r.threads},
-                                 {"wall_seconds", wall},
-                                 {"simulations", r.simulations},
-                                 {"attempts", rec.attempts},
-                                 {"max_rss_kib", max_rss_kib()},
-                                 {"seed", r.seed},
-                                 {"generator", {{"name", kToolName}, {"version", kVersion}}}}
-                                .dump(2) +
-                            "\n";
+        json run = run_metadata(r, wall);
+        run["job_id"] = id;
+        run["started_at"] = rec.started_at;
+        run["attempts"] = rec.attempts;
+        files["run.json"] = run.dump(2) + "\n";
         store.finish_succeeded(id, files);
         spdlog::info("job {} succeeded in {:.2f} s: J = {:.6g}", id, wall,
                      r.optimization.best_fitness);

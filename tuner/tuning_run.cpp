@@ -1,5 +1,7 @@
 #include "ftc/tune/tuning_run.hpp"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -11,22 +13,13 @@
 #include "ftc/tune/problem.hpp"
 #include "ftc/tune/sha256.hpp"
 #include "ftc/version.hpp"
+#include "text.hpp"
 
 namespace ftc::tune {
 
 using nlohmann::json;
 
 namespace {
-
-json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
-std::string fmt(double v, const char* f = "%.4g") {
-  if (std::isnan(v)) return "–";
-  if (std::isinf(v)) return "inf";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
 
 json named(const std::vector<std::string>& names, const Decision& x) {
   json j = json::object();
@@ -117,13 +110,13 @@ json gains_document(const TuningOutcome& r) {
   g["sample_time"] = job.scenarios.front().sample_time;
   g["plant"] = to_json(job.plant);
   json objective = to_json(job.objective);
-  objective["value"] = finite_or_null(r.best().outcome.evaluation.objective);
+  objective["value"] = json_number(r.best().outcome.evaluation.objective);
   g["objective"] = objective;
-  g["fitness"] = finite_or_null(r.optimization.best_fitness);
+  g["fitness"] = json_number(r.optimization.best_fitness);
   const ComparedController& base = r.baseline();
   g["baseline"] = {{"controller", to_json(base.controller)},
-                   {"objective", finite_or_null(base.outcome.evaluation.objective)},
-                   {"fitness", finite_or_null(base.outcome.evaluation.fitness)}};
+                   {"objective", json_number(base.outcome.evaluation.objective)},
+                   {"fitness", json_number(base.outcome.evaluation.fitness)}};
   json optimizer = job_json["tuning"]["algorithm"];
   optimizer["seed"] = r.seed;
   optimizer["evaluations"] = r.optimization.evaluations;
@@ -134,10 +127,10 @@ json gains_document(const TuningOutcome& r) {
   g["history"] = json::array();
   for (const HistoryRow& h : r.optimization.history)
     g["history"].push_back({{"iteration", h.iteration},
-                            {"best_fitness", finite_or_null(h.best_fitness)},
+                            {"best_fitness", json_number(h.best_fitness)},
                             {"best", named(names, h.best)},
-                            {"mean_loudness", finite_or_null(h.mean_loudness)},
-                            {"mean_pulse_rate", finite_or_null(h.mean_pulse_rate)},
+                            {"mean_loudness", json_number(h.mean_loudness)},
+                            {"mean_pulse_rate", json_number(h.mean_pulse_rate)},
                             {"evaluations", h.evaluations}});
   g["job"] = {{"name", job.name}, {"sha256", r.job_sha256}};
   g["generator"] = {{"name", kToolName}, {"version", kVersion}};
@@ -175,8 +168,8 @@ json comparison_document(const TuningOutcome& r) {
     cj["label"] = c.label;
     cj["role"] = c.role;
     cj["controller"] = to_json(c.controller);
-    cj["objective"] = finite_or_null(c.outcome.evaluation.objective);
-    cj["fitness"] = finite_or_null(c.outcome.evaluation.fitness);
+    cj["objective"] = json_number(c.outcome.evaluation.objective);
+    cj["fitness"] = json_number(c.outcome.evaluation.fitness);
     if (!c.outcome.error.empty()) cj["error"] = c.outcome.error;
     cj["scenarios"] = json::array();
     for (std::size_t i = 0; i < c.outcome.evaluation.scenarios.size(); ++i) {
@@ -196,12 +189,14 @@ std::string comparison_markdown(const TuningOutcome& r) {
   const Job& job = r.job;
   o << "# " << job.name << ": controllers compared\n\n";
   o << "Tuned:";
-  for (const auto& [name, value] : r.tuned) o << " " << name << " = " << fmt(value, "%.6g");
-  o << " (fitness J = " << fmt(r.optimization.best_fitness, "%.6g") << ", "
+  for (const auto& [name, value] : r.tuned)
+    o << " " << name << " = " << detail::format_number(value, "%.6g");
+  o << " (fitness J = " << detail::format_number(r.optimization.best_fitness, "%.6g") << ", "
     << r.optimization.evaluations << " evaluations, seed " << r.seed << ").\n\n";
   o << "Objective: " << sim::to_string(job.objective.metric) << " over ["
-    << fmt(job.objective.window.t0) << ", "
-    << (std::isfinite(job.objective.window.t1) ? fmt(job.objective.window.t1) : std::string("end"))
+    << detail::format_number(job.objective.window.t0) << ", "
+    << (std::isfinite(job.objective.window.t1) ? detail::format_number(job.objective.window.t1)
+                                               : std::string("end"))
     << ") s, " << to_string(job.objective.aggregate) << " over scenarios.\n";
   for (std::size_t s = 0; s < job.scenarios.size(); ++s) {
     const sim::Scenario& sc = job.scenarios[s];
@@ -209,7 +204,7 @@ std::string comparison_markdown(const TuningOutcome& r) {
     const sim::Metrics& first = r.comparison.front().outcome.evaluation.scenarios.at(s);
     o << "| controller | ISE | IAE | ITAE | max \\|u_d\\| | control TV |";
     for (const sim::Window& w : first.extra_windows)
-      o << " ISE [" << fmt(w.t0) << ", " << fmt(w.t1) << ") |";
+      o << " ISE [" << detail::format_number(w.t0) << ", " << detail::format_number(w.t1) << ") |";
     for (std::size_t f = 0; f < first.fault_onsets.size(); ++f)
       o << " peak ‖e‖ after fault " << f + 1 << " |";
     o << "\n|---|---:|---:|---:|---:|---:|";
@@ -218,11 +213,13 @@ std::string comparison_markdown(const TuningOutcome& r) {
     o << "\n";
     for (const ComparedController& c : r.comparison) {
       const sim::Metrics& m = c.outcome.evaluation.scenarios.at(s);
-      o << "| " << c.label << (m.diverged ? " (diverged)" : "") << " | " << fmt(m.errors.ise)
-        << " | " << fmt(m.errors.iae) << " | " << fmt(m.errors.itae) << " | " << fmt(m.max_abs_u)
-        << " | " << fmt(m.control_tv) << " |";
-      for (const sim::ErrorIntegrals& e : m.extra) o << " " << fmt(e.ise) << " |";
-      for (double p : m.peak_error_after_fault) o << " " << fmt(p) << " |";
+      o << "| " << c.label << (m.diverged ? " (diverged)" : "") << " | "
+        << detail::format_number(m.errors.ise) << " | " << detail::format_number(m.errors.iae)
+        << " | " << detail::format_number(m.errors.itae) << " | "
+        << detail::format_number(m.max_abs_u) << " | " << detail::format_number(m.control_tv)
+        << " |";
+      for (const sim::ErrorIntegrals& e : m.extra) o << " " << detail::format_number(e.ise) << " |";
+      for (double p : m.peak_error_after_fault) o << " " << detail::format_number(p) << " |";
       o << "\n";
     }
   }
@@ -243,6 +240,17 @@ std::map<std::string, std::string> output_files(const TuningOutcome& r) {
     for (std::size_t s = 0; s < r.comparison[c].outcome.trajectories.size(); ++s)
       files[trajectory_file(r, c, s)] = trajectory_csv(r.comparison[c].outcome.trajectories[s]);
   return files;
+}
+
+json run_metadata(const TuningOutcome& r, double wall_seconds) {
+  rusage ru{};
+  const long max_rss_kib = ::getrusage(RUSAGE_SELF, &ru) == 0 ? ru.ru_maxrss : -1;
+  return {{"threads", r.threads},
+          {"wall_seconds", wall_seconds},
+          {"simulations", r.simulations},
+          {"max_rss_kib", max_rss_kib},
+          {"seed", r.seed},
+          {"generator", {{"name", kToolName}, {"version", kVersion}}}};
 }
 
 void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir) {

@@ -68,7 +68,6 @@ struct ControllerField {
   std::uint8_t types;  // bit (1 << type) set when the field belongs to that controller type
   bool integer;        // integer-valued: validated as such and not tunable
   bool optional;       // may be absent (alpha1)
-  const char* unit;    // for documentation and messages
 
   bool applies_to(ControllerType t) const { return (types >> static_cast<int>(t)) & 1U; }
   bool tunable() const { return !integer; }

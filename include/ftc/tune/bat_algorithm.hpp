@@ -20,7 +20,6 @@
 // Random numbers are drawn in exactly this order: for initialisation, per bat x_i then v_i; per
 // iteration, per bat β, the pulse test and (if taken) ε; then per bat the loudness test.
 #include "ftc/tune/optimizer.hpp"
-#include "ftc/tune/rng.hpp"
 
 namespace ftc::tune {
 
@@ -28,7 +27,7 @@ namespace ftc::tune {
 Decision bat_frequency_move(const SearchSpace& space, const Decision& x, Decision& v,
                             const Decision& best, double f);
 
-class BatAlgorithm final : public Optimizer {
+class BatAlgorithm final : public GenerationalOptimizer {
  public:
   struct Bat {
     Decision x, v;
@@ -39,9 +38,6 @@ class BatAlgorithm final : public Optimizer {
 
   void initialize(BatchEvaluator& evaluator) override;
   void iterate(BatchEvaluator& evaluator) override;
-  int iteration() const override { return t_; }
-  int iterations() const override { return config_.iterations; }
-  const std::vector<HistoryRow>& history() const override { return history_; }
   nlohmann::json state() const override;
   void restore(const nlohmann::json& state) override;
 
@@ -50,17 +46,9 @@ class BatAlgorithm final : public Optimizer {
   double best_fitness() const { return best_fitness_; }
 
  private:
-  void record();
+  void record_iteration();
 
-  AlgorithmConfig config_;
-  SearchSpace space_;
-  Rng rng_;
   std::vector<Bat> bats_;
-  Decision best_;
-  double best_fitness_ = 0.0;
-  int t_ = -1;
-  std::int64_t evaluations_ = 0;
-  std::vector<HistoryRow> history_;
 };
 
 }  // namespace ftc::tune

@@ -36,8 +36,8 @@ struct Evaluation {
   bool diverged = false;
 };
 
-Evaluation evaluate(const Job& job, const sim::Plant& plant,
-                    const sim::ControllerConfig& controller);
+// Objective and fitness of a controller from its metrics on every scenario of the job.
+Evaluation score(const ObjectiveConfig& objective, std::vector<sim::Metrics> per_scenario);
 
 // CSV of a recorded trajectory: time, x1..x6, ud1..ud4 (commanded), u1..u4 (applied).
 std::string trajectory_csv(const std::vector<sim::TrajectoryRow>& rows);

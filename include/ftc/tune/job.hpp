@@ -97,6 +97,11 @@ Job parse_job(const nlohmann::json& j, const std::string& source);
 Job parse_job_text(const std::string& text, const std::string& source);
 Job load_job(const std::filesystem::path& file);
 
+// Numbers in output JSON: non-finite values (a diverged run's +inf) are written as null, and
+// read back as `if_null`.
+nlohmann::json json_number(double v);
+double json_number_or(const nlohmann::json& j, double if_null);
+
 // Resolved JSON forms (every default filled in). Keys come out sorted, so dump() of these is
 // canonical.
 nlohmann::json to_json(const Job& job);

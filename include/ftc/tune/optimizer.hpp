@@ -11,6 +11,7 @@
 
 #include "ftc/tune/batch_evaluator.hpp"
 #include "ftc/tune/job.hpp"
+#include "ftc/tune/rng.hpp"
 #include "ftc/tune/search_space.hpp"
 
 namespace ftc::tune {
@@ -60,11 +61,34 @@ OptimizationResult run_optimizer(Optimizer& optimizer, BatchEvaluator& evaluator
                                  const IterationObserver& observer = {},
                                  const nlohmann::json* resume = nullptr);
 
-// HistoryRow <-> JSON, shared by checkpoints.
-nlohmann::json to_json(const HistoryRow& row);
-HistoryRow history_row_from_json(const nlohmann::json& j);
-// Exact doubles through JSON: non-finite values are written as null and read back as NaN/inf.
-nlohmann::json exact(double v);
-double exact_double(const nlohmann::json& j, double if_null);
+// What the population optimisers here have in common: settings, search space, random engine,
+// iteration and evaluation counters, the best point and the history, and the checkpoint of all
+// that. A subclass adds its own population state to state() and restore().
+class GenerationalOptimizer : public Optimizer {
+ public:
+  int iteration() const override { return t_; }
+  int iterations() const override { return config_.iterations; }
+  const std::vector<HistoryRow>& history() const override { return history_; }
+
+ protected:
+  GenerationalOptimizer(const AlgorithmConfig& config, std::uint64_t seed, const SearchSpace& space)
+      : config_(config), space_(space), rng_(seed) {}
+
+  // Appends the history row of iteration t_ (NaN loudness and pulse rate where meaningless).
+  void record(double mean_loudness, double mean_pulse_rate);
+  // The common part of a checkpoint, tagged with the algorithm's name, and its inverse
+  // (which refuses another algorithm's checkpoint).
+  nlohmann::json common_state(const char* algorithm) const;
+  void restore_common(const nlohmann::json& state, const char* algorithm);
+
+  AlgorithmConfig config_;
+  SearchSpace space_;
+  Rng rng_;
+  Decision best_;
+  double best_fitness_ = 0.0;
+  int t_ = -1;
+  std::int64_t evaluations_ = 0;
+  std::vector<HistoryRow> history_;
+};
 
 }  // namespace ftc::tune

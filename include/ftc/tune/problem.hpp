@@ -36,8 +36,6 @@ class TuningProblem {
   // record_every > 0 also keeps every k-th sample of the trajectory.
   sim::SimulationResult simulate(const sim::ControllerConfig& controller, std::size_t scenario,
                                  std::int64_t record_every = 0) const;
-  // Objective and fitness from the metrics of every scenario.
-  Evaluation score(std::vector<sim::Metrics> per_scenario) const;
 
  private:
   Job job_;

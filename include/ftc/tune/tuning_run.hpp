@@ -75,6 +75,10 @@ std::string comparison_markdown(const TuningOutcome& r);
 // (one per compared controller, listed in comparison.json). The CLI and the service both write
 // exactly these bytes.
 std::map<std::string, std::string> output_files(const TuningOutcome& r);
+// The run.json fields both `ftctune run` and the service write: threads, wall seconds,
+// simulations, peak memory of the process, seed, generator. Callers add where and when.
+nlohmann::json run_metadata(const TuningOutcome& r, double wall_seconds);
+
 // Writes output_files() into `dir`, each atomically.
 void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir);
 
