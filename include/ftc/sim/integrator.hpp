@@ -3,23 +3,22 @@
 //
 //   k1 = F(t, x), k2 = F(t + h/2, x + h/2 k1), k3 = F(t + h/2, x + h/2 k2), k4 = F(t + h, x + h k3)
 //   x(t + h) = x + h/6 (k1 + 2 k2 + 2 k3 + k4)
-//
-// The overload taking k1 lets a caller that already evaluated F(t, x) reuse it.
 #include <utility>
 
 namespace ftc::sim {
 
-// `t_end` is the time of the last stage, t + h; a caller may pass the same instant computed
-// another way (k · Ts for the end of a sample) so that it matches the next step's start exactly.
-template <class Vector, class F>
-Vector rk4_step(const Vector& x, double t, double h, const Vector& k1, F&& deriv, double t_end) {
+// The step with k1 already known and the stage functions bound to their instants:
+// mid(x) = F(t + h/2, x) and end(x) = F(t + h, x). A caller with time-dependent inputs
+// evaluates them once per instant (the midpoint serves two stages) and binds them here.
+template <class Vector, class Mid, class End>
+Vector rk4_step(const Vector& x, double h, const Vector& k1, Mid&& mid, End&& end) {
   const double h2 = 0.5 * h;
   const Vector x2 = x + h2 * k1;
-  const Vector k2 = deriv(t + h2, x2);
+  const Vector k2 = mid(x2);
   const Vector x3 = x + h2 * k2;
-  const Vector k3 = deriv(t + h2, x3);
+  const Vector k3 = mid(x3);
   const Vector x4 = x + h * k3;
-  const Vector k4 = deriv(t_end, x4);
+  const Vector k4 = end(x4);
   Vector sum = k1 + 2.0 * k2;
   sum += 2.0 * k3;
   sum += k4;
@@ -27,14 +26,10 @@ Vector rk4_step(const Vector& x, double t, double h, const Vector& k1, F&& deriv
 }
 
 template <class Vector, class F>
-Vector rk4_step(const Vector& x, double t, double h, const Vector& k1, F&& deriv) {
-  return rk4_step(x, t, h, k1, std::forward<F>(deriv), t + h);
-}
-
-template <class Vector, class F>
 Vector rk4_step(const Vector& x, double t, double h, F&& deriv) {
-  const Vector k1 = deriv(t, x);
-  return rk4_step(x, t, h, k1, std::forward<F>(deriv), t + h);
+  return rk4_step(
+      x, h, deriv(t, x), [&](const Vector& s) { return deriv(t + 0.5 * h, s); },
+      [&](const Vector& s) { return deriv(t + h, s); });
 }
 
 }  // namespace ftc::sim
