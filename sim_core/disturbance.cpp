@@ -20,30 +20,30 @@ const char* to_string(Shape s) { return s == Shape::sin ? "sin" : "cos"; }
 
 Disturbance::Disturbance(std::vector<DisturbanceTerm> terms) : terms_(std::move(terms)) {}
 
-namespace {
-template <class SinCos>
-Vec3 sum_terms(const std::vector<DisturbanceTerm>& terms, double t, SinCos&& sincos) {
+Vec3 Disturbance::operator()(double t) const {
   Vec3 d = Vec3::Zero();
-  for (std::size_t i = 0; i < terms.size(); ++i) {
-    const DisturbanceTerm& term = terms[i];
-    double s, c;
-    sincos(i, term.frequency * t + term.phase, s, c);
-    d[term.axis - 1] += term.amplitude * (term.shape == Shape::sin ? s : c);
+  for (const DisturbanceTerm& term : terms_) {
+    const double x = term.frequency * t + term.phase;
+    d[term.axis - 1] += term.amplitude * (term.shape == Shape::sin ? std::sin(x) : std::cos(x));
   }
   return d;
 }
-}  // namespace
 
-Vec3 Disturbance::operator()(double t) const {
-  return sum_terms(terms_, t, [](std::size_t, double x, double& s, double& c) {
-    s = std::sin(x);
-    c = std::cos(x);
-  });
+Vec3 Disturbance::operator()(std::span<const Phasor> phasors) const {
+  Vec3 d = Vec3::Zero();
+  for (std::size_t i = 0; i < terms_.size(); ++i) {
+    const DisturbanceTerm& term = terms_[i];
+    d[term.axis - 1] +=
+        term.amplitude * (term.shape == Shape::sin ? phasors[i].sin() : phasors[i].cos());
+  }
+  return d;
 }
 
-Vec3 Disturbance::operator()(double t, std::span<SinCosTracker> trackers) const {
-  return sum_terms(
-      terms_, t, [&](std::size_t i, double x, double& s, double& c) { trackers[i].eval(x, s, c); });
+std::vector<Phasor> Disturbance::phasors(double dt) const {
+  std::vector<Phasor> p;
+  p.reserve(terms_.size());
+  for (const DisturbanceTerm& term : terms_) p.emplace_back(term.frequency, term.phase, dt);
+  return p;
 }
 
 }  // namespace ftc::sim

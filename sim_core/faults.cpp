@@ -66,7 +66,7 @@ FaultEffect combine(const std::vector<Fault>& faults, double t, Cos&& cosine) {
     const int j = f.actuator - 1;
     switch (f.type) {
       case FaultType::bias:
-        e.offset[j] += rho * (f.offset + f.amplitude * cosine(i, f.frequency * t + f.phase));
+        e.offset[j] += rho * (f.offset + f.amplitude * cosine(i));
         break;
       case FaultType::loss_of_effectiveness:
         e.gain[j] -= rho * f.fraction;
@@ -82,15 +82,20 @@ FaultEffect combine(const std::vector<Fault>& faults, double t, Cos&& cosine) {
 }  // namespace
 
 FaultEffect FaultSet::effect(double t) const {
-  return combine(faults_, t, [](std::size_t, double x) { return std::cos(x); });
+  return combine(faults_, t, [&](std::size_t i) {
+    return std::cos(faults_[i].frequency * t + faults_[i].phase);
+  });
 }
 
-FaultEffect FaultSet::effect(double t, std::span<SinCosTracker> trackers) const {
-  return combine(faults_, t, [&](std::size_t i, double x) {
-    double s, c;
-    trackers[i].eval(x, s, c);
-    return c;
-  });
+FaultEffect FaultSet::effect(double t, std::span<const Phasor> phasors) const {
+  return combine(faults_, t, [&](std::size_t i) { return phasors[i].cos(); });
+}
+
+std::vector<Phasor> FaultSet::phasors(double dt) const {
+  std::vector<Phasor> p;
+  p.reserve(faults_.size());
+  for (const Fault& f : faults_) p.emplace_back(f.frequency, f.phase, dt);
+  return p;
 }
 
 }  // namespace ftc::sim

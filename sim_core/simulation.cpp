@@ -1,6 +1,5 @@
 #include "ftc/sim/simulation.hpp"
 
-#include <array>
 #include <cmath>
 
 #include "ftc/sim/integrator.hpp"
@@ -9,37 +8,51 @@
 namespace ftc::sim {
 namespace {
 
-// Δ(t) and the fault effect depend on time only. RK4 asks for them at t, t + h/2 (twice) and
-// t + h, and the acceleration sensor at t again, so a few remembered instants remove most of
-// the trigonometry from the loop.
-class ExogenousCache {
+// Δ(t) and the fault effect depend on time only, and RK4 asks for them on the grid of half
+// steps t_k, t_k + h/2, t_k + h, ... (the midpoint serves two stages, the end of a sample is the
+// next sample's sensor instant). Their sinusoids advance along that grid by rotation (Phasor)
+// and are re-anchored with libm at the start of a step once Phasor::kMaxSteps half steps have
+// passed.
+class ExogenousInputs {
  public:
   struct Entry {
-    double t = std::numeric_limits<double>::quiet_NaN();
     Vec3 disturbance = Vec3::Zero();
     FaultEffect fault;
   };
 
-  ExogenousCache(const Disturbance& d, const FaultSet& f)
-      : dist_(d), faults_(f), dist_trig_(d.terms().size()), fault_trig_(f.faults().size()) {}
+  ExogenousInputs(const Disturbance& d, const FaultSet& f, double half_step)
+      : dist_(d),
+        faults_(f),
+        dist_phasors_(d.phasors(half_step)),
+        fault_phasors_(f.phasors(half_step)) {}
 
-  const Entry& at(double t) {
-    for (const Entry& e : slots_)
-      if (e.t == t) return e;
-    Entry& e = slots_[next_];
-    next_ = (next_ + 1) % slots_.size();
-    e.t = t;
-    e.disturbance = dist_(t, dist_trig_);
-    e.fault = faults_.effect(t, fault_trig_);
-    return e;
+  // The inputs at the start of a step at time t: `last` (the end of the previous step,
+  // evaluated at the same t) unless the phasors are due for re-anchoring.
+  void start_step(double t, Entry& last) {
+    if (steps_ + 2 <= Phasor::kMaxSteps) return;
+    for (Phasor& p : dist_phasors_) p.anchor(t);
+    for (Phasor& p : fault_phasors_) p.anchor(t);
+    steps_ = 0;
+    evaluate(t, last);
+  }
+  // Advances the phasors one half step, to time t, and evaluates there.
+  void next(double t, Entry& e) {
+    for (Phasor& p : dist_phasors_) p.advance();
+    for (Phasor& p : fault_phasors_) p.advance();
+    ++steps_;
+    evaluate(t, e);
   }
 
  private:
+  void evaluate(double t, Entry& e) const {
+    e.disturbance = dist_(dist_phasors_);
+    e.fault = faults_.effect(t, fault_phasors_);
+  }
+
   const Disturbance& dist_;
   const FaultSet& faults_;
-  std::vector<SinCosTracker> dist_trig_, fault_trig_;  // sized once, before the loop
-  std::array<Entry, 3> slots_{};
-  std::size_t next_ = 0;
+  std::vector<Phasor> dist_phasors_, fault_phasors_;  // sized once, before the loop
+  int steps_ = Phasor::kMaxSteps;                     // advances since the last anchor
 };
 
 bool out_of_bounds(const State& x) {
@@ -55,7 +68,6 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
                      const SimulationOptions& options) {
   const Disturbance disturbance(scenario.disturbance);
   const FaultSet faults(scenario.faults, scenario.saturation);
-  ExogenousCache exo(disturbance, faults);
 
   std::vector<double> onsets;
   onsets.reserve(scenario.faults.size());
@@ -65,6 +77,8 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
 
   const double Ts = scenario.sample_time;
   const double h = Ts / scenario.substeps;
+  ExogenousInputs exo(disturbance, faults, 0.5 * h);
+  ExogenousInputs::Entry e0, em, ee;  // at the start, midpoint and end of a step
   const std::int64_t N = scenario.samples();
 
   SimulationResult result;
@@ -79,7 +93,7 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
   const bool constant_G = plant.input_matrix_is_constant();
   const Mat34 G0 = plant.G(x0);
   // dX2/dt = f(X) + G(X) u + Δ(t), with u the command u_d after the faults of time t.
-  const auto accel = [&](const State& s, const Vec3& fs, const ExogenousCache::Entry& e,
+  const auto accel = [&](const State& s, const Vec3& fs, const ExogenousInputs::Entry& e,
                          const Vec4& u_d) -> Vec3 {
     const Vec4 u = faults.apply(e.fault, u_d);
     Vec3 a = fs;
@@ -92,7 +106,7 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
   };
   PlantWorkspace ws;
   // dX/dt at state s and stage inputs e, with the command of this sample held.
-  const auto deriv = [&](const State& s, const ExogenousCache::Entry& e) -> State {
+  const auto deriv = [&](const State& s, const ExogenousInputs::Entry& e) -> State {
     State d;
     d.head<kAxes>() = s.tail<kAxes>();
     d.tail<kAxes>() = accel(s, plant.f(s, ws), e, u_held);
@@ -103,7 +117,7 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
   for (; k < N; ++k) {
     const double t = static_cast<double>(k) * Ts;
     const Vec3 fx = plant.f(x, ws);
-    const ExogenousCache::Entry& e0 = exo.at(t);
+    exo.start_step(t, e0);
     const Vec3 a = accel(x, fx, e0, u_prev);
 
     const Vec4 u = controller.step(Measurement{t, x.head<kAxes>(), x.tail<kAxes>(), a, &fx});
@@ -122,12 +136,16 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
     const int S = scenario.substeps;
     for (int j = 0; j < S; ++j) {
       const double tj = t + j * h;
-      if (j > 0) k1 = deriv(x, exo.at(tj));
-      const ExogenousCache::Entry& em = exo.at(tj + 0.5 * h);
-      const ExogenousCache::Entry& ee = exo.at(j == S - 1 ? t_next : tj + h);
+      if (j > 0) {
+        exo.start_step(tj, e0);
+        k1 = deriv(x, e0);
+      }
+      exo.next(tj + 0.5 * h, em);
+      exo.next(j == S - 1 ? t_next : tj + h, ee);
       x = rk4_step(
           x, h, k1, [&](const State& s) { return deriv(s, em); },
           [&](const State& s) { return deriv(s, ee); });
+      e0 = ee;
     }
     u_prev = u;
 

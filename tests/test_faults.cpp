@@ -113,6 +113,30 @@ TEST(Disturbance, PaperDisturbance) {
   EXPECT_DOUBLE_EQ(v[2], 0.5 * std::sin(3 * t));
 }
 
+TEST(Disturbance, PhasorEvaluationMatchesDirectOne) {
+  const Disturbance d({{2, Shape::sin, 1.0, 2.0, 0.5},
+                       {2, Shape::cos, 0.25, 1.0, 0.0},
+                       {3, Shape::cos, 0.7, 3.0, -1.0}});
+  std::vector<Phasor> p = d.phasors(1e-3);
+  for (Phasor& q : p) q.anchor(2.5);
+  EXPECT_EQ(d(p), d(2.5));  // anchored: the same libm values
+  for (Phasor& q : p) q.advance();
+  EXPECT_TRUE(d(p).isApprox(d(2.501), 1e-14));
+}
+
+TEST(Faults, PhasorEffectMatchesDirectOne) {
+  const Scenario s = Scenario::paper();
+  const FaultSet set(s.faults, std::nullopt);
+  std::vector<Phasor> p = set.phasors(5e-4);
+  for (Phasor& q : p) q.anchor(25.0);
+  for (int n = 1; n <= 10; ++n) {
+    for (Phasor& q : p) q.advance();
+    const double t = 25.0 + n * 5e-4;
+    EXPECT_TRUE(set.effect(t, p).offset.isApprox(set.effect(t).offset, 1e-14));
+    EXPECT_EQ(set.effect(t, p).gain, set.effect(t).gain);
+  }
+}
+
 TEST(Disturbance, TermsOnOneAxisAddWithPhase) {
   const Disturbance d({{2, Shape::sin, 1.0, 2.0, 0.5}, {2, Shape::cos, 0.25, 1.0, 0.0}});
   const Vec3 v = d(0.3);

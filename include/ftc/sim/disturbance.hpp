@@ -30,8 +30,10 @@ class Disturbance {
   explicit Disturbance(std::vector<DisturbanceTerm> terms);
 
   Vec3 operator()(double t) const;
-  // The same, with one caller-owned tracker per term for stepping t in small increments.
-  Vec3 operator()(double t, std::span<SinCosTracker> trackers) const;
+  // The same from one phasor per term (made by phasors(), advanced by the caller to t).
+  Vec3 operator()(std::span<const Phasor> phasors) const;
+  // One phasor per term stepping by dt, not yet anchored.
+  std::vector<Phasor> phasors(double dt) const;
   const std::vector<DisturbanceTerm>& terms() const { return terms_; }
 
  private:

@@ -60,8 +60,11 @@ class FaultSet {
   FaultSet(std::vector<Fault> faults, std::optional<double> saturation);
 
   FaultEffect effect(double t) const;
-  // The same, with one caller-owned tracker per fault for stepping t in small increments.
-  FaultEffect effect(double t, std::span<SinCosTracker> trackers) const;
+  // The same with the bias sinusoids read from one phasor per fault (made by phasors(),
+  // advanced by the caller to t).
+  FaultEffect effect(double t, std::span<const Phasor> phasors) const;
+  // One phasor per fault stepping by dt, not yet anchored (unused but for bias faults).
+  std::vector<Phasor> phasors(double dt) const;
   // Applied actuator output for a held command: sat(gain ⊙ u_d + offset).
   Vec4 apply(const FaultEffect& e, const Vec4& u_d) const {
     Vec4 u = e.gain.cwiseProduct(u_d) + e.offset;
