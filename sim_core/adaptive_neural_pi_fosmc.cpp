@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "checks.hpp"
+#include "ftc/sim/plant_model.hpp"
 #include "ftc/sim/sliding.hpp"
 
 namespace ftc::sim {
@@ -40,7 +41,7 @@ Vec4 AdaptiveNeuralPiFosmc::step(const Measurement& m) {
   Vec3 v = Omega_ + C;
   v += (c.Ki / c.Kp) * I_;
   v += ur_;
-  const Vec4 u = -(plant_.G_pinv(x) * v);
+  const Vec4 u = -plant_.G_pinv_times(m, v);
 
   // ψ_j with μ_j = c_j (1,…,1); Activations has a fixed capacity, so this does not allocate.
   const double inv_w2 = 1.0 / (c.width * c.width);

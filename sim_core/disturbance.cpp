@@ -29,16 +29,6 @@ Vec3 Disturbance::operator()(double t) const {
   return d;
 }
 
-Vec3 Disturbance::operator()(std::span<const Phasor> phasors) const {
-  Vec3 d = Vec3::Zero();
-  for (std::size_t i = 0; i < terms_.size(); ++i) {
-    const DisturbanceTerm& term = terms_[i];
-    d[term.axis - 1] +=
-        term.amplitude * (term.shape == Shape::sin ? phasors[i].sin() : phasors[i].cos());
-  }
-  return d;
-}
-
 std::vector<Phasor> Disturbance::phasors(double dt) const {
   std::vector<Phasor> p;
   p.reserve(terms_.size());

@@ -23,12 +23,6 @@ const char* to_string(FaultProfileType t) {
   return t == FaultProfileType::abrupt ? "abrupt" : "incipient";
 }
 
-double FaultProfile::rho(double tau) const {
-  if (tau < 0.0) return 0.0;
-  if (type == FaultProfileType::abrupt) return 1.0;
-  return 1.0 - std::exp(-rate * tau);
-}
-
 std::vector<FieldError> Fault::validate(const std::string& path) const {
   std::vector<FieldError> errs;
   detail::check_int_range(errs, path + "/actuator", actuator, 1, kActuators);
@@ -55,40 +49,10 @@ std::vector<FieldError> Fault::validate(const std::string& path) const {
 FaultSet::FaultSet(std::vector<Fault> faults, std::optional<double> saturation)
     : faults_(std::move(faults)), saturation_(saturation) {}
 
-namespace {
-template <class Cos>
-FaultEffect combine(const std::vector<Fault>& faults, double t, Cos&& cosine) {
-  FaultEffect e;
-  for (std::size_t i = 0; i < faults.size(); ++i) {
-    const Fault& f = faults[i];
-    const double rho = f.profile.rho(t - f.onset);
-    if (rho == 0.0) continue;
-    const int j = f.actuator - 1;
-    switch (f.type) {
-      case FaultType::bias:
-        e.offset[j] += rho * (f.offset + f.amplitude * cosine(i));
-        break;
-      case FaultType::loss_of_effectiveness:
-        e.gain[j] -= rho * f.fraction;
-        break;
-      case FaultType::stuck:  // δu = value - u_d
-        e.gain[j] -= rho;
-        e.offset[j] += rho * f.value;
-        break;
-    }
-  }
-  return e;
-}
-}  // namespace
-
 FaultEffect FaultSet::effect(double t) const {
-  return combine(faults_, t, [&](std::size_t i) {
+  return detail::combine_faults(faults_, t, [&](std::size_t i) {
     return std::cos(faults_[i].frequency * t + faults_[i].phase);
   });
-}
-
-FaultEffect FaultSet::effect(double t, std::span<const Phasor> phasors) const {
-  return combine(faults_, t, [&](std::size_t i) { return phasors[i].cos(); });
 }
 
 std::vector<Phasor> FaultSet::phasors(double dt) const {

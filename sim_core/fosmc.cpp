@@ -1,6 +1,7 @@
 #include "ftc/sim/fosmc.hpp"
 
 #include "checks.hpp"
+#include "ftc/sim/plant_model.hpp"
 #include "ftc/sim/sliding.hpp"
 
 namespace ftc::sim {
@@ -10,14 +11,13 @@ Fosmc::Fosmc(const ControllerConfig& config, const Plant& plant, double sample_t
 
 Vec4 Fosmc::step(const Measurement& m) {
   const ControllerConfig& c = config_;
-  const State x = (State() << m.X1, m.X2).finished();
-  const Vec3 fx = m.f ? *m.f : plant_.f(x);
+  const Vec3 fx = plant_.f(m);
   const Vec3 C = fosm_term(m.X1, m.X2, c.c1, c.c2, c.alpha1, c.alpha2);
   const Vec3 sF = m.a + C;
 
   Vec3 v = fx + C;
   v += ur_;
-  const Vec4 u = -(plant_.G_pinv(x) * v);
+  const Vec4 u = -plant_.G_pinv_times(m, v);
 
   ur_ += (Ts_ * c.switching_gain) * sigm(sF, c.theta);
   return u;

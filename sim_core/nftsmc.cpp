@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "checks.hpp"
+#include "ftc/sim/plant_model.hpp"
 #include "ftc/sim/sliding.hpp"
 
 namespace ftc::sim {
@@ -15,8 +16,7 @@ Nftsmc::Nftsmc(const ControllerConfig& config, const Plant& plant, double sample
 
 Vec4 Nftsmc::step(const Measurement& m) {
   const ControllerConfig& c = config_;
-  const State x = (State() << m.X1, m.X2).finished();
-  const Vec3 fx = m.f ? *m.f : plant_.f(x);
+  const Vec3 fx = plant_.f(m);
 
   Vec3 s = m.X1 + c.sigma1 * sig(m.X1, c.alpha);
   s += c.sigma2 * sig(m.X2, pq_);
@@ -30,7 +30,7 @@ Vec4 Nftsmc::step(const Measurement& m) {
     ueq[i] += k * gain * sig(m.X2[i], 2.0 - pq_);
   }
   Vec3 v = ueq + c.switching_gain * sigm(s, c.theta);
-  return -(plant_.G_pinv(x) * v);
+  return -plant_.G_pinv_times(m, v);
 }
 
 }  // namespace ftc::sim

@@ -1,6 +1,7 @@
 #include "ftc/sim/pi_fosmc.hpp"
 
 #include "checks.hpp"
+#include "ftc/sim/plant_model.hpp"
 #include "ftc/sim/sliding.hpp"
 
 namespace ftc::sim {
@@ -12,8 +13,7 @@ PiFosmc::PiFosmc(const ControllerConfig& config, const Plant& plant, double samp
 // bit (x + 0·I = x and 1·sF = sF are exact in IEEE arithmetic).
 Vec4 PiFosmc::step(const Measurement& m) {
   const ControllerConfig& c = config_;
-  const State x = (State() << m.X1, m.X2).finished();
-  const Vec3 fx = m.f ? *m.f : plant_.f(x);
+  const Vec3 fx = plant_.f(m);
   const Vec3 C = fosm_term(m.X1, m.X2, c.c1, c.c2, c.alpha1, c.alpha2);
   const Vec3 sF = m.a + C;
   Vec3 sPI = c.Kp * sF;
@@ -22,7 +22,7 @@ Vec4 PiFosmc::step(const Measurement& m) {
   Vec3 v = fx + C;
   v += (c.Ki / c.Kp) * I_;
   v += ur_;
-  const Vec4 u = -(plant_.G_pinv(x) * v);
+  const Vec4 u = -plant_.G_pinv_times(m, v);
 
   I_ += Ts_ * sF;
   ur_ += (Ts_ * c.switching_gain) * sigm(sPI, c.theta);

@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 
 #include "ftc/sim/controller.hpp"
+#include "ftc/sim/plant_model.hpp"
 
 namespace ftc::sim {
 
@@ -39,7 +40,7 @@ class AdaptiveNeuralPiFosmc final : public Controller {
 
  private:
   ControllerConfig config_;
-  const Plant& plant_;
+  detail::PlantModel plant_;
   double Ts_;
   int l_;
   Activations centres_;  // c_j

@@ -40,4 +40,15 @@ class Disturbance {
   std::vector<DisturbanceTerm> terms_;
 };
 
+// Inline: the simulator evaluates it twice a sample.
+inline Vec3 Disturbance::operator()(std::span<const Phasor> phasors) const {
+  Vec3 d = Vec3::Zero();
+  for (std::size_t i = 0; i < terms_.size(); ++i) {
+    const DisturbanceTerm& term = terms_[i];
+    d[term.axis - 1] +=
+        term.amplitude * (term.shape == Shape::sin ? phasors[i].sin() : phasors[i].cos());
+  }
+  return d;
+}
+
 }  // namespace ftc::sim

@@ -9,6 +9,7 @@
 //
 // Every fault is affine in the command, so a fault set at time t reduces to
 // u = sat(gain(t) ⊙ u_d + offset(t)); the simulator evaluates (gain, offset) once per stage time.
+#include <cmath>
 #include <optional>
 #include <span>
 #include <string>
@@ -27,7 +28,11 @@ struct FaultProfile {
   FaultProfileType type = FaultProfileType::abrupt;
   double rate = 1.0;  // β in 1/s, incipient only
 
-  double rho(double tau) const;  // ρ(τ)
+  double rho(double tau) const {  // ρ(τ)
+    if (tau < 0.0) return 0.0;
+    if (type == FaultProfileType::abrupt) return 1.0;
+    return 1.0 - std::exp(-rate * tau);
+  }
 };
 
 struct Fault {
@@ -62,7 +67,7 @@ class FaultSet {
   FaultEffect effect(double t) const;
   // The same with the bias sinusoids read from one phasor per fault (made by phasors(),
   // advanced by the caller to t).
-  FaultEffect effect(double t, std::span<const Phasor> phasors) const;
+  FaultEffect effect(double t, std::span<const Phasor> phasors) const;  // inline below
   // One phasor per fault stepping by dt, not yet anchored (unused but for bias faults).
   std::vector<Phasor> phasors(double dt) const;
   // Applied actuator output for a held command: sat(gain ⊙ u_d + offset).
@@ -80,6 +85,38 @@ class FaultSet {
   std::vector<Fault> faults_;
   std::optional<double> saturation_;  // u_max, absent = no saturation
 };
+
+namespace detail {
+// Σ over the faults of ρ δu, in affine form; cosine(i) is cos(ω t + φ) of fault i.
+template <class Cos>
+FaultEffect combine_faults(const std::vector<Fault>& faults, double t, Cos&& cosine) {
+  FaultEffect e;
+  for (std::size_t i = 0; i < faults.size(); ++i) {
+    const Fault& f = faults[i];
+    const double rho = f.profile.rho(t - f.onset);
+    if (rho == 0.0) continue;
+    const int j = f.actuator - 1;
+    switch (f.type) {
+      case FaultType::bias:
+        e.offset[j] += rho * (f.offset + f.amplitude * cosine(i));
+        break;
+      case FaultType::loss_of_effectiveness:
+        e.gain[j] -= rho * f.fraction;
+        break;
+      case FaultType::stuck:  // δu = value - u_d
+        e.gain[j] -= rho;
+        e.offset[j] += rho * f.value;
+        break;
+    }
+  }
+  return e;
+}
+}  // namespace detail
+
+// Inline: the simulator evaluates it twice a sample.
+inline FaultEffect FaultSet::effect(double t, std::span<const Phasor> phasors) const {
+  return detail::combine_faults(faults_, t, [&](std::size_t i) { return phasors[i].cos(); });
+}
 
 const char* to_string(FaultType t);
 const char* to_string(FaultProfileType t);

@@ -7,6 +7,7 @@
 //
 // Units: a rad/s², sF rad/s², ur rad/s², K = Π+ζ in rad/s³. Model-based.
 #include "ftc/sim/controller.hpp"
+#include "ftc/sim/plant_model.hpp"
 
 namespace ftc::sim {
 
@@ -22,7 +23,7 @@ class Fosmc final : public Controller {
 
  private:
   ControllerConfig config_;
-  const Plant& plant_;
+  detail::PlantModel plant_;
   double Ts_;
   Vec3 ur_ = Vec3::Zero();
 };

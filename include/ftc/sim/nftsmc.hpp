@@ -8,6 +8,7 @@
 // Units: X1 rad, X2 rad/s, ueq and K rad/s². p, q positive odd integers with 1 < p/q < 2 and
 // α > p/q. Memoryless: reset() has nothing to clear. Model-based (uses f and G⁺).
 #include "ftc/sim/controller.hpp"
+#include "ftc/sim/plant_model.hpp"
 
 namespace ftc::sim {
 
@@ -23,7 +24,7 @@ class Nftsmc final : public Controller {
 
  private:
   ControllerConfig config_;
-  const Plant& plant_;
+  detail::PlantModel plant_;
   double Ts_;
   double pq_;  // p/q
 };

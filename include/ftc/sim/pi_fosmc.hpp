@@ -10,6 +10,7 @@
 // Units: sF rad/s², I rad/s, ur rad/s², K = Π+ζ rad/s³, Kp dimensionless, Ki 1/s.
 // With Kp = 1, Ki = 0 it issues exactly the commands of FOSMC. Model-based.
 #include "ftc/sim/controller.hpp"
+#include "ftc/sim/plant_model.hpp"
 
 namespace ftc::sim {
 
@@ -28,7 +29,7 @@ class PiFosmc final : public Controller {
 
  private:
   ControllerConfig config_;
-  const Plant& plant_;
+  detail::PlantModel plant_;
   double Ts_;
   Vec3 I_ = Vec3::Zero();
   Vec3 ur_ = Vec3::Zero();
