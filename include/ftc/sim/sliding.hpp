@@ -27,8 +27,21 @@ inline Vec3 sigm(const Vec3& s, double theta) {
 
 inline Vec3 fosm_term(const Vec3& X1, const Vec3& X2, double c1, double c2, double alpha1,
                       double alpha2) {
-  Vec3 c = c2 * sig(X2, alpha2);
-  c += c1 * sig(X1, alpha1);
+  // sig() element by element, bit for bit, but with the six logarithms taken before the six
+  // exponentials: the CPU overlaps independent libm calls in a row, where each log-exp pair
+  // would wait on itself (2-3 % of a simulation's cycles).
+  double l[6];
+  for (int i = 0; i < 3; ++i) {
+    l[i] = X2[i] == 0.0 ? 0.0 : std::log(std::abs(X2[i]));
+    l[i + 3] = X1[i] == 0.0 ? 0.0 : std::log(std::abs(X1[i]));
+  }
+  Vec3 s2, s1;
+  for (int i = 0; i < 3; ++i) {
+    s2[i] = X2[i] == 0.0 ? 0.0 : std::copysign(std::exp(alpha2 * l[i]), X2[i]);
+    s1[i] = X1[i] == 0.0 ? 0.0 : std::copysign(std::exp(alpha1 * l[i + 3]), X1[i]);
+  }
+  Vec3 c = c2 * s2;
+  c += c1 * s1;
   return c;
 }
 
