@@ -1,8 +1,8 @@
 #pragma once
 // Cheap sin and cos for the hot loop, in two forms.
 //
-// SinCosTracker: sin and cos of an argument that moves in small steps (the RK4 stages of a state,
-// or ω t for consecutive stage times). From an anchor a with s = sin a, c = cos a computed by libm,
+// SinCosTracker: sin and cos of an argument that moves in small steps (an attitude angle from
+// one RK4 stage and sample to the next). From an anchor a with s = sin a, c = cos a by libm,
 //
 //   sin(a + δ) = s cos δ + c sin δ,   cos(a + δ) = c cos δ - s sin δ
 //
@@ -49,7 +49,8 @@ class SinCosTracker {
 //
 // four multiplications instead of a sin and a cos. A rotation adds about one ulp of error, so
 // callers re-anchor at least every kMaxSteps advances, which keeps the values within 1e-14 of
-// libm's (tests/test_plant.cpp).
+// libm's at the paper's frequencies (tests/test_plant.cpp; at large ω t the rounding of the
+// argument ω t + φ itself, a few ulp of it, dominates both).
 class Phasor {
  public:
   static constexpr int kMaxSteps = 32;
