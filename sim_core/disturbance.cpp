@@ -21,11 +21,14 @@ const char* to_string(Shape s) { return s == Shape::sin ? "sin" : "cos"; }
 Disturbance::Disturbance(std::vector<DisturbanceTerm> terms) : terms_(std::move(terms)) {}
 
 Vec3 Disturbance::operator()(double t) const {
-  Vec3 d = Vec3::Zero();
-  for (const DisturbanceTerm& term : terms_) {
-    const double x = term.frequency * t + term.phase;
-    d[term.axis - 1] += term.amplitude * (term.shape == Shape::sin ? std::sin(x) : std::cos(x));
-  }
+  Vec3 d;
+  evaluate(
+      1,
+      [&](std::size_t i, std::size_t, Shape shape) {
+        const double x = terms_[i].frequency * t + terms_[i].phase;
+        return shape == Shape::sin ? std::sin(x) : std::cos(x);
+      },
+      &d);
   return d;
 }
 

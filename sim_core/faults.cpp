@@ -50,9 +50,14 @@ FaultSet::FaultSet(std::vector<Fault> faults, std::optional<double> saturation)
     : faults_(std::move(faults)), saturation_(saturation) {}
 
 FaultEffect FaultSet::effect(double t) const {
-  return detail::combine_faults(faults_, t, [&](std::size_t i) {
-    return std::cos(faults_[i].frequency * t + faults_[i].phase);
-  });
+  FaultEffect e;
+  evaluate(
+      std::span<const double>(&t, 1),
+      [&](std::size_t i, std::size_t) {
+        return std::cos(faults_[i].frequency * t + faults_[i].phase);
+      },
+      &e);
+  return e;
 }
 
 std::vector<Phasor> FaultSet::phasors(double dt) const {

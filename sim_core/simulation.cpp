@@ -1,6 +1,8 @@
 #include "ftc/sim/simulation.hpp"
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 
 #include "ftc/sim/integrator.hpp"
 #include "ftc/sim/spacecraft.hpp"
@@ -9,10 +11,13 @@ namespace ftc::sim {
 namespace {
 
 // Δ(t) and the fault effect depend on time only, and RK4 asks for them on the grid of half
-// steps t_k, t_k + h/2, t_k + h, ... (the midpoint serves two stages, the end of a sample is the
-// next sample's sensor instant). Their sinusoids advance along that grid by rotation (Phasor)
-// and are re-anchored with libm at the start of a step once Phasor::kMaxSteps half steps have
-// passed.
+// steps t_k, t_k + h/2, t_k + h, ... (the midpoint serves two stages, the end of a step is the
+// next step's start). They are filled a block of Phasor::kMaxSteps half steps at a time: the
+// sinusoids advance along the grid by rotation from a libm anchor at the block's first instant,
+// into one table per sinusoid, and Disturbance::evaluate and FaultSet::evaluate then run each
+// term over the whole block. Term by term over a block is a few instructions per instant,
+// where one instant at a time spent about 300 on bookkeeping. The block is of fixed size, so
+// memory does not grow with the duration.
 class ExogenousInputs {
  public:
   struct Entry {
@@ -20,39 +25,92 @@ class ExogenousInputs {
     FaultEffect fault;
   };
 
-  ExogenousInputs(const Disturbance& d, const FaultSet& f, double half_step)
+  ExogenousInputs(const Disturbance& d, const FaultSet& f, double sample_time, int substeps)
       : dist_(d),
         faults_(f),
-        dist_phasors_(d.phasors(half_step)),
-        fault_phasors_(f.phasors(half_step)) {}
-
-  // The inputs at the start of a step at time t: `last` (the end of the previous step,
-  // evaluated at the same t) unless the phasors are due for re-anchoring.
-  void start_step(double t, Entry& last) {
-    if (steps_ + 2 <= Phasor::kMaxSteps) return;
-    for (Phasor& p : dist_phasors_) p.anchor(t);
-    for (Phasor& p : fault_phasors_) p.anchor(t);
-    steps_ = 0;
-    evaluate(t, last);
+        Ts_(sample_time),
+        h_(sample_time / substeps),
+        substeps_(substeps),
+        phasors_(d.phasors(0.5 * h_)),
+        n_dist_(phasors_.size()) {
+    for (const Phasor& p : f.phasors(0.5 * h_)) phasors_.push_back(p);
+    // Padded to whole groups of kGroup; the padding phasors' tables are never read.
+    phasors_.resize((phasors_.size() + kGroup - 1) / kGroup * kGroup);
+    sin_.resize(phasors_.size() * kInstants);
+    cos_.resize(phasors_.size() * kInstants);
   }
-  // Advances the phasors one half step, to time t, and evaluates there.
-  void next(double t, Entry& e) {
-    for (Phasor& p : dist_phasors_) p.advance();
-    for (Phasor& p : fault_phasors_) p.advance();
-    ++steps_;
-    evaluate(t, e);
+
+  // The inputs at the start, midpoint and end of substep j of sample k: three consecutive
+  // entries. Steps must be asked for in order, each once.
+  const Entry* step(std::int64_t k, int j) {
+    if (used_ == kSteps) {
+      fill(k, j);
+      used_ = 0;
+    }
+    return &entries_[2 * used_++];
   }
 
  private:
-  void evaluate(double t, Entry& e) const {
-    e.disturbance = dist_(dist_phasors_);
-    e.fault = faults_.effect(t, fault_phasors_);
+  static constexpr int kSteps = Phasor::kMaxSteps / 2;  // RK4 steps per block
+  static constexpr int kInstants = 2 * kSteps + 1;      // half-step instants per block
+  static constexpr int kGroup = 4;                      // phasors advanced together
+
+  // The instants exactly as the simulation loop forms them (the same doubles), from the start
+  // of substep j of sample k on.
+  void fill(std::int64_t k, int j) {
+    for (int s = 0; s < kSteps; ++s) {
+      const double t = static_cast<double>(k) * Ts_;
+      const double tj = t + j * h_;
+      if (s == 0) t_[0] = tj;
+      t_[2 * s + 1] = tj + 0.5 * h_;
+      t_[2 * s + 2] = j == substeps_ - 1 ? static_cast<double>(k + 1) * Ts_ : tj + h_;
+      if (++j == substeps_) {
+        j = 0;
+        ++k;
+      }
+    }
+    for (std::size_t i = 0; i < phasors_.size(); i += kGroup) tabulate(i);
+
+    dist_.evaluate(
+        kInstants,
+        [&](std::size_t i, std::size_t n, Shape shape) {
+          return (shape == Shape::sin ? sin_ : cos_)[i * kInstants + n];
+        },
+        dist_values_.data());
+    faults_.evaluate(
+        t_, [&](std::size_t i, std::size_t n) { return cos_[(n_dist_ + i) * kInstants + n]; },
+        fault_values_.data());
+    for (int n = 0; n < kInstants; ++n) entries_[n] = {dist_values_[n], fault_values_[n]};
+  }
+
+  // Phasors i .. i + kGroup - 1 over the block. Local copies keep each rotation in registers,
+  // and a group advances together so that the CPU overlaps their dependency chains.
+  void tabulate(std::size_t i) {
+    std::array<Phasor, kGroup> q;
+    for (int g = 0; g < kGroup; ++g) {
+      q[g] = phasors_[i + g];
+      q[g].anchor(t_[0]);
+    }
+    for (int n = 0; n < kInstants; ++n)
+      for (int g = 0; g < kGroup; ++g) {
+        if (n > 0) q[g].advance();
+        sin_[(i + g) * kInstants + n] = q[g].sin();
+        cos_[(i + g) * kInstants + n] = q[g].cos();
+      }
   }
 
   const Disturbance& dist_;
   const FaultSet& faults_;
-  std::vector<Phasor> dist_phasors_, fault_phasors_;  // sized once, before the loop
-  int steps_ = Phasor::kMaxSteps;                     // advances since the last anchor
+  double Ts_, h_;
+  int substeps_;
+  std::vector<Phasor> phasors_;  // the disturbance terms', then the faults'; sized once
+  std::size_t n_dist_;
+  std::vector<double> sin_, cos_;  // per phasor, its values at the block's instants
+  std::array<double, kInstants> t_{};
+  std::array<Vec3, kInstants> dist_values_;
+  std::array<FaultEffect, kInstants> fault_values_;
+  std::array<Entry, kInstants> entries_;
+  int used_ = kSteps;  // steps of the current block handed out
 };
 
 bool out_of_bounds(const State& x) {
@@ -77,8 +135,7 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
 
   const double Ts = scenario.sample_time;
   const double h = Ts / scenario.substeps;
-  ExogenousInputs exo(disturbance, faults, 0.5 * h);
-  ExogenousInputs::Entry e0, em, ee;  // at the start, midpoint and end of a step
+  ExogenousInputs exo(disturbance, faults, Ts, scenario.substeps);
   const std::int64_t N = scenario.samples();
 
   SimulationResult result;
@@ -117,35 +174,32 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
   for (; k < N; ++k) {
     const double t = static_cast<double>(k) * Ts;
     const Vec3 fx = plant.f(x, ws);
-    exo.start_step(t, e0);
-    const Vec3 a = accel(x, fx, e0, u_prev);
+    const ExogenousInputs::Entry* e = exo.step(k, 0);  // at the start, midpoint, end
+    const Vec3 a = accel(x, fx, e[0], u_prev);
 
     const Vec4 u = controller.step(Measurement{t, x.head<kAxes>(), x.tail<kAxes>(), a, &fx});
     metrics.sample(t, x, u);
     if (options.record_every > 0 && k % options.record_every == 0)
-      result.trajectory.push_back({t, x, u, faults.apply(e0.fault, u)});
+      result.trajectory.push_back({t, x, u, faults.apply(e[0].fault, u)});
 
     u_held = u;
     // Stage 1 of the first substep is at (t, X): f(X) and Δ(t) are already known.
     State k1;
     k1.head<kAxes>() = x.tail<kAxes>();
-    k1.tail<kAxes>() = accel(x, fx, e0, u);
+    k1.tail<kAxes>() = accel(x, fx, e[0], u);
     // The last stage of the sample ends at t_{k+1} = (k+1)·Ts, the very instant (bit for bit)
-    // at which the next sample's sensor reads, so the disturbance and faults there are reused.
-    const double t_next = static_cast<double>(k + 1) * Ts;
+    // at which the next sample's sensor reads; ExogenousInputs forms the instants likewise.
     const int S = scenario.substeps;
     for (int j = 0; j < S; ++j) {
-      const double tj = t + j * h;
       if (j > 0) {
-        exo.start_step(tj, e0);
-        k1 = deriv(x, e0);
+        e = exo.step(k, j);
+        k1 = deriv(x, e[0]);
       }
-      exo.next(tj + 0.5 * h, em);
-      exo.next(j == S - 1 ? t_next : tj + h, ee);
+      const ExogenousInputs::Entry& em = e[1];
+      const ExogenousInputs::Entry& ee = e[2];
       x = rk4_step(
           x, h, k1, [&](const State& s) { return deriv(s, em); },
           [&](const State& s) { return deriv(s, ee); });
-      e0 = ee;
     }
     u_prev = u;
 

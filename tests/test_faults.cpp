@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 #include "ftc/sim/disturbance.hpp"
 #include "ftc/sim/faults.hpp"
@@ -113,28 +114,72 @@ TEST(Disturbance, PaperDisturbance) {
   EXPECT_DOUBLE_EQ(v[2], 0.5 * std::sin(3 * t));
 }
 
-TEST(Disturbance, PhasorEvaluationMatchesDirectOne) {
+TEST(Disturbance, BlockEvaluationMatchesPointwise) {
   const Disturbance d({{2, Shape::sin, 1.0, 2.0, 0.5},
                        {2, Shape::cos, 0.25, 1.0, 0.0},
                        {3, Shape::cos, 0.7, 3.0, -1.0}});
-  std::vector<Phasor> p = d.phasors(1e-3);
+  const std::vector<double> t = {0.0, 0.3, 2.5, 2.5005, 17.25};
+  std::vector<Vec3> out(t.size());
+  // With the same sinusoid values the block gives the pointwise sums bit for bit ...
+  d.evaluate(
+      t.size(),
+      [&](std::size_t i, std::size_t k, Shape shape) {
+        const DisturbanceTerm& term = d.terms()[i];
+        const double x = term.frequency * t[k] + term.phase;
+        return shape == Shape::sin ? std::sin(x) : std::cos(x);
+      },
+      out.data());
+  for (std::size_t k = 0; k < t.size(); ++k) EXPECT_EQ(out[k], d(t[k])) << t[k];
+  // ... and with the sinusoids from phasors (what the simulator does) within 1e-14.
+  std::vector<Phasor> p = d.phasors(5e-4);
   for (Phasor& q : p) q.anchor(2.5);
-  EXPECT_EQ(d(p), d(2.5));  // anchored: the same libm values
-  for (Phasor& q : p) q.advance();
-  EXPECT_TRUE(d(p).isApprox(d(2.501), 1e-14));
+  for (int n = 0; n < 20; ++n)
+    for (Phasor& q : p) q.advance();
+  Vec3 v;
+  d.evaluate(
+      1,
+      [&](std::size_t i, std::size_t, Shape shape) {
+        return shape == Shape::sin ? p[i].sin() : p[i].cos();
+      },
+      &v);
+  EXPECT_TRUE(v.isApprox(d(2.51), 1e-14));
 }
 
-TEST(Faults, PhasorEffectMatchesDirectOne) {
-  const Scenario s = Scenario::paper();
-  const FaultSet set(s.faults, std::nullopt);
-  std::vector<Phasor> p = set.phasors(5e-4);
-  for (Phasor& q : p) q.anchor(25.0);
-  for (int n = 1; n <= 10; ++n) {
-    for (Phasor& q : p) q.advance();
-    const double t = 25.0 + n * 5e-4;
-    EXPECT_TRUE(set.effect(t, p).offset.isApprox(set.effect(t).offset, 1e-14));
-    EXPECT_EQ(set.effect(t, p).gain, set.effect(t).gain);
+TEST(Faults, BlockEvaluationMatchesPointwise) {
+  Fault bias = make(FaultType::bias, 1, 1.0);
+  bias.offset = 5.0;
+  bias.amplitude = 15.0;
+  bias.frequency = 1.0;
+  bias.phase = 0.3;
+  bias.profile = {FaultProfileType::incipient, 2.0};
+  Fault loe = make(FaultType::loss_of_effectiveness, 2, 2.0);
+  loe.fraction = 0.8;
+  Fault stuck = make(FaultType::stuck, 1, 3.0);
+  stuck.value = -0.5;
+  Fault second = make(FaultType::loss_of_effectiveness, 2, 2.5);
+  second.fraction = 0.1;
+  const FaultSet set({bias, loe, stuck, second}, 4.0);
+  // Instants before, at and after each onset, in one block.
+  const std::vector<double> t = {0.0, 1.0, 1.5, 2.0, 2.5, 2.75, 3.0, 9.0};
+  std::vector<FaultEffect> out(t.size());
+  set.evaluate(
+      t,
+      [&](std::size_t i, std::size_t k) {
+        return std::cos(set.faults()[i].frequency * t[k] + set.faults()[i].phase);
+      },
+      out.data());
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const FaultEffect e = set.effect(t[k]);
+    EXPECT_EQ(out[k].gain, e.gain) << t[k];
+    EXPECT_EQ(out[k].offset, e.offset) << t[k];
   }
+  // Spot values from the definition: after 3 s actuator 1 is stuck on top of the grown bias,
+  // actuator 2 has lost 80 % and then 10 % more.
+  const double rho = 1.0 - std::exp(-2.0 * (9.0 - 1.0));
+  EXPECT_EQ(out[7].gain, Vec4(0.0, 1.0 - 0.8 - 0.1, 1.0, 1.0));
+  EXPECT_DOUBLE_EQ(out[7].offset[0], rho * (5.0 + 15.0 * std::cos(9.3)) - 0.5);
+  EXPECT_EQ(out[0].gain, Vec4::Ones());
+  EXPECT_EQ(out[0].offset, Vec4::Zero());
 }
 
 TEST(Disturbance, TermsOnOneAxisAddWithPhase) {

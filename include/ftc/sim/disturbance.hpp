@@ -1,7 +1,7 @@
 #pragma once
 // Additive disturbance Δ(t) on the accelerations (SPEC §2): per axis a sum of sinusoids
 // Δ_i(t) = Σ amplitude · shape(frequency · t + phase), shape ∈ {sin, cos}, in rad/s².
-#include <span>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -30,8 +30,12 @@ class Disturbance {
   explicit Disturbance(std::vector<DisturbanceTerm> terms);
 
   Vec3 operator()(double t) const;
-  // The same from one phasor per term (made by phasors(), advanced by the caller to t).
-  Vec3 operator()(std::span<const Phasor> phasors) const;
+  // Δ at n instants into out[0..n), given value(i, k, shape) = shape(frequency_i t_k + phase_i)
+  // of term i at instant k. The simulator fills a block of instants at once from phasor tables;
+  // operator()(t) is the case n = 1 with libm. Terms are summed in order, as the definition
+  // reads, so both agree bit for bit on the same sinusoid values.
+  template <class Value>
+  void evaluate(std::size_t n, Value&& value, Vec3* out) const;
   // One phasor per term stepping by dt, not yet anchored.
   std::vector<Phasor> phasors(double dt) const;
   const std::vector<DisturbanceTerm>& terms() const { return terms_; }
@@ -40,15 +44,14 @@ class Disturbance {
   std::vector<DisturbanceTerm> terms_;
 };
 
-// Inline: the simulator evaluates it twice a sample.
-inline Vec3 Disturbance::operator()(std::span<const Phasor> phasors) const {
-  Vec3 d = Vec3::Zero();
+template <class Value>
+void Disturbance::evaluate(std::size_t n, Value&& value, Vec3* out) const {
+  for (std::size_t k = 0; k < n; ++k) out[k].setZero();
   for (std::size_t i = 0; i < terms_.size(); ++i) {
     const DisturbanceTerm& term = terms_[i];
-    d[term.axis - 1] +=
-        term.amplitude * (term.shape == Shape::sin ? phasors[i].sin() : phasors[i].cos());
+    const int a = term.axis - 1;
+    for (std::size_t k = 0; k < n; ++k) out[k][a] += term.amplitude * value(i, k, term.shape);
   }
-  return d;
 }
 
 }  // namespace ftc::sim

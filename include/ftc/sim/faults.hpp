@@ -65,9 +65,11 @@ class FaultSet {
   FaultSet(std::vector<Fault> faults, std::optional<double> saturation);
 
   FaultEffect effect(double t) const;
-  // The same with the bias sinusoids read from one phasor per fault (made by phasors(),
-  // advanced by the caller to t).
-  FaultEffect effect(double t, std::span<const Phasor> phasors) const;  // inline below
+  // The effects at the instants t[0..n) into out[0..n), given cosine(i, k) = cos(ω_i t_k + φ_i)
+  // of fault i at instant k (read for bias faults only). The simulator fills a block of
+  // instants at once from phasor tables; effect(t) is the case n = 1 with libm.
+  template <class Cos>
+  void evaluate(std::span<const double> t, Cos&& cosine, FaultEffect* out) const;
   // One phasor per fault stepping by dt, not yet anchored (unused but for bias faults).
   std::vector<Phasor> phasors(double dt) const;
   // Applied actuator output for a held command: sat(gain ⊙ u_d + offset).
@@ -86,36 +88,32 @@ class FaultSet {
   std::optional<double> saturation_;  // u_max, absent = no saturation
 };
 
-namespace detail {
-// Σ over the faults of ρ δu, in affine form; cosine(i) is cos(ω t + φ) of fault i.
+// Σ over the faults of ρ δu, in affine form. Faults are taken in order at every instant, so
+// the sum is the same bit for bit whatever the number of instants.
 template <class Cos>
-FaultEffect combine_faults(const std::vector<Fault>& faults, double t, Cos&& cosine) {
-  FaultEffect e;
-  for (std::size_t i = 0; i < faults.size(); ++i) {
-    const Fault& f = faults[i];
-    const double rho = f.profile.rho(t - f.onset);
-    if (rho == 0.0) continue;
+void FaultSet::evaluate(std::span<const double> t, Cos&& cosine, FaultEffect* out) const {
+  for (std::size_t k = 0; k < t.size(); ++k) out[k] = FaultEffect{};
+  for (std::size_t i = 0; i < faults_.size(); ++i) {
+    const Fault& f = faults_[i];
     const int j = f.actuator - 1;
-    switch (f.type) {
-      case FaultType::bias:
-        e.offset[j] += rho * (f.offset + f.amplitude * cosine(i));
-        break;
-      case FaultType::loss_of_effectiveness:
-        e.gain[j] -= rho * f.fraction;
-        break;
-      case FaultType::stuck:  // δu = value - u_d
-        e.gain[j] -= rho;
-        e.offset[j] += rho * f.value;
-        break;
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      const double rho = f.profile.rho(t[k] - f.onset);
+      if (rho == 0.0) continue;
+      FaultEffect& e = out[k];
+      switch (f.type) {
+        case FaultType::bias:
+          e.offset[j] += rho * (f.offset + f.amplitude * cosine(i, k));
+          break;
+        case FaultType::loss_of_effectiveness:
+          e.gain[j] -= rho * f.fraction;
+          break;
+        case FaultType::stuck:  // δu = value - u_d
+          e.gain[j] -= rho;
+          e.offset[j] += rho * f.value;
+          break;
+      }
     }
   }
-  return e;
-}
-}  // namespace detail
-
-// Inline: the simulator evaluates it twice a sample.
-inline FaultEffect FaultSet::effect(double t, std::span<const Phasor> phasors) const {
-  return detail::combine_faults(faults_, t, [&](std::size_t i) { return phasors[i].cos(); });
 }
 
 const char* to_string(FaultType t);
