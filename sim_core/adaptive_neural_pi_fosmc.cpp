@@ -12,6 +12,7 @@ AdaptiveNeuralPiFosmc::AdaptiveNeuralPiFosmc(const ControllerConfig& config, con
                                              double sample_time)
     : config_(detail::checked_config(config, sample_time)),
       plant_(plant),
+      fosm_(config_.c1, config_.c2, config_.alpha1, config_.alpha2),
       Ts_(sample_time),
       l_(static_cast<int>(config_.nodes)) {
   centres_.resize(l_);
@@ -33,7 +34,7 @@ void AdaptiveNeuralPiFosmc::reset() {
 Vec4 AdaptiveNeuralPiFosmc::step(const Measurement& m) {
   const ControllerConfig& c = config_;
   const State x = (State() << m.X1, m.X2).finished();
-  const Vec3 C = fosm_term(m.X1, m.X2, c.c1, c.c2, c.alpha1, c.alpha2);
+  const Vec3 C = fosm_(m.X1, m.X2);
   const Vec3 sF = m.a + C;
   Vec3 sPI = c.Kp * sF;
   sPI += c.Ki * I_;

@@ -7,12 +7,15 @@
 namespace ftc::sim {
 
 Fosmc::Fosmc(const ControllerConfig& config, const Plant& plant, double sample_time)
-    : config_(detail::checked_config(config, sample_time)), plant_(plant), Ts_(sample_time) {}
+    : config_(detail::checked_config(config, sample_time)),
+      plant_(plant),
+      fosm_(config_.c1, config_.c2, config_.alpha1, config_.alpha2),
+      Ts_(sample_time) {}
 
 Vec4 Fosmc::step(const Measurement& m) {
   const ControllerConfig& c = config_;
   const Vec3 fx = plant_.f(m);
-  const Vec3 C = fosm_term(m.X1, m.X2, c.c1, c.c2, c.alpha1, c.alpha2);
+  const Vec3 C = fosm_(m.X1, m.X2);
   const Vec3 sF = m.a + C;
 
   Vec3 v = fx + C;

@@ -7,14 +7,17 @@
 namespace ftc::sim {
 
 PiFosmc::PiFosmc(const ControllerConfig& config, const Plant& plant, double sample_time)
-    : config_(detail::checked_config(config, sample_time)), plant_(plant), Ts_(sample_time) {}
+    : config_(detail::checked_config(config, sample_time)),
+      plant_(plant),
+      fosm_(config_.c1, config_.c2, config_.alpha1, config_.alpha2),
+      Ts_(sample_time) {}
 
 // The operations are ordered as in Fosmc::step so that Kp = 1, Ki = 0 reproduces FOSMC bit for
 // bit (x + 0·I = x and 1·sF = sF are exact in IEEE arithmetic).
 Vec4 PiFosmc::step(const Measurement& m) {
   const ControllerConfig& c = config_;
   const Vec3 fx = plant_.f(m);
-  const Vec3 C = fosm_term(m.X1, m.X2, c.c1, c.c2, c.alpha1, c.alpha2);
+  const Vec3 C = fosm_(m.X1, m.X2);
   const Vec3 sF = m.a + C;
   Vec3 sPI = c.Kp * sF;
   sPI += c.Ki * I_;

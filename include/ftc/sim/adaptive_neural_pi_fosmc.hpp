@@ -18,6 +18,7 @@
 
 #include "ftc/sim/controller.hpp"
 #include "ftc/sim/plant_model.hpp"
+#include "ftc/sim/sliding.hpp"
 
 namespace ftc::sim {
 
@@ -41,6 +42,7 @@ class AdaptiveNeuralPiFosmc final : public Controller {
  private:
   ControllerConfig config_;
   detail::PlantModel plant_;
+  FosmTerm fosm_;  // C(X)
   double Ts_;
   int l_;
   Activations centres_;  // c_j

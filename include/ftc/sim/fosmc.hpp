@@ -8,6 +8,7 @@
 // Units: a rad/s², sF rad/s², ur rad/s², K = Π+ζ in rad/s³. Model-based.
 #include "ftc/sim/controller.hpp"
 #include "ftc/sim/plant_model.hpp"
+#include "ftc/sim/sliding.hpp"
 
 namespace ftc::sim {
 
@@ -24,6 +25,7 @@ class Fosmc final : public Controller {
  private:
   ControllerConfig config_;
   detail::PlantModel plant_;
+  FosmTerm fosm_;  // C(X)
   double Ts_;
   Vec3 ur_ = Vec3::Zero();
 };

@@ -9,6 +9,7 @@
 // α > p/q. Memoryless: reset() has nothing to clear. Model-based (uses f and G⁺).
 #include "ftc/sim/controller.hpp"
 #include "ftc/sim/plant_model.hpp"
+#include "ftc/sim/sig_power.hpp"
 
 namespace ftc::sim {
 
@@ -27,6 +28,8 @@ class Nftsmc final : public Controller {
   detail::PlantModel plant_;
   double Ts_;
   double pq_;  // p/q
+  // sig^α, sig^{p/q}, sig^{2-p/q} and |·|^{α-1}
+  SigPower pow_alpha_, pow_pq_, pow_rate_, pow_gain_;
 };
 
 }  // namespace ftc::sim

@@ -11,6 +11,7 @@
 // With Kp = 1, Ki = 0 it issues exactly the commands of FOSMC. Model-based.
 #include "ftc/sim/controller.hpp"
 #include "ftc/sim/plant_model.hpp"
+#include "ftc/sim/sliding.hpp"
 
 namespace ftc::sim {
 
@@ -30,6 +31,7 @@ class PiFosmc final : public Controller {
  private:
   ControllerConfig config_;
   detail::PlantModel plant_;
+  FosmTerm fosm_;  // C(X)
   double Ts_;
   Vec3 I_ = Vec3::Zero();
   Vec3 ur_ = Vec3::Zero();

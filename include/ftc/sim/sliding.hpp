@@ -7,48 +7,44 @@
 //   C(X)     = c2 sig^α2(X2) + c1 sig^α1(X1)      the full-order surface term (eq. 8)
 #include <cmath>
 
+#include "ftc/sim/sig_power.hpp"
 #include "ftc/sim/types.hpp"
 
 namespace ftc::sim {
 
-// |x|^a as exp(a ln|x|): the same value within a few ulp, at about half the cost of std::pow,
-// which matters because the controllers evaluate six of these every sample. Split in two steps
-// so that vector callers take all their logarithms before their exponentials: the CPU overlaps
-// independent libm calls in a row, where each log-exp pair would wait on itself.
-inline double log_abs(double x) { return x == 0.0 ? 0.0 : std::log(std::abs(x)); }
-// sig^a(x) given l = log_abs(x).
-inline double sig_from_log(double x, double l, double a) {
-  return x == 0.0 ? 0.0 : std::copysign(std::exp(a * l), x);
+// sig^a for any exponent, as exp(a ln|x|). The controllers' fixed exponents use SigPower,
+// which is faster and closer to the exact power.
+inline double sig(double x, double a) {
+  return x == 0.0 ? 0.0 : std::copysign(std::exp(a * std::log(std::abs(x))), x);
 }
-inline double sig(double x, double a) { return sig_from_log(x, log_abs(x), a); }
+inline Vec3 sig(const Vec3& x, double a) { return Vec3(sig(x[0], a), sig(x[1], a), sig(x[2], a)); }
+inline Vec3 sig(const Vec3& x, const SigPower& p) { return Vec3(p(x[0]), p(x[1]), p(x[2])); }
 
-inline Vec3 log_abs(const Vec3& x) { return Vec3(log_abs(x[0]), log_abs(x[1]), log_abs(x[2])); }
-inline Vec3 sig_from_log(const Vec3& x, const Vec3& l, double a) {
-  return Vec3(sig_from_log(x[0], l[0], a), sig_from_log(x[1], l[1], a),
-              sig_from_log(x[2], l[2], a));
+// tanh(y) is ±1 in double precision once |y| > 19.06 (1 - tanh y ≈ 2 e^{-2y} < 2^-54); past
+// that point the sign alone gives the same bits without a call into libm.
+inline double sigm_scalar(double y) {
+  return std::abs(y) > 19.5 ? std::copysign(1.0, y) : std::tanh(y);
 }
-inline Vec3 sig(const Vec3& x, double a) { return sig_from_log(x, log_abs(x), a); }
-
 inline Vec3 sigm(const Vec3& s, double theta) {
   const double k = 0.5 * theta;
-  return Vec3(std::tanh(k * s[0]), std::tanh(k * s[1]), std::tanh(k * s[2]));
+  return Vec3(sigm_scalar(k * s[0]), sigm_scalar(k * s[1]), sigm_scalar(k * s[2]));
 }
 
-inline Vec3 fosm_term(const Vec3& X1, const Vec3& X2, double c1, double c2, double alpha1,
-                      double alpha2) {
-  double l2[3], l1[3];  // the six logarithms first (see sig)
-  for (int i = 0; i < 3; ++i) {
-    l2[i] = log_abs(X2[i]);
-    l1[i] = log_abs(X1[i]);
+// C(X) = c2 sig^α2(X2) + c1 sig^α1(X1) with the gains and exponents of one controller.
+class FosmTerm {
+ public:
+  FosmTerm(double c1, double c2, double alpha1, double alpha2)
+      : c1_(c1), c2_(c2), pow1_(alpha1), pow2_(alpha2) {}
+
+  Vec3 operator()(const Vec3& X1, const Vec3& X2) const {
+    Vec3 c = c2_ * sig(X2, pow2_);
+    c += c1_ * sig(X1, pow1_);
+    return c;
   }
-  Vec3 s2, s1;
-  for (int i = 0; i < 3; ++i) {
-    s2[i] = sig_from_log(X2[i], l2[i], alpha2);
-    s1[i] = sig_from_log(X1[i], l1[i], alpha1);
-  }
-  Vec3 c = c2 * s2;
-  c += c1 * s1;
-  return c;
-}
+
+ private:
+  double c1_, c2_;
+  SigPower pow1_, pow2_;
+};
 
 }  // namespace ftc::sim
