@@ -28,7 +28,7 @@ Vec3 Disturbance::operator()(double t) const {
         const double x = terms_[i].frequency * t + terms_[i].phase;
         return shape == Shape::sin ? std::sin(x) : std::cos(x);
       },
-      &d);
+      [&](std::size_t) -> Vec3& { return d; });
   return d;
 }
 

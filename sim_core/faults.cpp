@@ -56,7 +56,7 @@ FaultEffect FaultSet::effect(double t) const {
       [&](std::size_t i, std::size_t) {
         return std::cos(faults_[i].frequency * t + faults_[i].phase);
       },
-      &e);
+      [&](std::size_t) -> FaultEffect& { return e; });
   return e;
 }
 

@@ -34,8 +34,6 @@ class ExogenousInputs {
         phasors_(d.phasors(0.5 * h_)),
         n_dist_(phasors_.size()) {
     for (const Phasor& p : f.phasors(0.5 * h_)) phasors_.push_back(p);
-    // Padded to whole groups of kGroup; the padding phasors' tables are never read.
-    phasors_.resize((phasors_.size() + kGroup - 1) / kGroup * kGroup);
     sin_.resize(phasors_.size() * kInstants);
     cos_.resize(phasors_.size() * kInstants);
   }
@@ -53,7 +51,6 @@ class ExogenousInputs {
  private:
   static constexpr int kSteps = Phasor::kMaxSteps / 2;  // RK4 steps per block
   static constexpr int kInstants = 2 * kSteps + 1;      // half-step instants per block
-  static constexpr int kGroup = 4;                      // phasors advanced together
 
   // The instants exactly as the simulation loop forms them (the same doubles), from the start
   // of substep j of sample k on.
@@ -69,30 +66,33 @@ class ExogenousInputs {
         ++k;
       }
     }
-    for (std::size_t i = 0; i < phasors_.size(); i += kGroup) tabulate(i);
+    std::size_t first = 0;
+    for (; first + 4 <= phasors_.size(); first += 4) tabulate<4>(first);
+    for (; first + 2 <= phasors_.size(); first += 2) tabulate<2>(first);
+    if (first < phasors_.size()) tabulate<1>(first);
 
     dist_.evaluate(
         kInstants,
         [&](std::size_t i, std::size_t n, Shape shape) {
           return (shape == Shape::sin ? sin_ : cos_)[i * kInstants + n];
         },
-        dist_values_.data());
+        [&](std::size_t n) -> Vec3& { return entries_[n].disturbance; });
     faults_.evaluate(
         t_, [&](std::size_t i, std::size_t n) { return cos_[(n_dist_ + i) * kInstants + n]; },
-        fault_values_.data());
-    for (int n = 0; n < kInstants; ++n) entries_[n] = {dist_values_[n], fault_values_[n]};
+        [&](std::size_t n) -> FaultEffect& { return entries_[n].fault; });
   }
 
-  // Phasors i .. i + kGroup - 1 over the block. Local copies keep each rotation in registers,
-  // and a group advances together so that the CPU overlaps their dependency chains.
+  // Phasors i .. i + G - 1 over the block. Local copies keep each rotation in registers, and a
+  // group advances together so that the CPU overlaps their dependency chains.
+  template <int G>
   void tabulate(std::size_t i) {
-    std::array<Phasor, kGroup> q;
-    for (int g = 0; g < kGroup; ++g) {
+    std::array<Phasor, G> q;
+    for (int g = 0; g < G; ++g) {
       q[g] = phasors_[i + g];
       q[g].anchor(t_[0]);
     }
     for (int n = 0; n < kInstants; ++n)
-      for (int g = 0; g < kGroup; ++g) {
+      for (int g = 0; g < G; ++g) {
         if (n > 0) q[g].advance();
         sin_[(i + g) * kInstants + n] = q[g].sin();
         cos_[(i + g) * kInstants + n] = q[g].cos();
@@ -107,8 +107,6 @@ class ExogenousInputs {
   std::size_t n_dist_;
   std::vector<double> sin_, cos_;  // per phasor, its values at the block's instants
   std::array<double, kInstants> t_{};
-  std::array<Vec3, kInstants> dist_values_;
-  std::array<FaultEffect, kInstants> fault_values_;
   std::array<Entry, kInstants> entries_;
   int used_ = kSteps;  // steps of the current block handed out
 };

@@ -128,7 +128,7 @@ TEST(Disturbance, BlockEvaluationMatchesPointwise) {
         const double x = term.frequency * t[k] + term.phase;
         return shape == Shape::sin ? std::sin(x) : std::cos(x);
       },
-      out.data());
+      [&](std::size_t k) -> Vec3& { return out[k]; });
   for (std::size_t k = 0; k < t.size(); ++k) EXPECT_EQ(out[k], d(t[k])) << t[k];
   // ... and with the sinusoids from phasors (what the simulator does) within 1e-14.
   std::vector<Phasor> p = d.phasors(5e-4);
@@ -141,7 +141,7 @@ TEST(Disturbance, BlockEvaluationMatchesPointwise) {
       [&](std::size_t i, std::size_t, Shape shape) {
         return shape == Shape::sin ? p[i].sin() : p[i].cos();
       },
-      &v);
+      [&](std::size_t) -> Vec3& { return v; });
   EXPECT_TRUE(v.isApprox(d(2.51), 1e-14));
 }
 
@@ -167,7 +167,7 @@ TEST(Faults, BlockEvaluationMatchesPointwise) {
       [&](std::size_t i, std::size_t k) {
         return std::cos(set.faults()[i].frequency * t[k] + set.faults()[i].phase);
       },
-      out.data());
+      [&](std::size_t k) -> FaultEffect& { return out[k]; });
   for (std::size_t k = 0; k < t.size(); ++k) {
     const FaultEffect e = set.effect(t[k]);
     EXPECT_EQ(out[k].gain, e.gain) << t[k];

@@ -30,12 +30,13 @@ class Disturbance {
   explicit Disturbance(std::vector<DisturbanceTerm> terms);
 
   Vec3 operator()(double t) const;
-  // Δ at n instants into out[0..n), given value(i, k, shape) = shape(frequency_i t_k + phase_i)
+  // Δ at n instants into out(0) .. out(n-1) (each a Vec3&), given
+  // value(i, k, shape) = shape(frequency_i t_k + phase_i)
   // of term i at instant k. The simulator fills a block of instants at once from phasor tables;
   // operator()(t) is the case n = 1 with libm. Terms are summed in order, as the definition
   // reads, so both agree bit for bit on the same sinusoid values.
-  template <class Value>
-  void evaluate(std::size_t n, Value&& value, Vec3* out) const;
+  template <class Value, class Out>
+  void evaluate(std::size_t n, Value&& value, Out&& out) const;
   // One phasor per term stepping by dt, not yet anchored.
   std::vector<Phasor> phasors(double dt) const;
   const std::vector<DisturbanceTerm>& terms() const { return terms_; }
@@ -44,13 +45,13 @@ class Disturbance {
   std::vector<DisturbanceTerm> terms_;
 };
 
-template <class Value>
-void Disturbance::evaluate(std::size_t n, Value&& value, Vec3* out) const {
-  for (std::size_t k = 0; k < n; ++k) out[k].setZero();
+template <class Value, class Out>
+void Disturbance::evaluate(std::size_t n, Value&& value, Out&& out) const {
+  for (std::size_t k = 0; k < n; ++k) out(k).setZero();
   for (std::size_t i = 0; i < terms_.size(); ++i) {
     const DisturbanceTerm& term = terms_[i];
     const int a = term.axis - 1;
-    for (std::size_t k = 0; k < n; ++k) out[k][a] += term.amplitude * value(i, k, term.shape);
+    for (std::size_t k = 0; k < n; ++k) out(k)[a] += term.amplitude * value(i, k, term.shape);
   }
 }
 

@@ -65,11 +65,12 @@ class FaultSet {
   FaultSet(std::vector<Fault> faults, std::optional<double> saturation);
 
   FaultEffect effect(double t) const;
-  // The effects at the instants t[0..n) into out[0..n), given cosine(i, k) = cos(ω_i t_k + φ_i)
+  // The effects at the instants t[0..n) into out(0) .. out(n-1) (each a FaultEffect&), given
+  // cosine(i, k) = cos(ω_i t_k + φ_i)
   // of fault i at instant k (read for bias faults only). The simulator fills a block of
   // instants at once from phasor tables; effect(t) is the case n = 1 with libm.
-  template <class Cos>
-  void evaluate(std::span<const double> t, Cos&& cosine, FaultEffect* out) const;
+  template <class Cos, class Out>
+  void evaluate(std::span<const double> t, Cos&& cosine, Out&& out) const;
   // One phasor per fault stepping by dt, not yet anchored (unused but for bias faults).
   std::vector<Phasor> phasors(double dt) const;
   // Applied actuator output for a held command: sat(gain ⊙ u_d + offset).
@@ -90,16 +91,16 @@ class FaultSet {
 
 // Σ over the faults of ρ δu, in affine form. Faults are taken in order at every instant, so
 // the sum is the same bit for bit whatever the number of instants.
-template <class Cos>
-void FaultSet::evaluate(std::span<const double> t, Cos&& cosine, FaultEffect* out) const {
-  for (std::size_t k = 0; k < t.size(); ++k) out[k] = FaultEffect{};
+template <class Cos, class Out>
+void FaultSet::evaluate(std::span<const double> t, Cos&& cosine, Out&& out) const {
+  for (std::size_t k = 0; k < t.size(); ++k) out(k) = FaultEffect{};
   for (std::size_t i = 0; i < faults_.size(); ++i) {
     const Fault& f = faults_[i];
     const int j = f.actuator - 1;
     for (std::size_t k = 0; k < t.size(); ++k) {
       const double rho = f.profile.rho(t[k] - f.onset);
       if (rho == 0.0) continue;
-      FaultEffect& e = out[k];
+      FaultEffect& e = out(k);
       switch (f.type) {
         case FaultType::bias:
           e.offset[j] += rho * (f.offset + f.amplitude * cosine(i, k));
