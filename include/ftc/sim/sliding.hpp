@@ -12,12 +12,7 @@
 
 namespace ftc::sim {
 
-// sig^a for any exponent, as exp(a ln|x|). The controllers' fixed exponents use SigPower,
-// which is faster and closer to the exact power.
-inline double sig(double x, double a) {
-  return x == 0.0 ? 0.0 : std::copysign(std::exp(a * std::log(std::abs(x))), x);
-}
-inline Vec3 sig(const Vec3& x, double a) { return Vec3(sig(x[0], a), sig(x[1], a), sig(x[2], a)); }
+// sig^a(x) per component for the fixed exponent of p (the scalar sig is in sig_power.hpp).
 inline Vec3 sig(const Vec3& x, const SigPower& p) { return Vec3(p(x[0]), p(x[1]), p(x[2])); }
 
 // tanh(y) is ±1 in double precision once |y| > 19.06 (1 - tanh y ≈ 2 e^{-2y} < 2^-54); past
