@@ -32,11 +32,6 @@ Vec3 Disturbance::operator()(double t) const {
   return d;
 }
 
-std::vector<Phasor> Disturbance::phasors(double dt) const {
-  std::vector<Phasor> p;
-  p.reserve(terms_.size());
-  for (const DisturbanceTerm& term : terms_) p.emplace_back(term.frequency, term.phase, dt);
-  return p;
-}
+std::vector<Phasor> Disturbance::phasors(double dt) const { return phasors_of(terms_, dt); }
 
 }  // namespace ftc::sim

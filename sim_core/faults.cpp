@@ -60,11 +60,6 @@ FaultEffect FaultSet::effect(double t) const {
   return e;
 }
 
-std::vector<Phasor> FaultSet::phasors(double dt) const {
-  std::vector<Phasor> p;
-  p.reserve(faults_.size());
-  for (const Fault& f : faults_) p.emplace_back(f.frequency, f.phase, dt);
-  return p;
-}
+std::vector<Phasor> FaultSet::phasors(double dt) const { return phasors_of(faults_, dt); }
 
 }  // namespace ftc::sim

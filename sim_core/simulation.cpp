@@ -52,8 +52,9 @@ class ExogenousInputs {
   static constexpr int kSteps = Phasor::kMaxSteps / 2;  // RK4 steps per block
   static constexpr int kInstants = 2 * kSteps + 1;      // half-step instants per block
 
-  // The instants exactly as the simulation loop forms them (the same doubles), from the start
-  // of substep j of sample k on.
+  // The instants of the block's steps from substep j of sample k on: each step's start
+  // k·Ts + j·h, midpoint and end, the end of a sample's last substep formed as (k+1)·Ts so that
+  // it is the very double at which the next sample starts.
   void fill(std::int64_t k, int j) {
     for (int s = 0; s < kSteps; ++s) {
       const double t = static_cast<double>(k) * Ts_;

@@ -3,7 +3,6 @@
 //
 //   k1 = F(t, x), k2 = F(t + h/2, x + h/2 k1), k3 = F(t + h/2, x + h/2 k2), k4 = F(t + h, x + h k3)
 //   x(t + h) = x + h/6 (k1 + 2 k2 + 2 k3 + k4)
-#include <utility>
 
 namespace ftc::sim {
 

@@ -18,7 +18,7 @@ namespace ftc::sim {
 // nearby states (the RK4 stages of a step). Plants themselves stay immutable, so one plant can
 // serve many simulations on many threads.
 struct PlantWorkspace {
-  std::array<SinCosTracker, kStates> trig{};
+  std::array<SinCosTracker, kAxes> trig{};  // one per attitude angle
 };
 
 class Plant {

@@ -12,6 +12,7 @@
 // same sequence of arguments gives the same bits.
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace ftc::sim {
 
@@ -77,5 +78,15 @@ class Phasor {
   double C_ = 1.0, S_ = 0.0;
   double s_ = 0.0, c_ = 1.0;
 };
+
+// One phasor stepping by dt, not yet anchored, per sinusoid of `items` (anything with
+// `frequency` in rad/s and `phase` in rad: disturbance terms, faults).
+template <class Items>
+std::vector<Phasor> phasors_of(const Items& items, double dt) {
+  std::vector<Phasor> p;
+  p.reserve(items.size());
+  for (const auto& item : items) p.emplace_back(item.frequency, item.phase, dt);
+  return p;
+}
 
 }  // namespace ftc::sim

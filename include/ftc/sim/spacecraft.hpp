@@ -42,7 +42,7 @@ class Spacecraft final : public Plant {
 
 inline Vec3 Spacecraft::f(const State& x, PlantWorkspace& ws) const {
   double s[3], c[3];
-  for (int i = 0; i < 3; ++i) ws.trig[i].eval(x[i], s[i], c[i]);
+  for (int i = 0; i < kAxes; ++i) ws.trig[i].eval(x[i], s[i], c[i]);
   return f_trig(x, s, c);
 }
 
