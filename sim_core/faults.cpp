@@ -23,9 +23,9 @@ const char* to_string(FaultProfileType t) {
   return t == FaultProfileType::abrupt ? "abrupt" : "incipient";
 }
 
-std::vector<FieldError> Fault::validate(const std::string& path) const {
+std::vector<FieldError> Fault::validate(const std::string& path, int actuators) const {
   std::vector<FieldError> errs;
-  detail::check_int_range(errs, path + "/actuator", actuator, 1, kActuators);
+  detail::check_int_range(errs, path + "/actuator", actuator, 1, actuators);
   detail::check_non_negative(errs, path + "/onset", onset);
   if (profile.type == FaultProfileType::incipient)
     detail::check_positive(errs, path + "/profile/rate", profile.rate);
@@ -48,18 +48,5 @@ std::vector<FieldError> Fault::validate(const std::string& path) const {
 
 FaultSet::FaultSet(std::vector<Fault> faults, std::optional<double> saturation)
     : faults_(std::move(faults)), saturation_(saturation) {}
-
-FaultEffect FaultSet::effect(double t) const {
-  FaultEffect e;
-  evaluate(
-      std::span<const double>(&t, 1),
-      [&](std::size_t i, std::size_t) {
-        return std::cos(faults_[i].frequency * t + faults_[i].phase);
-      },
-      [&](std::size_t) -> FaultEffect& { return e; });
-  return e;
-}
-
-std::vector<Phasor> FaultSet::phasors(double dt) const { return phasors_of(faults_, dt); }
 
 }  // namespace ftc::sim

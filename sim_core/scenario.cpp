@@ -6,7 +6,8 @@
 
 namespace ftc::sim {
 
-std::vector<FieldError> Scenario::validate(const std::string& path) const {
+std::vector<FieldError> Scenario::validate(const std::string& path, int axes,
+                                           int actuators) const {
   std::vector<FieldError> errs;
   if (name.empty()) errs.push_back({path + "/name", "must not be empty"});
   detail::check_positive(errs, path + "/duration", duration);
@@ -21,14 +22,19 @@ std::vector<FieldError> Scenario::validate(const std::string& path) const {
       errs.push_back({path + "/duration", "needs more than 1e9 samples"});
   }
   detail::check_int_range(errs, path + "/substeps", substeps, 1, 1000);
-  for (int i = 0; i < kStates; ++i)
+  if (initial_state.size() != static_cast<std::size_t>(2 * axes))
+    errs.push_back({path + "/initial_state", "expected " + std::to_string(2 * axes) +
+                                                 " numbers (X1 and X2 of the plant's " +
+                                                 std::to_string(axes) + " axes), got " +
+                                                 std::to_string(initial_state.size())});
+  for (std::size_t i = 0; i < initial_state.size(); ++i)
     detail::check_finite(errs, path + "/initial_state/" + std::to_string(i), initial_state[i]);
   for (std::size_t i = 0; i < disturbance.size(); ++i) {
-    auto e = disturbance[i].validate(path + "/disturbance/" + std::to_string(i));
+    auto e = disturbance[i].validate(path + "/disturbance/" + std::to_string(i), axes);
     errs.insert(errs.end(), e.begin(), e.end());
   }
   for (std::size_t i = 0; i < faults.size(); ++i) {
-    auto e = faults[i].validate(path + "/faults/" + std::to_string(i));
+    auto e = faults[i].validate(path + "/faults/" + std::to_string(i), actuators);
     errs.insert(errs.end(), e.begin(), e.end());
   }
   if (saturation) detail::check_positive(errs, path + "/saturation", *saturation);

@@ -1,12 +1,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
 #include <random>
+#include <span>
 
-#include "ftc/sim/adaptive_neural_pi_fosmc.hpp"
+#include "controllers/adaptive_neural_pi_fosmc.hpp"
+#include "controllers/sliding.hpp"
 #include "ftc/sim/controller.hpp"
 #include "ftc/sim/simulation.hpp"
-#include "ftc/sim/sliding.hpp"
 #include "ftc/sim/spacecraft.hpp"
 
 using namespace ftc::sim;
@@ -43,13 +45,15 @@ class EveryController : public ::testing::TestWithParam<ControllerType> {};
 TEST_P(EveryController, KeepsAttitudeErrorSmallThroughFaults) {
   const SimulationResult r = run(ControllerConfig::table1(GetParam()), 1);
   ASSERT_FALSE(r.metrics.diverged);
-  ASSERT_EQ(r.trajectory.size(), 30000u);
+  ASSERT_EQ(r.trajectory.rows(), 30000u);
   double worst = 0.0, at = 0.0;
-  for (const TrajectoryRow& row : r.trajectory)
-    if (row.t >= 5.0 && row.x.head<3>().norm() > worst) {
-      worst = row.x.head<3>().norm();
-      at = row.t;
+  for (std::size_t k = 0; k < r.trajectory.rows(); ++k) {
+    const double e = Eigen::Map<const Vec3>(r.trajectory.x(k).data()).norm();
+    if (r.trajectory.t(k) >= 5.0 && e > worst) {
+      worst = e;
+      at = r.trajectory.t(k);
     }
+  }
   EXPECT_LT(worst, 0.05) << "at t = " << at;
 }
 
@@ -60,7 +64,7 @@ TEST_P(EveryController, StepWithGivenDriftEqualsStepComputingIt) {
   const State x = (State() << kX1, kX2).finished();
   const Vec3 f = plant.f(x);
   for (int k = 0; k < 3; ++k)
-    EXPECT_EQ(a->step(k * kTs, kX1, kX2, kA), b->step(Measurement{k * kTs, kX1, kX2, kA, &f}));
+    EXPECT_EQ(a->step(k * kTs, kX1, kX2, kA), b->step(Measurement<3>{k * kTs, kX1, kX2, kA, &f}));
 }
 
 TEST_P(EveryController, ResetRestoresInitialState) {
@@ -116,7 +120,7 @@ TEST(Nftsmc, StepFollowsEquation) {
 TEST(AdaptiveNeuralPiFosmc, FirstTwoStepsFollowEquations) {
   const Spacecraft plant;
   const ControllerConfig cfg = ControllerConfig::table1(ControllerType::adaptive_neural_pi_fosmc);
-  AdaptiveNeuralPiFosmc c(cfg, plant, kTs);
+  AdaptiveNeuralPiFosmc<3, 4> c(cfg, plant, kTs);
   const State x = (State() << kX1, kX2).finished();
   const double a1 = 0.5625 / (2 - 0.5625);
   const Vec3 C = 9.0 * sgn_pow(kX2, 0.5625) + 10.0 * sgn_pow(kX1, a1);
@@ -148,9 +152,11 @@ TEST(PiFosmc, UnitKpZeroKiReproducesFosmcBitForBit) {
   pi.Ki = 0.0;
   const SimulationResult a = run(pi, 1);
   const SimulationResult b = run(ControllerConfig::table1(ControllerType::fosmc), 1);
-  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
-  for (std::size_t k = 0; k < a.trajectory.size(); ++k)
-    ASSERT_EQ(a.trajectory[k].u_d, b.trajectory[k].u_d) << "sample " << k;
+  ASSERT_EQ(a.trajectory.rows(), b.trajectory.rows());
+  for (std::size_t k = 0; k < a.trajectory.rows(); ++k) {
+    const std::span<const double> ua = a.trajectory.u_d(k), ub = b.trajectory.u_d(k);
+    ASSERT_TRUE(std::equal(ua.begin(), ua.end(), ub.begin())) << "sample " << k;
+  }
   EXPECT_EQ(a.metrics.errors.ise, b.metrics.errors.ise);
 }
 

@@ -7,6 +7,8 @@
 #include "ftc/sim/faults.hpp"
 #include "ftc/sim/scenario.hpp"
 
+#include "sincos.hpp"
+
 using namespace ftc::sim;
 
 namespace {
@@ -98,7 +100,7 @@ TEST(Faults, SaturationIsAppliedAfterFaults) {
 TEST(Faults, ValidationNamesFields) {
   Fault f = make(FaultType::loss_of_effectiveness, 5, -1.0);
   f.fraction = 1.5;
-  const auto errs = f.validate("/f");
+  const auto errs = f.validate("/f", 4);
   ASSERT_EQ(errs.size(), 3u);
   EXPECT_EQ(errs[0].path, "/f/actuator");
   EXPECT_EQ(errs[1].path, "/f/onset");
@@ -108,7 +110,7 @@ TEST(Faults, ValidationNamesFields) {
 TEST(Disturbance, PaperDisturbance) {
   const Disturbance d(Scenario::paper().disturbance);
   const double t = 1.7;
-  const Vec3 v = d(t);
+  const Vec3 v = d.at<3>(t);
   EXPECT_DOUBLE_EQ(v[0], 0.5 * std::sin(t));
   EXPECT_DOUBLE_EQ(v[1], 0.5 * std::cos(2 * t));
   EXPECT_DOUBLE_EQ(v[2], 0.5 * std::sin(3 * t));
@@ -129,9 +131,9 @@ TEST(Disturbance, BlockEvaluationMatchesPointwise) {
         return shape == Shape::sin ? std::sin(x) : std::cos(x);
       },
       [&](std::size_t k) -> Vec3& { return out[k]; });
-  for (std::size_t k = 0; k < t.size(); ++k) EXPECT_EQ(out[k], d(t[k])) << t[k];
+  for (std::size_t k = 0; k < t.size(); ++k) EXPECT_EQ(out[k], d.at<3>(t[k])) << t[k];
   // ... and with the sinusoids from phasors (what the simulator does) within 1e-14.
-  std::vector<Phasor> p = d.phasors(5e-4);
+  std::vector<Phasor> p = phasors_of(d.terms(), 5e-4);
   for (Phasor& q : p) q.anchor(2.5);
   for (int n = 0; n < 20; ++n)
     for (Phasor& q : p) q.advance();
@@ -142,7 +144,7 @@ TEST(Disturbance, BlockEvaluationMatchesPointwise) {
         return shape == Shape::sin ? p[i].sin() : p[i].cos();
       },
       [&](std::size_t) -> Vec3& { return v; });
-  EXPECT_TRUE(v.isApprox(d(2.51), 1e-14));
+  EXPECT_TRUE(v.isApprox(d.at<3>(2.51), 1e-14));
 }
 
 TEST(Faults, BlockEvaluationMatchesPointwise) {
@@ -161,15 +163,15 @@ TEST(Faults, BlockEvaluationMatchesPointwise) {
   const FaultSet set({bias, loe, stuck, second}, 4.0);
   // Instants before, at and after each onset, in one block.
   const std::vector<double> t = {0.0, 1.0, 1.5, 2.0, 2.5, 2.75, 3.0, 9.0};
-  std::vector<FaultEffect> out(t.size());
+  std::vector<FaultEffect<4>> out(t.size());
   set.evaluate(
       t,
       [&](std::size_t i, std::size_t k) {
         return std::cos(set.faults()[i].frequency * t[k] + set.faults()[i].phase);
       },
-      [&](std::size_t k) -> FaultEffect& { return out[k]; });
+      [&](std::size_t k) -> FaultEffect<4>& { return out[k]; });
   for (std::size_t k = 0; k < t.size(); ++k) {
-    const FaultEffect e = set.effect(t[k]);
+    const FaultEffect<4> e = set.effect<4>(t[k]);
     EXPECT_EQ(out[k].gain, e.gain) << t[k];
     EXPECT_EQ(out[k].offset, e.offset) << t[k];
   }
@@ -184,7 +186,7 @@ TEST(Faults, BlockEvaluationMatchesPointwise) {
 
 TEST(Disturbance, TermsOnOneAxisAddWithPhase) {
   const Disturbance d({{2, Shape::sin, 1.0, 2.0, 0.5}, {2, Shape::cos, 0.25, 1.0, 0.0}});
-  const Vec3 v = d(0.3);
+  const Vec3 v = d.at<3>(0.3);
   EXPECT_EQ(v[0], 0.0);
   EXPECT_DOUBLE_EQ(v[1], std::sin(2.0 * 0.3 + 0.5) + 0.25 * std::cos(0.3));
 }

@@ -1,22 +1,28 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <span>
+#include <vector>
 
 #include "ftc/sim/integrator.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "ftc/sim/spacecraft.hpp"
+#include "plants/spacecraft_dynamics.hpp"
 
 using namespace ftc::sim;
 
 namespace {
 
+State state_of(const std::vector<double>& v) { return Eigen::Map<const State>(v.data()); }
+Vec4 input_of(std::span<const double> v) { return Eigen::Map<const Vec4>(v.data()); }
+
 // Open loop: a constant command, so the closed loop is a smooth ODE and RK4's order shows.
-class ConstantCommand final : public Controller {
+class ConstantCommand final : public Controller<3, 4> {
  public:
   explicit ConstantCommand(const Vec4& u) : u_(u) {}
   void reset() override {}
-  Vec4 step(const Measurement&) override { return u_; }
-  using Controller::step;
+  Vec4 step(const Measurement<3>&) override { return u_; }
+  using Controller<3, 4>::step;
   const ControllerConfig& config() const override { return config_; }
   double sample_time() const override { return 0.05; }
 
@@ -34,9 +40,9 @@ State open_loop_final(int substeps) {
   s.duration = 2.0;
   s.sample_time = 0.05;
   s.substeps = substeps;
-  s.initial_state << 0.3, -0.2, 0.5, 0.4, -0.6, 0.2;
+  s.initial_state = {0.3, -0.2, 0.5, 0.4, -0.6, 0.2};
   ConstantCommand c(Vec4(0.1, -0.2, 0.05, 0.1));
-  return simulate(plant, c, s).final_state;
+  return state_of(simulate(plant, c, s).final_state);
 }
 
 }  // namespace
@@ -71,7 +77,7 @@ TEST(Simulation, ExogenousInputsFollowTheirDefinitions) {
   s.duration = 3.0;
   s.sample_time = 0.05;
   s.substeps = 3;  // 180 RK4 steps: eleven blocks and part of a twelfth
-  s.initial_state << 0.3, -0.2, 0.5, 0.4, -0.6, 0.2;
+  s.initial_state = {0.3, -0.2, 0.5, 0.4, -0.6, 0.2};
   s.disturbance = {{1, Shape::sin, 0.5, 1.0, 0.0},
                    {2, Shape::cos, 0.5, 2.0, 0.0},
                    {2, Shape::sin, 0.2, 7.0, 0.4},
@@ -105,23 +111,25 @@ TEST(Simulation, ExogenousInputsFollowTheirDefinitions) {
 
   const Disturbance d(s.disturbance);
   const FaultSet faults(s.faults, s.saturation);
-  const Mat34 G = plant.G(s.initial_state);
+  const State x0 = state_of(s.initial_state);
+  const Mat34 G = plant.G(x0);
   const auto deriv = [&](double t, const State& x) {
     State dx;
-    dx.head<kAxes>() = x.tail<kAxes>();
-    dx.tail<kAxes>() = plant.f(x) + G * faults.apply(t, command) + d(t);
+    dx.head<3>() = x.tail<3>();
+    dx.tail<3>() = plant.f(x) + G * faults.apply(t, command) + d.at<3>(t);
     return dx;
   };
-  State x = s.initial_state;
+  State x = x0;
   const double h = s.sample_time / s.substeps;
   for (std::int64_t k = 0; k < s.samples(); ++k) {
     const double t = static_cast<double>(k) * s.sample_time;
     // The applied inputs recorded at each sample are the faults' definition at that instant.
-    ASSERT_TRUE(r.trajectory[k].u.isApprox(faults.apply(t, command), 1e-13)) << t;
+    ASSERT_TRUE(input_of(r.trajectory.u(k)).isApprox(faults.apply(t, command), 1e-13)) << t;
     for (int j = 0; j < s.substeps; ++j) x = rk4_step(x, t + j * h, h, deriv);
   }
-  EXPECT_TRUE(r.final_state.isApprox(x, 1e-12)) << (r.final_state - x).transpose();
-  EXPECT_GT((x - s.initial_state).norm(), 0.1);  // the run went somewhere
+  EXPECT_TRUE(state_of(r.final_state).isApprox(x, 1e-12))
+      << (state_of(r.final_state) - x).transpose();
+  EXPECT_GT((x - x0).norm(), 0.1);  // the run went somewhere
 }
 
 TEST(Simulation, StopsAndMarksDivergence) {
@@ -144,9 +152,10 @@ TEST(Simulation, RecordsDecimatedTrajectory) {
   SimulationOptions o;
   o.record_every = 10;
   const SimulationResult r = simulate(plant, c, s, o);
-  ASSERT_EQ(r.trajectory.size(), 100u);
-  EXPECT_EQ(r.trajectory[0].x, s.initial_state);
-  EXPECT_NEAR(r.trajectory[1].t, 0.01, 1e-15);
+  ASSERT_EQ(r.trajectory.rows(), 100u);
+  const std::span<const double> x0 = r.trajectory.x(0);
+  EXPECT_EQ(std::vector<double>(x0.begin(), x0.end()), s.initial_state);
+  EXPECT_NEAR(r.trajectory.t(1), 0.01, 1e-15);
   EXPECT_EQ(r.samples, 1000);
 }
 
@@ -164,25 +173,27 @@ TEST(Simulation, WindowedMetricsAddUp) {
   SimulationOptions first;
   first.window = {0.0, 0.0005};
   const Metrics m0 = simulate(plant, c, s, first).metrics;
-  EXPECT_DOUBLE_EQ(m0.errors.ise, 1e-3 * s.initial_state.head<3>().squaredNorm());
-  EXPECT_DOUBLE_EQ(m0.errors.iae, 1e-3 * s.initial_state.head<3>().cwiseAbs().sum());
+  const State x0 = state_of(s.initial_state);
+  EXPECT_DOUBLE_EQ(m0.errors.ise, 1e-3 * x0.head<3>().squaredNorm());
+  EXPECT_DOUBLE_EQ(m0.errors.iae, 1e-3 * x0.head<3>().cwiseAbs().sum());
 }
 
 namespace {
 
 // The spacecraft seen only through the Plant interface, and not admitting that G is constant:
 // the simulator's generic loop and the controllers' per-sample G⁺ then do the work that the
-// built-in spacecraft's specialised paths skip.
-class OpaqueSpacecraft final : public Plant {
+// built-in spacecraft's specialised paths skip. Its f keeps the spacecraft's angle trackers (one
+// simulation at a time), so that both paths evaluate f to the same bits.
+class OpaqueSpacecraft final : public Plant<3, 4> {
  public:
-  Vec3 f(const State& x) const override { return sc_.f(x); }
-  Vec3 f(const State& x, PlantWorkspace& ws) const override { return sc_.f(x, ws); }
+  Vec3 f(const State& x) const override { return sc_.f(x, ws_); }
   Mat34 G(const State& x) const override { return sc_.G(x); }
   Mat43 G_pinv(const State& x) const override { return sc_.G_pinv(x); }
   std::string model() const override { return "opaque spacecraft"; }
 
  private:
   Spacecraft sc_;
+  mutable Spacecraft::Workspace ws_;
 };
 
 }  // namespace

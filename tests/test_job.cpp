@@ -64,8 +64,8 @@ TEST(JobLoader, FillsDefaultsForOmittedKeys) {
   const tune::Job job = tune::parse_job(j, "minimal");
   EXPECT_EQ(job.scenarios[0].sample_time, 1e-3);
   EXPECT_EQ(job.scenarios[0].substeps, 1);
-  EXPECT_EQ(job.plant.spacecraft.inertia[0], 20.0);
-  EXPECT_EQ(job.plant.spacecraft.orbital_rate, 1.1e-3);
+  EXPECT_EQ(job.plant.model, "spacecraft");
+  EXPECT_EQ(job.plant.values, (std::vector<double>{20.0, 17.0, 15.0, 1.1e-3}));
   EXPECT_EQ(job.controller.c2, 9.0);
   EXPECT_EQ(job.objective.metric, sim::Metric::ise);
   EXPECT_FALSE(job.tuning.has_value());
@@ -137,7 +137,7 @@ TEST(JobLoader, RejectsBadInputWithJsonPath) {
        [](json& j) {
          j["scenarios"][0]["initial_state"] = {1, 2, 3, 4, 5};
        },
-       "/scenarios/0/initial_state", "array of 6 numbers"},
+       "/scenarios/0/initial_state", "expected 6 numbers (X1 and X2 of the plant's 3 axes), got 5"},
       {"incipient without rate",
        [](json& j) {
          j["scenarios"][0]["faults"][0]["profile"] = {{"type", "incipient"}};

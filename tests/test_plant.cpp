@@ -5,6 +5,8 @@
 
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/spacecraft.hpp"
+#include "plants/spacecraft_dynamics.hpp"
+#include "sincos.hpp"
 
 using namespace ftc::sim;
 
@@ -13,7 +15,7 @@ namespace {
 State random_state(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(-2.0, 2.0);
   State x;
-  for (int i = 0; i < kStates; ++i) x[i] = u(rng);
+  for (int i = 0; i < 6; ++i) x[i] = u(rng);
   return x;
 }
 
@@ -149,7 +151,7 @@ TEST(Plant, WorkspaceEvaluationAgreesWithDirectOne) {
   SpacecraftParams p;
   p.orbital_rate = 0.3;
   const Spacecraft sc(p);
-  PlantWorkspace ws;
+  Spacecraft::Workspace ws;
   State x;
   x << 0.4, -0.2, 1.1, 0.5, -0.3, 0.8;
   for (int k = 0; k < 5000; ++k) {

@@ -127,10 +127,11 @@ TEST(GainsFile, RoundTripAndReproducesTunedMetrics) {
 
   // The runtime-loaded controller reproduces the tuned run bit for bit.
   const tune::Job& job = r.job;
-  const auto plant = job.plant.make();
-  auto c = runtime::make_controller(g, *plant, 0.001);
+  ASSERT_EQ(job.plant.values, (std::vector<double>{20, 17, 15, 1.1e-3}));
+  const sim::Spacecraft plant;  // the job's
+  auto c = runtime::make_controller(g, plant, 0.001);
   const sim::SimulationResult sr =
-      sim::simulate(*plant, *c, job.scenarios[0], tune::simulation_options(job, job.scenarios[0]));
+      sim::simulate(plant, *c, job.scenarios[0], tune::simulation_options(job, job.scenarios[0]));
   EXPECT_EQ(sr.metrics.errors.ise, r.best().outcome.evaluation.scenarios[0].errors.ise);
 }
 
@@ -266,7 +267,7 @@ TEST(Runtime, ReadmeExampleLoadsAndSteps) {
   const ftc::sim::Vec3 X1(0.1, -0.2, 0.3), X2(0.0, 0.1, 0.0), a(0.0, 0.0, 0.0);
 
   const ftc::sim::Spacecraft plant({.inertia = {20, 17, 15}, .orbital_rate = 1.1e-3});
-  std::unique_ptr<ftc::sim::Controller> ctl =
+  std::unique_ptr<ftc::sim::Controller<3, 4>> ctl =
       ftc::runtime::load_controller(file, plant, /*sample_time=*/0.001);  // throws ftc::InputError
   ctl->reset();
   ftc::sim::Vec4 u_d = ctl->step(t, X1, X2, a);

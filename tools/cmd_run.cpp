@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli.hpp"
-#include "ftc/tune/controller_json.hpp"
+#include "ftc/runtime/controller_json.hpp"
 #include "ftc/tune/files.hpp"
 #include "ftc/tune/tuning_run.hpp"
 #include "progress.hpp"

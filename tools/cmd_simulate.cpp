@@ -9,7 +9,7 @@
 #include "cli.hpp"
 #include "ftc/runtime/gains.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/tune/controller_json.hpp"
+#include "ftc/runtime/controller_json.hpp"
 #include "ftc/tune/evaluation.hpp"
 #include "ftc/tune/files.hpp"
 #include "ftc/version.hpp"
@@ -43,18 +43,13 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
     if (!o.controller.empty() || !o.sets.empty())
       throw InputError("--gains", "", "cannot be combined with --controller or --set");
     const runtime::Gains gains = runtime::read_gains(o.gains);
-    for (std::size_t i = 0; i < job.scenarios.size(); ++i)
-      if (job.scenarios[i].sample_time != gains.sample_time)
-        throw InputError(o.gains, "/sample_time",
-                         "the gains were tuned for Ts = " + std::to_string(gains.sample_time) +
-                             " s, but scenario \"" + job.scenarios[i].name + "\" samples at Ts = " +
-                             std::to_string(job.scenarios[i].sample_time) + " s");
+    for (const sim::Scenario& s : job.scenarios) runtime::check_sample_time(gains, s.sample_time);
     controller = gains.controller;
   } else {
     controller = select_controller(job, o.controller, o.sets);
   }
   if (!(o.record_interval > 0)) throw InputError("--record-every", "", "must be > 0 seconds");
-  const auto plant = job.plant.make();
+  const auto plant = sim::make_plant(job.plant);
   const fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
 
   json scenarios = json::array();

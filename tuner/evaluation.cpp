@@ -29,12 +29,11 @@ sim::SimulationOptions simulation_options(const Job& job, const sim::Scenario& s
   return o;
 }
 
-sim::SimulationResult simulate_scenario(const Job& job, const sim::Plant& plant,
+sim::SimulationResult simulate_scenario(const Job& job, const sim::AnyPlant& plant,
                                         const sim::ControllerConfig& controller,
                                         std::size_t scenario, std::int64_t record_every) {
   const sim::Scenario& s = job.scenarios.at(scenario);
-  auto c = sim::make_controller(controller, plant, s.sample_time);
-  return sim::simulate(plant, *c, s, simulation_options(job, s, record_every));
+  return plant.simulate(controller, s, simulation_options(job, s, record_every));
 }
 
 double aggregate_objective(const ObjectiveConfig& objective, std::span<const sim::Metrics> runs) {
@@ -63,22 +62,22 @@ Evaluation score(const ObjectiveConfig& objective, std::vector<sim::Metrics> per
   return e;
 }
 
-std::string trajectory_csv(const std::vector<sim::TrajectoryRow>& rows) {
-  std::string s = "time,x1,x2,x3,x4,x5,x6,ud1,ud2,ud3,ud4,u1,u2,u3,u4\n";
-  s.reserve(rows.size() * 200);
+std::string trajectory_csv(const sim::Trajectory& tr) {
+  std::string s = "time";
+  for (int i = 1; i <= 2 * tr.axes; ++i) s += ",x" + std::to_string(i);
+  for (const char* prefix : {",ud", ",u"})
+    for (int j = 1; j <= tr.actuators; ++j) s += prefix + std::to_string(j);
+  s += '\n';
+  s.reserve(tr.rows() * 200);
   char buf[64];
-  for (const sim::TrajectoryRow& r : rows) {
-    std::snprintf(buf, sizeof buf, "%.6f", r.t);
+  for (std::size_t r = 0; r < tr.rows(); ++r) {
+    const std::span<const double> row = tr.row(r);
+    std::snprintf(buf, sizeof buf, "%.6f", row[0]);
     s += buf;
-    for (int i = 0; i < sim::kStates; ++i) {
-      std::snprintf(buf, sizeof buf, ",%.9g", r.x[i]);
+    for (std::size_t i = 1; i < row.size(); ++i) {
+      std::snprintf(buf, sizeof buf, ",%.9g", row[i]);
       s += buf;
     }
-    for (const sim::Vec4* v : {&r.u_d, &r.u})
-      for (int j = 0; j < sim::kActuators; ++j) {
-        std::snprintf(buf, sizeof buf, ",%.9g", (*v)[j]);
-        s += buf;
-      }
     s += '\n';
   }
   return s;

@@ -7,13 +7,13 @@
 #include <set>
 #include <sstream>
 
-#include "ftc/tune/controller_json.hpp"
+#include "ftc/runtime/controller_json.hpp"
 #include "ftc/tune/files.hpp"
-#include "json_reader.hpp"
+#include "ftc/runtime/json_reader.hpp"
 
 namespace ftc::tune {
 
-using detail::ObjectReader;
+using json_io::ObjectReader;
 using nlohmann::json;
 
 namespace {
@@ -36,15 +36,29 @@ PlantConfig parse_plant(const json& j, const std::string& path, std::vector<Fiel
   PlantConfig p;
   ObjectReader r(j, path, errs);
   r.string("model", p.model);
-  if (p.model == "spacecraft") {
-    r.numbers("inertia", p.spacecraft.inertia.data(), 3);
-    r.number("orbital_rate", p.spacecraft.orbital_rate);
-  } else {
-    errs.push_back({r.path("model"), "unknown plant model '" + p.model + "' (known: spacecraft)"});
+  const sim::PlantKind* kind = sim::find_plant_kind(p.model);
+  if (!kind) {
+    errs.push_back({r.path("model"), "unknown plant model '" + p.model +
+                                         "' (known: " + sim::plant_model_names() + ")"});
     return p;
+  }
+  p.values = kind->defaults();
+  std::size_t offset = 0;
+  for (const sim::PlantParameter& param : kind->parameters) {
+    if (param.size() == 1)
+      r.number(param.name.c_str(), p.values[offset]);
+    else
+      r.numbers(param.name.c_str(), p.values.data() + offset, param.size());
+    offset += param.size();
   }
   r.finish();
   return p;
+}
+
+// The plant's kind, or the default spacecraft's when the model is unknown (already reported).
+const sim::PlantKind& kind_of(const PlantConfig& p) {
+  const sim::PlantKind* k = sim::find_plant_kind(p.model);
+  return k ? *k : *sim::find_plant_kind("spacecraft");
 }
 
 sim::DisturbanceTerm parse_disturbance(const json& j, const std::string& path,
@@ -120,7 +134,7 @@ std::vector<T> parse_array(const json* j, const std::string& path, std::vector<F
   std::vector<T> out;
   if (!j) return out;
   if (!j->is_array()) {
-    errs.push_back({path, "expected an array, got " + detail::json_type_name(*j)});
+    errs.push_back({path, "expected an array, got " + json_io::json_type_name(*j)});
     return out;
   }
   for (std::size_t i = 0; i < j->size(); ++i)
@@ -136,7 +150,8 @@ sim::Scenario parse_scenario(const json& j, const std::string& path,
   r.number("duration", s.duration, true);
   r.number("sample_time", s.sample_time);
   r.integer("substeps", s.substeps);
-  r.numbers("initial_state", s.initial_state.data(), sim::kStates);
+  s.initial_state.clear();  // absent: the plant's default, filled in by parse_job
+  r.number_list("initial_state", s.initial_state);
   s.disturbance = parse_array<sim::DisturbanceTerm>(r.child("disturbance"), r.path("disturbance"),
                                                     errs, parse_disturbance);
   s.faults = parse_array<sim::Fault>(r.child("faults"), r.path("faults"), errs, parse_fault);
@@ -162,7 +177,7 @@ ObjectiveConfig parse_objective(const json& j, const std::string& path,
     const std::string wp = r.path("window");
     if (!w->is_array() || w->size() != 2 || !(*w)[0].is_number() ||
         !((*w)[1].is_number() || (*w)[1].is_null()))
-      errs.push_back({wp, "expected [start, end] in seconds, got " + detail::json_type_name(*w)});
+      errs.push_back({wp, "expected [start, end] in seconds, got " + json_io::json_type_name(*w)});
     else
       o.window = {(*w)[0].get<double>(), (*w)[1].is_null() ? std::numeric_limits<double>::infinity()
                                                            : (*w)[1].get<double>()};
@@ -187,17 +202,17 @@ TuningConfig parse_tuning(const json& j, const std::string& path, std::vector<Fi
     const std::string pp = r.path("parameters");
     if (!pj->is_object()) {
       errs.push_back(
-          {pp, "expected an object of name: [lower, upper], got " + detail::json_type_name(*pj)});
+          {pp, "expected an object of name: [lower, upper], got " + json_io::json_type_name(*pj)});
     } else {
       for (auto it = pj->begin(); it != pj->end(); ++it) {
         ParameterBounds b;
         b.name = it.key();
-        const std::string bp = pp + "/" + detail::pointer_escape(it.key());
+        const std::string bp = pp + "/" + json_io::pointer_escape(it.key());
         const json& v = it.value();
         if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number()) {
           errs.push_back({bp, "expected [lower, upper] (two numbers), got " +
                                   (v.is_array() ? "an array of " + std::to_string(v.size())
-                                                : detail::json_type_name(v))});
+                                                : json_io::json_type_name(v))});
           continue;
         }
         b.lower = v[0].get<double>();
@@ -260,7 +275,7 @@ void check_unit(std::vector<FieldError>& errs, const std::string& path, double v
   const bool ok = std::isfinite(v) && (open_low ? v > 0 : v >= 0) && v <= 1;
   if (!ok)
     errs.push_back({path, std::string("must be in ") + (open_low ? "(0, 1]" : "[0, 1]") + " (got " +
-                              detail::number_text(v) + ")"});
+                              json_io::number_text(v) + ")"});
 }
 
 }  // namespace
@@ -269,25 +284,6 @@ void check_unit(std::vector<FieldError>& errs, const std::string& path, double v
 
 const char* to_string(Aggregate a) { return a == Aggregate::mean ? "mean" : "max"; }
 const char* to_string(AlgorithmType a) { return a == AlgorithmType::bat ? "bat" : "random"; }
-
-std::vector<FieldError> PlantConfig::validate(const std::string& path) const {
-  std::vector<FieldError> errs;
-  if (model != "spacecraft") return errs;  // reported while parsing
-  for (int i = 0; i < 3; ++i) {
-    const double v = spacecraft.inertia[i];
-    if (!(std::isfinite(v) && v > 0))
-      errs.push_back({path + "/inertia/" + std::to_string(i),
-                      "must be > 0 (got " + detail::number_text(v) + ")"});
-  }
-  const double w = spacecraft.orbital_rate;
-  if (!(std::isfinite(w) && w >= 0))
-    errs.push_back({path + "/orbital_rate", "must be >= 0 (got " + detail::number_text(w) + ")"});
-  return errs;
-}
-
-std::unique_ptr<sim::Plant> PlantConfig::make() const {
-  return std::make_unique<sim::Spacecraft>(spacecraft);
-}
 
 std::vector<FieldError> AlgorithmConfig::validate(const std::string& path) const {
   std::vector<FieldError> errs;
@@ -298,20 +294,20 @@ std::vector<FieldError> AlgorithmConfig::validate(const std::string& path) const
   if (type != AlgorithmType::bat) return errs;
   const bool fmin_ok = std::isfinite(f_min) && f_min >= 0;
   if (!fmin_ok)
-    errs.push_back({path + "/f_min", "must be >= 0 (got " + detail::number_text(f_min) + ")"});
+    errs.push_back({path + "/f_min", "must be >= 0 (got " + json_io::number_text(f_min) + ")"});
   if (!std::isfinite(f_max))
     errs.push_back({path + "/f_max", "must be a finite number"});
   else if (fmin_ok && f_max < f_min)
-    errs.push_back({path + "/f_max", "must be >= f_min " + detail::number_text(f_min) + " (got " +
-                                         detail::number_text(f_max) + ")"});
+    errs.push_back({path + "/f_max", "must be >= f_min " + json_io::number_text(f_min) + " (got " +
+                                         json_io::number_text(f_max) + ")"});
   check_unit(errs, path + "/loudness", loudness, true);
   check_unit(errs, path + "/pulse_rate", pulse_rate, false);
   if (!(std::isfinite(loudness_decay) && loudness_decay > 0 && loudness_decay < 1))
     errs.push_back({path + "/loudness_decay", "must be in the open interval (0, 1) (got " +
-                                                  detail::number_text(loudness_decay) + ")"});
+                                                  json_io::number_text(loudness_decay) + ")"});
   if (!(std::isfinite(pulse_rate_growth) && pulse_rate_growth > 0))
     errs.push_back({path + "/pulse_rate_growth",
-                    "must be > 0 (got " + detail::number_text(pulse_rate_growth) + ")"});
+                    "must be > 0 (got " + json_io::number_text(pulse_rate_growth) + ")"});
   return errs;
 }
 
@@ -322,13 +318,14 @@ std::vector<FieldError> Job::validate() const {
                     "must be 1-100 characters of letters, digits, '_', '-', '.' "
                     "(it names the output directory); got \"" +
                         name + "\""});
-  append(errs, plant.validate("/plant"));
+  const sim::PlantKind& kind = kind_of(plant);
+  if (sim::find_plant_kind(plant.model)) append(errs, kind.validate(plant.values, "/plant"));
 
   if (scenarios.empty()) errs.push_back({"/scenarios", "must hold at least one scenario"});
   std::set<std::string> names;
   for (std::size_t i = 0; i < scenarios.size(); ++i) {
     const std::string p = "/scenarios/" + std::to_string(i);
-    append(errs, scenarios[i].validate(p));
+    append(errs, scenarios[i].validate(p, kind.axes, kind.actuators));
     if (!scenarios[i].name.empty() && !safe_name(scenarios[i].name))
       errs.push_back({p + "/name", "must be letters, digits, '_', '-', '.' (got \"" +
                                        scenarios[i].name + "\")"});
@@ -342,16 +339,16 @@ std::vector<FieldError> Job::validate() const {
 
   const sim::Window& w = objective.window;
   if (!std::isfinite(w.t0) || w.t0 < 0)
-    errs.push_back({"/objective/window/0", "must be >= 0 (got " + detail::number_text(w.t0) + ")"});
+    errs.push_back({"/objective/window/0", "must be >= 0 (got " + json_io::number_text(w.t0) + ")"});
   else if (!(w.t1 > w.t0))
-    errs.push_back({"/objective/window", "end " + detail::number_text(w.t1) +
-                                             " must be after start " + detail::number_text(w.t0)});
+    errs.push_back({"/objective/window", "end " + json_io::number_text(w.t1) +
+                                             " must be after start " + json_io::number_text(w.t0)});
   else if (std::isfinite(w.t1))
     for (const sim::Scenario& s : scenarios)
       if (std::isfinite(s.duration) && w.t1 > s.duration + 1e-12) {
         errs.push_back({"/objective/window/1",
-                        "end " + detail::number_text(w.t1) + " is after the end of scenario \"" +
-                            s.name + "\" (" + detail::number_text(s.duration) + " s)"});
+                        "end " + json_io::number_text(w.t1) + " is after the end of scenario \"" +
+                            s.name + "\" (" + json_io::number_text(s.duration) + " s)"});
         break;
       }
 
@@ -362,12 +359,12 @@ std::vector<FieldError> Job::validate() const {
       if (scenarios[i].sample_time != scenarios[0].sample_time)
         errs.push_back({"/scenarios/" + std::to_string(i) + "/sample_time",
                         "must equal the first scenario's sample_time " +
-                            detail::number_text(scenarios[0].sample_time) +
+                            json_io::number_text(scenarios[0].sample_time) +
                             " when the job is tuned"});
     if (tuning->parameters.empty())
       errs.push_back({"/tuning/parameters", "must name at least one controller parameter"});
     for (const ParameterBounds& b : tuning->parameters) {
-      const std::string p = "/tuning/parameters/" + detail::pointer_escape(b.name);
+      const std::string p = "/tuning/parameters/" + json_io::pointer_escape(b.name);
       const sim::ControllerField* f = sim::find_controller_field(b.name);
       if (!f || !f->applies_to(controller.type)) {
         std::string tunable;
@@ -388,9 +385,9 @@ std::vector<FieldError> Job::validate() const {
         continue;
       }
       if (b.lower >= b.upper) {
-        errs.push_back({p, "lower bound " + detail::number_text(b.lower) + " is " +
+        errs.push_back({p, "lower bound " + json_io::number_text(b.lower) + " is " +
                                (b.lower == b.upper ? "equal to" : "above") + " upper bound " +
-                               detail::number_text(b.upper)});
+                               json_io::number_text(b.upper)});
         continue;
       }
       for (int k = 0; k < 2; ++k) {
@@ -398,7 +395,7 @@ std::vector<FieldError> Job::validate() const {
         const std::string msg = sim::check_controller_value(controller, *f, v);
         if (!msg.empty())
           errs.push_back({p + "/" + std::to_string(k), std::string(k == 0 ? "lower" : "upper") +
-                                                           " bound " + detail::number_text(v) +
+                                                           " bound " + json_io::number_text(v) +
                                                            " is outside the valid range of " +
                                                            b.name + ": " + msg});
       }
@@ -424,7 +421,10 @@ Job parse_job(const json& j, const std::string& source) {
     errs.push_back(
         {"/schema", "must be \"" + std::string(kJobSchema) + "\" (got \"" + schema + "\")"});
   r.string("name", job.name, true);
-  if (const json* p = r.child("plant")) job.plant = parse_plant(*p, "/plant", errs);
+  if (const json* p = r.child("plant"))
+    job.plant = parse_plant(*p, "/plant", errs);
+  else
+    job.plant.values = kind_of(job.plant).defaults();
   job.scenarios =
       parse_array<sim::Scenario>(r.child("scenarios", true), "/scenarios", errs, parse_scenario);
   if (const json* c = r.child("controller", true))
@@ -437,7 +437,7 @@ Job parse_job(const json& j, const std::string& source) {
         if (cj.is_object() && cj.contains("label")) {
           if (!cj["label"].is_string())
             e.push_back(
-                {p + "/label", "expected a string, got " + detail::json_type_name(cj["label"])});
+                {p + "/label", "expected a string, got " + json_io::json_type_name(cj["label"])});
           else
             entry.label = cj["label"].get<std::string>();
           body.erase("label");
@@ -449,6 +449,8 @@ Job parse_job(const json& j, const std::string& source) {
   if (const json* o = r.child("objective")) job.objective = parse_objective(*o, "/objective", errs);
   if (const json* t = r.child("tuning")) job.tuning = parse_tuning(*t, "/tuning", errs);
   r.finish();
+  for (sim::Scenario& s : job.scenarios)
+    if (s.initial_state.empty()) s.initial_state = kind_of(job.plant).default_initial_state;
 
   // Range checks only where parsing found nothing: a missing or mistyped field is reported once.
   for (FieldError& e : job.validate()) {
@@ -461,7 +463,7 @@ Job parse_job(const json& j, const std::string& source) {
 }
 
 Job parse_job_text(const std::string& text, const std::string& source) {
-  return parse_job(detail::parse_json_text(text, source), source);
+  return parse_job(json_io::parse_json_text(text, source), source);
 }
 
 Job load_job(const std::filesystem::path& file) {
@@ -479,9 +481,17 @@ double json_number_or(const json& j, double if_null) {
 }
 
 json to_json(const PlantConfig& p) {
-  return {{"model", p.model},
-          {"inertia", {p.spacecraft.inertia[0], p.spacecraft.inertia[1], p.spacecraft.inertia[2]}},
-          {"orbital_rate", p.spacecraft.orbital_rate}};
+  json j = {{"model", p.model}};
+  std::size_t offset = 0;
+  for (const sim::PlantParameter& param : kind_of(p).parameters) {
+    if (param.size() == 1)
+      j[param.name] = p.values.at(offset);
+    else
+      j[param.name] = std::vector<double>(p.values.begin() + offset,
+                                          p.values.begin() + offset + param.size());
+    offset += param.size();
+  }
+  return j;
 }
 
 json to_json(const ObjectiveConfig& o) {
@@ -500,8 +510,7 @@ json to_json(const sim::Scenario& s) {
   j["duration"] = s.duration;
   j["sample_time"] = s.sample_time;
   j["substeps"] = s.substeps;
-  j["initial_state"] =
-      std::vector<double>(s.initial_state.data(), s.initial_state.data() + sim::kStates);
+  j["initial_state"] = s.initial_state;
   j["disturbance"] = json::array();
   for (const sim::DisturbanceTerm& d : s.disturbance)
     j["disturbance"].push_back({{"axis", d.axis},

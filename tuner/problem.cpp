@@ -8,7 +8,7 @@ TuningProblem::TuningProblem(Job job) : job_(std::move(job)) {
   std::vector<FieldError> errs = job_.validate();
   if (!job_.tuning) errs.push_back({"/tuning", "is required to tune"});
   throw_if_errors("job " + job_.name, std::move(errs));
-  plant_ = job_.plant.make();
+  plant_ = sim::make_plant(job_.plant);
   for (const ParameterBounds& b : job_.tuning->parameters) {
     const sim::ControllerField* f = sim::find_controller_field(b.name);
     space_.names.push_back(b.name);

@@ -21,7 +21,7 @@
 #include "ftc/tune/report.hpp"
 #include "ftc/tune/tuning_run.hpp"
 #include "ftc/version.hpp"
-#include "json_reader.hpp"
+#include "ftc/runtime/json_reader.hpp"
 
 namespace ftc::tune {
 
@@ -202,7 +202,7 @@ struct TuningService::Impl {
     };
     json body;
     try {
-      body = detail::parse_json_text(req.body, "request body");
+      body = json_io::parse_json_text(req.body, "request body");
     } catch (const InputError& e) {
       return bad_request("invalid_json", e);
     }

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "ftc/tune/controller_json.hpp"
+#include "ftc/runtime/controller_json.hpp"
 #include "ftc/tune/files.hpp"
 #include "ftc/tune/problem.hpp"
 #include "ftc/tune/sha256.hpp"

@@ -3,6 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include "ftc/sim/controller.hpp"
+#include "ftc/sim/plants.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "ftc/sim/spacecraft.hpp"
 
@@ -25,5 +26,22 @@ static void BM_PaperScenario(benchmark::State& state) {
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_PaperScenario)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
+
+// The same through the plant registry, as the tuner simulates: the loop compiled for the
+// spacecraft and the controller class.
+static void BM_PaperScenarioTuner(benchmark::State& state) {
+  const auto type = static_cast<ControllerType>(state.range(0));
+  const auto plant = make_plant(PlantSpec{});
+  const Scenario s = Scenario::paper();
+  const ControllerConfig c = ControllerConfig::table1(type);
+  double ise = 0;
+  for (auto _ : state) ise += plant->simulate(c, s).metrics.errors.ise;
+  benchmark::DoNotOptimize(ise);
+  state.SetLabel(to_string(type));
+  state.counters["ns_per_sample"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * s.samples(),
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_PaperScenarioTuner)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -3,7 +3,7 @@
 // to get a ready controller with the tuned gains.
 //
 //   const ftc::sim::Spacecraft plant(params);                 // the model-based laws need f, G⁺
-//   auto controller = ftc::runtime::load_controller("gains.json", plant, 0.001);
+//   auto controller = ftc::runtime::load_controller("gains.json", plant, 0.001);  // Controller<3, 4>
 //   controller->reset();
 //   every Ts:  u_d = controller->step(t, X1, X2, a);
 //
@@ -36,10 +36,24 @@ struct Gains {
 Gains parse_gains(const nlohmann::json& document, const std::string& source);
 Gains read_gains(const std::filesystem::path& file);
 
-// Builds the controller; throws InputError when `sample_time` differs from the gains' one.
-std::unique_ptr<sim::Controller> make_controller(const Gains& gains, const sim::Plant& plant,
-                                                 double sample_time);
-std::unique_ptr<sim::Controller> load_controller(const std::filesystem::path& file,
-                                                 const sim::Plant& plant, double sample_time);
+// Throws InputError when `sample_time` is not the one the gains were tuned for (equal within
+// 1e-12 relative: a Ts written in a file and re-read may differ in its last bit).
+void check_sample_time(const Gains& gains, double sample_time);
+
+// Builds the controller for a plant of any shape; throws InputError when `sample_time` differs
+// from the gains' one.
+template <int N, int M>
+std::unique_ptr<sim::Controller<N, M>> make_controller(const Gains& gains,
+                                                       const sim::Plant<N, M>& plant,
+                                                       double sample_time) {
+  check_sample_time(gains, sample_time);
+  return sim::make_controller(gains.controller, plant, sample_time);
+}
+template <int N, int M>
+std::unique_ptr<sim::Controller<N, M>> load_controller(const std::filesystem::path& file,
+                                                       const sim::Plant<N, M>& plant,
+                                                       double sample_time) {
+  return make_controller(read_gains(file), plant, sample_time);
+}
 
 }  // namespace ftc::runtime

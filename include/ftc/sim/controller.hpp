@@ -1,10 +1,14 @@
 #pragma once
 // The discrete-time controller interface shared by the simulator and the runtime.
 //
-// A controller runs every Ts seconds. At sample k it receives the measured attitude X1 (rad),
-// rates X2 (rad/s) and accelerations a = dX2/dt (rad/s², the "acceleration sensor" the
-// sliding surface sF = a + C(X) needs), returns the commanded actuator outputs u_d, and then
-// advances its internal states with forward Euler. reset() returns it to its initial state.
+// A controller runs every Ts seconds. At sample k it receives the measured positions X1,
+// rates X2 and accelerations a = dX2/dt (the "acceleration sensor" the sliding surface
+// sF = a + C(X) needs), returns the commanded actuator outputs u_d, and then advances its
+// internal states with forward Euler. reset() returns it to its initial state. For the
+// spacecraft X1 is in rad, X2 in rad/s, a in rad/s².
+//
+// The four laws (NFTSMC, FOSMC, PI-FOSMC, adaptive neural PI-FOSMC) are written once for any
+// plant shape; their equations are in the headers under sim_core/controllers/.
 #include <memory>
 
 #include "ftc/sim/controller_config.hpp"
@@ -16,22 +20,27 @@ namespace ftc::sim {
 // One sample of measurements. `f` optionally carries f(X) already computed by the caller (the
 // simulator has it from its acceleration sensor); model-based controllers then skip their own
 // evaluation. The result is bit-identical either way.
+template <int N>
 struct Measurement {
   double t = 0.0;
-  Vec3 X1 = Vec3::Zero();
-  Vec3 X2 = Vec3::Zero();
-  Vec3 a = Vec3::Zero();
-  const Vec3* f = nullptr;
+  Vec<N> X1 = Vec<N>::Zero();
+  Vec<N> X2 = Vec<N>::Zero();
+  Vec<N> a = Vec<N>::Zero();
+  const Vec<N>* f = nullptr;
 };
 
+template <int N, int M>
 class Controller {
  public:
+  using Vector = Vec<N>;
+  using Input = Vec<M>;
+
   virtual ~Controller() = default;
 
   virtual void reset() = 0;
-  virtual Vec4 step(const Measurement& m) = 0;
-  Vec4 step(double t, const Vec3& X1, const Vec3& X2, const Vec3& a) {
-    return step(Measurement{t, X1, X2, a, nullptr});
+  virtual Input step(const Measurement<N>& m) = 0;
+  Input step(double t, const Vector& X1, const Vector& X2, const Vector& a) {
+    return step(Measurement<N>{t, X1, X2, a, nullptr});
   }
 
   // The configuration as used (α1 resolved).
@@ -40,8 +49,10 @@ class Controller {
 };
 
 // Builds the controller of config.type for a plant and sample time. Throws InputError naming
-// every invalid field (source "controller"). The plant must outlive the controller.
-std::unique_ptr<Controller> make_controller(const ControllerConfig& config, const Plant& plant,
-                                            double sample_time);
+// every invalid field (source "controller"). The plant must outlive the controller. Defined
+// for the shapes of the plants in sim_core/plants/registry.cpp.
+template <int N, int M>
+std::unique_ptr<Controller<N, M>> make_controller(const ControllerConfig& config,
+                                                  const Plant<N, M>& plant, double sample_time);
 
 }  // namespace ftc::sim

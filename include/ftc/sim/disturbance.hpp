@@ -1,12 +1,12 @@
 #pragma once
 // Additive disturbance Δ(t) on the accelerations (SPEC §2): per axis a sum of sinusoids
 // Δ_i(t) = Σ amplitude · shape(frequency · t + phase), shape ∈ {sin, cos}, in rad/s².
+#include <cmath>
 #include <cstddef>
 #include <string>
 #include <vector>
 
 #include "ftc/sim/input_error.hpp"
-#include "ftc/sim/sincos.hpp"
 #include "ftc/sim/types.hpp"
 
 namespace ftc::sim {
@@ -15,13 +15,14 @@ enum class Shape { sin, cos };
 const char* to_string(Shape s);
 
 struct DisturbanceTerm {
-  int axis = 1;  // 1-based axis index, 1..3
+  int axis = 1;  // 1-based axis index, 1..n
   Shape shape = Shape::sin;
   double amplitude = 0.0;  // rad/s²
   double frequency = 0.0;  // rad/s
   double phase = 0.0;      // rad
 
-  std::vector<FieldError> validate(const std::string& path) const;
+  // Every bad field; `axes` is the plant's n.
+  std::vector<FieldError> validate(const std::string& path, int axes) const;
 };
 
 class Disturbance {
@@ -29,16 +30,16 @@ class Disturbance {
   Disturbance() = default;
   explicit Disturbance(std::vector<DisturbanceTerm> terms);
 
-  Vec3 operator()(double t) const;
-  // Δ at n instants into out(0) .. out(n-1) (each a Vec3&), given
+  // Δ(t) on the N axes.
+  template <int N>
+  Vec<N> at(double t) const;
+  // Δ at n instants into out(0) .. out(n-1) (each a Vec<N>&), given
   // value(i, k, shape) = shape(frequency_i t_k + phase_i)
   // of term i at instant k. The simulator fills a block of instants at once from phasor tables;
-  // operator()(t) is the case n = 1 with libm. Terms are summed in order, as the definition
+  // at(t) is the case n = 1 with libm. Terms are summed in order, as the definition
   // reads, so both agree bit for bit on the same sinusoid values.
   template <class Value, class Out>
   void evaluate(std::size_t n, Value&& value, Out&& out) const;
-  // One phasor per term stepping by dt, not yet anchored.
-  std::vector<Phasor> phasors(double dt) const;
   const std::vector<DisturbanceTerm>& terms() const { return terms_; }
 
  private:
@@ -53,6 +54,19 @@ void Disturbance::evaluate(std::size_t n, Value&& value, Out&& out) const {
     const int a = term.axis - 1;
     for (std::size_t k = 0; k < n; ++k) out(k)[a] += term.amplitude * value(i, k, term.shape);
   }
+}
+
+template <int N>
+Vec<N> Disturbance::at(double t) const {
+  Vec<N> d;
+  evaluate(
+      1,
+      [&](std::size_t i, std::size_t, Shape shape) {
+        const double x = terms_[i].frequency * t + terms_[i].phase;
+        return shape == Shape::sin ? std::sin(x) : std::cos(x);
+      },
+      [&](std::size_t) -> Vec<N>& { return d; });
+  return d;
 }
 
 }  // namespace ftc::sim

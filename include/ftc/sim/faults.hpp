@@ -13,10 +13,10 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "ftc/sim/input_error.hpp"
-#include "ftc/sim/sincos.hpp"
 #include "ftc/sim/types.hpp"
 
 namespace ftc::sim {
@@ -36,7 +36,7 @@ struct FaultProfile {
 };
 
 struct Fault {
-  int actuator = 1;  // 1-based, 1..4
+  int actuator = 1;  // 1-based, 1..m
   FaultType type = FaultType::bias;
   double onset = 0.0;  // t_f in s
   FaultProfile profile;
@@ -50,13 +50,16 @@ struct Fault {
   // stuck
   double value = 0.0;
 
-  std::vector<FieldError> validate(const std::string& path) const;
+  // Every bad field; `actuators` is the plant's m.
+  std::vector<FieldError> validate(const std::string& path, int actuators) const;
 };
 
-// The faults' effect at one instant: u = gain ⊙ u_d + offset (before saturation).
+// The faults' effect at one instant on the m actuators: u = gain ⊙ u_d + offset (before
+// saturation).
+template <int M>
 struct FaultEffect {
-  Vec4 gain = Vec4::Ones();
-  Vec4 offset = Vec4::Zero();
+  Vec<M> gain = Vec<M>::Ones();
+  Vec<M> offset = Vec<M>::Zero();
 };
 
 class FaultSet {
@@ -64,22 +67,25 @@ class FaultSet {
   FaultSet() = default;
   FaultSet(std::vector<Fault> faults, std::optional<double> saturation);
 
-  FaultEffect effect(double t) const;
-  // The effects at the instants t[0..n) into out(0) .. out(n-1) (each a FaultEffect&), given
+  template <int M>
+  FaultEffect<M> effect(double t) const;
+  // The effects at the instants t[0..n) into out(0) .. out(n-1) (each a FaultEffect<M>&), given
   // cosine(i, k) = cos(ω_i t_k + φ_i)
   // of fault i at instant k (read for bias faults only). The simulator fills a block of
   // instants at once from phasor tables; effect(t) is the case n = 1 with libm.
   template <class Cos, class Out>
   void evaluate(std::span<const double> t, Cos&& cosine, Out&& out) const;
-  // One phasor per fault stepping by dt, not yet anchored (unused but for bias faults).
-  std::vector<Phasor> phasors(double dt) const;
   // Applied actuator output for a held command: sat(gain ⊙ u_d + offset).
-  Vec4 apply(const FaultEffect& e, const Vec4& u_d) const {
-    Vec4 u = e.gain.cwiseProduct(u_d) + e.offset;
+  template <int M>
+  Vec<M> apply(const FaultEffect<M>& e, const Vec<M>& u_d) const {
+    Vec<M> u = e.gain.cwiseProduct(u_d) + e.offset;
     if (saturation_) u = u.cwiseMax(-*saturation_).cwiseMin(*saturation_);
     return u;
   }
-  Vec4 apply(double t, const Vec4& u_d) const { return apply(effect(t), u_d); }
+  template <int M>
+  Vec<M> apply(double t, const Vec<M>& u_d) const {
+    return apply(effect<M>(t), u_d);
+  }
 
   const std::vector<Fault>& faults() const { return faults_; }
   const std::optional<double>& saturation() const { return saturation_; }
@@ -93,14 +99,15 @@ class FaultSet {
 // the sum is the same bit for bit whatever the number of instants.
 template <class Cos, class Out>
 void FaultSet::evaluate(std::span<const double> t, Cos&& cosine, Out&& out) const {
-  for (std::size_t k = 0; k < t.size(); ++k) out(k) = FaultEffect{};
+  using Effect = std::remove_reference_t<decltype(out(0))>;
+  for (std::size_t k = 0; k < t.size(); ++k) out(k) = Effect{};
   for (std::size_t i = 0; i < faults_.size(); ++i) {
     const Fault& f = faults_[i];
     const int j = f.actuator - 1;
     for (std::size_t k = 0; k < t.size(); ++k) {
       const double rho = f.profile.rho(t[k] - f.onset);
       if (rho == 0.0) continue;
-      FaultEffect& e = out(k);
+      Effect& e = out(k);
       switch (f.type) {
         case FaultType::bias:
           e.offset[j] += rho * (f.offset + f.amplitude * cosine(i, k));
@@ -115,6 +122,18 @@ void FaultSet::evaluate(std::span<const double> t, Cos&& cosine, Out&& out) cons
       }
     }
   }
+}
+
+template <int M>
+FaultEffect<M> FaultSet::effect(double t) const {
+  FaultEffect<M> e;
+  evaluate(
+      std::span<const double>(&t, 1),
+      [&](std::size_t i, std::size_t) {
+        return std::cos(faults_[i].frequency * t + faults_[i].phase);
+      },
+      [&](std::size_t) -> FaultEffect<M>& { return e; });
+  return e;
 }
 
 const char* to_string(FaultType t);

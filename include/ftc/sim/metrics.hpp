@@ -7,10 +7,14 @@
 // plus, over the whole run, max |u_d,j|, the control total variation Σ_{k≥1} ‖u_k - u_{k-1}‖₂
 // (a chattering measure), and the peak ‖e‖ from each fault onset on. A diverged run has
 // ise = iae = itae = +inf in every window.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
 #include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "ftc/sim/types.hpp"
@@ -48,22 +52,58 @@ struct Metrics {
   double diverged_at = std::numeric_limits<double>::quiet_NaN();  // s
 
   double objective(Metric m) const { return errors.get(m); }
+  // Marks the run diverged at time t: every error integral becomes +inf.
+  void mark_diverged(double t);
 };
 
-// Accumulates Metrics on the fly. All storage is sized at construction; sample() never allocates.
+// Accumulates Metrics on the fly for a plant with N axes and M actuators. All storage is sized
+// at construction; sample() never allocates.
+template <int N, int M>
 class MetricsAccumulator {
  public:
   MetricsAccumulator(double sample_time, Window window, std::vector<Window> extra_windows,
-                     std::vector<double> fault_onsets);
+                     std::vector<double> fault_onsets)
+      : Ts_(sample_time) {
+    m_.window = window;
+    m_.extra.assign(extra_windows.size(), ErrorIntegrals{});
+    m_.extra_windows = std::move(extra_windows);
+    m_.peak_error_after_fault.assign(fault_onsets.size(),
+                                     std::numeric_limits<double>::quiet_NaN());
+    m_.fault_onsets = std::move(fault_onsets);
+  }
 
-  void sample(double t, const State& x, const Vec4& u_d);
-  void mark_diverged(double t);
+  void sample(double t, const StateOf<N>& x, const Vec<M>& u_d) {
+    const Vec<N> e = x.template head<N>();
+    const double e2 = e.squaredNorm();
+    const double e1 = e.cwiseAbs().sum();
+    if (m_.window.contains(t)) add(m_.errors, t, e2, e1);
+    for (std::size_t i = 0; i < m_.extra.size(); ++i)
+      if (m_.extra_windows[i].contains(t)) add(m_.extra[i], t, e2, e1);
+
+    m_.max_abs_u = std::max(m_.max_abs_u, u_d.cwiseAbs().maxCoeff());
+    if (has_prev_) m_.control_tv += (u_d - u_prev_).norm();
+    u_prev_ = u_d;
+    has_prev_ = true;
+
+    const double en = std::sqrt(e2);
+    for (std::size_t i = 0; i < m_.fault_onsets.size(); ++i)
+      if (t >= m_.fault_onsets[i] && !(m_.peak_error_after_fault[i] >= en))
+        m_.peak_error_after_fault[i] = en;
+  }
+
+  void mark_diverged(double t) { m_.mark_diverged(t); }
   const Metrics& result() const { return m_; }
 
  private:
+  void add(ErrorIntegrals& acc, double t, double e2, double e1) const {
+    acc.ise += Ts_ * e2;
+    acc.iae += Ts_ * e1;
+    acc.itae += Ts_ * t * e1;
+  }
+
   double Ts_;
   Metrics m_;
-  Vec4 u_prev_ = Vec4::Zero();
+  Vec<M> u_prev_ = Vec<M>::Zero();
   bool has_prev_ = false;
 };
 

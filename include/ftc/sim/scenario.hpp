@@ -9,7 +9,6 @@
 #include "ftc/sim/disturbance.hpp"
 #include "ftc/sim/faults.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/sim/types.hpp"
 
 namespace ftc::sim {
 
@@ -18,14 +17,17 @@ struct Scenario {
   double duration = 30.0;     // T in s, a whole number of sample times
   double sample_time = 1e-3;  // Ts in s: controller period and zero-order hold
   int substeps = 1;           // RK4 steps per sample, h = Ts / substeps
-  State initial_state = (State() << -0.7, -0.07, 1.5, 0.3, 1.3, -0.2).finished();
+  // X(0) = (X1, X2), 2n values; the paper's spacecraft state by default (a job fills in its
+  // plant's default when it gives none).
+  std::vector<double> initial_state{-0.7, -0.07, 1.5, 0.3, 1.3, -0.2};
   std::vector<DisturbanceTerm> disturbance;
   std::vector<Fault> faults;
   std::optional<double> saturation;  // |u_j| ≤ u_max after the faults; absent = none
 
   // N = round(T / Ts).
   std::int64_t samples() const { return std::llround(duration / sample_time); }
-  std::vector<FieldError> validate(const std::string& path) const;
+  // Every bad field, for a plant with `axes` (n) and `actuators` (m).
+  std::vector<FieldError> validate(const std::string& path, int axes, int actuators) const;
 
   // The paper's scenario (§6): Δ = 0.5 [sin t, cos 2t, sin 3t], bias 5 + 15 cos t on actuator
   // 1 from 10 s, 80 % loss of effectiveness on actuator 2 from 20 s.

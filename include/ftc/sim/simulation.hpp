@@ -10,7 +10,9 @@
 //     stop, marked diverged, when any |X_i| is NaN, inf or > 1e6
 //
 // A diverging run is a result (metrics.diverged), never an exception.
+#include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "ftc/sim/controller.hpp"
@@ -28,23 +30,40 @@ struct SimulationOptions {
   std::int64_t record_every = 0;      // record every k-th sample; 0 = no trajectory
 };
 
-struct TrajectoryRow {
-  double t;
-  State x;
-  Vec4 u_d;  // commanded
-  Vec4 u;    // applied, after faults and saturation
+// Recorded samples, one row each: t, X (2n values), the commanded u_d (m) and the applied u
+// after faults and saturation (m), stored flat so that any plant shape fits one type.
+struct Trajectory {
+  int axes = 0;
+  int actuators = 0;
+  std::vector<double> values;
+
+  std::size_t width() const { return 1 + 2 * static_cast<std::size_t>(axes + actuators); }
+  std::size_t rows() const { return width() == 1 ? 0 : values.size() / width(); }
+  std::span<const double> row(std::size_t i) const {
+    return std::span<const double>(values).subspan(i * width(), width());
+  }
+  double t(std::size_t i) const { return values[i * width()]; }
+  std::span<const double> x(std::size_t i) const { return row(i).subspan(1, 2 * axes); }
+  std::span<const double> u_d(std::size_t i) const {
+    return row(i).subspan(1 + 2 * axes, actuators);
+  }
+  std::span<const double> u(std::size_t i) const {
+    return row(i).subspan(1 + 2 * axes + actuators, actuators);
+  }
 };
 
 struct SimulationResult {
   Metrics metrics;
-  std::int64_t samples = 0;           // samples simulated (fewer than N when diverged)
-  State final_state = State::Zero();  // X at t = samples · Ts
-  std::vector<TrajectoryRow> trajectory;
+  std::int64_t samples = 0;         // samples simulated (fewer than N when diverged)
+  std::vector<double> final_state;  // X at t = samples · Ts
+  Trajectory trajectory;
 };
 
 // Runs one scenario. The controller is reset first. Throws InputError only for an invalid
-// scenario; the run itself never throws.
-SimulationResult simulate(const Plant& plant, Controller& controller, const Scenario& scenario,
-                          const SimulationOptions& options = {});
+// scenario; the run itself never throws. Defined for the shapes of the registered plants
+// (sim_core/plants/registry.cpp); for a registered plant class the loop is compiled for it.
+template <int N, int M>
+SimulationResult simulate(const Plant<N, M>& plant, Controller<N, M>& controller,
+                          const Scenario& scenario, const SimulationOptions& options = {});
 
 }  // namespace ftc::sim

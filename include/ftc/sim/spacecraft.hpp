@@ -1,9 +1,10 @@
 #pragma once
 // Rigid spacecraft attitude in Euler angles on a circular orbit (paper §6 and Appendix B).
 //
-// X1 = (roll, pitch, yaw) in rad, X2 their rates in rad/s, four actuators. f(X) contains the
-// gyroscopic coupling (I_y - I_z)/I_x x5 x6, ... and the orbital-rate terms in ω0 and ω0²;
-// G is the constant actuator-distribution matrix of eq. (B.4).
+// n = 3, m = 4. X1 = (roll, pitch, yaw) in rad, X2 their rates in rad/s. f(X) contains the
+// gyroscopic coupling (I_y - I_z)/I_x x5 x6, ... and the orbital-rate terms in ω0 and ω0²
+// (rad/s²); G is the constant actuator-distribution matrix of eq. (B.4), whose right inverse is
+// computed once.
 #include <array>
 
 #include "ftc/sim/plant.hpp"
@@ -15,15 +16,21 @@ struct SpacecraftParams {
   double orbital_rate = 1.1e-3;                     // ω0 in rad/s (not in the paper)
 };
 
-class Spacecraft final : public Plant {
+class Spacecraft final : public Plant<3, 4> {
  public:
+  // Scratch space of one simulation for evaluating f at the nearby states of successive RK4
+  // stages (defined in sim_core; the simulator owns one).
+  struct Workspace;
+
+  // Throws InputError naming a non-positive inertia or a negative orbital rate.
   explicit Spacecraft(const SpacecraftParams& params = {});
 
-  Vec3 f(const State& x) const override;
-  Vec3 f(const State& x, PlantWorkspace& ws) const override;
-  Mat34 G(const State&) const override { return G_; }
+  Vector f(const State& x) const override;
+  // The same f(X), reusing work kept in `ws` (equal to f(x) within an ulp).
+  Vector f(const State& x, Workspace& ws) const;
+  InputMatrix G(const State&) const override { return G_; }
   bool input_matrix_is_constant() const override { return true; }
-  Mat43 G_pinv(const State&) const override { return G_pinv_; }
+  InputInverse G_pinv(const State&) const override { return G_pinv_; }
   std::string model() const override { return "spacecraft"; }
 
   const SpacecraftParams& params() const { return params_; }
@@ -39,42 +46,5 @@ class Spacecraft final : public Plant {
   Mat34 G_;
   Mat43 G_pinv_;  // computed once: G is constant
 };
-
-inline Vec3 Spacecraft::f(const State& x, PlantWorkspace& ws) const {
-  double s[3], c[3];
-  for (int i = 0; i < kAxes; ++i) ws.trig[i].eval(x[i], s[i], c[i]);
-  return f_trig(x, s, c);
-}
-
-// Defined here so that the simulator, which calls it four times a sample through the final
-// class, can inline it.
-//
-// Appendix B (B.1–B.3), with the erratum of B.3 (s_2 x3 read as sin² x3). The terms are grouped
-// by powers of ω0 and shared trigonometric products are formed once; sin(2x) = 2 sin x cos x.
-// tests/test_plant.cpp checks this against a term-by-term transcription of the paper.
-inline Vec3 Spacecraft::f_trig(const State& x, const double (&s)[3], const double (&c)[3]) const {
-  const double x4 = x[3], x5 = x[4], x6 = x[5];
-  const double s1 = s[0], s2 = s[1], s3 = s[2];
-  const double c1 = c[0], c2 = c[1], c3 = c[2];
-  const double d1 = 2.0 * s1 * c1, d2 = 2.0 * s2 * c2, d3 = 2.0 * s3 * c3;
-  const double w = params_.orbital_rate;
-  const double w2 = w * w;
-
-  const double s3s2 = s3 * s2, s3c2 = s3 * c2;
-  const double A = c1 * s3s2 + c3 * s1;  // c1 s3 s2 + c3 s1
-  const double B = c3 * c1 - s3s2 * s1;  // c3 c1 - s3 s2 s1
-
-  const double f1 = w * (x6 * c3 * c2 - x5 * s3s2) +
-                    kx_ * (x5 * x6 + w * (x5 * A + x6 * B - d2 * s2 * s1 * s1) +
-                           w2 * (0.5 * d3 * c1 * c1 * s2 +
-                                 d1 * (0.5 * c3 * c3 - 0.5 * s2 * s2 * s3 * s3 - 1.5 * c2 * c2)));
-  const double f2 = w * (x6 * (s3 * c1 + c3 * s2 * s1) + x4 * A + x5 * s3c2 * s1) +
-                    ky_ * (x4 * x6 + w * (x4 * s2 * (c1 * s3 + c3 * s1) - x6 * s3c2) +
-                           w2 * (-0.5 * d2 * s3 * s3 * c1 - 0.5 * c2 * s1 * d3 + 1.5 * d2 * c1));
-  const double f3 = w * (x6 * (s3 * s1 - c1 * c3 * s2) - x4 * B - x5 * c1 * s3c2) +
-                    kz_ * (x4 * x5 + w * (x4 * B - x5 * s3c2) +
-                           w2 * (-0.5 * d3 * c2 * c1 - 0.5 * s3 * s3 * s1 * d2 - 1.5 * d2 * s1));
-  return Vec3(f1, f2, f3);
-}
 
 }  // namespace ftc::sim

@@ -10,7 +10,7 @@
 
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/metrics.hpp"
-#include "ftc/sim/plant.hpp"
+#include "ftc/sim/plants.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "ftc/tune/job.hpp"
 
@@ -22,7 +22,7 @@ sim::SimulationOptions simulation_options(const Job& job, const sim::Scenario& s
                                           std::int64_t record_every = 0);
 
 // One scenario of the job with the given controller. Never throws for a diverging run.
-sim::SimulationResult simulate_scenario(const Job& job, const sim::Plant& plant,
+sim::SimulationResult simulate_scenario(const Job& job, const sim::AnyPlant& plant,
                                         const sim::ControllerConfig& controller,
                                         std::size_t scenario, std::int64_t record_every = 0);
 
@@ -39,8 +39,8 @@ struct Evaluation {
 // Objective and fitness of a controller from its metrics on every scenario of the job.
 Evaluation score(const ObjectiveConfig& objective, std::vector<sim::Metrics> per_scenario);
 
-// CSV of a recorded trajectory: time, x1..x6, ud1..ud4 (commanded), u1..u4 (applied).
-std::string trajectory_csv(const std::vector<sim::TrajectoryRow>& rows);
+// CSV of a recorded trajectory: time, x1..x2n, ud1..udm (commanded), u1..um (applied).
+std::string trajectory_csv(const sim::Trajectory& trajectory);
 
 // Metrics of one scenario as written to metrics.json; ise/iae/itae in the objective window,
 // infinite values as null.

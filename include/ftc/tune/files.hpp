@@ -7,10 +7,11 @@
 #include <string>
 #include <string_view>
 
+#include "ftc/runtime/json_reader.hpp"
+
 namespace ftc::tune {
 
-// The whole file, or nullopt when it cannot be opened (callers word the error for their input).
-std::optional<std::string> read_file(const std::filesystem::path& path);
+using json_io::read_file;
 
 // Creates parent directories as needed. Throws std::runtime_error on I/O failure.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);

@@ -13,22 +13,20 @@
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/metrics.hpp"
-#include "ftc/sim/plant.hpp"
+#include "ftc/sim/plants.hpp"
 #include "ftc/sim/scenario.hpp"
-#include "ftc/sim/spacecraft.hpp"
-#include "ftc/tune/controller_json.hpp"
+#include "ftc/runtime/controller_json.hpp"
 
 namespace ftc::tune {
 
 inline constexpr const char* kJobSchema = "ftctune.job/1";
 
-struct PlantConfig {
-  std::string model = "spacecraft";
-  sim::SpacecraftParams spacecraft;
+using runtime::parse_controller;
+using runtime::to_json;
 
-  std::vector<FieldError> validate(const std::string& path) const;
-  std::unique_ptr<sim::Plant> make() const;
-};
+// The plant of a job: its model name and parameter values (sim_core's plant registry describes
+// them); the loader fills in every default.
+using PlantConfig = sim::PlantSpec;
 
 enum class Aggregate { mean, max };
 const char* to_string(Aggregate a);

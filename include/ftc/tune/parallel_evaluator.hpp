@@ -17,7 +17,7 @@ namespace ftc::tune {
 struct CandidateOutcome {
   Evaluation evaluation;  // per-scenario metrics, objective, fitness
   std::string error;      // non-empty when a simulation threw (fitness is then 0)
-  std::vector<std::vector<sim::TrajectoryRow>> trajectories;  // per scenario, when recorded
+  std::vector<sim::Trajectory> trajectories;  // per scenario, when recorded
 };
 
 class ParallelEvaluator final : public BatchEvaluator {

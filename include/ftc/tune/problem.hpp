@@ -13,7 +13,7 @@
 
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/metrics.hpp"
-#include "ftc/sim/plant.hpp"
+#include "ftc/sim/plants.hpp"
 #include "ftc/tune/evaluation.hpp"
 #include "ftc/tune/job.hpp"
 #include "ftc/tune/search_space.hpp"
@@ -26,7 +26,7 @@ class TuningProblem {
   explicit TuningProblem(Job job);
 
   const Job& job() const { return job_; }
-  const sim::Plant& plant() const { return *plant_; }
+  const sim::AnyPlant& plant() const { return *plant_; }
   const SearchSpace& space() const { return space_; }
   std::size_t scenarios() const { return job_.scenarios.size(); }
 
@@ -39,7 +39,7 @@ class TuningProblem {
 
  private:
   Job job_;
-  std::unique_ptr<sim::Plant> plant_;
+  std::shared_ptr<const sim::AnyPlant> plant_;
   SearchSpace space_;
   std::vector<double sim::ControllerConfig::*> members_;  // one per coordinate
 };

@@ -9,7 +9,7 @@
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/input_error.hpp"
 
-namespace ftc::tune {
+namespace ftc::runtime {
 
 // Parses a controller object at JSON path `path`; problems are appended to `errors` (ranges are
 // checked by ControllerConfig::validate, not here).
@@ -19,4 +19,4 @@ sim::ControllerConfig parse_controller(const nlohmann::json& j, const std::strin
 // Every parameter of the controller's type, α1 resolved; integer fields as integers.
 nlohmann::json to_json(const sim::ControllerConfig& c);
 
-}  // namespace ftc::tune
+}  // namespace ftc::runtime

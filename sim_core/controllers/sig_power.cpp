@@ -1,4 +1,4 @@
-#include "ftc/sim/sig_power.hpp"
+#include "controllers/sig_power.hpp"
 
 namespace ftc::sim {
 

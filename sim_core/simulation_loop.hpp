@@ -1,14 +1,20 @@
-#include "ftc/sim/simulation.hpp"
-
+#pragma once
+// The closed loop of SPEC §4, compiled per plant class and controller class, so that f, G and
+// the controller's step inline into it. Private to sim_core: plants/registry.cpp instantiates
+// it for every registered plant.
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
+#include <vector>
 
+#include "ftc/sim/disturbance.hpp"
+#include "ftc/sim/faults.hpp"
 #include "ftc/sim/integrator.hpp"
-#include "ftc/sim/spacecraft.hpp"
+#include "ftc/sim/simulation.hpp"
+#include "sincos.hpp"
 
-namespace ftc::sim {
-namespace {
+namespace ftc::sim::detail {
 
 // Δ(t) and the fault effect depend on time only, and RK4 asks for them on the grid of half
 // steps t_k, t_k + h/2, t_k + h, ... (the midpoint serves two stages, the end of a step is the
@@ -18,11 +24,12 @@ namespace {
 // term over the whole block. Term by term over a block is a few instructions per instant,
 // where one instant at a time spent about 300 on bookkeeping. The block is of fixed size, so
 // memory does not grow with the duration.
+template <int N, int M>
 class ExogenousInputs {
  public:
   struct Entry {
-    Vec3 disturbance = Vec3::Zero();
-    FaultEffect fault;
+    Vec<N> disturbance = Vec<N>::Zero();
+    FaultEffect<M> fault;
   };
 
   ExogenousInputs(const Disturbance& d, const FaultSet& f, double sample_time, int substeps)
@@ -31,9 +38,9 @@ class ExogenousInputs {
         Ts_(sample_time),
         h_(sample_time / substeps),
         substeps_(substeps),
-        phasors_(d.phasors(0.5 * h_)),
+        phasors_(phasors_of(d.terms(), 0.5 * h_)),
         n_dist_(phasors_.size()) {
-    for (const Phasor& p : f.phasors(0.5 * h_)) phasors_.push_back(p);
+    for (const Phasor& p : phasors_of(f.faults(), 0.5 * h_)) phasors_.push_back(p);
     sin_.resize(phasors_.size() * kInstants);
     cos_.resize(phasors_.size() * kInstants);
   }
@@ -77,10 +84,10 @@ class ExogenousInputs {
         [&](std::size_t i, std::size_t n, Shape shape) {
           return (shape == Shape::sin ? sin_ : cos_)[i * kInstants + n];
         },
-        [&](std::size_t n) -> Vec3& { return entries_[n].disturbance; });
+        [&](std::size_t n) -> Vec<N>& { return entries_[n].disturbance; });
     faults_.evaluate(
         t_, [&](std::size_t i, std::size_t n) { return cos_[(n_dist_ + i) * kInstants + n]; },
-        [&](std::size_t n) -> FaultEffect& { return entries_[n].fault; });
+        [&](std::size_t n) -> FaultEffect<M>& { return entries_[n].fault; });
   }
 
   // Phasors i .. i + G - 1 over the block. Local copies keep each rotation in registers, and a
@@ -112,47 +119,84 @@ class ExogenousInputs {
   int used_ = kSteps;  // steps of the current block handed out
 };
 
-bool out_of_bounds(const State& x) {
-  for (int i = 0; i < kStates; ++i)
+template <int S>
+bool out_of_bounds(const Vec<S>& x) {
+  for (int i = 0; i < S; ++i)
     if (!(std::abs(x[i]) <= kDivergenceBound)) return true;  // also catches NaN
   return false;
 }
 
-// The loop, compiled once per plant type: for the final Spacecraft class the calls to f are
-// devirtualised and inlined, which the four evaluations per sample make worthwhile.
+// The plant's scratch space for f at nearby states, when it has one (Spacecraft::Workspace).
+struct NoWorkspace {};
 template <class P>
-SimulationResult run(const P& plant, Controller& controller, const Scenario& scenario,
+auto make_workspace() {
+  if constexpr (requires { typename P::Workspace; })
+    return typename P::Workspace{};
+  else
+    return NoWorkspace{};
+}
+
+template <class P, class W>
+FTC_HOT_INLINE typename P::Vector drift(const P& plant, const typename P::State& x, W& ws) {
+  if constexpr (std::is_same_v<W, NoWorkspace>)
+    return plant.f(x);
+  else
+    return plant.f(x, ws);
+}
+
+// One recorded sample; out of line, as it is rare and would bloat the loop.
+template <int N, int M>
+[[gnu::noinline]] void append_row(Trajectory& tr, double t, const StateOf<N>& x,
+                                  const Vec<M>& u_d, const Vec<M>& u) {
+  std::vector<double>& v = tr.values;
+  v.push_back(t);
+  v.insert(v.end(), x.data(), x.data() + 2 * N);
+  v.insert(v.end(), u_d.data(), u_d.data() + M);
+  v.insert(v.end(), u.data(), u.data() + M);
+}
+
+// The loop, compiled once per plant class P and controller class C: for final classes the
+// calls to f and to the controller's step are devirtualised and inlined.
+template <class P, class C>
+SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
                      const SimulationOptions& options) {
+  constexpr int N = P::kAxes, M = P::kActuators;
+  using StateT = typename P::State;
+  using Entry = typename ExogenousInputs<N, M>::Entry;
   const Disturbance disturbance(scenario.disturbance);
   const FaultSet faults(scenario.faults, scenario.saturation);
 
   std::vector<double> onsets;
   onsets.reserve(scenario.faults.size());
   for (const Fault& f : scenario.faults) onsets.push_back(f.onset);
-  MetricsAccumulator metrics(scenario.sample_time, options.window, options.extra_windows,
-                             std::move(onsets));
+  MetricsAccumulator<N, M> metrics(scenario.sample_time, options.window, options.extra_windows,
+                                   std::move(onsets));
 
   const double Ts = scenario.sample_time;
   const double h = Ts / scenario.substeps;
-  ExogenousInputs exo(disturbance, faults, Ts, scenario.substeps);
-  const std::int64_t N = scenario.samples();
+  ExogenousInputs<N, M> exo(disturbance, faults, Ts, scenario.substeps);
+  const std::int64_t Nk = scenario.samples();
 
   SimulationResult result;
-  if (options.record_every > 0) result.trajectory.reserve(N / options.record_every + 1);
+  result.trajectory.axes = N;
+  result.trajectory.actuators = M;
+  if (options.record_every > 0)
+    result.trajectory.values.reserve((Nk / options.record_every + 1) *
+                                     result.trajectory.width());
 
   controller.reset();
-  const State x0 = scenario.initial_state;
-  State x = x0;
-  Vec4 u_prev = Vec4::Zero();
-  Vec4 u_held = Vec4::Zero();
+  const StateT x0 = Eigen::Map<const StateT>(scenario.initial_state.data());
+  StateT x = x0;
+  Vec<M> u_prev = Vec<M>::Zero();
+  Vec<M> u_held = Vec<M>::Zero();
 
   const bool constant_G = plant.input_matrix_is_constant();
-  const Mat34 G0 = plant.G(x0);
+  const Mat<N, M> G0 = plant.G(x0);
   // dX2/dt = f(X) + G(X) u + Δ(t), with u the command u_d after the faults of time t.
-  const auto accel = [&](const State& s, const Vec3& fs, const ExogenousInputs::Entry& e,
-                         const Vec4& u_d) -> Vec3 {
-    const Vec4 u = faults.apply(e.fault, u_d);
-    Vec3 a = fs;
+  const auto accel = [&](const StateT& s, const Vec<N>& fs, const Entry& e,
+                         const Vec<M>& u_d) FTC_HOT_LAMBDA -> Vec<N> {
+    const Vec<M> u = faults.apply(e.fault, u_d);
+    Vec<N> a = fs;
     if (constant_G)
       a.noalias() += G0 * u;
     else
@@ -160,32 +204,33 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
     a += e.disturbance;
     return a;
   };
-  PlantWorkspace ws;
+  auto ws = make_workspace<P>();
   // dX/dt at state s and stage inputs e, with the command of this sample held.
-  const auto deriv = [&](const State& s, const ExogenousInputs::Entry& e) -> State {
-    State d;
-    d.head<kAxes>() = s.tail<kAxes>();
-    d.tail<kAxes>() = accel(s, plant.f(s, ws), e, u_held);
+  const auto deriv = [&](const StateT& s, const Entry& e) -> StateT {
+    StateT d;
+    d.template head<N>() = s.template tail<N>();
+    d.template tail<N>() = accel(s, drift(plant, s, ws), e, u_held);
     return d;
   };
 
   std::int64_t k = 0;
-  for (; k < N; ++k) {
+  for (; k < Nk; ++k) {
     const double t = static_cast<double>(k) * Ts;
-    const Vec3 fx = plant.f(x, ws);
-    const ExogenousInputs::Entry* e = exo.step(k, 0);  // at the start, midpoint, end
-    const Vec3 a = accel(x, fx, e[0], u_prev);
+    const Vec<N> fx = drift(plant, x, ws);
+    const Entry* e = exo.step(k, 0);  // at the start, midpoint, end
+    const Vec<N> a = accel(x, fx, e[0], u_prev);
 
-    const Vec4 u = controller.step(Measurement{t, x.head<kAxes>(), x.tail<kAxes>(), a, &fx});
+    const Vec<M> u = controller.step(
+        Measurement<N>{t, x.template head<N>(), x.template tail<N>(), a, &fx});
     metrics.sample(t, x, u);
     if (options.record_every > 0 && k % options.record_every == 0)
-      result.trajectory.push_back({t, x, u, faults.apply(e[0].fault, u)});
+      append_row<N, M>(result.trajectory, t, x, u, faults.apply(e[0].fault, u));
 
     u_held = u;
     // Stage 1 of the first substep is at (t, X): f(X) and Δ(t) are already known.
-    State k1;
-    k1.head<kAxes>() = x.tail<kAxes>();
-    k1.tail<kAxes>() = accel(x, fx, e[0], u);
+    StateT k1;
+    k1.template head<N>() = x.template tail<N>();
+    k1.template tail<N>() = accel(x, fx, e[0], u);
     // The last stage of the sample ends at t_{k+1} = (k+1)·Ts, the very instant (bit for bit)
     // at which the next sample's sensor reads; ExogenousInputs forms the instants likewise.
     const int S = scenario.substeps;
@@ -194,11 +239,11 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
         e = exo.step(k, j);
         k1 = deriv(x, e[0]);
       }
-      const ExogenousInputs::Entry& em = e[1];
-      const ExogenousInputs::Entry& ee = e[2];
+      const Entry& em = e[1];
+      const Entry& ee = e[2];
       x = rk4_step(
-          x, h, k1, [&](const State& s) { return deriv(s, em); },
-          [&](const State& s) { return deriv(s, ee); });
+          x, h, k1, [&](const StateT& s) { return deriv(s, em); },
+          [&](const StateT& s) { return deriv(s, ee); });
     }
     u_prev = u;
 
@@ -209,19 +254,9 @@ SimulationResult run(const P& plant, Controller& controller, const Scenario& sce
     }
   }
   result.samples = k;
-  result.final_state = x;
+  result.final_state.assign(x.data(), x.data() + 2 * N);
   result.metrics = metrics.result();
   return result;
 }
 
-}  // namespace
-
-SimulationResult simulate(const Plant& plant, Controller& controller, const Scenario& scenario,
-                          const SimulationOptions& options) {
-  throw_if_errors("scenario " + scenario.name, scenario.validate(""));
-  if (const auto* spacecraft = dynamic_cast<const Spacecraft*>(&plant))
-    return run(*spacecraft, controller, scenario, options);
-  return run(plant, controller, scenario, options);
-}
-
-}  // namespace ftc::sim
+}  // namespace ftc::sim::detail

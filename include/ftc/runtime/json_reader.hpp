@@ -1,7 +1,10 @@
 #pragma once
-// Strict reading of JSON objects for the file loaders: every accessor records a FieldError
-// (with the JSON path) instead of throwing, and finish() reports keys nobody asked for.
+// Strict reading of JSON objects for the file loaders (job, gains and scenario files): every
+// accessor records a FieldError (with the JSON path) instead of throwing, and finish() reports
+// keys nobody asked for.
 #include <cstdint>
+#include <filesystem>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
@@ -9,7 +12,7 @@
 
 #include "ftc/sim/input_error.hpp"
 
-namespace ftc::tune::detail {
+namespace ftc::json_io {
 
 std::string json_type_name(const nlohmann::json& j);
 // A number for messages: `significant` digits (17 = exact round trip).
@@ -31,6 +34,8 @@ class ObjectReader {
   bool string(const char* key, std::string& out, bool required = false);
   // Fixed-length array of numbers.
   bool numbers(const char* key, double* out, std::size_t n, bool required = false);
+  // Array of numbers of any length.
+  bool number_list(const char* key, std::vector<double>& out, bool required = false);
   // The raw child (marked as read); nullptr when absent (an error if required).
   const nlohmann::json* child(const char* key, bool required = false);
 
@@ -56,7 +61,10 @@ class ObjectReader {
 // C".
 nlohmann::json parse_json_text(const std::string& text, const std::string& source);
 
+// The whole file, or nullopt when it cannot be opened (callers word the error for their input).
+std::optional<std::string> read_file(const std::filesystem::path& path);
+
 // Integral check for JSON numbers: 3 and 3.0 are integers, 3.5 is not.
 bool json_to_int(const nlohmann::json& v, long long& out);
 
-}  // namespace ftc::tune::detail
+}  // namespace ftc::json_io

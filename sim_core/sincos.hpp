@@ -14,13 +14,15 @@
 #include <limits>
 #include <vector>
 
+#include "ftc/sim/types.hpp"
+
 namespace ftc::sim {
 
 class SinCosTracker {
  public:
   static constexpr double kReach = 0.02;
 
-  void eval(double x, double& s, double& c) {
+  FTC_HOT_INLINE void eval(double x, double& s, double& c) {
     const double d = x - anchor_;
     if (!(std::abs(d) <= kReach)) {  // also true for the NaN anchor of a fresh tracker
       anchor_ = x;

@@ -148,4 +148,19 @@ std::string check_controller_value(const ControllerConfig& base, const Controlle
   return check_value(c, field.name, value);
 }
 
+namespace detail {
+
+// Shared by every controller constructor: validated copy with α1 resolved.
+ControllerConfig checked_config(const ControllerConfig& config, double sample_time) {
+  std::vector<FieldError> errs = config.validate("");
+  for (FieldError& e : errs) e.path = e.path.substr(1);  // field names, not JSON paths
+  if (!(sample_time > 0.0) || !std::isfinite(sample_time))
+    errs.push_back({"sample_time", "must be > 0 (got " + fmt_num(sample_time) + ")"});
+  throw_if_errors(std::string("controller ") + to_string(config.type), std::move(errs));
+  ControllerConfig c = config;
+  c.alpha1 = config.resolved_alpha1();
+  return c;
+}
+
+}  // namespace detail
 }  // namespace ftc::sim

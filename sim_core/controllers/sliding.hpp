@@ -7,22 +7,30 @@
 //   C(X)     = c2 sig^α2(X2) + c1 sig^α1(X1)      the full-order surface term (eq. 8)
 #include <cmath>
 
-#include "ftc/sim/sig_power.hpp"
+#include "controllers/sig_power.hpp"
 #include "ftc/sim/types.hpp"
 
 namespace ftc::sim {
 
 // sig^a(x) per component for the fixed exponent of p (the scalar sig is in sig_power.hpp).
-inline Vec3 sig(const Vec3& x, const SigPower& p) { return Vec3(p(x[0]), p(x[1]), p(x[2])); }
+template <int N>
+FTC_HOT_INLINE Vec<N> sig(const Vec<N>& x, const SigPower& p) {
+  Vec<N> r;
+  for (int i = 0; i < N; ++i) r[i] = p(x[i]);
+  return r;
+}
 
 // tanh(y) is ±1 in double precision once |y| > 19.06 (1 - tanh y ≈ 2 e^{-2y} < 2^-54); past
 // that point the sign alone gives the same bits without a call into libm.
-inline double sigm_scalar(double y) {
+FTC_HOT_INLINE double sigm_scalar(double y) {
   return std::abs(y) > 19.5 ? std::copysign(1.0, y) : std::tanh(y);
 }
-inline Vec3 sigm(const Vec3& s, double theta) {
+template <int N>
+FTC_HOT_INLINE Vec<N> sigm(const Vec<N>& s, double theta) {
   const double k = 0.5 * theta;
-  return Vec3(sigm_scalar(k * s[0]), sigm_scalar(k * s[1]), sigm_scalar(k * s[2]));
+  Vec<N> r;
+  for (int i = 0; i < N; ++i) r[i] = sigm_scalar(k * s[i]);
+  return r;
 }
 
 // C(X) = c2 sig^α2(X2) + c1 sig^α1(X1) with the gains and exponents of one controller.
@@ -31,8 +39,9 @@ class FosmTerm {
   FosmTerm(double c1, double c2, double alpha1, double alpha2)
       : c1_(c1), c2_(c2), pow1_(alpha1), pow2_(alpha2) {}
 
-  Vec3 operator()(const Vec3& X1, const Vec3& X2) const {
-    Vec3 c = c2_ * sig(X2, pow2_);
+  template <int N>
+  FTC_HOT_INLINE Vec<N> operator()(const Vec<N>& X1, const Vec<N>& X2) const {
+    Vec<N> c = c2_ * sig(X2, pow2_);
     c += c1_ * sig(X1, pow1_);
     return c;
   }

@@ -19,6 +19,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "ftc/sim/types.hpp"
+
 namespace ftc::sim {
 
 // sig^a for any exponent, as exp(a ln|x|): SigPower's fallback, and the definition it is
@@ -31,7 +33,7 @@ class SigPower {
  public:
   explicit SigPower(double a);
 
-  double operator()(double x) const {
+  FTC_HOT_INLINE double operator()(double x) const {
     const std::uint64_t bits = std::bit_cast<std::uint64_t>(x);
     const std::uint64_t magnitude = bits & ~kSign;
     const std::uint64_t slot = (magnitude >> 52) - kMinBiasedExponent;  // wraps when below

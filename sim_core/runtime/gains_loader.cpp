@@ -4,14 +4,13 @@
 #include <sstream>
 
 #include "ftc/runtime/gains.hpp"
-#include "ftc/tune/controller_json.hpp"
-#include "ftc/tune/files.hpp"
-#include "json_reader.hpp"
+#include "ftc/runtime/controller_json.hpp"
+#include "ftc/runtime/json_reader.hpp"
 
 namespace ftc::runtime {
 
 using nlohmann::json;
-using tune::detail::ObjectReader;
+using json_io::ObjectReader;
 
 namespace {
 
@@ -19,7 +18,7 @@ void require_kind(ObjectReader& r, const char* key, bool (json::*is)() const noe
                   const char* kind, std::vector<FieldError>& errs) {
   if (const json* v = r.child(key, true); v && !((*v).*is)())
     errs.push_back({r.path(key),
-                    std::string("expected ") + kind + ", got " + tune::detail::json_type_name(*v)});
+                    std::string("expected ") + kind + ", got " + json_io::json_type_name(*v)});
 }
 
 }  // namespace
@@ -37,7 +36,7 @@ Gains parse_gains(const json& doc, const std::string& source) {
                      "this file is \"" + schema + "\", expected \"" + kGainsSchema + "\"");
 
   if (const json* c = r.child("controller", true)) {
-    g.controller = tune::parse_controller(*c, "/controller", errs);
+    g.controller = parse_controller(*c, "/controller", errs);
     std::vector<FieldError> v = g.controller.validate("/controller");
     errs.insert(errs.end(), v.begin(), v.end());
   }
@@ -46,7 +45,7 @@ Gains parse_gains(const json& doc, const std::string& source) {
       errs.push_back({"/tuned", "expected an object of name: value"});
     } else {
       for (auto it = t->begin(); it != t->end(); ++it) {
-        const std::string p = "/tuned/" + tune::detail::pointer_escape(it.key());
+        const std::string p = "/tuned/" + json_io::pointer_escape(it.key());
         const sim::ControllerField* f = sim::find_controller_field(it.key());
         if (!it.value().is_number()) {
           errs.push_back({p, "expected a number"});
@@ -57,9 +56,9 @@ Gains parse_gains(const json& doc, const std::string& source) {
           g.tuned.emplace_back(it.key(), v);
           const double in_controller = g.controller.*f->member;
           if (in_controller != v)
-            errs.push_back({p, "value " + tune::detail::number_text(v, 17) +
+            errs.push_back({p, "value " + json_io::number_text(v, 17) +
                                    " differs from /controller/" + it.key() + " = " +
-                                   tune::detail::number_text(in_controller, 17)});
+                                   json_io::number_text(in_controller, 17)});
         }
       }
     }
@@ -87,25 +86,17 @@ Gains parse_gains(const json& doc, const std::string& source) {
 }
 
 Gains read_gains(const std::filesystem::path& file) {
-  const std::optional<std::string> text = tune::read_file(file);
+  const std::optional<std::string> text = json_io::read_file(file);
   if (!text) throw InputError(file.string(), "", "cannot open the gains file");
-  return parse_gains(tune::detail::parse_json_text(*text, file.string()), file.string());
+  return parse_gains(json_io::parse_json_text(*text, file.string()), file.string());
 }
 
-std::unique_ptr<sim::Controller> make_controller(const Gains& gains, const sim::Plant& plant,
-                                                 double sample_time) {
+void check_sample_time(const Gains& gains, double sample_time) {
   if (!(std::abs(sample_time - gains.sample_time) <= 1e-12 * gains.sample_time))
-    throw InputError(
-        "gains", "/sample_time",
-        "the gains were tuned for Ts = " + tune::detail::number_text(gains.sample_time, 17) +
-            " s, but the controller is to run at Ts = " +
-            tune::detail::number_text(sample_time, 17) + " s");
-  return sim::make_controller(gains.controller, plant, sample_time);
-}
-
-std::unique_ptr<sim::Controller> load_controller(const std::filesystem::path& file,
-                                                 const sim::Plant& plant, double sample_time) {
-  return make_controller(read_gains(file), plant, sample_time);
+    throw InputError("gains", "/sample_time",
+                     "the gains were tuned for Ts = " + json_io::number_text(gains.sample_time, 17) +
+                         " s, but the controller is to run at Ts = " +
+                         json_io::number_text(sample_time, 17) + " s");
 }
 
 }  // namespace ftc::runtime

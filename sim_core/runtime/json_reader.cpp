@@ -1,9 +1,19 @@
-#include "json_reader.hpp"
+#include "ftc/runtime/json_reader.hpp"
+
+#include <fstream>
 
 #include <cmath>
 #include <sstream>
 
-namespace ftc::tune::detail {
+namespace ftc::json_io {
+
+std::optional<std::string> read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
 
 using nlohmann::json;
 
@@ -157,6 +167,17 @@ bool ObjectReader::numbers(const char* key, double* out, std::size_t n, bool req
   return ok;
 }
 
+bool ObjectReader::number_list(const char* key, std::vector<double>& out, bool required) {
+  const json* v = get(key, required);
+  if (!v) return false;
+  if (!v->is_array()) {
+    errors_.push_back({path(key), "expected an array of numbers, got " + json_type_name(*v)});
+    return false;
+  }
+  out.assign(v->size(), 0.0);
+  return numbers(key, out.data(), out.size(), required);
+}
+
 std::vector<std::string> ObjectReader::keys() const {
   std::vector<std::string> k;
   if (obj_)
@@ -177,4 +198,4 @@ void ObjectReader::finish() {
   }
 }
 
-}  // namespace ftc::tune::detail
+}  // namespace ftc::json_io

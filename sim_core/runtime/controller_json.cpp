@@ -1,13 +1,13 @@
-#include "ftc/tune/controller_json.hpp"
+#include "ftc/runtime/controller_json.hpp"
 
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "json_reader.hpp"
+#include "ftc/runtime/json_reader.hpp"
 
-namespace ftc::tune {
+namespace ftc::runtime {
 
-using detail::ObjectReader;
+using json_io::ObjectReader;
 using nlohmann::json;
 
 sim::ControllerConfig parse_controller(const json& j, const std::string& path,
@@ -30,7 +30,7 @@ sim::ControllerConfig parse_controller(const json& j, const std::string& path,
     double v = 0;
     if (!r.number(f.name, v)) continue;
     if (f.integer && v != std::floor(v)) {
-      errs.push_back({r.path(f.name), "expected an integer, got " + detail::number_text(v)});
+      errs.push_back({r.path(f.name), "expected an integer, got " + json_io::number_text(v)});
       continue;
     }
     c.*f.member = v;
@@ -67,4 +67,4 @@ json to_json(const sim::ControllerConfig& c) {
   return j;
 }
 
-}  // namespace ftc::tune
+}  // namespace ftc::runtime

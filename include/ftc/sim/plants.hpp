@@ -1,0 +1,87 @@
+#pragma once
+// Plants by name, as job files know them. Each registered plant describes its parameters (name,
+// default, valid range, unit) and builds an AnyPlant: the plant with the simulator and the four
+// controllers compiled for its shape, behind one dimension-free interface. This is the seam the
+// tuner uses; it never sees n or m as types.
+//
+// Shipped: "spacecraft" (n = 3, m = 4; the paper's plant) and "manipulator" (a planar two-link
+// arm, n = 2, m = 3). To add one, see sim_core/plants/registry.cpp.
+#include <functional>
+#include <limits>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ftc/sim/controller_config.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/sim/scenario.hpp"
+#include "ftc/sim/simulation.hpp"
+
+namespace ftc::sim {
+
+// One named parameter of a plant: a number (one default) or a fixed-length array.
+struct PlantParameter {
+  std::string name;
+  std::vector<double> defaults;
+  double minimum = -std::numeric_limits<double>::infinity();
+  bool exclusive_minimum = false;  // value > minimum rather than >=
+  std::string unit;
+  std::string description;
+
+  std::size_t size() const { return defaults.size(); }
+};
+
+// A plant as a file gives it: its model name and the values of its parameters, flattened in
+// the order of its PlantKind's parameters.
+struct PlantSpec {
+  std::string model = "spacecraft";
+  std::vector<double> values;  // empty: the defaults
+};
+
+class AnyPlant;
+
+struct PlantKind {
+  std::string model;
+  std::string description;
+  int axes = 0;       // n
+  int actuators = 0;  // m
+  std::vector<PlantParameter> parameters;
+  std::vector<double> default_initial_state;  // 2n values, for scenarios that give none
+  // Builds the plant from validated values (the flattened parameters).
+  std::function<std::unique_ptr<AnyPlant>(const std::vector<double>& values)> make;
+
+  std::vector<double> defaults() const;
+  std::size_t value_count() const;
+  // Index of a parameter's first value in the flattened values; npos when unknown.
+  std::size_t offset(std::string_view parameter) const;
+  // Every value out of its parameter's range, named `path`/<parameter>[/<index>].
+  std::vector<FieldError> validate(const std::vector<double>& values,
+                                   const std::string& path) const;
+};
+
+// A plant of any shape with the simulator and controllers compiled for it. Immutable and
+// thread-safe: any number of threads may simulate on one AnyPlant at once.
+class AnyPlant {
+ public:
+  virtual ~AnyPlant() = default;
+  virtual const PlantKind& kind() const = 0;
+  int axes() const { return kind().axes; }
+  int actuators() const { return kind().actuators; }
+
+  // One scenario with a fresh controller of the given configuration. Throws InputError for an
+  // invalid controller or scenario; a diverging run is a result, never an exception.
+  virtual SimulationResult simulate(const ControllerConfig& controller, const Scenario& scenario,
+                                    const SimulationOptions& options = {}) const = 0;
+};
+
+const std::vector<PlantKind>& plant_kinds();
+// nullptr when no plant has that model name.
+const PlantKind* find_plant_kind(std::string_view model);
+// "spacecraft, manipulator": for messages.
+std::string plant_model_names();
+// Builds the plant of a spec; throws InputError (source "plant") for an unknown model or bad
+// values.
+std::unique_ptr<AnyPlant> make_plant(const PlantSpec& spec);
+
+}  // namespace ftc::sim

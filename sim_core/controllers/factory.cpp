@@ -1,0 +1,11 @@
+// make_controller for each shape of the registered plants (sim_core/plants/registry.cpp). The
+// controllers are compiled here and nowhere else, so that no translation unit holding the loop
+// sees their classes (see plants/plant_adapter.hpp for why that matters).
+#include "controllers/factory.hpp"
+
+namespace ftc::sim {
+
+template std::unique_ptr<Controller<3, 4>> make_controller<3, 4>(const ControllerConfig&,
+                                                                 const Plant<3, 4>&, double);
+
+}  // namespace ftc::sim

@@ -1,0 +1,10 @@
+#pragma once
+// The description of each shipped plant, defined in the plant's own .cpp. Private to sim_core.
+#include "ftc/sim/plants.hpp"
+
+namespace ftc::sim::detail {
+
+PlantKind spacecraft_kind();
+PlantKind manipulator_kind();
+
+}  // namespace ftc::sim::detail

@@ -1,0 +1,124 @@
+// The registered plants. Adding a plant takes its own header and .cpp (its class, its
+// PlantKind) plus the lines marked below: the list of kinds, the list of classes for the
+// generic simulate(), and, for a new shape (n, m), the two instantiations.
+#include <cstdio>
+#include <tuple>
+
+#include "ftc/sim/plants.hpp"
+#include "ftc/sim/spacecraft.hpp"
+#include "plants/kinds.hpp"
+#include "plants/spacecraft_dynamics.hpp"
+#include "simulation_loop.hpp"
+
+namespace ftc::sim {
+
+const std::vector<PlantKind>& plant_kinds() {
+  static const std::vector<PlantKind> kinds = {detail::spacecraft_kind()};  // <- add here
+  return kinds;
+}
+
+namespace {
+
+using RegisteredPlants = std::tuple<Spacecraft>;  // <- and here
+
+// The loop compiled for the registered class the plant is (found by dynamic_cast), or for the
+// Plant<N, M> interface when it is none of them.
+template <int N, int M, std::size_t I = 0>
+SimulationResult run_registered(const Plant<N, M>& plant, Controller<N, M>& controller,
+                                const Scenario& scenario, const SimulationOptions& options) {
+  if constexpr (I < std::tuple_size_v<RegisteredPlants>) {
+    using P = std::tuple_element_t<I, RegisteredPlants>;
+    if constexpr (P::kAxes == N && P::kActuators == M)
+      if (const auto* p = dynamic_cast<const P*>(&plant))
+        return detail::run(*p, controller, scenario, options);
+    return run_registered<N, M, I + 1>(plant, controller, scenario, options);
+  } else {
+    return detail::run(plant, controller, scenario, options);
+  }
+}
+
+}  // namespace
+
+template <int N, int M>
+SimulationResult simulate(const Plant<N, M>& plant, Controller<N, M>& controller,
+                          const Scenario& scenario, const SimulationOptions& options) {
+  throw_if_errors("scenario " + scenario.name, scenario.validate("", N, M));
+  return run_registered(plant, controller, scenario, options);
+}
+
+// One per plant shape (n, m), with make_controller in controllers/factory.cpp.  <- and here
+template SimulationResult simulate<3, 4>(const Plant<3, 4>&, Controller<3, 4>&, const Scenario&,
+                                         const SimulationOptions&);
+
+const PlantKind* find_plant_kind(std::string_view model) {
+  for (const PlantKind& k : plant_kinds())
+    if (k.model == model) return &k;
+  return nullptr;
+}
+
+std::string plant_model_names() {
+  std::string s;
+  for (const PlantKind& k : plant_kinds()) s += (s.empty() ? "" : ", ") + k.model;
+  return s;
+}
+
+std::unique_ptr<AnyPlant> make_plant(const PlantSpec& spec) {
+  const PlantKind* kind = find_plant_kind(spec.model);
+  if (!kind)
+    throw InputError("plant", "/model",
+                     "unknown plant model '" + spec.model + "' (known: " + plant_model_names() +
+                         ")");
+  const std::vector<double> values = spec.values.empty() ? kind->defaults() : spec.values;
+  throw_if_errors("plant", kind->validate(values, ""));
+  return kind->make(values);
+}
+
+std::vector<double> PlantKind::defaults() const {
+  std::vector<double> v;
+  for (const PlantParameter& p : parameters) v.insert(v.end(), p.defaults.begin(), p.defaults.end());
+  return v;
+}
+
+std::size_t PlantKind::value_count() const {
+  std::size_t n = 0;
+  for (const PlantParameter& p : parameters) n += p.size();
+  return n;
+}
+
+std::size_t PlantKind::offset(std::string_view parameter) const {
+  std::size_t n = 0;
+  for (const PlantParameter& p : parameters) {
+    if (p.name == parameter) return n;
+    n += p.size();
+  }
+  return std::string_view::npos;
+}
+
+std::vector<FieldError> PlantKind::validate(const std::vector<double>& values,
+                                            const std::string& path) const {
+  std::vector<FieldError> errs;
+  if (values.size() != value_count()) {
+    errs.push_back({path, "expected " + std::to_string(value_count()) + " parameter values for " +
+                              model + ", got " + std::to_string(values.size())});
+    return errs;
+  }
+  std::size_t i = 0;
+  for (const PlantParameter& p : parameters)
+    for (std::size_t j = 0; j < p.size(); ++j, ++i) {
+      std::string where = path + "/" + p.name;
+      if (p.size() > 1) where.append("/").append(std::to_string(j));
+      const double v = values[i];
+      char bound[32];
+      std::snprintf(bound, sizeof bound, "%.10g", p.minimum);
+      char got[32];
+      std::snprintf(got, sizeof got, "%.10g", v);
+      if (!std::isfinite(v))
+        errs.push_back({where, "must be a finite number"});
+      else if (p.exclusive_minimum ? !(v > p.minimum) : !(v >= p.minimum))
+        errs.push_back({where, std::string("must be ") + (p.exclusive_minimum ? "> " : ">= ") +
+                                   bound + " (got " + got + ")"});
+    }
+  return errs;
+}
+
+}  // namespace ftc::sim
