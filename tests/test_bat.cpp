@@ -2,9 +2,9 @@
 
 #include <cmath>
 
-#include "ftc/tune/bat_algorithm.hpp"
-#include "ftc/tune/optimizer.hpp"
-#include "ftc/tune/random_search.hpp"
+#include "ftc/tune/optimizers/bat.hpp"
+#include "ftc/tune/optimizers/optimizer.hpp"
+#include "ftc/tune/optimizers/random_search.hpp"
 
 using namespace ftc::tune;
 

@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "ftc/tune/job.hpp"
+#include "ftc/tune/job/job.hpp"
 
 using nlohmann::json;
 using namespace ftc;

@@ -3,8 +3,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
-#include "ftc/tune/report.hpp"
-#include "ftc/tune/tuning_run.hpp"
+#include "ftc/tune/report/report.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 #include "short_job.hpp"
 
 using nlohmann::json;

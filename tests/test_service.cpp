@@ -9,9 +9,9 @@
 #include <thread>
 
 #include "cli_runner.hpp"
-#include "ftc/tune/httplib.hpp"
-#include "ftc/tune/service.hpp"
-#include "ftc/tune/tuning_run.hpp"
+#include "service/httplib.hpp"
+#include "ftc/tune/service/service.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 #include "server_process.hpp"
 #include "short_job.hpp"
 

@@ -7,9 +7,9 @@
 #include "ftc/runtime/gains.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "ftc/sim/spacecraft.hpp"
-#include "ftc/tune/parallel_evaluator.hpp"
-#include "ftc/tune/problem.hpp"
-#include "ftc/tune/tuning_run.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 #include "short_job.hpp"
 
 using nlohmann::json;

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "ftc/sim/controller_config.hpp"
-#include "ftc/tune/job.hpp"
+#include "ftc/tune/job/job.hpp"
 
 namespace ftc::cli {
 

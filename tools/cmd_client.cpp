@@ -12,8 +12,8 @@
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/tune/files.hpp"
-#include "ftc/tune/httplib.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "service/httplib.hpp"
 
 namespace ftc::cli {
 namespace {

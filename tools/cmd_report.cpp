@@ -6,7 +6,7 @@
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/tune/report.hpp"
+#include "ftc/tune/report/report.hpp"
 
 namespace ftc::cli {
 

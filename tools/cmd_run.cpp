@@ -10,8 +10,8 @@
 
 #include "cli.hpp"
 #include "ftc/runtime/controller_json.hpp"
-#include "ftc/tune/files.hpp"
-#include "ftc/tune/tuning_run.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 #include "progress.hpp"
 
 namespace ftc::cli {

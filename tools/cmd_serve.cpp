@@ -8,8 +8,8 @@
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/tune/files.hpp"
-#include "ftc/tune/service.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/service/service.hpp"
 
 namespace ftc::cli {
 namespace {

@@ -10,8 +10,8 @@
 #include "ftc/runtime/gains.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/runtime/controller_json.hpp"
-#include "ftc/tune/evaluation.hpp"
-#include "ftc/tune/files.hpp"
+#include "ftc/tune/problem/evaluation.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/version.hpp"
 
 namespace ftc::cli {

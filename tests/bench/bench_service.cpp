@@ -13,9 +13,9 @@
 #include <fstream>
 #include <thread>
 
-#include "ftc/tune/httplib.hpp"
-#include "ftc/tune/service.hpp"
-#include "ftc/tune/tuning_run.hpp"
+#include "service/httplib.hpp"
+#include "ftc/tune/service/service.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 
 using nlohmann::json;
 using clk = std::chrono::steady_clock;

@@ -8,8 +8,8 @@
 
 #include <string>
 
-#include "ftc/tune/job.hpp"
-#include "ftc/tune/tuning_run.hpp"
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 
 using namespace ftc;
 

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "ftc/tune/batch_evaluator.hpp"
-#include "ftc/tune/evaluation.hpp"
-#include "ftc/tune/problem.hpp"
+#include "ftc/tune/evaluators/batch_evaluator.hpp"
+#include "ftc/tune/problem/evaluation.hpp"
+#include "ftc/tune/problem/problem.hpp"
 
 namespace ftc::tune {
 

@@ -14,9 +14,9 @@
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/metrics.hpp"
 #include "ftc/sim/plants.hpp"
-#include "ftc/tune/evaluation.hpp"
-#include "ftc/tune/job.hpp"
-#include "ftc/tune/search_space.hpp"
+#include "ftc/tune/problem/evaluation.hpp"
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/optimizers/search_space.hpp"
 
 namespace ftc::tune {
 

@@ -2,7 +2,7 @@
 // Uniform random search with the Bat algorithm's budget: M candidates drawn from U(lb, ub) at
 // iteration 0 and at each of T iterations, M·(T+1) evaluations in all, keeping the best. It is
 // the baseline that shows what the Bat algorithm's moves buy.
-#include "ftc/tune/optimizer.hpp"
+#include "ftc/tune/optimizers/optimizer.hpp"
 
 namespace ftc::tune {
 

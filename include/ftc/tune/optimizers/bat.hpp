@@ -19,7 +19,7 @@
 //
 // Random numbers are drawn in exactly this order: for initialisation, per bat x_i then v_i; per
 // iteration, per bat β, the pulse test and (if taken) ε; then per bat the loudness test.
-#include "ftc/tune/optimizer.hpp"
+#include "ftc/tune/optimizers/optimizer.hpp"
 
 namespace ftc::tune {
 

@@ -1,4 +1,4 @@
-#include "ftc/tune/report.hpp"
+#include "ftc/tune/report/report.hpp"
 
 #include <fcntl.h>
 #include <openssl/evp.h>
@@ -17,11 +17,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "ftc/tune/files.hpp"
-#include "ftc/tune/parallel_evaluator.hpp"
-#include "ftc/tune/problem.hpp"
-#include "ftc/tune/tuning_run.hpp"
-#include "text.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
+#include "io/text.hpp"
 
 extern char** environ;
 

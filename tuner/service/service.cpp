@@ -1,4 +1,4 @@
-#include "ftc/tune/service.hpp"
+#include "ftc/tune/service/service.hpp"
 
 #include <openssl/crypto.h>
 #include <spdlog/spdlog.h>
@@ -14,12 +14,12 @@
 #include <sstream>
 #include <thread>
 
-#include "ftc/tune/files.hpp"
-#include "ftc/tune/httplib.hpp"
-#include "ftc/tune/job.hpp"
-#include "ftc/tune/job_store.hpp"
-#include "ftc/tune/report.hpp"
-#include "ftc/tune/tuning_run.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "service/httplib.hpp"
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/service/job_store.hpp"
+#include "ftc/tune/report/report.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/version.hpp"
 #include "ftc/runtime/json_reader.hpp"
 

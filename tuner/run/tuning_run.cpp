@@ -1,4 +1,4 @@
-#include "ftc/tune/tuning_run.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 
 #include <sys/resource.h>
 
@@ -9,11 +9,11 @@
 #include <sstream>
 
 #include "ftc/runtime/controller_json.hpp"
-#include "ftc/tune/files.hpp"
-#include "ftc/tune/problem.hpp"
-#include "ftc/tune/sha256.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/io/sha256.hpp"
 #include "ftc/version.hpp"
-#include "text.hpp"
+#include "io/text.hpp"
 
 namespace ftc::tune {
 

@@ -12,7 +12,7 @@
 #include "ftc/sim/metrics.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/simulation.hpp"
-#include "ftc/tune/job.hpp"
+#include "ftc/tune/job/job.hpp"
 
 namespace ftc::tune {
 

@@ -9,10 +9,10 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
-#include "ftc/tune/batch_evaluator.hpp"
-#include "ftc/tune/job.hpp"
-#include "ftc/tune/rng.hpp"
-#include "ftc/tune/search_space.hpp"
+#include "ftc/tune/evaluators/batch_evaluator.hpp"
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/optimizers/rng.hpp"
+#include "ftc/tune/optimizers/search_space.hpp"
 
 namespace ftc::tune {
 

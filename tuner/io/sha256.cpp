@@ -1,4 +1,4 @@
-#include "ftc/tune/sha256.hpp"
+#include "ftc/tune/io/sha256.hpp"
 
 #include <openssl/evp.h>
 

@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "ftc/sim/controller_config.hpp"
-#include "ftc/tune/job.hpp"
-#include "ftc/tune/optimizer.hpp"
-#include "ftc/tune/parallel_evaluator.hpp"
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/optimizers/optimizer.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 
 namespace ftc::tune {
 

@@ -1,4 +1,4 @@
-#include "ftc/tune/problem.hpp"
+#include "ftc/tune/problem/problem.hpp"
 
 #include <utility>
 

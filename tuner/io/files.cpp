@@ -1,4 +1,4 @@
-#include "ftc/tune/files.hpp"
+#include "ftc/tune/io/files.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>

@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "ftc/tune/search_space.hpp"
+#include "ftc/tune/optimizers/search_space.hpp"
 
 namespace ftc::tune {
 

@@ -1,4 +1,4 @@
-#include "ftc/tune/random_search.hpp"
+#include "ftc/tune/optimizers/random_search.hpp"
 
 #include <limits>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "ftc/tune/job.hpp"
+#include "ftc/tune/job/job.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "ftc/runtime/controller_json.hpp"
-#include "ftc/tune/files.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/runtime/json_reader.hpp"
 
 namespace ftc::tune {

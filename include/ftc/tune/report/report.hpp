@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "ftc/tune/job.hpp"
+#include "ftc/tune/job/job.hpp"
 
 namespace ftc::tune {
 

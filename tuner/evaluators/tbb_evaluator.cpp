@@ -1,4 +1,4 @@
-#include "ftc/tune/parallel_evaluator.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

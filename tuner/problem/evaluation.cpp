@@ -1,4 +1,4 @@
-#include "ftc/tune/evaluation.hpp"
+#include "ftc/tune/problem/evaluation.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "ftc/tune/job_store.hpp"
+#include "ftc/tune/service/job_store.hpp"
 
 #include <fcntl.h>
 #include <sqlite3.h>

@@ -1,4 +1,4 @@
-#include "ftc/tune/bat_algorithm.hpp"
+#include "ftc/tune/optimizers/bat.hpp"
 
 #include <cassert>
 #include <cmath>

@@ -1,12 +1,12 @@
-#include "ftc/tune/optimizer.hpp"
+#include "ftc/tune/optimizers/optimizer.hpp"
 
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
-#include "ftc/tune/bat_algorithm.hpp"
-#include "ftc/tune/random_search.hpp"
+#include "ftc/tune/optimizers/bat.hpp"
+#include "ftc/tune/optimizers/random_search.hpp"
 
 namespace ftc::tune {
 
