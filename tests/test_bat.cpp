@@ -34,11 +34,11 @@ double rosenbrock(const Decision& x) {
 }
 
 // Counts evaluations and checks every candidate against the bounds.
-class CheckingEvaluator final : public BatchEvaluator {
+class CheckingEvaluator final : public BatchFitness {
  public:
   CheckingEvaluator(SearchSpace space, double (*f)(const Decision&))
       : space_(std::move(space)), f_(f) {}
-  std::vector<double> evaluate(const std::vector<Decision>& batch) override {
+  std::vector<double> operator()(const std::vector<Decision>& batch) override {
     std::vector<double> J;
     for (const Decision& x : batch) {
       if (!space_.contains(x)) ++out_of_bounds;
@@ -55,17 +55,18 @@ class CheckingEvaluator final : public BatchEvaluator {
   double (*f_)(const Decision&);
 };
 
-AlgorithmConfig bat(int population, int iterations) {
-  AlgorithmConfig c;
-  c.population = population;
-  c.iterations = iterations;
-  return c;
+AlgorithmPtr bat(int population, int iterations) {
+  return make_algorithm({{"type", "bat"}, {"population", population}, {"iterations", iterations}});
+}
+AlgorithmPtr random(int population, int iterations) {
+  return make_algorithm(
+      {{"type", "random"}, {"population", population}, {"iterations", iterations}});
 }
 
-OptimizationResult solve(const AlgorithmConfig& c, std::uint64_t seed, const SearchSpace& s,
+OptimizationResult solve(const AlgorithmPtr& c, std::uint64_t seed, const SearchSpace& s,
                          double (*f)(const Decision&), CheckingEvaluator* ev_out = nullptr) {
   CheckingEvaluator ev(s, f);
-  auto opt = make_optimizer(c, seed, s);
+  auto opt = c->make(seed, s);
   OptimizationResult r = run_optimizer(*opt, ev);
   EXPECT_EQ(ev.out_of_bounds, 0);
   if (ev_out) *ev_out = ev;
@@ -92,10 +93,8 @@ TEST(BatAlgorithm, SolvesSphereInTwoToFiveDimensions) {
       expect_monotone(r);
       EXPECT_LT(sphere(r.best), tolerance[d]) << "d = " << d << ", seed " << seed;
       EXPECT_DOUBLE_EQ(r.best_fitness, 1.0 / (1.0 + sphere(r.best)));
-      AlgorithmConfig rs = bat(30, 300);
-      rs.type = AlgorithmType::random;
       bat_total += sphere(r.best);
-      random_total += sphere(solve(rs, seed, s, sphere).best);
+      random_total += sphere(solve(random(30, 300), seed, s, sphere).best);
     }
     // What the algorithm buys: random search with the same budget ends clearly worse.
     if (d >= 3) {
@@ -146,7 +145,9 @@ TEST(BatAlgorithm, FrequencyMovesBatsTowardTheBest) {
 
 TEST(BatAlgorithm, LoudnessAndPulseRateChangeOnAcceptedMovesOnly) {
   const SearchSpace s = box(2, -5, 5);
-  const AlgorithmConfig c = bat(12, 0);
+  BatSettings c;
+  c.population = 12;
+  c.iterations = 0;
   BatAlgorithm ba(c, 3, s);
   CheckingEvaluator ev(s, sphere);
   ba.initialize(ev);
@@ -184,25 +185,23 @@ TEST(BatAlgorithm, SameSeedSameRunOtherSeedOtherRun) {
   ASSERT_EQ(a.history.size(), b.history.size());
   for (std::size_t i = 0; i < a.history.size(); ++i) {
     EXPECT_EQ(a.history[i].best, b.history[i].best);
-    EXPECT_EQ(a.history[i].mean_loudness, b.history[i].mean_loudness);
+    EXPECT_EQ(a.history[i].extras, b.history[i].extras);
   }
   EXPECT_NE(a.history.front().best, c.history.front().best);
 }
 
 TEST(RandomSearch, SameBudgetMonotoneAndInBounds) {
-  AlgorithmConfig c = bat(10, 10);
-  c.type = AlgorithmType::random;
   CheckingEvaluator ev(box(2, -5, 5), sphere);
-  const OptimizationResult r = solve(c, 9, box(2, -5, 5), sphere, &ev);
+  const OptimizationResult r = solve(random(10, 10), 9, box(2, -5, 5), sphere, &ev);
   EXPECT_EQ(ev.evaluations, 110);
   expect_monotone(r);
-  EXPECT_TRUE(std::isnan(r.history.back().mean_loudness));
+  EXPECT_TRUE(r.history.back().extras.empty());  // no loudness, no pulses
 }
 
 TEST(Optimizer, ObserverCanStopTheRun) {
   int calls = 0;
   CheckingEvaluator ev(box(2, -5, 5), sphere);
-  auto opt = make_optimizer(bat(5, 10), 1, box(2, -5, 5));
+  auto opt = bat(5, 10)->make(1, box(2, -5, 5));
   const OptimizationResult r = run_optimizer(*opt, ev, [&](const HistoryRow& h, const Optimizer&) {
     ++calls;
     return h.iteration < 3;
@@ -213,22 +212,20 @@ TEST(Optimizer, ObserverCanStopTheRun) {
 }
 
 TEST(Optimizer, ResumeFromSavedStateContinuesExactly) {
-  for (AlgorithmType type : {AlgorithmType::bat, AlgorithmType::random}) {
-    AlgorithmConfig c = bat(6, 8);
-    c.type = type;
+  for (const AlgorithmPtr& c : {bat(6, 8), random(6, 8)}) {
     const SearchSpace s = box(3, -2, 2);
     CheckingEvaluator ev(s, rosenbrock);
-    auto full = make_optimizer(c, 11, s);
+    auto full = c->make(11, s);
     const OptimizationResult uninterrupted = run_optimizer(*full, ev);
 
     std::string saved;
-    auto first = make_optimizer(c, 11, s);
+    auto first = c->make(11, s);
     run_optimizer(*first, ev, [&](const HistoryRow& h, const Optimizer& o) {
       saved = o.state().dump();  // through text, as a checkpoint store would keep it
       return h.iteration < 3;
     });
     const nlohmann::json state = nlohmann::json::parse(saved);
-    auto second = make_optimizer(c, 999, s);  // the seed must not matter: the state has the engine
+    auto second = c->make(999, s);  // the seed must not matter: the state has the engine
     const OptimizationResult resumed = run_optimizer(*second, ev, {}, &state);
     ASSERT_EQ(resumed.history.size(), uninterrupted.history.size());
     for (std::size_t i = 0; i < resumed.history.size(); ++i) {

@@ -50,7 +50,7 @@ TEST(JobLoader, LoadsTable1WithPaperDefaults) {
   EXPECT_EQ(job.compare[0].label, "NFTSMC");
   EXPECT_EQ(job.compare[0].controller.p, 9.0);
   ASSERT_TRUE(job.tuning.has_value());
-  EXPECT_EQ(job.tuning->algorithm.evaluations(), 110);
+  EXPECT_EQ(job.tuning->algorithm->evaluations(), 110);
   EXPECT_EQ(job.tuning->parameters[0].name, "Kp");
   EXPECT_EQ(job.tuning->parameters[1].upper, 50.0);
   EXPECT_EQ(job.steps_per_evaluation(), 30000);

@@ -4,6 +4,8 @@
 
 #include "cli_runner.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "short_job.hpp"
 
@@ -16,9 +18,9 @@ namespace {
 // A finished run of the shortened Table 1 job, as `ftctune run` leaves it.
 std::filesystem::path finished_run(const std::string& name) {
   const auto dir = fresh_dir(name);
-  tune::RunOptions o;
-  o.threads = 2;
-  tune::write_outputs(tune::tune(tune::parse_job(short_table1_job(), "short"), o), dir / "run");
+  tune::TbbEvaluator evaluator(2);
+  tune::write_outputs(tune::tune(tune::parse_job(short_table1_job(), "short"), evaluator),
+                      dir / "run");
   return dir / "run";
 }
 
@@ -89,10 +91,11 @@ TEST(Report, LandscapeGridAndHeatmap) {
   tune::LandscapeOptions o;
   o.n1 = 5;
   o.n2 = 4;
-  o.threads = 2;
+  tune::TbbEvaluator evaluator(2);
   o.history = run / "history.csv";
   const tune::LandscapeResult r =
-      tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "landscape", o);
+      tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "landscape", o,
+                              evaluator);
   EXPECT_EQ(r.simulations, 20);
   EXPECT_EQ(r.params, (std::vector<std::string>{"Kp", "Ki"}));
   std::istringstream csv(slurp(r.csv));
@@ -119,7 +122,8 @@ TEST(Report, LandscapeGridAndHeatmap) {
   EXPECT_NE(slurp(run / "landscape" / "landscape.gp").find("history.csv"), std::string::npos);
 
   o.params = {"Kp", "c1"};
-  EXPECT_THROW(tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "l2", o),
+  EXPECT_THROW(tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "l2", o,
+                                       evaluator),
                InputError);
 }
 

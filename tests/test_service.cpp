@@ -11,6 +11,8 @@
 #include "cli_runner.hpp"
 #include "service/httplib.hpp"
 #include "ftc/tune/service/service.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "server_process.hpp"
 #include "short_job.hpp"
@@ -47,9 +49,9 @@ json long_job(const std::string& name = "long") {
 }
 
 std::string expected_gains(const json& job) {
-  tune::RunOptions o;
-  o.threads = 2;
-  return tune::output_files(tune::tune(tune::parse_job(job, "expected"), o)).at("gains.json");
+  tune::TbbEvaluator evaluator(2);
+  return tune::output_files(tune::tune(tune::parse_job(job, "expected"), evaluator))
+      .at("gains.json");
 }
 
 struct Service {

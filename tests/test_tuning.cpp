@@ -9,6 +9,7 @@
 #include "ftc/sim/spacecraft.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "short_job.hpp"
 
@@ -18,11 +19,14 @@ using namespace ftc::testing;
 
 namespace {
 tune::Job short_job() { return tune::parse_job(short_table1_job(), "short"); }
-tune::RunOptions with(int threads, std::optional<std::uint64_t> seed = std::nullopt) {
-  tune::RunOptions o;
-  o.threads = threads;
+// A tuning run on `threads` TBB workers.
+tune::TuningOutcome tuned(const tune::Job& job, int threads,
+                          std::optional<std::uint64_t> seed = std::nullopt,
+                          const tune::RunOptions& base = {}) {
+  tune::TbbEvaluator evaluator(threads);
+  tune::RunOptions o = base;
   o.seed = seed;
-  return o;
+  return tune::tune(job, evaluator, o);
 }
 }  // namespace
 
@@ -38,21 +42,26 @@ TEST(TuningProblem, MapsDecisionOntoNamedFields) {
   EXPECT_EQ(c.c1, 10.0);  // untouched
 }
 
-TEST(TuningProblem, RequiresTuningSection) {
+TEST(TuningProblem, WithoutTuningSectionHasNoDecisionButCannotBeTuned) {
   json j = short_table1_job();
   j.erase("tuning");
-  EXPECT_THROW(tune::TuningProblem(tune::parse_job(j, "x")), InputError);
+  const tune::TuningProblem p(tune::parse_job(j, "x"));
+  EXPECT_EQ(p.space().dimension(), 0u);
+  EXPECT_EQ(p.controller_for({}).Kp, p.job().controller.Kp);
+  tune::SerialEvaluator serial;
+  EXPECT_THROW(tune::tune(p.job(), serial), InputError);
 }
 
-TEST(ParallelEvaluator, DivergingOrThrowingCandidateScoresZero) {
+TEST(TuningProblem, DivergingOrThrowingCandidateScoresZero) {
   const tune::TuningProblem p(short_job());
-  tune::ParallelEvaluator ev(p, 2);
+  tune::TbbEvaluator ev(2);
   sim::ControllerConfig good = p.job().controller;
   sim::ControllerConfig unstable = good;
   unstable.c2 = 1e5;  // far beyond what 1 ms sampling can stabilise
   sim::ControllerConfig invalid = good;
   invalid.Kp = -1;  // make_controller throws inside the task
-  const auto out = ev.evaluate_controllers({good, unstable, invalid});
+  const std::vector<sim::ControllerConfig> candidates = {good, unstable, invalid};
+  const auto out = p.evaluate(candidates, ev);
   EXPECT_GT(out[0].evaluation.fitness, 0.0);
   EXPECT_TRUE(out[1].evaluation.diverged);
   EXPECT_EQ(out[1].evaluation.fitness, 0.0);
@@ -66,19 +75,20 @@ TEST(TuningRun, FinishesWhenSomeCandidatesDiverge) {
   // ISE 1e8, 9e4 diverges), so this box holds both kinds.
   j["tuning"]["parameters"] = {{"c2", {1e3, 3e5}}};
   const tune::TuningProblem problem(tune::parse_job(j, "x"));
-  tune::ParallelEvaluator parallel(problem, 2);
+  tune::TbbEvaluator parallel(2);
+  tune::ProblemFitness fitness(problem, parallel);
   // Counts the candidates that scored 0 on their way to the optimiser.
-  struct Counting final : tune::BatchEvaluator {
-    tune::BatchEvaluator& inner;
+  struct Counting final : tune::BatchFitness {
+    tune::BatchFitness& inner;
     int zeros = 0, total = 0;
-    explicit Counting(tune::BatchEvaluator& e) : inner(e) {}
-    std::vector<double> evaluate(const std::vector<tune::Decision>& batch) override {
-      std::vector<double> J = inner.evaluate(batch);
+    explicit Counting(tune::BatchFitness& f) : inner(f) {}
+    std::vector<double> operator()(const std::vector<tune::Decision>& batch) override {
+      std::vector<double> J = inner(batch);
       for (double v : J) zeros += v == 0.0, ++total;
       return J;
     }
-  } counting(parallel);
-  auto optimizer = tune::make_optimizer(problem.job().tuning->algorithm, 1, problem.space());
+  } counting(fitness);
+  auto optimizer = problem.job().tuning->algorithm->make(1, problem.space());
   const tune::OptimizationResult r = tune::run_optimizer(*optimizer, counting);
   EXPECT_TRUE(r.completed);
   EXPECT_EQ(counting.total, 9);
@@ -89,21 +99,21 @@ TEST(TuningRun, FinishesWhenSomeCandidatesDiverge) {
 
 TEST(TuningRun, GainsIdenticalForOneAndTwoThreads) {
   const tune::Job job = short_job();
-  const std::string one = tune::gains_document(tune::tune(job, with(1))).dump();
-  const std::string two = tune::gains_document(tune::tune(job, with(2))).dump();
+  const std::string one = tune::gains_document(tuned(job, 1)).dump();
+  const std::string two = tune::gains_document(tuned(job, 2)).dump();
   EXPECT_EQ(one, two);
 }
 
 TEST(TuningRun, OtherSeedOtherHistory) {
   const tune::Job job = short_job();
-  const tune::TuningOutcome a = tune::tune(job, with(2));
-  const tune::TuningOutcome b = tune::tune(job, with(2, 2));
+  const tune::TuningOutcome a = tuned(job, 2);
+  const tune::TuningOutcome b = tuned(job, 2, 2);
   EXPECT_EQ(b.seed, 2u);
   EXPECT_NE(a.optimization.history.front().best, b.optimization.history.front().best);
 }
 
 TEST(TuningRun, TunedFitnessIsReproducedByComparison) {
-  const tune::TuningOutcome r = tune::tune(short_job(), with(2));
+  const tune::TuningOutcome r = tuned(short_job(), 2);
   EXPECT_EQ(r.best().role, "tuned");
   EXPECT_EQ(r.best().outcome.evaluation.fitness, r.optimization.best_fitness);
   EXPECT_EQ(r.baseline().controller.Kp, 20.0);
@@ -113,7 +123,7 @@ TEST(TuningRun, TunedFitnessIsReproducedByComparison) {
 }
 
 TEST(GainsFile, RoundTripAndReproducesTunedMetrics) {
-  const tune::TuningOutcome r = tune::tune(short_job(), with(2));
+  const tune::TuningOutcome r = tuned(short_job(), 2);
   const json doc = tune::gains_document(r);
   EXPECT_EQ(doc["schema"], "ftctune.gains/1");
   EXPECT_EQ(doc["job"]["sha256"].get<std::string>().size(), 64u);
@@ -131,12 +141,12 @@ TEST(GainsFile, RoundTripAndReproducesTunedMetrics) {
   const sim::Spacecraft plant;  // the job's
   auto c = runtime::make_controller(g, plant, 0.001);
   const sim::SimulationResult sr =
-      sim::simulate(plant, *c, job.scenarios[0], tune::simulation_options(job, job.scenarios[0]));
+      sim::simulate(plant, *c, job.scenarios[0], tune::TuningProblem(job).simulation_options(0));
   EXPECT_EQ(sr.metrics.errors.ise, r.best().outcome.evaluation.scenarios[0].errors.ise);
 }
 
 TEST(GainsFile, LoaderRejectsBadFilesClearly) {
-  const json doc = tune::gains_document(tune::tune(short_job(), with(2)));
+  const json doc = tune::gains_document(tuned(short_job(), 2));
   const auto message = [](const json& d) {
     try {
       runtime::parse_gains(d, "g.json");
@@ -261,7 +271,7 @@ TEST(Cli, RunWithoutTuningSectionExitsTwo) {
 // The README's "Using the gains in flight software" example, verbatim but for the file name.
 TEST(Runtime, ReadmeExampleLoadsAndSteps) {
   const auto dir = fresh_dir("runtime");
-  tune::write_outputs(tune::tune(short_job(), with(2)), dir);
+  tune::write_outputs(tuned(short_job(), 2), dir);
   const std::string file = (dir / "gains.json").string();
   const double t = 0.0;
   const ftc::sim::Vec3 X1(0.1, -0.2, 0.3), X2(0.0, 0.1, 0.0), a(0.0, 0.0, 0.0);
@@ -280,18 +290,18 @@ TEST(Runtime, ReadmeExampleLoadsAndSteps) {
 
 TEST(TuningRun, ResumedRunGivesTheSameGainsFile) {
   const tune::Job job = short_job();
-  const std::string uninterrupted = tune::gains_document(tune::tune(job, with(2))).dump();
+  const std::string uninterrupted = tune::gains_document(tuned(job, 2)).dump();
   std::string checkpoint;
-  tune::RunOptions stop = with(1);
+  tune::RunOptions stop;
   stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o) {
     checkpoint = o.state().dump();
     return h.iteration < 1;
   };
-  const tune::TuningOutcome partial = tune::tune(job, stop);
+  const tune::TuningOutcome partial = tuned(job, 1, std::nullopt, stop);
   EXPECT_FALSE(partial.completed());
   EXPECT_TRUE(partial.comparison.empty());
   const json state = json::parse(checkpoint);
-  tune::RunOptions resume = with(2);
+  tune::RunOptions resume;
   resume.resume = &state;
-  EXPECT_EQ(tune::gains_document(tune::tune(job, resume)).dump(), uninterrupted);
+  EXPECT_EQ(tune::gains_document(tuned(job, 2, std::nullopt, resume)).dump(), uninterrupted);
 }

@@ -6,6 +6,7 @@
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/report/report.hpp"
 
 namespace ftc::cli {
@@ -52,7 +53,6 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
   if (o.format != "png" && o.format != "svg")
     throw InputError("--format", "", "must be png or svg (got \"" + o.format + "\")");
   lo.format = o.format == "png" ? tune::FigureFormat::png : tune::FigureFormat::svg;
-  lo.threads = o.threads;
   const fs::path out = o.out.empty() ? default_out_dir(job) / "landscape" : fs::path(o.out);
   // The run's best-so-far path, when the job has been run into its default directory.
   lo.history = o.history.empty() && fs::is_regular_file(default_out_dir(job) / "history.csv")
@@ -62,7 +62,8 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
   spdlog::info("evaluating a {} grid over {} ({} simulations per point)", o.grid,
                o.params.empty() ? "the first two tuned parameters" : o.params,
                job.scenarios.size());
-  const tune::LandscapeResult r = tune::compute_landscape(job, out, lo);
+  tune::TbbEvaluator evaluator(o.threads);
+  const tune::LandscapeResult r = tune::compute_landscape(job, out, lo, evaluator);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!g.quiet) {
     std::printf("%lld simulations in %.2f s; lowest %s = %.6g at %s = %.5g, %s = %.5g\n",

@@ -11,6 +11,9 @@
 #include "cli.hpp"
 #include "ftc/runtime/controller_json.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/optimizers/random_search.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "progress.hpp"
 
@@ -60,15 +63,15 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   if (!job.tuning)
     throw InputError(o.job, "/tuning", "is required by ftctune run (what should be tuned?)");
   const fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
-  const std::int64_t total = job.tuning->algorithm.evaluations();
+  const std::int64_t total = job.tuning->algorithm->evaluations();
   std::vector<std::string> names;
   for (const tune::ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
 
   const std::string started = utc_now();
   const auto t0 = clock::now();
   ProgressBar bar(!g.quiet);
+  tune::TbbEvaluator evaluator(o.threads);
   tune::RunOptions ro;
-  ro.threads = o.threads;
   ro.seed = o.seed;
   ro.observer = [&](const tune::HistoryRow& h, const tune::Optimizer&) {
     const double elapsed = std::chrono::duration<double>(clock::now() - t0).count();
@@ -78,15 +81,15 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     bar.clear();
     spdlog::info(
         "iteration {}/{}: best J = {:.6g} ({}), {}/{} evaluations, {:.1f} s elapsed, ETA {:.1f} s",
-        h.iteration, job.tuning->algorithm.iterations, h.best_fitness, params_text(names, h.best),
+        h.iteration, job.tuning->algorithm->iterations(), h.best_fitness, params_text(names, h.best),
         h.evaluations, total, elapsed, eta);
     bar.draw(h.evaluations, total, elapsed);
     return true;
   };
   spdlog::info("tuning {} of job {}: {} evaluations of {} scenario(s), {} algorithm",
                fmt::join(names, ", "), job.name, total, job.scenarios.size(),
-               tune::to_string(job.tuning->algorithm.type));
-  const tune::TuningOutcome r = tune::tune(job, ro);
+               job.tuning->algorithm->type());
+  const tune::TuningOutcome r = tune::tune(job, evaluator, ro);
   bar.clear();
   const double wall = std::chrono::duration<double>(clock::now() - t0).count();
 
@@ -94,12 +97,11 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   if (o.baseline) {
     // Random search with the same budget and seed: what the algorithm buys (Fig. 5).
     tune::Job random = job;
-    random.tuning->algorithm.type = tune::AlgorithmType::random;
+    random.tuning->algorithm = tune::random_search_like(*job.tuning->algorithm);
     tune::RunOptions rr;
-    rr.threads = o.threads;
     rr.seed = o.seed;
     rr.compare = false;
-    const tune::TuningOutcome b = tune::tune(random, rr);
+    const tune::TuningOutcome b = tune::tune(random, evaluator, rr);
     tune::write_file_atomic(out / "history-random.csv", tune::history_csv(b));
     spdlog::info("random search with the same budget: best J = {:.6g} ({})",
                  b.optimization.best_fitness, params_text(names, b.optimization.best));

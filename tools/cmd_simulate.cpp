@@ -10,7 +10,8 @@
 #include "ftc/runtime/gains.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/runtime/controller_json.hpp"
-#include "ftc/tune/problem/evaluation.hpp"
+#include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/version.hpp"
 
@@ -49,7 +50,7 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
     controller = select_controller(job, o.controller, o.sets);
   }
   if (!(o.record_interval > 0)) throw InputError("--record-every", "", "must be > 0 seconds");
-  const auto plant = sim::make_plant(job.plant);
+  const tune::TuningProblem problem(job);
   const fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
 
   json scenarios = json::array();
@@ -57,7 +58,7 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
   for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
     const sim::Scenario& s = job.scenarios[i];
     const auto every = std::max<std::int64_t>(1, std::llround(o.record_interval / s.sample_time));
-    sim::SimulationResult r = tune::simulate_scenario(job, *plant, controller, i, every);
+    sim::SimulationResult r = problem.simulate(controller, i, every);
     json m = tune::metrics_json(r.metrics);
     m["name"] = s.name;
     scenarios.push_back(m);
@@ -68,7 +69,7 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
       spdlog::warn("scenario {} diverged at t = {:.3f} s", s.name, r.metrics.diverged_at);
   }
 
-  const tune::Evaluation e = tune::score(job.objective, std::move(metrics));
+  const tune::Evaluation e = problem.score(std::move(metrics));
   const double objective = e.objective, fitness = e.fitness;
   json doc;
   doc["generator"] = {{"name", kToolName}, {"version", kVersion}};

@@ -10,7 +10,7 @@ namespace {
 int run_validate(const std::string& file, const Globals& g) {
   try {
     const tune::Job job = tune::load_job(file);
-    const std::int64_t evals = job.tuning ? job.tuning->algorithm.evaluations() : 1;
+    const std::int64_t evals = job.tuning ? job.tuning->algorithm->evaluations() : 1;
     const std::int64_t steps = job.steps_per_evaluation();
     if (!g.quiet)
       std::printf(

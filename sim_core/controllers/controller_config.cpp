@@ -14,45 +14,49 @@ constexpr std::uint8_t P = bit(ControllerType::pi_fosmc);
 constexpr std::uint8_t A = bit(ControllerType::adaptive_neural_pi_fosmc);
 
 using C = ControllerConfig;
+constexpr Range kPositive = Range::positive(), kNonNegative = Range::non_negative();
+constexpr Range kOpenUnit = Range::open_unit(), kAny = Range::any();
 constexpr ControllerField kFields[] = {
-    {"c1", &C::c1, F | P | A, false, false},
-    {"c2", &C::c2, F | P | A, false, false},
-    {"alpha1", &C::alpha1, F | P | A, false, true},
-    {"alpha2", &C::alpha2, F | P | A, false, false},
-    {"switching_gain", &C::switching_gain, N | F | P, false, false},
-    {"theta", &C::theta, N | F | P | A, false, false},
-    {"Kp", &C::Kp, P | A, false, false},
-    {"Ki", &C::Ki, P | A, false, false},
-    {"sigma1", &C::sigma1, N, false, false},
-    {"sigma2", &C::sigma2, N, false, false},
-    {"alpha", &C::alpha, N, false, false},
-    {"p", &C::p, N, true, false},
-    {"q", &C::q, N, true, false},
-    {"nodes", &C::nodes, A, true, false},
-    {"width", &C::width, A, false, false},
-    {"weight_rate", &C::weight_rate, A, false, false},
-    {"lambda", &C::lambda, A, false, false},
-    {"zeta", &C::zeta, A, false, false},
-    {"ka0", &C::ka0, A, false, false},
+    {"c1", &C::c1, F | P | A, false, false, kPositive, "1/s²", "gain of sig^α1(X1) in C(X)"},
+    {"c2", &C::c2, F | P | A, false, false, kPositive, "1/s", "gain of sig^α2(X2) in C(X)"},
+    {"alpha1", &C::alpha1, F | P | A, false, true, kOpenUnit, "",
+     "exponent α1 of X1 in C(X); default α2 / (2 - α2)"},
+    {"alpha2", &C::alpha2, F | P | A, false, false, kOpenUnit, "", "exponent α2 of X2 in C(X)"},
+    {"switching_gain", &C::switching_gain, N | F | P, false, false, kNonNegative, "rad/s³",
+     "switching gain K (Ξ+ζ for NFTSMC, Π+ζ for FOSMC and PI-FOSMC)"},
+    {"theta", &C::theta, N | F | P | A, false, false, kPositive, "",
+     "slope θ of the smooth sign sigm(s) = tanh(θ s / 2)"},
+    {"Kp", &C::Kp, P | A, false, false, kPositive, "", "proportional gain of the PI surface"},
+    {"Ki", &C::Ki, P | A, false, false, kNonNegative, "1/s", "integral gain of the PI surface"},
+    {"sigma1", &C::sigma1, N, false, false, kPositive, "", "σ1 of the NFTSMC surface"},
+    {"sigma2", &C::sigma2, N, false, false, kPositive, "", "σ2 of the NFTSMC surface"},
+    {"alpha", &C::alpha, N, false, false, kAny, "", "exponent α of X1 in the NFTSMC surface",
+     "greater than p/q"},
+    {"p", &C::p, N, true, false, Range::at_least(1), "", "numerator of the exponent p/q",
+     "a positive odd integer, with 1 < p/q < 2"},
+    {"q", &C::q, N, true, false, Range::at_least(1), "", "denominator of the exponent p/q",
+     "a positive odd integer, with 1 < p/q < 2"},
+    {"nodes", &C::nodes, A, true, false, Range::between(1, 64), "",
+     "number l of RBF nodes, an integer in 1..64"},
+    {"width", &C::width, A, false, false, kPositive, "", "width σ of the Gaussian nodes"},
+    {"weight_rate", &C::weight_rate, A, false, false, kNonNegative, "",
+     "adaptation rate of the network weights (1/α of eq. 30)"},
+    {"lambda", &C::lambda, A, false, false, kPositive, "",
+     "λ of the switching-gain adaptation (eq. 29)"},
+    {"zeta", &C::zeta, A, false, false, kNonNegative, "rad/s³", "ζ added to the adaptive gain"},
+    {"ka0", &C::ka0, A, false, false, kNonNegative, "rad/s³", "initial adaptive gain K̂a(0)"},
 };
 
 bool is_odd_positive_int(double v) {
   return v >= 1 && v == std::floor(v) && v < 1e6 && static_cast<long>(v) % 2 == 1;
 }
 
-// The range rule of one field; `cfg` gives the other fields a rule depends on (alpha vs p/q).
-std::string check_value(const ControllerConfig& cfg, std::string_view name, double v) {
+// The rules of one field; `cfg` gives the other fields a rule depends on (alpha vs p/q).
+std::string check_value(const ControllerConfig& cfg, const ControllerField& f, double v) {
   using detail::fmt_num;
   const std::string got = " (got " + fmt_num(v) + ")";
+  const std::string_view name = f.name;
   if (!std::isfinite(v)) return "must be a finite number";
-  if (name == "c1" || name == "c2" || name == "theta" || name == "Kp" || name == "sigma1" ||
-      name == "sigma2" || name == "width" || name == "lambda")
-    return v > 0 ? "" : "must be > 0" + got;
-  if (name == "alpha1" || name == "alpha2")
-    return (v > 0 && v < 1) ? "" : "must be in the open interval (0, 1)" + got;
-  if (name == "switching_gain" || name == "Ki" || name == "weight_rate" || name == "zeta" ||
-      name == "ka0")
-    return v >= 0 ? "" : "must be >= 0" + got;
   if (name == "p" || name == "q") {
     if (!is_odd_positive_int(v)) return "must be a positive odd integer" + got;
     if (is_odd_positive_int(cfg.p) && is_odd_positive_int(cfg.q)) {
@@ -66,11 +70,12 @@ std::string check_value(const ControllerConfig& cfg, std::string_view name, doub
     if (std::isfinite(r) && !(v > r)) return "must be greater than p/q = " + fmt_num(r) + got;
     return "";
   }
-  if (name == "nodes") {
-    if (v != std::floor(v) || v < 1 || v > 64) return "must be an integer in 1..64" + got;
+  if (f.integer) {
+    if (v != std::floor(v) || !f.range.contains(v))
+      return "must be an integer in " + fmt_num(f.range.min) + ".." + fmt_num(f.range.max) + got;
     return "";
   }
-  return "";
+  return f.range.check(v);
 }
 
 }  // namespace
@@ -105,7 +110,7 @@ std::vector<FieldError> ControllerConfig::validate(const std::string& path) cons
     if (!f.applies_to(type)) continue;
     const double v = this->*f.member;
     if (f.optional && std::isnan(v)) continue;
-    std::string msg = check_value(*this, f.name, v);
+    std::string msg = check_value(*this, f, v);
     if (!msg.empty()) errs.push_back({path + "/" + f.name, std::move(msg)});
   }
   if (type == ControllerType::adaptive_neural_pi_fosmc) {
@@ -145,7 +150,7 @@ std::string check_controller_value(const ControllerConfig& base, const Controlle
                                    double value) {
   ControllerConfig c = base;
   c.*field.member = value;
-  return check_value(c, field.name, value);
+  return check_value(c, field, value);
 }
 
 namespace detail {

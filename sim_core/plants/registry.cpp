@@ -1,7 +1,6 @@
 // The registered plants. Adding a plant takes its own header and .cpp (its class, its
 // PlantKind) plus the lines marked below: the list of kinds, the list of classes for the
 // generic simulate(), and, for a new shape (n, m), the two instantiations.
-#include <cstdio>
 #include <tuple>
 
 #include "ftc/sim/plants.hpp"
@@ -107,16 +106,8 @@ std::vector<FieldError> PlantKind::validate(const std::vector<double>& values,
     for (std::size_t j = 0; j < p.size(); ++j, ++i) {
       std::string where = path + "/" + p.name;
       if (p.size() > 1) where.append("/").append(std::to_string(j));
-      const double v = values[i];
-      char bound[32];
-      std::snprintf(bound, sizeof bound, "%.10g", p.minimum);
-      char got[32];
-      std::snprintf(got, sizeof got, "%.10g", v);
-      if (!std::isfinite(v))
-        errs.push_back({where, "must be a finite number"});
-      else if (p.exclusive_minimum ? !(v > p.minimum) : !(v >= p.minimum))
-        errs.push_back({where, std::string("must be ") + (p.exclusive_minimum ? "> " : ">= ") +
-                                   bound + " (got " + got + ")"});
+      if (std::string msg = p.range.check(values[i]); !msg.empty())
+        errs.push_back({where, std::move(msg)});
     }
   return errs;
 }

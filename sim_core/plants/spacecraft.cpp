@@ -58,9 +58,9 @@ PlantKind spacecraft_kind() {
   k.actuators = 4;
   const SpacecraftParams d;
   k.parameters = {
-      {"inertia", {d.inertia[0], d.inertia[1], d.inertia[2]}, 0.0, true, "kg·m²",
+      {"inertia", {d.inertia[0], d.inertia[1], d.inertia[2]}, Range::positive(), "kg·m²",
        "principal moments of inertia Ix, Iy, Iz"},
-      {"orbital_rate", {d.orbital_rate}, 0.0, false, "rad/s", "orbital rate ω0"}};
+      {"orbital_rate", {d.orbital_rate}, Range::non_negative(), "rad/s", "orbital rate ω0"}};
   k.default_initial_state = {-0.7, -0.07, 1.5, 0.3, 1.3, -0.2};
   k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
     SpacecraftParams p;

@@ -7,64 +7,104 @@
 
 namespace ftc::runtime {
 
-using json_io::ObjectReader;
 using nlohmann::json;
+using sim::ControllerConfig;
+using sim::ControllerField;
+using sim::ControllerType;
 
-sim::ControllerConfig parse_controller(const json& j, const std::string& path,
-                                       std::vector<FieldError>& errs) {
-  sim::ControllerConfig c;
-  ObjectReader r(j, path, errs);
-  if (!r.ok()) return c;
-  std::string type;
-  if (!r.string("type", type, true)) return c;
-  const auto t = sim::controller_type_from_string(type);
-  if (!t) {
-    errs.push_back(
-        {r.path("type"), "unknown controller type \"" + type +
-                             "\" (known: nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)"});
-    return c;
+namespace {
+
+std::string field_doc(const ControllerField& f) {
+  std::string d = f.description;
+  if (*f.unit) d += " (" + std::string(f.unit) + ")";
+  if (*f.rule) d += "; " + std::string(f.rule);
+  return d;
+}
+
+// One table field of a controller: a number, or an integer held in a double (p, q, nodes).
+schema::Object<ControllerConfig>::Field table_field(const ControllerField& f) {
+  const ControllerConfig dflt;
+  return {f.name, false,
+          [&f](const json& v, const std::string& path, ControllerConfig& c,
+               schema::Errors& e) {
+            double d = 0;
+            if (!schema::detail::read_number(v, path, d, e)) return;
+            if (f.integer && d != std::floor(d)) {
+              e.push_back({path, "expected an integer, got " + json_io::number_text(d)});
+              return;
+            }
+            c.*f.member = d;
+          },
+          // Ranges and the rules between fields are ControllerConfig::validate's (the
+          // variant's rule below), so that a config built in code is checked the same way.
+          [](const ControllerConfig&, const std::string&, schema::Errors&) {},
+          [&f](const ControllerConfig& c, json& o) {
+            double v = c.*f.member;
+            if (f.optional && std::isnan(v)) v = c.resolved_alpha1();
+            if (f.integer)
+              o[f.name] = static_cast<long long>(v);
+            else
+              o[f.name] = v;
+          },
+          [&f, dflt] {
+            json s = {{"type", f.integer ? "integer" : "number"}, {"description", field_doc(f)}};
+            schema::annotate(f.range, s);
+            const double d = dflt.*f.member;
+            if (std::isfinite(d)) s["default"] = d;
+            return s;
+          }};
+}
+
+std::shared_ptr<const schema::Variant<ControllerConfig>> make_shape() {
+  auto v = std::make_shared<schema::Variant<ControllerConfig>>(
+      "type", [](const ControllerConfig& c) { return std::string(sim::to_string(c.type)); },
+      [](ControllerConfig& c, const std::string& name) {
+        // A new type starts from its Table 1 values.
+        c = ControllerConfig::table1(*sim::controller_type_from_string(name));
+      },
+      "A sliding-mode controller: its type and parameters (Table 1 values by default)", "",
+      [](const std::string& name) {
+        return "unknown controller type \"" + name +
+               "\" (known: nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)";
+      });
+  for (const ControllerType t : sim::kAllControllerTypes) {
+    auto o = std::make_shared<schema::Object<ControllerConfig>>();
+    for (const ControllerField& f : sim::controller_fields())
+      if (f.applies_to(t)) o->field(table_field(f));
+    if (t == ControllerType::adaptive_neural_pi_fosmc)
+      o->numbers("centre_range", &ControllerConfig::centre_range, 2, schema::Range::any(),
+                 "[lower, upper] of the node centres on the diagonal");
+    const std::string name = sim::to_string(t);
+    o->unknown_key_message([name, t](const std::string& key) {
+      const ControllerField* f = sim::find_controller_field(key);
+      if ((f && !f->applies_to(t)) || key == "centre_range")
+        return "does not apply to controller type " + name;
+      std::string allowed;
+      for (const std::string& n : sim::controller_field_names(t)) allowed += ", " + n;
+      return "unknown key (allowed here: type" + allowed + ")";
+    });
+    o->rule([](const ControllerConfig& c, const std::string& path, schema::Errors& e) {
+      for (FieldError& err : c.validate(path)) e.push_back(std::move(err));
+    });
+    v->add(name, std::move(o));
   }
-  c = sim::ControllerConfig::table1(*t);
-  for (const sim::ControllerField& f : sim::controller_fields()) {
-    if (!f.applies_to(*t)) continue;
-    double v = 0;
-    if (!r.number(f.name, v)) continue;
-    if (f.integer && v != std::floor(v)) {
-      errs.push_back({r.path(f.name), "expected an integer, got " + json_io::number_text(v)});
-      continue;
-    }
-    c.*f.member = v;
-  }
-  if (*t == sim::ControllerType::adaptive_neural_pi_fosmc)
-    r.numbers("centre_range", c.centre_range.data(), 2);
-  for (const std::string& k : r.keys()) {
-    const sim::ControllerField* f = sim::find_controller_field(k);
-    const bool other = (f && !f->applies_to(*t)) ||
-                       (k == "centre_range" && *t != sim::ControllerType::adaptive_neural_pi_fosmc);
-    if (other) {
-      errs.push_back({r.path(k.c_str()), "does not apply to controller type " + type});
-      r.mark_seen(k);
-    }
-  }
-  r.finish();
+  return v;
+}
+
+}  // namespace
+
+std::shared_ptr<const schema::Shape<ControllerConfig>> controller_shape() {
+  static const std::shared_ptr<const schema::Variant<ControllerConfig>> shape = make_shape();
+  return shape;
+}
+
+ControllerConfig parse_controller(const json& j, const std::string& path,
+                                  std::vector<FieldError>& errs) {
+  ControllerConfig c;
+  controller_shape()->read(j, path, c, errs);
   return c;
 }
 
-json to_json(const sim::ControllerConfig& c) {
-  json j;
-  j["type"] = sim::to_string(c.type);
-  for (const sim::ControllerField& f : sim::controller_fields()) {
-    if (!f.applies_to(c.type)) continue;
-    double v = c.*f.member;
-    if (f.optional && std::isnan(v)) v = c.resolved_alpha1();
-    if (f.integer)
-      j[f.name] = static_cast<long long>(v);
-    else
-      j[f.name] = v;
-  }
-  if (c.type == sim::ControllerType::adaptive_neural_pi_fosmc)
-    j["centre_range"] = {c.centre_range[0], c.centre_range[1]};
-  return j;
-}
+json to_json(const ControllerConfig& c) { return controller_shape()->write(c); }
 
 }  // namespace ftc::runtime

@@ -58,6 +58,12 @@ json parse_json_text(const std::string& text, const std::string& source) {
   }
 }
 
+json json_number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+double json_number_or(const json& j, double if_null) {
+  return j.is_number() ? j.get<double>() : if_null;
+}
+
 bool json_to_int(const json& v, long long& out) {
   if (v.is_number_integer()) {
     out = v.is_number_unsigned() ? static_cast<long long>(v.get<std::uint64_t>())

@@ -15,6 +15,8 @@
 
 #include "service/httplib.hpp"
 #include "ftc/tune/service/service.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
 using nlohmann::json;
@@ -59,9 +61,8 @@ int main() {
   const ftc::tune::Job job = ftc::tune::parse_job(table1, "table1");
   for (int rep = 0; rep < 5; ++rep) {
     auto t0 = clk::now();
-    ftc::tune::RunOptions ro;
-    ro.threads = 2;
-    const auto files = ftc::tune::output_files(ftc::tune::tune(job, ro));
+    ftc::tune::TbbEvaluator evaluator(2);
+    const auto files = ftc::tune::output_files(ftc::tune::tune(job, evaluator));
     direct.push_back(seconds_since(t0));
 
     t0 = clk::now();

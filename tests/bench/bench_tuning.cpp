@@ -9,6 +9,8 @@
 #include <string>
 
 #include "ftc/tune/job/job.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
 using namespace ftc;
@@ -25,10 +27,9 @@ double max_rss_mib() {
 
 void BM_TuneTable1(benchmark::State& state) {
   const tune::Job job = table1();
-  tune::RunOptions o;
-  o.threads = static_cast<int>(state.range(0));
+  tune::TbbEvaluator evaluator(static_cast<int>(state.range(0)));
   double J = 0;
-  for (auto _ : state) J += tune::tune(job, o).optimization.best_fitness;
+  for (auto _ : state) J += tune::tune(job, evaluator).optimization.best_fitness;
   benchmark::DoNotOptimize(J);
   state.counters["max_rss_MiB"] = max_rss_mib();
 }
@@ -45,20 +46,19 @@ BENCHMARK(BM_TuneTable1)
 void BM_TuneScaling(benchmark::State& state) {
   tune::Job job = table1();
   job.compare.clear();
-  job.tuning->algorithm.population = static_cast<int>(state.range(0));
-  job.tuning->algorithm.iterations = static_cast<int>(state.range(1));
+  job.tuning->algorithm = tune::make_algorithm(
+      {{"type", "bat"}, {"population", state.range(0)}, {"iterations", state.range(1)}});
   const sim::Scenario base = job.scenarios.front();
   job.scenarios.clear();
   for (int s = 0; s < state.range(2); ++s) {
     job.scenarios.push_back(base);
     job.scenarios.back().name = "copy" + std::to_string(s);
   }
-  tune::RunOptions o;
-  o.threads = 2;
+  tune::TbbEvaluator evaluator(2);
   double J = 0;
-  for (auto _ : state) J += tune::tune(job, o).optimization.best_fitness;
+  for (auto _ : state) J += tune::tune(job, evaluator).optimization.best_fitness;
   benchmark::DoNotOptimize(J);
-  const double sims = static_cast<double>(job.tuning->algorithm.evaluations() + 2) *
+  const double sims = static_cast<double>(job.tuning->algorithm->evaluations() + 2) *
                       static_cast<double>(job.scenarios.size());
   state.counters["simulations"] = sims;
   // Seconds of wall time per simulation (shown with a unit prefix, e.g. 8.6m = 8.6 ms).

@@ -235,28 +235,8 @@ TuningConfig parse_tuning(const json& j, const std::string& path, std::vector<Fi
     }
   }
   if (const json* aj = r.child("algorithm")) {
-    AlgorithmConfig& a = t.algorithm;
-    ObjectReader ar(*aj, r.path("algorithm"), errs);
-    std::string type = "bat";
-    if (ar.string("type", type)) {
-      if (type == "bat")
-        a.type = AlgorithmType::bat;
-      else if (type == "random")
-        a.type = AlgorithmType::random;
-      else
-        errs.push_back({ar.path("type"), "must be \"bat\" or \"random\" (got \"" + type + "\")"});
-    }
-    ar.integer("population", a.population);
-    ar.integer("iterations", a.iterations);
-    if (a.type == AlgorithmType::bat) {
-      ar.number("f_min", a.f_min);
-      ar.number("f_max", a.f_max);
-      ar.number("loudness", a.loudness);
-      ar.number("pulse_rate", a.pulse_rate);
-      ar.number("loudness_decay", a.loudness_decay);
-      ar.number("pulse_rate_growth", a.pulse_rate_growth);
-    }
-    ar.finish();
+    t.algorithm = parse_algorithm(*aj, r.path("algorithm"), errs);
+    if (!t.algorithm) t.algorithm = TuningConfig::default_algorithm();  // reported
   }
   r.uint64("seed", t.seed);
   r.finish();
@@ -283,32 +263,9 @@ void check_unit(std::vector<FieldError>& errs, const std::string& path, double v
 // --- public ----------------------------------------------------------------------------------
 
 const char* to_string(Aggregate a) { return a == Aggregate::mean ? "mean" : "max"; }
-const char* to_string(AlgorithmType a) { return a == AlgorithmType::bat ? "bat" : "random"; }
-
-std::vector<FieldError> AlgorithmConfig::validate(const std::string& path) const {
-  std::vector<FieldError> errs;
-  check_positive_int(errs, path + "/population", population, 100000);
-  if (iterations < 0 || iterations > 100000)
-    errs.push_back({path + "/iterations",
-                    "must be an integer in 0..100000 (got " + std::to_string(iterations) + ")"});
-  if (type != AlgorithmType::bat) return errs;
-  const bool fmin_ok = std::isfinite(f_min) && f_min >= 0;
-  if (!fmin_ok)
-    errs.push_back({path + "/f_min", "must be >= 0 (got " + json_io::number_text(f_min) + ")"});
-  if (!std::isfinite(f_max))
-    errs.push_back({path + "/f_max", "must be a finite number"});
-  else if (fmin_ok && f_max < f_min)
-    errs.push_back({path + "/f_max", "must be >= f_min " + json_io::number_text(f_min) + " (got " +
-                                         json_io::number_text(f_max) + ")"});
-  check_unit(errs, path + "/loudness", loudness, true);
-  check_unit(errs, path + "/pulse_rate", pulse_rate, false);
-  if (!(std::isfinite(loudness_decay) && loudness_decay > 0 && loudness_decay < 1))
-    errs.push_back({path + "/loudness_decay", "must be in the open interval (0, 1) (got " +
-                                                  json_io::number_text(loudness_decay) + ")"});
-  if (!(std::isfinite(pulse_rate_growth) && pulse_rate_growth > 0))
-    errs.push_back({path + "/pulse_rate_growth",
-                    "must be > 0 (got " + json_io::number_text(pulse_rate_growth) + ")"});
-  return errs;
+AlgorithmPtr TuningConfig::default_algorithm() {
+  static const AlgorithmPtr bat = make_algorithm({{"type", "bat"}});
+  return bat;
 }
 
 std::vector<FieldError> Job::validate() const {
@@ -353,7 +310,7 @@ std::vector<FieldError> Job::validate() const {
       }
 
   if (tuning) {
-    append(errs, tuning->algorithm.validate("/tuning/algorithm"));
+    append(errs, tuning->algorithm->validate("/tuning/algorithm"));
     // A gains file is valid for one sample time, so every tuned scenario must share it.
     for (std::size_t i = 1; i < scenarios.size(); ++i)
       if (scenarios[i].sample_time != scenarios[0].sample_time)
@@ -474,12 +431,6 @@ Job load_job(const std::filesystem::path& file) {
 
 // --- JSON output -----------------------------------------------------------------------------
 
-json json_number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
-double json_number_or(const json& j, double if_null) {
-  return j.is_number() ? j.get<double>() : if_null;
-}
-
 json to_json(const PlantConfig& p) {
   json j = {{"model", p.model}};
   std::size_t offset = 0;
@@ -565,17 +516,7 @@ json to_json(const Job& job) {
     const TuningConfig& t = *job.tuning;
     json params = json::object();
     for (const ParameterBounds& b : t.parameters) params[b.name] = {b.lower, b.upper};
-    const AlgorithmConfig& a = t.algorithm;
-    json alg = {
-        {"type", to_string(a.type)}, {"population", a.population}, {"iterations", a.iterations}};
-    if (a.type == AlgorithmType::bat) {
-      alg["f_min"] = a.f_min;
-      alg["f_max"] = a.f_max;
-      alg["loudness"] = a.loudness;
-      alg["pulse_rate"] = a.pulse_rate;
-      alg["loudness_decay"] = a.loudness_decay;
-      alg["pulse_rate_growth"] = a.pulse_rate_growth;
-    }
+    const json alg = t.algorithm->to_json();
     j["tuning"] = {{"parameters", params}, {"algorithm", alg}, {"seed", t.seed}};
   }
   return j;

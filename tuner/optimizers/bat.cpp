@@ -3,9 +3,58 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
+
+#include "ftc/runtime/json_reader.hpp"
 
 namespace ftc::tune {
+
+using json_io::json_number;
+using json_io::json_number_or;
+
+namespace {
+
+std::shared_ptr<const schema::Object<BatSettings>> bat_shape() {
+  using S = BatSettings;
+  using schema::IntRange;
+  using schema::Range;
+  static const auto shape = std::make_shared<const schema::Object<S>>(
+      schema::Object<S>("The Bat algorithm (paper §5): M bats, T iterations, M·(T+1) evaluations")
+          .integer("population", &S::population, IntRange{1, 100000}, "number of bats M")
+          .integer("iterations", &S::iterations, IntRange{0, 100000},
+                   "iterations T after the initial population")
+          .number("f_min", &S::f_min, Range::non_negative(), "lowest pulse frequency")
+          .number("f_max", &S::f_max, Range::any(), "highest pulse frequency (>= f_min)")
+          .number("loudness", &S::loudness, Range::half_open_unit(), "initial loudness A0")
+          .number("pulse_rate", &S::pulse_rate, Range::unit(), "initial pulse rate r0")
+          .number("loudness_decay", &S::loudness_decay, Range::open_unit(),
+                  "factor α on the loudness after an accepted move")
+          .number("pulse_rate_growth", &S::pulse_rate_growth, Range::positive(),
+                  "γ of r = r0 (1 - exp(-γ t))")
+          .rule([](const S& s, const std::string& path, schema::Errors& e) {
+            if (std::isfinite(s.f_min) && s.f_min >= 0 && std::isfinite(s.f_max) &&
+                s.f_max < s.f_min)
+              e.push_back({path + "/f_max", "must be >= f_min " + json_io::number_text(s.f_min) +
+                                                " (got " + json_io::number_text(s.f_max) + ")"});
+          }));
+  return shape;
+}
+
+}  // namespace
+
+std::vector<FieldError> BatSettings::validate(const std::string& path) const {
+  std::vector<FieldError> errs;
+  bat_shape()->validate(*this, path, errs);
+  return errs;
+}
+
+AlgorithmInfo bat_algorithm_info() {
+  return struct_algorithm<BatSettings>(
+      "bat", "the Bat algorithm of the paper (§5, Appendix A)", bat_shape(),
+      [](const BatSettings& s, std::uint64_t seed, const SearchSpace& space) {
+        return std::make_unique<BatAlgorithm>(s, seed, space);
+      },
+      {"mean_loudness", "mean_pulse_rate"});
+}
 
 Decision bat_frequency_move(const SearchSpace& space, const Decision& x, Decision& v,
                             const Decision& best, double f) {
@@ -17,29 +66,27 @@ Decision bat_frequency_move(const SearchSpace& space, const Decision& x, Decisio
   return c;
 }
 
-BatAlgorithm::BatAlgorithm(const AlgorithmConfig& config, std::uint64_t seed,
+BatAlgorithm::BatAlgorithm(const BatSettings& settings, std::uint64_t seed,
                            const SearchSpace& space)
-    : GenerationalOptimizer(config, seed, space) {
-  assert(config.type == AlgorithmType::bat);
+    : GenerationalOptimizer(settings.iterations, seed, space), settings_(settings) {
+  assert(settings.validate("").empty());
   assert(space.dimension() > 0);
 }
 
-void BatAlgorithm::initialize(BatchEvaluator& evaluator) {
+void BatAlgorithm::initialize(BatchFitness& fitness) {
   const std::size_t d = space_.dimension();
-  bats_.assign(static_cast<std::size_t>(config_.population), Bat{});
+  bats_.assign(static_cast<std::size_t>(settings_.population), Bat{});
   std::vector<Decision> batch;
   for (Bat& b : bats_) {
     b.x.resize(d);
     b.v.resize(d);
     for (std::size_t j = 0; j < d; ++j) b.x[j] = rng_.uniform(space_.lower[j], space_.upper[j]);
     for (std::size_t j = 0; j < d; ++j) b.v[j] = rng_.uniform();
-    b.loudness = config_.loudness;
-    b.pulse_rate = config_.pulse_rate;
+    b.loudness = settings_.loudness;
+    b.pulse_rate = settings_.pulse_rate;
     batch.push_back(b.x);
   }
-  const std::vector<double> J = evaluator.evaluate(batch);
-  if (J.size() != bats_.size()) throw std::logic_error("evaluator returned a wrong-sized batch");
-  evaluations_ += static_cast<std::int64_t>(J.size());
+  const std::vector<double> J = evaluate(fitness, batch);
   std::size_t best = 0;
   for (std::size_t i = 0; i < bats_.size(); ++i) {
     bats_[i].fitness = J[i];
@@ -51,10 +98,11 @@ void BatAlgorithm::initialize(BatchEvaluator& evaluator) {
   record_iteration();
 }
 
-void BatAlgorithm::iterate(BatchEvaluator& evaluator) {
+void BatAlgorithm::iterate(BatchFitness& fitness) {
   assert(t_ >= 0 && "initialize() first");
   const int t = t_ + 1;
   const std::size_t d = space_.dimension();
+  const BatSettings& c = settings_;
 
   double mean_loudness = 0.0;
   for (const Bat& b : bats_) mean_loudness += b.loudness;
@@ -64,26 +112,24 @@ void BatAlgorithm::iterate(BatchEvaluator& evaluator) {
   std::vector<Decision> candidates;
   candidates.reserve(bats_.size());
   for (Bat& b : bats_) {
-    const double f = config_.f_min + (config_.f_max - config_.f_min) * rng_.uniform();
-    Decision c = bat_frequency_move(space_, b.x, b.v, best, f);
+    const double f = c.f_min + (c.f_max - c.f_min) * rng_.uniform();
+    Decision cand = bat_frequency_move(space_, b.x, b.v, best, f);
     if (rng_.uniform() > b.pulse_rate) {  // local random walk around the best (eq. 39)
       for (std::size_t j = 0; j < d; ++j)
-        c[j] = space_.clamp(j, best[j] + rng_.uniform(-1.0, 1.0) * mean_loudness);
+        cand[j] = space_.clamp(j, best[j] + rng_.uniform(-1.0, 1.0) * mean_loudness);
     }
-    candidates.push_back(std::move(c));
+    candidates.push_back(std::move(cand));
   }
 
-  const std::vector<double> J = evaluator.evaluate(candidates);
-  if (J.size() != bats_.size()) throw std::logic_error("evaluator returned a wrong-sized batch");
-  evaluations_ += static_cast<std::int64_t>(J.size());
+  const std::vector<double> J = evaluate(fitness, candidates);
 
-  const double pulse = config_.pulse_rate * (1.0 - std::exp(-config_.pulse_rate_growth * t));
+  const double pulse = c.pulse_rate * (1.0 - std::exp(-c.pulse_rate_growth * t));
   for (std::size_t i = 0; i < bats_.size(); ++i) {
     Bat& b = bats_[i];
     if (rng_.uniform() < b.loudness && J[i] >= b.fitness) {
       b.x = candidates[i];
       b.fitness = J[i];
-      b.loudness *= config_.loudness_decay;
+      b.loudness *= c.loudness_decay;
       b.pulse_rate = pulse;
     }
     if (J[i] > best_fitness_) {
@@ -114,6 +160,10 @@ void BatAlgorithm::restore(const nlohmann::json& s) {
     bats_.push_back({b.at("x").get<Decision>(), b.at("v").get<Decision>(),
                      b.at("loudness").get<double>(), b.at("pulse_rate").get<double>(),
                      json_number_or(b.at("fitness"), std::numeric_limits<double>::infinity())});
+  if (bats_.size() != static_cast<std::size_t>(settings_.population))
+    throw InputError("checkpoint", "/bats",
+                     "holds " + std::to_string(bats_.size()) + " bats, the job has " +
+                         std::to_string(settings_.population));
 }
 
 void BatAlgorithm::record_iteration() {
@@ -123,7 +173,7 @@ void BatAlgorithm::record_iteration() {
     pulse_rate += b.pulse_rate;
   }
   const double n = static_cast<double>(bats_.size());
-  record(loudness / n, pulse_rate / n);
+  record({{"mean_loudness", loudness / n}, {"mean_pulse_rate", pulse_rate / n}});
 }
 
 }  // namespace ftc::tune

@@ -1,45 +1,84 @@
 #include "ftc/tune/optimizers/random_search.hpp"
 
-#include <limits>
-#include <stdexcept>
+#include <algorithm>
 
 namespace ftc::tune {
 
-RandomSearch::RandomSearch(const AlgorithmConfig& config, std::uint64_t seed,
-                           const SearchSpace& space)
-    : GenerationalOptimizer(config, seed, space) {}
+namespace {
 
-void RandomSearch::generation(BatchEvaluator& evaluator) {
-  std::vector<Decision> batch(static_cast<std::size_t>(config_.population));
+std::shared_ptr<const schema::Object<RandomSearchSettings>> random_shape() {
+  using S = RandomSearchSettings;
+  static const auto shape = std::make_shared<const schema::Object<S>>(
+      schema::Object<S>("Uniform random search: M candidates per iteration, M·(T+1) in all")
+          .integer("population", &S::population, schema::IntRange{1, 100000},
+                   "candidates per iteration M")
+          .integer("iterations", &S::iterations, schema::IntRange{0, 100000},
+                   "iterations T after the first"));
+  return shape;
+}
+
+}  // namespace
+
+std::vector<FieldError> RandomSearchSettings::validate(const std::string& path) const {
+  std::vector<FieldError> errs;
+  random_shape()->validate(*this, path, errs);
+  return errs;
+}
+
+AlgorithmInfo random_search_info() {
+  return struct_algorithm<RandomSearchSettings>(
+      "random", "uniform random search, the baseline", random_shape(),
+      [](const RandomSearchSettings& s, std::uint64_t seed, const SearchSpace& space) {
+        return std::make_unique<RandomSearch>(s, seed, space);
+      });
+}
+
+AlgorithmPtr random_search_like(const AlgorithmSettings& other) {
+  RandomSearchSettings s;
+  s.population = other.population();
+  // Whole generations within the other's budget, at least one.
+  s.iterations = static_cast<int>(std::max<std::int64_t>(
+      0, other.evaluations() / std::max(1, other.population()) - 1));
+  return std::make_shared<StructSettings<RandomSearchSettings>>(
+      "random", s, random_shape(),
+      [](const RandomSearchSettings& r, std::uint64_t seed, const SearchSpace& space) {
+        return std::make_unique<RandomSearch>(r, seed, space);
+      },
+      std::vector<std::string>{});
+}
+
+RandomSearch::RandomSearch(const RandomSearchSettings& settings, std::uint64_t seed,
+                           const SearchSpace& space)
+    : GenerationalOptimizer(settings.iterations, seed, space), settings_(settings) {}
+
+void RandomSearch::generation(BatchFitness& fitness) {
+  std::vector<Decision> batch(static_cast<std::size_t>(settings_.population));
   for (Decision& x : batch) {
     x.resize(space_.dimension());
     for (std::size_t j = 0; j < x.size(); ++j)
       x[j] = rng_.uniform(space_.lower[j], space_.upper[j]);
   }
-  const std::vector<double> J = evaluator.evaluate(batch);
-  if (J.size() != batch.size()) throw std::logic_error("evaluator returned a wrong-sized batch");
-  evaluations_ += static_cast<std::int64_t>(J.size());
+  const std::vector<double> J = evaluate(fitness, batch);
   for (std::size_t i = 0; i < batch.size(); ++i)
     if (best_.empty() || J[i] > best_fitness_) {
       best_ = batch[i];
       best_fitness_ = J[i];
     }
-  constexpr double nan = std::numeric_limits<double>::quiet_NaN();  // no loudness, no pulses
-  record(nan, nan);
+  record();
 }
 
 nlohmann::json RandomSearch::state() const { return common_state("random"); }
 
 void RandomSearch::restore(const nlohmann::json& s) { restore_common(s, "random"); }
 
-void RandomSearch::initialize(BatchEvaluator& evaluator) {
+void RandomSearch::initialize(BatchFitness& fitness) {
   t_ = 0;
-  generation(evaluator);
+  generation(fitness);
 }
 
-void RandomSearch::iterate(BatchEvaluator& evaluator) {
+void RandomSearch::iterate(BatchFitness& fitness) {
   ++t_;
-  generation(evaluator);
+  generation(fitness);
 }
 
 }  // namespace ftc::tune

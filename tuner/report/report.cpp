@@ -18,9 +18,8 @@
 #include <stdexcept>
 
 #include "ftc/tune/io/files.hpp"
-#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/problem/problem.hpp"
-#include "ftc/tune/run/tuning_run.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "io/text.hpp"
 
 extern char** environ;
@@ -442,7 +441,7 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
 }
 
 LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
-                                  const LandscapeOptions& options) {
+                                  const LandscapeOptions& options, BatchEvaluator& evaluator) {
   if (!job_in.tuning)
     throw InputError(job_in.name, "/tuning", "is required: it gives the parameters' bounds");
   std::vector<std::string> params = options.params;
@@ -479,18 +478,20 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
           bounds[1].lower + (bounds[1].upper - bounds[1].lower) * b / (options.n2 - 1);
       grid.push_back(i0 == 0 ? Decision{v0, v1} : Decision{v1, v0});
     }
-  ParallelEvaluator evaluator(problem, options.threads);
-  evaluator.evaluate(grid);
+  std::vector<sim::ControllerConfig> controllers;
+  controllers.reserve(grid.size());
+  for (const Decision& x : grid) controllers.push_back(problem.controller_for(x));
+  const std::vector<CandidateOutcome> outcomes = problem.evaluate(controllers, evaluator);
 
   LandscapeResult r;
   r.params = params;
-  r.simulations = evaluator.simulations();
+  r.simulations = static_cast<std::int64_t>(controllers.size() * problem.scenarios());
   r.best_objective = std::numeric_limits<double>::infinity();
   double worst_objective = 0.0;
   std::string csv = params[0] + "," + params[1] + ",objective,fitness,diverged\n";
   char buf[160];
   for (std::size_t k = 0; k < grid.size(); ++k) {
-    const Evaluation& e = evaluator.last_batch()[k].evaluation;
+    const Evaluation& e = outcomes[k].evaluation;
     const double p0 = grid[k][i0], p1 = grid[k][1 - i0];
     std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g,%.9g,%d\n", p0, p1,
                   std::isfinite(e.objective) ? e.objective : NAN, e.fitness, e.diverged ? 1 : 0);

@@ -19,6 +19,8 @@
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/service/job_store.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/version.hpp"
 #include "ftc/runtime/json_reader.hpp"
@@ -215,7 +217,7 @@ struct TuningService::Impl {
     if (!job.tuning)
       return send_error(res, 400, "invalid_job", "request body: /tuning: is required to tune",
                         json::array({{{"path", "/tuning"}, {"message", "is required to tune"}}}));
-    const double steps = static_cast<double>(job.tuning->algorithm.evaluations()) *
+    const double steps = static_cast<double>(job.tuning->algorithm->evaluations()) *
                          static_cast<double>(job.steps_per_evaluation());
     if (steps > opt.max_steps)
       return send_error(res, 400, "job_too_large",
@@ -229,8 +231,8 @@ struct TuningService::Impl {
     Submission s;
     s.job_json = to_json(job).dump();
     s.name = job.name;
-    s.iterations = job.tuning->algorithm.iterations;
-    s.total_evaluations = job.tuning->algorithm.evaluations();
+    s.iterations = job.tuning->algorithm->iterations();
+    s.total_evaluations = job.tuning->algorithm->evaluations();
     const std::string key = req.get_header_value("Idempotency-Key");
     if (!key.empty()) {
       if (key.size() > 200)
@@ -427,7 +429,6 @@ struct TuningService::Impl {
       const std::optional<std::string> checkpoint = store.checkpoint(id);
       json state;
       RunOptions ro;
-      ro.threads = opt.threads;
       if (checkpoint) {
         state = json::parse(*checkpoint);
         ro.resume = &state;
@@ -444,7 +445,8 @@ struct TuningService::Impl {
                               o.state().dump());
         return !stopping && !store.cancel_requested(id);
       };
-      const TuningOutcome r = tune(job, ro);
+      TbbEvaluator evaluator(opt.threads);
+      const TuningOutcome r = tune(job, evaluator, ro);
       if (store.cancel_requested(id)) {
         store.finish_cancelled(id);
         spdlog::info("job {} cancelled", id);

@@ -64,6 +64,11 @@ nlohmann::json parse_json_text(const std::string& text, const std::string& sourc
 // The whole file, or nullopt when it cannot be opened (callers word the error for their input).
 std::optional<std::string> read_file(const std::filesystem::path& path);
 
+// Numbers in output JSON: non-finite values (a diverged run's +inf) are written as null, and
+// read back as `if_null`.
+nlohmann::json json_number(double v);
+double json_number_or(const nlohmann::json& j, double if_null);
+
 // Integral check for JSON numbers: 3 and 3.0 are integers, 3.5 is not.
 bool json_to_int(const nlohmann::json& v, long long& out);
 

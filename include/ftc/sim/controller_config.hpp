@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/range.hpp"
 
 namespace ftc::sim {
 
@@ -61,13 +62,18 @@ struct ControllerConfig {
   static ControllerConfig table1(ControllerType type);
 };
 
-// One scalar field of ControllerConfig.
+// One scalar field of ControllerConfig: the single description of it that validation, the
+// job and gains file formats, their JSON Schema and the tuner's bounds checks all read.
 struct ControllerField {
   const char* name;
   double ControllerConfig::*member;
   std::uint8_t types;  // bit (1 << type) set when the field belongs to that controller type
   bool integer;        // integer-valued: validated as such and not tunable
   bool optional;       // may be absent (alpha1)
+  Range range;         // valid values; p, q and alpha have further rules (rule below)
+  const char* unit;
+  const char* description;
+  const char* rule = "";  // a condition beyond the range, in words ("" = none)
 
   bool applies_to(ControllerType t) const { return (types >> static_cast<int>(t)) & 1U; }
   bool tunable() const { return !integer; }

@@ -15,6 +15,7 @@
 
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/range.hpp"
 #include "ftc/sim/scenario.hpp"
 #include "ftc/sim/simulation.hpp"
 
@@ -24,8 +25,7 @@ namespace ftc::sim {
 struct PlantParameter {
   std::string name;
   std::vector<double> defaults;
-  double minimum = -std::numeric_limits<double>::infinity();
-  bool exclusive_minimum = false;  // value > minimum rather than >=
+  Range range;  // of each value
   std::string unit;
   std::string description;
 

@@ -1,38 +1,60 @@
 #pragma once
-// What an optimiser needs from the outside world: the fitness (larger is better) of a batch of
-// candidates, returned by index. How the batch is evaluated — serially, on TBB threads, or on
-// other machines — is the evaluator's business; the optimiser never sees it.
-#include <functional>
-#include <utility>
+// The evaluator seam. A batch evaluator runs a flat list of simulation tasks, each one
+// candidate controller on one scenario of a tuning problem, and returns their results by task
+// index. How (on the calling thread, on TBB workers, on other machines) is its own business:
+// the problem builds the tasks and scores the results, the optimiser never sees either. A task
+// that fails (a controller with invalid values) is a result with an error, never an exception.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
 #include <vector>
 
-#include "ftc/tune/optimizers/search_space.hpp"
+#include "ftc/sim/controller_config.hpp"
+#include "ftc/sim/metrics.hpp"
+#include "ftc/sim/simulation.hpp"
 
 namespace ftc::tune {
+
+class TuningProblem;
+
+struct SimulationTask {
+  std::size_t candidate = 0;  // index into SimulationBatch::candidates
+  std::size_t scenario = 0;   // index into the problem's scenarios
+};
+
+struct SimulationBatch {
+  std::span<const sim::ControllerConfig> candidates;
+  std::span<const SimulationTask> tasks;
+  std::int64_t record_every = 0;  // > 0: keep every k-th sample of each trajectory
+};
+
+struct TaskResult {
+  sim::Metrics metrics;
+  sim::Trajectory trajectory;  // when recorded
+  std::string error;           // non-empty when the simulation could not run
+};
 
 class BatchEvaluator {
  public:
   virtual ~BatchEvaluator() = default;
-  // One fitness per candidate, in order. A candidate that cannot be evaluated gets 0; the
-  // evaluator does not throw for it.
-  virtual std::vector<double> evaluate(const std::vector<Decision>& batch) = 0;
+  // One result per task, in task order.
+  virtual std::vector<TaskResult> run(const TuningProblem& problem, const SimulationBatch& batch) = 0;
+  // Simulations it can run at once (threads); for run.json and progress lines.
+  virtual int concurrency() const = 0;
+  virtual std::string name() const = 0;
 };
 
-// Evaluates a plain fitness function on the calling thread (tests, small problems).
-class FunctionEvaluator final : public BatchEvaluator {
+// Task k of a batch, as every evaluator must run it: the problem's simulation, with an exception
+// turned into the task's error.
+TaskResult run_task(const TuningProblem& problem, const SimulationBatch& batch, std::size_t k);
+
+// Runs the tasks one after another on the calling thread (tests, embedding, debugging).
+class SerialEvaluator final : public BatchEvaluator {
  public:
-  explicit FunctionEvaluator(std::function<double(const Decision&)> fitness)
-      : fitness_(std::move(fitness)) {}
-
-  std::vector<double> evaluate(const std::vector<Decision>& batch) override {
-    std::vector<double> out;
-    out.reserve(batch.size());
-    for (const Decision& x : batch) out.push_back(fitness_(x));
-    return out;
-  }
-
- private:
-  std::function<double(const Decision&)> fitness_;
+  std::vector<TaskResult> run(const TuningProblem& problem, const SimulationBatch& batch) override;
+  int concurrency() const override { return 1; }
+  std::string name() const override { return "serial"; }
 };
 
 }  // namespace ftc::tune

@@ -15,7 +15,9 @@
 #include "ftc/sim/metrics.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/scenario.hpp"
+#include "ftc/tune/optimizers/optimizer.hpp"
 #include "ftc/runtime/controller_json.hpp"
+#include "ftc/runtime/json_reader.hpp"
 
 namespace ftc::tune {
 
@@ -37,27 +39,6 @@ struct ObjectiveConfig {
   Aggregate aggregate = Aggregate::mean;
 };
 
-enum class AlgorithmType { bat, random };
-const char* to_string(AlgorithmType a);
-
-struct AlgorithmConfig {
-  AlgorithmType type = AlgorithmType::bat;
-  int population = 10;  // M
-  int iterations = 10;  // T
-  double f_min = 0.0;
-  double f_max = 2.0;
-  double loudness = 0.95;   // A0
-  double pulse_rate = 0.9;  // r0
-  double loudness_decay = 0.9;
-  double pulse_rate_growth = 0.9;
-
-  std::vector<FieldError> validate(const std::string& path) const;
-  // M·(T+1): the number of objective evaluations of a run.
-  std::int64_t evaluations() const {
-    return static_cast<std::int64_t>(population) * (iterations + 1);
-  }
-};
-
 struct ParameterBounds {
   std::string name;  // a tunable field of the controller
   double lower = 0.0;
@@ -66,8 +47,10 @@ struct ParameterBounds {
 
 struct TuningConfig {
   std::vector<ParameterBounds> parameters;
-  AlgorithmConfig algorithm;
+  AlgorithmPtr algorithm = default_algorithm();  // the Bat algorithm with Table 1 settings
   std::uint64_t seed = 1;
+
+  static AlgorithmPtr default_algorithm();
 };
 
 struct CompareEntry {
@@ -95,10 +78,8 @@ Job parse_job(const nlohmann::json& j, const std::string& source);
 Job parse_job_text(const std::string& text, const std::string& source);
 Job load_job(const std::filesystem::path& file);
 
-// Numbers in output JSON: non-finite values (a diverged run's +inf) are written as null, and
-// read back as `if_null`.
-nlohmann::json json_number(double v);
-double json_number_or(const nlohmann::json& j, double if_null);
+using json_io::json_number;
+using json_io::json_number_or;
 
 // Resolved JSON forms (every default filled in). Keys come out sorted, so dump() of these is
 // canonical.

@@ -19,9 +19,28 @@
 //
 // Random numbers are drawn in exactly this order: for initialisation, per bat x_i then v_i; per
 // iteration, per bat β, the pulse test and (if taken) ε; then per bat the loudness test.
+#include <string>
+#include <vector>
+
 #include "ftc/tune/optimizers/optimizer.hpp"
 
 namespace ftc::tune {
+
+// Settings of the Bat algorithm (job: tuning.algorithm with "type": "bat"); the defaults are the
+// paper's Table 1.
+struct BatSettings {
+  int population = 10;  // M
+  int iterations = 10;  // T
+  double f_min = 0.0;
+  double f_max = 2.0;
+  double loudness = 0.95;   // A0
+  double pulse_rate = 0.9;  // r0
+  double loudness_decay = 0.9;
+  double pulse_rate_growth = 0.9;
+
+  // Every bad field, each with `path` + "/" + its name.
+  std::vector<FieldError> validate(const std::string& path = "") const;
+};
 
 // The frequency move of one bat: v += (best - x) f, returns clamp(x + v). Public for testing.
 Decision bat_frequency_move(const SearchSpace& space, const Decision& x, Decision& v,
@@ -34,10 +53,11 @@ class BatAlgorithm final : public GenerationalOptimizer {
     double loudness = 0.0, pulse_rate = 0.0, fitness = 0.0;
   };
 
-  BatAlgorithm(const AlgorithmConfig& config, std::uint64_t seed, const SearchSpace& space);
+  // The settings must be valid (BatSettings::validate).
+  BatAlgorithm(const BatSettings& settings, std::uint64_t seed, const SearchSpace& space);
 
-  void initialize(BatchEvaluator& evaluator) override;
-  void iterate(BatchEvaluator& evaluator) override;
+  void initialize(BatchFitness& fitness) override;
+  void iterate(BatchFitness& fitness) override;
   nlohmann::json state() const override;
   void restore(const nlohmann::json& state) override;
 
@@ -48,7 +68,11 @@ class BatAlgorithm final : public GenerationalOptimizer {
  private:
   void record_iteration();
 
+  BatSettings settings_;
   std::vector<Bat> bats_;
 };
+
+// The registry entry ("bat").
+AlgorithmInfo bat_algorithm_info();
 
 }  // namespace ftc::tune

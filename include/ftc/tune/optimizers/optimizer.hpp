@@ -1,28 +1,61 @@
 #pragma once
-// Population optimisers that maximise fitness over a SearchSpace, one generation at a time:
-// initialize() evaluates the first population (iteration 0), iterate() one further generation.
-// All random numbers are drawn on the calling thread in a fixed order, so a run is determined by
-// its settings and seed, whatever the evaluator does in parallel.
+// The optimiser seam. An optimiser maximises fitness over a box (SearchSpace), one generation at a
+// time: initialize() evaluates the first population (iteration 0), iterate() one further
+// generation. It sees the problem only as BatchFitness, the fitness (larger is better) of a batch
+// of decision vectors by index, so how a batch is simulated (threads, SIMD lanes, other machines)
+// is none of its business. All random numbers are drawn on the calling thread in a fixed order,
+// so a run is determined by its settings and seed.
+//
+// Algorithms are registered by name (algorithms()): each owns its settings struct, their
+// validation and JSON form, and the extra columns of its history rows. To add one, see
+// tuner/optimizers/registry.cpp.
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
-#include "ftc/tune/evaluators/batch_evaluator.hpp"
-#include "ftc/tune/job/job.hpp"
+#include "ftc/runtime/schema.hpp"
+#include "ftc/sim/input_error.hpp"
 #include "ftc/tune/optimizers/rng.hpp"
 #include "ftc/tune/optimizers/search_space.hpp"
 
 namespace ftc::tune {
 
+// What an optimiser needs from the outside world: one fitness per decision vector, in order; a
+// candidate that cannot be evaluated gets 0. Never throws for a candidate.
+class BatchFitness {
+ public:
+  virtual ~BatchFitness() = default;
+  virtual std::vector<double> operator()(const std::vector<Decision>& batch) = 0;
+};
+
+// A plain function of one decision vector, evaluated on the calling thread (tests, small
+// problems, embedding).
+class FunctionFitness final : public BatchFitness {
+ public:
+  explicit FunctionFitness(std::function<double(const Decision&)> f) : f_(std::move(f)) {}
+  std::vector<double> operator()(const std::vector<Decision>& batch) override {
+    std::vector<double> out;
+    out.reserve(batch.size());
+    for (const Decision& x : batch) out.push_back(f_(x));
+    return out;
+  }
+
+ private:
+  std::function<double(const Decision&)> f_;
+};
+
 struct HistoryRow {
   int iteration = 0;             // 0 = the initial population
   double best_fitness = 0.0;     // J(x*) after this iteration
   Decision best;                 // x*
-  double mean_loudness = 0.0;    // Bat algorithm only (NaN for random search)
-  double mean_pulse_rate = 0.0;  // Bat algorithm only (NaN for random search)
   std::int64_t evaluations = 0;  // so far
+  // The algorithm's own figures, named (the Bat algorithm's mean loudness and pulse rate).
+  std::vector<std::pair<std::string, double>> extras;
 };
 
 struct OptimizationResult {
@@ -36,20 +69,132 @@ struct OptimizationResult {
 class Optimizer {
  public:
   virtual ~Optimizer() = default;
-  virtual void initialize(BatchEvaluator& evaluator) = 0;
-  virtual void iterate(BatchEvaluator& evaluator) = 0;
+  virtual void initialize(BatchFitness& fitness) = 0;
+  virtual void iterate(BatchFitness& fitness) = 0;
   virtual int iteration() const = 0;   // completed iterations (0 after initialize)
   virtual int iterations() const = 0;  // T
   virtual const std::vector<HistoryRow>& history() const = 0;
 
   // The complete state after the last iteration, random-number engine included, as JSON with
-  // exact (round-trip) doubles. restore() continues from it exactly as if never interrupted.
+  // exact (round-trip) doubles. restore() continues from it exactly as if never interrupted, and
+  // throws InputError for a state of another algorithm or a damaged one.
   virtual nlohmann::json state() const = 0;
   virtual void restore(const nlohmann::json& state) = 0;
 };
 
-std::unique_ptr<Optimizer> make_optimizer(const AlgorithmConfig& config, std::uint64_t seed,
-                                          const SearchSpace& space);
+// One algorithm's validated settings: immutable, shared by the copies of a job.
+class AlgorithmSettings {
+ public:
+  virtual ~AlgorithmSettings() = default;
+  virtual std::string type() const = 0;  // the job's tuning.algorithm.type
+  // The resolved JSON form (every default filled in, "type" included); canonical.
+  virtual nlohmann::json to_json() const = 0;
+  virtual int population() const = 0;            // candidates per generation
+  virtual int iterations() const = 0;            // generations after the initial one
+  virtual std::int64_t evaluations() const = 0;  // the run's budget of candidate evaluations
+  // The names of the extra history columns (HistoryRow::extras), in order.
+  virtual std::vector<std::string> history_columns() const { return {}; }
+  // Every bad setting, each named `path`/<setting> (settings built in code, not read from JSON).
+  virtual std::vector<FieldError> validate(const std::string& path) const = 0;
+  virtual std::unique_ptr<Optimizer> make(std::uint64_t seed, const SearchSpace& space) const = 0;
+};
+
+using AlgorithmPtr = std::shared_ptr<const AlgorithmSettings>;
+
+struct AlgorithmInfo {
+  std::string type;         // "bat", "random", "pagmo"
+  std::string description;  // one line, for help and the schema
+  // Reads a tuning.algorithm object strictly (type included), appending every problem with its
+  // JSON path; returns the settings with defaults filled in (null when unusable).
+  std::function<AlgorithmPtr(const nlohmann::json& j, const std::string& path,
+                             std::vector<FieldError>& errors)>
+      parse;
+  // JSON Schema (draft 2020-12) of such an object.
+  std::function<nlohmann::json()> schema;
+};
+
+const std::vector<AlgorithmInfo>& algorithms();
+const AlgorithmInfo* find_algorithm(std::string_view type);
+// Parses a tuning.algorithm object by its "type" (default "bat"); problems go to `errors`.
+AlgorithmPtr parse_algorithm(const nlohmann::json& j, const std::string& path,
+                             std::vector<FieldError>& errors);
+// The settings of an algorithm as a program gives them (the JSON form of a settings object);
+// throws InputError naming every bad field.
+AlgorithmPtr make_algorithm(const nlohmann::json& settings);
+
+// The settings of an algorithm whose options are a plain struct S (with `population` and
+// `iterations`) described by a schema::Object<S>; `make` builds its optimiser.
+template <class S>
+class StructSettings final : public AlgorithmSettings {
+ public:
+  using Make = std::function<std::unique_ptr<Optimizer>(const S&, std::uint64_t, const SearchSpace&)>;
+  StructSettings(std::string type, S settings, std::shared_ptr<const schema::Object<S>> shape,
+                 Make make, std::vector<std::string> columns)
+      : type_(std::move(type)),
+        s_(std::move(settings)),
+        shape_(std::move(shape)),
+        make_(std::move(make)),
+        columns_(std::move(columns)) {}
+
+  std::string type() const override { return type_; }
+  nlohmann::json to_json() const override {
+    nlohmann::json j = shape_->write(s_);
+    j["type"] = type_;
+    return j;
+  }
+  int population() const override { return s_.population; }
+  int iterations() const override { return s_.iterations; }
+  std::int64_t evaluations() const override {
+    return static_cast<std::int64_t>(s_.population) * (s_.iterations + 1);
+  }
+  std::vector<std::string> history_columns() const override { return columns_; }
+  std::vector<FieldError> validate(const std::string& path) const override {
+    std::vector<FieldError> errs;
+    shape_->validate(s_, path, errs);
+    return errs;
+  }
+  std::unique_ptr<Optimizer> make(std::uint64_t seed, const SearchSpace& space) const override {
+    return make_(s_, seed, space);
+  }
+  const S& settings() const { return s_; }
+
+ private:
+  std::string type_;
+  S s_;
+  std::shared_ptr<const schema::Object<S>> shape_;
+  Make make_;
+  std::vector<std::string> columns_;
+};
+
+// The registry entry of such an algorithm.
+template <class S>
+AlgorithmInfo struct_algorithm(std::string type, std::string description,
+                               std::shared_ptr<const schema::Object<S>> shape,
+                               typename StructSettings<S>::Make make,
+                               std::vector<std::string> columns = {}) {
+  AlgorithmInfo info;
+  info.type = type;
+  info.description = description;
+  info.parse = [type, shape, make, columns](const nlohmann::json& j, const std::string& path,
+                                            std::vector<FieldError>& errs) -> AlgorithmPtr {
+    S s;
+    std::vector<FieldError> mine;
+    shape->read_object(j, path, s, mine, {"type"});
+    std::vector<FieldError> range;
+    shape->validate(s, path, range);
+    schema::detail::dedupe_append(mine, std::move(range));
+    const bool ok = mine.empty();
+    errs.insert(errs.end(), mine.begin(), mine.end());
+    if (!ok) return nullptr;
+    return std::make_shared<StructSettings<S>>(type, std::move(s), shape, make, columns);
+  };
+  info.schema = [type, description, shape] {
+    nlohmann::json s = shape->object_schema({{"type", {{"const", type}}}}, {"type"});
+    s["description"] = description;
+    return s;
+  };
+  return info;
+}
 
 // Called after every iteration (including 0); returning false stops the run. The optimizer is
 // passed so that a caller can checkpoint its state().
@@ -57,31 +202,34 @@ using IterationObserver = std::function<bool(const HistoryRow&, const Optimizer&
 
 // Runs to the last iteration or until the observer says stop. With `resume` (a state() saved
 // earlier) it continues from there instead of initialising.
-OptimizationResult run_optimizer(Optimizer& optimizer, BatchEvaluator& evaluator,
+OptimizationResult run_optimizer(Optimizer& optimizer, BatchFitness& fitness,
                                  const IterationObserver& observer = {},
                                  const nlohmann::json* resume = nullptr);
 
-// What the population optimisers here have in common: settings, search space, random engine,
+// What the population optimisers here have in common: the search space, random engine,
 // iteration and evaluation counters, the best point and the history, and the checkpoint of all
 // that. A subclass adds its own population state to state() and restore().
 class GenerationalOptimizer : public Optimizer {
  public:
   int iteration() const override { return t_; }
-  int iterations() const override { return config_.iterations; }
+  int iterations() const override { return iterations_; }
   const std::vector<HistoryRow>& history() const override { return history_; }
 
  protected:
-  GenerationalOptimizer(const AlgorithmConfig& config, std::uint64_t seed, const SearchSpace& space)
-      : config_(config), space_(space), rng_(seed) {}
+  GenerationalOptimizer(int iterations, std::uint64_t seed, const SearchSpace& space)
+      : iterations_(iterations), space_(space), rng_(seed) {}
 
-  // Appends the history row of iteration t_ (NaN loudness and pulse rate where meaningless).
-  void record(double mean_loudness, double mean_pulse_rate);
-  // The common part of a checkpoint, tagged with the algorithm's name, and its inverse
-  // (which refuses another algorithm's checkpoint).
+  // Evaluates a batch and counts it; throws std::logic_error when the fitness is of the wrong
+  // size (a broken evaluator, not bad input).
+  std::vector<double> evaluate(BatchFitness& fitness, const std::vector<Decision>& batch);
+  // Appends the history row of iteration t_ with the algorithm's extra figures.
+  void record(std::vector<std::pair<std::string, double>> extras = {});
+  // The common part of a checkpoint, tagged with the algorithm's name, and its inverse (which
+  // refuses another algorithm's checkpoint).
   nlohmann::json common_state(const char* algorithm) const;
   void restore_common(const nlohmann::json& state, const char* algorithm);
 
-  AlgorithmConfig config_;
+  int iterations_;
   SearchSpace space_;
   Rng rng_;
   Decision best_;

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "ftc/tune/evaluators/batch_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
 
 namespace ftc::tune {
@@ -35,7 +36,6 @@ ReportResult render_report(const std::filesystem::path& run_dir, const ReportOpt
 struct LandscapeOptions {
   int n1 = 41, n2 = 41;             // grid points per parameter
   std::vector<std::string> params;  // two tuned parameters; default: the first two of the job
-  int threads = 0;
   std::filesystem::path history;  // a history.csv whose best-so-far path is drawn on top
   FigureFormat format = FigureFormat::png;
 };
@@ -51,7 +51,7 @@ struct LandscapeResult {
 // Evaluates the job's objective on a grid over two tuned parameters (one parallel batch) and
 // draws it as a heatmap with a log colour scale.
 LandscapeResult compute_landscape(const Job& job, const std::filesystem::path& out_dir,
-                                  const LandscapeOptions& options);
+                                  const LandscapeOptions& options, BatchEvaluator& evaluator);
 
 // Runs `gnuplot script` in `dir`; throws std::runtime_error with gnuplot's message on failure.
 void run_gnuplot(const std::filesystem::path& dir, const std::string& script_name);

@@ -1,12 +1,10 @@
 #pragma once
 // A whole tuning run, as `ftctune run` (and the service) perform it: optimise the tuned
 // parameters of the job's controller, then simulate side by side the job's `compare`
-// controllers, the job's own controller (the baseline) and the tuned one, and build the output
-// documents. Nothing here reads the clock or the host, so the gains file depends only on the
-// job and the seed; run metadata is the caller's.
+// controllers, the job's own controller (the baseline) and the tuned one. Nothing here reads the
+// clock or the host, so the outcome depends only on the job and the seed; run metadata is the
+// caller's. The documents a run writes are in run/documents.hpp.
 #include <cstdint>
-#include <filesystem>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -14,16 +12,14 @@
 #include <vector>
 
 #include "ftc/sim/controller_config.hpp"
+#include "ftc/tune/evaluators/batch_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/optimizers/optimizer.hpp"
-#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/problem/problem.hpp"
 
 namespace ftc::tune {
 
-inline constexpr const char* kGainsSchema = "ftctune.gains/1";
-
 struct RunOptions {
-  int threads = 0;                         // <= 0: all hardware threads
   std::optional<std::uint64_t> seed;       // overrides tuning.seed
   IterationObserver observer;              // progress; return false to stop
   const nlohmann::json* resume = nullptr;  // an Optimizer::state() to continue from
@@ -44,11 +40,13 @@ struct TuningOutcome {
   Job job;
   std::string job_sha256;  // of the canonical JSON of the job as given
   std::uint64_t seed = 0;
+  AlgorithmPtr algorithm;  // the settings the optimiser ran with
   OptimizationResult optimization;
   std::vector<std::pair<std::string, double>> tuned;
   sim::ControllerConfig tuned_controller;
   std::vector<ComparedController> comparison;  // compare entries, then baseline, then tuned
-  int threads = 0;
+  int threads = 0;          // the evaluator's concurrency
+  std::string evaluator;    // its name
   std::int64_t simulations = 0;
   bool completed() const { return optimization.completed; }
 
@@ -56,30 +54,16 @@ struct TuningOutcome {
   const ComparedController& best() const { return comparison.back(); }
 };
 
-// Throws InputError for a job that cannot be tuned. When the observer stops the run early, the
+// Tunes a problem with a given optimiser (made with `algorithm` and `seed`, which the outcome
+// records), simulating through `evaluator`. When the observer stops the run early, the
 // comparison is skipped and the outcome is not completed().
-TuningOutcome tune(const Job& job, const RunOptions& options = {});
+TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, AlgorithmPtr algorithm,
+                   std::uint64_t seed, BatchEvaluator& evaluator, const RunOptions& options = {});
+// The job's own algorithm, seeded by options.seed or tuning.seed. Throws InputError for a job
+// that cannot be tuned.
+TuningOutcome tune(const Job& job, BatchEvaluator& evaluator, const RunOptions& options = {});
 
 std::string canonical_job_sha256(const Job& job);
 std::string display_name(sim::ControllerType t);  // "PI-FOSMC", ...
-// The file of a compared controller's trajectory, relative to the run directory.
-std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std::size_t scenario);
-
-nlohmann::json gains_document(const TuningOutcome& r);
-std::string history_csv(const TuningOutcome& r);
-nlohmann::json comparison_document(const TuningOutcome& r);
-std::string comparison_markdown(const TuningOutcome& r);
-
-// The result files of a completed run, path → content: gains.json, history.csv, job.json
-// (the resolved job), comparison.json, comparison.md and trajectories/<scenario>/<NN>-<label>.csv
-// (one per compared controller, listed in comparison.json). The CLI and the service both write
-// exactly these bytes.
-std::map<std::string, std::string> output_files(const TuningOutcome& r);
-// The run.json fields both `ftctune run` and the service write: threads, wall seconds,
-// simulations, peak memory of the process, seed, generator. Callers add where and when.
-nlohmann::json run_metadata(const TuningOutcome& r, double wall_seconds);
-
-// Writes output_files() into `dir`, each atomically.
-void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir);
 
 }  // namespace ftc::tune

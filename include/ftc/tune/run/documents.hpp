@@ -1,0 +1,43 @@
+#pragma once
+// The files a tuning run writes (the CLI and the service write exactly these bytes): the gains
+// file, the history, the comparison of controllers and their trajectories, and the metrics of a
+// single simulation (`ftctune simulate`).
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "ftc/sim/metrics.hpp"
+#include "ftc/sim/simulation.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
+
+namespace ftc::tune {
+
+inline constexpr const char* kGainsSchema = "ftctune.gains/1";
+
+// The file of a compared controller's trajectory, relative to the run directory.
+std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std::size_t scenario);
+
+nlohmann::json gains_document(const TuningOutcome& r);
+std::string history_csv(const TuningOutcome& r);
+nlohmann::json comparison_document(const TuningOutcome& r);
+std::string comparison_markdown(const TuningOutcome& r);
+
+// CSV of a recorded trajectory: time, x1..x2n, ud1..udm (commanded), u1..um (applied).
+std::string trajectory_csv(const sim::Trajectory& trajectory);
+// Metrics of one scenario as written to metrics.json and comparison.json; ise/iae/itae in the
+// objective window, infinite values as null.
+nlohmann::json metrics_json(const sim::Metrics& m);
+
+// The result files of a completed run, path → content: gains.json, history.csv, job.json
+// (the resolved job), comparison.json, comparison.md and trajectories/<scenario>/<NN>-<label>.csv
+// (one per compared controller, listed in comparison.json).
+std::map<std::string, std::string> output_files(const TuningOutcome& r);
+// The run.json fields both `ftctune run` and the service write: threads, wall seconds,
+// simulations, peak memory of the process, seed, generator. Callers add where and when.
+nlohmann::json run_metadata(const TuningOutcome& r, double wall_seconds);
+
+// Writes output_files() into `dir`, each atomically.
+void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir);
+
+}  // namespace ftc::tune

@@ -1,0 +1,264 @@
+#include "ftc/tune/run/documents.hpp"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+#include "ftc/runtime/controller_json.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "ftc/version.hpp"
+#include "io/text.hpp"
+
+namespace ftc::tune {
+
+using nlohmann::json;
+
+namespace {
+
+// The tuned parameters in decision-vector order.
+std::vector<std::string> parameter_names(const Job& job) {
+  std::vector<std::string> names;
+  if (job.tuning)
+    for (const ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
+  return names;
+}
+
+json named(const std::vector<std::string>& names, const Decision& x) {
+  json j = json::object();
+  for (std::size_t i = 0; i < names.size() && i < x.size(); ++i) j[names[i]] = x[i];
+  return j;
+}
+
+}  // namespace
+
+std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std::size_t scenario) {
+  std::string slug;
+  for (char c : r.comparison.at(controller).label) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(c));
+    if (keep)
+      slug += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    else if (!slug.empty() && slug.back() != '-')
+      slug += '-';
+  }
+  while (!slug.empty() && slug.back() == '-') slug.pop_back();
+  char index[24];
+  std::snprintf(index, sizeof index, "%02zu-", controller + 1);
+  return "trajectories/" + r.job.scenarios.at(scenario).name + "/" + index + slug + ".csv";
+}
+
+json gains_document(const TuningOutcome& r) {
+  const Job& job = r.job;
+  json g;
+  g["schema"] = kGainsSchema;
+  g["controller"] = to_json(r.tuned_controller);
+  g["tuned"] = json::object();
+  for (const auto& [name, value] : r.tuned) g["tuned"][name] = value;
+  g["sample_time"] = job.scenarios.front().sample_time;
+  g["plant"] = to_json(job.plant);
+  json objective = to_json(job.objective);
+  objective["value"] = json_number(r.best().outcome.evaluation.objective);
+  g["objective"] = objective;
+  g["fitness"] = json_number(r.optimization.best_fitness);
+  const ComparedController& base = r.baseline();
+  g["baseline"] = {{"controller", to_json(base.controller)},
+                   {"objective", json_number(base.outcome.evaluation.objective)},
+                   {"fitness", json_number(base.outcome.evaluation.fitness)}};
+  json optimizer = r.algorithm->to_json();
+  optimizer["seed"] = r.seed;
+  optimizer["evaluations"] = r.optimization.evaluations;
+  optimizer["completed"] = r.optimization.completed;
+  g["optimizer"] = optimizer;
+  const std::vector<std::string> names = parameter_names(job);
+  g["history"] = json::array();
+  for (const HistoryRow& h : r.optimization.history) {
+    json row = {{"iteration", h.iteration},
+                {"best_fitness", json_number(h.best_fitness)},
+                {"best", named(names, h.best)},
+                {"evaluations", h.evaluations}};
+    for (const auto& [name, value] : h.extras) row[name] = json_number(value);
+    g["history"].push_back(std::move(row));
+  }
+  g["job"] = {{"name", job.name}, {"sha256", r.job_sha256}};
+  g["generator"] = {{"name", kToolName}, {"version", kVersion}};
+  return g;
+}
+
+std::string history_csv(const TuningOutcome& r) {
+  const std::vector<std::string> columns = r.algorithm->history_columns();
+  std::string s = "iteration,best_fitness";
+  for (const std::string& n : parameter_names(r.job)) s += "," + n;
+  for (const std::string& c : columns) s += "," + c;
+  s += ",evaluations\n";
+  char buf[48];
+  const auto cell = [&](double v) {
+    if (std::isnan(v)) return std::string(",");
+    std::snprintf(buf, sizeof buf, ",%.17g", v);
+    return std::string(buf);
+  };
+  for (const HistoryRow& h : r.optimization.history) {
+    s += std::to_string(h.iteration) + cell(h.best_fitness);
+    for (double v : h.best) s += cell(v);
+    for (const std::string& c : columns) {
+      double v = std::numeric_limits<double>::quiet_NaN();
+      for (const auto& [name, value] : h.extras)
+        if (name == c) v = value;
+      s += cell(v);
+    }
+    s += "," + std::to_string(h.evaluations) + "\n";
+  }
+  return s;
+}
+
+json comparison_document(const TuningOutcome& r) {
+  json doc;
+  doc["job"] = r.job.name;
+  doc["objective"] = to_json(r.job.objective);
+  doc["scenarios"] = json::array();
+  for (const sim::Scenario& s : r.job.scenarios) doc["scenarios"].push_back(s.name);
+  doc["controllers"] = json::array();
+  for (const ComparedController& c : r.comparison) {
+    json cj;
+    cj["label"] = c.label;
+    cj["role"] = c.role;
+    cj["controller"] = to_json(c.controller);
+    cj["objective"] = json_number(c.outcome.evaluation.objective);
+    cj["fitness"] = json_number(c.outcome.evaluation.fitness);
+    if (!c.outcome.error.empty()) cj["error"] = c.outcome.error;
+    cj["scenarios"] = json::array();
+    for (std::size_t i = 0; i < c.outcome.evaluation.scenarios.size(); ++i) {
+      json m = metrics_json(c.outcome.evaluation.scenarios[i]);
+      m["name"] = r.job.scenarios[i].name;
+      if (i < c.outcome.trajectories.size())
+        m["trajectory"] = trajectory_file(r, static_cast<std::size_t>(&c - r.comparison.data()), i);
+      cj["scenarios"].push_back(m);
+    }
+    doc["controllers"].push_back(cj);
+  }
+  return doc;
+}
+
+std::string comparison_markdown(const TuningOutcome& r) {
+  std::ostringstream o;
+  const Job& job = r.job;
+  o << "# " << job.name << ": controllers compared\n\n";
+  o << "Tuned:";
+  for (const auto& [name, value] : r.tuned)
+    o << " " << name << " = " << detail::format_number(value, "%.6g");
+  o << " (fitness J = " << detail::format_number(r.optimization.best_fitness, "%.6g") << ", "
+    << r.optimization.evaluations << " evaluations, seed " << r.seed << ").\n\n";
+  o << "Objective: " << sim::to_string(job.objective.metric) << " over ["
+    << detail::format_number(job.objective.window.t0) << ", "
+    << (std::isfinite(job.objective.window.t1) ? detail::format_number(job.objective.window.t1)
+                                               : std::string("end"))
+    << ") s, " << to_string(job.objective.aggregate) << " over scenarios.\n";
+  for (std::size_t s = 0; s < job.scenarios.size(); ++s) {
+    const sim::Scenario& sc = job.scenarios[s];
+    o << "\n## Scenario " << sc.name << "\n\n";
+    const sim::Metrics& first = r.comparison.front().outcome.evaluation.scenarios.at(s);
+    o << "| controller | ISE | IAE | ITAE | max \\|u_d\\| | control TV |";
+    for (const sim::Window& w : first.extra_windows)
+      o << " ISE [" << detail::format_number(w.t0) << ", " << detail::format_number(w.t1) << ") |";
+    for (std::size_t f = 0; f < first.fault_onsets.size(); ++f)
+      o << " peak ‖e‖ after fault " << f + 1 << " |";
+    o << "\n|---|---:|---:|---:|---:|---:|";
+    for (std::size_t k = 0; k < first.extra_windows.size() + first.fault_onsets.size(); ++k)
+      o << "---:|";
+    o << "\n";
+    for (const ComparedController& c : r.comparison) {
+      const sim::Metrics& m = c.outcome.evaluation.scenarios.at(s);
+      o << "| " << c.label << (m.diverged ? " (diverged)" : "") << " | "
+        << detail::format_number(m.errors.ise) << " | " << detail::format_number(m.errors.iae)
+        << " | " << detail::format_number(m.errors.itae) << " | "
+        << detail::format_number(m.max_abs_u) << " | " << detail::format_number(m.control_tv)
+        << " |";
+      for (const sim::ErrorIntegrals& e : m.extra) o << " " << detail::format_number(e.ise) << " |";
+      for (double p : m.peak_error_after_fault) o << " " << detail::format_number(p) << " |";
+      o << "\n";
+    }
+  }
+  o << "\nISE in rad²·s, IAE in rad·s, ITAE in rad·s², peak errors in rad; control TV = Σ‖u_k − "
+       "u_{k−1}‖ "
+       "(chattering).\n";
+  return o.str();
+}
+
+std::map<std::string, std::string> output_files(const TuningOutcome& r) {
+  std::map<std::string, std::string> files = {
+      {"gains.json", gains_document(r).dump(2) + "\n"},
+      {"history.csv", history_csv(r)},
+      {"job.json", to_json(r.job).dump(2) + "\n"},
+      {"comparison.json", comparison_document(r).dump(2) + "\n"},
+      {"comparison.md", comparison_markdown(r)}};
+  for (std::size_t c = 0; c < r.comparison.size(); ++c)
+    for (std::size_t s = 0; s < r.comparison[c].outcome.trajectories.size(); ++s)
+      files[trajectory_file(r, c, s)] = trajectory_csv(r.comparison[c].outcome.trajectories[s]);
+  return files;
+}
+
+json run_metadata(const TuningOutcome& r, double wall_seconds) {
+  rusage ru{};
+  const long max_rss_kib = ::getrusage(RUSAGE_SELF, &ru) == 0 ? ru.ru_maxrss : -1;
+  return {{"threads", r.threads},
+          {"wall_seconds", wall_seconds},
+          {"simulations", r.simulations},
+          {"max_rss_kib", max_rss_kib},
+          {"seed", r.seed},
+          {"generator", {{"name", kToolName}, {"version", kVersion}}}};
+}
+
+void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir) {
+  for (const auto& [name, content] : output_files(r)) write_file_atomic(dir / name, content);
+}
+
+std::string trajectory_csv(const sim::Trajectory& tr) {
+  std::string s = "time";
+  for (int i = 1; i <= 2 * tr.axes; ++i) s += ",x" + std::to_string(i);
+  for (const char* prefix : {",ud", ",u"})
+    for (int j = 1; j <= tr.actuators; ++j) s += prefix + std::to_string(j);
+  s += '\n';
+  s.reserve(tr.rows() * 200);
+  char buf[64];
+  for (std::size_t r = 0; r < tr.rows(); ++r) {
+    const std::span<const double> row = tr.row(r);
+    std::snprintf(buf, sizeof buf, "%.6f", row[0]);
+    s += buf;
+    for (std::size_t i = 1; i < row.size(); ++i) {
+      std::snprintf(buf, sizeof buf, ",%.9g", row[i]);
+      s += buf;
+    }
+    s += '\n';
+  }
+  return s;
+}
+
+namespace {
+json window_json(const sim::Window& w) { return json::array({w.t0, json_number(w.t1)}); }
+}  // namespace
+
+json metrics_json(const sim::Metrics& m) {
+  json j;
+  j["window"] = window_json(m.window);
+  j["ise"] = json_number(m.errors.ise);
+  j["iae"] = json_number(m.errors.iae);
+  j["itae"] = json_number(m.errors.itae);
+  j["max_abs_u"] = m.max_abs_u;
+  j["control_tv"] = m.control_tv;
+  j["peak_error_after_fault"] = json::array();
+  for (double v : m.peak_error_after_fault) j["peak_error_after_fault"].push_back(json_number(v));
+  j["diverged"] = m.diverged;
+  if (m.diverged) j["diverged_at"] = m.diverged_at;
+  j["segments"] = json::array();
+  for (std::size_t i = 0; i < m.extra.size(); ++i)
+    j["segments"].push_back({{"window", window_json(m.extra_windows[i])},
+                             {"ise", json_number(m.extra[i].ise)},
+                             {"iae", json_number(m.extra[i].iae)},
+                             {"itae", json_number(m.extra[i].itae)}});
+  return j;
+}
+
+}  // namespace ftc::tune
