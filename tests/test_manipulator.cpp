@@ -2,14 +2,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
 
+#include "cli_runner.hpp"
 #include "ftc/sim/controller.hpp"
 #include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/simulation.hpp"
+#include "ftc/tune/job.hpp"
 
+using nlohmann::json;
 using namespace ftc;
 using namespace ftc::sim;
+using namespace ftc::testing;
 
 namespace {
 
@@ -34,6 +40,11 @@ State2 state(double q1, double q2, double w1, double w2) {
   State2 x;
   x << q1, q2, w1, w2;
   return x;
+}
+
+json manipulator_job() {
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/manipulator.json");
+  return json::parse(in);
 }
 
 class ZeroController final : public Controller<2, 3> {
@@ -310,3 +321,76 @@ INSTANTIATE_TEST_SUITE_P(Table1, EveryControllerOnArm, ::testing::ValuesIn(kAllC
                          [](const ::testing::TestParamInfo<ControllerType>& p) {
                            return std::string(to_string(p.param));
                          });
+
+TEST(ManipulatorJob, LoadsWithItsPlantAndShape) {
+  const tune::Job job = tune::load_job(std::string(FTC_SOURCE_DIR) + "/jobs/manipulator.json");
+  EXPECT_EQ(job.name, "manipulator");
+  EXPECT_EQ(job.plant.model, "manipulator");
+  EXPECT_EQ(job.plant.values, find_plant_kind("manipulator")->defaults());
+  ASSERT_EQ(job.scenarios.size(), 1u);
+  EXPECT_EQ(job.scenarios[0].initial_state, (std::vector<double>{0.5, -0.4, 0.0, 0.0}));
+  EXPECT_EQ(job.scenarios[0].faults.size(), 2u);
+  EXPECT_EQ(job.compare.size(), 2u);
+  ASSERT_TRUE(job.tuning.has_value());
+  EXPECT_EQ(job.tuning->algorithm.evaluations(), 110);
+}
+
+TEST(ManipulatorJob, RejectsIndicesAndStatesOfTheWrongShape) {
+  const auto errors_of = [](const json& j) {
+    try {
+      tune::parse_job(j, "manipulator.json");
+    } catch (const InputError& e) {
+      return e.errors();
+    }
+    return std::vector<FieldError>{};
+  };
+  const auto expect_error = [](const std::vector<FieldError>& errs, const std::string& path,
+                               const std::string& message) {
+    std::string all;
+    bool found = false;
+    for (const FieldError& e : errs) {
+      all += "\n  " + to_string(e);
+      found = found || (e.path == path && e.message.find(message) != std::string::npos);
+    }
+    EXPECT_TRUE(found) << "expected " << path << " ~ " << message << ", got" << all;
+  };
+
+  json j = manipulator_job();
+  j["scenarios"][0]["faults"][1]["actuator"] = 4;  // fine for the spacecraft, not here
+  expect_error(errors_of(j), "/scenarios/0/faults/1/actuator", "1..3");
+
+  j = manipulator_job();
+  j["scenarios"][0]["initial_state"] = {-0.7, -0.07, 1.5, 0.3, 1.3, -0.2};  // a spacecraft's
+  expect_error(errors_of(j), "/scenarios/0/initial_state",
+               "expected 4 numbers (X1 and X2 of the plant's 2 axes), got 6");
+
+  j = manipulator_job();
+  j["scenarios"][0]["disturbance"][0]["axis"] = 3;
+  expect_error(errors_of(j), "/scenarios/0/disturbance/0/axis", "1..2");
+
+  j = manipulator_job();
+  j["plant"]["masses"] = {1, 0};
+  expect_error(errors_of(j), "/plant/masses/1", "must be > 0");
+}
+
+// The job end to end through the binary, cut down to 4 bats × 2 iterations.
+TEST(ManipulatorJob, CliRunWritesGainsForTheManipulator) {
+  const auto dir = fresh_dir("manipulator");
+  json j = manipulator_job();
+  j["tuning"]["algorithm"]["population"] = 4;
+  j["tuning"]["algorithm"]["iterations"] = 2;
+  {
+    std::ofstream f(dir / "job.json");
+    f << j.dump(2);
+  }
+  const CliResult r = run_cli(
+      "run '" + (dir / "job.json").string() + "' -q --out '" + (dir / "out").string() + "'", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json g = json::parse(slurp(dir / "out" / "gains.json"));
+  EXPECT_EQ(g["plant"]["model"], "manipulator");
+  EXPECT_EQ(g["controller"]["type"], "pi_fosmc");
+  EXPECT_GT(g["objective"]["value"].get<double>(), 0.0);
+  const std::string md = slurp(dir / "out" / "comparison.md");
+  for (const char* label : {"| NFTSMC", "| FOSMC", "| PI-FOSMC (job)", "| optimal PI-FOSMC"})
+    EXPECT_NE(md.find(label), std::string::npos) << label;
+}
