@@ -7,5 +7,7 @@ namespace ftc::sim {
 
 template std::unique_ptr<Controller<3, 4>> make_controller<3, 4>(const ControllerConfig&,
                                                                  const Plant<3, 4>&, double);
+template std::unique_ptr<Controller<2, 3>> make_controller<2, 3>(const ControllerConfig&,
+                                                                 const Plant<2, 3>&, double);
 
 }  // namespace ftc::sim

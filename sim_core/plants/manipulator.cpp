@@ -1,0 +1,96 @@
+#include "ftc/sim/manipulator.hpp"
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "checks.hpp"
+#include "plants/kinds.hpp"
+#include "plants/plant_adapter.hpp"
+
+namespace ftc::sim {
+
+Manipulator::Manipulator(const ManipulatorParams& params) : params_(params) {
+  std::vector<FieldError> errs;
+  // In the order of the parameters in a job file, so that errors are listed as they appear.
+  const auto check_pair = [&](const char* name, const std::array<double, 2>& v) {
+    for (int i = 0; i < 2; ++i)
+      detail::check_positive(errs, std::string("/") + name + "/" + std::to_string(i), v[i]);
+  };
+  check_pair("masses", params.masses);
+  check_pair("lengths", params.lengths);
+  check_pair("centres_of_mass", params.centres_of_mass);
+  check_pair("inertias", params.inertias);
+  detail::check_non_negative(errs, "/gravity", params.gravity);
+  throw_if_errors("plant", std::move(errs));
+
+  const double m1 = params.masses[0], m2 = params.masses[1];
+  const double l1 = params.lengths[0];
+  const double lc1 = params.centres_of_mass[0], lc2 = params.centres_of_mass[1];
+  const double I1 = params.inertias[0], I2 = params.inertias[1];
+  const double g0 = params.gravity;
+  a1_ = m1 * lc1 * lc1 + m2 * (l1 * l1 + lc2 * lc2) + I1 + I2;
+  a2_ = m2 * l1 * lc2;
+  a3_ = m2 * lc2 * lc2 + I2;
+  b1_ = (m1 * lc1 + m2 * l1) * g0;
+  b2_ = m2 * lc2 * g0;
+}
+
+double Manipulator::energy(const State& x) const {
+  const Vector q = x.head<2>(), qd = x.tail<2>();
+  const double kinetic = 0.5 * qd.dot(mass_matrix(q) * qd);
+  const double potential = b1_ * std::sin(q[0]) + b2_ * std::sin(q[0] + q[1]);
+  return kinetic + potential;
+}
+
+Manipulator::InputMatrix Manipulator::actuator_matrix() {
+  InputMatrix b;
+  b << 1.0, 0.0, 1.0,  //
+      0.0, 1.0, 1.0;
+  return b;
+}
+
+Manipulator::InputInverse Manipulator::actuator_pinv() {
+  InputInverse p;
+  p << 2.0, -1.0,  //
+      -1.0, 2.0,   //
+      1.0, 1.0;
+  return p / 3.0;
+}
+
+}  // namespace ftc::sim
+
+namespace ftc::sim::detail {
+
+PlantKind manipulator_kind() {
+  PlantKind k;
+  k.model = "manipulator";
+  k.description =
+      "planar two-link robot arm in a vertical plane, 2 joints, 3 actuators (one motor per "
+      "joint and a biarticular one driving both)";
+  k.axes = 2;
+  k.actuators = 3;
+  const ManipulatorParams d;
+  const auto both = [](const std::array<double, 2>& a) { return std::vector<double>{a[0], a[1]}; };
+  k.parameters = {{"masses", both(d.masses), 0.0, true, "kg", "link masses m1, m2"},
+                  {"lengths", both(d.lengths), 0.0, true, "m", "link lengths l1, l2"},
+                  {"centres_of_mass", both(d.centres_of_mass), 0.0, true, "m",
+                   "distances lc1, lc2 from joint i to the centre of mass of link i"},
+                  {"inertias", both(d.inertias), 0.0, true, "kg·m²",
+                   "moments of inertia I1, I2 of the links about their centres of mass"},
+                  {"gravity", {d.gravity}, 0.0, false, "m/s²", "gravitational acceleration g0"}};
+  k.default_initial_state = {0.5, -0.4, 0.0, 0.0};
+  k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
+    ManipulatorParams p;
+    p.masses = {v.at(0), v.at(1)};
+    p.lengths = {v.at(2), v.at(3)};
+    p.centres_of_mass = {v.at(4), v.at(5)};
+    p.inertias = {v.at(6), v.at(7)};
+    p.gravity = v.at(8);
+    return std::make_unique<PlantAdapter<Manipulator>>(Manipulator(p));
+  };
+  return k;
+}
+
+}  // namespace ftc::sim::detail
