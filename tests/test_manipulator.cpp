@@ -10,7 +10,7 @@
 #include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/simulation.hpp"
-#include "ftc/tune/job.hpp"
+#include "ftc/tune/job/job.hpp"
 
 using nlohmann::json;
 using namespace ftc;
@@ -332,7 +332,7 @@ TEST(ManipulatorJob, LoadsWithItsPlantAndShape) {
   EXPECT_EQ(job.scenarios[0].faults.size(), 2u);
   EXPECT_EQ(job.compare.size(), 2u);
   ASSERT_TRUE(job.tuning.has_value());
-  EXPECT_EQ(job.tuning->algorithm.evaluations(), 110);
+  EXPECT_EQ(job.tuning->algorithm->evaluations(), 110);
 }
 
 TEST(ManipulatorJob, RejectsIndicesAndStatesOfTheWrongShape) {

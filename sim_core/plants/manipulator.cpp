@@ -73,13 +73,15 @@ PlantKind manipulator_kind() {
   k.actuators = 3;
   const ManipulatorParams d;
   const auto both = [](const std::array<double, 2>& a) { return std::vector<double>{a[0], a[1]}; };
-  k.parameters = {{"masses", both(d.masses), 0.0, true, "kg", "link masses m1, m2"},
-                  {"lengths", both(d.lengths), 0.0, true, "m", "link lengths l1, l2"},
-                  {"centres_of_mass", both(d.centres_of_mass), 0.0, true, "m",
+  const Range positive = Range::positive();
+  k.parameters = {{"masses", both(d.masses), positive, "kg", "link masses m1, m2"},
+                  {"lengths", both(d.lengths), positive, "m", "link lengths l1, l2"},
+                  {"centres_of_mass", both(d.centres_of_mass), positive, "m",
                    "distances lc1, lc2 from joint i to the centre of mass of link i"},
-                  {"inertias", both(d.inertias), 0.0, true, "kg·m²",
+                  {"inertias", both(d.inertias), positive, "kg·m²",
                    "moments of inertia I1, I2 of the links about their centres of mass"},
-                  {"gravity", {d.gravity}, 0.0, false, "m/s²", "gravitational acceleration g0"}};
+                  {"gravity", {d.gravity}, Range::non_negative(), "m/s²",
+                   "gravitational acceleration g0"}};
   k.default_initial_state = {0.5, -0.4, 0.0, 0.0};
   k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
     ManipulatorParams p;
