@@ -26,13 +26,6 @@ void check_non_negative(std::vector<FieldError>& errs, const std::string& path, 
     errs.push_back({path, "must be >= 0 (got " + fmt_num(v) + ")"});
 }
 
-void check_range(std::vector<FieldError>& errs, const std::string& path, double v, double lo,
-                 double hi) {
-  if (check_finite(errs, path, v) && (v < lo || v > hi))
-    errs.push_back(
-        {path, "must be in [" + fmt_num(lo) + ", " + fmt_num(hi) + "] (got " + fmt_num(v) + ")"});
-}
-
 void check_int_range(std::vector<FieldError>& errs, const std::string& path, int v, int lo,
                      int hi) {
   if (v < lo || v > hi)

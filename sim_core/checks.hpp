@@ -18,8 +18,6 @@ std::string fmt_num(double v);
 bool check_finite(std::vector<FieldError>& errs, const std::string& path, double v);
 void check_positive(std::vector<FieldError>& errs, const std::string& path, double v);
 void check_non_negative(std::vector<FieldError>& errs, const std::string& path, double v);
-void check_range(std::vector<FieldError>& errs, const std::string& path, double v, double lo,
-                 double hi);  // closed [lo, hi]
 void check_int_range(std::vector<FieldError>& errs, const std::string& path, int v, int lo, int hi);
 
 }  // namespace ftc::sim::detail

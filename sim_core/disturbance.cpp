@@ -7,12 +7,29 @@
 
 namespace ftc::sim {
 
+namespace {
+
+using D = DisturbanceTerm;
+constexpr NumberField<DisturbanceTerm> kNumberFields[] = {
+    {"amplitude", &D::amplitude, Range::any(), "rad/s²", "amplitude, added to the acceleration"},
+    {"frequency", &D::frequency, Range::any(), "rad/s", "angular frequency"},
+    {"phase", &D::phase, Range::any(), "rad", "phase"}};
+constexpr IntegerField<DisturbanceTerm> kAxis = {"axis", &D::axis, 1, kMaxAxes,
+                                                 "axis index, 1..n of the plant"};
+
+}  // namespace
+
+std::span<const NumberField<DisturbanceTerm>> DisturbanceTerm::number_fields() {
+  return kNumberFields;
+}
+const IntegerField<DisturbanceTerm>& DisturbanceTerm::axis_field() { return kAxis; }
+
 std::vector<FieldError> DisturbanceTerm::validate(const std::string& path, int axes) const {
   std::vector<FieldError> errs;
   detail::check_int_range(errs, path + "/axis", axis, 1, axes);
-  detail::check_finite(errs, path + "/amplitude", amplitude);
-  detail::check_finite(errs, path + "/frequency", frequency);
-  detail::check_finite(errs, path + "/phase", phase);
+  for (const NumberField<DisturbanceTerm>& f : kNumberFields)
+    if (std::string msg = f.range.check(this->*f.member); !msg.empty())
+      errs.push_back({path + "/" + f.name, std::move(msg)});
   return errs;
 }
 

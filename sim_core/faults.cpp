@@ -23,26 +23,55 @@ const char* to_string(FaultProfileType t) {
   return t == FaultProfileType::abrupt ? "abrupt" : "incipient";
 }
 
+namespace {
+
+using F = Fault;
+constexpr NumberField<Fault> kCommon[] = {
+    {"onset", &F::onset, Range::non_negative(), "s", "time t_f the fault starts"}};
+constexpr NumberField<Fault> kBias[] = {
+    {"offset", &F::offset, Range::any(), "", "constant part of the bias, in actuator units"},
+    {"amplitude", &F::amplitude, Range::any(), "", "amplitude of its cosine"},
+    {"frequency", &F::frequency, Range::any(), "rad/s", "frequency of its cosine"},
+    {"phase", &F::phase, Range::any(), "rad", "phase of its cosine"}};
+constexpr NumberField<Fault> kLoss[] = {
+    {"fraction", &F::fraction, Range::unit(), "", "fraction of the command lost, 0..1"}};
+constexpr NumberField<Fault> kStuck[] = {
+    {"value", &F::value, Range::any(), "", "output the actuator is frozen at"}};
+constexpr IntegerField<Fault> kActuator = {"actuator", &F::actuator, 1, kMaxActuators,
+                                           "actuator index, 1..m of the plant"};
+constexpr NumberField<FaultProfile> kRate = {"rate", &FaultProfile::rate, Range::positive(), "1/s",
+                                             "β of ρ = 1 - exp(-β (t - t_f))"};
+
+void check(std::vector<FieldError>& errs, const std::string& path, const Range& r, double v) {
+  if (std::string msg = r.check(v); !msg.empty()) errs.push_back({path, std::move(msg)});
+}
+
+}  // namespace
+
+std::span<const NumberField<Fault>> Fault::common_fields() { return kCommon; }
+std::span<const NumberField<Fault>> Fault::type_fields(FaultType type) {
+  switch (type) {
+    case FaultType::bias:
+      return kBias;
+    case FaultType::loss_of_effectiveness:
+      return kLoss;
+    case FaultType::stuck:
+      return kStuck;
+  }
+  return {};
+}
+const IntegerField<Fault>& Fault::actuator_field() { return kActuator; }
+const NumberField<FaultProfile>& FaultProfile::rate_field() { return kRate; }
+
 std::vector<FieldError> Fault::validate(const std::string& path, int actuators) const {
   std::vector<FieldError> errs;
   detail::check_int_range(errs, path + "/actuator", actuator, 1, actuators);
-  detail::check_non_negative(errs, path + "/onset", onset);
+  for (const NumberField<Fault>& f : kCommon)
+    check(errs, path + "/" + f.name, f.range, this->*f.member);
   if (profile.type == FaultProfileType::incipient)
-    detail::check_positive(errs, path + "/profile/rate", profile.rate);
-  switch (type) {
-    case FaultType::bias:
-      detail::check_finite(errs, path + "/offset", offset);
-      detail::check_finite(errs, path + "/amplitude", amplitude);
-      detail::check_finite(errs, path + "/frequency", frequency);
-      detail::check_finite(errs, path + "/phase", phase);
-      break;
-    case FaultType::loss_of_effectiveness:
-      detail::check_range(errs, path + "/fraction", fraction, 0.0, 1.0);
-      break;
-    case FaultType::stuck:
-      detail::check_finite(errs, path + "/value", value);
-      break;
-  }
+    check(errs, path + "/profile/rate", kRate.range, profile.rate);
+  for (const NumberField<Fault>& f : type_fields(type))
+    check(errs, path + "/" + f.name, f.range, this->*f.member);
   return errs;
 }
 

@@ -6,12 +6,31 @@
 
 namespace ftc::sim {
 
-std::vector<FieldError> Scenario::validate(const std::string& path, int axes,
-                                           int actuators) const {
+namespace {
+
+constexpr NumberField<Scenario> kNumberFields[] = {
+    {"duration", &Scenario::duration, Range::positive(), "s",
+     "length T of the run, a whole multiple of sample_time"},
+    {"sample_time", &Scenario::sample_time, Range::positive(), "s",
+     "controller period Ts (zero-order hold in between)"},
+};
+constexpr IntegerField<Scenario> kSubsteps = {"substeps", &Scenario::substeps, 1, 1000,
+                                              "RK4 steps per sample, h = Ts / substeps"};
+
+void check(std::vector<FieldError>& errs, const std::string& path, const Range& r, double v) {
+  if (std::string msg = r.check(v); !msg.empty()) errs.push_back({path, std::move(msg)});
+}
+
+}  // namespace
+
+std::span<const NumberField<Scenario>> Scenario::number_fields() { return kNumberFields; }
+const IntegerField<Scenario>& Scenario::substeps_field() { return kSubsteps; }
+
+std::vector<FieldError> Scenario::validate(const std::string& path, int axes, int actuators) const {
   std::vector<FieldError> errs;
   if (name.empty()) errs.push_back({path + "/name", "must not be empty"});
-  detail::check_positive(errs, path + "/duration", duration);
-  detail::check_positive(errs, path + "/sample_time", sample_time);
+  for (const NumberField<Scenario>& f : kNumberFields)
+    check(errs, path + "/" + f.name, f.range, this->*f.member);
   if (std::isfinite(duration) && std::isfinite(sample_time) && duration > 0 && sample_time > 0) {
     const double n = std::round(duration / sample_time);
     if (n < 1 || std::abs(n * sample_time - duration) > 1e-9 * duration)
@@ -21,14 +40,15 @@ std::vector<FieldError> Scenario::validate(const std::string& path, int axes,
     else if (n > 1e9)
       errs.push_back({path + "/duration", "needs more than 1e9 samples"});
   }
-  detail::check_int_range(errs, path + "/substeps", substeps, 1, 1000);
+  detail::check_int_range(errs, path + "/substeps", substeps, static_cast<int>(kSubsteps.min),
+                          static_cast<int>(kSubsteps.max));
   if (initial_state.size() != static_cast<std::size_t>(2 * axes))
     errs.push_back({path + "/initial_state", "expected " + std::to_string(2 * axes) +
                                                  " numbers (X1 and X2 of the plant's " +
                                                  std::to_string(axes) + " axes), got " +
                                                  std::to_string(initial_state.size())});
   for (std::size_t i = 0; i < initial_state.size(); ++i)
-    detail::check_finite(errs, path + "/initial_state/" + std::to_string(i), initial_state[i]);
+    check(errs, path + "/initial_state/" + std::to_string(i), Range::any(), initial_state[i]);
   for (std::size_t i = 0; i < disturbance.size(); ++i) {
     auto e = disturbance[i].validate(path + "/disturbance/" + std::to_string(i), axes);
     errs.insert(errs.end(), e.begin(), e.end());
@@ -37,7 +57,7 @@ std::vector<FieldError> Scenario::validate(const std::string& path, int axes,
     auto e = faults[i].validate(path + "/faults/" + std::to_string(i), actuators);
     errs.insert(errs.end(), e.begin(), e.end());
   }
-  if (saturation) detail::check_positive(errs, path + "/saturation", *saturation);
+  if (saturation) check(errs, path + "/saturation", kSaturationRange, *saturation);
   return errs;
 }
 

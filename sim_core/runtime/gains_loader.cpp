@@ -1,86 +1,153 @@
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
-#include "ftc/runtime/gains.hpp"
 #include "ftc/runtime/controller_json.hpp"
+#include "ftc/runtime/gains.hpp"
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/runtime/plant_json.hpp"
+#include "ftc/runtime/schema.hpp"
 
 namespace ftc::runtime {
 
 using nlohmann::json;
-using json_io::ObjectReader;
+using schema::Errors;
+using schema::kRequired;
 
 namespace {
 
-void require_kind(ObjectReader& r, const char* key, bool (json::*is)() const noexcept,
-                  const char* kind, std::vector<FieldError>& errs) {
-  if (const json* v = r.child(key, true); v && !((*v).*is)())
-    errs.push_back({r.path(key),
-                    std::string("expected ") + kind + ", got " + json_io::json_type_name(*v)});
+// The parts of a gains file the runtime does not use (the objective, the baseline, the
+// optimiser and its history) are checked for their kind only: they document the run.
+schema::Object<Gains>::Field informational(const char* key, const char* kind, const char* doc) {
+  const bool array = std::string_view(kind) == "array";
+  return {key,
+          true,
+          [array](const json& v, const std::string& path, Gains&, Errors& e) {
+            if (array ? !v.is_array() : !v.is_object())
+              e.push_back({path, std::string("expected ") + (array ? "an array" : "an object") +
+                                     ", got " + json_io::json_type_name(v)});
+          },
+          [](const Gains&, const std::string&, Errors&) {},
+          [](const Gains&, json&) {},
+          [kind, doc] {
+            return json{{"type", kind}, {"description", doc}};
+          }};
+}
+
+struct JobRef {
+  std::string name, sha256;
+};
+
+std::shared_ptr<const schema::Object<Gains>> make_gains_shape() {
+  auto o = std::make_shared<schema::Object<Gains>>(
+      "A gains file: the tuned controller and what it was tuned for");
+  o->field({"schema", true, [](const json&, const std::string&, Gains&, Errors&) {},  // read first
+            [](const Gains&, const std::string&, Errors&) {}, [](const Gains&, json&) {},
+            [] {
+              return json{{"const", kGainsSchema}};
+            }});
+  o->object("controller", &Gains::controller, controller_shape(),
+            "the controller with every parameter, the tuned ones included", kRequired);
+  o->field({"tuned", true,
+            [](const json& t, const std::string& path, Gains& g, Errors& e) {
+              if (!t.is_object()) {
+                e.push_back({path, "expected an object of name: value"});
+                return;
+              }
+              for (auto it = t.begin(); it != t.end(); ++it) {
+                const std::string p = path + "/" + json_io::pointer_escape(it.key());
+                if (!it.value().is_number())
+                  e.push_back({p, "expected a number"});
+                else
+                  g.tuned.emplace_back(it.key(), it.value().get<double>());
+              }
+            },
+            // Each tuned value is a parameter of the controller and equals it there.
+            [](const Gains& g, const std::string& path, Errors& e) {
+              for (const auto& [name, v] : g.tuned) {
+                const std::string p = path + "/" + json_io::pointer_escape(name);
+                const sim::ControllerField* f = sim::find_controller_field(name);
+                if (!f || !f->applies_to(g.controller.type)) {
+                  e.push_back({p, "is not a parameter of the controller"});
+                  continue;
+                }
+                const double in_controller = g.controller.*f->member;
+                if (in_controller != v)
+                  e.push_back({p, "value " + json_io::number_text(v, 17) +
+                                      " differs from /controller/" + name + " = " +
+                                      json_io::number_text(in_controller, 17)});
+              }
+            },
+            [](const Gains&, json&) {},
+            [] {
+              return json{{"type", "object"},
+                          {"additionalProperties", {{"type", "number"}}},
+                          {"description", "tuned parameter → value (also in controller)"}};
+            }});
+  o->number("sample_time", &Gains::sample_time, schema::Range::positive(),
+            "the sample time Ts the gains were tuned for (s)", kRequired);
+  o->object("plant", &Gains::plant, plant_shape(), "the plant as simulated", kRequired);
+  o->field(informational("objective", "object", "metric, window, aggregate and the value reached"));
+  o->field({"fitness", true,
+            [](const json& v, const std::string& path, Gains& g, Errors& e) {
+              if (v.is_number())
+                g.fitness = v.get<double>();
+              else if (!v.is_null())
+                e.push_back({path, "expected a number or null"});
+            },
+            [](const Gains&, const std::string&, Errors&) {}, [](const Gains&, json&) {},
+            [] {
+              return json{{"type", json::array({"number", "null"})},
+                          {"description", "J = 1/objective of the tuned controller"}};
+            }});
+  o->field(informational("baseline", "object", "the job's own controller and its score"));
+  o->field(informational("optimizer", "object", "algorithm, settings, seed, evaluations"));
+  o->field(informational("history", "array", "one row per iteration"));
+  o->field({"job", true,
+            [](const json& v, const std::string& path, Gains& g, Errors& e) {
+              static const schema::Object<JobRef> ref =
+                  schema::Object<JobRef>()
+                      .string("name", &JobRef::name, "job name", kRequired)
+                      .string("sha256", &JobRef::sha256, "of the job's canonical JSON", kRequired);
+              JobRef r;
+              ref.read(v, path, r, e);
+              g.job_name = r.name;
+              g.job_sha256 = r.sha256;
+            },
+            [](const Gains&, const std::string&, Errors&) {}, [](const Gains&, json&) {},
+            [] {
+              return json{{"type", "object"},
+                          {"required", {"name", "sha256"}},
+                          {"additionalProperties", false},
+                          {"properties",
+                           {{"name", {{"type", "string"}}},
+                            {"sha256", {{"type", "string"}, {"pattern", "^[0-9a-f]{64}$"}}}}}};
+            }});
+  o->field(informational("generator", "object", "the tool and version that wrote the file"));
+  return o;
+}
+
+const schema::Object<Gains>& gains_shape() {
+  static const std::shared_ptr<const schema::Object<Gains>> shape = make_gains_shape();
+  return *shape;
 }
 
 }  // namespace
 
 Gains parse_gains(const json& doc, const std::string& source) {
-  std::vector<FieldError> errs;
+  if (!doc.is_object())
+    throw InputError(source, "", "expected an object, got " + json_io::json_type_name(doc));
+  // The schema first: a file of another kind gets one clear line, not a list of its fields.
+  const auto s = doc.find("schema");
+  if (s == doc.end()) throw InputError(source, "/schema", "is required");
+  if (!s->is_string() || s->get<std::string>() != kGainsSchema)
+    throw InputError(
+        source, "/schema",
+        "this file is " +
+            (s->is_string() ? "\"" + s->get<std::string>() + "\"" : json_io::json_type_name(*s)) +
+            ", expected \"" + kGainsSchema + "\"");
+  Errors errs;
   Gains g;
-  ObjectReader r(doc, "", errs);
-  if (!r.ok()) throw InputError(source, std::move(errs));
-
-  std::string schema;
-  if (!r.string("schema", schema, true)) throw InputError(source, std::move(errs));
-  if (schema != kGainsSchema)
-    throw InputError(source, "/schema",
-                     "this file is \"" + schema + "\", expected \"" + kGainsSchema + "\"");
-
-  if (const json* c = r.child("controller", true)) {
-    g.controller = parse_controller(*c, "/controller", errs);
-    std::vector<FieldError> v = g.controller.validate("/controller");
-    errs.insert(errs.end(), v.begin(), v.end());
-  }
-  if (const json* t = r.child("tuned", true)) {
-    if (!t->is_object()) {
-      errs.push_back({"/tuned", "expected an object of name: value"});
-    } else {
-      for (auto it = t->begin(); it != t->end(); ++it) {
-        const std::string p = "/tuned/" + json_io::pointer_escape(it.key());
-        const sim::ControllerField* f = sim::find_controller_field(it.key());
-        if (!it.value().is_number()) {
-          errs.push_back({p, "expected a number"});
-        } else if (!f || !f->applies_to(g.controller.type)) {
-          errs.push_back({p, "is not a parameter of the controller"});
-        } else {
-          const double v = it.value().get<double>();
-          g.tuned.emplace_back(it.key(), v);
-          const double in_controller = g.controller.*f->member;
-          if (in_controller != v)
-            errs.push_back({p, "value " + json_io::number_text(v, 17) +
-                                   " differs from /controller/" + it.key() + " = " +
-                                   json_io::number_text(in_controller, 17)});
-        }
-      }
-    }
-  }
-  if (r.number("sample_time", g.sample_time, true) &&
-      !(g.sample_time > 0 && std::isfinite(g.sample_time)))
-    errs.push_back({"/sample_time", "must be > 0"});
-  require_kind(r, "plant", &json::is_object, "an object", errs);
-  require_kind(r, "objective", &json::is_object, "an object", errs);
-  if (const json* f = r.child("fitness", true); f && !(f->is_number() || f->is_null()))
-    errs.push_back({"/fitness", "expected a number or null"});
-  require_kind(r, "baseline", &json::is_object, "an object", errs);
-  require_kind(r, "optimizer", &json::is_object, "an object", errs);
-  require_kind(r, "history", &json::is_array, "an array", errs);
-  if (const json* j = r.child("job", true)) {
-    ObjectReader jr(*j, "/job", errs);
-    jr.string("name", g.job_name, true);
-    jr.string("sha256", g.job_sha256, true);
-    jr.finish();
-  }
-  require_kind(r, "generator", &json::is_object, "an object", errs);
-  r.finish();
+  schema::read(gains_shape(), doc, "", g, errs);
   throw_if_errors(source, std::move(errs));
   return g;
 }
@@ -91,12 +158,19 @@ Gains read_gains(const std::filesystem::path& file) {
   return parse_gains(json_io::parse_json_text(*text, file.string()), file.string());
 }
 
+json gains_json_schema() {
+  return schema::document(gains_shape().json_schema(),
+                          "https://ftctune.example/schemas/ftctune.gains-1.json",
+                          "ftctune gains file (ftctune.gains/1)");
+}
+
 void check_sample_time(const Gains& gains, double sample_time) {
   if (!(std::abs(sample_time - gains.sample_time) <= 1e-12 * gains.sample_time))
-    throw InputError("gains", "/sample_time",
-                     "the gains were tuned for Ts = " + json_io::number_text(gains.sample_time, 17) +
-                         " s, but the controller is to run at Ts = " +
-                         json_io::number_text(sample_time, 17) + " s");
+    throw InputError(
+        "gains", "/sample_time",
+        "the gains were tuned for Ts = " + json_io::number_text(gains.sample_time, 17) +
+            " s, but the controller is to run at Ts = " + json_io::number_text(sample_time, 17) +
+            " s");
 }
 
 }  // namespace ftc::runtime

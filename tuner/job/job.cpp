@@ -2,23 +2,30 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sstream>
 
 #include "ftc/runtime/controller_json.hpp"
-#include "ftc/tune/io/files.hpp"
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/runtime/plant_json.hpp"
+#include "ftc/runtime/schema.hpp"
+#include "ftc/tune/io/files.hpp"
 
 namespace ftc::tune {
 
-using json_io::ObjectReader;
 using nlohmann::json;
+using schema::Errors;
+using schema::kRequired;
 
 namespace {
 
-void append(std::vector<FieldError>& to, std::vector<FieldError> from) {
+template <class T>
+using Obj = schema::Object<T>;
+template <class T>
+using Ptr = std::shared_ptr<const schema::Shape<T>>;
+
+void append(Errors& to, Errors from) {
   to.insert(to.end(), std::make_move_iterator(from.begin()), std::make_move_iterator(from.end()));
 }
 
@@ -29,279 +36,317 @@ bool safe_name(const std::string& s) {
       return false;
   return true;
 }
+constexpr const char* kNamePattern = "^[A-Za-z0-9_-][A-Za-z0-9_.-]{0,99}$";
 
-// --- parsing (structure and types) ---------------------------------------------------------
-
-PlantConfig parse_plant(const json& j, const std::string& path, std::vector<FieldError>& errs) {
-  PlantConfig p;
-  ObjectReader r(j, path, errs);
-  r.string("model", p.model);
-  const sim::PlantKind* kind = sim::find_plant_kind(p.model);
-  if (!kind) {
-    errs.push_back({r.path("model"), "unknown plant model '" + p.model +
-                                         "' (known: " + sim::plant_model_names() + ")"});
-    return p;
-  }
-  p.values = kind->defaults();
-  std::size_t offset = 0;
-  for (const sim::PlantParameter& param : kind->parameters) {
-    if (param.size() == 1)
-      r.number(param.name.c_str(), p.values[offset]);
-    else
-      r.numbers(param.name.c_str(), p.values.data() + offset, param.size());
-    offset += param.size();
-  }
-  r.finish();
-  return p;
+std::string field_doc(const char* description, const char* unit) {
+  return *unit ? std::string(description) + " (" + unit + ")" : std::string(description);
 }
 
-// The plant's kind, or the default spacecraft's when the model is unknown (already reported).
-const sim::PlantKind& kind_of(const PlantConfig& p) {
-  const sim::PlantKind* k = sim::find_plant_kind(p.model);
-  return k ? *k : *sim::find_plant_kind("spacecraft");
+// A numeric field of a sim struct from its table; checked by the struct's validate().
+template <class T>
+void add_number(Obj<T>& o, const sim::NumberField<T>& f, schema::Presence p = schema::kOptional) {
+  o.number(f.name, f.member, f.range, field_doc(f.description, f.unit), p, false);
+}
+template <class T>
+void add_integer(Obj<T>& o, const sim::IntegerField<T>& f, schema::Presence p = schema::kOptional) {
+  o.integer(f.name, f.member, {f.min, f.max}, f.description, p, false);
 }
 
-sim::DisturbanceTerm parse_disturbance(const json& j, const std::string& path,
-                                       std::vector<FieldError>& errs) {
-  sim::DisturbanceTerm d;
-  ObjectReader r(j, path, errs);
-  r.integer("axis", d.axis, true);
-  std::string shape = "sin";
-  if (r.string("shape", shape)) {
-    if (shape == "sin")
-      d.shape = sim::Shape::sin;
-    else if (shape == "cos")
-      d.shape = sim::Shape::cos;
-    else
-      errs.push_back({r.path("shape"), "must be \"sin\" or \"cos\" (got \"" + shape + "\")"});
-  }
-  r.number("amplitude", d.amplitude, true);
-  r.number("frequency", d.frequency, true);
-  r.number("phase", d.phase);
-  r.finish();
-  return d;
-}
+// --- scenarios --------------------------------------------------------------------------------
 
-sim::Fault parse_fault(const json& j, const std::string& path, std::vector<FieldError>& errs) {
-  sim::Fault f;
-  ObjectReader r(j, path, errs);
-  if (!r.ok()) return f;
-  r.integer("actuator", f.actuator, true);
-  r.number("onset", f.onset, true);
-  std::string type;
-  if (r.string("type", type, true)) {
-    if (type == "bias") {
-      f.type = sim::FaultType::bias;
-      r.number("offset", f.offset);
-      r.number("amplitude", f.amplitude);
-      r.number("frequency", f.frequency);
-      r.number("phase", f.phase);
-    } else if (type == "loss_of_effectiveness") {
-      f.type = sim::FaultType::loss_of_effectiveness;
-      r.number("fraction", f.fraction, true);
-    } else if (type == "stuck") {
-      f.type = sim::FaultType::stuck;
-      r.number("value", f.value, true);
-    } else {
-      errs.push_back({r.path("type"),
-                      "must be one of bias, loss_of_effectiveness, stuck (got \"" + type + "\")"});
-      for (const std::string& k : r.keys()) r.mark_seen(k);  // no point listing them
-    }
-  }
-  if (const json* pj = r.child("profile")) {
-    ObjectReader pr(*pj, r.path("profile"), errs);
-    std::string ptype = "abrupt";
-    if (pr.string("type", ptype, true)) {
-      if (ptype == "abrupt") {
-        f.profile.type = sim::FaultProfileType::abrupt;
-      } else if (ptype == "incipient") {
-        f.profile.type = sim::FaultProfileType::incipient;
-        pr.number("rate", f.profile.rate, true);
-      } else {
-        errs.push_back(
-            {pr.path("type"), "must be \"abrupt\" or \"incipient\" (got \"" + ptype + "\")"});
-      }
-    }
-    pr.finish();
-  }
-  r.finish();
-  return f;
-}
-
-template <class T, class F>
-std::vector<T> parse_array(const json* j, const std::string& path, std::vector<FieldError>& errs,
-                           F&& parse_one) {
-  std::vector<T> out;
-  if (!j) return out;
-  if (!j->is_array()) {
-    errs.push_back({path, "expected an array, got " + json_io::json_type_name(*j)});
-    return out;
-  }
-  for (std::size_t i = 0; i < j->size(); ++i)
-    out.push_back(parse_one((*j)[i], path + "/" + std::to_string(i), errs));
-  return out;
-}
-
-sim::Scenario parse_scenario(const json& j, const std::string& path,
-                             std::vector<FieldError>& errs) {
-  sim::Scenario s;
-  ObjectReader r(j, path, errs);
-  r.string("name", s.name, true);
-  r.number("duration", s.duration, true);
-  r.number("sample_time", s.sample_time);
-  r.integer("substeps", s.substeps);
-  s.initial_state.clear();  // absent: the plant's default, filled in by parse_job
-  r.number_list("initial_state", s.initial_state);
-  s.disturbance = parse_array<sim::DisturbanceTerm>(r.child("disturbance"), r.path("disturbance"),
-                                                    errs, parse_disturbance);
-  s.faults = parse_array<sim::Fault>(r.child("faults"), r.path("faults"), errs, parse_fault);
-  double sat = 0;
-  if (r.number("saturation", sat)) s.saturation = sat;
-  r.finish();
-  return s;
-}
-
-ObjectiveConfig parse_objective(const json& j, const std::string& path,
-                                std::vector<FieldError>& errs) {
-  ObjectiveConfig o;
-  ObjectReader r(j, path, errs);
-  std::string metric;
-  if (r.string("metric", metric)) {
-    if (auto m = sim::metric_from_string(metric))
-      o.metric = *m;
-    else
-      errs.push_back({r.path("metric"), "must be one of ise, iae, itae (got \"" + metric + "\")"});
-  }
-  // [t0, t1] in s; t1 may be null, meaning "to the end of each scenario".
-  if (const json* w = r.child("window")) {
-    const std::string wp = r.path("window");
-    if (!w->is_array() || w->size() != 2 || !(*w)[0].is_number() ||
-        !((*w)[1].is_number() || (*w)[1].is_null()))
-      errs.push_back({wp, "expected [start, end] in seconds, got " + json_io::json_type_name(*w)});
-    else
-      o.window = {(*w)[0].get<double>(), (*w)[1].is_null() ? std::numeric_limits<double>::infinity()
-                                                           : (*w)[1].get<double>()};
-  }
-  std::string agg;
-  if (r.string("aggregate", agg)) {
-    if (agg == "mean")
-      o.aggregate = Aggregate::mean;
-    else if (agg == "max")
-      o.aggregate = Aggregate::max;
-    else
-      errs.push_back({r.path("aggregate"), "must be \"mean\" or \"max\" (got \"" + agg + "\")"});
-  }
-  r.finish();
+Ptr<sim::DisturbanceTerm> make_disturbance_shape() {
+  using D = sim::DisturbanceTerm;
+  auto o = std::make_shared<Obj<D>>("One sinusoid of Δ on one axis: amplitude · shape(ω t + φ)");
+  add_integer(*o, D::axis_field(), kRequired);
+  o->choice("shape", &D::shape, {{"sin", sim::Shape::sin}, {"cos", sim::Shape::cos}}, "sin or cos");
+  for (const sim::NumberField<D>& f : D::number_fields())
+    add_number(*o, f, std::string_view(f.name) == "phase" ? schema::kOptional : kRequired);
   return o;
 }
 
-TuningConfig parse_tuning(const json& j, const std::string& path, std::vector<FieldError>& errs) {
-  TuningConfig t;
-  ObjectReader r(j, path, errs);
-  if (const json* pj = r.child("parameters", true)) {
-    const std::string pp = r.path("parameters");
-    if (!pj->is_object()) {
-      errs.push_back(
-          {pp, "expected an object of name: [lower, upper], got " + json_io::json_type_name(*pj)});
-    } else {
-      for (auto it = pj->begin(); it != pj->end(); ++it) {
-        ParameterBounds b;
-        b.name = it.key();
-        const std::string bp = pp + "/" + json_io::pointer_escape(it.key());
-        const json& v = it.value();
-        if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number()) {
-          errs.push_back({bp, "expected [lower, upper] (two numbers), got " +
-                                  (v.is_array() ? "an array of " + std::to_string(v.size())
-                                                : json_io::json_type_name(v))});
-          continue;
-        }
-        b.lower = v[0].get<double>();
-        b.upper = v[1].get<double>();
-        t.parameters.push_back(b);
-      }
-      // JSON objects are unordered: fix the decision-vector order as that of the controller
-      // field table (Kp before Ki), unknown names last, so it never depends on the file.
-      const auto rank = [](const std::string& n) {
-        const auto fields = sim::controller_fields();
-        for (std::size_t i = 0; i < fields.size(); ++i)
-          if (n == fields[i].name) return i;
-        return fields.size();
-      };
-      std::stable_sort(t.parameters.begin(), t.parameters.end(),
-                       [&](const ParameterBounds& a, const ParameterBounds& b) {
-                         return rank(a.name) != rank(b.name) ? rank(a.name) < rank(b.name)
-                                                             : a.name < b.name;
-                       });
+Ptr<sim::DisturbanceTerm> disturbance_shape() {
+  static const Ptr<sim::DisturbanceTerm> shape = make_disturbance_shape();
+  return shape;
+}
+
+Ptr<sim::FaultProfile> make_profile_shape() {
+  using P = sim::FaultProfile;
+  auto v = std::make_shared<schema::Variant<P>>(
+      "type", [](const P& p) { return std::string(sim::to_string(p.type)); },
+      [](P& p, const std::string& name) {
+        p.type =
+            name == "abrupt" ? sim::FaultProfileType::abrupt : sim::FaultProfileType::incipient;
+      },
+      "How the fault grows after its onset: abrupt (ρ = 1) or incipient (ρ = 1 - exp(-β τ))");
+  v->add("abrupt", std::make_shared<Obj<P>>());
+  auto incipient = std::make_shared<Obj<P>>();
+  add_number(*incipient, P::rate_field(), kRequired);
+  v->add("incipient", std::move(incipient));
+  return v;
+}
+
+Ptr<sim::FaultProfile> profile_shape() {
+  static const Ptr<sim::FaultProfile> shape = make_profile_shape();
+  return shape;
+}
+
+Ptr<sim::Fault> make_fault_shape() {
+  using F = sim::Fault;
+  const Ptr<sim::FaultProfile> profile = profile_shape();
+  auto v = std::make_shared<schema::Variant<F>>(
+      "type", [](const F& f) { return std::string(sim::to_string(f.type)); },
+      [](F& f, const std::string& name) {
+        for (sim::FaultType t :
+             {sim::FaultType::bias, sim::FaultType::loss_of_effectiveness, sim::FaultType::stuck})
+          if (name == sim::to_string(t)) f.type = t;
+      },
+      "An actuator fault: u_j = u_d,j + ρ(t - onset) δu_j");
+  const std::pair<sim::FaultType, const char*> cases[] = {
+      {sim::FaultType::bias, "a bias offset + amplitude cos(frequency t + phase)"},
+      {sim::FaultType::loss_of_effectiveness, "the actuator loses a fraction of its command"},
+      {sim::FaultType::stuck, "the actuator's output is frozen at value"}};
+  for (const auto& [type, what] : cases) {
+    auto o = std::make_shared<Obj<F>>(what);
+    add_integer(*o, F::actuator_field(), kRequired);
+    for (const sim::NumberField<F>& f : F::common_fields()) add_number(*o, f, kRequired);
+    o->object("profile", &F::profile, profile, "");
+    for (const sim::NumberField<F>& f : F::type_fields(type))
+      add_number(*o, f, type == sim::FaultType::bias ? schema::kOptional : kRequired);
+    v->add(sim::to_string(type), std::move(o));
+  }
+  return v;
+}
+
+Ptr<sim::Fault> fault_shape() {
+  static const Ptr<sim::Fault> shape = make_fault_shape();
+  return shape;
+}
+
+Ptr<sim::Scenario> make_scenario_shape() {
+  using S = sim::Scenario;
+  auto o = std::make_shared<Obj<S>>(
+      "A closed-loop fault scenario: run length, sampling, initial state, disturbance, faults");
+  o->string("name", &S::name, "unique within the job; names output files", kRequired, {},
+            kNamePattern);
+  for (const sim::NumberField<S>& f : S::number_fields())
+    add_number(*o, f, std::string_view(f.name) == "duration" ? kRequired : schema::kOptional);
+  add_integer(*o, S::substeps_field());
+  o->number_list("initial_state", &S::initial_state, schema::Range::any(),
+                 "X(0) = (X1, X2), 2n numbers; default the plant's", schema::kOptional, false);
+  o->array("disturbance", &S::disturbance, disturbance_shape(), "Δ(t), a sum of sinusoids");
+  o->array("faults", &S::faults, fault_shape(), "actuator faults; they add up");
+  o->optional_number("saturation", &S::saturation, S::kSaturationRange,
+                     "|u_j| <= saturation after the faults; absent: none", false);
+  return o;
+}
+
+Ptr<sim::Scenario> scenario_shape() {
+  static const Ptr<sim::Scenario> shape = make_scenario_shape();
+  return shape;
+}
+
+// --- objective and tuning ---------------------------------------------------------------------
+
+Ptr<ObjectiveConfig> make_objective_shape() {
+  using O = ObjectiveConfig;
+  auto o = std::make_shared<Obj<O>>("What a candidate is scored by");
+  o->choice("metric", &O::metric,
+            {{"ise", sim::Metric::ise}, {"iae", sim::Metric::iae}, {"itae", sim::Metric::itae}},
+            "ise = ∫‖e‖² dt, iae = ∫Σ|e_i| dt, itae = ∫t Σ|e_i| dt over the window");
+  // [t0, t1] in s; t1 may be null, meaning "to the end of each scenario".
+  o->field({"window", false,
+            [](const json& w, const std::string& path, O& out, Errors& e) {
+              if (!w.is_array() || w.size() != 2 || !w[0].is_number() ||
+                  !(w[1].is_number() || w[1].is_null()))
+                e.push_back(
+                    {path, "expected [start, end] in seconds, got " + json_io::json_type_name(w)});
+              else
+                out.window = {w[0].get<double>(), w[1].is_null()
+                                                      ? std::numeric_limits<double>::infinity()
+                                                      : w[1].get<double>()};
+            },
+            [](const O&, const std::string&, Errors&) {},  // against the scenarios: job rule
+            [](const O& obj, json& out) {
+              out["window"] = json::array({obj.window.t0, json_io::json_number(obj.window.t1)});
+            },
+            [] {
+              return json{
+                  {"type", "array"},
+                  {"prefixItems", json::array({{{"type", "number"}, {"minimum", 0}},
+                                               {{"type", json::array({"number", "null"})}}})},
+                  {"minItems", 2},
+                  {"maxItems", 2},
+                  {"description", "[start, end) in s; end null = the end of the run"}};
+            }});
+  o->choice("aggregate", &O::aggregate, {{"mean", Aggregate::mean}, {"max", Aggregate::max}},
+            "how the scenarios' values combine");
+  return o;
+}
+
+Ptr<ObjectiveConfig> objective_shape() {
+  static const Ptr<ObjectiveConfig> shape = make_objective_shape();
+  return shape;
+}
+
+// Rank of a parameter in the controller field table: the decision vector's order.
+std::size_t field_rank(const std::string& name) {
+  const auto fields = sim::controller_fields();
+  for (std::size_t i = 0; i < fields.size(); ++i)
+    if (name == fields[i].name) return i;
+  return fields.size();
+}
+
+Ptr<TuningConfig> make_tuning_shape() {
+  using T = TuningConfig;
+  auto o = std::make_shared<Obj<T>>("What to tune, with which algorithm and seed");
+  o->field({"parameters", true,
+            [](const json& pj, const std::string& pp, T& t, Errors& e) {
+              if (!pj.is_object()) {
+                e.push_back({pp, "expected an object of name: [lower, upper], got " +
+                                     json_io::json_type_name(pj)});
+                return;
+              }
+              for (auto it = pj.begin(); it != pj.end(); ++it) {
+                const std::string bp = pp + "/" + json_io::pointer_escape(it.key());
+                const json& v = it.value();
+                if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number()) {
+                  e.push_back({bp, "expected [lower, upper] (two numbers), got " +
+                                       (v.is_array() ? "an array of " + std::to_string(v.size())
+                                                     : json_io::json_type_name(v))});
+                  continue;
+                }
+                t.parameters.push_back({it.key(), v[0].get<double>(), v[1].get<double>()});
+              }
+              // JSON objects are unordered: fix the decision-vector order as that of the
+              // controller field table (Kp before Ki), unknown names last, so it never depends
+              // on the file.
+              std::stable_sort(t.parameters.begin(), t.parameters.end(),
+                               [](const ParameterBounds& a, const ParameterBounds& b) {
+                                 const std::size_t ra = field_rank(a.name), rb = field_rank(b.name);
+                                 return ra != rb ? ra < rb : a.name < b.name;
+                               });
+            },
+            [](const T&, const std::string&, Errors&) {},  // against the controller: job rule
+            [](const T& t, json& out) {
+              json params = json::object();
+              for (const ParameterBounds& b : t.parameters) params[b.name] = {b.lower, b.upper};
+              out["parameters"] = params;
+            },
+            [] {
+              json names = json::array();
+              for (const sim::ControllerField& f : sim::controller_fields())
+                if (f.tunable()) names.push_back(f.name);
+              return json{{"type", "object"},
+                          {"minProperties", 1},
+                          {"propertyNames", {{"enum", names}}},
+                          {"additionalProperties",
+                           {{"type", "array"},
+                            {"items", {{"type", "number"}}},
+                            {"minItems", 2},
+                            {"maxItems", 2}}},
+                          {"description",
+                           "controller field → [lower, upper]: the search box (a field of the "
+                           "job's controller type, not an integer one)"}};
+            }});
+  o->field({"algorithm", false,
+            [](const json& aj, const std::string& path, T& t, Errors& e) {
+              t.algorithm = parse_algorithm(aj, path, e);
+              if (!t.algorithm) t.algorithm = TuningConfig::default_algorithm();  // reported
+            },
+            [](const T& t, const std::string& path, Errors& e) {
+              append(e, t.algorithm->validate(path));
+            },
+            [](const T& t, json& out) { out["algorithm"] = t.algorithm->to_json(); },
+            [] {
+              json cases = json::array();
+              for (const AlgorithmInfo& a : algorithms()) cases.push_back(a.schema());
+              return json{{"type", "object"},
+                          {"oneOf", cases},
+                          {"description",
+                           "the optimiser and its settings; default the Bat "
+                           "algorithm with the paper's Table 1 settings"}};
+            }});
+  o->uint64("seed", &T::seed, "seed of the optimiser's random numbers");
+  return o;
+}
+
+Ptr<TuningConfig> tuning_shape() {
+  static const Ptr<TuningConfig> shape = make_tuning_shape();
+  return shape;
+}
+
+// --- comparison entries -----------------------------------------------------------------------
+
+// A controller object with an optional "label".
+class CompareShape final : public schema::Shape<CompareEntry> {
+ public:
+  void read(const json& j, const std::string& path, CompareEntry& out,
+            Errors& errs) const override {
+    json body = j;
+    if (j.is_object() && j.contains("label")) {
+      if (!j["label"].is_string())
+        errs.push_back(
+            {path + "/label", "expected a string, got " + json_io::json_type_name(j["label"])});
+      else
+        out.label = j["label"].get<std::string>();
+      body.erase("label");
     }
+    runtime::controller_shape()->read(body, path, out.controller, errs);
+    if (out.label.empty()) out.label = sim::to_string(out.controller.type);
   }
-  if (const json* aj = r.child("algorithm")) {
-    t.algorithm = parse_algorithm(*aj, r.path("algorithm"), errs);
-    if (!t.algorithm) t.algorithm = TuningConfig::default_algorithm();  // reported
+  void validate(const CompareEntry& c, const std::string& path, Errors& errs) const override {
+    runtime::controller_shape()->validate(c.controller, path, errs);
   }
-  r.uint64("seed", t.seed);
-  r.finish();
-  return t;
-}
+  json write(const CompareEntry& c) const override {
+    json j = runtime::controller_shape()->write(c.controller);
+    j["label"] = c.label;
+    return j;
+  }
+  json json_schema() const override {
+    json s = runtime::controller_shape()->json_schema();
+    for (json& c : s["oneOf"])
+      c["properties"]["label"] = {{"type", "string"},
+                                  {"description", "shown in comparisons; default the type"}};
+    s["description"] = "A controller simulated beside the job's own in comparisons and reports";
+    return s;
+  }
+};
 
-// --- validation helpers ----------------------------------------------------------------------
+// --- the job ----------------------------------------------------------------------------------
 
-void check_positive_int(std::vector<FieldError>& errs, const std::string& path, int v, int hi) {
-  if (v < 1 || v > hi)
-    errs.push_back({path, "must be an integer in 1.." + std::to_string(hi) + " (got " +
-                              std::to_string(v) + ")"});
-}
-
-void check_unit(std::vector<FieldError>& errs, const std::string& path, double v, bool open_low) {
-  const bool ok = std::isfinite(v) && (open_low ? v > 0 : v >= 0) && v <= 1;
-  if (!ok)
-    errs.push_back({path, std::string("must be in ") + (open_low ? "(0, 1]" : "[0, 1]") + " (got " +
-                              json_io::number_text(v) + ")"});
-}
-
-}  // namespace
-
-// --- public ----------------------------------------------------------------------------------
-
-const char* to_string(Aggregate a) { return a == Aggregate::mean ? "mean" : "max"; }
-AlgorithmPtr TuningConfig::default_algorithm() {
-  static const AlgorithmPtr bat = make_algorithm({{"type", "bat"}});
-  return bat;
-}
-
-std::vector<FieldError> Job::validate() const {
-  std::vector<FieldError> errs;
-  if (!safe_name(name))
+// The checks that span the job's parts: names, the scenarios against the plant's shape, the
+// objective window against the scenarios, the tuned parameters against the controller.
+void validate_job(const Job& job, Errors& errs) {
+  if (!safe_name(job.name))
     errs.push_back({"/name",
                     "must be 1-100 characters of letters, digits, '_', '-', '.' "
                     "(it names the output directory); got \"" +
-                        name + "\""});
-  const sim::PlantKind& kind = kind_of(plant);
-  if (sim::find_plant_kind(plant.model)) append(errs, kind.validate(plant.values, "/plant"));
+                        job.name + "\""});
+  const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
+  const int n = kind ? kind->axes : sim::kMaxAxes, m = kind ? kind->actuators : sim::kMaxActuators;
 
-  if (scenarios.empty()) errs.push_back({"/scenarios", "must hold at least one scenario"});
+  if (job.scenarios.empty()) errs.push_back({"/scenarios", "must hold at least one scenario"});
   std::set<std::string> names;
-  for (std::size_t i = 0; i < scenarios.size(); ++i) {
+  for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
+    const sim::Scenario& s = job.scenarios[i];
     const std::string p = "/scenarios/" + std::to_string(i);
-    append(errs, scenarios[i].validate(p, kind.axes, kind.actuators));
-    if (!scenarios[i].name.empty() && !safe_name(scenarios[i].name))
-      errs.push_back({p + "/name", "must be letters, digits, '_', '-', '.' (got \"" +
-                                       scenarios[i].name + "\")"});
-    if (!names.insert(scenarios[i].name).second)
-      errs.push_back({p + "/name", "duplicate scenario name \"" + scenarios[i].name + "\""});
+    append(errs, s.validate(p, n, m));
+    if (!s.name.empty() && !safe_name(s.name))
+      errs.push_back(
+          {p + "/name", "must be letters, digits, '_', '-', '.' (got \"" + s.name + "\")"});
+    if (!names.insert(s.name).second)
+      errs.push_back({p + "/name", "duplicate scenario name \"" + s.name + "\""});
   }
 
-  append(errs, controller.validate("/controller"));
-  for (std::size_t i = 0; i < compare.size(); ++i)
-    append(errs, compare[i].controller.validate("/compare/" + std::to_string(i)));
-
-  const sim::Window& w = objective.window;
+  const sim::Window& w = job.objective.window;
   if (!std::isfinite(w.t0) || w.t0 < 0)
-    errs.push_back({"/objective/window/0", "must be >= 0 (got " + json_io::number_text(w.t0) + ")"});
+    errs.push_back(
+        {"/objective/window/0", "must be >= 0 (got " + json_io::number_text(w.t0) + ")"});
   else if (!(w.t1 > w.t0))
     errs.push_back({"/objective/window", "end " + json_io::number_text(w.t1) +
                                              " must be after start " + json_io::number_text(w.t0)});
   else if (std::isfinite(w.t1))
-    for (const sim::Scenario& s : scenarios)
+    for (const sim::Scenario& s : job.scenarios)
       if (std::isfinite(s.duration) && w.t1 > s.duration + 1e-12) {
         errs.push_back({"/objective/window/1",
                         "end " + json_io::number_text(w.t1) + " is after the end of scenario \"" +
@@ -309,55 +354,104 @@ std::vector<FieldError> Job::validate() const {
         break;
       }
 
-  if (tuning) {
-    append(errs, tuning->algorithm->validate("/tuning/algorithm"));
-    // A gains file is valid for one sample time, so every tuned scenario must share it.
-    for (std::size_t i = 1; i < scenarios.size(); ++i)
-      if (scenarios[i].sample_time != scenarios[0].sample_time)
-        errs.push_back({"/scenarios/" + std::to_string(i) + "/sample_time",
-                        "must equal the first scenario's sample_time " +
-                            json_io::number_text(scenarios[0].sample_time) +
-                            " when the job is tuned"});
-    if (tuning->parameters.empty())
-      errs.push_back({"/tuning/parameters", "must name at least one controller parameter"});
-    for (const ParameterBounds& b : tuning->parameters) {
-      const std::string p = "/tuning/parameters/" + json_io::pointer_escape(b.name);
-      const sim::ControllerField* f = sim::find_controller_field(b.name);
-      if (!f || !f->applies_to(controller.type)) {
-        std::string tunable;
-        for (const sim::ControllerField& g : sim::controller_fields())
-          if (g.applies_to(controller.type) && g.tunable())
-            tunable += (tunable.empty() ? "" : ", ") + std::string(g.name);
-        errs.push_back({p, "is not a parameter of controller " +
-                               std::string(sim::to_string(controller.type)) +
-                               " (tunable: " + tunable + ")"});
-        continue;
-      }
-      if (!f->tunable()) {
-        errs.push_back({p, "is an integer parameter and cannot be tuned"});
-        continue;
-      }
-      if (!std::isfinite(b.lower) || !std::isfinite(b.upper)) {
-        errs.push_back({p, "bounds must be finite numbers"});
-        continue;
-      }
-      if (b.lower >= b.upper) {
-        errs.push_back({p, "lower bound " + json_io::number_text(b.lower) + " is " +
-                               (b.lower == b.upper ? "equal to" : "above") + " upper bound " +
-                               json_io::number_text(b.upper)});
-        continue;
-      }
-      for (int k = 0; k < 2; ++k) {
-        const double v = k == 0 ? b.lower : b.upper;
-        const std::string msg = sim::check_controller_value(controller, *f, v);
-        if (!msg.empty())
-          errs.push_back({p + "/" + std::to_string(k), std::string(k == 0 ? "lower" : "upper") +
-                                                           " bound " + json_io::number_text(v) +
-                                                           " is outside the valid range of " +
-                                                           b.name + ": " + msg});
-      }
+  if (!job.tuning) return;
+  // A gains file is valid for one sample time, so every tuned scenario must share it.
+  for (std::size_t i = 1; i < job.scenarios.size(); ++i)
+    if (job.scenarios[i].sample_time != job.scenarios[0].sample_time)
+      errs.push_back({"/scenarios/" + std::to_string(i) + "/sample_time",
+                      "must equal the first scenario's sample_time " +
+                          json_io::number_text(job.scenarios[0].sample_time) +
+                          " when the job is tuned"});
+  if (job.tuning->parameters.empty())
+    errs.push_back({"/tuning/parameters", "must name at least one controller parameter"});
+  for (const ParameterBounds& b : job.tuning->parameters) {
+    const std::string p = "/tuning/parameters/" + json_io::pointer_escape(b.name);
+    const sim::ControllerField* f = sim::find_controller_field(b.name);
+    if (!f || !f->applies_to(job.controller.type)) {
+      std::string tunable;
+      for (const sim::ControllerField& g : sim::controller_fields())
+        if (g.applies_to(job.controller.type) && g.tunable())
+          tunable += (tunable.empty() ? "" : ", ") + std::string(g.name);
+      errs.push_back({p, "is not a parameter of controller " +
+                             std::string(sim::to_string(job.controller.type)) +
+                             " (tunable: " + tunable + ")"});
+      continue;
+    }
+    if (!f->tunable()) {
+      errs.push_back({p, "is an integer parameter and cannot be tuned"});
+      continue;
+    }
+    if (!std::isfinite(b.lower) || !std::isfinite(b.upper)) {
+      errs.push_back({p, "bounds must be finite numbers"});
+      continue;
+    }
+    if (b.lower >= b.upper) {
+      errs.push_back({p, "lower bound " + json_io::number_text(b.lower) + " is " +
+                             (b.lower == b.upper ? "equal to" : "above") + " upper bound " +
+                             json_io::number_text(b.upper)});
+      continue;
+    }
+    for (int k = 0; k < 2; ++k) {
+      const double v = k == 0 ? b.lower : b.upper;
+      const std::string msg = sim::check_controller_value(job.controller, *f, v);
+      if (!msg.empty())
+        errs.push_back({p + "/" + std::to_string(k), std::string(k == 0 ? "lower" : "upper") +
+                                                         " bound " + json_io::number_text(v) +
+                                                         " is outside the valid range of " +
+                                                         b.name + ": " + msg});
     }
   }
+}
+
+std::shared_ptr<const Obj<Job>> make_job_shape() {
+  auto o = std::make_shared<Obj<Job>>(
+      "A tuning job: the plant, fault scenarios, the controller, the objective and what to tune");
+  o->field({"schema", true,
+            [](const json& v, const std::string& path, Job&, Errors& e) {
+              if (!v.is_string())
+                e.push_back({path, "expected a string, got " + json_io::json_type_name(v)});
+              else if (v.get<std::string>() != kJobSchema)
+                e.push_back({path, "must be \"" + std::string(kJobSchema) + "\" (got \"" +
+                                       v.get<std::string>() + "\")"});
+            },
+            [](const Job&, const std::string&, Errors&) {},
+            [](const Job&, json& out) { out["schema"] = kJobSchema; },
+            [] {
+              return json{{"const", kJobSchema}};
+            }});
+  o->string("name", &Job::name, "names the output directory: letters, digits, '_', '-', '.'",
+            kRequired, {}, kNamePattern);
+  o->object("plant", &Job::plant, runtime::plant_shape(), "");
+  o->array("scenarios", &Job::scenarios, scenario_shape(), "at least one", kRequired);
+  o->object("controller", &Job::controller, runtime::controller_shape(),
+            "the controller to tune, with its starting (baseline) values", kRequired);
+  o->array("compare", &Job::compare, Ptr<CompareEntry>(std::make_shared<CompareShape>()),
+           "controllers shown beside the job's own in comparisons", schema::kOptional, false);
+  o->object("objective", &Job::objective, objective_shape(), "");
+  o->optional_object("tuning", &Job::tuning, tuning_shape(), "");
+  o->rule([](const Job& job, const std::string&, Errors& e) { validate_job(job, e); });
+  return o;
+}
+
+const Obj<Job>& job_shape() {
+  static const std::shared_ptr<const Obj<Job>> shape = make_job_shape();
+  return *shape;
+}
+
+}  // namespace
+
+// --- public ----------------------------------------------------------------------------------
+
+const char* to_string(Aggregate a) { return a == Aggregate::mean ? "mean" : "max"; }
+
+AlgorithmPtr TuningConfig::default_algorithm() {
+  static const AlgorithmPtr bat = make_algorithm({{"type", "bat"}});
+  return bat;
+}
+
+std::vector<FieldError> Job::validate() const {
+  Errors errs;
+  job_shape().validate(*this, "", errs);
   return errs;
 }
 
@@ -368,53 +462,19 @@ std::int64_t Job::steps_per_evaluation() const {
 }
 
 Job parse_job(const json& j, const std::string& source) {
-  std::vector<FieldError> errs;
+  Errors errs;
   Job job;
-  ObjectReader r(j, "", errs);
-  if (!r.ok()) throw InputError(source, std::move(errs));
-
-  std::string schema;
-  if (r.string("schema", schema, true) && schema != kJobSchema)
-    errs.push_back(
-        {"/schema", "must be \"" + std::string(kJobSchema) + "\" (got \"" + schema + "\")"});
-  r.string("name", job.name, true);
-  if (const json* p = r.child("plant"))
-    job.plant = parse_plant(*p, "/plant", errs);
-  else
-    job.plant.values = kind_of(job.plant).defaults();
-  job.scenarios =
-      parse_array<sim::Scenario>(r.child("scenarios", true), "/scenarios", errs, parse_scenario);
-  if (const json* c = r.child("controller", true))
-    job.controller = parse_controller(*c, "/controller", errs);
-  job.compare = parse_array<CompareEntry>(
-      r.child("compare"), "/compare", errs,
-      [](const json& cj, const std::string& p, std::vector<FieldError>& e) {
-        CompareEntry entry;
-        json body = cj;
-        if (cj.is_object() && cj.contains("label")) {
-          if (!cj["label"].is_string())
-            e.push_back(
-                {p + "/label", "expected a string, got " + json_io::json_type_name(cj["label"])});
-          else
-            entry.label = cj["label"].get<std::string>();
-          body.erase("label");
-        }
-        entry.controller = parse_controller(body, p, e);
-        if (entry.label.empty()) entry.label = sim::to_string(entry.controller.type);
-        return entry;
-      });
-  if (const json* o = r.child("objective")) job.objective = parse_objective(*o, "/objective", errs);
-  if (const json* t = r.child("tuning")) job.tuning = parse_tuning(*t, "/tuning", errs);
-  r.finish();
-  for (sim::Scenario& s : job.scenarios)
-    if (s.initial_state.empty()) s.initial_state = kind_of(job.plant).default_initial_state;
-
-  // Range checks only where parsing found nothing: a missing or mistyped field is reported once.
-  for (FieldError& e : job.validate()) {
-    bool known = false;
-    for (const FieldError& p : errs) known = known || p.path == e.path;
-    if (!known) errs.push_back(std::move(e));
+  job_shape().read(j, "", job, errs);
+  // Every default filled in: the plant's parameters, and a scenario without an initial state
+  // starts from its plant's default one.
+  if (const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model)) {
+    if (job.plant.values.empty()) job.plant.values = kind->defaults();
+    for (sim::Scenario& s : job.scenarios)
+      if (s.initial_state.empty()) s.initial_state = kind->default_initial_state;
   }
+  Errors range;
+  job_shape().validate(job, "", range);
+  schema::detail::dedupe_append(errs, std::move(range));
   throw_if_errors(source, std::move(errs));
   return job;
 }
@@ -429,97 +489,17 @@ Job load_job(const std::filesystem::path& file) {
   return parse_job_text(*text, file.string());
 }
 
+json job_json_schema() {
+  return schema::document(job_shape().json_schema(),
+                          "https://ftctune.example/schemas/ftctune.job-1.json",
+                          "ftctune job file (ftctune.job/1)");
+}
+
 // --- JSON output -----------------------------------------------------------------------------
 
-json to_json(const PlantConfig& p) {
-  json j = {{"model", p.model}};
-  std::size_t offset = 0;
-  for (const sim::PlantParameter& param : kind_of(p).parameters) {
-    if (param.size() == 1)
-      j[param.name] = p.values.at(offset);
-    else
-      j[param.name] = std::vector<double>(p.values.begin() + offset,
-                                          p.values.begin() + offset + param.size());
-    offset += param.size();
-  }
-  return j;
-}
-
-json to_json(const ObjectiveConfig& o) {
-  json w = json::array({o.window.t0});
-  if (std::isfinite(o.window.t1))
-    w.push_back(o.window.t1);
-  else
-    w.push_back(nullptr);
-  return {
-      {"metric", sim::to_string(o.metric)}, {"window", w}, {"aggregate", to_string(o.aggregate)}};
-}
-
-json to_json(const sim::Scenario& s) {
-  json j;
-  j["name"] = s.name;
-  j["duration"] = s.duration;
-  j["sample_time"] = s.sample_time;
-  j["substeps"] = s.substeps;
-  j["initial_state"] = s.initial_state;
-  j["disturbance"] = json::array();
-  for (const sim::DisturbanceTerm& d : s.disturbance)
-    j["disturbance"].push_back({{"axis", d.axis},
-                                {"shape", sim::to_string(d.shape)},
-                                {"amplitude", d.amplitude},
-                                {"frequency", d.frequency},
-                                {"phase", d.phase}});
-  j["faults"] = json::array();
-  for (const sim::Fault& f : s.faults) {
-    json fj = {{"actuator", f.actuator}, {"type", sim::to_string(f.type)}, {"onset", f.onset}};
-    json prof = {{"type", sim::to_string(f.profile.type)}};
-    if (f.profile.type == sim::FaultProfileType::incipient) prof["rate"] = f.profile.rate;
-    fj["profile"] = prof;
-    switch (f.type) {
-      case sim::FaultType::bias:
-        fj["offset"] = f.offset;
-        fj["amplitude"] = f.amplitude;
-        fj["frequency"] = f.frequency;
-        fj["phase"] = f.phase;
-        break;
-      case sim::FaultType::loss_of_effectiveness:
-        fj["fraction"] = f.fraction;
-        break;
-      case sim::FaultType::stuck:
-        fj["value"] = f.value;
-        break;
-    }
-    j["faults"].push_back(fj);
-  }
-  if (s.saturation) j["saturation"] = *s.saturation;
-  return j;
-}
-
-json to_json(const Job& job) {
-  json j;
-  j["schema"] = kJobSchema;
-  j["name"] = job.name;
-  j["plant"] = to_json(job.plant);
-  j["scenarios"] = json::array();
-  for (const sim::Scenario& s : job.scenarios) j["scenarios"].push_back(to_json(s));
-  j["controller"] = to_json(job.controller);
-  if (!job.compare.empty()) {
-    j["compare"] = json::array();
-    for (const CompareEntry& c : job.compare) {
-      json cj = to_json(c.controller);
-      cj["label"] = c.label;
-      j["compare"].push_back(cj);
-    }
-  }
-  j["objective"] = to_json(job.objective);
-  if (job.tuning) {
-    const TuningConfig& t = *job.tuning;
-    json params = json::object();
-    for (const ParameterBounds& b : t.parameters) params[b.name] = {b.lower, b.upper};
-    const json alg = t.algorithm->to_json();
-    j["tuning"] = {{"parameters", params}, {"algorithm", alg}, {"seed", t.seed}};
-  }
-  return j;
-}
+json to_json(const Job& job) { return job_shape().write(job); }
+json to_json(const PlantConfig& p) { return runtime::plant_shape()->write(p); }
+json to_json(const ObjectiveConfig& o) { return objective_shape()->write(o); }
+json to_json(const sim::Scenario& s) { return scenario_shape()->write(s); }
 
 }  // namespace ftc::tune

@@ -125,7 +125,7 @@ double TuningProblem::objective(std::span<const double> x, const ObjectiveOption
   std::vector<FieldError> errs;
   for (std::size_t j = 0; j < x.size(); ++j)
     if (!(x[j] >= space_.lower[j] && x[j] <= space_.upper[j]))
-      errs.push_back({"/" + std::to_string(j),
+      errs.push_back({std::string("/").append(std::to_string(j)),
                       space_.names[j] + " = " + json_io::number_text(x[j], 17) +
                           " is outside its bounds [" + json_io::number_text(space_.lower[j]) +
                           ", " + json_io::number_text(space_.upper[j]) + "]"});
@@ -134,8 +134,8 @@ double TuningProblem::objective(std::span<const double> x, const ObjectiveOption
   const sim::ControllerConfig c = controller_for(x);
   const CandidateOutcome o = evaluate(std::span<const sim::ControllerConfig>(&c, 1), serial)[0];
   if (!o.error.empty()) throw InputError("objective", "", o.error);
-  const double v = o.evaluation.diverged ? std::numeric_limits<double>::infinity()
-                                         : o.evaluation.objective;
+  const double v =
+      o.evaluation.diverged ? std::numeric_limits<double>::infinity() : o.evaluation.objective;
   if (!std::isfinite(v) && options.diverged_penalty) return *options.diverged_penalty;
   return v;
 }

@@ -109,7 +109,7 @@ std::string history_csv(const TuningOutcome& r) {
         if (name == c) v = value;
       s += cell(v);
     }
-    s += "," + std::to_string(h.evaluations) + "\n";
+    s.append(",").append(std::to_string(h.evaluations)).append("\n");
   }
   return s;
 }

@@ -107,14 +107,17 @@ class Object final : public Shape<T> {
     return *this;
   }
 
-  Object& number(std::string key, double T::*m, Range r, std::string doc,
-                 Presence p = kOptional) {
+  // With `check` false the range is only stated (in the JSON Schema): a rule of the object
+  // checks it, e.g. the simulation core's own validate().
+  Object& number(std::string key, double T::*m, Range r, std::string doc, Presence p = kOptional,
+                 bool check = true) {
     const double dflt = T{}.*m;
     return field({key, p == kRequired,
                   [m](const json& v, const std::string& path, T& out, Errors& e) {
                     detail::read_number(v, path, out.*m, e);
                   },
-                  [m, r](const T& t, const std::string& path, Errors& e) {
+                  [m, r, check](const T& t, const std::string& path, Errors& e) {
+                    if (!check) return;
                     if (std::string msg = r.check(t.*m); !msg.empty()) e.push_back({path, msg});
                   },
                   [m, key](const T& t, json& o) { o[key] = t.*m; },
@@ -124,14 +127,15 @@ class Object final : public Shape<T> {
                     return s;
                   }});
   }
-  Object& optional_number(std::string key, std::optional<double> T::*m, Range r, std::string doc) {
+  Object& optional_number(std::string key, std::optional<double> T::*m, Range r, std::string doc,
+                          bool check = true) {
     return field({key, false,
                   [m](const json& v, const std::string& path, T& out, Errors& e) {
                     double d = 0;
                     if (detail::read_number(v, path, d, e)) out.*m = d;
                   },
-                  [m, r](const T& t, const std::string& path, Errors& e) {
-                    if (!(t.*m)) return;
+                  [m, r, check](const T& t, const std::string& path, Errors& e) {
+                    if (!check || !(t.*m)) return;
                     if (std::string msg = r.check(*(t.*m)); !msg.empty()) e.push_back({path, msg});
                   },
                   [m, key](const T& t, json& o) {
@@ -139,8 +143,8 @@ class Object final : public Shape<T> {
                   },
                   [doc, r] { return detail::number_schema(doc, r); }});
   }
-  Object& integer(std::string key, int T::*m, IntRange r, std::string doc,
-                  Presence p = kOptional) {
+  Object& integer(std::string key, int T::*m, IntRange r, std::string doc, Presence p = kOptional,
+                  bool check = true) {
     const int dflt = T{}.*m;
     return field({key, p == kRequired,
                   [m](const json& v, const std::string& path, T& out, Errors& e) {
@@ -151,7 +155,8 @@ class Object final : public Shape<T> {
                     else
                       out.*m = static_cast<int>(i);
                   },
-                  [m, r](const T& t, const std::string& path, Errors& e) {
+                  [m, r, check](const T& t, const std::string& path, Errors& e) {
+                    if (!check) return;
                     if (std::string msg = r.check(t.*m); !msg.empty()) e.push_back({path, msg});
                   },
                   [m, key](const T& t, json& o) { o[key] = t.*m; },
@@ -245,45 +250,45 @@ class Object final : public Shape<T> {
   // A fixed number of numbers (a std::array, or a std::vector whose size is `count`).
   template <class Seq>
   Object& numbers(std::string key, Seq T::*m, std::size_t count, Range r, std::string doc,
-                  Presence p = kOptional) {
-    return field({key, p == kRequired,
-                  [m, count](const json& v, const std::string& path, T& out, Errors& e) {
-                    if (!v.is_array() || v.size() != count) {
-                      e.push_back({path, "expected an array of " + std::to_string(count) +
-                                             " numbers, got " +
-                                             (v.is_array() ? "an array of " +
-                                                                 std::to_string(v.size())
-                                                           : json_io::json_type_name(v))});
-                      return;
-                    }
-                    Seq s = out.*m;
-                    if constexpr (requires { s.resize(count); }) s.resize(count);
-                    bool ok = true;
-                    for (std::size_t i = 0; i < count; ++i)
-                      ok = detail::read_number(v[i], path + "/" + std::to_string(i), s[i], e) && ok;
-                    if (ok) out.*m = s;
-                  },
-                  [m, r](const T& t, const std::string& path, Errors& e) {
-                    const Seq& s = t.*m;
-                    for (std::size_t i = 0; i < s.size(); ++i)
-                      if (std::string msg = r.check(s[i]); !msg.empty())
-                        e.push_back({path + "/" + std::to_string(i), msg});
-                  },
-                  [m, key](const T& t, json& o) {
-                    const Seq& s = t.*m;
-                    o[key] = std::vector<double>(s.begin(), s.end());
-                  },
-                  [doc, r, count] {
-                    return json{{"type", "array"},
-                                {"items", detail::number_schema("", r)},
-                                {"minItems", count},
-                                {"maxItems", count},
-                                {"description", doc}};
-                  }});
+                  Presence p = kOptional, bool check = true) {
+    return field(
+        {key, p == kRequired,
+         [m, count](const json& v, const std::string& path, T& out, Errors& e) {
+           if (!v.is_array() || v.size() != count) {
+             e.push_back({path, "expected an array of " + std::to_string(count) + " numbers, got " +
+                                    (v.is_array() ? "an array of " + std::to_string(v.size())
+                                                  : json_io::json_type_name(v))});
+             return;
+           }
+           Seq s = out.*m;
+           if constexpr (requires { s.resize(count); }) s.resize(count);
+           bool ok = true;
+           for (std::size_t i = 0; i < count; ++i)
+             ok = detail::read_number(v[i], path + "/" + std::to_string(i), s[i], e) && ok;
+           if (ok) out.*m = s;
+         },
+         [m, r, check](const T& t, const std::string& path, Errors& e) {
+           if (!check) return;
+           const Seq& s = t.*m;
+           for (std::size_t i = 0; i < s.size(); ++i)
+             if (std::string msg = r.check(s[i]); !msg.empty())
+               e.push_back({path + "/" + std::to_string(i), msg});
+         },
+         [m, key](const T& t, json& o) {
+           const Seq& s = t.*m;
+           o[key] = std::vector<double>(s.begin(), s.end());
+         },
+         [doc, r, count] {
+           return json{{"type", "array"},
+                       {"items", detail::number_schema("", r)},
+                       {"minItems", count},
+                       {"maxItems", count},
+                       {"description", doc}};
+         }});
   }
   // Numbers of any count (checked by a rule where it matters).
   Object& number_list(std::string key, std::vector<double> T::*m, Range r, std::string doc,
-                      Presence p = kOptional) {
+                      Presence p = kOptional, bool check = true) {
     return field({key, p == kRequired,
                   [m](const json& v, const std::string& path, T& out, Errors& e) {
                     if (!v.is_array()) {
@@ -296,7 +301,8 @@ class Object final : public Shape<T> {
                       ok = detail::read_number(v[i], path + "/" + std::to_string(i), s[i], e) && ok;
                     if (ok) out.*m = std::move(s);
                   },
-                  [m, r](const T& t, const std::string& path, Errors& e) {
+                  [m, r, check](const T& t, const std::string& path, Errors& e) {
+                    if (!check) return;
                     const std::vector<double>& s = t.*m;
                     for (std::size_t i = 0; i < s.size(); ++i)
                       if (std::string msg = r.check(s[i]); !msg.empty())
@@ -351,33 +357,33 @@ class Object final : public Shape<T> {
   template <class U>
   Object& array(std::string key, std::vector<U> T::*m, std::shared_ptr<const Shape<U>> item,
                 std::string doc, Presence p = kOptional, bool keep_empty = true) {
-    return field({key, p == kRequired,
-                  [m, item](const json& v, const std::string& path, T& out, Errors& e) {
-                    if (!v.is_array()) {
-                      e.push_back({path, detail::type_error("an array", v)});
-                      return;
-                    }
-                    std::vector<U> items(v.size());
-                    for (std::size_t i = 0; i < v.size(); ++i)
-                      item->read(v[i], path + "/" + std::to_string(i), items[i], e);
-                    out.*m = std::move(items);
-                  },
-                  [m, item](const T& t, const std::string& path, Errors& e) {
-                    const std::vector<U>& items = t.*m;
-                    for (std::size_t i = 0; i < items.size(); ++i)
-                      item->validate(items[i], path + "/" + std::to_string(i), e);
-                  },
-                  [m, key, item, keep_empty](const T& t, json& o) {
-                    const std::vector<U>& items = t.*m;
-                    if (items.empty() && !keep_empty) return;
-                    json a = json::array();
-                    for (const U& u : items) a.push_back(item->write(u));
-                    o[key] = std::move(a);
-                  },
-                  [item, doc] {
-                    return json{
-                        {"type", "array"}, {"items", item->json_schema()}, {"description", doc}};
-                  }});
+    return field(
+        {key, p == kRequired,
+         [m, item](const json& v, const std::string& path, T& out, Errors& e) {
+           if (!v.is_array()) {
+             e.push_back({path, detail::type_error("an array", v)});
+             return;
+           }
+           std::vector<U> items(v.size());
+           for (std::size_t i = 0; i < v.size(); ++i)
+             item->read(v[i], path + "/" + std::to_string(i), items[i], e);
+           out.*m = std::move(items);
+         },
+         [m, item](const T& t, const std::string& path, Errors& e) {
+           const std::vector<U>& items = t.*m;
+           for (std::size_t i = 0; i < items.size(); ++i)
+             item->validate(items[i], path + "/" + std::to_string(i), e);
+         },
+         [m, key, item, keep_empty](const T& t, json& o) {
+           const std::vector<U>& items = t.*m;
+           if (items.empty() && !keep_empty) return;
+           json a = json::array();
+           for (const U& u : items) a.push_back(item->write(u));
+           o[key] = std::move(a);
+         },
+         [item, doc] {
+           return json{{"type", "array"}, {"items", item->json_schema()}, {"description", doc}};
+         }});
   }
 
   // Reads an object; `also_allowed` are keys handled by an enclosing Variant.
@@ -406,7 +412,8 @@ class Object final : public Shape<T> {
     read_object(j, path, out, errs, {});
   }
   void validate(const T& value, const std::string& path, Errors& errs) const override {
-    for (const Field& f : fields_) f.validate(value, path + "/" + json_io::pointer_escape(f.key), errs);
+    for (const Field& f : fields_)
+      f.validate(value, path + "/" + json_io::pointer_escape(f.key), errs);
     for (const Rule& r : rules_) r(value, path, errs);
   }
   json write(const T& value) const override {
@@ -416,7 +423,8 @@ class Object final : public Shape<T> {
   }
   json json_schema() const override { return object_schema({}); }
   // With extra properties (a Variant's discriminator).
-  json object_schema(const json& extra_properties, const std::vector<std::string>& extra_required = {}) const {
+  json object_schema(const json& extra_properties,
+                     const std::vector<std::string>& extra_required = {}) const {
     json s = {{"type", "object"}, {"additionalProperties", false}};
     if (!description_.empty()) s["description"] = description_;
     json props = json::object();
@@ -465,8 +473,7 @@ class Variant final : public Shape<T> {
   // absent ("" = the key is required); `unknown` words the error for a name no case has.
   Variant(std::string key, std::function<std::string(const T&)> get,
           std::function<void(T&, const std::string&)> set, std::string description,
-          std::string fallback = "",
-          std::function<std::string(const std::string&)> unknown = {})
+          std::string fallback = "", std::function<std::string(const std::string&)> unknown = {})
       : key_(std::move(key)),
         get_(std::move(get)),
         set_(std::move(set)),
@@ -518,10 +525,10 @@ class Variant final : public Shape<T> {
   json json_schema() const override {
     json cases = json::array();
     for (const Case& c : cases_)
-      cases.push_back(c.shape->object_schema(
-          {{key_, {{"const", c.name}}}},
-          fallback_.empty() || c.name != fallback_ ? std::vector<std::string>{key_}
-                                                   : std::vector<std::string>{}));
+      cases.push_back(c.shape->object_schema({{key_, {{"const", c.name}}}},
+                                             fallback_.empty() || c.name != fallback_
+                                                 ? std::vector<std::string>{key_}
+                                                 : std::vector<std::string>{}));
     json s = {{"type", "object"}, {"oneOf", cases}};
     if (!description_.empty()) s["description"] = description_;
     return s;

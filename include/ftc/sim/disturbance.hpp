@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "ftc/sim/fields.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/types.hpp"
 
@@ -23,6 +24,9 @@ struct DisturbanceTerm {
 
   // Every bad field; `axes` is the plant's n.
   std::vector<FieldError> validate(const std::string& path, int axes) const;
+
+  static std::span<const NumberField<DisturbanceTerm>> number_fields();
+  static const IntegerField<DisturbanceTerm>& axis_field();
 };
 
 class Disturbance {

@@ -16,6 +16,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "ftc/sim/fields.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/types.hpp"
 
@@ -27,6 +28,8 @@ enum class FaultProfileType { abrupt, incipient };
 struct FaultProfile {
   FaultProfileType type = FaultProfileType::abrupt;
   double rate = 1.0;  // β in 1/s, incipient only
+
+  static const NumberField<FaultProfile>& rate_field();
 
   double rho(double tau) const {  // ρ(τ)
     if (tau < 0.0) return 0.0;
@@ -52,6 +55,11 @@ struct Fault {
 
   // Every bad field; `actuators` is the plant's m.
   std::vector<FieldError> validate(const std::string& path, int actuators) const;
+
+  // The numeric fields every fault has (onset), those of one type, and the actuator index.
+  static std::span<const NumberField<Fault>> common_fields();
+  static std::span<const NumberField<Fault>> type_fields(FaultType type);
+  static const IntegerField<Fault>& actuator_field();
 };
 
 // The faults' effect at one instant on the m actuators: u = gain ⊙ u_d + offset (before

@@ -8,6 +8,7 @@
 
 #include "ftc/sim/disturbance.hpp"
 #include "ftc/sim/faults.hpp"
+#include "ftc/sim/fields.hpp"
 #include "ftc/sim/input_error.hpp"
 
 namespace ftc::sim {
@@ -28,6 +29,11 @@ struct Scenario {
   std::int64_t samples() const { return std::llround(duration / sample_time); }
   // Every bad field, for a plant with `axes` (n) and `actuators` (m).
   std::vector<FieldError> validate(const std::string& path, int axes, int actuators) const;
+
+  // The numeric fields (duration, sample_time) and the substeps, as tables.
+  static std::span<const NumberField<Scenario>> number_fields();
+  static const IntegerField<Scenario>& substeps_field();
+  static constexpr Range kSaturationRange = Range::positive();
 
   // The paper's scenario (§6): Δ = 0.5 [sin t, cos 2t, sin 3t], bias 5 + 15 cos t on actuator
   // 1 from 10 s, 80 % loss of effectiveness on actuator 2 from 20 s.

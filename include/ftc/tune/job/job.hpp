@@ -10,14 +10,14 @@
 #include <string>
 #include <vector>
 
+#include "ftc/runtime/controller_json.hpp"
+#include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/metrics.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/scenario.hpp"
 #include "ftc/tune/optimizers/optimizer.hpp"
-#include "ftc/runtime/controller_json.hpp"
-#include "ftc/runtime/json_reader.hpp"
 
 namespace ftc::tune {
 
@@ -77,6 +77,10 @@ struct Job {
 Job parse_job(const nlohmann::json& j, const std::string& source);
 Job parse_job_text(const std::string& text, const std::string& source);
 Job load_job(const std::filesystem::path& file);
+
+// The JSON Schema (draft 2020-12) of job files, generated from the same description the loader
+// reads with: what `ftctune schema job` prints and docs/job.schema.json holds.
+nlohmann::json job_json_schema();
 
 using json_io::json_number;
 using json_io::json_number_or;
