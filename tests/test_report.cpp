@@ -3,8 +3,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
-#include "ftc/tune/report/report.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/report/landscape.hpp"
+#include "ftc/tune/report/report.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "short_job.hpp"
@@ -93,9 +94,8 @@ TEST(Report, LandscapeGridAndHeatmap) {
   o.n2 = 4;
   tune::TbbEvaluator evaluator(2);
   o.history = run / "history.csv";
-  const tune::LandscapeResult r =
-      tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "landscape", o,
-                              evaluator);
+  const tune::LandscapeResult r = tune::compute_landscape(
+      tune::parse_job(short_table1_job(), "short"), run / "landscape", o, evaluator);
   EXPECT_EQ(r.simulations, 20);
   EXPECT_EQ(r.params, (std::vector<std::string>{"Kp", "Ki"}));
   std::istringstream csv(slurp(r.csv));
@@ -168,4 +168,31 @@ TEST(Cli, RunWithReportAndRandomBaseline) {
   EXPECT_EQ(count_lines(random), count_lines(slurp(dir / "out" / "history.csv")));
   EXPECT_NE(slurp(dir / "out" / "figures" / "report.gp").find("random search, same budget"),
             std::string::npos);
+}
+
+// The figures read the trajectory's columns by the plant's shape: for the two-joint,
+// three-actuator arm, positions are columns 2-3, rates 4-5, commands 6-8 and applied outputs 9-11
+// (the spacecraft's 3 + 3 + 4 + 4 layout read them wrongly before).
+TEST(Report, FiguresFollowThePlantsShape) {
+  const auto dir = fresh_dir("report-arm");
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/manipulator.json");
+  nlohmann::json j = nlohmann::json::parse(in);
+  j["scenarios"][0]["duration"] = 7;
+  j["objective"]["window"] = {3, 7};
+  j["tuning"]["algorithm"]["population"] = 3;
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  tune::TbbEvaluator evaluator(2);
+  tune::write_outputs(tune::tune(tune::parse_job(j, "arm"), evaluator), dir / "run");
+  const tune::ReportResult r = tune::render_report(dir / "run", {.html = false});
+  ASSERT_EQ(r.figures.size(), 5u);
+  const std::string gp = slurp(dir / "run" / "figures" / "report.gp");
+  for (const char* col : {"using 1:2 ", "using 1:3 ", "using 1:4 ", "using 1:5 ", "using 1:6 ",
+                          "using 1:8 ", "using 1:9 ", "using 1:11 "})
+    EXPECT_NE(gp.find(col), std::string::npos) << col;
+  for (const char* col : {"using 1:12 ", "using 1:13 ", "using 1:14 ", "using 1:15 "})
+    EXPECT_EQ(gp.find(col), std::string::npos) << col;           // the spacecraft's columns
+  EXPECT_NE(gp.find("sqrt($2**2 + $3**2)"), std::string::npos);  // ‖X1‖ of two joints
+  EXPECT_NE(gp.find("q2 x_2 [rad]"), std::string::npos);
+  EXPECT_NE(gp.find("'u_{d3}'"), std::string::npos);
+  EXPECT_EQ(gp.find("'u_{d4}'"), std::string::npos);
 }

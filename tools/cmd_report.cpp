@@ -7,6 +7,7 @@
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/report/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
 
 namespace ftc::cli {

@@ -83,6 +83,9 @@ PlantKind manipulator_kind() {
                   {"gravity", {d.gravity}, Range::non_negative(), "m/s²",
                    "gravitational acceleration g0"}};
   k.default_initial_state = {0.5, -0.4, 0.0, 0.0};
+  k.positions = "joint angles";
+  k.rates = "joint rates";
+  k.axis_names = {"q1", "q2"};
   k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
     ManipulatorParams p;
     p.masses = {v.at(0), v.at(1)};

@@ -62,6 +62,9 @@ PlantKind spacecraft_kind() {
        "principal moments of inertia Ix, Iy, Iz"},
       {"orbital_rate", {d.orbital_rate}, Range::non_negative(), "rad/s", "orbital rate ω0"}};
   k.default_initial_state = {-0.7, -0.07, 1.5, 0.3, 1.3, -0.2};
+  k.positions = "attitude angles";
+  k.rates = "angular rates";
+  k.axis_names = {"roll", "pitch", "yaw"};
   k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
     SpacecraftParams p;
     p.inertia = {v.at(0), v.at(1), v.at(2)};

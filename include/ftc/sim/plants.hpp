@@ -48,6 +48,12 @@ struct PlantKind {
   int actuators = 0;  // m
   std::vector<PlantParameter> parameters;
   std::vector<double> default_initial_state;  // 2n values, for scenarios that give none
+  // For figures and tables: what X1 and X2 are, per axis, and their units.
+  std::string positions = "positions";  // "attitude angles"
+  std::string rates = "rates";          // "angular rates"
+  std::vector<std::string> axis_names;  // n names: "roll", "pitch", "yaw"
+  std::string position_unit = "rad";
+  std::string rate_unit = "rad/s";
   // Builds the plant from validated values (the flattened parameters).
   std::function<std::unique_ptr<AnyPlant>(const std::vector<double>& values)> make;
 

@@ -12,7 +12,6 @@
 #include <string>
 #include <vector>
 
-#include "ftc/tune/evaluators/batch_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
 
 namespace ftc::tune {
@@ -32,26 +31,6 @@ struct ReportResult {
 // Throws InputError (source: the run directory or the offending file) when the directory is not
 // a complete `ftctune run` output; std::runtime_error when gnuplot is missing or fails.
 ReportResult render_report(const std::filesystem::path& run_dir, const ReportOptions& options = {});
-
-struct LandscapeOptions {
-  int n1 = 41, n2 = 41;             // grid points per parameter
-  std::vector<std::string> params;  // two tuned parameters; default: the first two of the job
-  std::filesystem::path history;  // a history.csv whose best-so-far path is drawn on top
-  FigureFormat format = FigureFormat::png;
-};
-
-struct LandscapeResult {
-  std::filesystem::path csv, figure;
-  std::vector<std::string> params;
-  std::int64_t simulations = 0;
-  double best_objective = 0.0;
-  std::vector<double> best;  // grid point with the lowest objective
-};
-
-// Evaluates the job's objective on a grid over two tuned parameters (one parallel batch) and
-// draws it as a heatmap with a log colour scale.
-LandscapeResult compute_landscape(const Job& job, const std::filesystem::path& out_dir,
-                                  const LandscapeOptions& options, BatchEvaluator& evaluator);
 
 // Runs `gnuplot script` in `dir`; throws std::runtime_error with gnuplot's message on failure.
 void run_gnuplot(const std::filesystem::path& dir, const std::string& script_name);

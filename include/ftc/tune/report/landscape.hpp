@@ -1,0 +1,36 @@
+#pragma once
+// The objective on a grid over two tuned parameters, evaluated as one parallel batch and drawn as
+// a heatmap with a log colour scale and the optimiser's best-so-far path on top: it shows whether
+// the objective can tell gains apart at all.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "ftc/tune/evaluators/batch_evaluator.hpp"
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/report/report.hpp"
+
+namespace ftc::tune {
+
+struct LandscapeOptions {
+  int n1 = 41, n2 = 41;             // grid points per parameter
+  std::vector<std::string> params;  // two tuned parameters; default: the first two of the job
+  std::filesystem::path history;    // a history.csv whose best-so-far path is drawn on top
+  FigureFormat format = FigureFormat::png;
+};
+
+struct LandscapeResult {
+  std::filesystem::path csv, figure;
+  std::vector<std::string> params;
+  std::int64_t simulations = 0;
+  double best_objective = 0.0;
+  std::vector<double> best;  // grid point with the lowest objective
+};
+
+// Evaluates the job's objective on a grid over two tuned parameters (one parallel batch) and
+// draws it as a heatmap with a log colour scale.
+LandscapeResult compute_landscape(const Job& job, const std::filesystem::path& out_dir,
+                                  const LandscapeOptions& options, BatchEvaluator& evaluator);
+
+}  // namespace ftc::tune

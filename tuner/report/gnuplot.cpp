@@ -1,0 +1,133 @@
+#include "report/gnuplot.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <stdexcept>
+
+#include "ftc/tune/io/files.hpp"
+#include "io/text.hpp"
+
+namespace ftc::tune {
+namespace plot {
+
+// A string literal for gnuplot (single quotes; a quote inside is doubled).
+std::string gp(const std::string& s) {
+  std::string o = "'";
+  for (char c : s) o += c == '\'' ? std::string("''") : std::string(1, c);
+  return o + "'";
+}
+
+std::string terminal(FigureFormat f, int width, int height) {
+  char buf[160];
+  if (f == FigureFormat::png)
+    std::snprintf(
+        buf, sizeof buf,
+        "set terminal pngcairo size %d,%d enhanced font 'DejaVu Sans,11' background rgb 'white'\n",
+        width, height);
+  else
+    std::snprintf(
+        buf, sizeof buf,
+        "set terminal svg size %d,%d enhanced font 'DejaVu Sans,11' background rgb 'white'\n",
+        width, height);
+  return buf;
+}
+
+const char* extension(FigureFormat f) { return f == FigureFormat::png ? ".png" : ".svg"; }
+
+// Colour-bar tics for a log scale: gnuplot draws none when the range is under a decade, which
+// is common for objectives that barely change, so place six at even log spacing.
+std::string colour_tics(double lo, double hi) {
+  if (!(lo > 0) || !(hi > lo) || !std::isfinite(hi)) return "";
+  std::string s = "set cbrange [" + detail::format_number(lo, "%.9g") + ":" +
+                  detail::format_number(hi, "%.9g") + "]\nset cbtics (";
+  for (int i = 0; i <= 5; ++i) {
+    const double v = lo * std::pow(hi / lo, i / 5.0);
+    s += (i ? ", " : "") + std::string("'") + detail::format_number(v, "%.5g") + "' " +
+         detail::format_number(v, "%.9g");
+  }
+  return s + ")\n";
+}
+
+// Vertical dashed lines at the fault onsets, optionally labelled.
+std::string onset_marks(const std::vector<double>& onsets, bool labels) {
+  std::string s = "unset arrow; unset label\n";
+  for (std::size_t i = 0; i < onsets.size(); ++i) {
+    char buf[256];
+    std::snprintf(
+        buf, sizeof buf,
+        "set arrow from %.9g, graph 0 to %.9g, graph 1 nohead dt 2 lw 1.2 lc rgb 'gray40' front\n",
+        onsets[i], onsets[i]);
+    s += buf;
+    if (labels) {
+      std::snprintf(
+          buf, sizeof buf,
+          "set label 'fault %zu' at %.9g, graph 0.93 offset 0.5,0 textcolor rgb 'gray30' front\n",
+          i + 1, onsets[i]);
+      s += buf;
+    }
+  }
+  return s;
+}
+
+std::string series_plot(const std::vector<Series>& series, const std::string& using_expr,
+                        bool titles) {
+  std::string s = "plot ";
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    if (i) s += ", \\\n     ";
+    s += gp(series[i].file) + " skip 1 using " + using_expr + " with lines ls " +
+         std::to_string(i + 1) + " lw 1.4" +
+         (titles ? " title " + gp(series[i].label) : " notitle");
+  }
+  return s + "\n";
+}
+
+const char* const kStyles =
+    "set datafile separator ','\n"
+    "set style line 1 lc rgb '#d62728'\n"
+    "set style line 2 lc rgb '#1f77b4'\n"
+    "set style line 3 lc rgb '#2ca02c'\n"
+    "set style line 4 lc rgb '#9467bd'\n"
+    "set style line 5 lc rgb '#ff7f0e'\n"
+    "set style line 6 lc rgb '#8c564b'\n"
+    "set grid lc rgb '#dddddd'\n"
+    "set key outside right top vertical box opaque\n";
+
+}  // namespace plot
+
+namespace fs = std::filesystem;
+
+void run_gnuplot(const fs::path& dir_in, const std::string& script_name) {
+  // Absolute: the file actions below run after the chdir.
+  const fs::path dir = fs::absolute(dir_in);
+  const std::string log = (dir / (script_name + ".log")).string();
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addchdir_np(&fa, dir.c_str());
+  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  std::string prog = "gnuplot", script = script_name;
+  char* argv[] = {prog.data(), script.data(), nullptr};
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, "gnuplot", &fa, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0)
+    throw std::runtime_error(
+        std::string("cannot run gnuplot: ") + std::strerror(rc) +
+        " (it comes with the Debian package gnuplot-nox, which tools/bootstrap installs)");
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw std::runtime_error("gnuplot failed on " + (dir / script_name).string() + ": " +
+                             read_file(log).value_or(""));
+  fs::remove(log);
+}
+
+}  // namespace ftc::tune

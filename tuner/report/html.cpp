@@ -1,0 +1,147 @@
+#include "report/html.hpp"
+
+#include <openssl/evp.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "ftc/runtime/json_reader.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "io/text.hpp"
+
+namespace ftc::tune::report_detail {
+
+using json_io::json_number_or;
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string base64(const std::string& data) {
+  std::string out(4 * ((data.size() + 2) / 3) + 1, '\0');
+  const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
+                                reinterpret_cast<const unsigned char*>(data.data()),
+                                static_cast<int>(data.size()));
+  out.resize(static_cast<std::size_t>(n));
+  return out;
+}
+
+std::string html_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      default:
+        o += c;
+    }
+  }
+  return o;
+}
+
+// A figure gnuplot has just drawn.
+std::string figure_bytes(const fs::path& file) {
+  std::optional<std::string> bytes = read_file(file);
+  if (!bytes) throw std::runtime_error("gnuplot did not write " + file.string());
+  return *bytes;
+}
+
+}  // namespace
+
+std::string report_html(const fs::path& run_dir, const Job& job, const std::string& job_text,
+                        const json& gains, const json& comparison, const json& run,
+                        const std::vector<Figure>& figures) {
+  const std::size_t S = job.scenarios.size();
+  std::ostringstream h;
+  const std::string title = "ftctune report: " + job.name;
+  h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>"
+    << html_escape(title)
+    << "</title>\n<style>body{font-family:'DejaVu "
+       "Sans',Arial,sans-serif;max-width:1200px;margin:2em auto;"
+       "color:#222}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid "
+       "#ccc;padding:4px 8px;"
+       "text-align:right}th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}"
+       "img{max-width:100%;border:1px solid #eee}pre{background:#f7f7f7;padding:1em;overflow:auto}"
+       "figcaption{color:#555;margin-bottom:2em}</style></head><body>\n";
+  h << "<h1>" << html_escape(title) << "</h1>\n";
+  h << "<h2>Tuned gains</h2>\n<table><tr><th>parameter</th><th>tuned</th><th>job's "
+       "value</th></tr>\n";
+  for (auto it = gains["tuned"].begin(); it != gains["tuned"].end(); ++it)
+    h << "<tr><td>" << html_escape(it.key()) << "</td><td>"
+      << detail::format_number(it.value().get<double>(), "%.6g") << "</td><td>"
+      << detail::format_number(gains["baseline"]["controller"].value(it.key(), NAN), "%.6g")
+      << "</td></tr>\n";
+  // In the metrics JSON, null error integrals mean a diverged run (+inf); other nulls, a value
+  // that does not exist (a fault whose onset was never reached).
+  const auto num_or = [](const json& j) { return json_number_or(j, NAN); };
+  const auto integral = [](const json& j) { return json_number_or(j, INFINITY); };
+  h << "</table>\n<p>Fitness J = " << detail::format_number(num_or(gains["fitness"]), "%.6g")
+    << " (job's controller: " << detail::format_number(num_or(gains["baseline"]["fitness"]), "%.6g")
+    << "); objective " << html_escape(gains["objective"].value("metric", "")) << " = "
+    << detail::format_number(num_or(gains["objective"]["value"]), "%.6g") << "; "
+    << gains["optimizer"].value("evaluations", 0) << " evaluations, seed "
+    << gains["optimizer"].value("seed", 0) << ".</p>\n";
+
+  for (std::size_t s = 0; s < S; ++s) {
+    h << "<h2>Controllers compared"
+      << (S > 1 ? ", scenario " + html_escape(job.scenarios[s].name) : "")
+      << "</h2>\n<table><tr><th>controller</th><th>ISE</th><th>IAE</th><th>ITAE</th><th>max "
+         "|u_d|</th>"
+         "<th>control TV</th>";
+    const json& first = comparison["controllers"][0]["scenarios"][s];
+    for (const json& seg : first.value("segments", json::array()))
+      h << "<th>ISE [" << detail::format_number(num_or(seg["window"][0])) << ", "
+        << detail::format_number(num_or(seg["window"][1])) << ")</th>";
+    for (std::size_t f = 0; f < first.value("peak_error_after_fault", json::array()).size(); ++f)
+      h << "<th>peak ‖e‖ after fault " << f + 1 << "</th>";
+    h << "</tr>\n";
+    for (const json& c : comparison["controllers"]) {
+      const json& m = c["scenarios"][s];
+      h << "<tr><td>" << html_escape(c.value("label", "?"))
+        << (m.value("diverged", false) ? " (diverged)" : "") << "</td><td>"
+        << detail::format_number(integral(m["ise"])) << "</td><td>"
+        << detail::format_number(integral(m["iae"])) << "</td><td>"
+        << detail::format_number(integral(m["itae"])) << "</td><td>"
+        << detail::format_number(num_or(m["max_abs_u"])) << "</td><td>"
+        << detail::format_number(num_or(m["control_tv"])) << "</td>";
+      for (const json& seg : m.value("segments", json::array()))
+        h << "<td>" << detail::format_number(integral(seg["ise"])) << "</td>";
+      for (const json& p : m.value("peak_error_after_fault", json::array()))
+        h << "<td>" << detail::format_number(num_or(p)) << "</td>";
+      h << "</tr>\n";
+    }
+    h << "</table>\n<p>ISE, IAE, ITAE over the objective window; ISE in rad²·s, peak errors in "
+         "rad; control "
+         "TV = Σ‖u_k − u_{k−1}‖ measures chattering.</p>\n";
+  }
+
+  h << "<h2>Figures</h2>\n";
+  for (const Figure& f : figures)
+    h << "<figure><img alt=\"" << html_escape(f.title) << "\" src=\"data:image/png;base64,"
+      << base64(figure_bytes(run_dir / f.file)) << "\"><figcaption>" << html_escape(f.caption)
+      << "</figcaption></figure>\n";
+
+  h << "<h2>Run</h2>\n<table>\n";
+  for (auto it = run.begin(); it != run.end(); ++it)
+    h << "<tr><td>" << html_escape(it.key()) << "</td><td>"
+      << html_escape(it.value().is_string() ? it.value().get<std::string>() : it.value().dump())
+      << "</td></tr>\n";
+  h << "<tr><td>job SHA-256</td><td>" << html_escape(gains["job"].value("sha256", ""))
+    << "</td></tr>\n"
+    << "<tr><td>generator</td><td>" << html_escape(gains["generator"].dump())
+    << "</td></tr>\n</table>\n";
+  h << "<h2>Job</h2>\n<pre>" << html_escape(job_text) << "</pre>\n</body></html>\n";
+  return h.str();
+}
+
+}  // namespace ftc::tune::report_detail

@@ -1,0 +1,130 @@
+#include "ftc/tune/report/landscape.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/problem/problem.hpp"
+#include "io/text.hpp"
+#include "report/gnuplot.hpp"
+
+namespace ftc::tune {
+
+namespace fs = std::filesystem;
+
+LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
+                                  const LandscapeOptions& options, BatchEvaluator& evaluator) {
+  if (!job_in.tuning)
+    throw InputError(job_in.name, "/tuning", "is required: it gives the parameters' bounds");
+  std::vector<std::string> params = options.params;
+  if (params.empty())
+    for (const ParameterBounds& b : job_in.tuning->parameters)
+      if (params.size() < 2) params.push_back(b.name);
+  if (params.size() != 2 || params[0] == params[1])
+    throw InputError("--params", "",
+                     "needs two different tuned parameters (the job tunes " +
+                         std::to_string(job_in.tuning->parameters.size()) + ")");
+  if (options.n1 < 2 || options.n2 < 2 || options.n1 > 1000 || options.n2 > 1000)
+    throw InputError("--grid", "", "needs 2..1000 points per parameter");
+
+  // A job tuning exactly the two parameters, everything else at the job's values.
+  Job job = job_in;
+  std::vector<ParameterBounds> bounds;
+  for (const std::string& p : params) {
+    auto it = std::find_if(job_in.tuning->parameters.begin(), job_in.tuning->parameters.end(),
+                           [&](const ParameterBounds& b) { return b.name == p; });
+    if (it == job_in.tuning->parameters.end())
+      throw InputError("--params", "", p + " is not under tuning.parameters of the job");
+    bounds.push_back(*it);
+  }
+  job.tuning->parameters = bounds;
+  const TuningProblem problem(job);
+  const std::size_t i0 = problem.space().names[0] == params[0] ? 0 : 1;  // problem orders by field
+
+  std::vector<Decision> grid;
+  for (int a = 0; a < options.n1; ++a)
+    for (int b = 0; b < options.n2; ++b) {
+      const double v0 =
+          bounds[0].lower + (bounds[0].upper - bounds[0].lower) * a / (options.n1 - 1);
+      const double v1 =
+          bounds[1].lower + (bounds[1].upper - bounds[1].lower) * b / (options.n2 - 1);
+      grid.push_back(i0 == 0 ? Decision{v0, v1} : Decision{v1, v0});
+    }
+  std::vector<sim::ControllerConfig> controllers;
+  controllers.reserve(grid.size());
+  for (const Decision& x : grid) controllers.push_back(problem.controller_for(x));
+  const std::vector<CandidateOutcome> outcomes = problem.evaluate(controllers, evaluator);
+
+  LandscapeResult r;
+  r.params = params;
+  r.simulations = static_cast<std::int64_t>(controllers.size() * problem.scenarios());
+  r.best_objective = std::numeric_limits<double>::infinity();
+  double worst_objective = 0.0;
+  std::string csv = params[0] + "," + params[1] + ",objective,fitness,diverged\n";
+  char buf[160];
+  for (std::size_t k = 0; k < grid.size(); ++k) {
+    const Evaluation& e = outcomes[k].evaluation;
+    const double p0 = grid[k][i0], p1 = grid[k][1 - i0];
+    std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g,%.9g,%d\n", p0, p1,
+                  std::isfinite(e.objective) ? e.objective : NAN, e.fitness, e.diverged ? 1 : 0);
+    csv += buf;
+    if ((k + 1) % static_cast<std::size_t>(options.n2) == 0) csv += "\n";  // gnuplot grid rows
+    if (e.objective < r.best_objective) {
+      r.best_objective = e.objective;
+      r.best = {p0, p1};
+    }
+    if (std::isfinite(e.objective)) worst_objective = std::max(worst_objective, e.objective);
+  }
+  fs::create_directories(out_dir);
+  r.csv = out_dir / "landscape.csv";
+  write_file_atomic(r.csv, csv);
+
+  r.figure = out_dir / (std::string("landscape") + plot::extension(options.format));
+  std::ostringstream g;
+  g << plot::kStyles << plot::terminal(options.format, 1000, 800) << "set output "
+    << plot::gp(r.figure.filename().string()) << "\nset title "
+    << plot::gp("Objective (" + std::string(sim::to_string(job.objective.metric)) + ") of " +
+                job.name + " over " + params[0] + " and " + params[1])
+    << " font ',13'\nset logscale cb\n"
+    << plot::colour_tics(r.best_objective, worst_objective) << "set cblabel "
+    << plot::gp(std::string(sim::to_string(job.objective.metric)) + " (log scale; lower is better)")
+    << "\nset palette rgb 33,13,10\nset xlabel " << plot::gp(params[0]) << "\nset ylabel "
+    << plot::gp(params[1]) << "\nset xrange [" << bounds[0].lower << ":" << bounds[0].upper
+    << "]\nset yrange [" << bounds[1].lower << ":" << bounds[1].upper
+    << "]\nset key outside top center horizontal\n"
+    << "plot 'landscape.csv' skip 1 using 1:2:3 with image notitle";
+  if (!options.history.empty()) {
+    if (!fs::is_regular_file(options.history))
+      throw InputError(options.history.string(), "", "cannot read the history file");
+    std::istringstream hist(read_file(options.history).value_or(""));
+    std::string header;
+    std::getline(hist, header);
+    std::vector<std::string> cols;
+    std::stringstream hs(header);
+    for (std::string c; std::getline(hs, c, ',');) cols.push_back(c);
+    const auto col = [&](const std::string& n) {
+      return static_cast<int>(std::find(cols.begin(), cols.end(), n) - cols.begin()) + 1;
+    };
+    const int c0 = col(params[0]), c1 = col(params[1]);
+    if (c0 > static_cast<int>(cols.size()) || c1 > static_cast<int>(cols.size()))
+      throw InputError(options.history.string(), "",
+                       "has no columns " + params[0] + " and " + params[1]);
+    const fs::path copy = out_dir / "history.csv";
+    if (fs::absolute(options.history) != fs::absolute(copy))
+      fs::copy_file(options.history, copy, fs::copy_options::overwrite_existing);
+    g << ", \\\n     'history.csv' skip 1 using " << c0 << ":" << c1
+      << " with linespoints lw 2.5 pt 7 ps 1.3 lc rgb 'black' title 'optimiser: best so far, by "
+         "iteration'";
+  }
+  g << ", \\\n     '-' using 1:2 with points pt 6 ps 3 lw 3 lc rgb 'black' title 'best grid "
+       "point'\n"
+    << r.best[0] << "," << r.best[1] << "\ne\n";
+  write_file_atomic(out_dir / "landscape.gp", g.str());
+  run_gnuplot(out_dir, "landscape.gp");
+  return r;
+}
+
+}  // namespace ftc::tune
