@@ -10,12 +10,14 @@
 // it back into the queue, and returns.
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/evaluators/batch_evaluator.hpp"
 
 namespace ftc::tune {
 
@@ -29,6 +31,8 @@ struct ServiceOptions {
       token;  // when set, every request needs "Authorization: Bearer <token>"
   std::size_t max_body_bytes = 1 << 20;
   double max_steps = 2e9;  // budget: evaluations × simulated steps per evaluation
+  // How each job's simulations run; default a TbbEvaluator with `threads` workers.
+  std::function<std::unique_ptr<BatchEvaluator>()> evaluator;
 
   // Every bad option, e.g. a non-loopback bind without a token.
   std::vector<FieldError> validate() const;

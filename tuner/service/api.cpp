@@ -1,0 +1,343 @@
+#include "service/api.hpp"
+
+#include <openssl/crypto.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "ftc/runtime/json_reader.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/report/report.hpp"
+#include "ftc/version.hpp"
+
+namespace ftc::tune::service_detail {
+
+using nlohmann::json;
+
+namespace {
+
+void send_error(httplib::Response& res, int status, const std::string& code,
+                const std::string& message, json details = json::array()) {
+  res.status = status;
+  res.set_content(
+      json{{"error", {{"code", code}, {"message", message}, {"details", details}}}}.dump(),
+      "application/json");
+}
+
+void send_json(httplib::Response& res, int status, const json& body) {
+  res.status = status;
+  res.set_content(body.dump(), "application/json");
+}
+
+json nullable(const std::string& s) { return s.empty() ? json(nullptr) : json(s); }
+
+json job_links(const std::string& id) {
+  const std::string base = "/v1/jobs/" + id;
+  return {{"self", base},
+          {"gains", base + "/gains"},
+          {"history", base + "/history"},
+          {"comparison", base + "/comparison"},
+          {"report", base + "/report"},
+          {"cancel", base + "/cancel"}};
+}
+
+json job_json_view(const JobRecord& r) {
+  json progress = {{"iteration", r.iteration >= 0 ? json(r.iteration) : json(nullptr)},
+                   {"iterations", r.iterations},
+                   {"evaluations", r.evaluations},
+                   {"total_evaluations", r.total_evaluations},
+                   {"best_fitness", r.best_fitness ? json(*r.best_fitness) : json(nullptr)},
+                   {"best", r.best}};
+  return {{"id", r.id},
+          {"name", r.name},
+          {"status", to_string(r.status)},
+          {"created_at", r.created_at},
+          {"started_at", nullable(r.started_at)},
+          {"finished_at", nullable(r.finished_at)},
+          {"updated_at", r.updated_at},
+          {"progress", progress},
+          {"cancel_requested", r.cancel_requested},
+          {"attempts", r.attempts},
+          {"error", nullable(r.error)},
+          {"links", job_links(r.id)}};
+}
+
+std::string fmt_g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+bool parse_int(const std::string& s, long long lo, long long hi, long long& out) {
+  if (s.empty() || s.size() > 12) return false;
+  char* end = nullptr;
+  const long long v = std::strtoll(s.c_str(), &end, 10);
+  if (*end != '\0' || v < lo || v > hi) return false;
+  out = v;
+  return true;
+}
+
+std::vector<std::string> split_path(const std::string& path) {
+  std::vector<std::string> parts;
+  std::size_t i = 0;
+  while (i < path.size()) {
+    while (i < path.size() && path[i] == '/') ++i;
+    const std::size_t j = path.find('/', i);
+    if (i < path.size())
+      parts.push_back(path.substr(i, j == std::string::npos ? std::string::npos : j - i));
+    i = j == std::string::npos ? path.size() : j;
+  }
+  return parts;
+}
+
+}  // namespace
+
+bool Api::authorised(const httplib::Request& req) const {
+  if (!opt_.token) return true;
+  const std::string expected = "Bearer " + *opt_.token;
+  const std::string got = req.get_header_value("Authorization");
+  // Constant time in the token's content; only the length can leak.
+  return got.size() == expected.size() &&
+         CRYPTO_memcmp(got.data(), expected.data(), got.size()) == 0;
+}
+
+void Api::method_not_allowed(httplib::Response& res, const char* allow) {
+  res.set_header("Allow", allow);
+  send_error(res, 405, "method_not_allowed", std::string("this resource allows ") + allow);
+}
+
+void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
+  const std::vector<std::string> p = split_path(req.path);
+  const std::string& m = req.method;
+  if (p.size() == 1 && p[0] == "healthz") {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    return send_json(res, 200,
+                     {{"status", "ok"},
+                      {"version", kVersion},
+                      {"queued", store_.count(JobStatus::queued)},
+                      {"running", store_.count(JobStatus::running)}});
+  }
+  if (p.size() < 2 || p[0] != "v1" || p[1] != "jobs")
+    return send_error(res, 404, "not_found", "no such resource: " + req.path);
+  if (p.size() == 2) {
+    if (m == "POST") return submit(req, res);
+    if (m == "GET") return list(req, res);
+    return method_not_allowed(res, "GET, POST");
+  }
+  const std::string& id = p[2];
+  if (p.size() == 3) {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    const auto job = store_.get(id);
+    if (!job) return send_error(res, 404, "not_found", "no job " + id);
+    return send_json(res, 200, job_json_view(*job));
+  }
+  if (p.size() == 4 && p[3] == "cancel") {
+    if (m != "POST") return method_not_allowed(res, "POST");
+    return cancel(id, res);
+  }
+  if (p.size() == 4 &&
+      (p[3] == "gains" || p[3] == "history" || p[3] == "comparison" || p[3] == "report")) {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    return result(req, res, id, p[3]);
+  }
+  send_error(res, 404, "not_found", "no such resource: " + req.path);
+}
+
+void Api::submit(const httplib::Request& req, httplib::Response& res) {
+  const auto bad_request = [&](const char* code, const InputError& e) {
+    json details = json::array();
+    for (const FieldError& fe : e.errors())
+      details.push_back({{"path", fe.path}, {"message", fe.message}});
+    send_error(res, 400, code, e.what(), details);
+  };
+  json body;
+  try {
+    body = json_io::parse_json_text(req.body, "request body");
+  } catch (const InputError& e) {
+    return bad_request("invalid_json", e);
+  }
+  Job job;
+  try {
+    job = parse_job(body, "request body");
+  } catch (const InputError& e) {
+    return bad_request("invalid_job", e);
+  }
+  if (!job.tuning)
+    return send_error(res, 400, "invalid_job", "request body: /tuning: is required to tune",
+                      json::array({{{"path", "/tuning"}, {"message", "is required to tune"}}}));
+  const double steps = static_cast<double>(job.tuning->algorithm->evaluations()) *
+                       static_cast<double>(job.steps_per_evaluation());
+  if (steps > opt_.max_steps)
+    return send_error(res, 400, "job_too_large",
+                      "the job needs " + fmt_g(steps) +
+                          " simulated steps (evaluations x steps per "
+                          "evaluation), " +
+                          fmt_g(steps / opt_.max_steps) + " times the server's budget of " +
+                          fmt_g(opt_.max_steps),
+                      json{{{"steps", steps}, {"budget", opt_.max_steps}}});
+
+  Submission s;
+  s.job_json = to_json(job).dump();
+  s.name = job.name;
+  s.iterations = job.tuning->algorithm->iterations();
+  s.total_evaluations = job.tuning->algorithm->evaluations();
+  const std::string key = req.get_header_value("Idempotency-Key");
+  if (!key.empty()) {
+    if (key.size() > 200)
+      return send_error(res, 400, "invalid_header",
+                        "Idempotency-Key is longer than 200 characters");
+    s.idempotency_key = key;
+  }
+  const auto [record, created] = store_.submit(s);
+  if (!created && store_.job_json(record.id) != s.job_json)
+    return send_error(
+        res, 409, "idempotency_conflict",
+        "Idempotency-Key was already used for job " + record.id + " with a different job");
+  if (created) {
+    spdlog::info("job {} ({}) queued", record.id, record.name);
+    on_submit_();
+  }
+  res.set_header("Location", "/v1/jobs/" + record.id);
+  send_json(
+      res, created ? 201 : 200,
+      {{"id", record.id}, {"status", to_string(record.status)}, {"links", job_links(record.id)}});
+}
+
+void Api::list(const httplib::Request& req, httplib::Response& res) {
+  std::optional<JobStatus> status;
+  if (req.has_param("status")) {
+    status = job_status_from_string(req.get_param_value("status"));
+    if (!status)
+      return send_error(res, 400, "invalid_parameter",
+                        "status must be one of queued, running, succeeded, failed, cancelled");
+  }
+  long long limit = 50, offset = 0;
+  if (req.has_param("limit") && !parse_int(req.get_param_value("limit"), 1, 1000, limit))
+    return send_error(res, 400, "invalid_parameter", "limit must be an integer in 1..1000");
+  if (req.has_param("offset") && !parse_int(req.get_param_value("offset"), 0, 1000000000, offset))
+    return send_error(res, 400, "invalid_parameter", "offset must be a non-negative integer");
+  json jobs = json::array();
+  for (const JobRecord& r : store_.list(status, static_cast<int>(limit), static_cast<int>(offset)))
+    jobs.push_back(job_json_view(r));
+  send_json(
+      res, 200,
+      {{"jobs", jobs}, {"total", store_.count(status)}, {"limit", limit}, {"offset", offset}});
+}
+
+void Api::cancel(const std::string& id, httplib::Response& res) {
+  const auto before = store_.get(id);
+  if (!before) return send_error(res, 404, "not_found", "no job " + id);
+  if (is_terminal(before->status))
+    return send_error(
+        res, 409, "conflict",
+        "job " + id + " has already " +
+            (before->status == JobStatus::cancelled ? std::string("been cancelled")
+                                                    : std::string(to_string(before->status))));
+  const auto after = store_.request_cancel(id);
+  spdlog::info("job {}: cancel requested ({})", id, to_string(after->status));
+  send_json(res, 202, job_json_view(*after));
+}
+
+void Api::result(const httplib::Request& req, httplib::Response& res, const std::string& id,
+                 const std::string& what) {
+  const auto job = store_.get(id);
+  if (!job) return send_error(res, 404, "not_found", "no job " + id);
+  if (job->status != JobStatus::succeeded)
+    return send_error(res, 409, "not_ready",
+                      "job " + id + " is " + to_string(job->status) +
+                          "; its results exist once it has succeeded");
+  const std::string format = req.has_param("format") ? req.get_param_value("format") : "";
+  if (what == "gains") {
+    res.set_content(store_.artifact(id, "gains.json").value_or(""), "application/json");
+  } else if (what == "report") {
+    res.set_content(report(id), "text/html; charset=utf-8");
+  } else if (what == "history") {
+    if (format == "json") {
+      const json gains = json::parse(store_.artifact(id, "gains.json").value_or("{}"));
+      send_json(res, 200, gains.value("history", json::array()));
+    } else if (format.empty() || format == "csv") {
+      res.set_content(store_.artifact(id, "history.csv").value_or(""), "text/csv");
+    } else {
+      return send_error(res, 400, "invalid_parameter", "format must be csv or json");
+    }
+  } else {
+    if (format == "md")
+      res.set_content(store_.artifact(id, "comparison.md").value_or(""), "text/markdown");
+    else if (format.empty() || format == "json")
+      res.set_content(store_.artifact(id, "comparison.json").value_or(""), "application/json");
+    else
+      return send_error(res, 400, "invalid_parameter", "format must be json or md");
+  }
+}
+
+// report.html of a succeeded job: drawn from its stored files on first request, then kept.
+std::string Api::report(const std::string& id) {
+  if (auto cached = store_.artifact(id, "report.html")) return *cached;
+  namespace fs = std::filesystem;
+  const fs::path dir =
+      fs::temp_directory_path() / ("ftctune-report-" + id + "-" + std::to_string(::getpid()) + "-" +
+                                   std::to_string(report_counter_++));
+  struct Cleanup {
+    fs::path dir;
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+  } cleanup{dir};
+  for (const auto& [name, content] : store_.artifacts(id)) write_file_atomic(dir / name, content);
+  const ReportResult r = render_report(dir, ReportOptions{});
+  const std::string html = read_file(r.html).value_or("");
+  store_.put_artifact(id, "report.html", html);
+  return html;
+}
+
+void Api::configure(httplib::Server& http) {
+  const auto handler = [this](const httplib::Request& req, httplib::Response& res) {
+    dispatch(req, res);
+  };
+  // One catch-all route per method: dispatch() tells 404 (no such resource) from 405.
+  http.Get(".*", handler);
+  http.Post(".*", handler);
+  http.Put(".*", handler);
+  http.Patch(".*", handler);
+  http.Delete(".*", handler);
+  http.Options(".*", handler);
+  http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+    if (authorised(req)) return httplib::Server::HandlerResponse::Unhandled;
+    res.set_header("WWW-Authenticate", "Bearer");
+    send_error(res, 401, "unauthorized",
+               "a valid \"Authorization: Bearer <token>\" header is required");
+    return httplib::Server::HandlerResponse::Handled;
+  });
+  // Errors the library produces itself (413 above the body limit, 400 for a malformed
+  // request, 404 for an unknown method) get the same JSON body as ours.
+  http.set_error_handler([](const httplib::Request&, httplib::Response& res) {
+    if (!res.body.empty()) return;
+    if (res.status == 413)
+      send_error(res, 413, "payload_too_large", "the request body exceeds the server's limit");
+    else
+      send_error(res, res.status, "http_error", "HTTP status " + std::to_string(res.status));
+  });
+  http.set_exception_handler(
+      [](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+        std::string what = "unknown error";
+        try {
+          std::rethrow_exception(ep);
+        } catch (const std::exception& e) {
+          what = e.what();
+        } catch (...) {
+        }
+        spdlog::error("request failed: {}", what);
+        send_error(res, 500, "internal_error", what);
+      });
+  http.set_payload_max_length(opt_.max_body_bytes);
+  http.set_read_timeout(5, 0);
+  http.set_write_timeout(5, 0);
+  http.set_keep_alive_timeout(5);
+}
+
+}  // namespace ftc::tune::service_detail
