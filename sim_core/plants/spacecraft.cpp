@@ -46,6 +46,23 @@ Vec3 Spacecraft::f(const State& x) const {
 
 }  // namespace ftc::sim
 
+namespace ftc::sim {
+
+SpacecraftParams spacecraft_params(const PlantSpec& spec) {
+  if (spec.model != "spacecraft")
+    throw InputError("plant", "/model", "is \"" + spec.model + "\", expected \"spacecraft\"");
+  const PlantKind& kind = *find_plant_kind("spacecraft");
+  const std::vector<double> v = spec.values.empty() ? kind.defaults() : spec.values;
+  throw_if_errors("plant", kind.validate(v, ""));
+  SpacecraftParams p;
+  const std::size_t inertia = kind.offset("inertia"), rate = kind.offset("orbital_rate");
+  p.inertia = {v[inertia], v[inertia + 1], v[inertia + 2]};
+  p.orbital_rate = v[rate];
+  return p;
+}
+
+}  // namespace ftc::sim
+
 namespace ftc::sim::detail {
 
 PlantKind spacecraft_kind() {
@@ -58,7 +75,10 @@ PlantKind spacecraft_kind() {
   k.actuators = 4;
   const SpacecraftParams d;
   k.parameters = {
-      {"inertia", {d.inertia[0], d.inertia[1], d.inertia[2]}, Range::positive(), "kg·m²",
+      {"inertia",
+       {d.inertia[0], d.inertia[1], d.inertia[2]},
+       Range::positive(),
+       "kg·m²",
        "principal moments of inertia Ix, Iy, Iz"},
       {"orbital_rate", {d.orbital_rate}, Range::non_negative(), "rad/s", "orbital rate ω0"}};
   k.default_initial_state = {-0.7, -0.07, 1.5, 0.3, 1.3, -0.2};

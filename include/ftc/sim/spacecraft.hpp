@@ -16,6 +16,11 @@ struct SpacecraftParams {
   double orbital_rate = 1.1e-3;                     // ω0 in rad/s (not in the paper)
 };
 
+struct PlantSpec;
+// The parameters of a spacecraft plant as a job or gains file gives them (PlantSpec, see
+// plants.hpp); throws InputError when the spec is of another model or its values are invalid.
+SpacecraftParams spacecraft_params(const PlantSpec& spec);
+
 class Spacecraft final : public Plant<3, 4> {
  public:
   // Scratch space of one simulation for evaluating f at the nearby states of successive RK4
