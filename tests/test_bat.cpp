@@ -5,80 +5,10 @@
 #include "ftc/tune/optimizers/bat.hpp"
 #include "ftc/tune/optimizers/optimizer.hpp"
 #include "ftc/tune/optimizers/random_search.hpp"
+#include "test_functions.hpp"
 
 using namespace ftc::tune;
-
-namespace {
-
-SearchSpace box(std::size_t d, double lo, double hi) {
-  SearchSpace s;
-  for (std::size_t j = 0; j < d; ++j) {
-    s.names.push_back(std::string(1, static_cast<char>('a' + j)));  // a, b, c, ...
-    s.lower.push_back(lo);
-    s.upper.push_back(hi);
-  }
-  return s;
-}
-
-double sphere(const Decision& x) {
-  double f = 0;
-  for (double v : x) f += (v - 1.0) * (v - 1.0);  // optimum at (1, …, 1), off-centre on purpose
-  return f;
-}
-
-double rosenbrock(const Decision& x) {
-  double f = 0;
-  for (std::size_t j = 0; j + 1 < x.size(); ++j)
-    f += 100 * std::pow(x[j + 1] - x[j] * x[j], 2) + std::pow(1 - x[j], 2);
-  return f;
-}
-
-// Counts evaluations and checks every candidate against the bounds.
-class CheckingEvaluator final : public BatchFitness {
- public:
-  CheckingEvaluator(SearchSpace space, double (*f)(const Decision&))
-      : space_(std::move(space)), f_(f) {}
-  std::vector<double> operator()(const std::vector<Decision>& batch) override {
-    std::vector<double> J;
-    for (const Decision& x : batch) {
-      if (!space_.contains(x)) ++out_of_bounds;
-      ++evaluations;
-      J.push_back(1.0 / (1.0 + f_(x)));  // fitness: larger is better, 1 at the optimum
-    }
-    return J;
-  }
-  int evaluations = 0;
-  int out_of_bounds = 0;
-
- private:
-  SearchSpace space_;
-  double (*f_)(const Decision&);
-};
-
-AlgorithmPtr bat(int population, int iterations) {
-  return make_algorithm({{"type", "bat"}, {"population", population}, {"iterations", iterations}});
-}
-AlgorithmPtr random(int population, int iterations) {
-  return make_algorithm(
-      {{"type", "random"}, {"population", population}, {"iterations", iterations}});
-}
-
-OptimizationResult solve(const AlgorithmPtr& c, std::uint64_t seed, const SearchSpace& s,
-                         double (*f)(const Decision&), CheckingEvaluator* ev_out = nullptr) {
-  CheckingEvaluator ev(s, f);
-  auto opt = c->make(seed, s);
-  OptimizationResult r = run_optimizer(*opt, ev);
-  EXPECT_EQ(ev.out_of_bounds, 0);
-  if (ev_out) *ev_out = ev;
-  return r;
-}
-
-void expect_monotone(const OptimizationResult& r) {
-  for (std::size_t i = 1; i < r.history.size(); ++i)
-    EXPECT_GE(r.history[i].best_fitness, r.history[i - 1].best_fitness) << "iteration " << i;
-}
-
-}  // namespace
+using namespace ftc::testing;
 
 // Tolerances are the worst case over seeds 1–10 measured with this implementation (M = 30,
 // T = 300), rounded up; the Bat algorithm with the paper's settings refines only down to about
@@ -188,51 +118,4 @@ TEST(BatAlgorithm, SameSeedSameRunOtherSeedOtherRun) {
     EXPECT_EQ(a.history[i].extras, b.history[i].extras);
   }
   EXPECT_NE(a.history.front().best, c.history.front().best);
-}
-
-TEST(RandomSearch, SameBudgetMonotoneAndInBounds) {
-  CheckingEvaluator ev(box(2, -5, 5), sphere);
-  const OptimizationResult r = solve(random(10, 10), 9, box(2, -5, 5), sphere, &ev);
-  EXPECT_EQ(ev.evaluations, 110);
-  expect_monotone(r);
-  EXPECT_TRUE(r.history.back().extras.empty());  // no loudness, no pulses
-}
-
-TEST(Optimizer, ObserverCanStopTheRun) {
-  int calls = 0;
-  CheckingEvaluator ev(box(2, -5, 5), sphere);
-  auto opt = bat(5, 10)->make(1, box(2, -5, 5));
-  const OptimizationResult r = run_optimizer(*opt, ev, [&](const HistoryRow& h, const Optimizer&) {
-    ++calls;
-    return h.iteration < 3;
-  });
-  EXPECT_EQ(calls, 4);
-  EXPECT_FALSE(r.completed);
-  EXPECT_EQ(r.evaluations, 20);
-}
-
-TEST(Optimizer, ResumeFromSavedStateContinuesExactly) {
-  for (const AlgorithmPtr& c : {bat(6, 8), random(6, 8)}) {
-    const SearchSpace s = box(3, -2, 2);
-    CheckingEvaluator ev(s, rosenbrock);
-    auto full = c->make(11, s);
-    const OptimizationResult uninterrupted = run_optimizer(*full, ev);
-
-    std::string saved;
-    auto first = c->make(11, s);
-    run_optimizer(*first, ev, [&](const HistoryRow& h, const Optimizer& o) {
-      saved = o.state().dump();  // through text, as a checkpoint store would keep it
-      return h.iteration < 3;
-    });
-    const nlohmann::json state = nlohmann::json::parse(saved);
-    auto second = c->make(999, s);  // the seed must not matter: the state has the engine
-    const OptimizationResult resumed = run_optimizer(*second, ev, {}, &state);
-    ASSERT_EQ(resumed.history.size(), uninterrupted.history.size());
-    for (std::size_t i = 0; i < resumed.history.size(); ++i) {
-      EXPECT_EQ(resumed.history[i].best, uninterrupted.history[i].best) << "iteration " << i;
-      EXPECT_EQ(resumed.history[i].best_fitness, uninterrupted.history[i].best_fitness);
-    }
-    EXPECT_TRUE(resumed.completed);
-    EXPECT_EQ(resumed.evaluations, uninterrupted.evaluations);
-  }
 }

@@ -9,12 +9,12 @@
 #include <thread>
 
 #include "cli_runner.hpp"
-#include "service/httplib.hpp"
-#include "ftc/tune/service/service.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
+#include "ftc/tune/service/service.hpp"
 #include "server_process.hpp"
+#include "service/httplib.hpp"
 #include "short_job.hpp"
 
 using nlohmann::json;

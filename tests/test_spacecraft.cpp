@@ -55,12 +55,12 @@ Vec3 paper_f(const State& x, double Ix, double Iy, double Iz, double w) {
 
 }  // namespace
 
-TEST(Plant, DriftIsZeroAtOrigin) {
+TEST(Spacecraft, DriftIsZeroAtOrigin) {
   const Spacecraft sc;
   EXPECT_EQ(sc.f(State::Zero()), Vec3::Zero());
 }
 
-TEST(Plant, ZeroOrbitalRateLeavesEulerGyroscopicTerms) {
+TEST(Spacecraft, ZeroOrbitalRateLeavesEulerGyroscopicTerms) {
   SpacecraftParams p;
   p.orbital_rate = 0.0;
   const Spacecraft sc(p);
@@ -75,7 +75,7 @@ TEST(Plant, ZeroOrbitalRateLeavesEulerGyroscopicTerms) {
   }
 }
 
-TEST(Plant, MatchesAppendixBWithOrbitalTerms) {
+TEST(Spacecraft, MatchesAppendixBWithOrbitalTerms) {
   // A large ω0 so that the orbital terms are not negligible against the gyroscopic ones.
   SpacecraftParams p;
   p.inertia = {12.0, 9.0, 7.0};
@@ -90,7 +90,7 @@ TEST(Plant, MatchesAppendixBWithOrbitalTerms) {
   }
 }
 
-TEST(Plant, PseudoInverseIsRightInverse) {
+TEST(Spacecraft, PseudoInverseIsRightInverse) {
   const Spacecraft sc;
   const Mat34 G = sc.G(State::Zero());
   EXPECT_EQ(G, Spacecraft::distribution_matrix());
@@ -100,7 +100,7 @@ TEST(Plant, PseudoInverseIsRightInverse) {
   EXPECT_NEAR(G(2, 3), -0.28, 0.0);
 }
 
-TEST(Plant, RejectsNonPositiveInertia) {
+TEST(Spacecraft, RejectsNonPositiveInertia) {
   SpacecraftParams p;
   p.inertia = {20.0, 0.0, 15.0};
   try {
@@ -112,42 +112,7 @@ TEST(Plant, RejectsNonPositiveInertia) {
   }
 }
 
-TEST(SinCosTracker, MatchesLibmForSmallAndLargeSteps) {
-  SinCosTracker tr;
-  double x = -3.0, worst = 0.0;
-  // Small steps (stay near the anchor), then jumps that force re-anchoring.
-  for (int k = 0; k < 20000; ++k) {
-    x += (k % 1000 == 999) ? 0.7 : 1.3e-3;
-    double s, c;
-    tr.eval(x, s, c);
-    worst = std::max({worst, std::abs(s - std::sin(x)), std::abs(c - std::cos(x))});
-  }
-  EXPECT_LT(worst, 4e-16);
-}
-
-TEST(Phasor, StaysWithinLibmBetweenAnchors) {
-  // The simulator's use: half steps of 0.5 ms for 30 s, re-anchored every kMaxSteps advances.
-  // Against libm at the rounded argument ω t + φ, whose own rounding (a few ulp of ω t) is the
-  // larger error at high frequencies.
-  const double dt = 5e-4;
-  for (const double omega : {1.0, 3.0, 50.0}) {
-    Phasor p(omega, 0.4, dt);
-    double worst = 0.0;
-    for (int n = 0; n <= 60000; ++n) {
-      const double t = n * dt;
-      if (n % Phasor::kMaxSteps == 0)
-        p.anchor(t);
-      else
-        p.advance();
-      const double a = omega * t + 0.4;
-      worst = std::max({worst, std::abs(p.sin() - std::sin(a)), std::abs(p.cos() - std::cos(a))});
-    }
-    EXPECT_LT(worst, 1e-14 + 4 * omega * 30.0 * 0x1p-52) << "omega " << omega;
-    EXPECT_GT(worst, 0.0) << "omega " << omega;  // rotation is not libm: the test can tell
-  }
-}
-
-TEST(Plant, WorkspaceEvaluationAgreesWithDirectOne) {
+TEST(Spacecraft, WorkspaceEvaluationAgreesWithDirectOne) {
   SpacecraftParams p;
   p.orbital_rate = 0.3;
   const Spacecraft sc(p);
