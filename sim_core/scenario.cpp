@@ -63,6 +63,7 @@ std::vector<FieldError> Scenario::validate(const std::string& path, int axes, in
 
 Scenario Scenario::paper() {
   Scenario s;
+  s.initial_state = {-0.7, -0.07, 1.5, 0.3, 1.3, -0.2};
   s.disturbance = {{1, Shape::sin, 0.5, 1.0, 0.0},
                    {2, Shape::cos, 0.5, 2.0, 0.0},
                    {3, Shape::sin, 0.5, 3.0, 0.0}};

@@ -1,7 +1,8 @@
 #pragma once
-// The closed loop of SPEC §4, compiled per plant class and controller class, so that f, G and
-// the controller's step inline into it. Private to sim_core: plants/registry.cpp instantiates
-// it for every registered plant.
+// The closed loop of SPEC §4, compiled per plant class so that its f and G inline into it (the
+// controller is called through its interface: plants/plant_adapter.hpp says why). Private to
+// sim_core: each plant's .cpp instantiates it through PlantAdapter, registry.cpp for the
+// Plant<n, m> interface.
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -155,8 +156,8 @@ template <int N, int M>
   v.insert(v.end(), u.data(), u.data() + M);
 }
 
-// The loop, compiled once per plant class P and controller class C: for final classes the
-// calls to f and to the controller's step are devirtualised and inlined.
+// The loop for plant class P and controller type C (the Controller<n, m> interface in practice):
+// for a final plant class the calls to f and G are devirtualised and inlined.
 template <class P, class C>
 SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
                      const SimulationOptions& options) {

@@ -261,7 +261,7 @@ TEST(Manipulator, OpenLoopConservesEnergy) {
 // q(0) = (0.5, −0.4) rad under a sinusoidal disturbance on both joints and a 30 % loss of
 // effectiveness of actuator 1 (the shoulder motor) at 3 s. The Table 1 gains were designed for
 // the spacecraft, and larger losses on this arm are not all recovered by them (see
-// docs/manipulator.md), so the fault here is one they are expected to ride through.
+// docs/model.md (the manipulator section)), so the fault here is one they are expected to ride through.
 namespace {
 
 constexpr double kFaultOnset = 3.0;  // s
@@ -333,6 +333,16 @@ TEST(ManipulatorJob, LoadsWithItsPlantAndShape) {
   EXPECT_EQ(job.compare.size(), 2u);
   ASSERT_TRUE(job.tuning.has_value());
   EXPECT_EQ(job.tuning->algorithm->evaluations(), 110);
+}
+
+// A scenario without an initial state starts from its plant's default: four values for the arm
+// (the spacecraft's six were filled in before, and the job was refused).
+TEST(ManipulatorJob, StartsFromTheArmsStateWhenTheJobGivesNone) {
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/manipulator.json");
+  json j = json::parse(in);
+  j["scenarios"][0].erase("initial_state");
+  const tune::Job job = tune::parse_job(j, "manipulator.json");
+  EXPECT_EQ(job.scenarios[0].initial_state, find_plant_kind("manipulator")->default_initial_state);
 }
 
 TEST(ManipulatorJob, RejectsIndicesAndStatesOfTheWrongShape) {

@@ -27,8 +27,7 @@ static void BM_PaperScenario(benchmark::State& state) {
 }
 BENCHMARK(BM_PaperScenario)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
 
-// The same through the plant registry, as the tuner simulates: the loop compiled for the
-// spacecraft and the controller class.
+// The same through the plant registry, as the tuner simulates (AnyPlant::simulate).
 static void BM_PaperScenarioTuner(benchmark::State& state) {
   const auto type = static_cast<ControllerType>(state.range(0));
   const auto plant = make_plant(PlantSpec{});

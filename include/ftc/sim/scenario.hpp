@@ -18,12 +18,15 @@ struct Scenario {
   double duration = 30.0;     // T in s, a whole number of sample times
   double sample_time = 1e-3;  // Ts in s: controller period and zero-order hold
   int substeps = 1;           // RK4 steps per sample, h = Ts / substeps
-  // X(0) = (X1, X2), 2n values; the paper's spacecraft state by default (a job fills in its
-  // plant's default when it gives none).
-  std::vector<double> initial_state{-0.7, -0.07, 1.5, 0.3, 1.3, -0.2};
+  // X(0) = (X1, X2), 2n values. Empty here: a job fills in its plant's default when it gives
+  // none (paper() sets the paper's spacecraft state); simulate() needs all 2n.
+  std::vector<double> initial_state;
   std::vector<DisturbanceTerm> disturbance;
   std::vector<Fault> faults;
   std::optional<double> saturation;  // |u_j| ≤ u_max after the faults; absent = none
+  // The true inertia of the simulated plant, when it differs from the model the controller is
+  // given (model mismatch); empty = the plant's own. Overrides the plant parameter "inertia".
+  std::vector<double> inertia;
 
   // N = round(T / Ts).
   std::int64_t samples() const { return std::llround(duration / sample_time); }

@@ -1,7 +1,7 @@
 #pragma once
 // The tuning service behind `ftctune serve`: an HTTP/JSON API (cpp-httplib) in front of a
 // durable SQLite job store, and worker threads that run queued jobs in submission order with the
-// same tuner as `ftctune run`. See the README's "Running the service" for the API.
+// same tuner as `ftctune run`. See docs/service.md for the API.
 //
 // Durability: a job's progress and optimiser checkpoint are committed after every iteration, so
 // after a crash start() puts running jobs back in the queue and they resume from their last
