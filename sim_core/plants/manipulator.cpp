@@ -74,26 +74,28 @@ PlantKind manipulator_kind() {
   const ManipulatorParams d;
   const auto both = [](const std::array<double, 2>& a) { return std::vector<double>{a[0], a[1]}; };
   const Range positive = Range::positive();
-  k.parameters = {{"masses", both(d.masses), positive, "kg", "link masses m1, m2"},
-                  {"lengths", both(d.lengths), positive, "m", "link lengths l1, l2"},
-                  {"centres_of_mass", both(d.centres_of_mass), positive, "m",
-                   "distances lc1, lc2 from joint i to the centre of mass of link i"},
-                  {"inertias", both(d.inertias), positive, "kg·m²",
-                   "moments of inertia I1, I2 of the links about their centres of mass"},
-                  {"gravity", {d.gravity}, Range::non_negative(), "m/s²",
-                   "gravitational acceleration g0"}};
+  k.parameters = {
+      {"masses", both(d.masses), positive, "kg", "link masses m1, m2"},
+      {"lengths", both(d.lengths), positive, "m", "link lengths l1, l2"},
+      {"centres_of_mass", both(d.centres_of_mass), positive, "m",
+       "distances lc1, lc2 from joint i to the centre of mass of link i"},
+      {"inertias", both(d.inertias), positive, "kg·m²",
+       "moments of inertia I1, I2 of the links about their centres of mass"},
+      {"gravity", {d.gravity}, Range::non_negative(), "m/s²", "gravitational acceleration g0"}};
   k.default_initial_state = {0.5, -0.4, 0.0, 0.0};
   k.positions = "joint angles";
   k.rates = "joint rates";
   k.axis_names = {"q1", "q2"};
   k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
-    ManipulatorParams p;
-    p.masses = {v.at(0), v.at(1)};
-    p.lengths = {v.at(2), v.at(3)};
-    p.centres_of_mass = {v.at(4), v.at(5)};
-    p.inertias = {v.at(6), v.at(7)};
-    p.gravity = v.at(8);
-    return std::make_unique<PlantAdapter<Manipulator>>(Manipulator(p));
+    return std::make_unique<PlantAdapter<Manipulator>>(v, [](const std::vector<double>& w) {
+      ManipulatorParams p;
+      p.masses = {w.at(0), w.at(1)};
+      p.lengths = {w.at(2), w.at(3)};
+      p.centres_of_mass = {w.at(4), w.at(5)};
+      p.inertias = {w.at(6), w.at(7)};
+      p.gravity = w.at(8);
+      return Manipulator(p);
+    });
   };
   return k;
 }

@@ -8,7 +8,10 @@
 // reason this header must not see the controller classes (their make_controller lives in
 // controllers/factory.cpp): with them in sight GCC devirtualises the call speculatively and
 // bloats the loop (16 % slower).
+#include <Eigen/LU>
+#include <functional>
 #include <utility>
+#include <vector>
 
 #include "ftc/sim/plants.hpp"
 #include "simulation_loop.hpp"
@@ -18,7 +21,11 @@ namespace ftc::sim::detail {
 template <class P>
 class PlantAdapter final : public AnyPlant {
  public:
-  explicit PlantAdapter(P plant) : plant_(std::move(plant)) {}
+  using Build = std::function<P(const std::vector<double>&)>;
+
+  // `build` makes a P from parameter values (validated); the model is built from `values`.
+  PlantAdapter(std::vector<double> values, Build build)
+      : values_(std::move(values)), build_(std::move(build)), plant_(build_(values_)) {}
 
   const PlantKind& kind() const override { return *find_plant_kind(plant_.model()); }
   const P& plant() const { return plant_; }
@@ -27,10 +34,41 @@ class PlantAdapter final : public AnyPlant {
                             const SimulationOptions& options) const override {
     const auto c = make_controller(controller, plant_, scenario.sample_time);
     throw_if_errors("scenario " + scenario.name, scenario.validate("", P::kAxes, P::kActuators));
-    return run(plant_, *c, scenario, options);
+    if (scenario.inertia.empty()) return run(plant_, *c, scenario, options);
+    // Model mismatch: the controller keeps the model, the loop simulates the true plant.
+    const std::vector<double> truth = kind().with_inertia(values_, scenario.inertia, "/inertia");
+    throw_if_errors("scenario " + scenario.name, kind().validate(truth, ""));
+    return run(build_(truth), *c, scenario, options);
+  }
+
+  bool recoverable(const Scenario& scenario) const override {
+    constexpr int N = P::kAxes, M = P::kActuators;
+    std::array<bool, M> stuck{};
+    std::array<double, M> lost{};
+    for (const Fault& f : scenario.faults) {
+      if (f.actuator < 1 || f.actuator > M) continue;  // reported by validation
+      if (f.type == FaultType::stuck) stuck[f.actuator - 1] = true;
+      if (f.type == FaultType::loss_of_effectiveness) lost[f.actuator - 1] += f.fraction;
+    }
+    typename P::State x0 = P::State::Zero();
+    if (scenario.initial_state.size() == static_cast<std::size_t>(2 * N))
+      x0 = Eigen::Map<const typename P::State>(scenario.initial_state.data());
+    const Mat<N, M> G = plant_.G(x0);
+    Eigen::Matrix<double, N, Eigen::Dynamic, 0, N, M> acting(N, 0);
+    for (int j = 0; j < M; ++j)
+      if (!stuck[j] && lost[j] < 1.0) {
+        acting.conservativeResize(Eigen::NoChange, acting.cols() + 1);
+        acting.col(acting.cols() - 1) = G.col(j);
+      }
+    if (acting.cols() < N) return false;
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(acting);
+    lu.setThreshold(1e-9);
+    return lu.rank() == N;
   }
 
  private:
+  std::vector<double> values_;
+  Build build_;
   P plant_;
 };
 

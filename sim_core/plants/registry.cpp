@@ -68,9 +68,9 @@ std::string plant_model_names() {
 std::unique_ptr<AnyPlant> make_plant(const PlantSpec& spec) {
   const PlantKind* kind = find_plant_kind(spec.model);
   if (!kind)
-    throw InputError("plant", "/model",
-                     "unknown plant model '" + spec.model + "' (known: " + plant_model_names() +
-                         ")");
+    throw InputError(
+        "plant", "/model",
+        "unknown plant model '" + spec.model + "' (known: " + plant_model_names() + ")");
   const std::vector<double> values = spec.values.empty() ? kind->defaults() : spec.values;
   throw_if_errors("plant", kind->validate(values, ""));
   return kind->make(values);
@@ -78,7 +78,8 @@ std::unique_ptr<AnyPlant> make_plant(const PlantSpec& spec) {
 
 std::vector<double> PlantKind::defaults() const {
   std::vector<double> v;
-  for (const PlantParameter& p : parameters) v.insert(v.end(), p.defaults.begin(), p.defaults.end());
+  for (const PlantParameter& p : parameters)
+    v.insert(v.end(), p.defaults.begin(), p.defaults.end());
   return v;
 }
 
@@ -95,6 +96,23 @@ std::size_t PlantKind::offset(std::string_view parameter) const {
     n += p.size();
   }
   return std::string_view::npos;
+}
+
+std::vector<double> PlantKind::with_inertia(std::vector<double> values,
+                                            const std::vector<double>& inertia,
+                                            const std::string& path) const {
+  const std::size_t at = offset("inertia");
+  if (at == std::string_view::npos)
+    throw InputError("plant", path, "the " + model + " plant has no inertia parameter");
+  for (const PlantParameter& p : parameters)
+    if (p.name == "inertia") {
+      if (inertia.size() != p.size())
+        throw InputError("plant", path,
+                         "expected " + std::to_string(p.size()) + " numbers (the " + model +
+                             "'s inertia), got " + std::to_string(inertia.size()));
+      std::copy(inertia.begin(), inertia.end(), values.begin() + static_cast<long>(at));
+    }
+  return values;
 }
 
 std::vector<FieldError> PlantKind::validate(const std::vector<double>& values,

@@ -86,10 +86,9 @@ PlantKind spacecraft_kind() {
   k.rates = "angular rates";
   k.axis_names = {"roll", "pitch", "yaw"};
   k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
-    SpacecraftParams p;
-    p.inertia = {v.at(0), v.at(1), v.at(2)};
-    p.orbital_rate = v.at(3);
-    return std::make_unique<PlantAdapter<Spacecraft>>(Spacecraft(p));
+    return std::make_unique<PlantAdapter<Spacecraft>>(v, [](const std::vector<double>& values) {
+      return Spacecraft(spacecraft_params(PlantSpec{"spacecraft", values}));
+    });
   };
   return k;
 }

@@ -4,8 +4,8 @@
 // device, not part of the model.
 #include <array>
 
-#include "sincos.hpp"
 #include "ftc/sim/spacecraft.hpp"
+#include "sincos.hpp"
 
 namespace ftc::sim {
 
@@ -22,7 +22,8 @@ FTC_HOT_INLINE Vec3 Spacecraft::f(const State& x, Workspace& ws) const {
 // Appendix B (B.1–B.3), with the erratum of B.3 (s_2 x3 read as sin² x3). The terms are grouped
 // by powers of ω0 and shared trigonometric products are formed once; sin(2x) = 2 sin x cos x.
 // tests/test_plant.cpp checks this against a term-by-term transcription of the paper.
-FTC_HOT_INLINE Vec3 Spacecraft::f_trig(const State& x, const double (&s)[3], const double (&c)[3]) const {
+FTC_HOT_INLINE Vec3 Spacecraft::f_trig(const State& x, const double (&s)[3],
+                                       const double (&c)[3]) const {
   const double x4 = x[3], x5 = x[4], x6 = x[5];
   const double s1 = s[0], s2 = s[1], s3 = s[2];
   const double c1 = c[0], c2 = c[1], c3 = c[2];

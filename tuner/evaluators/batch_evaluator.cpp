@@ -10,8 +10,8 @@ TaskResult run_task(const TuningProblem& problem, const SimulationBatch& batch, 
   TaskResult r;
   const SimulationTask& task = batch.tasks[k];
   try {
-    sim::SimulationResult s =
-        problem.simulate(batch.candidates[task.candidate], task.scenario, batch.record_every);
+    sim::SimulationResult s = problem.simulate(batch.candidates[task.candidate], task.scenario,
+                                               task.record ? batch.record_every : 0);
     r.metrics = std::move(s.metrics);
     r.trajectory = std::move(s.trajectory);
   } catch (const std::exception& e) {

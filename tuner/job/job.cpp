@@ -11,6 +11,8 @@
 #include "ftc/runtime/plant_json.hpp"
 #include "ftc/runtime/schema.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/job/ensemble.hpp"
+#include "job/shapes.hpp"
 
 namespace ftc::tune {
 
@@ -137,6 +139,29 @@ Ptr<sim::Scenario> make_scenario_shape() {
   o->array("faults", &S::faults, fault_shape(), "actuator faults; they add up");
   o->optional_number("saturation", &S::saturation, S::kSaturationRange,
                      "|u_j| <= saturation after the faults; absent: none", false);
+  o->field(
+      {"inertia", false,
+       [](const json& v, const std::string& path, S& s, Errors& e) {
+         if (!v.is_array()) {
+           e.push_back({path, "expected an array of numbers, got " + json_io::json_type_name(v)});
+           return;
+         }
+         std::vector<double> x(v.size());
+         for (std::size_t i = 0; i < v.size(); ++i)
+           if (!schema::detail::read_number(v[i], path + "/" + std::to_string(i), x[i], e)) return;
+         s.inertia = std::move(x);
+       },
+       [](const S&, const std::string&, Errors&) {},  // against the plant: job rule
+       [](const S& s, json& o) {
+         if (!s.inertia.empty()) o["inertia"] = s.inertia;
+       },
+       [] {
+         return json{{"type", "array"},
+                     {"items", {{"type", "number"}, {"exclusiveMinimum", 0}}},
+                     {"description",
+                      "the true inertia of the simulated plant (kg·m²); the controller keeps "
+                      "the job's plant as its model. Absent: the plant's"}};
+       }});
   return o;
 }
 
@@ -178,8 +203,67 @@ Ptr<ObjectiveConfig> make_objective_shape() {
                   {"maxItems", 2},
                   {"description", "[start, end) in s; end null = the end of the run"}};
             }});
-  o->choice("aggregate", &O::aggregate, {{"mean", Aggregate::mean}, {"max", Aggregate::max}},
-            "how the scenarios' values combine");
+  o->choice("aggregate", &O::aggregate,
+            {{"mean", Aggregate::mean},
+             {"max", Aggregate::max},
+             {"quantile", Aggregate::quantile},
+             {"cvar", Aggregate::cvar}},
+            "how the scenarios' values combine; quantile and cvar are the robust ones");
+  // q, alpha and window_from appear in the resolved job only where they matter, so that jobs
+  // without them keep their canonical form (and their hash) from before these keys existed.
+  const auto conditional = [](const char* key, double O::*m, schema::Range r, Aggregate when,
+                              const char* doc) -> Obj<O>::Field {
+    return {key,
+            false,
+            [m](const json& v, const std::string& path, O& o, Errors& e) {
+              schema::detail::read_number(v, path, o.*m, e);
+            },
+            [m, r](const O& o, const std::string& path, Errors& e) {
+              if (std::string msg = r.check(o.*m); !msg.empty()) e.push_back({path, msg});
+            },
+            [m, key, when](const O& o, json& out) {
+              if (o.aggregate == when) out[key] = o.*m;
+            },
+            [r, doc] {
+              json s = schema::detail::number_schema(doc, r);
+              s["default"] = 0.9;
+              return s;
+            }};
+  };
+  o->field(conditional("q", &O::q, schema::Range::half_open_unit(), Aggregate::quantile,
+                       "the quantile q in (0, 1] of aggregate quantile"));
+  o->field(conditional("alpha", &O::alpha, {0.0, false, 1.0, true}, Aggregate::cvar,
+                       "alpha in [0, 1) of aggregate cvar: the mean of the worst 1 - alpha"));
+  o->field({"window_from", false,
+            [](const json& v, const std::string& path, O& o, Errors& e) {
+              if (!v.is_string())
+                e.push_back({path, "expected a string, got " + json_io::json_type_name(v)});
+              else if (v == "start")
+                o.window_from = WindowFrom::start;
+              else if (v == "first_fault")
+                o.window_from = WindowFrom::first_fault;
+              else
+                e.push_back({path, schema::detail::choice_error({"start", "first_fault"},
+                                                                v.get<std::string>())});
+            },
+            [](const O&, const std::string&, Errors&) {},
+            [](const O& o, json& out) {
+              if (o.window_from == WindowFrom::first_fault) out["window_from"] = "first_fault";
+            },
+            [] {
+              return json{{"type", "string"},
+                          {"enum", {"start", "first_fault"}},
+                          {"default", "start"},
+                          {"description",
+                           "measure the window from each run's start or from each scenario's "
+                           "earliest fault onset"}};
+            }});
+  o->rule([](const O& o, const std::string& path, Errors& e) {
+    if (o.aggregate != Aggregate::quantile && o.q != 0.9)
+      e.push_back({path + "/q", "is used only with aggregate \"quantile\""});
+    if (o.aggregate != Aggregate::cvar && o.alpha != 0.9)
+      e.push_back({path + "/alpha", "is used only with aggregate \"cvar\""});
+  });
   return o;
 }
 
@@ -199,55 +283,89 @@ std::size_t field_rank(const std::string& name) {
 Ptr<TuningConfig> make_tuning_shape() {
   using T = TuningConfig;
   auto o = std::make_shared<Obj<T>>("What to tune, with which algorithm and seed");
-  o->field({"parameters", true,
-            [](const json& pj, const std::string& pp, T& t, Errors& e) {
-              if (!pj.is_object()) {
-                e.push_back({pp, "expected an object of name: [lower, upper], got " +
-                                     json_io::json_type_name(pj)});
-                return;
-              }
-              for (auto it = pj.begin(); it != pj.end(); ++it) {
-                const std::string bp = pp + "/" + json_io::pointer_escape(it.key());
-                const json& v = it.value();
-                if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number()) {
-                  e.push_back({bp, "expected [lower, upper] (two numbers), got " +
-                                       (v.is_array() ? "an array of " + std::to_string(v.size())
-                                                     : json_io::json_type_name(v))});
-                  continue;
-                }
-                t.parameters.push_back({it.key(), v[0].get<double>(), v[1].get<double>()});
-              }
-              // JSON objects are unordered: fix the decision-vector order as that of the
-              // controller field table (Kp before Ki), unknown names last, so it never depends
-              // on the file.
-              std::stable_sort(t.parameters.begin(), t.parameters.end(),
-                               [](const ParameterBounds& a, const ParameterBounds& b) {
-                                 const std::size_t ra = field_rank(a.name), rb = field_rank(b.name);
-                                 return ra != rb ? ra < rb : a.name < b.name;
-                               });
-            },
-            [](const T&, const std::string&, Errors&) {},  // against the controller: job rule
-            [](const T& t, json& out) {
-              json params = json::object();
-              for (const ParameterBounds& b : t.parameters) params[b.name] = {b.lower, b.upper};
-              out["parameters"] = params;
-            },
-            [] {
-              json names = json::array();
-              for (const sim::ControllerField& f : sim::controller_fields())
-                if (f.tunable()) names.push_back(f.name);
-              return json{{"type", "object"},
-                          {"minProperties", 1},
-                          {"propertyNames", {{"enum", names}}},
-                          {"additionalProperties",
-                           {{"type", "array"},
-                            {"items", {{"type", "number"}}},
-                            {"minItems", 2},
-                            {"maxItems", 2}}},
-                          {"description",
-                           "controller field → [lower, upper]: the search box (a field of the "
-                           "job's controller type, not an integer one)"}};
-            }});
+  o->field(
+      {"parameters", true,
+       [](const json& pj, const std::string& pp, T& t, Errors& e) {
+         if (!pj.is_object()) {
+           e.push_back({pp, "expected an object of name: [lower, upper], got " +
+                                json_io::json_type_name(pj)});
+           return;
+         }
+         for (auto it = pj.begin(); it != pj.end(); ++it) {
+           const std::string bp = pp + "/" + json_io::pointer_escape(it.key());
+           ParameterBounds b{it.key()};
+           const json* v = &it.value();
+           std::string vp = bp;
+           if (v->is_object()) {  // {"bounds": [lower, upper], "scale": "linear" | "log"}
+             for (auto k = v->begin(); k != v->end(); ++k)
+               if (k.key() != "bounds" && k.key() != "scale")
+                 e.push_back({bp + "/" + json_io::pointer_escape(k.key()),
+                              "unknown key (allowed here: bounds, scale)"});
+             if (const auto s = v->find("scale"); s != v->end()) {
+               if (*s == "log")
+                 b.scale = Scale::log;
+               else if (*s != "linear")
+                 e.push_back(
+                     {bp + "/scale", "must be \"linear\" or \"log\" (got " + s->dump() + ")"});
+             }
+             if (!v->contains("bounds")) {
+               e.push_back({bp + "/bounds", "is required"});
+               continue;
+             }
+             vp = bp + "/bounds";
+             v = &(*v)["bounds"];
+           }
+           if (!v->is_array() || v->size() != 2 || !(*v)[0].is_number() || !(*v)[1].is_number()) {
+             e.push_back({vp, "expected [lower, upper] (two numbers), got " +
+                                  (v->is_array() ? "an array of " + std::to_string(v->size())
+                                                 : json_io::json_type_name(*v))});
+             continue;
+           }
+           b.lower = (*v)[0].get<double>();
+           b.upper = (*v)[1].get<double>();
+           t.parameters.push_back(b);
+         }
+         // JSON objects are unordered: fix the decision-vector order as that of the
+         // controller field table (Kp before Ki), unknown names last, so it never depends
+         // on the file.
+         std::stable_sort(t.parameters.begin(), t.parameters.end(),
+                          [](const ParameterBounds& a, const ParameterBounds& b) {
+                            const std::size_t ra = field_rank(a.name), rb = field_rank(b.name);
+                            return ra != rb ? ra < rb : a.name < b.name;
+                          });
+       },
+       [](const T&, const std::string&, Errors&) {},  // against the controller: job rule
+       [](const T& t, json& out) {
+         json params = json::object();
+         for (const ParameterBounds& b : t.parameters)
+           params[b.name] = b.scale == Scale::linear
+                                ? json{b.lower, b.upper}
+                                : json{{"bounds", {b.lower, b.upper}}, {"scale", "log"}};
+         out["parameters"] = params;
+       },
+       [] {
+         json names = json::array();
+         for (const sim::ControllerField& f : sim::controller_fields())
+           if (f.tunable()) names.push_back(f.name);
+         const json pair = {
+             {"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 2}, {"maxItems", 2}};
+         return json{
+             {"type", "object"},
+             {"minProperties", 1},
+             {"propertyNames", {{"enum", names}}},
+             {"additionalProperties",
+              {{"oneOf",
+                json::array(
+                    {pair,
+                     {{"type", "object"},
+                      {"properties", {{"bounds", pair}, {"scale", {{"enum", {"linear", "log"}}}}}},
+                      {"required", {"bounds"}},
+                      {"additionalProperties", false}}})}}},
+             {"description",
+              "controller field → [lower, upper] or {\"bounds\": [lower, upper], "
+              "\"scale\": \"log\"}: the search box (a field of the job's "
+              "controller type, not an integer one); log scale searches ln x"}};
+       }});
   o->field({"algorithm", false,
             [](const json& aj, const std::string& path, T& t, Errors& e) {
               t.algorithm = parse_algorithm(aj, path, e);
@@ -259,7 +377,15 @@ Ptr<TuningConfig> make_tuning_shape() {
             [](const T& t, json& out) { out["algorithm"] = t.algorithm->to_json(); },
             [] {
               json cases = json::array();
-              for (const AlgorithmInfo& a : algorithms()) cases.push_back(a.schema());
+              for (const AlgorithmInfo& a : algorithms()) {
+                json c = a.schema();
+                // The loader takes an object without "type" for the default algorithm.
+                if (a.type == TuningConfig::default_algorithm()->type() && c.contains("required"))
+                  c["required"].erase(
+                      std::remove(c["required"].begin(), c["required"].end(), json("type")),
+                      c["required"].end());
+                cases.push_back(std::move(c));
+              }
               return json{{"type", "object"},
                           {"oneOf", cases},
                           {"description",
@@ -314,6 +440,53 @@ class CompareShape final : public schema::Shape<CompareEntry> {
 
 // --- the job ----------------------------------------------------------------------------------
 
+// The ensemble against the job: its base, the plant's actuators and inertia, member names.
+void validate_ensemble(const Job& job, const sim::PlantKind& kind, Errors& errs) {
+  const EnsembleConfig& e = *job.ensemble;
+  if (!e.base.empty() && std::none_of(job.scenarios.begin(), job.scenarios.end(),
+                                      [&](const sim::Scenario& s) { return s.name == e.base; }))
+    errs.push_back({"/ensemble/base", "no scenario is named \"" + e.base + "\" (known: " + [&] {
+                      std::string n;
+                      for (const sim::Scenario& s : job.scenarios)
+                        n += (n.empty() ? "" : ", ") + s.name;
+                      return n;
+                    }() + ")"});
+  if (e.inertia_scale && kind.offset("inertia") == std::string_view::npos)
+    errs.push_back({"/ensemble/inertia_scale", "the " + kind.model + " plant has no inertia"});
+  if (e.faults) {
+    const FaultDistribution& f = *e.faults;
+    std::set<int> seen;
+    for (std::size_t i = 0; i < f.actuators.size(); ++i) {
+      const int a = f.actuators[i];
+      const std::string p = "/ensemble/faults/actuators/" + std::to_string(i);
+      if (a < 1 || a > kind.actuators)
+        errs.push_back({p, "actuator " + std::to_string(a) + " does not exist: the " + kind.model +
+                               " has actuators 1.." + std::to_string(kind.actuators)});
+      else if (!seen.insert(a).second)
+        errs.push_back({p, "actuator " + std::to_string(a) + " is listed twice"});
+    }
+    const int listed = f.actuators.empty() ? kind.actuators : static_cast<int>(f.actuators.size());
+    if (f.count_hi > listed && f.count_lo >= 0 && f.count_hi >= f.count_lo)
+      errs.push_back({"/ensemble/faults/count", "upper bound " + std::to_string(f.count_hi) +
+                                                    " exceeds the " + std::to_string(listed) +
+                                                    " listed actuators"});
+  }
+  // Member k is named <base>-k; none may take another scenario's name.
+  if (!job.scenarios.empty()) {
+    const std::string& base = e.base.empty() ? job.scenarios.front().name : e.base;
+    for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
+      const std::string& n = job.scenarios[i].name;
+      if (n.size() > base.size() + 1 && n.compare(0, base.size() + 1, base + "-") == 0) {
+        const std::string k = n.substr(base.size() + 1);
+        if (std::all_of(k.begin(), k.end(), ::isdigit) && (k == "0" || k[0] != '0') &&
+            k.size() < 8 && std::stoll(k) < e.count)
+          errs.push_back({"/scenarios/" + std::to_string(i) + "/name",
+                          "\"" + n + "\" is also the name of ensemble member " + k});
+      }
+    }
+  }
+}
+
 // The checks that span the job's parts: names, the scenarios against the plant's shape, the
 // objective window against the scenarios, the tuned parameters against the controller.
 void validate_job(const Job& job, Errors& errs) {
@@ -345,7 +518,7 @@ void validate_job(const Job& job, Errors& errs) {
   else if (!(w.t1 > w.t0))
     errs.push_back({"/objective/window", "end " + json_io::number_text(w.t1) +
                                              " must be after start " + json_io::number_text(w.t0)});
-  else if (std::isfinite(w.t1))
+  else if (std::isfinite(w.t1) && job.objective.window_from == WindowFrom::start)
     for (const sim::Scenario& s : job.scenarios)
       if (std::isfinite(s.duration) && w.t1 > s.duration + 1e-12) {
         errs.push_back({"/objective/window/1",
@@ -353,6 +526,19 @@ void validate_job(const Job& job, Errors& errs) {
                             s.name + "\" (" + json_io::number_text(s.duration) + " s)"});
         break;
       }
+
+  // A scenario's true inertia replaces the plant's "inertia" parameter.
+  for (std::size_t i = 0; kind && i < job.scenarios.size(); ++i) {
+    const sim::Scenario& s = job.scenarios[i];
+    if (s.inertia.empty()) continue;
+    const std::string p = "/scenarios/" + std::to_string(i) + "/inertia";
+    try {
+      append(errs, kind->validate(kind->with_inertia(job.plant.values, s.inertia, p), ""));
+    } catch (const InputError& e) {
+      append(errs, e.errors());
+    }
+  }
+  if (job.ensemble && kind) validate_ensemble(job, *kind, errs);
 
   if (!job.tuning) return;
   // A gains file is valid for one sample time, so every tuned scenario must share it.
@@ -391,6 +577,9 @@ void validate_job(const Job& job, Errors& errs) {
                              json_io::number_text(b.upper)});
       continue;
     }
+    if (b.scale == Scale::log && !(b.lower > 0))
+      errs.push_back(
+          {p + "/0", "must be > 0 on a log scale (got " + json_io::number_text(b.lower) + ")"});
     for (int k = 0; k < 2; ++k) {
       const double v = k == 0 ? b.lower : b.upper;
       const std::string msg = sim::check_controller_value(job.controller, *f, v);
@@ -429,6 +618,20 @@ std::shared_ptr<const Obj<Job>> make_job_shape() {
            "controllers shown beside the job's own in comparisons", schema::kOptional, false);
   o->object("objective", &Job::objective, objective_shape(), "");
   o->optional_object("tuning", &Job::tuning, tuning_shape(), "");
+  o->field({"ensemble", false,
+            [](const json& v, const std::string& path, Job& job, Errors& e) {
+              auto config = std::make_shared<EnsembleConfig>();
+              job_detail::ensemble_shape()->read(v, path, *config, e);
+              job.ensemble = std::move(config);
+            },
+            [](const Job& job, const std::string& path, Errors& e) {
+              if (job.ensemble) job_detail::ensemble_shape()->validate(*job.ensemble, path, e);
+            },
+            [](const Job& job, json& out) {
+              if (job.ensemble)
+                out["ensemble"] = job_detail::ensemble_shape()->write(*job.ensemble);
+            },
+            [] { return job_detail::ensemble_shape()->json_schema(); }});
   o->rule([](const Job& job, const std::string&, Errors& e) { validate_job(job, e); });
   return o;
 }
@@ -442,7 +645,52 @@ const Obj<Job>& job_shape() {
 
 // --- public ----------------------------------------------------------------------------------
 
-const char* to_string(Aggregate a) { return a == Aggregate::mean ? "mean" : "max"; }
+const char* to_string(Aggregate a) {
+  switch (a) {
+    case Aggregate::mean:
+      return "mean";
+    case Aggregate::max:
+      return "max";
+    case Aggregate::quantile:
+      return "quantile";
+    case Aggregate::cvar:
+      return "cvar";
+  }
+  return "?";
+}
+
+sim::Window ObjectiveConfig::window_of(const sim::Scenario& s) const {
+  sim::Window w = window;
+  if (window_from == WindowFrom::first_fault && !s.faults.empty()) {
+    double first = s.faults.front().onset;
+    for (const sim::Fault& f : s.faults) first = std::min(first, f.onset);
+    w.t0 += first;
+    w.t1 += first;
+  }
+  w.t1 = std::min(w.t1, s.duration);  // cut at the end of the run
+  return w;
+}
+
+double ObjectiveConfig::aggregate_of(std::vector<double> v) const {
+  if (v.empty()) return 0.0;
+  if (aggregate == Aggregate::mean) {
+    double sum = 0.0;  // in scenario order
+    for (double x : v) sum += x;
+    return sum / static_cast<double>(v.size());
+  }
+  if (aggregate == Aggregate::max) return *std::max_element(v.begin(), v.end());
+  std::sort(v.begin(), v.end());  // a NaN never comes: a diverged run is +inf
+  const double n = static_cast<double>(v.size());
+  if (aggregate == Aggregate::quantile) {
+    const auto rank = static_cast<std::size_t>(std::ceil(q * n));  // nearest rank, 1-based
+    return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
+  }
+  const auto k =
+      std::clamp<std::size_t>(static_cast<std::size_t>(std::ceil((1.0 - alpha) * n)), 1, v.size());
+  double sum = 0.0;  // the k largest, ascending
+  for (std::size_t i = v.size() - k; i < v.size(); ++i) sum += v[i];
+  return sum / static_cast<double>(k);
+}
 
 AlgorithmPtr TuningConfig::default_algorithm() {
   static const AlgorithmPtr bat = make_algorithm({{"type", "bat"}});
@@ -461,8 +709,54 @@ std::int64_t Job::steps_per_evaluation() const {
   return n;
 }
 
-Job parse_job(const json& j, const std::string& source) {
+Job parse_job(const json& j_in, const std::string& source,
+              const std::optional<std::filesystem::path>& base_dir) {
   Errors errs;
+  json j = j_in;
+  // "scenarios": {"file": ...} names an ftctune.scenarios/1 file (what `ftctune ensemble`
+  // writes); its entries take the place of the list, and their stated recoverability is
+  // checked against the plant below.
+  std::vector<std::optional<bool>> stated;
+  if (j.is_object() && j.contains("scenarios") && j["scenarios"].is_object()) {
+    const json ref = j["scenarios"];
+    j["scenarios"] = json::array();
+    if (ref.size() != 1 || !ref.contains("file") || !ref["file"].is_string()) {
+      errs.push_back({"/scenarios", "expected an array of scenarios or {\"file\": path}"});
+    } else if (!base_dir) {
+      errs.push_back({"/scenarios/file",
+                      "scenario files are read relative to a job file; this "
+                      "job has none (give the scenarios inline)"});
+    } else {
+      const std::filesystem::path file = *base_dir / ref["file"].get<std::string>();
+      const std::optional<std::string> text = read_file(file);
+      json doc;
+      if (!text) {
+        errs.push_back({"/scenarios/file", "cannot open " + file.string()});
+      } else {
+        doc = json::parse(*text, nullptr, false);
+        if (doc.is_discarded() || !doc.is_object())
+          errs.push_back({"/scenarios/file", file.string() + " is not a JSON object"});
+        else if (doc.value("schema", "") != kScenariosSchema)
+          errs.push_back(
+              {"/scenarios/file",
+               file.string() + " is " +
+                   (doc.contains("schema") ? doc["schema"].dump() : std::string("unnamed")) +
+                   ", not a scenarios file (" + kScenariosSchema + ")"});
+        else if (!doc.contains("scenarios") || !doc["scenarios"].is_array())
+          errs.push_back({"/scenarios/file", file.string() + " lists no scenarios"});
+        else
+          for (json entry : doc["scenarios"]) {
+            std::optional<bool> r;
+            if (entry.is_object() && entry.contains("recoverable")) {
+              if (entry["recoverable"].is_boolean()) r = entry["recoverable"].get<bool>();
+              entry.erase("recoverable");
+            }
+            stated.push_back(r);
+            j["scenarios"].push_back(std::move(entry));
+          }
+      }
+    }
+  }
   Job job;
   job_shape().read(j, "", job, errs);
   // Every default filled in: the plant's parameters, and a scenario without an initial state
@@ -475,18 +769,28 @@ Job parse_job(const json& j, const std::string& source) {
   Errors range;
   job_shape().validate(job, "", range);
   schema::detail::dedupe_append(errs, std::move(range));
+  if (errs.empty() && !stated.empty()) {
+    const std::unique_ptr<sim::AnyPlant> plant = sim::make_plant(job.plant);
+    for (std::size_t i = 0; i < stated.size() && i < job.scenarios.size(); ++i)
+      if (stated[i] && *stated[i] != plant->recoverable(job.scenarios[i]))
+        errs.push_back({"/scenarios/" + std::to_string(i) + "/recoverable",
+                        std::string("the scenarios file says ") + (*stated[i] ? "true" : "false") +
+                            ", but its faults leave the plant " +
+                            (*stated[i] ? "without" : "with") + " full control"});
+  }
   throw_if_errors(source, std::move(errs));
   return job;
 }
 
-Job parse_job_text(const std::string& text, const std::string& source) {
-  return parse_job(json_io::parse_json_text(text, source), source);
+Job parse_job_text(const std::string& text, const std::string& source,
+                   const std::optional<std::filesystem::path>& base_dir) {
+  return parse_job(json_io::parse_json_text(text, source), source, base_dir);
 }
 
 Job load_job(const std::filesystem::path& file) {
   const std::optional<std::string> text = read_file(file);
   if (!text) throw InputError(file.string(), "", "cannot open the job file");
-  return parse_job_text(*text, file.string());
+  return parse_job_text(*text, file.string(), file.parent_path());
 }
 
 json job_json_schema() {

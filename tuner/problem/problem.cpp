@@ -6,19 +6,9 @@
 #include <utility>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/tune/job/ensemble.hpp"
 
 namespace ftc::tune {
-
-double aggregate_objective(const ObjectiveConfig& objective, std::span<const sim::Metrics> runs) {
-  double acc = 0.0;
-  for (const sim::Metrics& m : runs) {
-    const double v = m.objective(objective.metric);
-    acc = objective.aggregate == Aggregate::mean ? acc + v : std::max(acc, v);
-  }
-  if (objective.aggregate == Aggregate::mean && !runs.empty())
-    acc /= static_cast<double>(runs.size());
-  return acc;
-}
 
 double fitness_of(double objective) {
   if (!std::isfinite(objective) || objective < 0) return 0.0;
@@ -29,27 +19,59 @@ double fitness_of(double objective) {
 TuningProblem::TuningProblem(Job job) : job_(std::make_shared<const Job>(std::move(job))) {
   throw_if_errors("job " + job_->name, job_->validate());
   plant_ = sim::make_plant(job_->plant);
+  auto all = std::make_shared<std::vector<sim::Scenario>>(job_->scenarios);
+  for (sim::Scenario& m : expand_ensemble(*job_)) all->push_back(std::move(m));
+  scenarios_ = std::move(all);
+  const bool include = job_->ensemble && job_->ensemble->unrecoverable == Unrecoverable::include;
+  for (const sim::Scenario& sc : *scenarios_) {
+    recoverable_.push_back(plant_->recoverable(sc));
+    counted_.push_back(recoverable_.back() || include);
+  }
   if (!job_->tuning) return;
   for (const ParameterBounds& b : job_->tuning->parameters) {
     const sim::ControllerField* f = sim::find_controller_field(b.name);
     space_.names.push_back(b.name);
-    space_.lower.push_back(b.lower);
-    space_.upper.push_back(b.upper);
-    members_.push_back(f->member);  // validate() made sure the field exists and is tunable
+    const bool log = b.scale == Scale::log;
+    space_.lower.push_back(log ? std::log(b.lower) : b.lower);
+    space_.upper.push_back(log ? std::log(b.upper) : b.upper);
+    scales_.push_back(b.scale);
+    fields_.push_back(f->member);  // validate() made sure the field exists and is tunable
   }
 }
 
-sim::ControllerConfig TuningProblem::controller_for(std::span<const double> x) const {
+int TuningProblem::unrecoverable() const {
+  return static_cast<int>(std::count(recoverable_.begin(), recoverable_.end(), false));
+}
+
+int TuningProblem::left_out() const {
+  return static_cast<int>(std::count(counted_.begin(), counted_.end(), false));
+}
+
+Decision TuningProblem::to_parameters(std::span<const double> y) const {
+  Decision x(y.begin(), y.end());
+  for (std::size_t j = 0; j < x.size() && j < scales_.size(); ++j)
+    if (scales_[j] == Scale::log) {
+      const ParameterBounds& b = job_->tuning->parameters[j];
+      x[j] = std::clamp(std::exp(y[j]), b.lower, b.upper);  // exp(ln b) may miss b by an ulp
+    }
+  return x;
+}
+
+sim::ControllerConfig TuningProblem::controller_for(std::span<const double> y) const {
+  return controller_with(to_parameters(y));
+}
+
+sim::ControllerConfig TuningProblem::controller_with(std::span<const double> x) const {
   sim::ControllerConfig c = job_->controller;
-  for (std::size_t j = 0; j < members_.size(); ++j) c.*members_[j] = x[j];
+  for (std::size_t j = 0; j < fields_.size(); ++j) c.*fields_[j] = x[j];
   return c;
 }
 
 sim::SimulationOptions TuningProblem::simulation_options(std::size_t scenario,
                                                          std::int64_t record_every) const {
-  const sim::Scenario& s = job_->scenarios.at(scenario);
+  const sim::Scenario& s = scenarios_->at(scenario);
   sim::SimulationOptions o;
-  o.window = job_->objective.window;
+  o.window = job_->objective.window_of(s);
   o.record_every = record_every;
   std::vector<double> cuts;
   for (const sim::Fault& f : s.faults)
@@ -68,31 +90,49 @@ sim::SimulationOptions TuningProblem::simulation_options(std::size_t scenario,
 sim::SimulationResult TuningProblem::simulate(const sim::ControllerConfig& controller,
                                               std::size_t scenario,
                                               std::int64_t record_every) const {
-  return plant_->simulate(controller, job_->scenarios.at(scenario),
+  return plant_->simulate(controller, scenarios_->at(scenario),
                           simulation_options(scenario, record_every));
 }
 
-std::vector<SimulationTask> TuningProblem::tasks(std::size_t candidates) const {
+std::vector<SimulationTask> TuningProblem::tasks(std::size_t candidates, bool record_listed) const {
   std::vector<SimulationTask> t;
   t.reserve(candidates * scenarios());
   for (std::size_t c = 0; c < candidates; ++c)
-    for (std::size_t s = 0; s < scenarios(); ++s) t.push_back({c, s});
+    for (std::size_t s = 0; s < scenarios(); ++s)
+      t.push_back({c, s, record_listed && s < listed_scenarios()});
   return t;
 }
 
 Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
   Evaluation e;
   e.scenarios = std::move(per_scenario);
-  for (const sim::Metrics& m : e.scenarios) e.diverged = e.diverged || m.diverged;
-  e.objective = aggregate_objective(job_->objective, e.scenarios);
-  e.fitness = e.diverged ? 0.0 : fitness_of(e.objective);
+  std::vector<double> values;
+  values.reserve(e.scenarios.size());
+  for (std::size_t i = 0; i < e.scenarios.size(); ++i) {
+    const sim::Metrics& m = e.scenarios[i];
+    e.diverged = e.diverged || m.diverged;
+    e.diverged_count += m.diverged ? 1 : 0;
+    if (counted_[i]) values.push_back(m.objective(job_->objective.metric));  // +inf if diverged
+  }
+  e.objective = job_->objective.aggregate_of(std::move(values));
+  e.fitness = fitness_of(e.objective);
   return e;
+}
+
+TuningProblem TuningProblem::perturbed(std::uint64_t seed, std::uint64_t k, double eps) const {
+  TuningProblem p = *this;
+  auto scenarios = std::make_shared<std::vector<sim::Scenario>>(*scenarios_);
+  SplitMix64 r = SplitMix64::member(seed, k);
+  for (sim::Scenario& s : *scenarios)
+    for (double& x : s.initial_state) x *= 1.0 + eps * (2.0 * r.uniform() - 1.0);
+  p.scenarios_ = std::move(scenarios);
+  return p;
 }
 
 std::vector<CandidateOutcome> TuningProblem::evaluate(
     std::span<const sim::ControllerConfig> controllers, BatchEvaluator& evaluator,
     std::int64_t record_every) const {
-  const std::vector<SimulationTask> t = tasks(controllers.size());
+  const std::vector<SimulationTask> t = tasks(controllers.size(), record_every > 0);
   std::vector<TaskResult> results = evaluator.run(*this, {controllers, t, record_every});
   const std::size_t S = scenarios();
   std::vector<CandidateOutcome> out(controllers.size());
@@ -102,7 +142,7 @@ std::vector<CandidateOutcome> TuningProblem::evaluate(
     for (std::size_t s = 0; s < S; ++s) {
       TaskResult& r = results[i * S + s];
       per.push_back(std::move(r.metrics));
-      if (record_every > 0) out[i].trajectories.push_back(std::move(r.trajectory));
+      if (t[i * S + s].record) out[i].trajectories.push_back(std::move(r.trajectory));
       if (out[i].error.empty() && !r.error.empty()) out[i].error = r.error;
     }
     out[i].evaluation = score(std::move(per));
@@ -131,7 +171,7 @@ double TuningProblem::objective(std::span<const double> x, const ObjectiveOption
                           ", " + json_io::number_text(space_.upper[j]) + "]"});
   throw_if_errors("objective", std::move(errs));
   SerialEvaluator serial;
-  const sim::ControllerConfig c = controller_for(x);
+  const sim::ControllerConfig c = controller_with(x);
   const CandidateOutcome o = evaluate(std::span<const sim::ControllerConfig>(&c, 1), serial)[0];
   if (!o.error.empty()) throw InputError("objective", "", o.error);
   const double v =

@@ -27,7 +27,8 @@
 // The third actuator is there for fault tolerance: B has full row rank with any one column
 // removed, so after one actuator is lost (or stuck) the remaining two still reach every joint
 // torque. With only the two joint motors, losing one would leave a joint unactuated. (Whether a
-// controller that does not know of the fault recovers is another matter: docs/model.md (the manipulator section).)
+// controller that does not know of the fault recovers is another matter: docs/model.md (the
+// manipulator section).)
 //
 // In the paper's form dX2/dt = f(X) + G(X) u + Δ:
 //

@@ -67,8 +67,7 @@ class MetricsAccumulator {
     m_.window = window;
     m_.extra.assign(extra_windows.size(), ErrorIntegrals{});
     m_.extra_windows = std::move(extra_windows);
-    m_.peak_error_after_fault.assign(fault_onsets.size(),
-                                     std::numeric_limits<double>::quiet_NaN());
+    m_.peak_error_after_fault.assign(fault_onsets.size(), std::numeric_limits<double>::quiet_NaN());
     m_.fault_onsets = std::move(fault_onsets);
   }
 

@@ -64,6 +64,10 @@ struct PlantKind {
   // Every value out of its parameter's range, named `path`/<parameter>[/<index>].
   std::vector<FieldError> validate(const std::vector<double>& values,
                                    const std::string& path) const;
+  // The values with a scenario's true inertia put in place of the "inertia" parameter; checks
+  // that the plant has one of that size, naming `path` (the scenario's inertia) otherwise.
+  std::vector<double> with_inertia(std::vector<double> values, const std::vector<double>& inertia,
+                                   const std::string& path) const;
 };
 
 // A plant of any shape with the simulator and controllers compiled for it. Immutable and
@@ -75,10 +79,17 @@ class AnyPlant {
   int axes() const { return kind().axes; }
   int actuators() const { return kind().actuators; }
 
-  // One scenario with a fresh controller of the given configuration. Throws InputError for an
-  // invalid controller or scenario; a diverging run is a result, never an exception.
+  // One scenario with a fresh controller of the given configuration. The controller is given
+  // this plant as its model; the simulated plant is the same unless the scenario names a true
+  // inertia. Throws InputError for an invalid controller or scenario; a diverging run is a
+  // result, never an exception.
   virtual SimulationResult simulate(const ControllerConfig& controller, const Scenario& scenario,
                                     const SimulationOptions& options = {}) const = 0;
+
+  // Whether any gains can control every axis once all of the scenario's faults have started:
+  // the actuators still acting (not stuck, not wholly lost) leave G, at the scenario's initial
+  // state, with full row rank n.
+  virtual bool recoverable(const Scenario& scenario) const = 0;
 };
 
 const std::vector<PlantKind>& plant_kinds();

@@ -15,9 +15,9 @@ struct Range {
   static constexpr Range any() { return {}; }
   static constexpr Range positive() { return {0.0, true}; }
   static constexpr Range non_negative() { return {0.0, false}; }
-  static constexpr Range unit() { return {0.0, false, 1.0, false}; }            // [0, 1]
-  static constexpr Range open_unit() { return {0.0, true, 1.0, true}; }         // (0, 1)
-  static constexpr Range half_open_unit() { return {0.0, true, 1.0, false}; }   // (0, 1]
+  static constexpr Range unit() { return {0.0, false, 1.0, false}; }           // [0, 1]
+  static constexpr Range open_unit() { return {0.0, true, 1.0, true}; }        // (0, 1)
+  static constexpr Range half_open_unit() { return {0.0, true, 1.0, false}; }  // (0, 1]
   static constexpr Range at_least(double v) { return {v, false}; }
   static constexpr Range between(double lo, double hi) { return {lo, false, hi, false}; }
 

@@ -21,6 +21,7 @@ class TuningProblem;
 struct SimulationTask {
   std::size_t candidate = 0;  // index into SimulationBatch::candidates
   std::size_t scenario = 0;   // index into the problem's scenarios
+  bool record = false;        // keep the trajectory (every record_every-th sample)
 };
 
 struct SimulationBatch {

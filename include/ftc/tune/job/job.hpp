@@ -22,6 +22,7 @@
 namespace ftc::tune {
 
 inline constexpr const char* kJobSchema = "ftctune.job/1";
+inline constexpr const char* kScenariosSchema = "ftctune.scenarios/1";
 
 using runtime::parse_controller;
 using runtime::to_json;
@@ -30,19 +31,38 @@ using runtime::to_json;
 // them); the loader fills in every default.
 using PlantConfig = sim::PlantSpec;
 
-enum class Aggregate { mean, max };
+// How the scenarios' values combine into the objective (SPEC §13): for n values sorted
+// ascending, quantile is the nearest rank v_ceil(q n), cvar the mean of the largest
+// ceil((1 - alpha) n); a diverged scenario counts +inf.
+enum class Aggregate { mean, max, quantile, cvar };
 const char* to_string(Aggregate a);
+
+// Where the objective window is measured from: each run's start, or each scenario's earliest
+// fault onset (so members with random onsets are all scored on their recovery).
+enum class WindowFrom { start, first_fault };
 
 struct ObjectiveConfig {
   sim::Metric metric = sim::Metric::ise;
   sim::Window window;  // default: the whole run
   Aggregate aggregate = Aggregate::mean;
+  double q = 0.9;      // quantile
+  double alpha = 0.9;  // cvar
+  WindowFrom window_from = WindowFrom::start;
+
+  // The window of one scenario: the job's window, shifted to the scenario's first fault when
+  // window_from is first_fault, and cut at the scenario's end.
+  sim::Window window_of(const sim::Scenario& s) const;
+  // The aggregate of values (+inf for a diverged run); 0 values give 0.
+  double aggregate_of(std::vector<double> values) const;
 };
+
+enum class Scale { linear, log };
 
 struct ParameterBounds {
   std::string name;  // a tunable field of the controller
   double lower = 0.0;
   double upper = 0.0;
+  Scale scale = Scale::linear;  // log: the optimiser searches ln x uniformly (0 < lower)
 };
 
 struct TuningConfig {
@@ -58,10 +78,14 @@ struct CompareEntry {
   sim::ControllerConfig controller;
 };
 
+struct EnsembleConfig;  // job/ensemble.hpp
+
 struct Job {
   std::string name;
   PlantConfig plant;
-  std::vector<sim::Scenario> scenarios;
+  std::vector<sim::Scenario> scenarios;  // the scenarios listed (or loaded from a file)
+  // Scenarios drawn from distributions (SPEC §12); shared, immutable once loaded.
+  std::shared_ptr<const EnsembleConfig> ensemble;
   sim::ControllerConfig controller;
   std::vector<CompareEntry> compare;
   ObjectiveConfig objective;
@@ -73,9 +97,12 @@ struct Job {
   std::int64_t steps_per_evaluation() const;
 };
 
-// Parses and validates; throws InputError(source, every error).
-Job parse_job(const nlohmann::json& j, const std::string& source);
-Job parse_job_text(const std::string& text, const std::string& source);
+// Parses and validates; throws InputError(source, every error). A scenario file named by the job
+// ("scenarios": {"file": ...}) is read relative to `base_dir`; without one it is refused.
+Job parse_job(const nlohmann::json& j, const std::string& source,
+              const std::optional<std::filesystem::path>& base_dir = std::nullopt);
+Job parse_job_text(const std::string& text, const std::string& source,
+                   const std::optional<std::filesystem::path>& base_dir = std::nullopt);
 Job load_job(const std::filesystem::path& file);
 
 // The JSON Schema (draft 2020-12) of job files, generated from the same description the loader

@@ -31,10 +31,11 @@ namespace ftc::tune {
 
 // A candidate's score.
 struct Evaluation {
-  std::vector<sim::Metrics> scenarios;  // per scenario of the job
-  double objective = 0.0;               // the aggregate; +inf when a scenario diverged
-  double fitness = 0.0;                 // 1/objective; 0 when diverged
-  bool diverged = false;
+  std::vector<sim::Metrics> scenarios;  // per scenario of the problem (listed, then members)
+  double objective = 0.0;               // the aggregate; +inf when it takes a diverged run
+  double fitness = 0.0;                 // 1/objective; 0 when the objective is +inf
+  bool diverged = false;                // some scenario diverged
+  int diverged_count = 0;               // how many (counted or not)
 };
 
 // A candidate's score with what else its simulations gave.
@@ -44,8 +45,6 @@ struct CandidateOutcome {
   std::vector<sim::Trajectory> trajectories;  // per scenario, when recorded
 };
 
-// The aggregate of the job's metric over its scenarios (mean or max).
-double aggregate_objective(const ObjectiveConfig& objective, std::span<const sim::Metrics> runs);
 double fitness_of(double objective);  // 1/objective; 0 for inf/NaN; +inf for 0
 
 struct ObjectiveOptions {
@@ -57,16 +56,33 @@ struct ObjectiveOptions {
 class TuningProblem {
  public:
   // Throws InputError when the job does not validate. A job without a tuning section is a
-  // problem of dimension 0 (its own controller only: simulate, compare).
+  // problem of dimension 0 (its own controller only: simulate, compare). The job's ensemble is
+  // expanded here, on the calling thread, and appended to its listed scenarios.
   explicit TuningProblem(Job job);
 
   const Job& job() const { return *job_; }
   const sim::AnyPlant& plant() const { return *plant_; }
+  // The search space in search coordinates: ln x for a parameter on a log scale, x otherwise.
   const SearchSpace& space() const { return space_; }
-  std::size_t scenarios() const { return job_->scenarios.size(); }
 
-  // The job's controller with the tuned fields set from x (in space().names order).
-  sim::ControllerConfig controller_for(std::span<const double> x) const;
+  // The scenarios: the job's listed ones, then its ensemble's members.
+  std::size_t scenarios() const { return scenarios_->size(); }
+  std::size_t listed_scenarios() const { return job_->scenarios.size(); }
+  const sim::Scenario& scenario(std::size_t i) const { return (*scenarios_)[i]; }
+  // Whether gains can control the scenario once its faults have started (SPEC §12), and
+  // whether it counts in the objective (unrecoverable ones are left out unless the ensemble
+  // says include).
+  bool recoverable(std::size_t i) const { return recoverable_[i]; }
+  bool counted(std::size_t i) const { return counted_[i]; }
+  int unrecoverable() const;  // how many scenarios are not recoverable
+  int left_out() const;       // how many of them the objective leaves out
+
+  // Parameter values from search coordinates (exp for log-scale ones, kept inside the bounds).
+  Decision to_parameters(std::span<const double> y) const;
+  // The job's controller with the tuned fields set from search coordinates y.
+  sim::ControllerConfig controller_for(std::span<const double> y) const;
+  // The job's controller with the tuned fields set to the values x (in space().names order).
+  sim::ControllerConfig controller_with(std::span<const double> x) const;
   // The simulation options of a scenario: the objective window and the fault segments (before
   // the first onset, between onsets, after the last) as extra windows.
   sim::SimulationOptions simulation_options(std::size_t scenario,
@@ -76,8 +92,9 @@ class TuningProblem {
   sim::SimulationResult simulate(const sim::ControllerConfig& controller, std::size_t scenario,
                                  std::int64_t record_every = 0) const;
 
-  // The tasks of n candidates: every (candidate, scenario) pair, candidate-major.
-  std::vector<SimulationTask> tasks(std::size_t candidates) const;
+  // The tasks of n candidates: every (candidate, scenario) pair, candidate-major; with
+  // `record_listed` the listed scenarios' trajectories are kept (never the members').
+  std::vector<SimulationTask> tasks(std::size_t candidates, bool record_listed = false) const;
   // A candidate's score from its metrics on every scenario.
   Evaluation score(std::vector<sim::Metrics> per_scenario) const;
   // Simulates and scores controllers through an evaluator, one outcome per controller.
@@ -85,16 +102,24 @@ class TuningProblem {
                                          BatchEvaluator& evaluator,
                                          std::int64_t record_every = 0) const;
 
-  // The objective (minimised) of decision vector x, simulated on the calling thread. Throws
-  // InputError, before simulating anything, when x has the wrong size, is not finite or lies
-  // outside the tuning bounds.
+  // The objective (minimised) of the parameter values x (natural units, in space().names
+  // order), simulated on the calling thread. Throws InputError, before simulating anything,
+  // when x has the wrong size, is not finite or lies outside the tuning bounds.
   double objective(std::span<const double> x, const ObjectiveOptions& options = {}) const;
+
+  // A copy whose scenarios start from initial states multiplied component by component by
+  // 1 + eps (2u - 1), u from the SPEC §12 stream of member k with the given seed, drawn in
+  // scenario order then component order: the noise-floor probe of SPEC §14.
+  TuningProblem perturbed(std::uint64_t seed, std::uint64_t k, double eps) const;
 
  private:
   std::shared_ptr<const Job> job_;
   std::shared_ptr<const sim::AnyPlant> plant_;
+  std::shared_ptr<const std::vector<sim::Scenario>> scenarios_;
+  std::vector<bool> recoverable_, counted_;
   SearchSpace space_;
-  std::vector<double sim::ControllerConfig::*> members_;  // one per coordinate
+  std::vector<Scale> scales_;                            // one per coordinate
+  std::vector<double sim::ControllerConfig::*> fields_;  // one per coordinate
 };
 
 // The problem as an optimiser sees it: the fitness of a batch of decision vectors, simulated

@@ -1,0 +1,95 @@
+#pragma once
+// Scenario ensembles (SPEC §12): many scenarios drawn from distributions, reproducibly, so that
+// gains are tuned for a family of faults and plants and checked on members they were not tuned
+// on. The random numbers are normative: member k has its own SplitMix64 stream seeded from the
+// ensemble's seed and k, and its draws are taken in a fixed order whether used or not, so any
+// implementation expands the same members, in any order and on any number of threads.
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ftc/sim/scenario.hpp"
+#include "ftc/tune/job/job.hpp"
+
+namespace ftc::tune {
+
+// SplitMix64: mix(z) is the finaliser, next() the stream of SPEC §12.
+class SplitMix64 {
+ public:
+  static std::uint64_t mix(std::uint64_t z);
+  // The stream of member k of an ensemble seeded `seed`: s0 = mix(seed XOR mix(k + 1)).
+  static SplitMix64 member(std::uint64_t seed, std::uint64_t k);
+
+  explicit SplitMix64(std::uint64_t state) : s_(state) {}
+  std::uint64_t next_bits();
+  double uniform() { return static_cast<double>(next_bits() >> 11) * 0x1.0p-53; }  // [0, 1)
+
+ private:
+  std::uint64_t s_;
+};
+
+// A random variable: a constant, U(a, b), or log-uniform on [a, b] (0 < a).
+struct Distribution {
+  enum class Kind { constant, uniform, log_uniform };
+  Kind kind = Kind::constant;
+  double a = 0.0, b = 0.0;  // the constant is a
+
+  static Distribution constant(double v) { return {Kind::constant, v, v}; }
+  double draw(double u) const;
+};
+
+// A weighted choice among names in a canonical order: the first name whose cumulative weight
+// exceeds u·W. Absent names weigh 0.
+struct Choice {
+  std::vector<double> weights;  // per canonical name
+  std::size_t pick(double u) const;
+};
+
+inline constexpr std::array<sim::FaultType, 3> kFaultTypeOrder = {
+    sim::FaultType::bias, sim::FaultType::loss_of_effectiveness, sim::FaultType::stuck};
+inline constexpr std::array<sim::FaultProfileType, 2> kProfileOrder = {
+    sim::FaultProfileType::abrupt, sim::FaultProfileType::incipient};
+
+struct FaultDistribution {
+  int count_lo = 0, count_hi = 0;     // a member gets lo + floor(u (hi - lo + 1)) faults
+  std::vector<int> actuators;         // in listed order; empty: every actuator of the plant
+  Choice type;                        // over kFaultTypeOrder
+  std::optional<Distribution> onset;  // absent: half the duration
+  Choice profile{{1.0, 0.0}};         // over kProfileOrder; default abrupt only
+  Distribution rate = Distribution::constant(1.0);
+  Distribution offset = Distribution::constant(0.0);
+  Distribution amplitude = Distribution::constant(0.0);
+  Distribution frequency = Distribution::constant(0.0);
+  Distribution phase = Distribution::constant(0.0);
+  Distribution fraction = Distribution::constant(0.5);
+  Distribution value = Distribution::constant(0.0);
+};
+
+enum class Unrecoverable { exclude, include };
+
+struct EnsembleConfig {
+  std::int64_t count = 1;
+  std::uint64_t seed = 0;
+  std::string base;  // the scenario members copy; "" = the first
+  // Absent: factor 1 (the draws are consumed all the same).
+  std::optional<Distribution> inertia_scale, initial_state_scale, disturbance_scale;
+  std::optional<FaultDistribution> faults;  // absent: members keep the base's faults
+  Unrecoverable unrecoverable = Unrecoverable::exclude;
+};
+
+inline constexpr std::int64_t kMaxEnsembleCount = 1000000;
+
+// Member k (0-based) of the job's ensemble with the given seed, named `<base>-<k>`. The job must
+// be valid (parse_job checked the ensemble against its plant and scenarios).
+sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k);
+// Members 0 .. count-1; seed and count default to the job's ensemble's.
+std::vector<sim::Scenario> expand_ensemble(const Job& job,
+                                           std::optional<std::uint64_t> seed = std::nullopt,
+                                           std::optional<std::int64_t> count = std::nullopt);
+
+// The base scenario of the job's ensemble.
+const sim::Scenario& ensemble_base(const Job& job);
+
+}  // namespace ftc::tune

@@ -1,0 +1,457 @@
+#include "ftc/tune/job/ensemble.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "ftc/runtime/json_reader.hpp"
+#include "ftc/runtime/schema.hpp"
+#include "ftc/sim/plants.hpp"
+#include "job/shapes.hpp"
+
+namespace ftc::tune {
+
+using nlohmann::json;
+using schema::Errors;
+
+// --- the stream --------------------------------------------------------------------------------
+
+std::uint64_t SplitMix64::mix(std::uint64_t z) {
+  z ^= z >> 30;
+  z *= 0xBF58476D1CE4E5B9ULL;
+  z ^= z >> 27;
+  z *= 0x94D049BB133111EBULL;
+  z ^= z >> 31;
+  return z;
+}
+
+SplitMix64 SplitMix64::member(std::uint64_t seed, std::uint64_t k) {
+  return SplitMix64(mix(seed ^ mix(k + 1)));
+}
+
+std::uint64_t SplitMix64::next_bits() {
+  s_ += 0x9E3779B97F4A7C15ULL;
+  return mix(s_);
+}
+
+double Distribution::draw(double u) const {
+  switch (kind) {
+    case Kind::constant:
+      return a;
+    case Kind::uniform:
+      return a + (b - a) * u;
+    case Kind::log_uniform:
+      return std::exp(std::log(a) + (std::log(b) - std::log(a)) * u);
+  }
+  return a;
+}
+
+std::size_t Choice::pick(double u) const {
+  double total = 0.0;
+  for (double w : weights) total += w;
+  const double target = u * total;
+  double cumulative = 0.0;
+  std::size_t last = 0;
+  for (std::size_t i = 0; i < weights.size(); ++i) {
+    if (weights[i] <= 0.0) continue;
+    cumulative += weights[i];
+    last = i;
+    if (cumulative > target) return i;
+  }
+  return last;  // rounding at u just below 1
+}
+
+// --- expansion ---------------------------------------------------------------------------------
+
+const sim::Scenario& ensemble_base(const Job& job) {
+  const std::string& base = job.ensemble->base;
+  if (base.empty()) return job.scenarios.front();
+  for (const sim::Scenario& s : job.scenarios)
+    if (s.name == base) return s;
+  throw InputError("job " + job.name, "/ensemble/base", "no scenario is named \"" + base + "\"");
+}
+
+sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k) {
+  const EnsembleConfig& e = *job.ensemble;
+  const sim::Scenario& base = ensemble_base(job);
+  const sim::PlantKind& kind = *sim::find_plant_kind(job.plant.model);
+  SplitMix64 r = SplitMix64::member(seed, static_cast<std::uint64_t>(k));
+  const auto factor = [&](const std::optional<Distribution>& d) {
+    const double u = r.uniform();  // consumed whether or not the scale is given
+    return d ? d->draw(u) : 1.0;
+  };
+
+  sim::Scenario s = base;
+  s.name = base.name + "-" + std::to_string(k);
+
+  // 3 inertia factors (axes 1-3), onto the base's true inertia or the plant's.
+  std::array<double, 3> inertia_factor{};
+  for (double& f : inertia_factor) f = factor(e.inertia_scale);
+  if (const std::size_t at = kind.offset("inertia"); at != std::string_view::npos) {
+    std::vector<double> inertia = base.inertia;
+    if (inertia.empty())
+      for (std::size_t i = 0; i < kind.parameters.size(); ++i)
+        if (kind.parameters[i].name == "inertia")
+          inertia.assign(
+              job.plant.values.begin() + static_cast<long>(at),
+              job.plant.values.begin() + static_cast<long>(at + kind.parameters[i].size()));
+    for (std::size_t i = 0; i < inertia.size() && i < inertia_factor.size(); ++i)
+      inertia[i] *= inertia_factor[i];
+    s.inertia = std::move(inertia);
+  }
+  // One factor per initial-state component (2n: six for the spacecraft).
+  for (double& x : s.initial_state) x *= factor(e.initial_state_scale);
+  // One factor on every disturbance amplitude.
+  const double d = factor(e.disturbance_scale);
+  for (sim::DisturbanceTerm& t : s.disturbance) t.amplitude *= d;
+
+  if (!e.faults) return s;
+  const FaultDistribution& fd = *e.faults;
+  const int span = fd.count_hi - fd.count_lo + 1;
+  const int count =
+      std::min(fd.count_hi, fd.count_lo + static_cast<int>(std::floor(r.uniform() * span)));
+  std::vector<int> available = fd.actuators;
+  if (available.empty())
+    for (int j = 1; j <= kind.actuators; ++j) available.push_back(j);
+  s.faults.clear();
+  for (int slot = 0; slot < fd.count_hi; ++slot) {
+    // The slot's 11 draws, in the normative order, all consumed.
+    double u[11];
+    for (double& v : u) v = r.uniform();
+    if (slot >= count) continue;
+    sim::Fault f;
+    const std::size_t pick = std::min(
+        available.size() - 1, static_cast<std::size_t>(std::floor(u[0] * available.size())));
+    f.actuator = available[pick];
+    available.erase(available.begin() + static_cast<long>(pick));
+    f.type = kFaultTypeOrder[fd.type.pick(u[1])];
+    f.onset = fd.onset ? fd.onset->draw(u[2]) : 0.5 * base.duration;
+    f.profile.type = kProfileOrder[fd.profile.pick(u[3])];
+    f.profile.rate = f.profile.type == sim::FaultProfileType::incipient ? fd.rate.draw(u[4]) : 1.0;
+    switch (f.type) {
+      case sim::FaultType::bias:
+        f.offset = fd.offset.draw(u[5]);
+        f.amplitude = fd.amplitude.draw(u[6]);
+        f.frequency = fd.frequency.draw(u[7]);
+        f.phase = fd.phase.draw(u[8]);
+        break;
+      case sim::FaultType::loss_of_effectiveness:
+        f.fraction = std::clamp(fd.fraction.draw(u[9]), 0.0, 1.0);
+        break;
+      case sim::FaultType::stuck:
+        f.value = fd.value.draw(u[10]);
+        break;
+    }
+    s.faults.push_back(f);
+  }
+  return s;
+}
+
+std::vector<sim::Scenario> expand_ensemble(const Job& job, std::optional<std::uint64_t> seed,
+                                           std::optional<std::int64_t> count) {
+  std::vector<sim::Scenario> members;
+  if (!job.ensemble) return members;
+  const std::int64_t n = count.value_or(job.ensemble->count);
+  members.reserve(static_cast<std::size_t>(n));
+  for (std::int64_t k = 0; k < n; ++k)
+    members.push_back(ensemble_member(job, seed.value_or(job.ensemble->seed), k));
+  return members;
+}
+
+// --- the JSON form -----------------------------------------------------------------------------
+
+namespace {
+
+const char* kind_name(Distribution::Kind k) {
+  return k == Distribution::Kind::uniform ? "uniform" : "log_uniform";
+}
+
+// A number (constant), {"uniform": [a, b]} or {"log_uniform": [a, b]}.
+class DistributionShape final : public schema::Shape<Distribution> {
+ public:
+  explicit DistributionShape(std::string doc, bool positive = false)
+      : doc_(std::move(doc)), positive_(positive) {}
+
+  void read(const json& j, const std::string& path, Distribution& out,
+            Errors& errs) const override {
+    if (j.is_number()) {
+      out = Distribution::constant(j.get<double>());
+      return;
+    }
+    const char* expected =
+        "expected a number, {\"uniform\": [a, b]} or {\"log_uniform\": [a, b]}, got ";
+    if (!j.is_object() || j.size() != 1 || !(j.contains("uniform") || j.contains("log_uniform"))) {
+      errs.push_back({path, expected + json_io::json_type_name(j)});
+      return;
+    }
+    const std::string key = j.begin().key();
+    const json& v = j.begin().value();
+    const std::string p = path + "/" + key;
+    if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number()) {
+      errs.push_back({p, "expected [a, b] (two numbers), got " + json_io::json_type_name(v)});
+      return;
+    }
+    out.kind = key == "uniform" ? Distribution::Kind::uniform : Distribution::Kind::log_uniform;
+    out.a = v[0].get<double>();
+    out.b = v[1].get<double>();
+  }
+  void validate(const Distribution& d, const std::string& path, Errors& errs) const override {
+    if (d.kind == Distribution::Kind::constant) {
+      if (!std::isfinite(d.a))
+        errs.push_back({path, "must be a finite number"});
+      else if (positive_ && !(d.a > 0))
+        errs.push_back({path, "must be > 0 (got " + json_io::number_text(d.a) + ")"});
+      return;
+    }
+    const std::string p = path + "/" + kind_name(d.kind);
+    if (!std::isfinite(d.a) || !std::isfinite(d.b)) {
+      errs.push_back({p, "must hold two finite numbers"});
+      return;
+    }
+    if (d.a > d.b)
+      errs.push_back({p, "lower end " + json_io::number_text(d.a) + " is above upper end " +
+                             json_io::number_text(d.b)});
+    else if ((d.kind == Distribution::Kind::log_uniform || positive_) && !(d.a > 0))
+      errs.push_back(
+          {p + "/0", std::string("must be > 0 for ") +
+                         (d.kind == Distribution::Kind::log_uniform ? "a log-uniform distribution"
+                                                                    : "a scale of the inertia") +
+                         " (got " + json_io::number_text(d.a) + ")"});
+  }
+  json write(const Distribution& d) const override {
+    if (d.kind == Distribution::Kind::constant) return d.a;
+    return {{kind_name(d.kind), {d.a, d.b}}};
+  }
+  json json_schema() const override {
+    const json pair = {
+        {"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 2}, {"maxItems", 2}};
+    return {{"description", doc_},
+            {"oneOf", json::array({{{"type", "number"}},
+                                   {{"type", "object"},
+                                    {"properties", {{"uniform", pair}}},
+                                    {"required", {"uniform"}},
+                                    {"additionalProperties", false}},
+                                   {{"type", "object"},
+                                    {"properties", {{"log_uniform", pair}}},
+                                    {"required", {"log_uniform"}},
+                                    {"additionalProperties", false}}})}};
+  }
+
+ private:
+  std::string doc_;
+  bool positive_;
+};
+
+// name → weight over a canonical list of names.
+class ChoiceShape final : public schema::Shape<Choice> {
+ public:
+  ChoiceShape(std::vector<std::string> names, std::string doc)
+      : names_(std::move(names)), doc_(std::move(doc)) {}
+
+  void read(const json& j, const std::string& path, Choice& out, Errors& errs) const override {
+    if (!j.is_object()) {
+      errs.push_back(
+          {path, "expected an object of name: weight, got " + json_io::json_type_name(j)});
+      return;
+    }
+    out.weights.assign(names_.size(), 0.0);
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      const std::string p = path + "/" + json_io::pointer_escape(it.key());
+      const auto n = std::find(names_.begin(), names_.end(), it.key());
+      if (n == names_.end()) {
+        std::string known;
+        for (const std::string& k : names_) known += (known.empty() ? "" : ", ") + k;
+        errs.push_back({p, "unknown name (known: " + known + ")"});
+      } else if (!it.value().is_number()) {
+        errs.push_back({p, "expected a number, got " + json_io::json_type_name(it.value())});
+      } else {
+        out.weights[static_cast<std::size_t>(n - names_.begin())] = it.value().get<double>();
+      }
+    }
+  }
+  void validate(const Choice& c, const std::string& path, Errors& errs) const override {
+    double total = 0.0;
+    for (std::size_t i = 0; i < c.weights.size(); ++i) {
+      if (!(std::isfinite(c.weights[i]) && c.weights[i] >= 0))
+        errs.push_back({path + "/" + names_[i],
+                        "must be a weight >= 0 (got " + json_io::number_text(c.weights[i]) + ")"});
+      else
+        total += c.weights[i];
+    }
+    if (!(total > 0)) errs.push_back({path, "weights must not all be zero"});
+  }
+  json write(const Choice& c) const override {
+    json o = json::object();
+    for (std::size_t i = 0; i < names_.size() && i < c.weights.size(); ++i)
+      o[names_[i]] = c.weights[i];
+    return o;
+  }
+  json json_schema() const override {
+    json props = json::object();
+    for (const std::string& n : names_) props[n] = {{"type", "number"}, {"minimum", 0}};
+    return {{"type", "object"},
+            {"properties", props},
+            {"additionalProperties", false},
+            {"minProperties", 1},
+            {"description", doc_}};
+  }
+
+ private:
+  std::vector<std::string> names_;
+  std::string doc_;
+};
+
+template <class T>
+using Obj = schema::Object<T>;
+
+std::shared_ptr<const Obj<FaultDistribution>> make_faults_shape() {
+  using F = FaultDistribution;
+  auto o = std::make_shared<Obj<F>>("How each member's faults are drawn (they replace the base's)");
+  o->field({"count", true,
+            [](const json& v, const std::string& path, F& f, Errors& e) {
+              long long lo = 0, hi = 0;
+              if (!v.is_array() || v.size() != 2 || !json_io::json_to_int(v[0], lo) ||
+                  !json_io::json_to_int(v[1], hi)) {
+                e.push_back(
+                    {path, "expected [lo, hi] (two integers), got " + json_io::json_type_name(v)});
+                return;
+              }
+              f.count_lo = static_cast<int>(std::clamp(lo, -1LL, 1000000LL));
+              f.count_hi = static_cast<int>(std::clamp(hi, -1LL, 1000000LL));
+            },
+            [](const F&, const std::string&, Errors&) {},  // against the actuators: rule below
+            [](const F& f, json& o) {
+              o["count"] = {f.count_lo, f.count_hi};
+            },
+            [] {
+              return json{{"type", "array"},
+                          {"items", {{"type", "integer"}, {"minimum", 0}}},
+                          {"minItems", 2},
+                          {"maxItems", 2},
+                          {"description", "[lo, hi]: lo + floor(u (hi - lo + 1)) faults"}};
+            }});
+  o->field({"actuators", false,
+            [](const json& v, const std::string& path, F& f, Errors& e) {
+              if (!v.is_array()) {
+                e.push_back({path, "expected an array of actuator indices, got " +
+                                       json_io::json_type_name(v)});
+                return;
+              }
+              f.actuators.clear();
+              for (std::size_t i = 0; i < v.size(); ++i) {
+                long long a = 0;
+                if (!json_io::json_to_int(v[i], a))
+                  e.push_back({path + "/" + std::to_string(i),
+                               "expected an integer, got " + json_io::json_type_name(v[i])});
+                else
+                  f.actuators.push_back(static_cast<int>(std::clamp(a, -1LL, 1000000LL)));
+              }
+            },
+            [](const F&, const std::string&, Errors&) {},  // against the plant: job rule
+            [](const F& f, json& o) { o["actuators"] = f.actuators; },
+            [] {
+              return json{{"type", "array"},
+                          {"items", {{"type", "integer"}, {"minimum", 1}}},
+                          {"uniqueItems", true},
+                          {"description",
+                           "the actuators faults may hit, in listed order "
+                           "(default all)"}};
+            }});
+  const auto choice = [](std::vector<std::string> names, std::string doc) {
+    return std::make_shared<ChoiceShape>(std::move(names), std::move(doc));
+  };
+  o->object("type", &F::type,
+            std::shared_ptr<const schema::Shape<Choice>>(
+                choice({"bias", "loss_of_effectiveness", "stuck"}, "weights of the fault types")),
+            "", schema::kRequired);
+  o->optional_object("onset", &F::onset,
+                     std::shared_ptr<const schema::Shape<Distribution>>(
+                         std::make_shared<DistributionShape>("onset t_f in s")),
+                     "default half the duration");
+  o->object("profile", &F::profile,
+            std::shared_ptr<const schema::Shape<Choice>>(
+                choice({"abrupt", "incipient"}, "weights of the profiles; default abrupt only")),
+            "");
+  const std::pair<const char*, Distribution F::*> dists[] = {
+      {"rate", &F::rate},           {"offset", &F::offset}, {"amplitude", &F::amplitude},
+      {"frequency", &F::frequency}, {"phase", &F::phase},   {"fraction", &F::fraction},
+      {"value", &F::value}};
+  for (const auto& [name, member] : dists)
+    o->object(name, member,
+              std::shared_ptr<const schema::Shape<Distribution>>(
+                  std::make_shared<DistributionShape>(std::string("the fault's ") + name)),
+              "");
+  o->rule([](const F& f, const std::string& path, Errors& e) {
+    if (f.count_lo < 0 || f.count_hi < f.count_lo)
+      e.push_back({path + "/count", "must be [lo, hi] with 0 <= lo <= hi (got [" +
+                                        std::to_string(f.count_lo) + ", " +
+                                        std::to_string(f.count_hi) + "])"});
+    // a is each distribution's least value.
+    if (f.profile.weights.size() > 1 && f.profile.weights[1] > 0 && !(f.rate.a > 0))
+      e.push_back({path + "/rate", "must be > 0, the rate β of incipient faults (got " +
+                                       json_io::number_text(f.rate.a) + ")"});
+    if (f.onset && !(f.onset->a >= 0))
+      e.push_back({path + "/onset", "must not draw onsets before 0 s (got " +
+                                        json_io::number_text(f.onset->a) + ")"});
+  });
+  return o;
+}
+
+std::shared_ptr<const Obj<EnsembleConfig>> make_ensemble_shape() {
+  using E = EnsembleConfig;
+  auto o = std::make_shared<Obj<E>>(
+      "Scenarios drawn from distributions (SPEC §12): member k copies the base and draws its "
+      "scales and faults from its own random stream");
+  o->field({"count", true,
+            [](const json& v, const std::string& path, E& e, Errors& errs) {
+              long long n = 0;
+              if (!json_io::json_to_int(v, n))
+                errs.push_back({path, "expected an integer, got " + json_io::json_type_name(v)});
+              else
+                e.count = n;
+            },
+            [](const E& e, const std::string& path, Errors& errs) {
+              if (e.count < 1 || e.count > kMaxEnsembleCount)
+                errs.push_back({path, "must be an integer in 1..1000000 (got " +
+                                          std::to_string(e.count) + ")"});
+            },
+            [](const E& e, json& o) { o["count"] = e.count; },
+            [] {
+              return json{{"type", "integer"},
+                          {"minimum", 1},
+                          {"maximum", kMaxEnsembleCount},
+                          {"description", "number of members"}};
+            }});
+  o->uint64("seed", &E::seed, "seed of the members' random streams");
+  o->string("base", &E::base, "the scenario members copy (default the first)");
+  for (const auto& [name, member, positive, doc] :
+       {std::tuple{"inertia_scale", &E::inertia_scale, true,
+                   "factor on each axis's true inertia (3 draws)"},
+        std::tuple{"initial_state_scale", &E::initial_state_scale, false,
+                   "factor on each initial-state component (2n draws)"},
+        std::tuple{"disturbance_scale", &E::disturbance_scale, false,
+                   "factor on every disturbance amplitude (1 draw)"}})
+    o->optional_object(name, member,
+                       std::shared_ptr<const schema::Shape<Distribution>>(
+                           std::make_shared<DistributionShape>(doc, positive)),
+                       "");
+  o->optional_object("faults", &E::faults,
+                     std::shared_ptr<const schema::Shape<FaultDistribution>>(make_faults_shape()),
+                     "");
+  o->choice("unrecoverable", &E::unrecoverable,
+            {{"exclude", Unrecoverable::exclude}, {"include", Unrecoverable::include}},
+            "whether members no gains can control count in the objective");
+  return o;
+}
+
+}  // namespace
+
+namespace job_detail {
+
+std::shared_ptr<const schema::Shape<EnsembleConfig>> ensemble_shape() {
+  static const std::shared_ptr<const Obj<EnsembleConfig>> shape = make_ensemble_shape();
+  return shape;
+}
+
+}  // namespace job_detail
+}  // namespace ftc::tune
