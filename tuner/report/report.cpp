@@ -125,6 +125,14 @@ std::string colour_tics(double lo, double hi) {
   return s + ")\n";
 }
 
+// How the convergence figure names the run's optimiser.
+std::string optimizer_label(const json& optimizer) {
+  const std::string type = optimizer.value("type", "bat");
+  if (type == "random") return "random search";
+  if (type == "pagmo") return "pagmo " + optimizer.value("name", std::string("?"));
+  return "Bat algorithm";
+}
+
 struct Series {
   std::string label;
   std::string file;  // relative to the run directory
@@ -289,9 +297,7 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
               "'%.6g'\n"
            << "set key inside right bottom\n"
            << "plot 'history.csv' skip 1 using 1:2 with linespoints ls 2 lw 2 pt 7 title "
-           << gp(std::string(gains["optimizer"].value("type", "bat") == "random"
-                                 ? "random search"
-                                 : "Bat algorithm"));
+           << gp(optimizer_label(gains["optimizer"]));
     if (fs::is_regular_file(run_dir / "history-random.csv"))
       gpfile << ", \\\n     'history-random.csv' skip 1 using 1:2 with linespoints ls 5 lw 2 pt 5 "
                 "title 'random search, same budget'";
@@ -550,6 +556,56 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   write_file_atomic(out_dir / "landscape.gp", g.str());
   run_gnuplot(out_dir, "landscape.gp");
   return r;
+}
+
+fs::path draw_study(const fs::path& dir, const std::string& title,
+                    const std::string& objective_label, const std::vector<StudySeries>& series,
+                    FigureFormat format) {
+  double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+  for (const StudySeries& s : series)
+    for (double v : s.objectives)
+      if (std::isfinite(v) && v > 0) {
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+  const bool log_scale = hi >= 10 * lo;
+  const fs::path figure = dir / (std::string("study") + extension(format));
+  std::ostringstream g;
+  g << kStyles << terminal(format, 1000, 600) << "set output " << gp(figure.filename().string())
+    << "\nset title " << gp(title) << " font ',13'\nset ylabel " << gp(objective_label) << "\n"
+    << (log_scale ? "set logscale y\nset format y '%.3g'\n" : "set format y '%.6g'\n")
+    << "set xrange [-0.6:" << series.size() - 0.4 << "]\nset xtics rotate by -30 left (";
+  for (std::size_t i = 0; i < series.size(); ++i)
+    g << (i ? ", " : "") << gp(series[i].label) << " " << i;
+  g << ")\nset grid xtics ytics lc rgb '#dddddd'\nset key inside top right opaque box\n"
+    << "$runs << EOD\n";
+  // Runs side by side within an algorithm's slot, in seed order, so equal results stay visible.
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    const std::size_t n = series[i].objectives.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      const double v = series[i].objectives[k];
+      if (!std::isfinite(v) || (log_scale && v <= 0)) continue;
+      const double dx =
+          n > 1 ? 0.5 * (static_cast<double>(k) / static_cast<double>(n - 1) - 0.5) : 0.0;
+      g << detail::format_number(static_cast<double>(i) + dx, "%.6g") << ","
+        << detail::format_number(v, "%.17g") << "\n";
+    }
+  }
+  g << "EOD\n$medians << EOD\n";
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    std::vector<double> v = series[i].objectives;
+    if (v.empty()) continue;
+    std::sort(v.begin(), v.end());
+    const double m = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+    if (!std::isfinite(m)) continue;
+    g << static_cast<double>(i) - 0.35 << "," << detail::format_number(m, "%.17g") << ",0.7,0\n";
+  }
+  g << "EOD\nplot $runs using 1:2 with points pt 7 ps 1.1 lc rgb '#1f77b4' title 'best "
+       "objective of a run (one per seed)', \\\n"
+    << "     $medians using 1:2:3:4 with vectors nohead lw 3 lc rgb '#d62728' title 'median'\n";
+  write_file_atomic(dir / "study.gp", g.str());
+  run_gnuplot(dir, "study.gp");
+  return figure;
 }
 
 }  // namespace ftc::tune

@@ -53,6 +53,20 @@ struct LandscapeResult {
 LandscapeResult compute_landscape(const Job& job, const std::filesystem::path& out_dir,
                                   const LandscapeOptions& options, BatchEvaluator& evaluator);
 
+// One algorithm's results in a comparison: the best objective of each run (one per seed).
+struct StudySeries {
+  std::string label;
+  std::vector<double> objectives;  // +inf for a run whose every candidate diverged
+};
+
+// Draws `dir`/study.png (or .svg) from `dir`/study.gp: one point per run for each algorithm, in
+// the order given, with each algorithm's median marked; the objective axis is logarithmic when
+// the finite objectives span a factor of 10 or more. Returns the figure's path.
+std::filesystem::path draw_study(const std::filesystem::path& dir, const std::string& title,
+                                 const std::string& objective_label,
+                                 const std::vector<StudySeries>& series,
+                                 FigureFormat format = FigureFormat::png);
+
 // Runs `gnuplot script` in `dir`; throws std::runtime_error with gnuplot's message on failure.
 void run_gnuplot(const std::filesystem::path& dir, const std::string& script_name);
 
