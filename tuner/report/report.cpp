@@ -574,10 +574,12 @@ fs::path draw_study(const fs::path& dir, const std::string& title,
   g << kStyles << terminal(format, 1000, 600) << "set output " << gp(figure.filename().string())
     << "\nset title " << gp(title) << " font ',13'\nset ylabel " << gp(objective_label) << "\n"
     << (log_scale ? "set logscale y\nset format y '%.3g'\n" : "set format y '%.6g'\n")
-    << "set xrange [-0.6:" << series.size() - 0.4 << "]\nset xtics rotate by -30 left (";
+    << "set xrange [-0.6:" << series.size() - 0.4 << "]\nset xtics noenhanced rotate by -30 left (";
   for (std::size_t i = 0; i < series.size(); ++i)
     g << (i ? ", " : "") << gp(series[i].label) << " " << i;
-  g << ")\nset grid xtics ytics lc rgb '#dddddd'\nset key inside top right opaque box\n"
+  // Algorithm names keep their underscores (no enhanced-text subscripts). The key goes top left:
+  // callers order the algorithms best median first, so that corner is the emptiest.
+  g << ")\nset grid xtics ytics lc rgb '#dddddd'\nset key inside top left opaque box\n"
     << "$runs << EOD\n";
   // Runs side by side within an algorithm's slot, in seed order, so equal results stay visible.
   for (std::size_t i = 0; i < series.size(); ++i) {
@@ -601,7 +603,7 @@ fs::path draw_study(const fs::path& dir, const std::string& title,
     g << static_cast<double>(i) - 0.35 << "," << detail::format_number(m, "%.17g") << ",0.7,0\n";
   }
   g << "EOD\nplot $runs using 1:2 with points pt 7 ps 1.1 lc rgb '#1f77b4' title 'best "
-       "objective of a run (one per seed)', \\\n"
+       "objective of one run (one point per seed)', \\\n"
     << "     $medians using 1:2:3:4 with vectors nohead lw 3 lc rgb '#d62728' title 'median'\n";
   write_file_atomic(dir / "study.gp", g.str());
   run_gnuplot(dir, "study.gp");

@@ -60,8 +60,9 @@ struct StudySeries {
 };
 
 // Draws `dir`/study.png (or .svg) from `dir`/study.gp: one point per run for each algorithm, in
-// the order given, with each algorithm's median marked; the objective axis is logarithmic when
-// the finite objectives span a factor of 10 or more. Returns the figure's path.
+// the order given (best median first keeps the key clear of the points), with each algorithm's
+// median marked; the objective axis is logarithmic when the finite objectives span a factor of
+// 10 or more. Returns the figure's path.
 std::filesystem::path draw_study(const std::filesystem::path& dir, const std::string& title,
                                  const std::string& objective_label,
                                  const std::vector<StudySeries>& series,
