@@ -25,6 +25,7 @@ void add_serve_command(CLI::App& app, const Globals& g, Action& action);
 void add_client_commands(CLI::App& app, const Globals& g, Action& action);
 void add_report_commands(CLI::App& app, const Globals& g, Action& action);
 void add_schema_command(CLI::App& app, const Globals& g, Action& action);
+void add_study_command(CLI::App& app, const Globals& g, Action& action);
 
 // Renders the report of a run directory; format html, png or svg.
 int render_run_report(const std::string& dir, const std::string& format, bool quiet);

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   ftc::cli::add_validate_command(app, globals, action);
   ftc::cli::add_schema_command(app, globals, action);
   ftc::cli::add_report_commands(app, globals, action);
+  ftc::cli::add_study_command(app, globals, action);
   ftc::cli::add_serve_command(app, globals, action);
   ftc::cli::add_client_commands(app, globals, action);
 

@@ -3,12 +3,14 @@
 // here.
 #include "ftc/tune/optimizers/bat.hpp"
 #include "ftc/tune/optimizers/optimizer.hpp"
+#include "ftc/tune/optimizers/pagmo.hpp"
 #include "ftc/tune/optimizers/random_search.hpp"
 
 namespace ftc::tune {
 
 const std::vector<AlgorithmInfo>& algorithms() {
-  static const std::vector<AlgorithmInfo> all = {bat_algorithm_info(), random_search_info()};
+  static const std::vector<AlgorithmInfo> all = {bat_algorithm_info(), random_search_info(),
+                                                  pagmo_algorithm_info()};
   return all;
 }
 

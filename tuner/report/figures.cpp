@@ -82,9 +82,11 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
   {
     const std::string file = "figures/fig5-fitness" + ext;
     const std::string type = gains["optimizer"].value("type", "bat");
-    const std::string algorithm = type == "bat"      ? "Bat algorithm"
-                                  : type == "random" ? "random search"
-                                                     : type;
+    const std::string algorithm =
+        type == "bat"      ? "Bat algorithm"
+        : type == "random" ? "random search"
+        : type == "pagmo"  ? "pagmo " + gains["optimizer"].value("name", std::string("?"))
+                           : type;
     g << plot::terminal(fmt, 1000, 600) << "set output " << gp(file) << "\n"
       << "unset arrow; unset label\nset title "
       << gp(std::string("Best fitness per iteration") + (paper ? " (paper Fig. 5)" : ""))

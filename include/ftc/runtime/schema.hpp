@@ -168,6 +168,23 @@ class Object final : public Shape<T> {
                     return s;
                   }});
   }
+  Object& boolean(std::string key, bool T::*m, std::string doc, Presence p = kOptional) {
+    const bool dflt = T{}.*m;
+    return field({key, p == kRequired,
+                  [m](const json& v, const std::string& path, T& out, Errors& e) {
+                    if (!v.is_boolean())
+                      e.push_back({path, detail::type_error("true or false", v)});
+                    else
+                      out.*m = v.get<bool>();
+                  },
+                  [](const T&, const std::string&, Errors&) {},
+                  [m, key](const T& t, json& o) { o[key] = t.*m; },
+                  [doc, dflt, p] {
+                    json s = {{"type", "boolean"}, {"description", doc}};
+                    if (p == kOptional) s["default"] = dflt;
+                    return s;
+                  }});
+  }
   Object& uint64(std::string key, std::uint64_t T::*m, std::string doc, Presence p = kOptional) {
     const std::uint64_t dflt = T{}.*m;
     return field({key, p == kRequired,

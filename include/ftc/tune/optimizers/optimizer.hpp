@@ -9,8 +9,10 @@
 // Algorithms are registered by name (algorithms()): each owns its settings struct, their
 // validation and JSON form, and the extra columns of its history rows. To add one, see
 // tuner/optimizers/registry.cpp.
+#include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -82,6 +84,9 @@ class Optimizer {
   virtual void restore(const nlohmann::json& state) = 0;
 };
 
+class AlgorithmSettings;
+using AlgorithmPtr = std::shared_ptr<const AlgorithmSettings>;
+
 // One algorithm's validated settings: immutable, shared by the copies of a job.
 class AlgorithmSettings {
  public:
@@ -97,9 +102,11 @@ class AlgorithmSettings {
   // Every bad setting, each named `path`/<setting> (settings built in code, not read from JSON).
   virtual std::vector<FieldError> validate(const std::string& path) const = 0;
   virtual std::unique_ptr<Optimizer> make(std::uint64_t seed, const SearchSpace& space) const = 0;
+  // The same settings with as many iterations as `budget` evaluations pay for, the initial
+  // population included (so that algorithms can be compared at equal cost); null when the budget
+  // does not reach the end of the first iteration after the initial population.
+  virtual AlgorithmPtr with_budget(std::int64_t budget) const = 0;
 };
-
-using AlgorithmPtr = std::shared_ptr<const AlgorithmSettings>;
 
 struct AlgorithmInfo {
   std::string type;         // "bat", "random", "pagmo"
@@ -155,6 +162,14 @@ class StructSettings final : public AlgorithmSettings {
   }
   std::unique_ptr<Optimizer> make(std::uint64_t seed, const SearchSpace& space) const override {
     return make_(s_, seed, space);
+  }
+  AlgorithmPtr with_budget(std::int64_t budget) const override {
+    const std::int64_t generations = budget / std::max(1, s_.population);
+    if (generations < 2) return nullptr;
+    S s = s_;
+    s.iterations =
+        static_cast<int>(std::min<std::int64_t>(generations - 1, std::numeric_limits<int>::max()));
+    return std::make_shared<StructSettings<S>>(type_, std::move(s), shape_, make_, columns_);
   }
   const S& settings() const { return s_; }
 

@@ -1,0 +1,443 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/optimizers/bat.hpp"
+#include "ftc/tune/optimizers/optimizer.hpp"
+#include "ftc/tune/optimizers/pagmo.hpp"
+#include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
+#include "short_job.hpp"
+
+using nlohmann::json;
+using namespace ftc;
+using namespace ftc::tune;
+
+namespace {
+
+SearchSpace box(std::size_t d, double lo, double hi) {
+  SearchSpace s;
+  for (std::size_t j = 0; j < d; ++j) {
+    s.names.push_back(std::string(1, static_cast<char>('a' + j)));
+    s.lower.push_back(lo);
+    s.upper.push_back(hi);
+  }
+  return s;
+}
+
+double sphere(const Decision& x) {
+  double f = 0;
+  for (double v : x) f += (v - 1.0) * (v - 1.0);  // optimum at (1, …, 1), off-centre on purpose
+  return f;
+}
+
+double rosenbrock(const Decision& x) {
+  double f = 0;
+  for (std::size_t j = 0; j + 1 < x.size(); ++j)
+    f += 100 * std::pow(x[j + 1] - x[j] * x[j], 2) + std::pow(1 - x[j], 2);
+  return f;
+}
+
+// Records every batch (its size) and checks every candidate against the bounds.
+class RecordingFitness final : public BatchFitness {
+ public:
+  RecordingFitness(SearchSpace space, double (*f)(const Decision&))
+      : space_(std::move(space)), f_(f) {}
+  std::vector<double> operator()(const std::vector<Decision>& batch) override {
+    batches.push_back(batch.size());
+    std::vector<double> J;
+    for (const Decision& x : batch) {
+      if (!space_.contains(x)) ++out_of_bounds;
+      ++evaluations;
+      J.push_back(1.0 / (1.0 + f_(x)));  // fitness: larger is better, 1 at the optimum
+    }
+    return J;
+  }
+  std::vector<std::size_t> batches;
+  std::int64_t evaluations = 0;
+  int out_of_bounds = 0;
+
+ private:
+  SearchSpace space_;
+  double (*f_)(const Decision&);
+};
+
+AlgorithmPtr pagmo(const std::string& name, int population, int generations,
+                   const json& settings = json::object()) {
+  return make_algorithm({{"type", "pagmo"},
+                         {"name", name},
+                         {"population", population},
+                         {"generations", generations},
+                         {"settings", settings}});
+}
+
+OptimizationResult solve(const AlgorithmPtr& a, std::uint64_t seed, const SearchSpace& s,
+                         double (*f)(const Decision&), RecordingFitness* seen = nullptr) {
+  RecordingFitness fitness(s, f);
+  auto opt = a->make(seed, s);
+  OptimizationResult r = run_optimizer(*opt, fitness);
+  EXPECT_EQ(fitness.out_of_bounds, 0);
+  EXPECT_EQ(r.evaluations, fitness.evaluations);
+  if (seen) *seen = fitness;
+  return r;
+}
+
+std::vector<std::string> all_names() {
+  std::vector<std::string> names;
+  for (const PagmoAlgorithmInfo& a : pagmo_algorithms()) names.push_back(a.name);
+  return names;
+}
+
+// The smallest population every algorithm takes with its default settings (gaco: ker 63).
+int population_for(const std::string& name) {
+  return std::max(10, find_pagmo_algorithm(name)->min_population);
+}
+
+// A job's problems, joined one per line.
+std::string problems(const json& algorithm) {
+  json j = ftc::testing::short_table1_job();
+  j["tuning"]["algorithm"] = algorithm;
+  try {
+    parse_job(j, "job");
+  } catch (const InputError& e) {
+    std::string s;
+    for (const FieldError& f : e.errors()) s += to_string(f) + "\n";
+    return s;
+  }
+  return "";
+}
+
+Job short_pagmo_job(const std::string& name, int population, int generations) {
+  json j = ftc::testing::short_table1_job();
+  j["tuning"]["algorithm"] = {
+      {"type", "pagmo"}, {"name", name}, {"population", population}, {"generations", generations}};
+  return parse_job(j, "short");
+}
+
+std::string gains(const Job& job, int threads, const RunOptions& o = {}) {
+  TbbEvaluator evaluator(threads);
+  return gains_document(tune::tune(job, evaluator, o)).dump();
+}
+
+}  // namespace
+
+// Tolerances: the worst of seeds 1–10 measured with this adapter (population 30, 100
+// generations, so 3 030 evaluations), rounded up to the next power of ten or a round number.
+TEST(PagmoOptimizer, CmaesAndPsoGenSolveSphereInTwoToFiveDimensions) {
+  for (const std::string name : {"cmaes", "pso_gen"}) {
+    const double tolerance = name == "cmaes" ? 1e-6 : 1e-4;  // worst 9.9e-8 and 3.4e-5
+    for (std::size_t d = 2; d <= 5; ++d)
+      for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+        const OptimizationResult r = solve(pagmo(name, 30, 100), seed, box(d, -5, 5), sphere);
+        EXPECT_LT(sphere(r.best), tolerance) << name << ", d = " << d << ", seed " << seed;
+        EXPECT_DOUBLE_EQ(r.best_fitness, 1.0 / (1.0 + sphere(r.best)));
+        for (std::size_t i = 1; i < r.history.size(); ++i)
+          ASSERT_GE(r.history[i].best_fitness, r.history[i - 1].best_fitness);
+      }
+  }
+}
+
+TEST(PagmoOptimizer, CmaesAndPsoGenGetCloseOnRosenbrock) {
+  // Worst over seeds 1–10 per dimension 2..5: CMA-ES 1.3e-8, 2.3e-8, 1.1e-6, 7.8e-4; PSO
+  // 0.0030, 0.31, 1.21, 2.09 (its 3 030 evaluations do not get down the curved valley).
+  const double cmaes[] = {1e-6, 1e-6, 1e-5, 1e-2};
+  const double pso[] = {0.01, 0.5, 2.0, 3.0};
+  for (std::size_t d = 2; d <= 5; ++d)
+    for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+      const SearchSpace s = box(d, -2, 2);
+      EXPECT_LT(rosenbrock(solve(pagmo("cmaes", 30, 100), seed, s, rosenbrock).best), cmaes[d - 2])
+          << "d = " << d << ", seed " << seed;
+      EXPECT_LT(rosenbrock(solve(pagmo("pso_gen", 30, 100), seed, s, rosenbrock).best), pso[d - 2])
+          << "d = " << d << ", seed " << seed;
+    }
+}
+
+TEST(PagmoOptimizer, EveryAlgorithmSpendsTheBudgetItDeclares) {
+  for (const std::string& name : all_names()) {
+    const AlgorithmPtr a = pagmo(name, population_for(name), 6);
+    RecordingFitness seen(box(3, -5, 5), sphere);
+    const OptimizationResult r = solve(a, 3, box(3, -5, 5), sphere, &seen);
+    // Six generations are too few for any stopping tolerance on this sphere, so the run spends
+    // exactly what the settings declare.
+    EXPECT_EQ(r.evaluations, a->evaluations()) << name;
+    ASSERT_EQ(r.history.size(), 7u) << name;
+    const PagmoAlgorithmInfo& info = *find_pagmo_algorithm(name);
+    for (std::size_t g = 0; g < r.history.size(); ++g)
+      EXPECT_EQ(r.history[g].evaluations,
+                a->population() +
+                    static_cast<std::int64_t>(g) * (a->population() * info.per_member + info.fixed))
+          << name << ", generation " << g;
+  }
+  EXPECT_EQ(pagmo("bee_colony", 10, 5)->evaluations(), 10 + 5 * 20);
+  EXPECT_EQ(pagmo("sea", 10, 100)->evaluations(), 10 + 100);
+}
+
+TEST(PagmoOptimizer, StoppingToleranceEndsTheRunEarlyAndCountsWhatItSpent) {
+  // CMA-ES on a 2-D sphere meets ftol = 1e-6 long before 100 generations.
+  const AlgorithmPtr a = pagmo("cmaes", 30, 100);
+  const OptimizationResult r = solve(a, 1, box(2, -5, 5), sphere);
+  EXPECT_TRUE(r.completed);
+  EXPECT_LT(r.evaluations, a->evaluations());
+  EXPECT_EQ(r.history.size(), 101u);
+  EXPECT_EQ(r.history.back().evaluations, r.history[r.history.size() - 2].evaluations);
+}
+
+TEST(PagmoOptimizer, BatchAlgorithmsEvaluateAGenerationInOneBatch) {
+  for (const auto& [name, population] :
+       std::vector<std::pair<std::string, int>>{{"pso_gen", 8}, {"gaco", 63}}) {
+    RecordingFitness seen(box(2, -5, 5), sphere);
+    solve(pagmo(name, population, 4), 1, box(2, -5, 5), sphere, &seen);
+    EXPECT_EQ(seen.batches, std::vector<std::size_t>(5, population)) << name;
+    EXPECT_TRUE(find_pagmo_algorithm(name)->batch);
+  }
+  // The others ask for one candidate at a time; only their initial population is one batch.
+  RecordingFitness seen(box(2, -5, 5), sphere);
+  solve(pagmo("cmaes", 8, 4), 1, box(2, -5, 5), sphere, &seen);
+  std::vector<std::size_t> expected{8};
+  expected.resize(1 + 4 * 8, 1);
+  EXPECT_EQ(seen.batches, expected);
+  EXPECT_FALSE(find_pagmo_algorithm("cmaes")->batch);
+}
+
+TEST(PagmoOptimizer, DivergedCandidatesArePenalisedNotFatal) {
+  // Half the box "diverges" (J = 0): the run goes on and ends on the other half.
+  static constexpr auto half = [](const Decision& x) { return x[0] < 0 ? -1.0 : sphere(x); };
+  class HalfFitness final : public BatchFitness {
+   public:
+    std::vector<double> operator()(const std::vector<Decision>& batch) override {
+      std::vector<double> J;
+      for (const Decision& x : batch) {
+        const double f = half(x);
+        J.push_back(f < 0 ? 0.0 : 1.0 / (1.0 + f));
+      }
+      return J;
+    }
+  } fitness;
+  for (const std::string name : {"cmaes", "pso_gen", "bee_colony", "sade"}) {
+    auto opt = pagmo(name, 10, 20)->make(1, box(2, -5, 5));
+    const OptimizationResult r = run_optimizer(*opt, fitness);
+    EXPECT_TRUE(r.completed) << name;
+    EXPECT_GE(r.best[0], 0.0) << name;
+    EXPECT_GT(r.best_fitness, 0.5) << name;
+    double diverged = 0;
+    for (const HistoryRow& h : r.history)
+      for (const auto& [column, value] : h.extras)
+        if (column == "generation_diverged") diverged += value;
+    EXPECT_GT(diverged, 0) << name << ": no candidate diverged, the test proves nothing";
+  }
+}
+
+TEST(PagmoOptimizer, SameSeedSameRunOtherSeedOtherRun) {
+  const AlgorithmPtr a = pagmo("pso_gen", 10, 5);
+  const SearchSpace s = box(3, -5, 5);
+  const OptimizationResult one = solve(a, 4, s, rosenbrock), two = solve(a, 4, s, rosenbrock);
+  const OptimizationResult other = solve(a, 5, s, rosenbrock);
+  ASSERT_EQ(one.history.size(), two.history.size());
+  for (std::size_t i = 0; i < one.history.size(); ++i)
+    EXPECT_EQ(one.history[i].best, two.history[i].best);
+  EXPECT_NE(one.history.front().best, other.history.front().best);
+}
+
+TEST(PagmoOptimizer, ResumeFromSavedStateContinuesExactlyForEveryAlgorithm) {
+  for (const std::string& name : all_names()) {
+    const AlgorithmPtr a = pagmo(name, population_for(name), 6);
+    const SearchSpace s = box(3, -2, 2);
+    RecordingFitness fitness(s, rosenbrock);
+    auto full = a->make(11, s);
+    const OptimizationResult uninterrupted = run_optimizer(*full, fitness);
+
+    std::string saved;
+    auto first = a->make(11, s);
+    run_optimizer(*first, fitness, [&](const HistoryRow& h, const Optimizer& o) {
+      saved = o.state().dump();  // through text, as a checkpoint store keeps it
+      return h.iteration < 3;
+    });
+    const json state = json::parse(saved);
+    RecordingFitness after(s, rosenbrock);
+    auto second = a->make(999, s);  // the seed must not matter: the state has the run
+    const OptimizationResult resumed = run_optimizer(*second, after, {}, &state);
+    ASSERT_EQ(resumed.history.size(), uninterrupted.history.size()) << name;
+    for (std::size_t i = 0; i < resumed.history.size(); ++i) {
+      EXPECT_EQ(resumed.history[i].best, uninterrupted.history[i].best) << name << ", " << i;
+      EXPECT_EQ(resumed.history[i].best_fitness, uninterrupted.history[i].best_fitness);
+      EXPECT_EQ(resumed.history[i].evaluations, uninterrupted.history[i].evaluations);
+    }
+    EXPECT_TRUE(resumed.completed);
+    // Nothing logged is simulated again.
+    EXPECT_EQ(after.evaluations, uninterrupted.evaluations - resumed.history[3].evaluations)
+        << name;
+  }
+}
+
+TEST(PagmoOptimizer, RejectsCheckpointsOfOtherRunsAndDamagedOnes) {
+  const SearchSpace s = box(2, -5, 5);
+  RecordingFitness fitness(s, sphere);
+  const auto state_of = [&](const AlgorithmPtr& a, std::uint64_t seed,
+                            const SearchSpace& space = box(2, -5, 5)) {
+    auto o = a->make(seed, space);
+    run_optimizer(*o, fitness,
+                  [](const HistoryRow& h, const Optimizer&) { return h.iteration < 2; });
+    return o->state();
+  };
+  const auto rejected = [&](const AlgorithmPtr& a, const json& state, const std::string& what) {
+    auto o = a->make(1, s);
+    try {
+      o->restore(state);
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.source(), "checkpoint");
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+      return;
+    }
+    ADD_FAILURE() << "accepted a checkpoint it should refuse (" << what << ")";
+  };
+  const AlgorithmPtr pso = pagmo("pso_gen", 6, 5);
+  const json good = state_of(pso, 1);
+  {
+    auto o = pso->make(1, s);
+    EXPECT_NO_THROW(o->restore(good));
+  }
+  rejected(pso, state_of(make_algorithm({{"type", "bat"}, {"population", 6}}), 1), "pagmo");
+  rejected(pso, state_of(pagmo("cmaes", 6, 5), 1), "cmaes");
+  rejected(pso, state_of(pso, 1, box(2, -4, 4)), "does not replay");  // another problem
+  json damaged = good;
+  damaged["fitness_log"][7] = 0.5;
+  rejected(pso, damaged, "does not replay");
+  json short_log = good;
+  short_log["fitness_log"].erase(short_log["fitness_log"].size() - 1);
+  rejected(pso, short_log, "does not replay");
+}
+
+TEST(PagmoSettings, ErrorsNameTheirJsonPath) {
+  const json ok = {{"type", "pagmo"}, {"name", "pso_gen"}, {"population", 10}};
+  EXPECT_EQ(problems(ok), "");
+  json j = ok;
+  j["name"] = "pso2";
+  EXPECT_EQ(problems(j),
+            "/tuning/algorithm/name: unknown pagmo algorithm \"pso2\" (known: bee_colony, cmaes, "
+            "de, de1220, gaco, gwo, ihs, pso, pso_gen, sade, sea, sga, xnes)\n");
+  j = ok;
+  j["settings"] = {{"omegaa", 0.5}};
+  EXPECT_NE(problems(j).find("/tuning/algorithm/settings/omegaa: unknown key (allowed here: "),
+            std::string::npos)
+      << problems(j);
+  j["settings"] = {{"omega", "0.5"}, {"variant", 2.5}};
+  EXPECT_EQ(problems(j),
+            "/tuning/algorithm/settings/omega: expected a number, got a string\n"
+            "/tuning/algorithm/settings/variant: expected an integer, got a number\n");
+  j["settings"] = {{"omega", 1.5}};
+  EXPECT_EQ(problems(j), "/tuning/algorithm/settings/omega: must be in [0, 1] (got 1.5)\n");
+  j = ok;
+  j["iterations"] = 10;  // the Bat algorithm's word; pagmo's is generations
+  EXPECT_NE(problems(j).find("/tuning/algorithm/iterations: unknown key"), std::string::npos);
+  EXPECT_EQ(problems({{"type", "pagmo"}, {"name", "cmaes"}, {"population", 3}}),
+            "/tuning/algorithm/population: must be at least 5 for cmaes (got 3)\n");
+  EXPECT_EQ(problems({{"type", "pagmo"}, {"name", "gaco"}, {"population", 10}}),
+            "/tuning/algorithm/population: must be at least 63 for gaco with ker 63 (got 10)\n");
+  EXPECT_EQ(problems({{"type", "pagmo"},
+                      {"name", "gaco"},
+                      {"population", 10},
+                      {"settings", {{"ker", 8}, {"threshold", 20}}}}),
+            "/tuning/algorithm/settings/threshold: must be at most generations 10 (got 20)\n");
+  EXPECT_EQ(problems({{"type", "pagmo"},
+                      {"name", "sga"},
+                      {"population", 9},
+                      {"settings", {{"crossover", "sbx"}}}}),
+            "/tuning/algorithm/population: must be even for sbx crossover (got 9)\n");
+  EXPECT_EQ(problems({{"type", "pagmo"}, {"name", "sea"}, {"settings", {{"gen", 3}}}}),
+            "/tuning/algorithm/settings/gen: sea has no settings\n");
+  EXPECT_EQ(problems({{"type", "pagmo"}, {"name", "cmaes"}, {"settings", {{"cc", 2}}}}),
+            "/tuning/algorithm/settings/cc: must be -1 (automatic) or in [0, 1] (got 2)\n");
+  EXPECT_EQ(problems({{"type", "pagmo"}}),
+            "/tuning/algorithm/name: is required (one of bee_colony, cmaes, de, de1220, gaco, "
+            "gwo, ihs, pso, pso_gen, sade, sea, sga, xnes)\n");
+}
+
+TEST(PagmoSettings, ResolvedFormHasPagmosDefaultsAndRoundTrips) {
+  const AlgorithmPtr a = pagmo("pso_gen", 12, 7, {{"omega", 0.5}});
+  const json j = a->to_json();
+  EXPECT_EQ(j["type"], "pagmo");
+  EXPECT_EQ(j["name"], "pso_gen");
+  EXPECT_EQ(j["population"], 12);
+  EXPECT_EQ(j["generations"], 7);
+  EXPECT_EQ(j["settings"], json({{"omega", 0.5},
+                                 {"eta1", 2.05},
+                                 {"eta2", 2.05},
+                                 {"max_vel", 0.5},
+                                 {"variant", 5},
+                                 {"neighb_type", 2},
+                                 {"neighb_param", 4}}));
+  EXPECT_EQ(make_algorithm(j)->to_json().dump(), j.dump());
+  EXPECT_EQ(a->evaluations(), 12 + 7 * 12);
+  EXPECT_EQ(a->iterations(), 7);
+  EXPECT_EQ(a->history_columns(),
+            (std::vector<std::string>{"generation_mean_objective", "generation_diverged"}));
+}
+
+TEST(PagmoSettings, SchemaHasOneCasePerAlgorithmListingItsSettings) {
+  const json s = find_algorithm("pagmo")->schema();
+  ASSERT_EQ(s["oneOf"].size(), pagmo_algorithms().size());
+  for (const json& c : s["oneOf"]) {
+    const std::string name = c["properties"]["name"]["const"];
+    EXPECT_EQ(c["properties"]["type"]["const"], "pagmo");
+    EXPECT_EQ(c["additionalProperties"], false);
+    const json& settings = c["properties"]["settings"];
+    EXPECT_EQ(settings["additionalProperties"], false) << name;
+    if (name == "pso_gen") {
+      for (const char* k :
+           {"omega", "eta1", "eta2", "max_vel", "variant", "neighb_type", "neighb_param"})
+        EXPECT_TRUE(settings["properties"].contains(k)) << k;
+      EXPECT_EQ(settings["properties"]["omega"]["default"], 0.7298);
+    }
+    if (name == "cmaes") {
+      EXPECT_EQ(settings["properties"]["sigma0"]["default"], 0.5);
+    }
+  }
+}
+
+TEST(PagmoSettings, WithBudgetFitsWholeGenerations) {
+  EXPECT_EQ(pagmo("bee_colony", 10, 1)->with_budget(110)->iterations(), 5);
+  EXPECT_EQ(pagmo("sea", 10, 1)->with_budget(110)->iterations(), 100);
+  EXPECT_EQ(pagmo("cmaes", 10, 1)->with_budget(1000)->iterations(), 99);
+  EXPECT_EQ(pagmo("cmaes", 10, 1)->with_budget(1000)->evaluations(), 1000);
+  EXPECT_EQ(pagmo("bee_colony", 10, 1)->with_budget(1000)->evaluations(), 990);
+  EXPECT_EQ(pagmo("cmaes", 10, 1)->with_budget(19), nullptr);  // not one generation
+  EXPECT_EQ(pagmo("gaco", 63, 1)->with_budget(110), nullptr);
+  const AlgorithmPtr bat = make_algorithm({{"type", "bat"}, {"population", 10}});
+  EXPECT_EQ(bat->with_budget(110)->iterations(), 10);
+  EXPECT_EQ(bat->with_budget(119)->evaluations(), 110);
+  EXPECT_EQ(bat->with_budget(19), nullptr);
+}
+
+TEST(PagmoTuning, GainsIdenticalForOneAndTwoThreads) {
+  for (const std::string name : {"pso_gen", "cmaes"}) {
+    const Job job = short_pagmo_job(name, 5, 2);
+    const std::string one = gains(job, 1);
+    EXPECT_EQ(one, gains(job, 2)) << name;
+    const json g = json::parse(one);
+    EXPECT_EQ(g["optimizer"]["type"], "pagmo");
+    EXPECT_EQ(g["optimizer"]["name"], name);
+    EXPECT_EQ(g["optimizer"]["evaluations"], 15);
+  }
+}
+
+TEST(PagmoTuning, ResumedRunGivesTheSameGainsFile) {
+  const Job job = short_pagmo_job("pso_gen", 5, 3);
+  const std::string uninterrupted = gains(job, 2);
+  std::string checkpoint;
+  RunOptions stop;
+  stop.observer = [&](const HistoryRow& h, const Optimizer& o) {
+    checkpoint = o.state().dump();
+    return h.iteration < 1;
+  };
+  TbbEvaluator one(1);
+  EXPECT_FALSE(tune::tune(job, one, stop).completed());
+  const json state = json::parse(checkpoint);
+  RunOptions resume;
+  resume.resume = &state;
+  EXPECT_EQ(gains(job, 2, resume), uninterrupted);
+}

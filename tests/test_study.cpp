@@ -1,0 +1,96 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_runner.hpp"
+#include "short_job.hpp"
+
+using nlohmann::json;
+using namespace ftc::testing;
+
+namespace {
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+// The short Table 1 job in `dir`, quoted for the shell.
+std::string job_file(const std::filesystem::path& dir) {
+  std::ofstream f(dir / "job.json");
+  f << short_table1_job().dump(2);
+  return "'" + (dir / "job.json").string() + "'";
+}
+
+}  // namespace
+
+TEST(Study, WritesOneRowPerRunTheTableAndTheFigure) {
+  const auto dir = fresh_dir("study");
+  const std::string out = (dir / "study").string();
+  // The short job's Bat algorithm has 3 bats: 20 evaluations pay for 5 iterations (18); pagmo's
+  // CMA-ES needs 5 members, so 3 generations (20).
+  const CliResult r = run_cli("study " + job_file(dir) +
+                                  " --algorithms bat,pagmo:cmaes --seeds 1,2 --budget 20 "
+                                  "--threads 2 --out '" +
+                                  out + "'",
+                              dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("[4/4] pagmo:cmaes seed 2: ise = "), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("| algorithm | median | best | worst |"), std::string::npos) << r.out;
+
+  const std::vector<std::string> csv = lines(slurp(dir / "study" / "study.csv"));
+  ASSERT_EQ(csv.size(), 5u);
+  EXPECT_EQ(csv[0], "algorithm,seed,objective,Kp,Ki,on_bound,evaluations,wall_seconds");
+  EXPECT_EQ(csv[1].rfind("bat,1,", 0), 0u) << csv[1];
+  EXPECT_EQ(csv[4].rfind("pagmo:cmaes,2,", 0), 0u) << csv[4];
+  EXPECT_NE(csv[1].find(",18,"), std::string::npos) << csv[1];
+  EXPECT_NE(csv[3].find(",20,"), std::string::npos) << csv[3];
+
+  const std::string md = slurp(dir / "study" / "study.md");
+  int rows = 0;
+  for (const std::string& l : lines(md))
+    rows += l.rfind("| bat |", 0) == 0 || l.rfind("| pagmo:cmaes |", 0) == 0;
+  EXPECT_EQ(rows, 2) << md;
+  EXPECT_NE(md.find("\"name\":\"cmaes\""), std::string::npos) << md;
+  const std::string png = slurp(dir / "study" / "study.png");
+  ASSERT_GT(png.size(), 8u);
+  EXPECT_EQ(png.substr(1, 3), "PNG");
+}
+
+TEST(Study, BadAlgorithmsSeedsAndBudgetsExitTwo) {
+  const auto dir = fresh_dir("study-errors");
+  const std::string job = job_file(dir);
+  const auto study = [&](const std::string& args) {
+    return run_cli("study " + job + " " + args + " --out '" + (dir / "o").string() + "'", dir);
+  };
+  const struct {
+    std::string args, message;
+  } cases[] = {
+      {"--algorithms '' --seeds 1 --budget 20", "--algorithms: is empty"},
+      {"--algorithms bat,pagmo:pso2 --seeds 1 --budget 20",
+       "--algorithms: unknown algorithm \"pagmo:pso2\" (known: bat, random, pagmo:bee_colony"},
+      {"--algorithms bat,cmaes --seeds 1 --budget 20", "unknown algorithm \"cmaes\""},
+      {"--algorithms bat,bat --seeds 1 --budget 20", "\"bat\" is given twice"},
+      {"--algorithms bat --seeds 3-1 --budget 20", "--seeds: range \"3-1\" runs backwards"},
+      {"--algorithms bat --seeds 1,x --budget 20", "\"x\" is not a seed or a range"},
+      {"--algorithms bat --seeds 1-3,2 --budget 20", "seed 2 is given twice"},
+      {"--algorithms bat --seeds -1 --budget 20", "\"-1\" is not a seed"},
+      {"--algorithms bat --seeds 1 --budget 5",
+       "--budget: 5 evaluations do not pay for one generation of bat"},
+      {"--algorithms pagmo:gaco --seeds 1 --budget 100",
+       "do not pay for one generation of pagmo:gaco after its initial population of 63"},
+  };
+  for (const auto& c : cases) {
+    const CliResult r = study(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << "\n" << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "o"));  // nothing ran
+}
