@@ -17,10 +17,11 @@ namespace {
 
 // The parts of a gains file the runtime does not use (the objective, the baseline, the
 // optimiser and its history) are checked for their kind only: they document the run.
-schema::Object<Gains>::Field informational(const char* key, const char* kind, const char* doc) {
+schema::Object<Gains>::Field informational(const char* key, const char* kind, const char* doc,
+                                           bool required = true) {
   const bool array = std::string_view(kind) == "array";
   return {key,
-          true,
+          required,
           [array](const json& v, const std::string& path, Gains&, Errors& e) {
             if (array ? !v.is_array() : !v.is_object())
               e.push_back({path, std::string("expected ") + (array ? "an array" : "an object") +
@@ -123,6 +124,11 @@ std::shared_ptr<const schema::Object<Gains>> make_gains_shape() {
                             {"sha256", {{"type", "string"}, {"pattern", "^[0-9a-f]{64}$"}}}}}};
             }});
   o->field(informational("generator", "object", "the tool and version that wrote the file"));
+  o->field(informational("noise_floor", "object",
+                         "the tuned objective re-evaluated with the initial state nudged by a "
+                         "relative 1e-12 (perturbation, repeats, objective_min, objective_max, "
+                         "relative_spread)",
+                         false));
   return o;
 }
 

@@ -119,6 +119,33 @@ Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
   return e;
 }
 
+Summary TuningProblem::summarize(const Evaluation& e) const {
+  Summary s;
+  s.scenarios = static_cast<int>(e.scenarios.size());
+  s.unrecoverable = unrecoverable();
+  s.diverged = e.diverged_count;
+  std::vector<double> v;
+  for (std::size_t i = 0; i < e.scenarios.size(); ++i)
+    if (counted_[i]) v.push_back(e.scenarios[i].objective(job_->objective.metric));
+  s.counted = static_cast<int>(v.size());
+  s.objective = e.objective;
+  if (v.empty()) return s;
+  ObjectiveConfig o = job_->objective;
+  const auto at = [&](Aggregate a, double q) {
+    o.aggregate = a;
+    o.q = q;
+    return o.aggregate_of(v);
+  };
+  s.mean = at(Aggregate::mean, 0.9);
+  s.median = at(Aggregate::quantile, 0.5);
+  s.p90 = at(Aggregate::quantile, 0.9);
+  s.p99 = at(Aggregate::quantile, 0.99);
+  s.max = at(Aggregate::max, 0.9);
+  o.alpha = job_->objective.aggregate == Aggregate::cvar ? job_->objective.alpha : 0.9;
+  s.cvar = at(Aggregate::cvar, 0.9);
+  return s;
+}
+
 TuningProblem TuningProblem::perturbed(std::uint64_t seed, std::uint64_t k, double eps) const {
   TuningProblem p = *this;
   auto scenarios = std::make_shared<std::vector<sim::Scenario>>(*scenarios_);

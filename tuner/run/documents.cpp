@@ -11,6 +11,7 @@
 
 #include "ftc/runtime/controller_json.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/job/ensemble.hpp"
 #include "ftc/version.hpp"
 #include "io/text.hpp"
 
@@ -51,6 +52,22 @@ std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std:
   return "trajectories/" + r.job.scenarios.at(scenario).name + "/" + index + slug + ".csv";
 }
 
+namespace {
+json summary_json(const Summary& s) {
+  return {{"scenarios", s.scenarios},
+          {"counted", s.counted},
+          {"unrecoverable", s.unrecoverable},
+          {"diverged", s.diverged},
+          {"mean", json_number(s.mean)},
+          {"median", json_number(s.median)},
+          {"p90", json_number(s.p90)},
+          {"p99", json_number(s.p99)},
+          {"max", json_number(s.max)},
+          {"cvar", json_number(s.cvar)},
+          {"objective", json_number(s.objective)}};
+}
+}  // namespace
+
 json gains_document(const TuningOutcome& r) {
   const Job& job = r.job;
   json g;
@@ -62,6 +79,11 @@ json gains_document(const TuningOutcome& r) {
   g["plant"] = to_json(job.plant);
   json objective = to_json(job.objective);
   objective["value"] = json_number(r.best().outcome.evaluation.objective);
+  if (job.ensemble)  // what the value is taken over
+    objective["scenarios"] = {{"listed", r.listed_scenarios},
+                              {"members", r.scenarios - r.listed_scenarios},
+                              {"unrecoverable", r.unrecoverable},
+                              {"left_out", r.left_out}};
   g["objective"] = objective;
   g["fitness"] = json_number(r.optimization.best_fitness);
   const ComparedController& base = r.baseline();
@@ -82,6 +104,14 @@ json gains_document(const TuningOutcome& r) {
                 {"evaluations", h.evaluations}};
     for (const auto& [name, value] : h.extras) row[name] = json_number(value);
     g["history"].push_back(std::move(row));
+  }
+  if (r.noise_floor) {
+    const NoiseFloor& n = *r.noise_floor;
+    g["noise_floor"] = {{"perturbation", n.perturbation},
+                        {"repeats", n.repeats},
+                        {"objective_min", json_number(n.objective_min)},
+                        {"objective_max", json_number(n.objective_max)},
+                        {"relative_spread", json_number(n.relative_spread)}};
   }
   g["job"] = {{"name", job.name}, {"sha256", r.job_sha256}};
   g["generator"] = {{"name", kToolName}, {"version", kVersion}};
@@ -130,15 +160,19 @@ json comparison_document(const TuningOutcome& r) {
     cj["fitness"] = json_number(c.outcome.evaluation.fitness);
     if (!c.outcome.error.empty()) cj["error"] = c.outcome.error;
     cj["scenarios"] = json::array();
-    for (std::size_t i = 0; i < c.outcome.evaluation.scenarios.size(); ++i) {
+    // The listed scenarios in full; an ensemble's members in its summary below.
+    for (std::size_t i = 0; i < r.listed_scenarios && i < c.outcome.evaluation.scenarios.size();
+         ++i) {
       json m = metrics_json(c.outcome.evaluation.scenarios[i]);
       m["name"] = r.job.scenarios[i].name;
       if (i < c.outcome.trajectories.size())
         m["trajectory"] = trajectory_file(r, static_cast<std::size_t>(&c - r.comparison.data()), i);
       cj["scenarios"].push_back(m);
     }
+    if (r.job.ensemble) cj["ensemble"] = summary_json(c.summary);
     doc["controllers"].push_back(cj);
   }
+  if (const std::string s = noise_floor_sentence(r); !s.empty()) doc["noise_floor"] = s;
   return doc;
 }
 
@@ -155,7 +189,34 @@ std::string comparison_markdown(const TuningOutcome& r) {
     << detail::format_number(job.objective.window.t0) << ", "
     << (std::isfinite(job.objective.window.t1) ? detail::format_number(job.objective.window.t1)
                                                : std::string("end"))
-    << ") s, " << to_string(job.objective.aggregate) << " over scenarios.\n";
+    << ") s"
+    << (job.objective.window_from == WindowFrom::first_fault ? " from each scenario's first fault"
+                                                             : "")
+    << ", " << to_string(job.objective.aggregate)
+    << (job.objective.aggregate == Aggregate::quantile
+            ? " (q = " + detail::format_number(job.objective.q, "%.3g") + ")"
+        : job.objective.aggregate == Aggregate::cvar
+            ? " (alpha = " + detail::format_number(job.objective.alpha, "%.3g") + ")"
+            : std::string())
+    << " over scenarios.\n";
+  if (const std::string nf = noise_floor_sentence(r); !nf.empty()) o << "\n" << nf << "\n";
+  if (job.ensemble) {
+    o << "\n## All " << r.scenarios << " scenarios (" << r.listed_scenarios << " listed, "
+      << r.scenarios - r.listed_scenarios << " ensemble members, seed " << job.ensemble->seed
+      << ")\n\n"
+      << r.unrecoverable << " cannot be controlled by any gains once their faults have started"
+      << (r.left_out > 0 ? ", and the objective leaves them out" : "") << ". Values are "
+      << sim::to_string(job.objective.metric) << " per scenario; quantiles by nearest rank.\n\n"
+      << "| controller | objective | mean | median | p90 | max | CVaR | diverged |\n"
+      << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const ComparedController& c : r.comparison) {
+      const Summary& m = c.summary;
+      o << "| " << c.label << " | " << detail::format_number(m.objective) << " | "
+        << detail::format_number(m.mean) << " | " << detail::format_number(m.median) << " | "
+        << detail::format_number(m.p90) << " | " << detail::format_number(m.max) << " | "
+        << detail::format_number(m.cvar) << " | " << m.diverged << " |\n";
+    }
+  }
   for (std::size_t s = 0; s < job.scenarios.size(); ++s) {
     const sim::Scenario& sc = job.scenarios[s];
     o << "\n## Scenario " << sc.name << "\n\n";

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
+#include <span>
 
 #include "ftc/tune/io/sha256.hpp"
 
@@ -35,12 +38,30 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   r.threads = evaluator.concurrency();
   r.evaluator = evaluator.name();
 
+  r.scenarios = problem.scenarios();
+  r.listed_scenarios = problem.listed_scenarios();
+  r.unrecoverable = problem.unrecoverable();
+  r.left_out = problem.left_out();
+
+  // The optimiser works in search coordinates (ln x on a log scale); everything it reports
+  // leaves here in parameter values.
+  const auto in_values = [&](HistoryRow row) {
+    row.best = problem.to_parameters(row.best);
+    return row;
+  };
+  IterationObserver observer;
+  if (options.observer)
+    observer = [&](const HistoryRow& h, const Optimizer& o) {
+      return options.observer(in_values(h), o);
+    };
   ProblemFitness fitness(problem, evaluator);
-  r.optimization = run_optimizer(optimizer, fitness, options.observer, options.resume);
+  r.optimization = run_optimizer(optimizer, fitness, observer, options.resume);
   r.simulations = fitness.simulations();
+  r.tuned_controller = problem.controller_for(r.optimization.best);
+  r.optimization.best = problem.to_parameters(r.optimization.best);
+  for (HistoryRow& h : r.optimization.history) h = in_values(std::move(h));
   if (!r.optimization.completed || !options.compare) return r;
 
-  r.tuned_controller = problem.controller_for(r.optimization.best);
   for (std::size_t j = 0; j < problem.space().names.size(); ++j)
     r.tuned.emplace_back(problem.space().names[j], r.optimization.best[j]);
 
@@ -58,9 +79,61 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   const auto every = std::max<std::int64_t>(
       1, std::llround(kComparisonRecordInterval / job.scenarios.front().sample_time));
   std::vector<CandidateOutcome> outcomes = problem.evaluate(controllers, evaluator, every);
-  for (std::size_t i = 0; i < outcomes.size(); ++i) r.comparison[i].outcome = std::move(outcomes[i]);
+  for (std::size_t i = 0; i < outcomes.size(); ++i) {
+    r.comparison[i].summary = problem.summarize(outcomes[i].evaluation);
+    r.comparison[i].outcome = std::move(outcomes[i]);
+  }
   r.simulations += static_cast<std::int64_t>(controllers.size() * problem.scenarios());
+  // The noise floor: the winner on R copies of the problem whose initial states are nudged.
+  NoiseFloor nf;
+  nf.objective_min = std::numeric_limits<double>::infinity();
+  nf.objective_max = -std::numeric_limits<double>::infinity();
+  for (int k = 0; k < nf.repeats; ++k) {
+    const TuningProblem p =
+        problem.perturbed(seed, kNoiseFloorStream + static_cast<std::uint64_t>(k), nf.perturbation);
+    const double v =
+        p.evaluate(std::span<const sim::ControllerConfig>(&r.tuned_controller, 1), evaluator)[0]
+            .evaluation.objective;
+    nf.objective_min = std::min(nf.objective_min, v);
+    nf.objective_max = std::max(nf.objective_max, v);
+  }
+  r.simulations +=
+      static_cast<std::int64_t>(nf.repeats) * static_cast<std::int64_t>(problem.scenarios());
+  nf.relative_spread =
+      (nf.objective_max - nf.objective_min) / r.best().outcome.evaluation.objective;
+  r.noise_floor = nf;
   return r;
+}
+
+std::string noise_floor_sentence(const TuningOutcome& r) {
+  if (!r.noise_floor || r.comparison.size() < 2) return "";
+  const double base = r.baseline().outcome.evaluation.objective;
+  const double best = r.best().outcome.evaluation.objective;
+  const double spread = r.noise_floor->relative_spread;
+  char buf[480];
+  if (!std::isfinite(best) || !std::isfinite(spread)) {
+    std::snprintf(buf, sizeof buf,
+                  "The noise floor is undefined: the tuned controller's objective is not finite.");
+    return buf;
+  }
+  if (!std::isfinite(base)) {
+    std::snprintf(buf, sizeof buf,
+                  "The job's own controller diverges; the tuned one does not (its objective moves "
+                  "by %.2g %% when the initial state is nudged by a relative %.0e).",
+                  100 * spread, r.noise_floor->perturbation);
+    return buf;
+  }
+  const double margin = (base - best) / best;  // relative to the winner, like the spread
+  const bool outside = std::abs(margin) > spread;
+  std::snprintf(buf, sizeof buf,
+                "The tuned objective is %.3g %% %s the job's own controller's; nudging the initial "
+                "state by a relative %.0e moves it by up to %.2g %% (%d runs), so the %s is %s "
+                "the noise floor.",
+                100 * std::abs(margin), margin >= 0 ? "below" : "above",
+                r.noise_floor->perturbation, 100 * spread, r.noise_floor->repeats,
+                margin >= 0 ? "improvement" : "difference",
+                outside ? "larger than" : "inside (not merit)");
+  return buf;
 }
 
 TuningOutcome tune(const Job& job, BatchEvaluator& evaluator, const RunOptions& options) {

@@ -38,6 +38,15 @@ struct Evaluation {
   int diverged_count = 0;               // how many (counted or not)
 };
 
+// A candidate over many scenarios at a glance (SPEC §15's aggregates): the job's metric over the
+// counted scenarios, quantiles by nearest rank, cvar with the job's alpha (0.9 when it
+// aggregates otherwise); +inf for a diverged run.
+struct Summary {
+  int scenarios = 0, counted = 0, unrecoverable = 0, diverged = 0;
+  double mean = 0, median = 0, p90 = 0, p99 = 0, max = 0, cvar = 0;
+  double objective = 0;  // the job's own aggregate
+};
+
 // A candidate's score with what else its simulations gave.
 struct CandidateOutcome {
   Evaluation evaluation;
@@ -97,6 +106,7 @@ class TuningProblem {
   std::vector<SimulationTask> tasks(std::size_t candidates, bool record_listed = false) const;
   // A candidate's score from its metrics on every scenario.
   Evaluation score(std::vector<sim::Metrics> per_scenario) const;
+  Summary summarize(const Evaluation& e) const;
   // Simulates and scores controllers through an evaluator, one outcome per controller.
   std::vector<CandidateOutcome> evaluate(std::span<const sim::ControllerConfig> controllers,
                                          BatchEvaluator& evaluator,

@@ -34,17 +34,33 @@ struct ComparedController {
   std::string role;  // "compare", "baseline" (the job's controller) or "tuned"
   sim::ControllerConfig controller;
   CandidateOutcome outcome;
+  Summary summary;  // over every scenario, members included
 };
+
+// SPEC §14: the winner re-evaluated with its initial states nudged by a relative 1e-12. After
+// a fault the closed loop is chaotic at rounding level, so objectives closer than this spread
+// are not told apart by merit.
+struct NoiseFloor {
+  double perturbation = 1e-12;
+  int repeats = 8;
+  double objective_min = 0.0, objective_max = 0.0;
+  double relative_spread = 0.0;  // (max - min) / the winner's objective
+};
+inline constexpr std::uint64_t kNoiseFloorStream = 1000000;  // member k = 1e6 + r of §12
 
 struct TuningOutcome {
   Job job;
   std::string job_sha256;  // of the canonical JSON of the job as given
   std::uint64_t seed = 0;
   AlgorithmPtr algorithm;  // the settings the optimiser ran with
-  OptimizationResult optimization;
+  OptimizationResult optimization;  // best and history in parameter values (not ln x)
   std::vector<std::pair<std::string, double>> tuned;
   sim::ControllerConfig tuned_controller;
   std::vector<ComparedController> comparison;  // compare entries, then baseline, then tuned
+  std::optional<NoiseFloor> noise_floor;       // with the comparison
+  // What the problem scored: its scenarios (listed, then members) and which it left out.
+  std::size_t scenarios = 0, listed_scenarios = 0;
+  int unrecoverable = 0, left_out = 0;
   int threads = 0;          // the evaluator's concurrency
   std::string evaluator;    // its name
   std::int64_t simulations = 0;
@@ -62,6 +78,10 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
 // The job's own algorithm, seeded by options.seed or tuning.seed. Throws InputError for a job
 // that cannot be tuned.
 TuningOutcome tune(const Job& job, BatchEvaluator& evaluator, const RunOptions& options = {});
+
+// Whether the tuned controller's margin over the job's own is larger than the noise floor, in one
+// sentence for people (empty without a comparison).
+std::string noise_floor_sentence(const TuningOutcome& r);
 
 std::string canonical_job_sha256(const Job& job);
 std::string display_name(sim::ControllerType t);  // "PI-FOSMC", ...
