@@ -10,8 +10,8 @@
 
 #include "cli.hpp"
 #include "ftc/runtime/controller_json.hpp"
-#include "ftc/tune/io/files.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/random_search.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
@@ -81,8 +81,8 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     bar.clear();
     spdlog::info(
         "iteration {}/{}: best J = {:.6g} ({}), {}/{} evaluations, {:.1f} s elapsed, ETA {:.1f} s",
-        h.iteration, job.tuning->algorithm->iterations(), h.best_fitness, params_text(names, h.best),
-        h.evaluations, total, elapsed, eta);
+        h.iteration, job.tuning->algorithm->iterations(), h.best_fitness,
+        params_text(names, h.best), h.evaluations, total, elapsed, eta);
     bar.draw(h.evaluations, total, elapsed);
     return true;
   };
@@ -120,6 +120,12 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     std::printf("  fitness J = %.6g (job's own controller: %.6g), %s = %.6g\n",
                 r.optimization.best_fitness, r.baseline().outcome.evaluation.fitness,
                 sim::to_string(job.objective.metric), r.best().outcome.evaluation.objective);
+    if (r.scenarios > r.listed_scenarios)
+      std::printf("  over %zu scenarios: %zu listed, %zu ensemble members; %d unrecoverable%s\n",
+                  r.scenarios, r.listed_scenarios, r.scenarios - r.listed_scenarios,
+                  r.unrecoverable, r.left_out > 0 ? ", left out of the objective" : "");
+    if (const std::string nf = tune::noise_floor_sentence(r); !nf.empty())
+      std::printf("  %s\n", nf.c_str());
     std::printf("  %lld simulations on %d thread%s in %.2f s\n",
                 static_cast<long long>(r.simulations), r.threads, r.threads == 1 ? "" : "s", wall);
     std::printf("  wrote %s/{gains.json, history.csv, comparison.json, comparison.md, run.json}\n",

@@ -16,14 +16,24 @@ double fitness_of(double objective) {
   return 1.0 / objective;
 }
 
-TuningProblem::TuningProblem(Job job) : job_(std::make_shared<const Job>(std::move(job))) {
+TuningProblem::TuningProblem(Job job)
+    : TuningProblem(
+          job,
+          [&] {
+            std::vector<sim::Scenario> all = job.scenarios;
+            for (sim::Scenario& m : expand_ensemble(job)) all.push_back(std::move(m));
+            return all;
+          }(),
+          job.scenarios.size()) {}
+
+TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed)
+    : job_(std::make_shared<const Job>(std::move(job))), listed_(listed) {
   throw_if_errors("job " + job_->name, job_->validate());
   plant_ = sim::make_plant(job_->plant);
-  auto all = std::make_shared<std::vector<sim::Scenario>>(job_->scenarios);
-  for (sim::Scenario& m : expand_ensemble(*job_)) all->push_back(std::move(m));
-  scenarios_ = std::move(all);
+  scenarios_ = std::make_shared<const std::vector<sim::Scenario>>(std::move(scenarios));
   const bool include = job_->ensemble && job_->ensemble->unrecoverable == Unrecoverable::include;
   for (const sim::Scenario& sc : *scenarios_) {
+    throw_if_errors("scenario " + sc.name, sc.validate("", plant_->axes(), plant_->actuators()));
     recoverable_.push_back(plant_->recoverable(sc));
     counted_.push_back(recoverable_.back() || include);
   }

@@ -123,15 +123,20 @@ std::string noise_floor_sentence(const TuningOutcome& r) {
                   100 * spread, r.noise_floor->perturbation);
     return buf;
   }
-  const double margin = (base - best) / best;  // relative to the winner, like the spread
+  // The decision compares like with like: the margin and the spread relative to the winner.
+  const double margin = (base - best) / best;
   const bool outside = std::abs(margin) > spread;
+  const double percent = 100 * std::abs(base - best) / std::max(base, best);
+  char factor[64] = "";
+  if (std::max(base, best) > 2 * std::min(base, best))
+    std::snprintf(factor, sizeof factor, " (a factor of %.3g)",
+                  std::max(base, best) / std::min(base, best));
   std::snprintf(buf, sizeof buf,
-                "The tuned objective is %.3g %% %s the job's own controller's; nudging the initial "
-                "state by a relative %.0e moves it by up to %.2g %% (%d runs), so the %s is %s "
-                "the noise floor.",
-                100 * std::abs(margin), margin >= 0 ? "below" : "above",
-                r.noise_floor->perturbation, 100 * spread, r.noise_floor->repeats,
-                margin >= 0 ? "improvement" : "difference",
+                "The tuned objective is %.3g %% %s the job's own controller's%s; nudging the "
+                "initial state by a relative %.0e moves it by up to %.2g %% (%d runs), so the %s "
+                "is %s the noise floor.",
+                percent, margin >= 0 ? "below" : "above", factor, r.noise_floor->perturbation,
+                100 * spread, r.noise_floor->repeats, margin >= 0 ? "improvement" : "difference",
                 outside ? "larger than" : "inside (not merit)");
   return buf;
 }

@@ -68,6 +68,9 @@ class TuningProblem {
   // problem of dimension 0 (its own controller only: simulate, compare). The job's ensemble is
   // expanded here, on the calling thread, and appended to its listed scenarios.
   explicit TuningProblem(Job job);
+  // The same with these scenarios in place of the listed ones and the ensemble's members (the
+  // ensemble's unrecoverable policy still applies): a slice of a large evaluation.
+  TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed);
 
   const Job& job() const { return *job_; }
   const sim::AnyPlant& plant() const { return *plant_; }
@@ -76,7 +79,7 @@ class TuningProblem {
 
   // The scenarios: the job's listed ones, then its ensemble's members.
   std::size_t scenarios() const { return scenarios_->size(); }
-  std::size_t listed_scenarios() const { return job_->scenarios.size(); }
+  std::size_t listed_scenarios() const { return listed_; }
   const sim::Scenario& scenario(std::size_t i) const { return (*scenarios_)[i]; }
   // Whether gains can control the scenario once its faults have started (SPEC §12), and
   // whether it counts in the objective (unrecoverable ones are left out unless the ensemble
@@ -127,6 +130,7 @@ class TuningProblem {
   std::shared_ptr<const sim::AnyPlant> plant_;
   std::shared_ptr<const std::vector<sim::Scenario>> scenarios_;
   std::vector<bool> recoverable_, counted_;
+  std::size_t listed_ = 0;
   SearchSpace space_;
   std::vector<Scale> scales_;                            // one per coordinate
   std::vector<double sim::ControllerConfig::*> fields_;  // one per coordinate
