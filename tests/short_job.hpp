@@ -20,4 +20,21 @@ inline nlohmann::json short_table1_job() {
   return j;
 }
 
+// A shortened copy of jobs/robust-faults.json: 6 members of 10 s with onsets in [3, 5] s, scored
+// over the 4 s after each member's first fault; 3 bats × 2 iterations.
+inline nlohmann::json short_ensemble_job() {
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/robust-faults.json");
+  nlohmann::json j = nlohmann::json::parse(in);
+  j["name"] = "robust-short";
+  j["scenarios"][0]["duration"] = 10;
+  j["scenarios"][0]["faults"][0]["onset"] = 3;
+  j["scenarios"][0]["faults"][1]["onset"] = 4;
+  j["ensemble"]["count"] = 6;
+  j["ensemble"]["faults"]["onset"] = {{"uniform", {3, 5}}};
+  j["objective"]["window"] = {0, 4};
+  j["tuning"]["algorithm"]["population"] = 3;
+  j["tuning"]["algorithm"]["iterations"] = 2;
+  return j;
+}
+
 }  // namespace ftc::testing

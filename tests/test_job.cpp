@@ -205,3 +205,64 @@ TEST(JobLoader, SyntaxErrorNamesLine) {
 TEST(JobLoader, MissingFileIsInputError) {
   EXPECT_THROW(tune::load_job("/nonexistent/job.json"), InputError);
 }
+
+TEST(Objective, QuantileAndCvarHandleTiesAndInfinity) {
+  tune::ObjectiveConfig o;
+  const double inf = std::numeric_limits<double>::infinity();
+  o.aggregate = tune::Aggregate::quantile;
+  o.q = 0.5;  // nearest rank: v_ceil(0.5 · 5) = v_3
+  EXPECT_EQ(o.aggregate_of({3, 1, 2, 2, 5}), 2.0);
+  o.q = 0.9;  // v_ceil(4.5) = v_5
+  EXPECT_EQ(o.aggregate_of({3, 1, 2, 2, 5}), 5.0);
+  o.q = 0.8;  // v_4 with a tie at the top
+  EXPECT_EQ(o.aggregate_of({4, 1, 4, 2, 4}), 4.0);
+  o.q = 0.1;  // v_1: a quantile below the diverged run is finite
+  EXPECT_EQ(o.aggregate_of({inf, 1, 2}), 1.0);
+  o.q = 1.0;
+  EXPECT_EQ(o.aggregate_of({inf, 1, 2}), inf);
+  o.aggregate = tune::Aggregate::cvar;
+  o.alpha = 0.5;  // mean of the ceil(0.5 · 5) = 3 largest: (3 + 4 + 4) / 3
+  EXPECT_EQ(o.aggregate_of({4, 1, 3, 2, 4}), 11.0 / 3.0);
+  o.alpha = 0.9;  // ceil(0.1 · 5) = 1: the largest
+  EXPECT_EQ(o.aggregate_of({4, 1, 3, 2, 4}), 4.0);
+  o.alpha = 0.0;  // all of them: the mean
+  EXPECT_EQ(o.aggregate_of({4, 1, 3, 2, 4}), 14.0 / 5.0);
+  o.alpha = 0.5;
+  EXPECT_EQ(o.aggregate_of({inf, 1, 2, 3}), inf);  // a diverged run in the tail
+  EXPECT_EQ(o.aggregate_of({}), 0.0);
+}
+
+TEST(Objective, WindowFromFirstFaultShiftsAndCutsEachScenariosWindow) {
+  tune::ObjectiveConfig o;
+  o.window = {0, 8};
+  o.window_from = tune::WindowFrom::first_fault;
+  sim::Scenario s;
+  s.duration = 12;
+  sim::Fault a, b;
+  a.onset = 7;
+  b.onset = 5.5;
+  s.faults = {a, b};
+  EXPECT_EQ(o.window_of(s).t0, 5.5);  // the earliest onset, whatever the order
+  EXPECT_EQ(o.window_of(s).t1, 12);   // 13.5 is past the end
+  s.faults.clear();                   // no fault: measured from the start
+  EXPECT_EQ(o.window_of(s).t0, 0);
+  EXPECT_EQ(o.window_of(s).t1, 8);
+}
+
+TEST(JobLoader, LogScaleBoundsMustBePositiveAndInsideTheFieldsRange) {
+  json j = table1();
+  j["tuning"]["parameters"]["Kp"] = {{"bounds", {0, 50}}, {"scale", "log"}};
+  std::vector<FieldError> errs = errors_of(j);
+  ASSERT_FALSE(errs.empty());
+  EXPECT_EQ(errs[0].path, "/tuning/parameters/Kp/bounds/0") << to_string(errs[0]);
+  j["tuning"]["parameters"]["Kp"] = {{"bounds", {1, 50}}, {"scale", "cubic"}};
+  errs = errors_of(j);
+  ASSERT_FALSE(errs.empty());
+  EXPECT_EQ(errs[0].path, "/tuning/parameters/Kp/scale") << to_string(errs[0]);
+  // alpha2 must stay in (0, 1) whatever the tuning bounds say.
+  j["tuning"]["parameters"] = {{"alpha2", {{"bounds", {0.4, 1.2}}, {"scale", "log"}}}};
+  errs = errors_of(j);
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_EQ(errs[0].path, "/tuning/parameters/alpha2/bounds/1") << to_string(errs[0]);
+  EXPECT_NE(errs[0].message.find("outside the valid range of alpha2"), std::string::npos);
+}

@@ -100,3 +100,76 @@ TEST(TuningProblem, DivergedObjectiveIsInfiniteOrThePenaltyAskedFor) {
   EXPECT_EQ(p.objective(x, {.diverged_penalty = 1e30}), 1e30);
   EXPECT_LT(p.objective(std::vector<double>{1e3}), 1e30);  // a finite one is left alone
 }
+
+TEST(TuningProblem, LogScaleParametersAreSearchedInLogSpaceWithinBounds) {
+  json j = short_table1_job();
+  j["tuning"]["parameters"] = {{"Kp", {1, 50}},
+                               {"switching_gain", {{"bounds", {2, 200}}, {"scale", "log"}}}};
+  const tune::TuningProblem p(tune::parse_job(j, "x"));
+  // switching_gain comes before Kp in the field table; its coordinate is ln x.
+  ASSERT_EQ(p.space().names, (std::vector<std::string>{"switching_gain", "Kp"}));
+  EXPECT_EQ(p.space().lower[0], std::log(2.0));
+  EXPECT_EQ(p.space().upper[0], std::log(200.0));
+  EXPECT_EQ(p.space().lower[1], 1.0);  // linear: the value itself
+  // The midpoint of the search interval is the geometric mean of the bounds.
+  const tune::Decision mid =
+      p.to_parameters(std::vector<double>{0.5 * (std::log(2.0) + std::log(200.0)), 25.5});
+  EXPECT_NEAR(mid[0], 20.0, 1e-12);
+  EXPECT_EQ(mid[1], 25.5);
+  // exp(ln 200) may round above 200; the value stays inside the bounds all the same.
+  for (const double y : {std::log(2.0), std::log(200.0)}) {
+    const tune::Decision x = p.to_parameters(std::vector<double>{y, 1.0});
+    EXPECT_GE(x[0], 2.0);
+    EXPECT_LE(x[0], 200.0);
+  }
+  EXPECT_EQ(p.to_parameters(std::vector<double>{std::log(200.0), 1.0})[0], 200.0);
+  EXPECT_EQ(p.controller_for(std::vector<double>{std::log(200.0), 7.0}).switching_gain, 200.0);
+}
+
+TEST(TuningProblem, ModelMismatchActsOnlyThroughTheSimulatedPlant) {
+  const tune::Job job = short_job();
+  tune::Job mismatched = job;
+  mismatched.scenarios[0].inertia = {22, 15.3, 16.5};  // the true plant; the model keeps 20, 17, 15
+  const tune::TuningProblem nominal(job), off(mismatched);
+  const sim::SimulationResult a = off.simulate(job.controller, 0);
+  // The same run by hand: a spacecraft with the true inertia, a controller built on the model.
+  sim::SpacecraftParams truth_params, model_params;
+  truth_params.inertia = {22, 15.3, 16.5};
+  const sim::Spacecraft truth(truth_params), model(model_params);
+  auto controller = sim::make_controller(job.controller, model, job.scenarios[0].sample_time);
+  sim::Scenario plain = mismatched.scenarios[0];
+  plain.inertia.clear();
+  const sim::SimulationResult b =
+      sim::simulate(truth, *controller, plain, off.simulation_options(0));
+  EXPECT_EQ(a.metrics.errors.ise, b.metrics.errors.ise);
+  EXPECT_EQ(a.metrics.control_tv, b.metrics.control_tv);
+  EXPECT_NE(a.metrics.errors.ise, nominal.simulate(job.controller, 0).metrics.errors.ise);
+  // Naming the plant's own inertia changes nothing.
+  tune::Job same = job;
+  same.scenarios[0].inertia = {20, 17, 15};
+  EXPECT_EQ(tune::TuningProblem(same).simulate(job.controller, 0).metrics.errors.ise,
+            nominal.simulate(job.controller, 0).metrics.errors.ise);
+}
+
+TEST(TuningProblem, UnrecoverableMembersAreFlaggedAndLeftOutUnlessIncluded) {
+  json j = short_ensemble_job();
+  j["ensemble"]["count"] = 12;
+  j["ensemble"]["faults"]["count"] = {2, 2};
+  j["ensemble"]["faults"]["type"] = {{"stuck", 1}};  // every member: two stuck actuators
+  const tune::TuningProblem p(tune::parse_job(j, "x"));
+  ASSERT_EQ(p.scenarios(), 13u);
+  EXPECT_TRUE(p.recoverable(0));  // the listed scenario: a bias and a partial loss
+  EXPECT_EQ(p.unrecoverable(), 12);
+  EXPECT_EQ(p.left_out(), 12);
+  for (std::size_t i = 1; i < p.scenarios(); ++i) EXPECT_FALSE(p.counted(i));
+  // The objective is then the listed scenario's alone.
+  tune::SerialEvaluator serial;
+  const std::vector<tune::CandidateOutcome> o =
+      p.evaluate(std::span<const sim::ControllerConfig>(&p.job().controller, 1), serial);
+  EXPECT_EQ(o[0].evaluation.objective, o[0].evaluation.scenarios[0].errors.ise);
+  j["ensemble"]["unrecoverable"] = "include";
+  const tune::TuningProblem all(tune::parse_job(j, "x"));
+  EXPECT_EQ(all.unrecoverable(), 12);
+  EXPECT_EQ(all.left_out(), 0);
+  EXPECT_TRUE(all.counted(5));
+}

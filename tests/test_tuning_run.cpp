@@ -9,6 +9,7 @@
 #include "ftc/sim/simulation.hpp"
 #include "ftc/sim/spacecraft.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
@@ -182,4 +183,26 @@ TEST(TuningRun, ResumedRunGivesTheSameGainsFile) {
   tune::RunOptions resume;
   resume.resume = &state;
   EXPECT_EQ(tune::gains_document(tuned(job, 2, std::nullopt, resume)).dump(), uninterrupted);
+}
+
+TEST(Cli, EnsembleRunGivesTheSameGainsFileOnOneAndTwoThreads) {
+  const auto dir = fresh_dir("run-ensemble");
+  tune::write_file_atomic(dir / "job.json", short_ensemble_job().dump(2));
+  const std::string job = std::string("'").append((dir / "job.json").string()).append("'");
+  const CliResult a =
+      run_cli("run " + job + " --threads 1 --out '" + (dir / "t1").string() + "'", dir);
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  EXPECT_NE(a.out.find("over 7 scenarios: 1 listed, 6 ensemble members;"), std::string::npos)
+      << a.out;
+  EXPECT_NE(a.out.find("noise floor"), std::string::npos) << a.out;
+  const CliResult b =
+      run_cli("run " + job + " --threads 2 -q --out '" + (dir / "t2").string() + "'", dir);
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_EQ(slurp(dir / "t1" / "gains.json"), slurp(dir / "t2" / "gains.json"));
+  const json g = json::parse(slurp(dir / "t1" / "gains.json"));
+  EXPECT_TRUE(g.contains("noise_floor"));
+  const std::string md = slurp(dir / "t1" / "comparison.md");
+  EXPECT_NE(md.find("## All 7 scenarios (1 listed, 6 ensemble members, seed 7)"), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("noise floor"), std::string::npos);
 }

@@ -26,6 +26,8 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action);
 void add_report_commands(CLI::App& app, const Globals& g, Action& action);
 void add_schema_command(CLI::App& app, const Globals& g, Action& action);
 void add_study_command(CLI::App& app, const Globals& g, Action& action);
+void add_ensemble_command(CLI::App& app, const Globals& g, Action& action);
+void add_evaluate_command(CLI::App& app, const Globals& g, Action& action);
 
 // Renders the report of a run directory; format html, png or svg.
 int render_run_report(const std::string& dir, const std::string& format, bool quiet);

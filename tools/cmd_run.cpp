@@ -86,9 +86,9 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     bar.draw(h.evaluations, total, elapsed);
     return true;
   };
-  spdlog::info("tuning {} of job {}: {} evaluations of {} scenario(s), {} algorithm",
-               fmt::join(names, ", "), job.name, total, job.scenarios.size(),
-               job.tuning->algorithm->type());
+  spdlog::info("tuning {} of job {}: {} evaluations of {} scenario{}, {} algorithm",
+               fmt::join(names, ", "), job.name, total, job.scenario_count(),
+               job.scenario_count() == 1 ? "" : "s", job.tuning->algorithm->type());
   const tune::TuningOutcome r = tune::tune(job, evaluator, ro);
   bar.clear();
   const double wall = std::chrono::duration<double>(clock::now() - t0).count();

@@ -3,6 +3,7 @@
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/job/ensemble.hpp"
 
 namespace ftc::cli {
 namespace {
@@ -12,13 +13,17 @@ int run_validate(const std::string& file, const Globals& g) {
     const tune::Job job = tune::load_job(file);
     const std::int64_t evals = job.tuning ? job.tuning->algorithm->evaluations() : 1;
     const std::int64_t steps = job.steps_per_evaluation();
+    const std::string members = job.ensemble
+                                    ? " (" + std::to_string(job.scenarios.size()) + " listed + " +
+                                          std::to_string(job.ensemble->count) + " ensemble members)"
+                                    : "";
     if (!g.quiet)
       std::printf(
-          "%s: valid job \"%s\": %lld evaluation%s x %zu scenario%s, %lld simulated steps "
+          "%s: valid job \"%s\": %lld evaluation%s x %zu scenario%s%s, %lld simulated steps "
           "per evaluation, %.3g in all%s\n",
           file.c_str(), job.name.c_str(), static_cast<long long>(evals), evals == 1 ? "" : "s",
-          job.scenarios.size(), job.scenarios.size() == 1 ? "" : "s", static_cast<long long>(steps),
-          static_cast<double>(evals) * static_cast<double>(steps),
+          job.scenario_count(), job.scenario_count() == 1 ? "" : "s", members.c_str(),
+          static_cast<long long>(steps), static_cast<double>(evals) * static_cast<double>(steps),
           job.tuning ? "" : " (no tuning section: simulate only)");
     return 0;
   } catch (const InputError& e) {

@@ -26,6 +26,8 @@ int main(int argc, char** argv) {
   ftc::cli::add_schema_command(app, globals, action);
   ftc::cli::add_report_commands(app, globals, action);
   ftc::cli::add_study_command(app, globals, action);
+  ftc::cli::add_ensemble_command(app, globals, action);
+  ftc::cli::add_evaluate_command(app, globals, action);
   ftc::cli::add_serve_command(app, globals, action);
   ftc::cli::add_client_commands(app, globals, action);
 

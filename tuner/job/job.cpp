@@ -577,17 +577,19 @@ void validate_job(const Job& job, Errors& errs) {
                              json_io::number_text(b.upper)});
       continue;
     }
+    // A log scale is only written {"bounds": [...], "scale": "log"}; the pair is nested there.
+    const std::string bounds = b.scale == Scale::log ? p + "/bounds" : p;
     if (b.scale == Scale::log && !(b.lower > 0))
-      errs.push_back(
-          {p + "/0", "must be > 0 on a log scale (got " + json_io::number_text(b.lower) + ")"});
+      errs.push_back({bounds + "/0",
+                      "must be > 0 on a log scale (got " + json_io::number_text(b.lower) + ")"});
     for (int k = 0; k < 2; ++k) {
       const double v = k == 0 ? b.lower : b.upper;
       const std::string msg = sim::check_controller_value(job.controller, *f, v);
       if (!msg.empty())
-        errs.push_back({p + "/" + std::to_string(k), std::string(k == 0 ? "lower" : "upper") +
-                                                         " bound " + json_io::number_text(v) +
-                                                         " is outside the valid range of " +
-                                                         b.name + ": " + msg});
+        errs.push_back({bounds + "/" + std::to_string(k), std::string(k == 0 ? "lower" : "upper") +
+                                                              " bound " + json_io::number_text(v) +
+                                                              " is outside the valid range of " +
+                                                              b.name + ": " + msg});
     }
   }
 }
@@ -706,7 +708,15 @@ std::vector<FieldError> Job::validate() const {
 std::int64_t Job::steps_per_evaluation() const {
   std::int64_t n = 0;
   for (const sim::Scenario& s : scenarios) n += s.samples() * s.substeps;
+  if (ensemble) {  // members copy the base's duration, sample time and substeps
+    const sim::Scenario& base = ensemble_base(*this);
+    n += ensemble->count * base.samples() * base.substeps;
+  }
   return n;
+}
+
+std::size_t Job::scenario_count() const {
+  return scenarios.size() + (ensemble ? static_cast<std::size_t>(ensemble->count) : 0);
 }
 
 Job parse_job(const json& j_in, const std::string& source,
@@ -717,6 +727,7 @@ Job parse_job(const json& j_in, const std::string& source,
   // writes); its entries take the place of the list, and their stated recoverability is
   // checked against the plant below.
   std::vector<std::optional<bool>> stated;
+  bool file_failed = false;
   if (j.is_object() && j.contains("scenarios") && j["scenarios"].is_object()) {
     const json ref = j["scenarios"];
     j["scenarios"] = json::array();
@@ -756,6 +767,7 @@ Job parse_job(const json& j_in, const std::string& source,
           }
       }
     }
+    file_failed = !errs.empty();
   }
   Job job;
   job_shape().read(j, "", job, errs);
@@ -768,6 +780,11 @@ Job parse_job(const json& j_in, const std::string& source,
   }
   Errors range;
   job_shape().validate(job, "", range);
+  // Without its scenarios file the job has no scenarios: say why once, not what follows from it.
+  if (file_failed)
+    std::erase_if(range, [](const FieldError& e) {
+      return e.path == "/scenarios" || e.path == "/ensemble/base";
+    });
   schema::detail::dedupe_append(errs, std::move(range));
   if (errs.empty() && !stated.empty()) {
     const std::unique_ptr<sim::AnyPlant> plant = sim::make_plant(job.plant);

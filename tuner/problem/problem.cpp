@@ -62,7 +62,10 @@ Decision TuningProblem::to_parameters(std::span<const double> y) const {
   for (std::size_t j = 0; j < x.size() && j < scales_.size(); ++j)
     if (scales_[j] == Scale::log) {
       const ParameterBounds& b = job_->tuning->parameters[j];
-      x[j] = std::clamp(std::exp(y[j]), b.lower, b.upper);  // exp(ln b) may miss b by an ulp
+      // exp(ln b) may miss b by an ulp either way: a search at its bound gives the bound itself.
+      x[j] = y[j] >= space_.upper[j]   ? b.upper
+             : y[j] <= space_.lower[j] ? b.lower
+                                       : std::clamp(std::exp(y[j]), b.lower, b.upper);
     }
   return x;
 }
@@ -129,18 +132,12 @@ Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
   return e;
 }
 
-Summary TuningProblem::summarize(const Evaluation& e) const {
+Summary summarize_values(const ObjectiveConfig& objective, std::vector<double> v) {
   Summary s;
-  s.scenarios = static_cast<int>(e.scenarios.size());
-  s.unrecoverable = unrecoverable();
-  s.diverged = e.diverged_count;
-  std::vector<double> v;
-  for (std::size_t i = 0; i < e.scenarios.size(); ++i)
-    if (counted_[i]) v.push_back(e.scenarios[i].objective(job_->objective.metric));
   s.counted = static_cast<int>(v.size());
-  s.objective = e.objective;
+  s.objective = objective.aggregate_of(v);
   if (v.empty()) return s;
-  ObjectiveConfig o = job_->objective;
+  ObjectiveConfig o = objective;
   const auto at = [&](Aggregate a, double q) {
     o.aggregate = a;
     o.q = q;
@@ -151,8 +148,20 @@ Summary TuningProblem::summarize(const Evaluation& e) const {
   s.p90 = at(Aggregate::quantile, 0.9);
   s.p99 = at(Aggregate::quantile, 0.99);
   s.max = at(Aggregate::max, 0.9);
-  o.alpha = job_->objective.aggregate == Aggregate::cvar ? job_->objective.alpha : 0.9;
+  o.alpha = objective.aggregate == Aggregate::cvar ? objective.alpha : 0.9;
   s.cvar = at(Aggregate::cvar, 0.9);
+  return s;
+}
+
+Summary TuningProblem::summarize(const Evaluation& e) const {
+  std::vector<double> v;
+  for (std::size_t i = 0; i < e.scenarios.size(); ++i)
+    if (counted_[i]) v.push_back(e.scenarios[i].objective(job_->objective.metric));
+  Summary s = summarize_values(job_->objective, std::move(v));
+  s.scenarios = static_cast<int>(e.scenarios.size());
+  s.unrecoverable = unrecoverable();
+  s.diverged = e.diverged_count;
+  s.objective = e.objective;
   return s;
 }
 

@@ -37,9 +37,9 @@ json named(const std::vector<std::string>& names, const Decision& x) {
 
 }  // namespace
 
-std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std::size_t scenario) {
+std::string label_slug(const std::string& label) {
   std::string slug;
-  for (char c : r.comparison.at(controller).label) {
+  for (char c : label) {
     const bool keep = std::isalnum(static_cast<unsigned char>(c));
     if (keep)
       slug += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -47,12 +47,16 @@ std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std:
       slug += '-';
   }
   while (!slug.empty() && slug.back() == '-') slug.pop_back();
-  char index[24];
-  std::snprintf(index, sizeof index, "%02zu-", controller + 1);
-  return "trajectories/" + r.job.scenarios.at(scenario).name + "/" + index + slug + ".csv";
+  return slug;
 }
 
-namespace {
+std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std::size_t scenario) {
+  char index[24];
+  std::snprintf(index, sizeof index, "%02zu-", controller + 1);
+  return "trajectories/" + r.job.scenarios.at(scenario).name + "/" + index +
+         label_slug(r.comparison.at(controller).label) + ".csv";
+}
+
 json summary_json(const Summary& s) {
   return {{"scenarios", s.scenarios},
           {"counted", s.counted},
@@ -66,7 +70,6 @@ json summary_json(const Summary& s) {
           {"cvar", json_number(s.cvar)},
           {"objective", json_number(s.objective)}};
 }
-}  // namespace
 
 json gains_document(const TuningOutcome& r) {
   const Job& job = r.job;

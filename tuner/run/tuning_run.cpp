@@ -67,13 +67,13 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
 
   std::vector<sim::ControllerConfig> controllers;
   for (const CompareEntry& c : job.compare) {
-    r.comparison.push_back({c.label, "compare", c.controller, {}});
+    r.comparison.push_back({c.label, "compare", c.controller, {}, {}});
     controllers.push_back(c.controller);
   }
   const std::string name = display_name(job.controller.type);
-  r.comparison.push_back({name + " (job)", "baseline", job.controller, {}});
+  r.comparison.push_back({name + " (job)", "baseline", job.controller, {}, {}});
   controllers.push_back(job.controller);
-  r.comparison.push_back({"optimal " + name, "tuned", r.tuned_controller, {}});
+  r.comparison.push_back({"optimal " + name, "tuned", r.tuned_controller, {}, {}});
   controllers.push_back(r.tuned_controller);
 
   const auto every = std::max<std::int64_t>(
@@ -126,17 +126,21 @@ std::string noise_floor_sentence(const TuningOutcome& r) {
   // The decision compares like with like: the margin and the spread relative to the winner.
   const double margin = (base - best) / best;
   const bool outside = std::abs(margin) > spread;
-  const double percent = 100 * std::abs(base - best) / std::max(base, best);
-  char factor[64] = "";
-  if (std::max(base, best) > 2 * std::min(base, best))
-    std::snprintf(factor, sizeof factor, " (a factor of %.3g)",
-                  std::max(base, best) / std::min(base, best));
+  // A margin of a factor of two or more reads better as a ratio than as "100 % below".
+  char amount[96];
+  const double hi = std::max(base, best), lo = std::min(base, best);
+  if (hi > 2 * lo)
+    std::snprintf(amount, sizeof amount, "%.3g times %s than", hi / lo,
+                  margin >= 0 ? "smaller" : "larger");
+  else
+    std::snprintf(amount, sizeof amount, "%.3g %% %s", 100 * (hi - lo) / hi,
+                  margin >= 0 ? "below" : "above");
   std::snprintf(buf, sizeof buf,
-                "The tuned objective is %.3g %% %s the job's own controller's%s; nudging the "
-                "initial state by a relative %.0e moves it by up to %.2g %% (%d runs), so the %s "
-                "is %s the noise floor.",
-                percent, margin >= 0 ? "below" : "above", factor, r.noise_floor->perturbation,
-                100 * spread, r.noise_floor->repeats, margin >= 0 ? "improvement" : "difference",
+                "The tuned objective is %s the job's own controller's; nudging the initial state "
+                "by a relative %.0e moves it by up to %.2g %% (%d runs), so the %s is %s the "
+                "noise floor.",
+                amount, r.noise_floor->perturbation, 100 * spread, r.noise_floor->repeats,
+                margin >= 0 ? "improvement" : "difference",
                 outside ? "larger than" : "inside (not merit)");
   return buf;
 }

@@ -93,8 +93,11 @@ struct Job {
 
   // Range and consistency checks of the whole job (types were checked while parsing).
   std::vector<FieldError> validate() const;
-  // Simulated steps of one evaluation of a candidate (Σ over scenarios of samples × substeps).
+  // Simulated steps of one evaluation of a candidate (Σ over scenarios and ensemble members of
+  // samples × substeps).
   std::int64_t steps_per_evaluation() const;
+  // Scenarios a candidate is simulated on: the listed ones and the ensemble's members.
+  std::size_t scenario_count() const;
 };
 
 // Parses and validates; throws InputError(source, every error). A scenario file named by the job

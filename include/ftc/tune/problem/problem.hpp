@@ -46,6 +46,9 @@ struct Summary {
   double mean = 0, median = 0, p90 = 0, p99 = 0, max = 0, cvar = 0;
   double objective = 0;  // the job's own aggregate
 };
+// The summary of the counted values of a metric (+inf for a diverged run) under the job's
+// objective; the caller fills in the counts of scenarios, unrecoverable and diverged ones.
+Summary summarize_values(const ObjectiveConfig& objective, std::vector<double> counted);
 
 // A candidate's score with what else its simulations gave.
 struct CandidateOutcome {

@@ -28,6 +28,10 @@ std::string trajectory_csv(const sim::Trajectory& trajectory);
 // Metrics of one scenario as written to metrics.json and comparison.json; ise/iae/itae in the
 // objective window, infinite values as null.
 nlohmann::json metrics_json(const sim::Metrics& m);
+// A controller's summary over many scenarios (SPEC §15's aggregates, with the counts).
+nlohmann::json summary_json(const Summary& s);
+// A label as a file name: lower-case letters and digits, other runs of characters as one '-'.
+std::string label_slug(const std::string& label);
 
 // The result files of a completed run, path → content: gains.json, history.csv, job.json
 // (the resolved job), comparison.json, comparison.md and trajectories/<scenario>/<NN>-<label>.csv

@@ -1,0 +1,218 @@
+// Out-of-sample evaluation (`ftctune evaluate`): the numbers are those of simulating each member
+// alone, the held-out members are those of the seed asked for, gains for another plant or
+// sample time are refused, and the files it writes replay.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "cli_runner.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/job/ensemble.hpp"
+#include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/evaluate.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
+#include "short_job.hpp"
+
+using nlohmann::json;
+using namespace ftc;
+using namespace ftc::testing;
+
+namespace {
+
+tune::Job ensemble_job() { return tune::parse_job(short_ensemble_job(), "robust-short"); }
+
+// Two gains files for the spacecraft at Ts = 1 ms: a short tuning run's, and the same with
+// other Kp and Ki (a second, different controller).
+struct GainsFiles {
+  std::filesystem::path a, b;
+  json document;
+};
+const GainsFiles& gains_files() {
+  static const GainsFiles files = [] {
+    GainsFiles f;
+    const std::filesystem::path dir = fresh_dir("evaluate-gains");
+    tune::SerialEvaluator serial;
+    const tune::TuningOutcome r = tune::tune(tune::parse_job(short_table1_job(), "short"), serial);
+    f.document = tune::gains_document(r);
+    f.a = dir / "a.json";
+    tune::write_file_atomic(f.a, f.document.dump(2));
+    json other = f.document;
+    other["controller"]["Kp"] = 35.0;
+    other["controller"]["Ki"] = 2.5;
+    other["tuned"] = {{"Kp", 35.0}, {"Ki", 2.5}};
+    f.b = dir / "b.json";
+    tune::write_file_atomic(f.b, other.dump(2));
+    return f;
+  }();
+  return files;
+}
+
+std::string refusal(const json& gains) {
+  const std::filesystem::path file = fresh_dir("evaluate-refusal") / "gains.json";
+  tune::write_file_atomic(file, gains.dump());
+  tune::EvaluateOptions o;
+  o.gains = {{file, ""}};
+  tune::SerialEvaluator serial;
+  try {
+    tune::evaluate_out_of_sample(ensemble_job(), o, serial);
+  } catch (const InputError& e) {
+    return to_string(e.errors().at(0));
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Evaluate, GivesTheNumbersOfSimulatingEachMemberAlone) {
+  const tune::Job job = ensemble_job();
+  tune::EvaluateOptions o;
+  o.gains = {{gains_files().a, "a"}, {gains_files().b, "b"}};
+  tune::TbbEvaluator evaluator(2);
+  const tune::EvaluationResult r = tune::evaluate_out_of_sample(job, o, evaluator);
+  ASSERT_EQ(r.controllers.size(), 3u);  // the job's own (its compare list is empty), a, b
+  EXPECT_EQ(r.controllers[0].label, "PI-FOSMC (job)");
+  EXPECT_EQ(r.controllers[0].source, "job");
+  EXPECT_EQ(r.controllers[1].label, "a");
+  EXPECT_EQ(r.controllers[2].source, gains_files().b.string());
+  EXPECT_EQ(r.seed, 8u);  // held out: the ensemble's seed 7 + 1
+  EXPECT_EQ(r.count, 6);
+  for (const tune::EvaluatedController& c : r.controllers) {
+    ASSERT_EQ(c.members.size(), 7u) << c.label;  // the listed scenario and 6 members
+    std::vector<double> counted;
+    for (std::size_t i = 0; i < c.members.size(); ++i) {
+      // The member on its own: a job with that one scenario and no ensemble.
+      tune::Job one = job;
+      one.ensemble = nullptr;
+      one.scenarios = {i == 0 ? job.scenarios[0]
+                              : tune::ensemble_member(job, 8, static_cast<std::int64_t>(i - 1))};
+      const tune::TuningProblem alone(one);
+      const sim::SimulationResult s = alone.simulate(c.controller, 0);
+      EXPECT_EQ(c.members[i].scenario, one.scenarios[0].name);
+      EXPECT_EQ(c.members[i].objective, s.metrics.errors.ise) << c.label << " " << i;
+      EXPECT_EQ(c.members[i].iae, s.metrics.errors.iae);
+      EXPECT_EQ(c.members[i].control_tv, s.metrics.control_tv);
+      EXPECT_EQ(c.members[i].recoverable, alone.recoverable(0));
+      if (c.members[i].recoverable) counted.push_back(c.members[i].objective);
+    }
+    // CVaR at the job's alpha 0.9: the mean of the ceil(0.1 n) largest.
+    std::sort(counted.begin(), counted.end());
+    EXPECT_EQ(c.aggregates.cvar, counted.back()) << c.label;  // n ≤ 10: the largest alone
+    EXPECT_EQ(c.aggregates.objective, c.aggregates.cvar);
+    EXPECT_EQ(c.aggregates.max, counted.back());
+    EXPECT_EQ(c.aggregates.counted, static_cast<int>(counted.size()));
+  }
+  // The two gains files are different controllers and score differently.
+  EXPECT_NE(r.controllers[1].members[1].objective, r.controllers[2].members[1].objective);
+}
+
+TEST(Evaluate, SeedAndCountChooseTheHeldOutMembers) {
+  tune::EvaluateOptions o;
+  o.seed = 123;
+  o.count = 3;
+  tune::SerialEvaluator serial;
+  const tune::EvaluationResult r = tune::evaluate_out_of_sample(ensemble_job(), o, serial);
+  EXPECT_EQ(r.seed, 123u);
+  ASSERT_EQ(r.controllers.front().members.size(), 4u);
+  EXPECT_EQ(r.controllers.front().members[3].scenario, "paper-2");
+  // Without an ensemble there is nothing to draw.
+  tune::Job plain = ensemble_job();
+  plain.ensemble = nullptr;
+  try {
+    tune::evaluate_out_of_sample(plain, o, serial);
+    FAIL() << "a seed for a job without ensemble was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(to_string(e.errors().at(0)).find("has no ensemble"), std::string::npos);
+  }
+  o.seed.reset();
+  o.count = 0;
+  EXPECT_THROW(tune::evaluate_out_of_sample(ensemble_job(), o, serial), InputError);
+}
+
+TEST(Evaluate, RefusesGainsTunedForAnotherPlantOrSampleTime) {
+  json g = gains_files().document;
+  g["plant"]["inertia"] = {21, 17, 15};
+  EXPECT_NE(refusal(g).find("/plant: was tuned for other plant values"), std::string::npos)
+      << refusal(g);
+  g = gains_files().document;
+  g["sample_time"] = 0.002;
+  EXPECT_NE(refusal(g).find("/sample_time: was tuned for Ts = 0.002 s; scenario \"paper\""),
+            std::string::npos)
+      << refusal(g);
+  g = gains_files().document;
+  g["plant"] = {{"model", "manipulator"}};
+  EXPECT_NE(refusal(g).find("/plant/model: was tuned for the plant \"manipulator\""),
+            std::string::npos)
+      << refusal(g);
+}
+
+TEST(Evaluate, CommandWritesItsFilesAndTheWorstMembersReplay) {
+  const std::filesystem::path dir = fresh_dir("evaluate-cli");
+  tune::write_file_atomic(dir / "job.json", short_ensemble_job().dump(2));
+  const std::string out = (dir / "ev").string();
+  const CliResult r = run_cli("evaluate '" + (dir / "job.json").string() + "' --gains 'tuned=" +
+                                  gains_files().a.string() + "' --threads 2 --out '" + out + "'",
+                              dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("held-out seed 8 (the job's seed + 1)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("controller"), std::string::npos);
+  EXPECT_NE(r.out.find("CVaR"), std::string::npos);
+  EXPECT_NE(r.out.find("tuned"), std::string::npos);
+  const json doc = json::parse(slurp(dir / "ev" / "evaluation.json"));
+  EXPECT_EQ(doc["schema"], "ftctune.evaluation/1");
+  EXPECT_EQ(doc["seed"], 8);
+  EXPECT_EQ(doc["count"], 6);
+  EXPECT_EQ(doc["metric"], "ise");
+  EXPECT_EQ(doc["aggregate"]["type"], "cvar");
+  ASSERT_EQ(doc["controllers"].size(), 2u);
+  EXPECT_EQ(doc["controllers"][1]["label"], "tuned");
+  EXPECT_EQ(doc["controllers"][1]["source"], gains_files().a.string());
+  EXPECT_EQ(doc["controllers"][1]["members"].size(), 7u);
+  EXPECT_TRUE(std::filesystem::exists(dir / "ev" / "evaluation.png"));
+  // One CSV row per controller × scenario, with the faults in words.
+  std::istringstream csv(slurp(dir / "ev" / "evaluation.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(
+      line,
+      "controller,scenario,faults,recoverable,objective,ise,iae,max_abs_u,control_tv,diverged");
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 2 * 7);
+  // The worst member of the tuned gains, replayed by `simulate`, scores what evaluate said.
+  const std::filesystem::path worst = dir / "ev" / "worst" / "02-tuned";
+  ASSERT_TRUE(std::filesystem::exists(worst));
+  std::filesystem::path first;
+  for (const auto& e : std::filesystem::directory_iterator(worst))
+    if (e.path().filename().string().rfind("1-", 0) == 0) first = e.path();
+  ASSERT_FALSE(first.empty());
+  const CliResult s = run_cli(
+      "simulate '" + first.string() + "' -q --out '" + (dir / "replay").string() + "'", dir);
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const json m = json::parse(slurp(dir / "replay" / "metrics.json"));
+  double worst_objective = 0;
+  for (const json& member : doc["controllers"][1]["members"])
+    if (member["recoverable"].get<bool>())
+      worst_objective = std::max(worst_objective, member["objective"].get<double>());
+  EXPECT_EQ(m["objective"].get<double>(), worst_objective);
+}
+
+TEST(Evaluate, CommandRefusesAnUnfitGainsFileWithExitTwo) {
+  const std::filesystem::path dir = fresh_dir("evaluate-unfit");
+  json g = gains_files().document;
+  g["sample_time"] = 0.002;
+  tune::write_file_atomic(dir / "g.json", g.dump());
+  const CliResult r =
+      run_cli("evaluate jobs/robust-faults.json --gains '" + (dir / "g.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("was tuned for Ts = 0.002 s"), std::string::npos) << r.err;
+  const CliResult bad = run_cli("evaluate jobs/robust-faults.json --gains '=x.json'", dir);
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("expected FILE or LABEL=FILE"), std::string::npos) << bad.err;
+}

@@ -1,0 +1,106 @@
+// ftctune evaluate JOB --gains FILE...: out-of-sample validation of tuned gains on the job's
+// scenarios and on ensemble members drawn with a seed they were not tuned on.
+#include <chrono>
+#include <cstdio>
+
+#include "cli.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/job/ensemble.hpp"
+#include "ftc/tune/report/evaluation.hpp"
+#include "ftc/tune/run/evaluate.hpp"
+#include "progress.hpp"
+
+namespace ftc::cli {
+namespace {
+
+struct EvaluateCliOptions {
+  std::string job;
+  std::vector<std::string> gains;
+  std::optional<std::uint64_t> seed;
+  std::optional<std::int64_t> count;
+  std::string out;
+  int threads = 0;
+  bool figure = true;
+};
+
+int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
+  namespace fs = std::filesystem;
+  const tune::Job job = tune::load_job(o.job);
+  tune::EvaluateOptions options;
+  // LABEL=FILE names the controller in tables and figures; a bare FILE is labelled by its path.
+  for (const std::string& p : o.gains) {
+    const std::size_t eq = p.find('=');
+    if (eq == std::string::npos)
+      options.gains.push_back({p, ""});
+    else if (eq == 0 || eq + 1 == p.size())
+      throw InputError("--gains", "", "\"" + p + "\": expected FILE or LABEL=FILE");
+    else
+      options.gains.push_back({p.substr(eq + 1), p.substr(0, eq)});
+  }
+  options.seed = o.seed;
+  options.count = o.count;
+  const fs::path out = o.out.empty() ? default_out_dir(job) / "evaluation" : fs::path(o.out);
+  if (!g.quiet && job.ensemble)
+    std::printf(
+        "Evaluating on %s: %zu listed scenario%s + %lld ensemble members, held-out "
+        "seed %llu%s\n",
+        job.name.c_str(), job.scenarios.size(), job.scenarios.size() == 1 ? "" : "s",
+        static_cast<long long>(o.count.value_or(job.ensemble->count)),
+        static_cast<unsigned long long>(o.seed.value_or(job.ensemble->seed + 1)),
+        o.seed ? "" : " (the job's seed + 1)");
+  ProgressBar bar(!g.quiet);
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  options.progress = [&](std::int64_t done, std::int64_t total) {
+    bar.draw(done, total, elapsed());
+  };
+  tune::TbbEvaluator evaluator(o.threads);
+  const tune::EvaluationResult r = tune::evaluate_out_of_sample(job, options, evaluator);
+  bar.clear();
+  tune::write_evaluation(r, out);
+  fs::path figure;
+  if (o.figure) figure = tune::draw_evaluation(r, out);
+  if (g.quiet) return 0;
+  const tune::Summary& s0 = r.controllers.front().aggregates;
+  std::printf("%s of each scenario over the window; %d scenarios, %d counted, %d unrecoverable%s\n",
+              sim::to_string(job.objective.metric), s0.scenarios, s0.counted, s0.unrecoverable,
+              s0.counted < s0.scenarios ? " (left out)" : "");
+  std::fputs(tune::evaluation_table(r).c_str(), stdout);
+  std::printf("  %lld simulations on %d thread%s in %.2f s\n",
+              static_cast<long long>(r.simulations), evaluator.concurrency(),
+              evaluator.concurrency() == 1 ? "" : "s", elapsed());
+  std::printf("  wrote %s/{evaluation.json, evaluation.csv%s, worst/}\n", out.c_str(),
+              figure.empty() ? "" : (", " + figure.filename().string()).c_str());
+  return 0;
+}
+
+}  // namespace
+
+void add_evaluate_command(CLI::App& app, const Globals& g, Action& action) {
+  auto opts = std::make_shared<EvaluateCliOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "evaluate",
+      "Judge controllers out of sample: the job's own, its compare list and gains files");
+  sub->add_option("job", opts->job, "Job file (ftctune.job/1)")->required();
+  sub->add_option("--gains", opts->gains,
+                  "A gains file to evaluate, FILE or LABEL=FILE (repeatable)");
+  sub->add_option("--seed", opts->seed,
+                  "Ensemble seed of the held-out members (default: the job's seed + 1)");
+  sub->add_option("--count", opts->count, "Ensemble members (default: the job's count)");
+  sub->add_option("--out", opts->out, "Output directory (default out/<job name>/evaluation)");
+  sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_flag("!--no-figure", opts->figure, "Skip the figure (no gnuplot needed)");
+  sub->footer(
+      "\nExamples:\n"
+      "  ftctune evaluate jobs/robust-faults.json --gains out/robust-faults/gains.json\n"
+      "  ftctune evaluate jobs/robust-faults.json --gains 'nominal=out/table1/gains.json' \\\n"
+      "      --gains 'robust=out/robust-faults/gains.json' --count 1000\n"
+      "  ftctune simulate out/robust-faults/evaluation/worst/<NN-controller>/1-<member>.json");
+  sub->callback([&action, &g, opts] { action = [&g, opts] { return run_evaluate(*opts, g); }; });
+}
+
+}  // namespace ftc::cli

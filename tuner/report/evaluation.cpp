@@ -1,0 +1,97 @@
+#include "ftc/tune/report/evaluation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/job/ensemble.hpp"
+#include "io/text.hpp"
+#include "report/gnuplot.hpp"
+
+namespace ftc::tune {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Okabe-Ito: told apart by readers with any common colour-vision deficiency; dashes as well.
+constexpr const char* kColours[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
+                                    "#E69F00", "#56B4E9", "#000000", "#F0E442"};
+constexpr int kColourCount = sizeof kColours / sizeof kColours[0];
+// An ECDF of more points than this is thinned: the eye cannot see them and the script grows.
+constexpr std::size_t kMaxCdfPoints = 2000;
+
+}  // namespace
+
+fs::path draw_evaluation(const EvaluationResult& r, const fs::path& dir, FigureFormat format) {
+  const bool include = r.job.ensemble && r.job.ensemble->unrecoverable == Unrecoverable::include;
+  const fs::path figure = dir / (std::string("evaluation") + plot::extension(format));
+  std::ostringstream g;
+  g << plot::kStyles << plot::terminal(format, 1300, 560) << "set output "
+    << plot::gp(figure.filename().string()) << "\n";
+  std::vector<std::size_t> finite_counts, diverged_counts;
+  for (std::size_t c = 0; c < r.controllers.size(); ++c) {
+    std::vector<double> v;
+    std::size_t diverged = 0;
+    for (const MemberResult& m : r.controllers[c].members) {
+      if (!(m.recoverable || include)) continue;
+      if (std::isfinite(m.objective) && m.objective > 0)
+        v.push_back(m.objective);
+      else
+        ++diverged;
+    }
+    std::sort(v.begin(), v.end());
+    // The CDF counts diverged members too (they sit beyond the right edge), so a controller
+    // that diverges often never reaches 1.
+    const double n = static_cast<double>(v.size() + diverged);
+    g << "$cdf" << c << " << EOD\n";
+    const std::size_t step = std::max<std::size_t>(1, v.size() / kMaxCdfPoints);
+    for (std::size_t k = 0; k < v.size(); ++k)
+      if (k % step == 0 || k + 1 == v.size())
+        g << detail::format_number(v[k], "%.9g") << ","
+          << detail::format_number(static_cast<double>(k + 1) / n, "%.6g") << "\n";
+    g << "EOD\n$box" << c << " << EOD\n";
+    for (double x : v) g << detail::format_number(x, "%.9g") << "\n";
+    g << "EOD\n";
+    finite_counts.push_back(v.size());
+    diverged_counts.push_back(diverged);
+  }
+  const std::string what = std::string(sim::to_string(r.job.objective.metric)) + " of a member";
+  g << "set multiplot layout 1,2 title "
+    << plot::gp("Out of sample: " + r.job.name + ", " + std::to_string(r.job.scenarios.size()) +
+                (r.job.scenarios.size() == 1 ? " listed scenario + " : " listed scenarios + ") +
+                std::to_string(r.count) + " members (seed " + std::to_string(r.seed) + ")")
+    << " font ',13'\n"
+    << "set logscale x\nset format x '%.2g'\nset xlabel " << plot::gp(what)
+    << "\nset ylabel 'fraction of members at or below'\nset yrange [0:1.02]\n"
+    << "set key bottom right inside opaque box noenhanced\nplot ";
+  for (std::size_t c = 0; c < r.controllers.size(); ++c) {
+    std::string title = r.controllers[c].label;
+    if (diverged_counts[c] > 0) title += " (" + std::to_string(diverged_counts[c]) + " diverged)";
+    g << (c ? ", \\\n     " : "") << "$cdf" << c << " using 1:2 with steps lw 2 lc rgb '"
+      << kColours[c % kColourCount] << "' dt " << c % 5 + 1 << " title " << plot::gp(title);
+  }
+  g << "\nunset logscale x\nset format x '%g'\nset rmargin 10\nunset xlabel\nset ylabel "
+    << plot::gp(what) << "\nset logscale y\nset format y '%.2g'\nset autoscale y\nset xrange [-0.6:"
+    << static_cast<double>(r.controllers.size()) - 0.4
+    << "]\nset xtics noenhanced rotate by -20 left (";
+  for (std::size_t c = 0; c < r.controllers.size(); ++c)
+    g << (c ? ", " : "") << plot::gp(r.controllers[c].label) << " " << c;
+  g << ")\nset style fill solid 0.25 border -1\nset style boxplot outliers pointtype 7\n"
+       "set style data boxplot\nunset key\nplot ";
+  bool any = false;
+  for (std::size_t c = 0; c < r.controllers.size(); ++c) {
+    if (finite_counts[c] == 0) continue;
+    g << (any ? ", \\\n     " : "") << "$box" << c << " using (" << c << "):1 lc rgb '"
+      << kColours[c % kColourCount] << "' ps 0.4";
+    any = true;
+  }
+  if (!any) g << "NaN notitle";
+  g << "\nunset multiplot\n";
+  write_file_atomic(dir / "evaluation.gp", g.str());
+  run_gnuplot(dir, "evaluation.gp");
+  return figure;
+}
+
+}  // namespace ftc::tune

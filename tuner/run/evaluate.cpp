@@ -1,0 +1,310 @@
+#include "ftc/tune/run/evaluate.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <sstream>
+
+#include "ftc/runtime/controller_json.hpp"
+#include "ftc/runtime/gains.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/job/ensemble.hpp"
+#include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
+#include "io/text.hpp"
+
+namespace ftc::tune {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Members per slice: enough tasks to keep every core busy, few enough that the scenarios and
+// metrics of a slice stay small whatever the member count.
+constexpr std::int64_t kSlice = 256;
+
+std::vector<double> resolved_values(const sim::PlantSpec& spec) {
+  if (!spec.values.empty()) return spec.values;
+  const sim::PlantKind* kind = sim::find_plant_kind(spec.model);
+  return kind ? kind->defaults() : std::vector<double>{};
+}
+
+// A gains file may only be judged on the plant and sample time it was tuned for: a controller
+// built from another model's f and G⁺ would be a different controller.
+void check_fits(const runtime::Gains& g, const Job& job, const std::string& path) {
+  if (g.plant.model != job.plant.model)
+    throw InputError(path, "/plant/model",
+                     "was tuned for the plant \"" + g.plant.model + "\", the job's is \"" +
+                         job.plant.model + "\"");
+  if (resolved_values(g.plant) != resolved_values(job.plant))
+    throw InputError(path, "/plant",
+                     "was tuned for other plant values than the job's (the controller's model "
+                     "would not be the job's plant)");
+  for (const sim::Scenario& s : job.scenarios) {
+    try {
+      runtime::check_sample_time(g, s.sample_time);
+    } catch (const InputError& e) {
+      throw InputError(path, "/sample_time",
+                       "was tuned for Ts = " + detail::format_number(g.sample_time, "%.9g") +
+                           " s; scenario \"" + s.name + "\" samples at " +
+                           detail::format_number(s.sample_time, "%.9g") + " s");
+    }
+  }
+}
+
+MemberResult member_result(const TuningProblem& p, std::size_t i, const sim::Metrics& m) {
+  MemberResult r;
+  r.scenario = p.scenario(i).name;
+  r.recoverable = p.recoverable(i);
+  r.objective = m.objective(p.job().objective.metric);
+  r.ise = m.errors.ise;
+  r.iae = m.errors.iae;
+  r.max_abs_u = m.max_abs_u;
+  r.control_tv = m.control_tv;
+  r.diverged = m.diverged;
+  return r;
+}
+
+// "a2 stuck abrupt @12.3 s; a4 loss_of_effectiveness incipient @20.1 s", or "none".
+std::string faults_summary(const sim::Scenario& s) {
+  std::string out;
+  for (const sim::Fault& f : s.faults) {
+    if (!out.empty()) out += "; ";
+    out.append("a")
+        .append(std::to_string(f.actuator))
+        .append(" ")
+        .append(sim::to_string(f.type))
+        .append(" ")
+        .append(sim::to_string(f.profile.type))
+        .append(" @")
+        .append(detail::format_number(f.onset, "%.4g"))
+        .append(" s");
+  }
+  return out.empty() ? "none" : out;
+}
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string o = "\"";
+  for (char c : s) o += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return o + "\"";
+}
+
+// The scenario of member index i (listed scenarios first, then the held-out members).
+sim::Scenario scenario_at(const Job& job, std::uint64_t seed, std::int64_t i) {
+  const auto listed = static_cast<std::int64_t>(job.scenarios.size());
+  if (i < listed) return job.scenarios[static_cast<std::size_t>(i)];
+  return ensemble_member(job, seed, i - listed);
+}
+
+}  // namespace
+
+EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions& options,
+                                        BatchEvaluator& evaluator) {
+  EvaluationResult r;
+  r.job = job_in;
+  Job& job = r.job;
+  throw_if_errors("job " + job.name, job.validate());
+  if (!job.ensemble && (options.seed || options.count))
+    throw InputError(options.seed ? "--seed" : "--count", "",
+                     "the job \"" + job.name + "\" has no ensemble to draw members from");
+  if (options.count && (*options.count < 1 || *options.count > kMaxEnsembleCount))
+    throw InputError("--count", "",
+                     "must be between 1 and " + std::to_string(kMaxEnsembleCount) + ", got " +
+                         std::to_string(*options.count));
+  if (job.ensemble) {
+    r.seed = options.seed.value_or(job.ensemble->seed + 1);
+    r.count = options.count.value_or(job.ensemble->count);
+  }
+
+  // The controllers: the compare list, the job's own, then every gains file.
+  for (const CompareEntry& c : job.compare)
+    r.controllers.push_back({c.label, "compare", c.controller, {}, {}});
+  r.controllers.push_back(
+      {display_name(job.controller.type) + " (job)", "job", job.controller, {}, {}});
+  for (const EvaluateOptions::GainsFile& f : options.gains) {
+    const runtime::Gains g = runtime::read_gains(f.path);
+    check_fits(g, job, f.path.string());
+    r.controllers.push_back(
+        {f.label.empty() ? f.path.string() : f.label, f.path.string(), g.controller, {}, {}});
+  }
+  for (std::size_t i = 0; i < r.controllers.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (r.controllers[i].label == r.controllers[j].label)
+        throw InputError("--gains", "",
+                         "two controllers are labelled \"" + r.controllers[i].label +
+                             "\"; give one a label of its own (--gains LABEL=FILE)");
+  std::vector<sim::ControllerConfig> controllers;
+  for (const EvaluatedController& c : r.controllers) controllers.push_back(c.controller);
+
+  // Slice by slice: build the slice's scenarios on this thread, simulate every (controller,
+  // scenario) pair through the evaluator, keep a few numbers per member.
+  const auto listed = static_cast<std::int64_t>(job.scenarios.size());
+  const std::int64_t total = listed + r.count;
+  std::vector<std::vector<double>> counted(r.controllers.size());
+  std::vector<int> diverged(r.controllers.size(), 0);
+  int unrecoverable = 0;
+  for (EvaluatedController& c : r.controllers) c.members.reserve(static_cast<std::size_t>(total));
+  for (std::int64_t begin = 0; begin < total; begin += kSlice) {
+    const std::int64_t end = std::min(total, begin + kSlice);
+    std::vector<sim::Scenario> slice;
+    slice.reserve(static_cast<std::size_t>(end - begin));
+    for (std::int64_t i = begin; i < end; ++i) slice.push_back(scenario_at(job, r.seed, i));
+    const auto slice_listed =
+        static_cast<std::size_t>(std::clamp(listed - begin, std::int64_t{0}, end - begin));
+    const TuningProblem problem(job, std::move(slice), slice_listed);
+    const std::vector<CandidateOutcome> outcomes = problem.evaluate(controllers, evaluator);
+    for (std::size_t i = 0; i < problem.scenarios(); ++i)
+      unrecoverable += problem.recoverable(i) ? 0 : 1;
+    for (std::size_t c = 0; c < outcomes.size(); ++c) {
+      if (!outcomes[c].error.empty())
+        throw InputError("controller \"" + r.controllers[c].label + "\"", "", outcomes[c].error);
+      const std::vector<sim::Metrics>& per = outcomes[c].evaluation.scenarios;
+      for (std::size_t i = 0; i < per.size(); ++i) {
+        r.controllers[c].members.push_back(member_result(problem, i, per[i]));
+        diverged[c] += per[i].diverged ? 1 : 0;
+        if (problem.counted(i)) counted[c].push_back(r.controllers[c].members.back().objective);
+      }
+    }
+    r.simulations += static_cast<std::int64_t>(controllers.size() * problem.scenarios());
+    if (options.progress) options.progress(end, total);
+  }
+  for (std::size_t c = 0; c < r.controllers.size(); ++c) {
+    Summary& s = r.controllers[c].aggregates;
+    s = summarize_values(job.objective, std::move(counted[c]));
+    s.scenarios = static_cast<int>(total);
+    s.unrecoverable = unrecoverable;
+    s.diverged = diverged[c];
+  }
+  return r;
+}
+
+json evaluation_document(const EvaluationResult& r) {
+  const Job& job = r.job;
+  json doc;
+  doc["schema"] = kEvaluationSchema;
+  doc["job"] = job.name;
+  doc["seed"] = r.seed;
+  doc["count"] = r.count;
+  doc["listed"] = job.scenarios.size();
+  doc["metric"] = sim::to_string(job.objective.metric);
+  doc["window"] = {
+      {"t0", json_number(job.objective.window.t0)},
+      {"t1", json_number(job.objective.window.t1)},
+      {"from", job.objective.window_from == WindowFrom::first_fault ? "first_fault" : "start"}};
+  json agg = {{"type", to_string(job.objective.aggregate)}};
+  if (job.objective.aggregate == Aggregate::quantile) agg["q"] = job.objective.q;
+  if (job.objective.aggregate == Aggregate::cvar) agg["alpha"] = job.objective.alpha;
+  doc["aggregate"] = agg;
+  doc["unrecoverable"] =
+      job.ensemble && job.ensemble->unrecoverable == Unrecoverable::include ? "include" : "exclude";
+  json cs = json::array();
+  for (const EvaluatedController& c : r.controllers) {
+    json members = json::array();
+    for (const MemberResult& m : c.members)
+      members.push_back({{"scenario", m.scenario},
+                         {"recoverable", m.recoverable},
+                         {"objective", json_number(m.objective)},
+                         {"ise", json_number(m.ise)},
+                         {"iae", json_number(m.iae)},
+                         {"max_abs_u", json_number(m.max_abs_u)},
+                         {"control_tv", json_number(m.control_tv)},
+                         {"diverged", m.diverged}});
+    cs.push_back({{"label", c.label},
+                  {"source", c.source},
+                  {"controller", to_json(c.controller)},
+                  {"aggregates", summary_json(c.aggregates)},
+                  {"members", std::move(members)}});
+  }
+  doc["controllers"] = std::move(cs);
+  return doc;
+}
+
+std::string evaluation_csv(const EvaluationResult& r) {
+  std::ostringstream o;
+  o << "controller,scenario,faults,recoverable,objective,ise,iae,max_abs_u,control_tv,diverged\n";
+  // The faults column is the same for every controller: describe each scenario once. Members are
+  // redrawn rather than kept, so memory stays flat in the member count.
+  const std::size_t n = r.controllers.empty() ? 0 : r.controllers.front().members.size();
+  std::vector<std::string> faults(n);
+  for (std::size_t i = 0; i < n; ++i)
+    faults[i] = csv_field(faults_summary(scenario_at(r.job, r.seed, static_cast<std::int64_t>(i))));
+  for (const EvaluatedController& c : r.controllers)
+    for (std::size_t i = 0; i < c.members.size(); ++i) {
+      const MemberResult& m = c.members[i];
+      o << csv_field(c.label) << "," << csv_field(m.scenario) << "," << faults[i] << ","
+        << (m.recoverable ? 1 : 0) << "," << detail::format_number(m.objective, "%.17g") << ","
+        << detail::format_number(m.ise, "%.17g") << "," << detail::format_number(m.iae, "%.17g")
+        << "," << detail::format_number(m.max_abs_u, "%.17g") << ","
+        << detail::format_number(m.control_tv, "%.17g") << "," << (m.diverged ? 1 : 0) << "\n";
+    }
+  return o.str();
+}
+
+std::string evaluation_table(const EvaluationResult& r) {
+  std::size_t w = std::string("controller").size();
+  for (const EvaluatedController& c : r.controllers) w = std::max(w, c.label.size());
+  std::ostringstream o;
+  char buf[512];
+  std::snprintf(buf, sizeof buf, "  %-*s %11s %11s %11s %11s %11s %8s\n", static_cast<int>(w),
+                "controller", "mean", "median", "p90", "max", "CVaR", "diverged");
+  o << buf;
+  for (const EvaluatedController& c : r.controllers) {
+    const Summary& s = c.aggregates;
+    const auto f = [](double v) { return detail::format_number(v, "%.5g"); };
+    std::snprintf(buf, sizeof buf, "  %-*s %11s %11s %11s %11s %11s %8d\n", static_cast<int>(w),
+                  c.label.c_str(), f(s.mean).c_str(), f(s.median).c_str(), f(s.p90).c_str(),
+                  f(s.max).c_str(), f(s.cvar).c_str(), s.diverged);
+    o << buf;
+  }
+  return o.str();
+}
+
+std::vector<std::size_t> worst_members(const EvaluatedController& c, std::size_t k) {
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < c.members.size(); ++i)
+    if (c.members[i].recoverable) idx.push_back(i);
+  // Worst first; ties (two diverged members) in scenario order, so the choice is reproducible.
+  std::stable_sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) {
+    return c.members[a].objective > c.members[b].objective;
+  });
+  if (idx.size() > k) idx.resize(k);
+  return idx;
+}
+
+std::string controller_slug(const EvaluationResult& r, std::size_t c) {
+  char index[24];
+  std::snprintf(index, sizeof index, "%02zu-", c + 1);
+  const std::string slug = label_slug(r.controllers.at(c).label);
+  return index + (slug.empty() ? std::string("controller") : slug);
+}
+
+void write_evaluation(const EvaluationResult& r, const fs::path& dir) {
+  write_file_atomic(dir / "evaluation.json", evaluation_document(r).dump(2) + "\n");
+  write_file_atomic(dir / "evaluation.csv", evaluation_csv(r));
+  // Each worst member as a complete job: the controller that did badly on the one scenario, so
+  // `ftctune simulate worst/<controller>/<rank>-<scenario>.json` replays it and draws it.
+  fs::remove_all(dir / "worst");
+  for (std::size_t c = 0; c < r.controllers.size(); ++c) {
+    const EvaluatedController& ec = r.controllers[c];
+    int rank = 0;
+    for (std::size_t i : worst_members(ec, kWorstMembers)) {
+      Job one = r.job;
+      one.name = r.job.name + "-" + ec.members[i].scenario;
+      one.ensemble = nullptr;
+      one.compare.clear();
+      one.tuning.reset();
+      one.controller = ec.controller;
+      one.scenarios = {scenario_at(r.job, r.seed, static_cast<std::int64_t>(i))};
+      const fs::path file = dir / "worst" / controller_slug(r, c) /
+                            (std::to_string(++rank) + "-" + ec.members[i].scenario + ".json");
+      write_file_atomic(file, to_json(one).dump(2) + "\n");
+    }
+  }
+}
+
+}  // namespace ftc::tune
