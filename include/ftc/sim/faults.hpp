@@ -85,7 +85,7 @@ class FaultSet {
   void evaluate(std::span<const double> t, Cos&& cosine, Out&& out) const;
   // Applied actuator output for a held command: sat(gain ⊙ u_d + offset).
   template <int M>
-  Vec<M> apply(const FaultEffect<M>& e, const Vec<M>& u_d) const {
+  FTC_HOT_INLINE Vec<M> apply(const FaultEffect<M>& e, const Vec<M>& u_d) const {
     Vec<M> u = e.gain.cwiseProduct(u_d) + e.offset;
     if (saturation_) u = u.cwiseMax(-*saturation_).cwiseMin(*saturation_);
     return u;
