@@ -323,3 +323,51 @@ TEST(Recoverability, TwoStuckActuatorsOfFourLeaveTheSpacecraftUncontrollable) {
   s.faults[1].type = sim::FaultType::bias;
   EXPECT_TRUE(plant->recoverable(s));
 }
+
+TEST(Ensemble, BadEnsembleOrScenariosFileExitsTwoWithThePath) {
+  const std::filesystem::path dir = ftc::testing::fresh_dir("ensemble-exit");
+  json j = robust_job();
+  j["ensemble"]["faults"]["actuators"] = json::array();
+  std::ofstream(dir / "bad.json") << j.dump();
+  ftc::testing::CliResult r =
+      ftc::testing::run_cli("validate '" + (dir / "bad.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("/ensemble/faults/actuators: must list at least one actuator"),
+            std::string::npos)
+      << r.err;
+  // A scenarios file whose schema is not even a string.
+  std::ofstream(dir / "odd.json") << R"({"schema": 7, "scenarios": []})";
+  j = robust_job();
+  j["scenarios"] = {{"file", "odd.json"}};
+  std::ofstream(dir / "job.json") << j.dump();
+  r = ftc::testing::run_cli("run '" + (dir / "job.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("/scenarios/file: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("is 7, not a scenarios file"), std::string::npos) << r.err;
+  // --count that would give a member the name of a listed scenario.
+  j = robust_job();
+  json other = j["scenarios"][0];
+  other["name"] = "paper-150";
+  j["scenarios"].push_back(other);
+  std::ofstream(dir / "clash.json") << j.dump();
+  r = ftc::testing::run_cli("ensemble '" + (dir / "clash.json").string() + "' --count 200", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("/scenarios/1/name"), std::string::npos) << r.err;
+}
+
+TEST(Ensemble, EveryPlantDrawsSixInitialStateFactors) {
+  // SPEC §12 fixes the draw order for any plant: on the two-link arm (four state components)
+  // the disturbance factor is still the tenth draw.
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/manipulator.json");
+  json j = json::parse(in);
+  j["ensemble"] = {{"count", 3}, {"seed", 5}, {"disturbance_scale", {{"uniform", {0, 1}}}}};
+  if (j["scenarios"][0]["disturbance"].empty())
+    j["scenarios"][0]["disturbance"] = {{{"axis", 1}, {"amplitude", 1.0}, {"frequency", 1.0}}};
+  const tune::Job job = parse(j);
+  const double a = job.scenarios[0].disturbance[0].amplitude;
+  for (std::int64_t k = 0; k < 3; ++k) {
+    SplitMix64 r = SplitMix64::member(5, static_cast<std::uint64_t>(k));
+    for (int i = 0; i < 9; ++i) r.uniform();
+    EXPECT_EQ(tune::ensemble_member(job, 5, k).disturbance[0].amplitude, a * r.uniform());
+  }
+}

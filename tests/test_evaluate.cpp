@@ -169,7 +169,10 @@ TEST(Evaluate, CommandWritesItsFilesAndTheWorstMembersReplay) {
   EXPECT_EQ(doc["seed"], 8);
   EXPECT_EQ(doc["count"], 6);
   EXPECT_EQ(doc["metric"], "ise");
-  EXPECT_EQ(doc["aggregate"]["type"], "cvar");
+  EXPECT_EQ(doc["aggregate"], "cvar");  // the objective in the job's own form
+  EXPECT_EQ(doc["alpha"], 0.9);
+  EXPECT_EQ(doc["window"], json::parse("[0, 4]"));
+  EXPECT_EQ(doc["window_from"], "first_fault");
   ASSERT_EQ(doc["controllers"].size(), 2u);
   EXPECT_EQ(doc["controllers"][1]["label"], "tuned");
   EXPECT_EQ(doc["controllers"][1]["source"], gains_files().a.string());
@@ -215,4 +218,44 @@ TEST(Evaluate, CommandRefusesAnUnfitGainsFileWithExitTwo) {
   const CliResult bad = run_cli("evaluate jobs/robust-faults.json --gains '=x.json'", dir);
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("expected FILE or LABEL=FILE"), std::string::npos) << bad.err;
+}
+
+TEST(Evaluate, MembersAcrossSliceBoundariesAreTheMembersAlone) {
+  // 256 scenarios a slice: with the listed one first, members 255 and 256 fall on either side.
+  const tune::Job job = ensemble_job();
+  tune::EvaluateOptions o;
+  o.count = 300;
+  tune::TbbEvaluator evaluator(2);
+  const tune::EvaluationResult r = tune::evaluate_out_of_sample(job, o, evaluator);
+  ASSERT_EQ(r.controllers[0].members.size(), 301u);
+  for (const std::int64_t k : {0, 254, 255, 256, 299}) {
+    tune::Job one = job;
+    one.ensemble = nullptr;
+    one.scenarios = {tune::ensemble_member(job, 8, k)};
+    const sim::SimulationResult s = tune::TuningProblem(one).simulate(job.controller, 0);
+    const tune::MemberResult& m = r.controllers[0].members[static_cast<std::size_t>(k + 1)];
+    EXPECT_EQ(m.scenario, "paper-" + std::to_string(k));
+    EXPECT_EQ(m.objective, s.metrics.errors.ise) << "member " << k;
+  }
+}
+
+TEST(Evaluate, CountThatWouldRenameAListedScenarioIsRefused) {
+  json j = short_ensemble_job();
+  j["scenarios"][0]["name"] = "nominal";
+  j["ensemble"]["base"] = "nominal";
+  json other = j["scenarios"][0];
+  other["name"] = "nominal-10";  // member 10 once there are more than 10 members
+  j["scenarios"].push_back(other);
+  const tune::Job job = tune::parse_job(j, "x");  // 6 members: no clash
+  tune::EvaluateOptions o;
+  o.count = 11;
+  tune::SerialEvaluator serial;
+  try {
+    tune::evaluate_out_of_sample(job, o, serial);
+    FAIL() << "a member named like a listed scenario was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.errors().at(0).path, "/scenarios/1/name");
+    EXPECT_NE(e.errors().at(0).message.find("also the name of ensemble member 10"),
+              std::string::npos);
+  }
 }

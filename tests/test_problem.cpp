@@ -9,6 +9,7 @@
 #include "ftc/sim/simulation.hpp"
 #include "ftc/sim/spacecraft.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
@@ -172,4 +173,31 @@ TEST(TuningProblem, UnrecoverableMembersAreFlaggedAndLeftOutUnlessIncluded) {
   EXPECT_EQ(all.unrecoverable(), 12);
   EXPECT_EQ(all.left_out(), 0);
   EXPECT_TRUE(all.counted(5));
+}
+
+TEST(TuningProblem, ObjectiveOfXTakesLogScaleParametersInTheirOwnUnits) {
+  json j = short_table1_job();
+  j["tuning"]["parameters"] = {{"Kp", {1, 50}},
+                               {"switching_gain", {{"bounds", {2, 200}}, {"scale", "log"}}}};
+  const tune::TuningProblem p(tune::parse_job(j, "x"));
+  const std::vector<double> x = {100.0, 20.0};  // switching_gain, Kp: values, not logarithms
+  sim::ControllerConfig c = p.job().controller;
+  c.switching_gain = 100.0;
+  c.Kp = 20.0;
+  EXPECT_EQ(p.objective(x), p.simulate(c, 0).metrics.errors.ise);
+  EXPECT_THROW(p.objective(std::vector<double>{300.0, 20.0}), InputError);
+  EXPECT_THROW(p.objective(std::vector<double>{1.0, 20.0}), InputError);
+}
+
+TEST(TuningProblem, NoiseFloorProbeNudgesInitialStatesFromTheReservedStream) {
+  const tune::TuningProblem p(short_job());
+  const tune::TuningProblem q = p.perturbed(1, tune::kNoiseFloorStream + 3, 1e-12);
+  tune::SplitMix64 r = tune::SplitMix64::member(1, 1000003);
+  const std::vector<double>& x0 = p.scenario(0).initial_state;
+  const std::vector<double>& x1 = q.scenario(0).initial_state;
+  ASSERT_EQ(x1.size(), 6u);
+  for (std::size_t i = 0; i < x0.size(); ++i) {
+    EXPECT_EQ(x1[i], x0[i] * (1.0 + 1e-12 * (2.0 * r.uniform() - 1.0))) << i;
+    EXPECT_NE(x1[i], x0[i]);
+  }
 }

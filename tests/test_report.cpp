@@ -196,3 +196,41 @@ TEST(Report, FiguresFollowThePlantsShape) {
   EXPECT_NE(gp.find("'u_{d3}'"), std::string::npos);
   EXPECT_EQ(gp.find("'u_{d4}'"), std::string::npos);
 }
+
+TEST(Report, LandscapeOfALogScaleParameterIsEvenInItsLogarithm) {
+  json j = short_table1_job();
+  j["tuning"]["parameters"] = {{"Kp", {1, 50}},
+                               {"switching_gain", {{"bounds", {2, 200}}, {"scale", "log"}}}};
+  const tune::Job job = tune::parse_job(j, "short");
+  tune::LandscapeOptions o;
+  o.n1 = 3;  // switching_gain 2, 20, 200 (the problem's field order puts it first)
+  o.n2 = 2;
+  o.params = {"switching_gain", "Kp"};
+  tune::TbbEvaluator evaluator(2);
+  const auto dir = fresh_dir("landscape-log");
+  const tune::LandscapeResult r = tune::compute_landscape(job, dir, o, evaluator);
+  std::istringstream csv(slurp(r.csv));
+  std::string line;
+  std::getline(csv, line);
+  std::vector<std::pair<double, double>> points;  // switching_gain, objective at Kp = 1
+  while (std::getline(csv, line)) {
+    double sg, kp, obj, fit;
+    int div;
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%d", &sg, &kp, &obj, &fit, &div) == 5 &&
+        kp == 1.0)
+      points.emplace_back(sg, obj);
+  }
+  ASSERT_EQ(points.size(), 3u);
+  EXPECT_EQ(points[0].first, 2.0);
+  EXPECT_NEAR(points[1].first, 20.0, 1e-6);
+  EXPECT_EQ(points[2].first, 200.0);
+  // Each point is the controller with that value itself (not exp of it).
+  const tune::TuningProblem p(job);
+  for (const auto& [sg, obj] : points) {
+    sim::ControllerConfig c = job.controller;
+    c.switching_gain = sg;
+    c.Kp = 1.0;
+    EXPECT_NEAR(p.simulate(c, 0).metrics.errors.ise, obj, 1e-8 * obj) << sg;
+  }
+  EXPECT_NE(slurp(dir / "landscape.gp").find("log10($1)"), std::string::npos);
+}

@@ -206,3 +206,19 @@ TEST(Cli, EnsembleRunGivesTheSameGainsFileOnOneAndTwoThreads) {
       << md;
   EXPECT_NE(md.find("noise floor"), std::string::npos);
 }
+
+TEST(TuningRun, RefusesAJobWhoseEveryScenarioIsUnrecoverable) {
+  json j = short_ensemble_job();
+  j["scenarios"][0]["faults"] = json::parse(
+      R"([{"actuator": 1, "type": "stuck", "onset": 3, "value": 0},
+          {"actuator": 2, "type": "stuck", "onset": 3, "value": 0}])");
+  j["ensemble"]["faults"]["count"] = {2, 2};
+  j["ensemble"]["faults"]["type"] = {{"stuck", 1}};
+  tune::SerialEvaluator serial;
+  try {
+    tune::tune(tune::parse_job(j, "x"), serial);
+    FAIL() << "tuned a job with nothing to improve";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.errors().at(0).path, "/ensemble/unrecoverable");
+  }
+}

@@ -31,6 +31,7 @@ int run_ensemble(const EnsembleOptions& o, const Globals& g) {
                          std::to_string(*o.count));
   const std::uint64_t seed = o.seed.value_or(job.ensemble->seed);
   const std::int64_t count = o.count.value_or(job.ensemble->count);
+  throw_if_errors("--count " + std::to_string(count), tune::member_name_clashes(job, count));
   const std::unique_ptr<sim::AnyPlant> plant = sim::make_plant(job.plant);
   json members = json::array();
   int unrecoverable = 0;

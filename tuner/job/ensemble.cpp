@@ -99,8 +99,13 @@ sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k
       inertia[i] *= inertia_factor[i];
     s.inertia = std::move(inertia);
   }
-  // One factor per initial-state component (2n: six for the spacecraft).
-  for (double& x : s.initial_state) x *= factor(e.initial_state_scale);
+  // Six initial-state factors whatever the plant (SPEC §12 fixes the draw order): a plant with
+  // fewer than six components uses the first 2n, one with more would draw one per component.
+  const std::size_t draws = std::max<std::size_t>(6, s.initial_state.size());
+  for (std::size_t i = 0; i < draws; ++i) {
+    const double f = factor(e.initial_state_scale);
+    if (i < s.initial_state.size()) s.initial_state[i] *= f;
+  }
   // One factor on every disturbance amplitude.
   const double d = factor(e.disturbance_scale);
   for (sim::DisturbanceTerm& t : s.disturbance) t.amplitude *= d;
@@ -338,6 +343,10 @@ std::shared_ptr<const Obj<FaultDistribution>> make_faults_shape() {
                 return;
               }
               f.actuators.clear();
+              if (v.empty())
+                e.push_back({path,
+                             "must list at least one actuator (leave the key out for all "
+                             "of the plant's)"});
               for (std::size_t i = 0; i < v.size(); ++i) {
                 long long a = 0;
                 if (!json_io::json_to_int(v[i], a))

@@ -471,21 +471,34 @@ void validate_ensemble(const Job& job, const sim::PlantKind& kind, Errors& errs)
                                                     " exceeds the " + std::to_string(listed) +
                                                     " listed actuators"});
   }
-  // Member k is named <base>-k; none may take another scenario's name.
   if (!job.scenarios.empty()) {
-    const std::string& base = e.base.empty() ? job.scenarios.front().name : e.base;
-    for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
-      const std::string& n = job.scenarios[i].name;
-      if (n.size() > base.size() + 1 && n.compare(0, base.size() + 1, base + "-") == 0) {
-        const std::string k = n.substr(base.size() + 1);
-        if (std::all_of(k.begin(), k.end(), ::isdigit) && (k == "0" || k[0] != '0') &&
-            k.size() < 8 && std::stoll(k) < e.count)
-          errs.push_back({"/scenarios/" + std::to_string(i) + "/name",
-                          "\"" + n + "\" is also the name of ensemble member " + k});
-      }
-    }
+    std::vector<FieldError> clashes = member_name_clashes(job, e.count);
+    errs.insert(errs.end(), clashes.begin(), clashes.end());
   }
 }
+
+}  // namespace
+
+std::vector<FieldError> member_name_clashes(const Job& job, std::int64_t count) {
+  // Member k is named <base>-k; none may take another scenario's name.
+  std::vector<FieldError> errs;
+  if (!job.ensemble || job.scenarios.empty()) return errs;
+  const std::string& base =
+      job.ensemble->base.empty() ? job.scenarios.front().name : job.ensemble->base;
+  for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
+    const std::string& n = job.scenarios[i].name;
+    if (n.size() > base.size() + 1 && n.compare(0, base.size() + 1, base + "-") == 0) {
+      const std::string k = n.substr(base.size() + 1);
+      if (std::all_of(k.begin(), k.end(), ::isdigit) && (k == "0" || k[0] != '0') && k.size() < 8 &&
+          std::stoll(k) < count)
+        errs.push_back({"/scenarios/" + std::to_string(i) + "/name",
+                        "\"" + n + "\" is also the name of ensemble member " + k});
+    }
+  }
+  return errs;
+}
+
+namespace {
 
 // The checks that span the job's parts: names, the scenarios against the plant's shape, the
 // objective window against the scenarios, the tuned parameters against the controller.
@@ -747,7 +760,8 @@ Job parse_job(const json& j_in, const std::string& source,
         doc = json::parse(*text, nullptr, false);
         if (doc.is_discarded() || !doc.is_object())
           errs.push_back({"/scenarios/file", file.string() + " is not a JSON object"});
-        else if (doc.value("schema", "") != kScenariosSchema)
+        else if (!doc.contains("schema") || !doc["schema"].is_string() ||
+                 doc["schema"].get<std::string>() != kScenariosSchema)
           errs.push_back(
               {"/scenarios/file",
                file.string() + " is " +
@@ -759,7 +773,12 @@ Job parse_job(const json& j_in, const std::string& source,
           for (json entry : doc["scenarios"]) {
             std::optional<bool> r;
             if (entry.is_object() && entry.contains("recoverable")) {
-              if (entry["recoverable"].is_boolean()) r = entry["recoverable"].get<bool>();
+              if (entry["recoverable"].is_boolean())
+                r = entry["recoverable"].get<bool>();
+              else
+                errs.push_back({"/scenarios/file", file.string() + ": /scenarios/" +
+                                                       std::to_string(stated.size()) +
+                                                       "/recoverable must be true or false"});
               entry.erase("recoverable");
             }
             stated.push_back(r);
@@ -811,8 +830,21 @@ Job load_job(const std::filesystem::path& file) {
 }
 
 json job_json_schema() {
-  return schema::document(job_shape().json_schema(),
-                          "https://ftctune.example/schemas/ftctune.job-1.json",
+  json body = job_shape().json_schema();
+  // The scenarios may also come from a scenarios file (parse_job reads it before the shape does).
+  json listed = body["properties"]["scenarios"];
+  const std::string doc = listed.value("description", "");
+  listed.erase("description");
+  body["properties"]["scenarios"] = {
+      {"description", doc + "; or {\"file\": path} naming an " + kScenariosSchema +
+                          " file, relative to the job file"},
+      {"anyOf",
+       {listed,
+        {{"type", "object"},
+         {"properties", {{"file", {{"type", "string"}, {"minLength", 1}}}}},
+         {"required", {"file"}},
+         {"additionalProperties", false}}}}};
+  return schema::document(body, "https://ftctune.example/schemas/ftctune.job-1.json",
                           "ftctune job file (ftctune.job/1)");
 }
 

@@ -160,7 +160,9 @@ Summary TuningProblem::summarize(const Evaluation& e) const {
   Summary s = summarize_values(job_->objective, std::move(v));
   s.scenarios = static_cast<int>(e.scenarios.size());
   s.unrecoverable = unrecoverable();
-  s.diverged = e.diverged_count;
+  // Like the aggregates, the count follows the unrecoverable policy.
+  for (std::size_t i = 0; i < e.scenarios.size(); ++i)
+    s.diverged += counted_[i] && e.scenarios[i].diverged ? 1 : 0;
   s.objective = e.objective;
   return s;
 }
@@ -209,19 +211,22 @@ double TuningProblem::objective(std::span<const double> x, const ObjectiveOption
                          std::to_string(space_.dimension()) + " (" + names + ")");
   }
   std::vector<FieldError> errs;
-  for (std::size_t j = 0; j < x.size(); ++j)
-    if (!(x[j] >= space_.lower[j] && x[j] <= space_.upper[j]))
+  for (std::size_t j = 0; j < x.size(); ++j) {
+    const ParameterBounds& b = job_->tuning->parameters[j];  // natural units, like x
+    if (!(x[j] >= b.lower && x[j] <= b.upper))
       errs.push_back({std::string("/").append(std::to_string(j)),
-                      space_.names[j] + " = " + json_io::number_text(x[j], 17) +
-                          " is outside its bounds [" + json_io::number_text(space_.lower[j]) +
-                          ", " + json_io::number_text(space_.upper[j]) + "]"});
+                      b.name + " = " + json_io::number_text(x[j], 17) + " is outside its bounds [" +
+                          json_io::number_text(b.lower) + ", " + json_io::number_text(b.upper) +
+                          "]"});
+  }
   throw_if_errors("objective", std::move(errs));
   SerialEvaluator serial;
   const sim::ControllerConfig c = controller_with(x);
   const CandidateOutcome o = evaluate(std::span<const sim::ControllerConfig>(&c, 1), serial)[0];
   if (!o.error.empty()) throw InputError("objective", "", o.error);
-  const double v =
-      o.evaluation.diverged ? std::numeric_limits<double>::infinity() : o.evaluation.objective;
+  // The job's aggregate: +inf when a counted scenario diverged into it, finite when the only
+  // diverged runs are left out (unrecoverable) or below a quantile.
+  const double v = o.evaluation.objective;
   if (!std::isfinite(v) && options.diverged_penalty) return *options.diverged_penalty;
   return v;
 }

@@ -30,32 +30,35 @@ fs::path draw_evaluation(const EvaluationResult& r, const fs::path& dir, FigureF
   std::ostringstream g;
   g << plot::kStyles << plot::terminal(format, 1300, 560) << "set output "
     << plot::gp(figure.filename().string()) << "\n";
-  std::vector<std::size_t> finite_counts, diverged_counts;
+  std::vector<std::size_t> finite_counts, diverged_counts, zero_counts;
   for (std::size_t c = 0; c < r.controllers.size(); ++c) {
     std::vector<double> v;
-    std::size_t diverged = 0;
+    std::size_t diverged = 0, zero = 0;
     for (const MemberResult& m : r.controllers[c].members) {
       if (!(m.recoverable || include)) continue;
-      if (std::isfinite(m.objective) && m.objective > 0)
+      if (!std::isfinite(m.objective))
+        ++diverged;
+      else if (m.objective > 0)
         v.push_back(m.objective);
       else
-        ++diverged;
+        ++zero;  // an empty window (its fault starts after the end): no place on a log axis
     }
     std::sort(v.begin(), v.end());
     // The CDF counts diverged members too (they sit beyond the right edge), so a controller
     // that diverges often never reaches 1.
-    const double n = static_cast<double>(v.size() + diverged);
+    const double n = static_cast<double>(v.size() + diverged + zero);
     g << "$cdf" << c << " << EOD\n";
     const std::size_t step = std::max<std::size_t>(1, v.size() / kMaxCdfPoints);
     for (std::size_t k = 0; k < v.size(); ++k)
       if (k % step == 0 || k + 1 == v.size())
         g << detail::format_number(v[k], "%.9g") << ","
-          << detail::format_number(static_cast<double>(k + 1) / n, "%.6g") << "\n";
+          << detail::format_number(static_cast<double>(zero + k + 1) / n, "%.6g") << "\n";
     g << "EOD\n$box" << c << " << EOD\n";
     for (double x : v) g << detail::format_number(x, "%.9g") << "\n";
     g << "EOD\n";
     finite_counts.push_back(v.size());
     diverged_counts.push_back(diverged);
+    zero_counts.push_back(zero);
   }
   const std::string what = std::string(sim::to_string(r.job.objective.metric)) + " of a member";
   g << "set multiplot layout 1,2 title "
@@ -69,6 +72,7 @@ fs::path draw_evaluation(const EvaluationResult& r, const fs::path& dir, FigureF
   for (std::size_t c = 0; c < r.controllers.size(); ++c) {
     std::string title = r.controllers[c].label;
     if (diverged_counts[c] > 0) title += " (" + std::to_string(diverged_counts[c]) + " diverged)";
+    if (zero_counts[c] > 0) title += " (" + std::to_string(zero_counts[c]) + " at 0, not drawn)";
     g << (c ? ", \\\n     " : "") << "$cdf" << c << " using 1:2 with steps lw 2 lc rgb '"
       << kColours[c % kColourCount] << "' dt " << c % 5 + 1 << " title " << plot::gp(title);
   }

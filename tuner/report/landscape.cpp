@@ -44,18 +44,23 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   const TuningProblem problem(job);
   const std::size_t i0 = problem.space().names[0] == params[0] ? 0 : 1;  // problem orders by field
 
+  // Evenly spaced in the coordinate the optimiser searches: the value, or its log.
+  const auto at = [](const ParameterBounds& b, int i, int n) {
+    const double f = static_cast<double>(i) / (n - 1);
+    if (i == n - 1) return b.upper;  // exactly, whatever the rounding on the way
+    return b.scale == Scale::log ? b.lower * std::pow(b.upper / b.lower, f)
+                                 : b.lower + (b.upper - b.lower) * f;
+  };
   std::vector<Decision> grid;
   for (int a = 0; a < options.n1; ++a)
     for (int b = 0; b < options.n2; ++b) {
-      const double v0 =
-          bounds[0].lower + (bounds[0].upper - bounds[0].lower) * a / (options.n1 - 1);
-      const double v1 =
-          bounds[1].lower + (bounds[1].upper - bounds[1].lower) * b / (options.n2 - 1);
+      const double v0 = at(bounds[0], a, options.n1);
+      const double v1 = at(bounds[1], b, options.n2);
       grid.push_back(i0 == 0 ? Decision{v0, v1} : Decision{v1, v0});
     }
   std::vector<sim::ControllerConfig> controllers;
   controllers.reserve(grid.size());
-  for (const Decision& x : grid) controllers.push_back(problem.controller_for(x));
+  for (const Decision& x : grid) controllers.push_back(problem.controller_with(x));
   const std::vector<CandidateOutcome> outcomes = problem.evaluate(controllers, evaluator);
 
   LandscapeResult r;
@@ -83,19 +88,31 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   write_file_atomic(r.csv, csv);
 
   r.figure = out_dir / (std::string("landscape") + plot::extension(options.format));
+  // A log-scale parameter is drawn against log10 of its value, where the grid is even (gnuplot
+  // draws an image on a log axis as if the axis were linear).
+  const auto coord = [&](int k, const std::string& column) {
+    return bounds[k].scale == Scale::log ? "(log10($" + column + "))" : column;
+  };
+  const auto axis_end = [&](int k, double v) {
+    return bounds[k].scale == Scale::log ? std::log10(v) : v;
+  };
+  const auto label = [&](int k) {
+    return bounds[k].scale == Scale::log ? "log10(" + params[k] + ")" : params[k];
+  };
   std::ostringstream g;
   g << plot::kStyles << plot::terminal(options.format, 1000, 800) << "set output "
     << plot::gp(r.figure.filename().string()) << "\nset title "
     << plot::gp("Objective (" + std::string(sim::to_string(job.objective.metric)) + ") of " +
                 job.name + " over " + params[0] + " and " + params[1])
-    << " font ',13'\nset logscale cb\n"
+    << " font ',13' noenhanced\nset logscale cb\n"
     << plot::colour_tics(r.best_objective, worst_objective) << "set cblabel "
     << plot::gp(std::string(sim::to_string(job.objective.metric)) + " (log scale; lower is better)")
-    << "\nset palette rgb 33,13,10\nset xlabel " << plot::gp(params[0]) << "\nset ylabel "
-    << plot::gp(params[1]) << "\nset xrange [" << bounds[0].lower << ":" << bounds[0].upper
-    << "]\nset yrange [" << bounds[1].lower << ":" << bounds[1].upper
-    << "]\nset key outside top center horizontal\n"
-    << "plot 'landscape.csv' skip 1 using 1:2:3 with image notitle";
+    << "\nset palette rgb 33,13,10\nset xlabel " << plot::gp(label(0)) << " noenhanced\nset ylabel "
+    << plot::gp(label(1)) << " noenhanced\nset xrange [" << axis_end(0, bounds[0].lower) << ":"
+    << axis_end(0, bounds[0].upper) << "]\nset yrange [" << axis_end(1, bounds[1].lower) << ":"
+    << axis_end(1, bounds[1].upper) << "]\nset key outside top center horizontal\n"
+    << "plot 'landscape.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2")
+    << ":3 with image notitle";
   if (!options.history.empty()) {
     if (!fs::is_regular_file(options.history))
       throw InputError(options.history.string(), "", "cannot read the history file");
@@ -115,13 +132,14 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
     const fs::path copy = out_dir / "history.csv";
     if (fs::absolute(options.history) != fs::absolute(copy))
       fs::copy_file(options.history, copy, fs::copy_options::overwrite_existing);
-    g << ", \\\n     'history.csv' skip 1 using " << c0 << ":" << c1
+    g << ", \\\n     'history.csv' skip 1 using " << coord(0, std::to_string(c0)) << ":"
+      << coord(1, std::to_string(c1))
       << " with linespoints lw 2.5 pt 7 ps 1.3 lc rgb 'black' title 'optimiser: best so far, by "
          "iteration'";
   }
   g << ", \\\n     '-' using 1:2 with points pt 6 ps 3 lw 3 lc rgb 'black' title 'best grid "
        "point'\n"
-    << r.best[0] << "," << r.best[1] << "\ne\n";
+    << axis_end(0, r.best[0]) << "," << axis_end(1, r.best[1]) << "\ne\n";
   write_file_atomic(out_dir / "landscape.gp", g.str());
   run_gnuplot(out_dir, "landscape.gp");
   return r;

@@ -168,6 +168,8 @@ json comparison_document(const TuningOutcome& r) {
          ++i) {
       json m = metrics_json(c.outcome.evaluation.scenarios[i]);
       m["name"] = r.job.scenarios[i].name;
+      if (i < r.listed_recoverable.size())
+        m["recoverable"] = static_cast<bool>(r.listed_recoverable[i]);
       if (i < c.outcome.trajectories.size())
         m["trajectory"] = trajectory_file(r, static_cast<std::size_t>(&c - r.comparison.data()), i);
       cj["scenarios"].push_back(m);

@@ -119,6 +119,7 @@ EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions
   if (job.ensemble) {
     r.seed = options.seed.value_or(job.ensemble->seed + 1);
     r.count = options.count.value_or(job.ensemble->count);
+    throw_if_errors("--count " + std::to_string(r.count), member_name_clashes(job, r.count));
   }
 
   // The controllers: the compare list, the job's own, then every gains file.
@@ -166,8 +167,9 @@ EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions
       const std::vector<sim::Metrics>& per = outcomes[c].evaluation.scenarios;
       for (std::size_t i = 0; i < per.size(); ++i) {
         r.controllers[c].members.push_back(member_result(problem, i, per[i]));
+        if (!problem.counted(i)) continue;  // listed, but outside the aggregates
         diverged[c] += per[i].diverged ? 1 : 0;
-        if (problem.counted(i)) counted[c].push_back(r.controllers[c].members.back().objective);
+        counted[c].push_back(r.controllers[c].members.back().objective);
       }
     }
     r.simulations += static_cast<std::int64_t>(controllers.size() * problem.scenarios());
@@ -183,7 +185,29 @@ EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions
   return r;
 }
 
-json evaluation_document(const EvaluationResult& r) {
+namespace {
+
+// Collects small pieces and hands them to the sink 64 KiB at a time.
+class Buffered {
+ public:
+  explicit Buffered(const ChunkSink& sink) : sink_(sink) {}
+  ~Buffered() = default;
+  Buffered& operator<<(std::string_view s) {
+    buf_.append(s);
+    if (buf_.size() >= (1u << 16)) flush();
+    return *this;
+  }
+  void flush() {
+    sink_(buf_);
+    buf_.clear();
+  }
+
+ private:
+  const ChunkSink& sink_;
+  std::string buf_;
+};
+
+json header_document(const EvaluationResult& r) {
   const Job& job = r.job;
   json doc;
   doc["schema"] = kEvaluationSchema;
@@ -191,58 +215,69 @@ json evaluation_document(const EvaluationResult& r) {
   doc["seed"] = r.seed;
   doc["count"] = r.count;
   doc["listed"] = job.scenarios.size();
-  doc["metric"] = sim::to_string(job.objective.metric);
-  doc["window"] = {
-      {"t0", json_number(job.objective.window.t0)},
-      {"t1", json_number(job.objective.window.t1)},
-      {"from", job.objective.window_from == WindowFrom::first_fault ? "first_fault" : "start"}};
-  json agg = {{"type", to_string(job.objective.aggregate)}};
-  if (job.objective.aggregate == Aggregate::quantile) agg["q"] = job.objective.q;
-  if (job.objective.aggregate == Aggregate::cvar) agg["alpha"] = job.objective.alpha;
-  doc["aggregate"] = agg;
+  // The objective in the job's own form.
+  const json objective = to_json(job.objective);
+  for (const char* k : {"metric", "window", "window_from", "aggregate", "q", "alpha"})
+    if (objective.contains(k)) doc[k] = objective[k];
   doc["unrecoverable"] =
       job.ensemble && job.ensemble->unrecoverable == Unrecoverable::include ? "include" : "exclude";
-  json cs = json::array();
-  for (const EvaluatedController& c : r.controllers) {
-    json members = json::array();
-    for (const MemberResult& m : c.members)
-      members.push_back({{"scenario", m.scenario},
-                         {"recoverable", m.recoverable},
-                         {"objective", json_number(m.objective)},
-                         {"ise", json_number(m.ise)},
-                         {"iae", json_number(m.iae)},
-                         {"max_abs_u", json_number(m.max_abs_u)},
-                         {"control_tv", json_number(m.control_tv)},
-                         {"diverged", m.diverged}});
-    cs.push_back({{"label", c.label},
-                  {"source", c.source},
-                  {"controller", to_json(c.controller)},
-                  {"aggregates", summary_json(c.aggregates)},
-                  {"members", std::move(members)}});
-  }
-  doc["controllers"] = std::move(cs);
   return doc;
 }
 
-std::string evaluation_csv(const EvaluationResult& r) {
-  std::ostringstream o;
-  o << "controller,scenario,faults,recoverable,objective,ise,iae,max_abs_u,control_tv,diverged\n";
-  // The faults column is the same for every controller: describe each scenario once. Members are
-  // redrawn rather than kept, so memory stays flat in the member count.
-  const std::size_t n = r.controllers.empty() ? 0 : r.controllers.front().members.size();
-  std::vector<std::string> faults(n);
-  for (std::size_t i = 0; i < n; ++i)
-    faults[i] = csv_field(faults_summary(scenario_at(r.job, r.seed, static_cast<std::int64_t>(i))));
-  for (const EvaluatedController& c : r.controllers)
+}  // namespace
+
+void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
+  // Written member by member: the document of a million members is never built in memory.
+  Buffered out(sink);
+  std::string head = header_document(r).dump(2);
+  head.pop_back();  // the closing brace: the controllers follow
+  while (!head.empty() && head.back() == '\n') head.pop_back();
+  out << head << ",\n  \"controllers\": [";
+  for (std::size_t c = 0; c < r.controllers.size(); ++c) {
+    const EvaluatedController& ec = r.controllers[c];
+    const json meta = {{"label", ec.label},
+                       {"source", ec.source},
+                       {"controller", to_json(ec.controller)},
+                       {"aggregates", summary_json(ec.aggregates)}};
+    std::string m = meta.dump();
+    m.pop_back();
+    out << (c ? ",\n    " : "\n    ") << m << ", \"members\": [";
+    for (std::size_t i = 0; i < ec.members.size(); ++i) {
+      const MemberResult& x = ec.members[i];
+      const json row = {{"scenario", x.scenario},
+                        {"recoverable", x.recoverable},
+                        {"objective", json_number(x.objective)},
+                        {"ise", json_number(x.ise)},
+                        {"iae", json_number(x.iae)},
+                        {"max_abs_u", json_number(x.max_abs_u)},
+                        {"control_tv", json_number(x.control_tv)},
+                        {"diverged", x.diverged}};
+      out << (i ? ",\n      " : "\n      ") << row.dump();
+    }
+    out << "\n    ]}";
+  }
+  out << "\n  ]\n}\n";
+  out.flush();
+}
+
+void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
+  Buffered out(sink);
+  out << "controller,scenario,faults,recoverable,objective,ise,iae,max_abs_u,control_tv,diverged\n";
+  for (const EvaluatedController& c : r.controllers) {
+    const std::string label = csv_field(c.label);
     for (std::size_t i = 0; i < c.members.size(); ++i) {
       const MemberResult& m = c.members[i];
-      o << csv_field(c.label) << "," << csv_field(m.scenario) << "," << faults[i] << ","
-        << (m.recoverable ? 1 : 0) << "," << detail::format_number(m.objective, "%.17g") << ","
-        << detail::format_number(m.ise, "%.17g") << "," << detail::format_number(m.iae, "%.17g")
-        << "," << detail::format_number(m.max_abs_u, "%.17g") << ","
-        << detail::format_number(m.control_tv, "%.17g") << "," << (m.diverged ? 1 : 0) << "\n";
+      // Members are drawn again rather than kept: memory stays flat in the member count.
+      const std::string faults =
+          csv_field(faults_summary(scenario_at(r.job, r.seed, static_cast<std::int64_t>(i))));
+      out << label << "," << csv_field(m.scenario) << "," << faults << ","
+          << (m.recoverable ? "1," : "0,") << detail::format_number(m.objective, "%.17g") << ","
+          << detail::format_number(m.ise, "%.17g") << "," << detail::format_number(m.iae, "%.17g")
+          << "," << detail::format_number(m.max_abs_u, "%.17g") << ","
+          << detail::format_number(m.control_tv, "%.17g") << "," << (m.diverged ? "1\n" : "0\n");
     }
-  return o.str();
+  }
+  out.flush();
 }
 
 std::string evaluation_table(const EvaluationResult& r) {
@@ -284,8 +319,10 @@ std::string controller_slug(const EvaluationResult& r, std::size_t c) {
 }
 
 void write_evaluation(const EvaluationResult& r, const fs::path& dir) {
-  write_file_atomic(dir / "evaluation.json", evaluation_document(r).dump(2) + "\n");
-  write_file_atomic(dir / "evaluation.csv", evaluation_csv(r));
+  write_file_atomic(dir / "evaluation.json",
+                    [&](const ChunkSink& sink) { write_evaluation_json(r, sink); });
+  write_file_atomic(dir / "evaluation.csv",
+                    [&](const ChunkSink& sink) { write_evaluation_csv(r, sink); });
   // Each worst member as a complete job: the controller that did badly on the one scenario, so
   // `ftctune simulate worst/<controller>/<rank>-<scenario>.json` replays it and draws it.
   fs::remove_all(dir / "worst");

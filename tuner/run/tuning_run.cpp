@@ -30,6 +30,11 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
                    std::uint64_t seed, BatchEvaluator& evaluator, const RunOptions& options) {
   const Job& job = problem.job();
   if (!job.tuning) throw InputError("job " + job.name, "/tuning", "is required to tune");
+  // With nothing counted the objective would be 0 for every candidate: any gains would "win".
+  if (problem.scenarios() > 0 && problem.left_out() == static_cast<int>(problem.scenarios()))
+    throw InputError("job " + job.name, "/ensemble/unrecoverable",
+                     "every scenario is unrecoverable, so no gains can improve the objective; "
+                     "give recoverable scenarios or set \"include\" to tune on them anyway");
   TuningOutcome r;
   r.job = job;
   r.job_sha256 = canonical_job_sha256(job);
@@ -42,6 +47,8 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   r.listed_scenarios = problem.listed_scenarios();
   r.unrecoverable = problem.unrecoverable();
   r.left_out = problem.left_out();
+  for (std::size_t i = 0; i < problem.listed_scenarios(); ++i)
+    r.listed_recoverable.push_back(problem.recoverable(i));
 
   // The optimiser works in search coordinates (ln x on a log scale); everything it reports
   // leaves here in parameter values.
@@ -126,19 +133,21 @@ std::string noise_floor_sentence(const TuningOutcome& r) {
   // The decision compares like with like: the margin and the spread relative to the winner.
   const double margin = (base - best) / best;
   const bool outside = std::abs(margin) > spread;
-  // A margin of a factor of two or more reads better as a ratio than as "100 % below".
-  char amount[96];
-  const double hi = std::max(base, best), lo = std::min(base, best);
-  if (hi > 2 * lo)
-    std::snprintf(amount, sizeof amount, "%.3g times %s than", hi / lo,
-                  margin >= 0 ? "smaller" : "larger");
+  // Both figures are relative to the tuned objective, so the sentence compares what it decides
+  // on; a margin of a factor of two or more reads better as a ratio.
+  char amount[160];
+  if (std::max(base, best) > 2 * std::min(base, best))
+    std::snprintf(amount, sizeof amount,
+                  "The tuned objective is %.3g times %s than the job's own "
+                  "controller's",
+                  std::max(base, best) / std::min(base, best), margin >= 0 ? "smaller" : "larger");
   else
-    std::snprintf(amount, sizeof amount, "%.3g %% %s", 100 * (hi - lo) / hi,
-                  margin >= 0 ? "below" : "above");
+    std::snprintf(amount, sizeof amount,
+                  "The job's own controller's objective is %.3g %% %s the tuned one's",
+                  100 * std::abs(margin), margin >= 0 ? "above" : "below");
   std::snprintf(buf, sizeof buf,
-                "The tuned objective is %s the job's own controller's; nudging the initial state "
-                "by a relative %.0e moves it by up to %.2g %% (%d runs), so the %s is %s the "
-                "noise floor.",
+                "%s; nudging the initial state by a relative %.0e moves the tuned objective by up "
+                "to %.2g %% (%d runs), so the %s is %s the noise floor.",
                 amount, r.noise_floor->perturbation, 100 * spread, r.noise_floor->repeats,
                 margin >= 0 ? "improvement" : "difference",
                 outside ? "larger than" : "inside (not merit)");

@@ -89,6 +89,10 @@ std::vector<sim::Scenario> expand_ensemble(const Job& job,
                                            std::optional<std::uint64_t> seed = std::nullopt,
                                            std::optional<std::int64_t> count = std::nullopt);
 
+// The listed scenarios whose names an ensemble of `count` members would take again (member k is
+// `<base>-<k>`), as errors at their paths.
+std::vector<FieldError> member_name_clashes(const Job& job, std::int64_t count);
+
 // The base scenario of the job's ensemble.
 const sim::Scenario& ensemble_base(const Job& job);
 

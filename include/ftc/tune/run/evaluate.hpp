@@ -15,6 +15,7 @@
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/faults.hpp"
 #include "ftc/tune/evaluators/batch_evaluator.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/problem/problem.hpp"
 
@@ -62,9 +63,10 @@ struct EvaluationResult {
 EvaluationResult evaluate_out_of_sample(const Job& job, const EvaluateOptions& options,
                                         BatchEvaluator& evaluator);
 
-nlohmann::json evaluation_document(const EvaluationResult& r);  // ftctune.evaluation/1
-// One row per controller × scenario, with the scenario's faults in a column of their own.
-std::string evaluation_csv(const EvaluationResult& r);
+// evaluation.json (ftctune.evaluation/1), written piece by piece into `sink`.
+void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink);
+// evaluation.csv: one row per controller × scenario, with the scenario's faults in words.
+void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink);
 // The table `ftctune evaluate` prints: controller, mean, median, p90, max, CVaR, diverged.
 std::string evaluation_table(const EvaluationResult& r);
 // How many worst members write_evaluation keeps per controller.

@@ -52,7 +52,7 @@ struct TuningOutcome {
   Job job;
   std::string job_sha256;  // of the canonical JSON of the job as given
   std::uint64_t seed = 0;
-  AlgorithmPtr algorithm;  // the settings the optimiser ran with
+  AlgorithmPtr algorithm;           // the settings the optimiser ran with
   OptimizationResult optimization;  // best and history in parameter values (not ln x)
   std::vector<std::pair<std::string, double>> tuned;
   sim::ControllerConfig tuned_controller;
@@ -61,8 +61,9 @@ struct TuningOutcome {
   // What the problem scored: its scenarios (listed, then members) and which it left out.
   std::size_t scenarios = 0, listed_scenarios = 0;
   int unrecoverable = 0, left_out = 0;
-  int threads = 0;          // the evaluator's concurrency
-  std::string evaluator;    // its name
+  std::vector<bool> listed_recoverable;  // per listed scenario (SPEC §12)
+  int threads = 0;                       // the evaluator's concurrency
+  std::string evaluator;                 // its name
   std::int64_t simulations = 0;
   bool completed() const { return optimization.completed; }
 
