@@ -1,10 +1,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "cli_runner.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/optimizers/bat.hpp"
@@ -440,4 +443,30 @@ TEST(PagmoTuning, ResumedRunGivesTheSameGainsFile) {
   RunOptions resume;
   resume.resume = &state;
   EXPECT_EQ(gains(job, 2, resume), uninterrupted);
+}
+
+namespace {
+// How many times the dynamic loader mentions libpagmo while the CLI runs `args`.
+int libpagmo_mentions(const std::string& args) {
+  const std::string cmd = "cd '" FTC_SOURCE_DIR "' && LD_DEBUG=libs '" FTC_CLI "' " + args +
+                          " 2>&1 >/dev/null | grep -c 'libpagmo'";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) return -1;
+  int n = -1;
+  if (std::fscanf(p, "%d", &n) != 1) n = -1;
+  ::pclose(p);
+  return n;
+}
+}  // namespace
+
+TEST(Pagmo, LibraryIsLoadedOnlyWhenAJobNamesAPagmoAlgorithm) {
+  // Its static initialisers cost ~60 ms and 36 MB: `--version`, `validate` and a Bat run skip it.
+  EXPECT_EQ(libpagmo_mentions("--version"), 0);
+  EXPECT_EQ(libpagmo_mentions("validate jobs/table1.json"), 0);
+  const auto dir = ftc::testing::fresh_dir("pagmo-lazy");
+  json j = ftc::testing::short_table1_job();
+  j["tuning"]["algorithm"] = {
+      {"type", "pagmo"}, {"name", "sea"}, {"population", 4}, {"generations", 2}};
+  std::ofstream(dir / "job.json") << j.dump();
+  EXPECT_GT(libpagmo_mentions("validate '" + (dir / "job.json").string() + "'"), 0);
 }

@@ -45,6 +45,7 @@
 #include <stdexcept>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "optimizers/pagmo_plugin.hpp"
 
 namespace ftc::tune {
 
@@ -976,7 +977,9 @@ json pagmo_schema() {
 
 }  // namespace
 
-const std::vector<PagmoAlgorithmInfo>& pagmo_algorithms() {
+namespace {
+
+const std::vector<PagmoAlgorithmInfo>& module_algorithms() {
   static const std::vector<PagmoAlgorithmInfo> all = [] {
     std::vector<PagmoAlgorithmInfo> v;
     for (const auto& e : entries()) v.push_back(e->info());
@@ -985,13 +988,7 @@ const std::vector<PagmoAlgorithmInfo>& pagmo_algorithms() {
   return all;
 }
 
-const PagmoAlgorithmInfo* find_pagmo_algorithm(const std::string& name) {
-  for (const PagmoAlgorithmInfo& a : pagmo_algorithms())
-    if (a.name == name) return &a;
-  return nullptr;
-}
-
-AlgorithmInfo pagmo_algorithm_info() {
+AlgorithmInfo module_info() {
   AlgorithmInfo info;
   info.type = "pagmo";
   info.description = "a single-objective algorithm of pagmo2 (" + known_names() + ")";
@@ -1000,4 +997,14 @@ AlgorithmInfo pagmo_algorithm_info() {
   return info;
 }
 
+}  // namespace
+
 }  // namespace ftc::tune
+
+// The module's one exported symbol (the target builds with hidden visibility).
+extern "C" [[gnu::visibility("default")]] const ftc::tune::pagmo_plugin::Api*
+ftctune_pagmo_plugin() {
+  static const ftc::tune::pagmo_plugin::Api api{FTC_BUILD_ID, ftc::tune::module_algorithms,
+                                                ftc::tune::module_info};
+  return &api;
+}

@@ -1,0 +1,95 @@
+// Opens the pagmo2 adapter module the first time something asks for a pagmo algorithm (see
+// optimizers/pagmo_plugin.hpp for why it is a module), and stands in for it in the registry until
+// then: parsing a job of another algorithm, `ftctune --version` or `validate` never load it.
+#include <dlfcn.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/optimizers/pagmo.hpp"
+#include "optimizers/pagmo_plugin.hpp"
+
+namespace ftc::tune {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Where the module may be: $FTCTUNE_PLUGIN_DIR, beside an installed binary
+// (<prefix>/<bindir>/../<libdir>/ftctune), and the build tree it was built in.
+std::vector<fs::path> candidates() {
+  std::vector<fs::path> dirs;
+  if (const char* env = std::getenv("FTCTUNE_PLUGIN_DIR"); env && *env) dirs.emplace_back(env);
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) dirs.push_back(exe.parent_path() / FTC_PLUGIN_DIR_FROM_BIN);
+  dirs.emplace_back(FTC_PLUGIN_BUILD_DIR);
+  std::vector<fs::path> files;
+  for (const fs::path& d : dirs) files.push_back(d / pagmo_plugin::kModuleName);
+  return files;
+}
+
+const pagmo_plugin::Api& api() {
+  static const pagmo_plugin::Api* loaded = nullptr;
+  static std::string failure;
+  static std::once_flag once;
+  std::call_once(once, [] {
+    std::string tried;
+    for (const fs::path& f : candidates()) {
+      if (!fs::exists(f)) {
+        tried += (tried.empty() ? "" : ", ") + f.string();
+        continue;
+      }
+      // Never closed: the settings and optimisers it makes live as long as the process.
+      void* h = ::dlopen(f.c_str(), RTLD_NOW | RTLD_LOCAL);
+      if (!h) {
+        failure = std::string("cannot load ") + f.string() + ": " + ::dlerror();
+        return;
+      }
+      using Entry = const pagmo_plugin::Api* (*)();
+      const auto entry = reinterpret_cast<Entry>(::dlsym(h, pagmo_plugin::kEntryPoint));
+      const pagmo_plugin::Api* a = entry ? entry() : nullptr;
+      if (!a || std::string(a->build_id) != FTC_BUILD_ID) {
+        failure = f.string() + " comes from another build of ftctune; reinstall it with this one";
+        return;
+      }
+      loaded = a;
+      return;
+    }
+    failure = "the pagmo2 adapter " + std::string(pagmo_plugin::kModuleName) +
+              " is not installed (looked for " + tried +
+              "); it is built and installed with ftctune, or point FTCTUNE_PLUGIN_DIR at it";
+  });
+  if (!loaded) throw InputError("tuning.algorithm", "", "pagmo: " + failure);
+  return *loaded;
+}
+
+}  // namespace
+
+const std::vector<PagmoAlgorithmInfo>& pagmo_algorithms() { return api().algorithms(); }
+
+const PagmoAlgorithmInfo* find_pagmo_algorithm(const std::string& name) {
+  for (const PagmoAlgorithmInfo& a : pagmo_algorithms())
+    if (a.name == name) return &a;
+  return nullptr;
+}
+
+AlgorithmInfo pagmo_algorithm_info() {
+  // Parsing and the schema go to the module; the entry itself costs nothing to register.
+  AlgorithmInfo info;
+  info.type = "pagmo";
+  info.description =
+      "a single-objective algorithm of pagmo2, chosen by `name` (see docs/optimizers.md)";
+  info.parse = [](const nlohmann::json& j, const std::string& path,
+                  std::vector<FieldError>& errors) { return api().info().parse(j, path, errors); };
+  info.schema = [] { return api().info().schema(); };
+  return info;
+}
+
+}  // namespace ftc::tune
