@@ -6,6 +6,9 @@
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
+#include <cmath>
+#include <cstdio>
+#include <span>
 #include <string>
 
 #include "ftc/tune/job/job.hpp"
@@ -80,5 +83,48 @@ BENCHMARK(BM_TuneScaling)
     ->Iterations(1);
 
 }  // namespace
+
+// Writing a recorded trajectory as CSV: 30 000 rows of the spacecraft (t, 6 states, 4 + 4
+// actuator values), as `simulate --record-every 0.001` writes. The printf version is the one
+// trajectory_csv replaced, kept here as the yardstick.
+ftc::sim::Trajectory sample_trajectory() {
+  ftc::sim::Trajectory tr;
+  tr.axes = 3;
+  tr.actuators = 4;
+  for (int k = 0; k < 30000; ++k) {
+    const double t = 0.001 * k;
+    tr.values.push_back(t);
+    for (int i = 0; i < 14; ++i) tr.values.push_back(std::sin(0.37 * i + t) * std::exp(-0.1 * t));
+  }
+  return tr;
+}
+
+std::string printf_csv(const ftc::sim::Trajectory& tr) {
+  std::string s;
+  char buf[64];
+  for (std::size_t r = 0; r < tr.rows(); ++r) {
+    const std::span<const double> row = tr.row(r);
+    std::snprintf(buf, sizeof buf, "%.6f", row[0]);
+    s += buf;
+    for (std::size_t i = 1; i < row.size(); ++i) {
+      std::snprintf(buf, sizeof buf, ",%.9g", row[i]);
+      s += buf;
+    }
+    s += '\n';
+  }
+  return s;
+}
+
+void BM_TrajectoryCsv(benchmark::State& state) {
+  const ftc::sim::Trajectory tr = sample_trajectory();
+  for (auto _ : state) benchmark::DoNotOptimize(ftc::tune::trajectory_csv(tr));
+}
+BENCHMARK(BM_TrajectoryCsv)->Unit(benchmark::kMillisecond);
+
+void BM_TrajectoryCsvPrintf(benchmark::State& state) {
+  const ftc::sim::Trajectory tr = sample_trajectory();
+  for (auto _ : state) benchmark::DoNotOptimize(printf_csv(tr));
+}
+BENCHMARK(BM_TrajectoryCsvPrintf)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();
