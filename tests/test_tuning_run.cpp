@@ -222,3 +222,40 @@ TEST(TuningRun, RefusesAJobWhoseEveryScenarioIsUnrecoverable) {
     EXPECT_EQ(e.errors().at(0).path, "/ensemble/unrecoverable");
   }
 }
+
+TEST(TuningRun, WarnsOfTunedValuesAtABound) {
+  json j = short_table1_job();
+  j["tuning"]["parameters"] = {{"Kp", {1, 50}},
+                               {"Ki", {0, 50}},
+                               {"switching_gain", {{"bounds", {2, 200}}, {"scale", "log"}}}};
+  const tune::Job job = tune::parse_job(j, "x");
+  // Field order: switching_gain, Kp, Ki.
+  EXPECT_TRUE(tune::bound_warnings(job, {20, 25, 25}).empty());
+  EXPECT_TRUE(tune::bound_warnings(job, {20, 1.1, 25}).empty());  // 0.2 % of the range away
+  std::vector<std::string> w = tune::bound_warnings(job, {20, 25, 50});
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("Ki = 50 ended at its upper bound 50"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("widen tuning.parameters.Ki"), std::string::npos) << w[0];
+  // Ki cannot go below 0: no advice to widen.
+  w = tune::bound_warnings(job, {20, 25, 0});
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("the field's own limit"), std::string::npos) << w[0];
+  // On a log scale the distance is measured in ln x: 199.5 is 0.05 % of ln(100) from 200.
+  w = tune::bound_warnings(job, {199.5, 25, 25});
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("switching_gain"), std::string::npos);
+  EXPECT_TRUE(tune::bound_warnings(job, {190, 25, 25}).empty());
+}
+
+TEST(Cli, Table1RunWarnsThatKiEndsOnItsBound) {
+  const auto dir = fresh_dir("run-bound");
+  const CliResult r = run_cli("run jobs/table1.json --out '" + (dir / "t").string() + "'", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("[warning] Ki = 50 ended at its upper bound 50"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("ise = 1.33"), std::string::npos) << r.out;  // seven digits, not J alone
+  EXPECT_NE(r.out.find("% lower"), std::string::npos) << r.out;
+  const json g = json::parse(slurp(dir / "t" / "gains.json"));
+  ASSERT_EQ(g["warnings"].size(), 1u);
+  EXPECT_NE(g["warnings"][0].get<std::string>().find("widen tuning.parameters.Ki"),
+            std::string::npos);
+}

@@ -114,12 +114,20 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
 
   if (r.optimization.best_fitness == 0.0)
     spdlog::warn("every candidate diverged: the gains file holds a diverging controller");
+  for (const std::string& w : r.warnings) spdlog::warn("{}", w);
   if (!g.quiet) {
     std::printf("tuned %s: %s\n", tune::display_name(job.controller.type).c_str(),
                 params_text(names, r.optimization.best).c_str());
-    std::printf("  fitness J = %.6g (job's own controller: %.6g), %s = %.6g\n",
-                r.optimization.best_fitness, r.baseline().outcome.evaluation.fitness,
-                sim::to_string(job.objective.metric), r.best().outcome.evaluation.objective);
+    // The objective with seven digits and the change in %: J to six digits can read the same
+    // while the gains and the objective move.
+    const double best = r.best().outcome.evaluation.objective;
+    const double base = r.baseline().outcome.evaluation.objective;
+    std::printf("  %s = %.6e (job's own controller: %.6e", sim::to_string(job.objective.metric),
+                best, base);
+    if (std::isfinite(best) && std::isfinite(base) && base > 0)
+      std::printf(", %.3g %% %s", 100 * std::abs(base - best) / base,
+                  best <= base ? "lower" : "higher");
+    std::printf("); fitness J = %.6g\n", r.optimization.best_fitness);
     if (r.scenarios > r.listed_scenarios)
       std::printf("  over %zu scenarios: %zu listed, %zu ensemble members; %d unrecoverable%s\n",
                   r.scenarios, r.listed_scenarios, r.scenarios - r.listed_scenarios,

@@ -124,6 +124,10 @@ std::shared_ptr<const schema::Object<Gains>> make_gains_shape() {
                             {"sha256", {{"type", "string"}, {"pattern", "^[0-9a-f]{64}$"}}}}}};
             }});
   o->field(informational("generator", "object", "the tool and version that wrote the file"));
+  o->field(informational("warnings", "array",
+                         "sentences about the result a user should act on, e.g. a tuned value at "
+                         "a bound of its search range",
+                         false));
   o->field(informational("noise_floor", "object",
                          "the tuned objective re-evaluated with the initial state nudged by a "
                          "relative 1e-12 (perturbation, repeats, objective_min, objective_max, "

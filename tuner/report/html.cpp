@@ -91,6 +91,12 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
     << detail::format_number(num_or(gains["objective"]["value"]), "%.6g") << "; "
     << gains["optimizer"].value("evaluations", 0) << " evaluations, seed "
     << gains["optimizer"].value("seed", 0) << ".</p>\n";
+  if (gains.contains("warnings") && gains["warnings"].is_array() && !gains["warnings"].empty()) {
+    h << "<ul class=\"warnings\">\n";
+    for (const auto& w : gains["warnings"])
+      if (w.is_string()) h << "<li><b>Warning:</b> " << html_escape(w.get<std::string>()) << "</li>\n";
+    h << "</ul>\n";
+  }
 
   for (std::size_t s = 0; s < S; ++s) {
     h << "<h2>Controllers compared"

@@ -117,6 +117,7 @@ json gains_document(const TuningOutcome& r) {
                         {"objective_max", json_number(n.objective_max)},
                         {"relative_spread", json_number(n.relative_spread)}};
   }
+  g["warnings"] = r.warnings;
   g["job"] = {{"name", job.name}, {"sha256", r.job_sha256}};
   g["generator"] = {{"name", kToolName}, {"version", kVersion}};
   return g;

@@ -1,5 +1,7 @@
 #include "ftc/tune/run/tuning_run.hpp"
 
+#include "ftc/sim/controller_config.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -71,6 +73,7 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
 
   for (std::size_t j = 0; j < problem.space().names.size(); ++j)
     r.tuned.emplace_back(problem.space().names[j], r.optimization.best[j]);
+  r.warnings = bound_warnings(job, r.optimization.best);
 
   std::vector<sim::ControllerConfig> controllers;
   for (const CompareEntry& c : job.compare) {
@@ -110,6 +113,34 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
       (nf.objective_max - nf.objective_min) / r.best().outcome.evaluation.objective;
   r.noise_floor = nf;
   return r;
+}
+
+std::vector<std::string> bound_warnings(const Job& job, const Decision& x) {
+  std::vector<std::string> out;
+  if (!job.tuning) return out;
+  const std::vector<ParameterBounds>& ps = job.tuning->parameters;
+  for (std::size_t j = 0; j < ps.size() && j < x.size(); ++j) {
+    const ParameterBounds& b = ps[j];
+    const bool log = b.scale == Scale::log;
+    const auto c = [&](double v) { return log ? std::log(v) : v; };
+    const double tol = 1e-3 * (c(b.upper) - c(b.lower));
+    const bool at_lower = c(x[j]) - c(b.lower) <= tol, at_upper = c(b.upper) - c(x[j]) <= tol;
+    if (!at_lower && !at_upper) continue;
+    const double bound = at_upper ? b.upper : b.lower;
+    // Can the bound move? Not when it is the field's own limit (Ki ≥ 0, say).
+    const sim::ControllerField* f = sim::find_controller_field(b.name);
+    const double beyond = at_upper ? bound + std::max(1e-6, std::abs(bound)) * 0.5
+                                   : (log ? bound * 0.5 : bound - std::max(1e-6, std::abs(bound)) * 0.5);
+    const bool can_widen = f && sim::check_controller_value(job.controller, *f, beyond).empty();
+    char buf[400];
+    std::snprintf(buf, sizeof buf, "%s = %.6g ended at its %s bound %.6g (within 0.1 %% of the range)%s",
+                  b.name.c_str(), x[j], at_upper ? "upper" : "lower", bound,
+                  can_widen ? "; the optimum may lie beyond it: widen tuning.parameters." : "");
+    std::string w = buf;
+    w += can_widen ? b.name + " and run again." : ", which is the field's own limit.";
+    out.push_back(std::move(w));
+  }
+  return out;
 }
 
 std::string noise_floor_sentence(const TuningOutcome& r) {

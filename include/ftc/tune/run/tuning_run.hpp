@@ -58,6 +58,9 @@ struct TuningOutcome {
   sim::ControllerConfig tuned_controller;
   std::vector<ComparedController> comparison;  // compare entries, then baseline, then tuned
   std::optional<NoiseFloor> noise_floor;       // with the comparison
+  // Things a user should act on, one sentence each: a tuned parameter that ended within 0.1 % of
+  // its search range from a bound (the optimum may lie beyond it).
+  std::vector<std::string> warnings;
   // What the problem scored: its scenarios (listed, then members) and which it left out.
   std::size_t scenarios = 0, listed_scenarios = 0;
   int unrecoverable = 0, left_out = 0;
@@ -83,6 +86,10 @@ TuningOutcome tune(const Job& job, BatchEvaluator& evaluator, const RunOptions& 
 // Whether the tuned controller's margin over the job's own is larger than the noise floor, in one
 // sentence for people (empty without a comparison).
 std::string noise_floor_sentence(const TuningOutcome& r);
+
+// The warnings of tuned values at a bound: within 0.1 % of the search range (in ln x for a
+// log-scale parameter) from the lower or upper bound.
+std::vector<std::string> bound_warnings(const Job& job, const Decision& values);
 
 std::string canonical_job_sha256(const Job& job);
 std::string display_name(sim::ControllerType t);  // "PI-FOSMC", ...
