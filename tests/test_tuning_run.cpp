@@ -251,11 +251,47 @@ TEST(Cli, Table1RunWarnsThatKiEndsOnItsBound) {
   const auto dir = fresh_dir("run-bound");
   const CliResult r = run_cli("run jobs/table1.json --out '" + (dir / "t").string() + "'", dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("[warning] Ki = 50 ended at its upper bound 50"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("[warning] Ki = 50 ended at its upper bound 50"), std::string::npos)
+      << r.err;
   EXPECT_NE(r.out.find("ise = 1.33"), std::string::npos) << r.out;  // seven digits, not J alone
   EXPECT_NE(r.out.find("% lower"), std::string::npos) << r.out;
   const json g = json::parse(slurp(dir / "t" / "gains.json"));
   ASSERT_EQ(g["warnings"].size(), 1u);
   EXPECT_NE(g["warnings"][0].get<std::string>().find("widen tuning.parameters.Ki"),
             std::string::npos);
+}
+
+TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {
+  const auto dir = fresh_dir("run-overwrite");
+  json j = short_table1_job();
+  j["name"] = "overwrite-test-" + std::to_string(::getpid());
+  tune::write_file_atomic(dir / "job.json", j.dump());
+  const std::string job = "'" + (dir / "job.json").string() + "'";
+  const std::string out = (dir / "run").string();
+  ASSERT_EQ(run_cli("run " + job + " -q --out '" + out + "'", dir).exit_code, 0);
+  const std::string first = slurp(dir / "run" / "gains.json");
+  // A given --out that holds files is refused, and nothing in it changes.
+  tune::write_file_atomic(dir / "run" / "figures" / "stale.png", "old");
+  CliResult r = run_cli("run " + job + " -q --seed 7 --out '" + out + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("already holds files"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(dir / "run" / "gains.json"), first);
+  // --force replaces the run, and what the earlier run left (its figures) is gone.
+  r = run_cli("run " + job + " -q --seed 7 --force --out '" + out + "'", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(slurp(dir / "run" / "gains.json"), first);
+  EXPECT_FALSE(std::filesystem::exists(dir / "run" / "figures" / "stale.png"));
+  // Without --out, the default out/<name> moves on to out/<name>-2.
+  const std::filesystem::path src(FTC_SOURCE_DIR);
+  const std::filesystem::path a = src / "out" / j["name"].get<std::string>();
+  const std::filesystem::path b = src / "out" / (j["name"].get<std::string>() + "-2");
+  ASSERT_EQ(run_cli("run " + job + " -q", dir).exit_code, 0);
+  r = run_cli("run " + job, dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find(b.filename().string()), std::string::npos) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(a / "gains.json"));
+  EXPECT_TRUE(std::filesystem::exists(b / "gains.json"));
+  std::filesystem::remove_all(a);
+  std::filesystem::remove_all(b);
 }

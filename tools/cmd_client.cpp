@@ -121,10 +121,16 @@ int guarded(const std::function<int()>& body) {
 void print_json(const std::string& body) { std::printf("%s\n", json::parse(body).dump(2).c_str()); }
 
 int fetch_gains(Api& api, const std::string& id, const std::string& out, const std::string& name,
-                bool quiet) {
+                bool quiet, bool force) {
   const std::string gains = api.get("/v1/jobs/" + id + "/gains");
+  // By default in a folder of the service job's own, so a local run's gains.json is never
+  // replaced by a fetched one; an existing file is only replaced with --force.
   const std::filesystem::path file =
-      out.empty() ? default_out_dir_for(name) / "gains.json" : std::filesystem::path(out);
+      out.empty() ? default_out_dir_for(name) / ("service-" + id.substr(0, 8)) / "gains.json"
+                  : std::filesystem::path(out);
+  if (std::filesystem::exists(file) && !force)
+    throw InputError(file.string(), "",
+                     "exists already; pass --force to replace it or -o to write elsewhere");
   tune::write_file_atomic(file, gains);
   if (!quiet) std::printf("wrote %s\n", file.c_str());
   return 0;
@@ -148,14 +154,17 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
     auto job = std::make_shared<std::string>();
     auto wait = std::make_shared<bool>(false);
     auto out = std::make_shared<std::string>();
+    auto force = std::make_shared<bool>(false);
     CLI::App* sub = app.add_subcommand("submit", "Submit a tuning job to the service");
     sub->add_option("job", *job, "Job file (ftctune.job/1)")->required();
     sub->add_flag("--wait", *wait, "Follow the progress, then fetch the gains file");
     sub->add_option("-o,--output", *out,
-                    "With --wait: where to write the gains (default out/<job name>/gains.json)");
+                    "With --wait: where to write the gains (default "
+                    "out/<job name>/service-<id>/gains.json)");
+    sub->add_flag("--force", *force, "Replace the output file if it exists");
     common(sub);
-    sub->callback([&action, &g, o, job, wait, out] {
-      action = [&g, o, job, wait, out] {
+    sub->callback([&action, &g, o, job, wait, out, force] {
+      action = [&g, o, job, wait, out, force] {
         return guarded([&] {
           const std::optional<std::string> text = tune::read_file(*job);
           if (!text) throw InputError(*job, "", "cannot open the job file");
@@ -178,7 +187,8 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
               std::fprintf(stderr, "%s\n", describe(j).c_str());
               last_iteration = it;
             }
-            if (status == "succeeded") return fetch_gains(api, id, *out, j["name"], g.quiet);
+            if (status == "succeeded")
+              return fetch_gains(api, id, *out, j["name"], g.quiet, *force);
             if (status == "failed" || status == "cancelled") {
               std::fprintf(stderr, "ftctune: job %s %s\n", id.c_str(), status.c_str());
               return 1;
@@ -216,12 +226,15 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
     return 0;
   });
   auto out = std::make_shared<std::string>();
-  id_command("fetch", "Download a finished job's gains file",
-             [&g, out](Api& api, const std::string& id) {
-               const json j = json::parse(api.get("/v1/jobs/" + id));
-               return fetch_gains(api, id, *out, j["name"], g.quiet);
-             })
-      ->add_option("-o,--output", *out, "Output file (default out/<job name>/gains.json)");
+  auto force = std::make_shared<bool>(false);
+  CLI::App* fetch = id_command("fetch", "Download a finished job's gains file",
+                               [&g, out, force](Api& api, const std::string& id) {
+                                 const json j = json::parse(api.get("/v1/jobs/" + id));
+                                 return fetch_gains(api, id, *out, j["name"], g.quiet, *force);
+                               });
+  fetch->add_option("-o,--output", *out,
+                    "Output file (default out/<job name>/service-<id>/gains.json)");
+  fetch->add_flag("--force", *force, "Replace the output file if it exists");
   id_command("cancel", "Cancel a queued or running job", [o](Api& api, const std::string& id) {
     const std::string body = api.post("/v1/jobs/" + id + "/cancel", "");
     if (o->json_output) {

@@ -29,6 +29,7 @@ struct RunCliOptions {
   std::optional<std::uint64_t> seed;
   bool report = false;
   bool baseline = false;
+  bool force = false;
 };
 
 std::string utc_now() {
@@ -56,13 +57,42 @@ std::string params_text(const std::vector<std::string>& names, const tune::Decis
   return s;
 }
 
+bool holds_files(const std::filesystem::path& d) {
+  std::error_code ec;
+  return std::filesystem::is_directory(d, ec) && !std::filesystem::is_empty(d, ec);
+}
+
+// Where a run writes. A directory that already holds files is never written into silently: a
+// given --out is refused, the default out/<name> moves on to out/<name>-2, -3, ...; with --force
+// the directory is used and the files a run writes are removed first, so no figure or trajectory
+// of the previous run is left beside the new ones.
+std::filesystem::path run_directory(const std::filesystem::path& wanted, bool given, bool force) {
+  namespace fs = std::filesystem;
+  fs::path out = wanted;
+  if (holds_files(out) && !force) {
+    if (given)
+      throw InputError("--out", "",
+                       out.string() +
+                           " already holds files; choose another directory, or pass "
+                           "--force to replace the run in it");
+    for (int k = 2; holds_files(out); ++k) out = wanted.string() + "-" + std::to_string(k);
+  }
+  if (force)
+    for (const char* f :
+         {"gains.json", "history.csv", "history-random.csv", "comparison.json", "comparison.md",
+          "run.json", "job.json", "report.html", "figures", "trajectories"})
+      fs::remove_all(out / f);
+  return out;
+}
+
 int run_tuning(const RunCliOptions& o, const Globals& g) {
   namespace fs = std::filesystem;
   using clock = std::chrono::steady_clock;
   const tune::Job job = tune::load_job(o.job);
   if (!job.tuning)
     throw InputError(o.job, "/tuning", "is required by ftctune run (what should be tuned?)");
-  const fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
+  const fs::path out = run_directory(o.out.empty() ? default_out_dir(job) : fs::path(o.out),
+                                     !o.out.empty(), o.force);
   const std::int64_t total = job.tuning->algorithm->evaluations();
   std::vector<std::string> names;
   for (const tune::ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
@@ -157,6 +187,8 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
       "--baseline", opts->baseline,
       "Also run random search with the same budget (history-random.csv, drawn in Fig. 5)");
   sub->add_flag("--report", opts->report, "Then draw the figures and report.html (ftctune report)");
+  sub->add_flag("--force", opts->force,
+                "Write into an output directory that holds files, replacing the run in it");
   sub->callback([&action, &g, opts] { action = [&g, opts] { return run_tuning(*opts, g); }; });
 }
 

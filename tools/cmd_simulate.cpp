@@ -7,12 +7,12 @@
 #include <string>
 
 #include "cli.hpp"
+#include "ftc/runtime/controller_json.hpp"
 #include "ftc/runtime/gains.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/runtime/controller_json.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
-#include "ftc/tune/io/files.hpp"
 #include "ftc/version.hpp"
 
 namespace ftc::cli {
@@ -51,7 +51,8 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
   }
   if (!(o.record_interval > 0)) throw InputError("--record-every", "", "must be > 0 seconds");
   const tune::TuningProblem problem(job);
-  const fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
+  // A folder of its own: beside a run's files, never over them.
+  const fs::path out = o.out.empty() ? default_out_dir(job) / "simulate" : fs::path(o.out);
 
   json scenarios = json::array();
   std::vector<sim::Metrics> metrics;
@@ -118,7 +119,7 @@ void add_simulate_command(CLI::App& app, const Globals& g, Action& action) {
   sub->add_option("--set", opts->sets, "Override a controller parameter, KEY=VALUE (repeatable)");
   sub->add_option("--gains", opts->gains,
                   "Simulate the controller of a gains file (ftctune.gains/1)");
-  sub->add_option("--out", opts->out, "Output directory (default out/<job name>)");
+  sub->add_option("--out", opts->out, "Output directory (default out/<job name>/simulate)");
   sub->add_option("--record-every", opts->record_interval,
                   "Trajectory sampling interval in seconds (default 0.01)");
   sub->callback([&action, &g, opts] { action = [&g, opts] { return run_simulate(*opts, g); }; });

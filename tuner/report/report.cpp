@@ -65,6 +65,9 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
 
   // The page embeds PNGs: a fifth of the size of SVGs that carry every sample.
   const FigureFormat format = options.html ? FigureFormat::png : options.format;
+  // Redrawn from scratch: a figure of an earlier report (another format, another scenario
+  // count) must not sit beside the new ones as if it were current.
+  fs::remove_all(run_dir / "figures");
   fs::create_directories(run_dir / "figures");
   const std::vector<report_detail::Figure> figures =
       report_detail::draw_run_figures(run_dir, job, gains, series[0], format);
