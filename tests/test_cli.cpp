@@ -104,3 +104,13 @@ TEST(Cli, VersionAndHelp) {
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("simulate"), std::string::npos);
 }
+
+TEST(Cli, RepeatedOptionsMayComeBeforeTheJobPath) {
+  const auto dir = fresh_dir("options-first");
+  const CliResult r = run_cli(
+      "simulate --set Kp=12 --set Ki=3 jobs/table1.json -q --out '" + dir.string() + "'", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json m = json::parse(slurp(dir / "metrics.json"));
+  EXPECT_EQ(m["controller"]["Kp"], 12.0);
+  EXPECT_EQ(m["controller"]["Ki"], 3.0);
+}

@@ -86,8 +86,10 @@ void add_evaluate_command(CLI::App& app, const Globals& g, Action& action) {
       "evaluate",
       "Judge controllers out of sample: the job's own, its compare list and gains files");
   sub->add_option("job", opts->job, "Job file (ftctune.job/1)")->required();
+  // One value per --gains, so the job path may come after them.
   sub->add_option("--gains", opts->gains,
-                  "A gains file to evaluate, FILE or LABEL=FILE (repeatable)");
+                  "A gains file to evaluate, FILE or LABEL=FILE (repeatable)")
+      ->allow_extra_args(false);
   sub->add_option("--seed", opts->seed,
                   "Ensemble seed of the held-out members (default: the job's seed + 1)");
   sub->add_option("--count", opts->count, "Ensemble members (default: the job's count)");

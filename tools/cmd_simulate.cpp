@@ -116,7 +116,9 @@ void add_simulate_command(CLI::App& app, const Globals& g, Action& action) {
   sub->add_option("--controller", opts->controller,
                   "Controller type with its Table 1 defaults instead of the job's controller "
                   "(nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)");
-  sub->add_option("--set", opts->sets, "Override a controller parameter, KEY=VALUE (repeatable)");
+  // One value per --set, so the job path may come after them.
+  sub->add_option("--set", opts->sets, "Override a controller parameter, KEY=VALUE (repeatable)")
+      ->allow_extra_args(false);
   sub->add_option("--gains", opts->gains,
                   "Simulate the controller of a gains file (ftctune.gains/1)");
   sub->add_option("--out", opts->out, "Output directory (default out/<job name>/simulate)");
