@@ -114,3 +114,40 @@ TEST(Cli, RepeatedOptionsMayComeBeforeTheJobPath) {
   EXPECT_EQ(m["controller"]["Kp"], 12.0);
   EXPECT_EQ(m["controller"]["Ki"], 3.0);
 }
+
+TEST(Cli, NearMissNamesGetASuggestion) {
+  const auto dir = fresh_dir("did-you-mean");
+  CliResult r = run_cli("simulate jobs/table1.json --set kp=3 --out '" + dir.string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("did you mean \"Kp\"?"), std::string::npos) << r.err;
+  json j = json::parse(slurp(std::filesystem::path(FTC_SOURCE_DIR) / "jobs" / "table1.json"));
+  j["controller"]["swiching_gain"] = 3;
+  j["objective"]["metrc"] = "ise";
+  std::ofstream(dir / "job.json") << j.dump();
+  r = run_cli("validate '" + (dir / "job.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("/controller/swiching_gain: unknown key"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("did you mean \"switching_gain\"?"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("did you mean \"metric\"?"), std::string::npos) << r.err;
+  // Two equally near names (Kq: Kp or Ki?) get no guess.
+  r = run_cli("simulate jobs/table1.json --set Kq=3 --out '" + dir.string() + "'", dir);
+  EXPECT_EQ(r.err.find("did you mean"), std::string::npos) << r.err;
+}
+
+TEST(Cli, HelpNamesTheCommandAndEndsWithExamples) {
+  const auto dir = fresh_dir("help");
+  CliResult r = run_cli("--help", dir);
+  EXPECT_NE(r.out.find("Usage: ftctune "), std::string::npos) << r.out;
+  for (const char* c :
+       {"run", "simulate", "validate", "schema", "report", "landscape", "study", "ensemble",
+        "evaluate", "serve", "submit", "status", "fetch", "cancel", "jobs"}) {
+    r = run_cli(std::string(c) + " --help", dir);
+    EXPECT_NE(r.out.find("Usage: ftctune " + std::string(c)), std::string::npos) << c;
+    EXPECT_NE(r.out.find("Examples:\n  ftctune " + std::string(c)), std::string::npos) << c;
+    EXPECT_EQ(run_cli(std::string("help ") + c, dir).out, r.out) << c;
+  }
+  r = run_cli("simulate", dir);  // a usage error points to the command's own help
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("(see ftctune simulate --help)"), std::string::npos) << r.err;
+  EXPECT_EQ(run_cli("help nope", dir).exit_code, 2);
+}

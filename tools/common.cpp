@@ -35,7 +35,8 @@ sim::ControllerConfig select_controller(const tune::Job& job, const std::string&
         names += (names.empty() ? "" : ", ") + n;
       errs.push_back({key, "is not a parameter of controller " +
                                std::string(sim::to_string(base.type)) + " (parameters: " + names +
-                               ")"});
+                               ")" +
+                               json_io::did_you_mean(key, sim::controller_field_names(base.type))});
       continue;
     }
     try {

@@ -6,13 +6,46 @@
 
 #include <cstdio>
 #include <exception>
+#include <map>
+#include <string>
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/version.hpp"
 
+namespace {
+
+// Two or three examples at the end of each command's --help, for commands that do not give
+// their own.
+const std::map<std::string, std::string> kExamples = {
+    {"run",
+     "  ftctune run jobs/table1.json\n  ftctune run jobs/post-fault.json --threads 2 --report\n"
+     "  ftctune run jobs/table1.json --seed 7 --out out/seed7"},
+    {"simulate",
+     "  ftctune simulate jobs/table1.json\n  ftctune simulate --set Kp=12 --set Ki=3 "
+     "jobs/table1.json\n  ftctune simulate jobs/table1.json --gains out/table1/gains.json"},
+    {"validate", "  ftctune validate jobs/table1.json\n  ftctune validate my-job.json"},
+    {"report", "  ftctune report out/table1\n  ftctune report out/table1 --format svg"},
+    {"landscape",
+     "  ftctune landscape jobs/table1.json\n  ftctune landscape jobs/robust-faults.json "
+     "--params switching_gain,Kp --grid 21x21"},
+    {"study",
+     "  ftctune study jobs/post-fault.json --algorithms bat,random,pagmo:cmaes --seeds 1-10 "
+     "--budget 110"},
+    {"serve", "  ftctune serve\n  ftctune serve --bind 0.0.0.0 --port 8080 --token-file token.txt"},
+    {"submit", "  ftctune submit jobs/table1.json\n  ftctune submit jobs/table1.json --wait"},
+    {"status", "  ftctune status 3f9c0a7d12e4b6a1\n  ftctune status 3f9c0a7d12e4b6a1 --json"},
+    {"fetch", "  ftctune fetch 3f9c0a7d12e4b6a1\n  ftctune fetch 3f9c0a7d12e4b6a1 -o gains.json"},
+    {"cancel", "  ftctune cancel 3f9c0a7d12e4b6a1"},
+    {"jobs", "  ftctune jobs\n  ftctune jobs --status running --limit 5"},
+    {"help", "  ftctune help\n  ftctune help simulate"},
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"ftctune: offline tuning of fault-tolerant sliding-mode controllers"};
+  app.name("ftctune");  // usage lines show the command, not the path it was run by
   app.set_version_flag("--version", std::string(ftc::kToolName) + " " + ftc::kVersion);
   app.require_subcommand(1);
   app.fallthrough();  // global flags such as -q may also follow the subcommand
@@ -31,6 +64,31 @@ int main(int argc, char** argv) {
   ftc::cli::add_serve_command(app, globals, action);
   ftc::cli::add_client_commands(app, globals, action);
 
+  // `ftctune help [COMMAND]`: the same text as --help.
+  auto help_topic = std::make_shared<std::string>();
+  CLI::App* help = app.add_subcommand("help", "Show the help of ftctune or of one command");
+  help->add_option("command", *help_topic, "A command");
+  help->callback([&app, &action, help_topic] {
+    action = [&app, help_topic] {
+      if (help_topic->empty()) {
+        std::fputs(app.help().c_str(), stdout);
+        return 0;
+      }
+      for (CLI::App* sub : app.get_subcommands({}))
+        if (sub->get_name() == *help_topic) {
+          std::fputs(sub->help("ftctune").c_str(), stdout);
+          return 0;
+        }
+      std::fprintf(stderr, "ftctune: error: no command \"%s\" (see ftctune --help)\n",
+                   help_topic->c_str());
+      return 2;
+    };
+  });
+  for (CLI::App* sub : app.get_subcommands({}))
+    if (sub->get_footer().empty())
+      if (const auto it = kExamples.find(sub->get_name()); it != kExamples.end())
+        sub->footer("\nExamples:\n" + it->second);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -40,7 +98,11 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "ftctune: error: %s (see ftctune --help)\n", e.what());
+    // Point to the help of the command being parsed, when there is one.
+    std::string where = "ftctune --help";
+    for (const CLI::App* sub : app.get_subcommands())
+      where = "ftctune " + sub->get_name() + " --help";
+    std::fprintf(stderr, "ftctune: error: %s (see %s)\n", e.what(), where.c_str());
     return 2;
   }
 

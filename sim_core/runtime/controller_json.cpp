@@ -25,8 +25,7 @@ std::string field_doc(const ControllerField& f) {
 schema::Object<ControllerConfig>::Field table_field(const ControllerField& f) {
   const ControllerConfig dflt;
   return {f.name, false,
-          [&f](const json& v, const std::string& path, ControllerConfig& c,
-               schema::Errors& e) {
+          [&f](const json& v, const std::string& path, ControllerConfig& c, schema::Errors& e) {
             double d = 0;
             if (!schema::detail::read_number(v, path, d, e)) return;
             if (f.integer && d != std::floor(d)) {
@@ -81,7 +80,8 @@ std::shared_ptr<const schema::Variant<ControllerConfig>> make_shape() {
         return "does not apply to controller type " + name;
       std::string allowed;
       for (const std::string& n : sim::controller_field_names(t)) allowed += ", " + n;
-      return "unknown key (allowed here: type" + allowed + ")";
+      return "unknown key (allowed here: type" + allowed + ")" +
+             json_io::did_you_mean(key, sim::controller_field_names(t));
     });
     o->rule([](const ControllerConfig& c, const std::string& path, schema::Errors& e) {
       for (FieldError& err : c.validate(path)) e.push_back(std::move(err));

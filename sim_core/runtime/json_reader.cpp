@@ -1,8 +1,9 @@
 #include "ftc/runtime/json_reader.hpp"
 
-#include <fstream>
-
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <fstream>
 #include <sstream>
 
 namespace ftc::json_io {
@@ -45,6 +46,37 @@ std::string pointer_escape(const std::string& key) {
       s += c;
   }
   return s;
+}
+
+std::string did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
+  const auto lower = [](std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  };
+  const std::string a = lower(name);
+  std::string best;
+  std::size_t best_d = 3;  // more than two edits is not a near miss
+  for (const std::string& cand : candidates) {
+    const std::string b = lower(cand);
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+      std::size_t diag = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= b.size(); ++j) {
+        const std::size_t up = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        diag = up;
+      }
+    }
+    // Short names need a closer match: "c1" is one edit from "c2" and means something else.
+    const std::size_t d = row[b.size()];
+    if (d < best_d && d * 3 <= std::max(a.size(), b.size()) && cand != name) {
+      best_d = d;
+      best = cand;
+    }
+  }
+  return best.empty() ? "" : "; did you mean \"" + best + "\"?";
 }
 
 json parse_json_text(const std::string& text, const std::string& source) {
@@ -199,8 +231,9 @@ void ObjectReader::finish() {
     if (seen_.count(it.key())) continue;
     std::string allowed;
     for (const std::string& k : seen_) allowed += (allowed.empty() ? "" : ", ") + k;
-    errors_.push_back(
-        {path_ + "/" + pointer_escape(it.key()), "unknown key (allowed here: " + allowed + ")"});
+    errors_.push_back({path_ + "/" + pointer_escape(it.key()),
+                       "unknown key (allowed here: " + allowed + ")" +
+                           did_you_mean(it.key(), {seen_.begin(), seen_.end()})});
   }
 }
 

@@ -4,8 +4,8 @@
 // keys nobody asked for.
 #include <cstdint>
 #include <filesystem>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -18,6 +18,9 @@ std::string json_type_name(const nlohmann::json& j);
 // A number for messages: `significant` digits (17 = exact round trip).
 std::string number_text(double v, int significant = 10);
 std::string pointer_escape(const std::string& key);
+// `; did you mean "Kp"?` when one candidate is a near miss of `name` (at most two edits, case
+// ignored), "" otherwise: for messages about unknown keys and parameters.
+std::string did_you_mean(const std::string& name, const std::vector<std::string>& candidates);
 
 class ObjectReader {
  public:

@@ -422,7 +422,7 @@ class Object final : public Shape<T> {
     for (auto it = j.begin(); it != j.end(); ++it) {
       if (also_allowed.count(it.key()) || has(it.key())) continue;
       errs.push_back({path + "/" + json_io::pointer_escape(it.key()),
-                      unknown_ ? unknown_(it.key()) : unknown_key_text(also_allowed)});
+                      unknown_ ? unknown_(it.key()) : unknown_key_text(it.key(), also_allowed)});
     }
   }
   void read(const json& j, const std::string& path, T& out, Errors& errs) const override {
@@ -463,12 +463,14 @@ class Object final : public Shape<T> {
   }
 
  private:
-  std::string unknown_key_text(const std::set<std::string>& also_allowed) const {
+  std::string unknown_key_text(const std::string& key,
+                               const std::set<std::string>& also_allowed) const {
     std::set<std::string> keys(also_allowed);
     for (const Field& f : fields_) keys.insert(f.key);
     std::string allowed;
     for (const std::string& k : keys) allowed += (allowed.empty() ? "" : ", ") + k;
-    return "unknown key (allowed here: " + allowed + ")";
+    return "unknown key (allowed here: " + allowed + ")" +
+           json_io::did_you_mean(key, {keys.begin(), keys.end()});
   }
 
   std::string description_;
