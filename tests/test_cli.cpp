@@ -151,3 +151,15 @@ TEST(Cli, HelpNamesTheCommandAndEndsWithExamples) {
   EXPECT_NE(r.err.find("(see ftctune simulate --help)"), std::string::npos) << r.err;
   EXPECT_EQ(run_cli("help nope", dir).exit_code, 2);
 }
+
+TEST(Cli, NegativeThreadCountsAreRefusedEverywhere) {
+  const auto dir = fresh_dir("threads");
+  for (const char* c :
+       {"run jobs/table1.json", "landscape jobs/table1.json", "evaluate jobs/robust-faults.json",
+        "serve", "study jobs/table1.json --algorithms bat --seeds 1 --budget 20"}) {
+    const CliResult r = run_cli(std::string(c) + " --threads -1", dir);
+    EXPECT_EQ(r.exit_code, 2) << c;
+    EXPECT_NE(r.err.find("--threads: Value -1 not in range 0 to 4096"), std::string::npos)
+        << c << ": " << r.err;
+  }
+}

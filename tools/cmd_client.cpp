@@ -63,7 +63,9 @@ class Api {
   std::string check(const httplib::Result& r, const std::string& path) {
     if (!r)
       throw Unreachable("cannot reach the ftctune server at " + url_ + " (" +
-                        httplib::to_string(r.error()) + ")");
+                        httplib::to_string(r.error()) +
+                        "); start one with `ftctune serve`, or point --server or FTCTUNE_SERVER "
+                        "at a running one");
     if (r->status >= 400) {
       std::string msg = "HTTP " + std::to_string(r->status) + " from " + path;
       const json body = json::parse(r->body, nullptr, false);

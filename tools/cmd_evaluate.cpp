@@ -95,7 +95,7 @@ void add_evaluate_command(CLI::App& app, const Globals& g, Action& action) {
   sub->add_option("--count", opts->count, "Ensemble members (default: the job's count)");
   sub->add_option("--out", opts->out, "Output directory (default out/<job name>/evaluation)");
   sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 4096));
   sub->add_flag("!--no-figure", opts->figure, "Skip the figure (no gnuplot needed)");
   sub->footer(
       "\nExamples:\n"

@@ -100,7 +100,8 @@ void add_report_commands(CLI::App& app, const Globals& g, Action& action) {
     sub->add_option("--history", o->history,
                     "history.csv whose best-so-far path is drawn (default out/<job "
                     "name>/history.csv if present)");
-    sub->add_option("--threads", o->threads, "Worker threads (default: all cores)");
+    sub->add_option("--threads", o->threads, "Worker threads (default: all cores)")
+        ->check(CLI::Range(0, 4096));
     sub->add_option("--format", o->format, "png (default) or svg");
     sub->callback([&action, &g, o] { action = [&g, o] { return run_landscape(*o, g); }; });
   }

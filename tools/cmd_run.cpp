@@ -181,7 +181,7 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
   sub->add_option("job", opts->job, "Job file (ftctune.job/1)")->required();
   sub->add_option("--out", opts->out, "Output directory (default out/<job name>)");
   sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 4096));
   sub->add_option("--seed", opts->seed, "Seed instead of the job's tuning.seed");
   sub->add_flag(
       "--baseline", opts->baseline,

@@ -73,7 +73,8 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
   sub->add_option("--port", o->service.port, "Port (default 8080; 0 = any free port)");
   sub->add_option("--store", o->service.store, "Store directory (default ./ftctune-store)");
   sub->add_option("--concurrent-jobs", o->service.concurrent_jobs, "Jobs run at once (default 1)");
-  sub->add_option("--threads", o->service.threads, "Threads per job (default: all cores)");
+  sub->add_option("--threads", o->service.threads, "Threads per job (default: all cores)")
+      ->check(CLI::Range(0, 4096));
   sub->add_option("--token-file", o->token_file,
                   "File holding the bearer token every request must carry");
   sub->add_option("--max-body-kib", o->max_body_kib,

@@ -320,7 +320,7 @@ void add_study_command(CLI::App& app, const Globals& g, Action& action) {
   sub->add_option("--budget", o->budget, "Evaluations per run, the initial population included")
       ->required();
   sub->add_option("--threads", o->threads, "Worker threads (default: all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 4096));
   sub->add_option("--out", o->out, "Output directory (default out/<job name>/study)");
   sub->callback([&action, &g, o] { action = [&g, o] { return run_study(*o, g); }; });
 }
