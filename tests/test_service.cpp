@@ -455,5 +455,25 @@ TEST(Cli, ClientCommandsTalkToTheService) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("cannot reach the ftctune server at http://127.0.0.1:1"), std::string::npos)
       << r.err;
+  EXPECT_NE(r.err.find("ftctune serve"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1);
+
+  // A unique prefix of an id will do; the table has a header; --all brings every result, and
+  // an existing file is not written over without --force.
+  r = run_cli("jobs" + server, dir);
+  EXPECT_EQ(r.out.rfind("ID ", 0), 0u) << r.out;
+  EXPECT_NE(r.out.find("SUBMITTED (UTC)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(id + "  "), std::string::npos) << r.out;
+  const std::string all = (dir / "all" / "gains.json").string();
+  r = run_cli("fetch " + id.substr(0, 6) + " --all -o '" + all + "'" + server, dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f :
+       {"gains.json", "history.csv", "comparison.json", "comparison.md", "report.html"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "all" / f)) << f;
+  EXPECT_EQ(slurp(dir / "all" / "gains.json"), slurp(dir / "gains.json"));
+  r = run_cli("fetch " + id.substr(0, 6) + " -o '" + all + "'" + server, dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("exists already; pass --force"), std::string::npos) << r.err;
+  EXPECT_EQ(
+      run_cli("fetch " + id.substr(0, 6) + " --force -o '" + all + "'" + server, dir).exit_code, 0);
 }

@@ -5,7 +5,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
@@ -138,6 +140,56 @@ int fetch_gains(Api& api, const std::string& id, const std::string& out, const s
   return 0;
 }
 
+// Everything a finished job has: the gains, history, comparison and report, beside the gains.
+int fetch_all(Api& api, const std::string& id, const std::string& out, const std::string& name,
+              bool quiet, bool force) {
+  if (const int rc = fetch_gains(api, id, out, name, quiet, force); rc != 0) return rc;
+  const std::filesystem::path dir =
+      (out.empty() ? default_out_dir_for(name) / ("service-" + id.substr(0, 8)) / "gains.json"
+                   : std::filesystem::path(out))
+          .parent_path();
+  const std::pair<const char*, const char*> files[] = {
+      {"/history?format=csv", "history.csv"},
+      {"/comparison?format=json", "comparison.json"},
+      {"/comparison?format=md", "comparison.md"},
+      {"/report", "report.html"}};
+  for (const auto& [path, file] : files) {
+    const std::filesystem::path f = dir / file;
+    if (std::filesystem::exists(f) && !force)
+      throw InputError(f.string(), "", "exists already; pass --force to replace it");
+    tune::write_file_atomic(f, api.get("/v1/jobs/" + id + path));
+    if (!quiet) std::printf("wrote %s\n", f.c_str());
+  }
+  return 0;
+}
+
+// A job id, or a unique prefix of one among the newest 1000 jobs.
+std::string resolve_id(Api& api, const std::string& id) {
+  if (id.size() >= 16) return id;
+  const json j = json::parse(api.get("/v1/jobs?limit=1000"));
+  std::vector<std::string> hits;
+  for (const json& job : j["jobs"])
+    if (job["id"].get<std::string>().rfind(id, 0) == 0) hits.push_back(job["id"]);
+  if (hits.size() == 1) return hits[0];
+  if (hits.empty()) return id;  // the server answers 404 with its own message
+  std::string list;
+  for (const std::string& h : hits) list += (list.empty() ? "" : ", ") + h;
+  throw InputError("id", "", "\"" + id + "\" is a prefix of several jobs: " + list);
+}
+
+// "2026-11-23T14:00:00.123Z" as seconds since the epoch; NaN when it is not one.
+double iso_seconds(const json& v) {
+  if (!v.is_string()) return std::numeric_limits<double>::quiet_NaN();
+  std::tm tm{};
+  int ms = 0;
+  if (std::sscanf(v.get<std::string>().c_str(), "%d-%d-%dT%d:%d:%d.%dZ", &tm.tm_year, &tm.tm_mon,
+                  &tm.tm_mday, &tm.tm_hour, &tm.tm_min, &tm.tm_sec, &ms) < 6)
+    return std::numeric_limits<double>::quiet_NaN();
+  tm.tm_year -= 1900;
+  tm.tm_mon -= 1;
+  return static_cast<double>(timegm(&tm)) + ms / 1000.0;
+}
+
 }  // namespace
 
 std::filesystem::path default_out_dir_for(const std::string& job_name) {
@@ -207,13 +259,13 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
   const auto id_command = [&](const char* name, const char* help, IdAction fn) {
     auto id = std::make_shared<std::string>();
     CLI::App* sub = app.add_subcommand(name, help);
-    sub->add_option("id", *id, "Job id")->required();
+    sub->add_option("id", *id, "Job id, or a prefix of one that no other job shares")->required();
     common(sub);
     sub->callback([&action, o, id, fn] {
       action = [o, id, fn] {
         return guarded([&] {
           Api api(*o);
-          return fn(api, *id);
+          return fn(api, resolve_id(api, *id));
         });
       };
     });
@@ -229,11 +281,17 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
   });
   auto out = std::make_shared<std::string>();
   auto force = std::make_shared<bool>(false);
-  CLI::App* fetch = id_command("fetch", "Download a finished job's gains file",
-                               [&g, out, force](Api& api, const std::string& id) {
-                                 const json j = json::parse(api.get("/v1/jobs/" + id));
-                                 return fetch_gains(api, id, *out, j["name"], g.quiet, *force);
-                               });
+  auto all = std::make_shared<bool>(false);
+  CLI::App* fetch = id_command(
+      "fetch", "Download a finished job's gains file (with --all, its other results too)",
+      [&g, out, force, all](Api& api, const std::string& id) {
+        const json j = json::parse(api.get("/v1/jobs/" + id));
+        return *all ? fetch_all(api, id, *out, j["name"], g.quiet, *force)
+                    : fetch_gains(api, id, *out, j["name"], g.quiet, *force);
+      });
+  fetch->add_flag("--all", *all,
+                  "Also history.csv, comparison.json, comparison.md and report.html, beside the "
+                  "gains file");
   fetch->add_option("-o,--output", *out,
                     "Output file (default out/<job name>/service-<id>/gains.json)");
   fetch->add_flag("--force", *force, "Replace the output file if it exists");
@@ -268,7 +326,27 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
             return 0;
           }
           const json j = json::parse(body);
-          for (const json& job : j["jobs"]) std::printf("%s\n", describe(job).c_str());
+          std::printf("%-16s  %-20s  %-10s  %-19s  %9s  %s\n", "ID", "NAME", "STATE",
+                      "SUBMITTED (UTC)", "DURATION", "PROGRESS");
+          const double now = static_cast<double>(std::time(nullptr));
+          for (const json& job : j["jobs"]) {
+            const double start = iso_seconds(job["started_at"]);
+            const double end = job["finished_at"].is_null() ? now : iso_seconds(job["finished_at"]);
+            char duration[32] = "-";
+            if (std::isfinite(start) && std::isfinite(end))
+              std::snprintf(duration, sizeof duration, "%.1f s", end - start);
+            std::string submitted = job.value("created_at", "");
+            if (submitted.size() >= 19)
+              submitted = submitted.substr(0, 10) + " " + submitted.substr(11, 8);
+            const json& p = job["progress"];
+            const std::string progress = std::to_string(p["evaluations"].get<long long>()) + "/" +
+                                         std::to_string(p["total_evaluations"].get<long long>()) +
+                                         " evaluations";
+            std::printf(
+                "%-16s  %-20s  %-10s  %-19s  %9s  %s\n", job["id"].get<std::string>().c_str(),
+                job["name"].get<std::string>().c_str(), job["status"].get<std::string>().c_str(),
+                submitted.c_str(), duration, progress.c_str());
+          }
           std::printf("(%zu of %lld)\n", j["jobs"].size(), j["total"].get<long long>());
           return 0;
         });
