@@ -234,3 +234,21 @@ TEST(Report, LandscapeOfALogScaleParameterIsEvenInItsLogarithm) {
   }
   EXPECT_NE(slurp(dir / "landscape.gp").find("log10($1)"), std::string::npos);
 }
+
+TEST(Report, LandscapeReportsItsProgressBlockByBlock) {
+  tune::LandscapeOptions o;
+  o.n1 = 12;
+  o.n2 = 12;  // 144 points: three blocks of at most 64
+  std::vector<std::pair<std::int64_t, std::int64_t>> calls;
+  o.progress = [&](std::int64_t done, std::int64_t total) { calls.emplace_back(done, total); };
+  tune::TbbEvaluator evaluator(2);
+  const auto dir = fresh_dir("landscape-progress");
+  json j = short_table1_job();
+  j["scenarios"][0]["duration"] = 1;
+  j["scenarios"][0]["faults"] = json::array();
+  j["objective"]["window"] = {0, 1};
+  tune::compute_landscape(tune::parse_job(j, "short"), dir, o, evaluator);
+  ASSERT_GE(calls.size(), 3u);
+  EXPECT_EQ(calls.back(), std::make_pair(std::int64_t{144}, std::int64_t{144}));
+  for (std::size_t i = 1; i < calls.size(); ++i) EXPECT_GT(calls[i].first, calls[i - 1].first);
+}

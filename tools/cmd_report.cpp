@@ -9,6 +9,7 @@
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/report/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "progress.hpp"
 
 namespace ftc::cli {
 
@@ -64,7 +65,22 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
                o.params.empty() ? "the first two tuned parameters" : o.params,
                job.scenarios.size());
   tune::TbbEvaluator evaluator(o.threads);
+  ProgressBar bar(!g.quiet);
+  int last_tenth = 0;
+  lo.progress = [&](std::int64_t done, std::int64_t total) {
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // A log line every tenth of the grid; the bar (on a terminal) after every block.
+    if (const int tenth = static_cast<int>(10 * done / total); tenth > last_tenth) {
+      last_tenth = tenth;
+      bar.clear();
+      spdlog::info("{}/{} grid points, {:.1f} s elapsed, ETA {:.1f} s", done, total, elapsed,
+                   elapsed * static_cast<double>(total - done) / static_cast<double>(done));
+    }
+    bar.draw(done, total, elapsed);
+  };
   const tune::LandscapeResult r = tune::compute_landscape(job, out, lo, evaluator);
+  bar.clear();
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!g.quiet) {
     std::printf("%lld simulations in %.2f s; lowest %s = %.6g at %s = %.5g, %s = %.5g\n",

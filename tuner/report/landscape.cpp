@@ -61,7 +61,21 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   std::vector<sim::ControllerConfig> controllers;
   controllers.reserve(grid.size());
   for (const Decision& x : grid) controllers.push_back(problem.controller_with(x));
-  const std::vector<CandidateOutcome> outcomes = problem.evaluate(controllers, evaluator);
+  // A block at a time (each still one parallel batch, large enough to keep every core busy),
+  // so that a long landscape shows its progress; results are placed by index as before.
+  std::vector<CandidateOutcome> outcomes;
+  outcomes.reserve(controllers.size());
+  const std::size_t block =
+      std::max<std::size_t>(64, 16 * static_cast<std::size_t>(evaluator.concurrency()));
+  for (std::size_t begin = 0; begin < controllers.size(); begin += block) {
+    const std::size_t n = std::min(block, controllers.size() - begin);
+    std::vector<CandidateOutcome> part = problem.evaluate(
+        std::span<const sim::ControllerConfig>(controllers.data() + begin, n), evaluator);
+    for (CandidateOutcome& c : part) outcomes.push_back(std::move(c));
+    if (options.progress)
+      options.progress(static_cast<std::int64_t>(begin + n),
+                       static_cast<std::int64_t>(controllers.size()));
+  }
 
   LandscapeResult r;
   r.params = params;

@@ -4,6 +4,7 @@
 // the objective can tell gains apart at all.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,9 @@ struct LandscapeOptions {
   std::vector<std::string> params;  // two tuned parameters; default: the first two of the job
   std::filesystem::path history;    // a history.csv whose best-so-far path is drawn on top
   FigureFormat format = FigureFormat::png;
+  // Called on the calling thread after each block of grid points with the points done and the
+  // total (the grid is evaluated a block at a time so that progress can be shown).
+  std::function<void(std::int64_t, std::int64_t)> progress;
 };
 
 struct LandscapeResult {
