@@ -129,8 +129,9 @@ TEST(Cli, NearMissNamesGetASuggestion) {
   EXPECT_NE(r.err.find("/controller/swiching_gain: unknown key"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("did you mean \"switching_gain\"?"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("did you mean \"metric\"?"), std::string::npos) << r.err;
-  // Two equally near names (Kq: Kp or Ki?) get no guess.
-  r = run_cli("simulate jobs/table1.json --set Kq=3 --out '" + dir.string() + "'", dir);
+  // Two equally near names (alpha3: alpha1 or alpha2?) get no guess.
+  r = run_cli("simulate jobs/table1.json --set alpha3=0.5 --out '" + dir.string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err.find("did you mean"), std::string::npos) << r.err;
 }
 

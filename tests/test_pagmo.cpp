@@ -469,4 +469,8 @@ TEST(Pagmo, LibraryIsLoadedOnlyWhenAJobNamesAPagmoAlgorithm) {
       {"type", "pagmo"}, {"name", "sea"}, {"population", 4}, {"generations", 2}};
   std::ofstream(dir / "job.json") << j.dump();
   EXPECT_GT(libpagmo_mentions("validate '" + (dir / "job.json").string() + "'"), 0);
+  // ... and the module loads and parses it.
+  const ftc::testing::CliResult r =
+      ftc::testing::run_cli("validate '" + (dir / "job.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
 }

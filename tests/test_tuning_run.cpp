@@ -245,6 +245,11 @@ TEST(TuningRun, WarnsOfTunedValuesAtABound) {
   ASSERT_EQ(w.size(), 1u);
   EXPECT_NE(w[0].find("switching_gain"), std::string::npos);
   EXPECT_TRUE(tune::bound_warnings(job, {190, 25, 25}).empty());
+  // An open range: alpha2 < 1, so a bound at 0.7 can move, one at the top of the range cannot.
+  j["tuning"]["parameters"] = {{"alpha2", {0.3, 0.7}}};
+  w = tune::bound_warnings(tune::parse_job(j, "x"), {0.7});
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("widen tuning.parameters.alpha2"), std::string::npos) << w[0];
 }
 
 TEST(Cli, Table1RunWarnsThatKiEndsOnItsBound) {
@@ -274,7 +279,7 @@ TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {
   tune::write_file_atomic(dir / "run" / "figures" / "stale.png", "old");
   CliResult r = run_cli("run " + job + " -q --seed 7 --out '" + out + "'", dir);
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("already holds files"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("already holds a run"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
   EXPECT_EQ(slurp(dir / "run" / "gains.json"), first);
   // --force replaces the run, and what the earlier run left (its figures) is gone.
@@ -282,16 +287,36 @@ TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(slurp(dir / "run" / "gains.json"), first);
   EXPECT_FALSE(std::filesystem::exists(dir / "run" / "figures" / "stale.png"));
-  // Without --out, the default out/<name> moves on to out/<name>-2.
-  const std::filesystem::path src(FTC_SOURCE_DIR);
-  const std::filesystem::path a = src / "out" / j["name"].get<std::string>();
-  const std::filesystem::path b = src / "out" / (j["name"].get<std::string>() + "-2");
-  ASSERT_EQ(run_cli("run " + job + " -q", dir).exit_code, 0);
-  r = run_cli("run " + job, dir);
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find(b.filename().string()), std::string::npos) << r.out;
-  EXPECT_TRUE(std::filesystem::exists(a / "gains.json"));
-  EXPECT_TRUE(std::filesystem::exists(b / "gains.json"));
-  std::filesystem::remove_all(a);
-  std::filesystem::remove_all(b);
+  // Without --out, the default out/<name> moves on to out/<name>-2 (run from a scratch working
+  // directory, so nothing lands in the source tree); files that are not a run do not count.
+  const auto cwd = fresh_dir("run-default");
+  const auto run_here = [&](const std::string& args) {
+    return std::system(("cd '" + cwd.string() + "' && '" FTC_CLI "' " + args +
+                        " >/dev/null 2>&1")
+                           .c_str());
+  };
+  const std::string name = j["name"];
+  tune::write_file_atomic(cwd / "out" / name / "simulate" / "metrics.json", "{}");
+  ASSERT_EQ(run_here("run " + job + " -q"), 0);
+  EXPECT_TRUE(std::filesystem::exists(cwd / "out" / name / "gains.json"));
+  ASSERT_EQ(run_here("run " + job + " -q"), 0);
+  EXPECT_TRUE(std::filesystem::exists(cwd / "out" / (name + "-2") / "gains.json"));
+  // The run's file list and the trials table.
+  const json run = json::parse(slurp(cwd / "out" / name / "run.json"));
+  EXPECT_NE(std::find(run["files"].begin(), run["files"].end(), "trials.csv"), run["files"].end());
+  std::istringstream trials(slurp(cwd / "out" / name / "trials.csv"));
+  std::string line;
+  std::getline(trials, line);
+  EXPECT_EQ(line, "iteration,index,Kp,Ki,objective,fitness,diverged,accepted,objective_paper");
+  int rows = 0, accepted = 0;
+  while (std::getline(trials, line)) {
+    ++rows;
+    std::vector<std::string> cells;
+    std::stringstream cs(line);
+    for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
+    ASSERT_EQ(cells.size(), 9u) << line;
+    accepted += cells[7] == "1";
+  }
+  EXPECT_EQ(rows, 9);  // 3 bats x (1 + 2 iterations): one row per evaluation
+  EXPECT_GE(accepted, 1);
 }

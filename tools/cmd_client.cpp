@@ -150,6 +150,7 @@ int fetch_all(Api& api, const std::string& id, const std::string& out, const std
           .parent_path();
   const std::pair<const char*, const char*> files[] = {
       {"/history?format=csv", "history.csv"},
+      {"/trials", "trials.csv"},
       {"/comparison?format=json", "comparison.json"},
       {"/comparison?format=md", "comparison.md"},
       {"/report", "report.html"}};
@@ -222,6 +223,9 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
         return guarded([&] {
           const std::optional<std::string> text = tune::read_file(*job);
           if (!text) throw InputError(*job, "", "cannot open the job file");
+          // Refuse before the job runs, not after.
+          if (*wait && !out->empty() && std::filesystem::exists(*out) && !*force)
+            throw InputError(*out, "", "exists already; pass --force to replace it");
           Api api(*o);
           const json created = json::parse(api.post("/v1/jobs", *text));
           const std::string id = created["id"];
@@ -290,8 +294,8 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
                     : fetch_gains(api, id, *out, j["name"], g.quiet, *force);
       });
   fetch->add_flag("--all", *all,
-                  "Also history.csv, comparison.json, comparison.md and report.html, beside the "
-                  "gains file");
+                  "Also history.csv, trials.csv, comparison.json, comparison.md and report.html, "
+                  "beside the gains file");
   fetch->add_option("-o,--output", *out,
                     "Output file (default out/<job name>/service-<id>/gains.json)");
   fetch->add_flag("--force", *force, "Replace the output file if it exists");

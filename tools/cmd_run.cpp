@@ -57,32 +57,39 @@ std::string params_text(const std::vector<std::string>& names, const tune::Decis
   return s;
 }
 
-bool holds_files(const std::filesystem::path& d) {
+// Whether a directory holds an ftctune run (what `run` writes first and last).
+bool holds_run(const std::filesystem::path& d) {
   std::error_code ec;
-  return std::filesystem::is_directory(d, ec) && !std::filesystem::is_empty(d, ec);
+  return std::filesystem::exists(d / "gains.json", ec) || std::filesystem::exists(d / "run.json", ec);
 }
 
-// Where a run writes. A directory that already holds files is never written into silently: a
-// given --out is refused, the default out/<name> moves on to out/<name>-2, -3, ...; with --force
-// the directory is used and the files a run writes are removed first, so no figure or trajectory
-// of the previous run is left beside the new ones.
+// Where a run writes. A run is never written over silently: a given --out that holds a run is
+// refused, the default out/<name> moves on to out/<name>-2, -3, ... (with a warning); --force
+// replaces the run (its files are cleared only once the new run has finished, see
+// clear_previous_run). Other files in the directory (an evaluation, a landscape, fetched
+// service results) are not a run and are left alone.
 std::filesystem::path run_directory(const std::filesystem::path& wanted, bool given, bool force) {
   namespace fs = std::filesystem;
+  if (!holds_run(wanted) || force) return wanted;
+  if (given)
+    throw InputError("--out", "",
+                     wanted.string() + " already holds a run; choose another directory, or pass "
+                                       "--force to replace that run");
   fs::path out = wanted;
-  if (holds_files(out) && !force) {
-    if (given)
-      throw InputError("--out", "",
-                       out.string() +
-                           " already holds files; choose another directory, or pass "
-                           "--force to replace the run in it");
-    for (int k = 2; holds_files(out); ++k) out = wanted.string() + "-" + std::to_string(k);
-  }
-  if (force)
-    for (const char* f :
-         {"gains.json", "history.csv", "history-random.csv", "comparison.json", "comparison.md",
-          "run.json", "job.json", "report.html", "figures", "trajectories"})
-      fs::remove_all(out / f);
+  for (int k = 2; holds_run(out); ++k) out = wanted.string() + "-" + std::to_string(k);
+  spdlog::warn("{} already holds a run: writing to {} (--force replaces it instead)",
+               wanted.string(), out.string());
   return out;
+}
+
+// With --force, after the new run has finished and before its files are written: remove what a
+// run writes, so that no figure or trajectory of the earlier run is left beside the new ones.
+void clear_previous_run(const std::filesystem::path& out) {
+  if (!holds_run(out)) return;
+  for (const char* f : {"gains.json", "history.csv", "trials.csv", "history-random.csv",
+                        "comparison.json", "comparison.md", "run.json", "job.json", "report.html",
+                        "figures", "trajectories"})
+    std::filesystem::remove_all(out / f);
 }
 
 int run_tuning(const RunCliOptions& o, const Globals& g) {
@@ -123,7 +130,9 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   bar.clear();
   const double wall = std::chrono::duration<double>(clock::now() - t0).count();
 
+  if (o.force) clear_previous_run(out);
   tune::write_outputs(r, out);
+  std::int64_t baseline_simulations = 0;
   if (o.baseline) {
     // Random search with the same budget and seed: what the algorithm buys (Fig. 5).
     tune::Job random = job;
@@ -132,11 +141,21 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     rr.seed = o.seed;
     rr.compare = false;
     const tune::TuningOutcome b = tune::tune(random, evaluator, rr);
+    baseline_simulations = b.simulations;
     tune::write_file_atomic(out / "history-random.csv", tune::history_csv(b));
     spdlog::info("random search with the same budget: best J = {:.6g} ({})",
                  b.optimization.best_fitness, params_text(names, b.optimization.best));
   }
   json run = tune::run_metadata(r, wall);
+  // Every file of the run, and every simulation, the random-search baseline's included.
+  json files = json::array();
+  for (const auto& [name, content] : tune::output_files(r)) files.push_back(name);
+  if (o.baseline) {
+    files.push_back("history-random.csv");
+    run["simulations"] = run["simulations"].get<std::int64_t>() + baseline_simulations;
+  }
+  files.push_back("run.json");
+  run["files"] = files;
   run["started_at"] = started;
   run["host"] = hostname();
   run["job_file"] = o.job;
@@ -166,8 +185,9 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
       std::printf("  %s\n", nf.c_str());
     std::printf("  %lld simulations on %d thread%s in %.2f s\n",
                 static_cast<long long>(r.simulations), r.threads, r.threads == 1 ? "" : "s", wall);
-    std::printf("  wrote %s/{gains.json, history.csv, comparison.json, comparison.md, run.json}\n",
-                out.c_str());
+    std::printf("  wrote %s/{gains.json, history.csv, trials.csv, comparison.json, comparison.md, "
+                "job.json, run.json%s} and trajectories/\n",
+                out.c_str(), o.baseline ? ", history-random.csv" : "");
   }
   if (o.report) return render_run_report(out.string(), "html", g.quiet);
   return 0;
@@ -188,7 +208,7 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
       "Also run random search with the same budget (history-random.csv, drawn in Fig. 5)");
   sub->add_flag("--report", opts->report, "Then draw the figures and report.html (ftctune report)");
   sub->add_flag("--force", opts->force,
-                "Write into an output directory that holds files, replacing the run in it");
+                "Replace the run in an output directory that holds one");
   sub->callback([&action, &g, opts] { action = [&g, opts] { return run_tuning(*opts, g); }; });
 }
 

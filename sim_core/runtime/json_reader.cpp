@@ -56,6 +56,7 @@ std::string did_you_mean(const std::string& name, const std::vector<std::string>
   const std::string a = lower(name);
   std::string best;
   std::size_t best_d = 3;  // more than two edits is not a near miss
+  int ties = 0;            // a guess between equally near names would mislead
   for (const std::string& cand : candidates) {
     const std::string b = lower(cand);
     std::vector<std::size_t> row(b.size() + 1);
@@ -71,12 +72,16 @@ std::string did_you_mean(const std::string& name, const std::vector<std::string>
     }
     // Short names need a closer match: "c1" is one edit from "c2" and means something else.
     const std::size_t d = row[b.size()];
-    if (d < best_d && d * 3 <= std::max(a.size(), b.size()) && cand != name) {
+    if (d * 3 > std::max(a.size(), b.size()) || cand == name) continue;
+    if (d < best_d) {
       best_d = d;
       best = cand;
+      ties = 0;
+    } else if (d == best_d) {
+      ++ties;
     }
   }
-  return best.empty() ? "" : "; did you mean \"" + best + "\"?";
+  return best.empty() || ties > 0 ? "" : "; did you mean \"" + best + "\"?";
 }
 
 json parse_json_text(const std::string& text, const std::string& source) {

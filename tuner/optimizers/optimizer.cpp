@@ -93,10 +93,12 @@ OptimizationResult run_optimizer(Optimizer& optimizer, BatchFitness& fitness,
       throw InputError("checkpoint", "", std::string("damaged optimiser state: ") + e.what());
     }
   } else {
+    fitness.begin_iteration(0);
     optimizer.initialize(fitness);
     go = !observer || observer(optimizer.history().back(), optimizer);
   }
   while (go && optimizer.iteration() < optimizer.iterations()) {
+    fitness.begin_iteration(optimizer.iteration() + 1);
     optimizer.iterate(fitness);
     go = !observer || observer(optimizer.history().back(), optimizer);
   }

@@ -28,8 +28,13 @@ std::vector<fs::path> candidates() {
   if (const char* env = std::getenv("FTCTUNE_PLUGIN_DIR"); env && *env) dirs.emplace_back(env);
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) dirs.push_back(exe.parent_path() / FTC_PLUGIN_DIR_FROM_BIN);
-  dirs.emplace_back(FTC_PLUGIN_BUILD_DIR);
+  if (!ec) {
+    dirs.push_back(exe.parent_path() / FTC_PLUGIN_DIR_FROM_BIN);
+    // The build tree only for a binary that lives in it: an installed copy must not pick up a
+    // module of whatever the build tree holds today.
+    const std::string tree = FTC_BUILD_TREE;
+    if (exe.string().rfind(tree + "/", 0) == 0) dirs.emplace_back(FTC_PLUGIN_BUILD_DIR);
+  }
   std::vector<fs::path> files;
   for (const fs::path& d : dirs) files.push_back(d / pagmo_plugin::kModuleName);
   return files;
@@ -42,28 +47,29 @@ const pagmo_plugin::Api& api() {
   std::call_once(once, [] {
     std::string tried;
     for (const fs::path& f : candidates()) {
-      if (!fs::exists(f)) {
+      std::error_code ec;
+      if (!fs::exists(f, ec)) {
         tried += (tried.empty() ? "" : ", ") + f.string();
         continue;
       }
       // Never closed: the settings and optimisers it makes live as long as the process.
       void* h = ::dlopen(f.c_str(), RTLD_NOW | RTLD_LOCAL);
       if (!h) {
-        failure = std::string("cannot load ") + f.string() + ": " + ::dlerror();
-        return;
+        tried += (tried.empty() ? "" : ", ") + f.string() + " (" + ::dlerror() + ")";
+        continue;
       }
       using Entry = const pagmo_plugin::Api* (*)();
       const auto entry = reinterpret_cast<Entry>(::dlsym(h, pagmo_plugin::kEntryPoint));
       const pagmo_plugin::Api* a = entry ? entry() : nullptr;
       if (!a || std::string(a->build_id) != FTC_BUILD_ID) {
-        failure = f.string() + " comes from another build of ftctune; reinstall it with this one";
-        return;
+        tried += (tried.empty() ? "" : ", ") + f.string() + " (from another build of ftctune)";
+        continue;
       }
       loaded = a;
       return;
     }
     failure = "the pagmo2 adapter " + std::string(pagmo_plugin::kModuleName) +
-              " is not installed (looked for " + tried +
+              " of this build was not found (tried " + tried +
               "); it is built and installed with ftctune, or point FTCTUNE_PLUGIN_DIR at it";
   });
   if (!loaded) throw InputError("tuning.algorithm", "", "pagmo: " + failure);

@@ -238,7 +238,24 @@ std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batc
   const std::vector<CandidateOutcome> out = problem_.evaluate(controllers, evaluator_);
   simulations_ += static_cast<std::int64_t>(controllers.size() * problem_.scenarios());
   std::vector<double> J(batch.size());
-  for (std::size_t i = 0; i < batch.size(); ++i) J[i] = out[i].evaluation.fitness;
+  const bool per_scenario = !problem_.job().ensemble;
+  for (std::size_t i = 0; i < batch.size(); ++i) {
+    const Evaluation& e = out[i].evaluation;
+    J[i] = e.fitness;
+    Trial t;
+    t.iteration = iteration_;
+    t.index = index_++;
+    t.parameters = problem_.to_parameters(batch[i]);
+    t.objective = e.objective;
+    t.fitness = e.fitness;
+    t.diverged = e.diverged_count;
+    if (per_scenario)
+      for (const sim::Metrics& m : e.scenarios)
+        t.scenario_objectives.push_back(m.objective(problem_.job().objective.metric));
+    t.accepted = e.fitness > best_;
+    best_ = std::max(best_, e.fitness);
+    trials_.push_back(std::move(t));
+  }
   return J;
 }
 

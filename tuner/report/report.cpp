@@ -5,6 +5,8 @@
 
 #include "ftc/tune/io/files.hpp"
 #include "report/figures.hpp"
+
+#include <set>
 #include "report/html.hpp"
 
 namespace ftc::tune {
@@ -65,12 +67,17 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
 
   // The page embeds PNGs: a fifth of the size of SVGs that carry every sample.
   const FigureFormat format = options.html ? FigureFormat::png : options.format;
-  // Redrawn from scratch: a figure of an earlier report (another format, another scenario
-  // count) must not sit beside the new ones as if it were current.
-  fs::remove_all(run_dir / "figures");
   fs::create_directories(run_dir / "figures");
   const std::vector<report_detail::Figure> figures =
       report_detail::draw_run_figures(run_dir, job, gains, series[0], format);
+  // Once the new figures are drawn: a figure of an earlier report (another format, another
+  // scenario count) must not sit beside them as if it were current.
+  std::set<fs::path> current;
+  for (const report_detail::Figure& f : figures) current.insert(fs::absolute(run_dir / f.file));
+  for (const auto& e : fs::directory_iterator(run_dir / "figures"))
+    if (e.is_regular_file() && (e.path().extension() == ".png" || e.path().extension() == ".svg") &&
+        !current.count(fs::absolute(e.path())))
+      fs::remove(e.path());
   ReportResult result;
   for (const report_detail::Figure& f : figures) result.figures.push_back(run_dir / f.file);
   if (!options.html) return result;

@@ -117,10 +117,33 @@ json gains_document(const TuningOutcome& r) {
                         {"objective_max", json_number(n.objective_max)},
                         {"relative_spread", json_number(n.relative_spread)}};
   }
-  g["warnings"] = r.warnings;
+  // Only when there is something to say: a runtime loader from before this key exists would
+  // refuse every file that has it.
+  if (!r.warnings.empty()) g["warnings"] = r.warnings;
   g["job"] = {{"name", job.name}, {"sha256", r.job_sha256}};
   g["generator"] = {{"name", kToolName}, {"version", kVersion}};
   return g;
+}
+
+std::string trials_csv(const TuningOutcome& r) {
+  const std::vector<std::string> names = parameter_names(r.job);
+  std::string s = "iteration,index";
+  for (const std::string& n : names) s.append(",").append(n);
+  s += ",objective,fitness,diverged,accepted";
+  if (!r.job.ensemble)
+    for (const sim::Scenario& sc : r.job.scenarios) s.append(",objective_").append(sc.name);
+  s += '\n';
+  const auto num = [&](double v) { s.append(",").append(detail::format_number(v, "%.17g")); };
+  for (const Trial& t : r.trials) {
+    s.append(std::to_string(t.iteration)).append(",").append(std::to_string(t.index));
+    for (double v : t.parameters) num(v);
+    num(t.objective);
+    num(t.fitness);
+    s.append(",").append(std::to_string(t.diverged)).append(t.accepted ? ",1" : ",0");
+    for (double v : t.scenario_objectives) num(v);
+    s += '\n';
+  }
+  return s;
 }
 
 std::string history_csv(const TuningOutcome& r) {
@@ -259,6 +282,7 @@ std::map<std::string, std::string> output_files(const TuningOutcome& r) {
   std::map<std::string, std::string> files = {
       {"gains.json", gains_document(r).dump(2) + "\n"},
       {"history.csv", history_csv(r)},
+      {"trials.csv", trials_csv(r)},
       {"job.json", to_json(r.job).dump(2) + "\n"},
       {"comparison.json", comparison_document(r).dump(2) + "\n"},
       {"comparison.md", comparison_markdown(r)}};

@@ -66,6 +66,7 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   ProblemFitness fitness(problem, evaluator);
   r.optimization = run_optimizer(optimizer, fitness, observer, options.resume);
   r.simulations = fitness.simulations();
+  r.trials = fitness.trials();
   r.tuned_controller = problem.controller_for(r.optimization.best);
   r.optimization.best = problem.to_parameters(r.optimization.best);
   for (HistoryRow& h : r.optimization.history) h = in_values(std::move(h));
@@ -129,8 +130,9 @@ std::vector<std::string> bound_warnings(const Job& job, const Decision& x) {
     const double bound = at_upper ? b.upper : b.lower;
     // Can the bound move? Not when it is the field's own limit (Ki ≥ 0, say).
     const sim::ControllerField* f = sim::find_controller_field(b.name);
-    const double beyond = at_upper ? bound + std::max(1e-6, std::abs(bound)) * 0.5
-                                   : (log ? bound * 0.5 : bound - std::max(1e-6, std::abs(bound)) * 0.5);
+    // A step just past the bound (a millionth of the range) tells whether the field allows it.
+    const double step = 1e-6 * (b.upper - b.lower);
+    const double beyond = at_upper ? bound + step : (log ? bound * (1 - 1e-6) : bound - step);
     const bool can_widen = f && sim::check_controller_value(job.controller, *f, beyond).empty();
     char buf[400];
     std::snprintf(buf, sizeof buf, "%s = %.6g ended at its %s bound %.6g (within 0.1 %% of the range)%s",

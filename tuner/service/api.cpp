@@ -40,6 +40,7 @@ json job_links(const std::string& id) {
   return {{"self", base},
           {"gains", base + "/gains"},
           {"history", base + "/history"},
+          {"trials", base + "/trials"},
           {"comparison", base + "/comparison"},
           {"report", base + "/report"},
           {"cancel", base + "/cancel"}};
@@ -140,7 +141,8 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
     return cancel(id, res);
   }
   if (p.size() == 4 &&
-      (p[3] == "gains" || p[3] == "history" || p[3] == "comparison" || p[3] == "report")) {
+      (p[3] == "gains" || p[3] == "history" || p[3] == "trials" || p[3] == "comparison" ||
+       p[3] == "report")) {
     if (m != "GET") return method_not_allowed(res, "GET");
     return result(req, res, id, p[3]);
   }
@@ -255,6 +257,8 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
     res.set_content(store_.artifact(id, "gains.json").value_or(""), "application/json");
   } else if (what == "report") {
     res.set_content(report(id), "text/html; charset=utf-8");
+  } else if (what == "trials") {
+    res.set_content(store_.artifact(id, "trials.csv").value_or(""), "text/csv");
   } else if (what == "history") {
     if (format == "json") {
       const json gains = json::parse(store_.artifact(id, "gains.json").value_or("{}"));

@@ -33,6 +33,9 @@ class BatchFitness {
  public:
   virtual ~BatchFitness() = default;
   virtual std::vector<double> operator()(const std::vector<Decision>& batch) = 0;
+  // run_optimizer says which iteration the evaluations that follow belong to (0: the initial
+  // population), for fitness functions that keep a record of every trial.
+  virtual void begin_iteration(int /*iteration*/) {}
 };
 
 // A plain function of one decision vector, evaluated on the calling thread (tests, small

@@ -139,19 +139,39 @@ class TuningProblem {
   std::vector<double sim::ControllerConfig::*> fields_;  // one per coordinate
 };
 
+// One evaluated candidate, as trials.csv lists it.
+struct Trial {
+  int iteration = 0;     // of the optimiser (0: the initial population)
+  int index = 0;         // in evaluation order within the iteration
+  Decision parameters;   // in natural units, in space().names order
+  double objective = 0;  // the job's aggregate
+  double fitness = 0;
+  int diverged = 0;                         // scenarios that diverged
+  std::vector<double> scenario_objectives;  // per listed scenario (empty with an ensemble)
+  bool accepted = false;                    // became the run's best so far when evaluated
+};
+
 // The problem as an optimiser sees it: the fitness of a batch of decision vectors, simulated
-// through an evaluator. Counts the simulations it ran.
+// through an evaluator. Counts the simulations it ran and keeps a record of every trial.
 class ProblemFitness final : public BatchFitness {
  public:
   ProblemFitness(const TuningProblem& problem, BatchEvaluator& evaluator)
       : problem_(problem), evaluator_(evaluator) {}
   std::vector<double> operator()(const std::vector<Decision>& batch) override;
+  void begin_iteration(int iteration) override {
+    iteration_ = iteration;
+    index_ = 0;
+  }
   std::int64_t simulations() const { return simulations_; }
+  const std::vector<Trial>& trials() const { return trials_; }
 
  private:
   const TuningProblem& problem_;
   BatchEvaluator& evaluator_;
   std::int64_t simulations_ = 0;
+  int iteration_ = 0, index_ = 0;
+  double best_ = -1.0;  // best fitness so far; J ≥ 0, so the first trial is accepted
+  std::vector<Trial> trials_;
 };
 
 }  // namespace ftc::tune

@@ -20,6 +20,11 @@ std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std:
 
 nlohmann::json gains_document(const TuningOutcome& r);
 std::string history_csv(const TuningOutcome& r);
+// trials.csv: one row per evaluated candidate: iteration, index, the tuned parameters, objective,
+// fitness, diverged (scenarios), accepted (became the best so far), and per listed scenario its
+// objective (a job with an ensemble lists only the aggregate: `ftctune simulate --set` gives any
+// candidate's members).
+std::string trials_csv(const TuningOutcome& r);
 nlohmann::json comparison_document(const TuningOutcome& r);
 std::string comparison_markdown(const TuningOutcome& r);
 

@@ -54,6 +54,7 @@ struct TuningOutcome {
   std::uint64_t seed = 0;
   AlgorithmPtr algorithm;           // the settings the optimiser ran with
   OptimizationResult optimization;  // best and history in parameter values (not ln x)
+  std::vector<Trial> trials;        // every evaluated candidate (since the resume, if resumed)
   std::vector<std::pair<std::string, double>> tuned;
   sim::ControllerConfig tuned_controller;
   std::vector<ComparedController> comparison;  // compare entries, then baseline, then tuned
