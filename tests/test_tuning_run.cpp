@@ -291,9 +291,8 @@ TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {
   // directory, so nothing lands in the source tree); files that are not a run do not count.
   const auto cwd = fresh_dir("run-default");
   const auto run_here = [&](const std::string& args) {
-    return std::system(("cd '" + cwd.string() + "' && '" FTC_CLI "' " + args +
-                        " >/dev/null 2>&1")
-                           .c_str());
+    return std::system(
+        ("cd '" + cwd.string() + "' && '" FTC_CLI "' " + args + " >/dev/null 2>&1").c_str());
   };
   const std::string name = j["name"];
   tune::write_file_atomic(cwd / "out" / name / "simulate" / "metrics.json", "{}");

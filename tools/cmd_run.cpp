@@ -60,7 +60,8 @@ std::string params_text(const std::vector<std::string>& names, const tune::Decis
 // Whether a directory holds an ftctune run (what `run` writes first and last).
 bool holds_run(const std::filesystem::path& d) {
   std::error_code ec;
-  return std::filesystem::exists(d / "gains.json", ec) || std::filesystem::exists(d / "run.json", ec);
+  return std::filesystem::exists(d / "gains.json", ec) ||
+         std::filesystem::exists(d / "run.json", ec);
 }
 
 // Where a run writes. A run is never written over silently: a given --out that holds a run is
@@ -73,8 +74,9 @@ std::filesystem::path run_directory(const std::filesystem::path& wanted, bool gi
   if (!holds_run(wanted) || force) return wanted;
   if (given)
     throw InputError("--out", "",
-                     wanted.string() + " already holds a run; choose another directory, or pass "
-                                       "--force to replace that run");
+                     wanted.string() +
+                         " already holds a run; choose another directory, or pass "
+                         "--force to replace that run");
   fs::path out = wanted;
   for (int k = 2; holds_run(out); ++k) out = wanted.string() + "-" + std::to_string(k);
   spdlog::warn("{} already holds a run: writing to {} (--force replaces it instead)",
@@ -86,9 +88,9 @@ std::filesystem::path run_directory(const std::filesystem::path& wanted, bool gi
 // run writes, so that no figure or trajectory of the earlier run is left beside the new ones.
 void clear_previous_run(const std::filesystem::path& out) {
   if (!holds_run(out)) return;
-  for (const char* f : {"gains.json", "history.csv", "trials.csv", "history-random.csv",
-                        "comparison.json", "comparison.md", "run.json", "job.json", "report.html",
-                        "figures", "trajectories"})
+  for (const char* f :
+       {"gains.json", "history.csv", "trials.csv", "history-random.csv", "comparison.json",
+        "comparison.md", "run.json", "job.json", "report.html", "figures", "trajectories"})
     std::filesystem::remove_all(out / f);
 }
 
@@ -185,9 +187,10 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
       std::printf("  %s\n", nf.c_str());
     std::printf("  %lld simulations on %d thread%s in %.2f s\n",
                 static_cast<long long>(r.simulations), r.threads, r.threads == 1 ? "" : "s", wall);
-    std::printf("  wrote %s/{gains.json, history.csv, trials.csv, comparison.json, comparison.md, "
-                "job.json, run.json%s} and trajectories/\n",
-                out.c_str(), o.baseline ? ", history-random.csv" : "");
+    std::printf(
+        "  wrote %s/{gains.json, history.csv, trials.csv, comparison.json, comparison.md, "
+        "job.json, run.json%s} and trajectories/\n",
+        out.c_str(), o.baseline ? ", history-random.csv" : "");
   }
   if (o.report) return render_run_report(out.string(), "html", g.quiet);
   return 0;
@@ -207,8 +210,7 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
       "--baseline", opts->baseline,
       "Also run random search with the same budget (history-random.csv, drawn in Fig. 5)");
   sub->add_flag("--report", opts->report, "Then draw the figures and report.html (ftctune report)");
-  sub->add_flag("--force", opts->force,
-                "Replace the run in an output directory that holds one");
+  sub->add_flag("--force", opts->force, "Replace the run in an output directory that holds one");
   sub->callback([&action, &g, opts] { action = [&g, opts] { return run_tuning(*opts, g); }; });
 }
 

@@ -11,8 +11,8 @@
 #include <span>
 #include <string>
 
-#include "ftc/tune/job/job.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/job/job.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 

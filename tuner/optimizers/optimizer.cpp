@@ -18,8 +18,10 @@ namespace {
 json to_json(const HistoryRow& row) {
   json extras = json::array();
   for (const auto& [name, value] : row.extras) extras.push_back({name, json_number(value)});
-  return {{"iteration", row.iteration},   {"best_fitness", json_number(row.best_fitness)},
-          {"best", row.best},             {"evaluations", row.evaluations},
+  return {{"iteration", row.iteration},
+          {"best_fitness", json_number(row.best_fitness)},
+          {"best", row.best},
+          {"evaluations", row.evaluations},
           {"extras", extras}};
 }
 
@@ -62,8 +64,7 @@ AlgorithmPtr parse_algorithm(const json& j, const std::string& path,
   if (!info) {
     std::string known;
     for (const AlgorithmInfo& a : algorithms()) known += (known.empty() ? "" : ", ") + a.type;
-    errors.push_back(
-        {path + "/type", "unknown algorithm \"" + type + "\" (known: " + known + ")"});
+    errors.push_back({path + "/type", "unknown algorithm \"" + type + "\" (known: " + known + ")"});
     return nullptr;
   }
   return info->parse(j, path, errors);

@@ -94,7 +94,8 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
   if (gains.contains("warnings") && gains["warnings"].is_array() && !gains["warnings"].empty()) {
     h << "<ul class=\"warnings\">\n";
     for (const auto& w : gains["warnings"])
-      if (w.is_string()) h << "<li><b>Warning:</b> " << html_escape(w.get<std::string>()) << "</li>\n";
+      if (w.is_string())
+        h << "<li><b>Warning:</b> " << html_escape(w.get<std::string>()) << "</li>\n";
     h << "</ul>\n";
   }
 

@@ -2,11 +2,10 @@
 
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 
 #include "ftc/tune/io/files.hpp"
 #include "report/figures.hpp"
-
-#include <set>
 #include "report/html.hpp"
 
 namespace ftc::tune {

@@ -1,13 +1,12 @@
 #include "ftc/tune/run/tuning_run.hpp"
 
-#include "ftc/sim/controller_config.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <span>
 
+#include "ftc/sim/controller_config.hpp"
 #include "ftc/tune/io/sha256.hpp"
 
 namespace ftc::tune {
@@ -135,7 +134,8 @@ std::vector<std::string> bound_warnings(const Job& job, const Decision& x) {
     const double beyond = at_upper ? bound + step : (log ? bound * (1 - 1e-6) : bound - step);
     const bool can_widen = f && sim::check_controller_value(job.controller, *f, beyond).empty();
     char buf[400];
-    std::snprintf(buf, sizeof buf, "%s = %.6g ended at its %s bound %.6g (within 0.1 %% of the range)%s",
+    std::snprintf(buf, sizeof buf,
+                  "%s = %.6g ended at its %s bound %.6g (within 0.1 %% of the range)%s",
                   b.name.c_str(), x[j], at_upper ? "upper" : "lower", bound,
                   can_widen ? "; the optimum may lie beyond it: widen tuning.parameters." : "");
     std::string w = buf;

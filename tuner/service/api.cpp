@@ -140,9 +140,8 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
     if (m != "POST") return method_not_allowed(res, "POST");
     return cancel(id, res);
   }
-  if (p.size() == 4 &&
-      (p[3] == "gains" || p[3] == "history" || p[3] == "trials" || p[3] == "comparison" ||
-       p[3] == "report")) {
+  if (p.size() == 4 && (p[3] == "gains" || p[3] == "history" || p[3] == "trials" ||
+                        p[3] == "comparison" || p[3] == "report")) {
     if (m != "GET") return method_not_allowed(res, "GET");
     return result(req, res, id, p[3]);
   }

@@ -137,7 +137,8 @@ AlgorithmPtr make_algorithm(const nlohmann::json& settings);
 template <class S>
 class StructSettings final : public AlgorithmSettings {
  public:
-  using Make = std::function<std::unique_ptr<Optimizer>(const S&, std::uint64_t, const SearchSpace&)>;
+  using Make =
+      std::function<std::unique_ptr<Optimizer>(const S&, std::uint64_t, const SearchSpace&)>;
   StructSettings(std::string type, S settings, std::shared_ptr<const schema::Object<S>> shape,
                  Make make, std::vector<std::string> columns)
       : type_(std::move(type)),
