@@ -22,7 +22,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // Where the module may be: $FTCTUNE_PLUGIN_DIR, beside an installed binary
-// (<prefix>/<bindir>/../<libdir>/ftctune), and the build tree it was built in.
+// (<prefix>/<bindir>/../<libdir>/ftctune), and, for a binary inside the build tree, that tree.
 std::vector<fs::path> candidates() {
   std::vector<fs::path> dirs;
   if (const char* env = std::getenv("FTCTUNE_PLUGIN_DIR"); env && *env) dirs.emplace_back(env);
