@@ -87,6 +87,14 @@ TEST(Report, FigureFilesInSvgAndPng) {
   }
 }
 
+namespace {
+std::string detail_number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+}  // namespace
+
 TEST(Report, LandscapeGridAndHeatmap) {
   const auto run = finished_run("landscape");
   tune::LandscapeOptions o;
@@ -119,7 +127,12 @@ TEST(Report, LandscapeGridAndHeatmap) {
   EXPECT_EQ(rows, 20);
   EXPECT_NEAR(r.best_objective, lowest, 1e-8 * lowest);
   EXPECT_EQ(slurp(r.figure).substr(0, 4), std::string("\x89PNG", 4));
-  EXPECT_NE(slurp(run / "landscape" / "landscape.gp").find("history.csv"), std::string::npos);
+  const std::string gp = slurp(run / "landscape" / "landscape.gp");
+  EXPECT_NE(gp.find("history.csv"), std::string::npos);
+  // viridis, not a rainbow, and coloured by the relative excess over the lowest objective.
+  EXPECT_NE(gp.find("set palette defined (0 '#440154'"), std::string::npos) << gp;
+  EXPECT_EQ(gp.find("rgb 33,13,10"), std::string::npos);
+  EXPECT_NE(gp.find("($3/" + detail_number(r.best_objective) + " - 1)"), std::string::npos) << gp;
 
   o.params = {"Kp", "c1"};
   EXPECT_THROW(tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "l2", o,

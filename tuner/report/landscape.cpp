@@ -110,23 +110,48 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   const auto axis_end = [&](int k, double v) {
     return bounds[k].scale == Scale::log ? std::log10(v) : v;
   };
+  // Half a grid cell beyond the bounds: the cells at the edges, the best point and the optimiser's
+  // path are drawn whole.
+  const auto range = [&](int k, int n) {
+    const double lo = axis_end(k, bounds[k].lower), hi = axis_end(k, bounds[k].upper);
+    const double pad = (hi - lo) / (2.0 * (n - 1));
+    return detail::format_number(lo - pad, "%.9g") + ":" + detail::format_number(hi + pad, "%.9g");
+  };
   const auto label = [&](int k) {
     return bounds[k].scale == Scale::log ? "log10(" + params[k] + ")" : params[k];
   };
+  // Coloured by the relative excess over the best point, objective/min − 1, on a log scale: a
+  // landscape whose objective spans 0.2 % is then as readable as one that spans decades. The
+  // best point itself (excess 0) takes the colour of a tenth of the smallest positive excess.
+  const std::string metric = sim::to_string(job.objective.metric);
+  double least_excess = std::numeric_limits<double>::infinity();
+  for (const CandidateOutcome& o : outcomes) {
+    const double x = o.evaluation.objective / r.best_objective - 1;
+    if (std::isfinite(x) && x > 0) least_excess = std::min(least_excess, x);
+  }
+  const double floor_excess = std::isfinite(least_excess) ? least_excess / 10 : 1e-12;
+  const double most_excess = std::max(worst_objective / r.best_objective - 1, 10 * floor_excess);
+  const std::string best_text = detail::format_number(r.best_objective, "%.17g");
+  const std::string excess = "(($3/" + best_text + " - 1) > " +
+                             detail::format_number(floor_excess, "%.17g") + " ? ($3/" + best_text +
+                             " - 1) : " + detail::format_number(floor_excess, "%.17g") + ")";
   std::ostringstream g;
   g << plot::kStyles << plot::terminal(options.format, 1000, 800) << "set output "
     << plot::gp(r.figure.filename().string()) << "\nset title "
-    << plot::gp("Objective (" + std::string(sim::to_string(job.objective.metric)) + ") of " +
-                job.name + " over " + params[0] + " and " + params[1])
+    << plot::gp("Objective (" + metric + ") of " + job.name + " over " + params[0] + " and " +
+                params[1] + ": lowest " + detail::format_number(r.best_objective, "%.7g"))
     << " font ',13' noenhanced\nset logscale cb\n"
-    << plot::colour_tics(r.best_objective, worst_objective) << "set cblabel "
-    << plot::gp(std::string(sim::to_string(job.objective.metric)) + " (log scale; lower is better)")
-    << "\nset palette rgb 33,13,10\nset xlabel " << plot::gp(label(0)) << " noenhanced\nset ylabel "
-    << plot::gp(label(1)) << " noenhanced\nset xrange [" << axis_end(0, bounds[0].lower) << ":"
-    << axis_end(0, bounds[0].upper) << "]\nset yrange [" << axis_end(1, bounds[1].lower) << ":"
-    << axis_end(1, bounds[1].upper) << "]\nset key outside top center horizontal\n"
-    << "plot 'landscape.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2")
-    << ":3 with image notitle";
+    << plot::colour_tics(floor_excess, most_excess) << "set cblabel "
+    << plot::gp(metric + " / lowest " + metric + " - 1 (log scale; lower is better)")
+    << " noenhanced\n"
+    // viridis: perceptually uniform and readable with the common colour-vision deficiencies
+    << "set palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', "
+       "1 '#fde725')\nset xlabel "
+    << plot::gp(label(0)) << " noenhanced\nset ylabel " << plot::gp(label(1))
+    << " noenhanced\nset xrange [" << range(0, options.n1) << "]\nset yrange ["
+    << range(1, options.n2) << "]\nset rmargin 14\nset key outside top center horizontal\n"
+    << "plot 'landscape.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2") << ":"
+    << excess << " with image notitle";
   if (!options.history.empty()) {
     if (!fs::is_regular_file(options.history))
       throw InputError(options.history.string(), "", "cannot read the history file");
