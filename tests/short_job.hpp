@@ -1,9 +1,15 @@
 #pragma once
 // A shortened copy of the Table 1 job for fast end-to-end tests: 5 s with the faults at 2 s
 // and 3.5 s, 3 bats × 2 iterations.
+#include <cstdint>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::testing {
 
@@ -35,6 +41,18 @@ inline nlohmann::json short_ensemble_job() {
   j["tuning"]["algorithm"]["population"] = 3;
   j["tuning"]["algorithm"]["iterations"] = 2;
   return j;
+}
+
+inline tune::Job short_job() { return tune::parse_job(short_table1_job(), "short"); }
+
+// A tuning run on `threads` TBB workers.
+inline tune::TuningOutcome tuned(const tune::Job& job, int threads,
+                                 std::optional<std::uint64_t> seed = std::nullopt,
+                                 const tune::RunOptions& base = {}) {
+  tune::TbbEvaluator evaluator(threads);
+  tune::RunOptions o = base;
+  o.seed = seed;
+  return tune::tune(job, evaluator, o);
 }
 
 }  // namespace ftc::testing

@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "ftc/tune/optimizers/optimizer.hpp"
 
@@ -36,12 +38,13 @@ inline double rosenbrock(const Decision& x) {
   return f;
 }
 
-// Counts evaluations and checks every candidate against the bounds.
+// Counts evaluations, records the batch sizes and checks every candidate against the bounds.
 class CheckingEvaluator final : public BatchFitness {
  public:
   CheckingEvaluator(SearchSpace space, double (*f)(const Decision&))
       : space_(std::move(space)), f_(f) {}
   std::vector<double> operator()(const std::vector<Decision>& batch) override {
+    batches.push_back(batch.size());
     std::vector<double> J;
     for (const Decision& x : batch) {
       if (!space_.contains(x)) ++out_of_bounds;
@@ -50,7 +53,8 @@ class CheckingEvaluator final : public BatchFitness {
     }
     return J;
   }
-  int evaluations = 0;
+  std::vector<std::size_t> batches;  // the size of every batch, in order
+  std::int64_t evaluations = 0;
   int out_of_bounds = 0;
 
  private:
@@ -72,6 +76,7 @@ inline OptimizationResult solve(const AlgorithmPtr& c, std::uint64_t seed, const
   auto opt = c->make(seed, s);
   OptimizationResult r = run_optimizer(*opt, ev);
   EXPECT_EQ(ev.out_of_bounds, 0);
+  EXPECT_EQ(r.evaluations, ev.evaluations);
   if (ev_out) *ev_out = ev;
   return r;
 }

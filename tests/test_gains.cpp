@@ -18,19 +18,6 @@ using nlohmann::json;
 using namespace ftc;
 using namespace ftc::testing;
 
-namespace {
-tune::Job short_job() { return tune::parse_job(short_table1_job(), "short"); }
-// A tuning run on `threads` TBB workers.
-tune::TuningOutcome tuned(const tune::Job& job, int threads,
-                          std::optional<std::uint64_t> seed = std::nullopt,
-                          const tune::RunOptions& base = {}) {
-  tune::TbbEvaluator evaluator(threads);
-  tune::RunOptions o = base;
-  o.seed = seed;
-  return tune::tune(job, evaluator, o);
-}
-}  // namespace
-
 TEST(GainsFile, RoundTripAndReproducesTunedMetrics) {
   const tune::TuningOutcome r = tuned(short_job(), 2);
   const json doc = tune::gains_document(r);

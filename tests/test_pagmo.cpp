@@ -16,59 +16,14 @@
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "short_job.hpp"
+#include "test_functions.hpp"
 
 using nlohmann::json;
 using namespace ftc;
 using namespace ftc::tune;
+using namespace ftc::testing;
 
 namespace {
-
-SearchSpace box(std::size_t d, double lo, double hi) {
-  SearchSpace s;
-  for (std::size_t j = 0; j < d; ++j) {
-    s.names.push_back(std::string(1, static_cast<char>('a' + j)));
-    s.lower.push_back(lo);
-    s.upper.push_back(hi);
-  }
-  return s;
-}
-
-double sphere(const Decision& x) {
-  double f = 0;
-  for (double v : x) f += (v - 1.0) * (v - 1.0);  // optimum at (1, …, 1), off-centre on purpose
-  return f;
-}
-
-double rosenbrock(const Decision& x) {
-  double f = 0;
-  for (std::size_t j = 0; j + 1 < x.size(); ++j)
-    f += 100 * std::pow(x[j + 1] - x[j] * x[j], 2) + std::pow(1 - x[j], 2);
-  return f;
-}
-
-// Records every batch (its size) and checks every candidate against the bounds.
-class RecordingFitness final : public BatchFitness {
- public:
-  RecordingFitness(SearchSpace space, double (*f)(const Decision&))
-      : space_(std::move(space)), f_(f) {}
-  std::vector<double> operator()(const std::vector<Decision>& batch) override {
-    batches.push_back(batch.size());
-    std::vector<double> J;
-    for (const Decision& x : batch) {
-      if (!space_.contains(x)) ++out_of_bounds;
-      ++evaluations;
-      J.push_back(1.0 / (1.0 + f_(x)));  // fitness: larger is better, 1 at the optimum
-    }
-    return J;
-  }
-  std::vector<std::size_t> batches;
-  std::int64_t evaluations = 0;
-  int out_of_bounds = 0;
-
- private:
-  SearchSpace space_;
-  double (*f_)(const Decision&);
-};
 
 AlgorithmPtr pagmo(const std::string& name, int population, int generations,
                    const json& settings = json::object()) {
@@ -77,17 +32,6 @@ AlgorithmPtr pagmo(const std::string& name, int population, int generations,
                          {"population", population},
                          {"generations", generations},
                          {"settings", settings}});
-}
-
-OptimizationResult solve(const AlgorithmPtr& a, std::uint64_t seed, const SearchSpace& s,
-                         double (*f)(const Decision&), RecordingFitness* seen = nullptr) {
-  RecordingFitness fitness(s, f);
-  auto opt = a->make(seed, s);
-  OptimizationResult r = run_optimizer(*opt, fitness);
-  EXPECT_EQ(fitness.out_of_bounds, 0);
-  EXPECT_EQ(r.evaluations, fitness.evaluations);
-  if (seen) *seen = fitness;
-  return r;
 }
 
 std::vector<std::string> all_names() {
@@ -163,7 +107,7 @@ TEST(PagmoOptimizer, CmaesAndPsoGenGetCloseOnRosenbrock) {
 TEST(PagmoOptimizer, EveryAlgorithmSpendsTheBudgetItDeclares) {
   for (const std::string& name : all_names()) {
     const AlgorithmPtr a = pagmo(name, population_for(name), 6);
-    RecordingFitness seen(box(3, -5, 5), sphere);
+    CheckingEvaluator seen(box(3, -5, 5), sphere);
     const OptimizationResult r = solve(a, 3, box(3, -5, 5), sphere, &seen);
     // Six generations are too few for any stopping tolerance on this sphere, so the run spends
     // exactly what the settings declare.
@@ -193,13 +137,13 @@ TEST(PagmoOptimizer, StoppingToleranceEndsTheRunEarlyAndCountsWhatItSpent) {
 TEST(PagmoOptimizer, BatchAlgorithmsEvaluateAGenerationInOneBatch) {
   for (const auto& [name, population] :
        std::vector<std::pair<std::string, int>>{{"pso_gen", 8}, {"gaco", 63}}) {
-    RecordingFitness seen(box(2, -5, 5), sphere);
+    CheckingEvaluator seen(box(2, -5, 5), sphere);
     solve(pagmo(name, population, 4), 1, box(2, -5, 5), sphere, &seen);
     EXPECT_EQ(seen.batches, std::vector<std::size_t>(5, population)) << name;
     EXPECT_TRUE(find_pagmo_algorithm(name)->batch);
   }
   // The others ask for one candidate at a time; only their initial population is one batch.
-  RecordingFitness seen(box(2, -5, 5), sphere);
+  CheckingEvaluator seen(box(2, -5, 5), sphere);
   solve(pagmo("cmaes", 8, 4), 1, box(2, -5, 5), sphere, &seen);
   std::vector<std::size_t> expected{8};
   expected.resize(1 + 4 * 8, 1);
@@ -250,7 +194,7 @@ TEST(PagmoOptimizer, ResumeFromSavedStateContinuesExactlyForEveryAlgorithm) {
   for (const std::string& name : all_names()) {
     const AlgorithmPtr a = pagmo(name, population_for(name), 6);
     const SearchSpace s = box(3, -2, 2);
-    RecordingFitness fitness(s, rosenbrock);
+    CheckingEvaluator fitness(s, rosenbrock);
     auto full = a->make(11, s);
     const OptimizationResult uninterrupted = run_optimizer(*full, fitness);
 
@@ -261,7 +205,7 @@ TEST(PagmoOptimizer, ResumeFromSavedStateContinuesExactlyForEveryAlgorithm) {
       return h.iteration < 3;
     });
     const json state = json::parse(saved);
-    RecordingFitness after(s, rosenbrock);
+    CheckingEvaluator after(s, rosenbrock);
     auto second = a->make(999, s);  // the seed must not matter: the state has the run
     const OptimizationResult resumed = run_optimizer(*second, after, {}, &state);
     ASSERT_EQ(resumed.history.size(), uninterrupted.history.size()) << name;
@@ -279,7 +223,7 @@ TEST(PagmoOptimizer, ResumeFromSavedStateContinuesExactlyForEveryAlgorithm) {
 
 TEST(PagmoOptimizer, RejectsCheckpointsOfOtherRunsAndDamagedOnes) {
   const SearchSpace s = box(2, -5, 5);
-  RecordingFitness fitness(s, sphere);
+  CheckingEvaluator fitness(s, sphere);
   const auto state_of = [&](const AlgorithmPtr& a, std::uint64_t seed,
                             const SearchSpace& space = box(2, -5, 5)) {
     auto o = a->make(seed, space);

@@ -19,10 +19,6 @@ using nlohmann::json;
 using namespace ftc;
 using namespace ftc::testing;
 
-namespace {
-tune::Job short_job() { return tune::parse_job(short_table1_job(), "short"); }
-}  // namespace
-
 TEST(TuningProblem, MapsDecisionOntoNamedFields) {
   json j = short_table1_job();
   j["tuning"]["parameters"] = {{"Ki", {0, 50}}, {"c2", {1, 20}}, {"Kp", {1, 50}}};

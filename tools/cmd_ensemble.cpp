@@ -25,13 +25,8 @@ struct EnsembleOptions {
 int run_ensemble(const EnsembleOptions& o, const Globals& g) {
   const tune::Job job = tune::load_job(o.job);
   if (!job.ensemble) throw InputError(o.job, "/ensemble", "the job has no ensemble to expand");
-  if (o.count && (*o.count < 1 || *o.count > tune::kMaxEnsembleCount))
-    throw InputError("--count", "",
-                     "must be between 1 and " + std::to_string(tune::kMaxEnsembleCount) + ", got " +
-                         std::to_string(*o.count));
   const std::uint64_t seed = o.seed.value_or(job.ensemble->seed);
-  const std::int64_t count = o.count.value_or(job.ensemble->count);
-  throw_if_errors("--count " + std::to_string(count), tune::member_name_clashes(job, count));
+  const std::int64_t count = tune::ensemble_count(job, o.count);
   const std::unique_ptr<sim::AnyPlant> plant = sim::make_plant(job.plant);
   json members = json::array();
   int unrecoverable = 0;

@@ -133,7 +133,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   const double wall = std::chrono::duration<double>(clock::now() - t0).count();
 
   if (o.force) clear_previous_run(out);
-  tune::write_outputs(r, out);
+  const std::vector<std::string> written = tune::write_outputs(r, out);
   std::int64_t baseline_simulations = 0;
   if (o.baseline) {
     // Random search with the same budget and seed: what the algorithm buys (Fig. 5).
@@ -150,8 +150,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   }
   json run = tune::run_metadata(r, wall);
   // Every file of the run, and every simulation, the random-search baseline's included.
-  json files = json::array();
-  for (const auto& [name, content] : tune::output_files(r)) files.push_back(name);
+  json files = written;
   if (o.baseline) {
     files.push_back("history-random.csv");
     run["simulations"] = run["simulations"].get<std::int64_t>() + baseline_simulations;

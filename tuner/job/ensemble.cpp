@@ -63,6 +63,16 @@ std::size_t Choice::pick(double u) const {
 
 // --- expansion ---------------------------------------------------------------------------------
 
+std::int64_t ensemble_count(const Job& job, std::optional<std::int64_t> count) {
+  if (count && (*count < 1 || *count > kMaxEnsembleCount))
+    throw InputError("--count", "",
+                     "must be between 1 and " + std::to_string(kMaxEnsembleCount) + ", got " +
+                         std::to_string(*count));
+  const std::int64_t n = count.value_or(job.ensemble->count);
+  throw_if_errors("--count " + std::to_string(n), member_name_clashes(job, n));
+  return n;
+}
+
 const sim::Scenario& ensemble_base(const Job& job) {
   const std::string& base = job.ensemble->base;
   if (base.empty()) return job.scenarios.front();

@@ -303,8 +303,13 @@ json run_metadata(const TuningOutcome& r, double wall_seconds) {
           {"generator", {{"name", kToolName}, {"version", kVersion}}}};
 }
 
-void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir) {
-  for (const auto& [name, content] : output_files(r)) write_file_atomic(dir / name, content);
+std::vector<std::string> write_outputs(const TuningOutcome& r, const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& [name, content] : output_files(r)) {
+    write_file_atomic(dir / name, content);
+    names.push_back(name);
+  }
+  return names;
 }
 
 std::string trajectory_csv(const sim::Trajectory& tr) {

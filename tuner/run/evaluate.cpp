@@ -112,14 +112,9 @@ EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions
   if (!job.ensemble && (options.seed || options.count))
     throw InputError(options.seed ? "--seed" : "--count", "",
                      "the job \"" + job.name + "\" has no ensemble to draw members from");
-  if (options.count && (*options.count < 1 || *options.count > kMaxEnsembleCount))
-    throw InputError("--count", "",
-                     "must be between 1 and " + std::to_string(kMaxEnsembleCount) + ", got " +
-                         std::to_string(*options.count));
   if (job.ensemble) {
     r.seed = options.seed.value_or(job.ensemble->seed + 1);
-    r.count = options.count.value_or(job.ensemble->count);
-    throw_if_errors("--count " + std::to_string(r.count), member_name_clashes(job, r.count));
+    r.count = ensemble_count(job, options.count);
   }
 
   // The controllers: the compare list, the job's own, then every gains file.

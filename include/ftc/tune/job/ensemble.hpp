@@ -93,6 +93,11 @@ std::vector<sim::Scenario> expand_ensemble(const Job& job,
 // `<base>-<k>`), as errors at their paths.
 std::vector<FieldError> member_name_clashes(const Job& job, std::int64_t count);
 
+// The member count a command asked for (`--count`), or the ensemble's own: throws InputError
+// (source "--count") when it is outside 1..kMaxEnsembleCount or would give a member the name of
+// a listed scenario. The job must have an ensemble.
+std::int64_t ensemble_count(const Job& job, std::optional<std::int64_t> count);
+
 // The base scenario of the job's ensemble.
 const sim::Scenario& ensemble_base(const Job& job);
 

@@ -46,7 +46,7 @@ std::map<std::string, std::string> output_files(const TuningOutcome& r);
 // simulations, peak memory of the process, seed, generator. Callers add where and when.
 nlohmann::json run_metadata(const TuningOutcome& r, double wall_seconds);
 
-// Writes output_files() into `dir`, each atomically.
-void write_outputs(const TuningOutcome& r, const std::filesystem::path& dir);
+// Writes output_files() into `dir`, each atomically; returns their names.
+std::vector<std::string> write_outputs(const TuningOutcome& r, const std::filesystem::path& dir);
 
 }  // namespace ftc::tune
