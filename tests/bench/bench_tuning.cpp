@@ -86,7 +86,7 @@ BENCHMARK(BM_TuneScaling)
 
 // Writing a recorded trajectory as CSV: 30 000 rows of the spacecraft (t, 6 states, 4 + 4
 // actuator values), as `simulate --record-every 0.001` writes. The printf version is the one
-// trajectory_csv replaced, kept here as the yardstick.
+// trajectory_csv replaced, kept here as the yardstick (io/decimal.cpp prints the same bytes).
 ftc::sim::Trajectory sample_trajectory() {
   ftc::sim::Trajectory tr;
   tr.axes = 3;
