@@ -8,6 +8,7 @@
 #include "ftc/tune/report/report.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
+#include "report/gnuplot.hpp"
 #include "short_job.hpp"
 
 using nlohmann::json;
@@ -185,7 +186,8 @@ TEST(Cli, RunWithReportAndRandomBaseline) {
 
 // The figures read the trajectory's columns by the plant's shape: for the two-joint,
 // three-actuator arm, positions are columns 2-3, rates 4-5, commands 6-8 and applied outputs 9-11
-// (the spacecraft's 3 + 3 + 4 + 4 layout read them wrongly before).
+// (the spacecraft's 3 + 3 + 4 + 4 layout read them wrongly before). The script's data blocks
+// start with the first sample of the column each curve draws.
 TEST(Report, FiguresFollowThePlantsShape) {
   const auto dir = fresh_dir("report-arm");
   std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/manipulator.json");
@@ -199,15 +201,194 @@ TEST(Report, FiguresFollowThePlantsShape) {
   const tune::ReportResult r = tune::render_report(dir / "run", {.html = false});
   ASSERT_EQ(r.figures.size(), 5u);
   const std::string gp = slurp(dir / "run" / "figures" / "report.gp");
-  for (const char* col : {"using 1:2 ", "using 1:3 ", "using 1:4 ", "using 1:5 ", "using 1:6 ",
-                          "using 1:8 ", "using 1:9 ", "using 1:11 "})
-    EXPECT_NE(gp.find(col), std::string::npos) << col;
-  for (const char* col : {"using 1:12 ", "using 1:13 ", "using 1:14 ", "using 1:15 "})
-    EXPECT_EQ(gp.find(col), std::string::npos) << col;           // the spacecraft's columns
-  EXPECT_NE(gp.find("sqrt($2**2 + $3**2)"), std::string::npos);  // ‖X1‖ of two joints
+  const json comparison = json::parse(slurp(dir / "run" / "comparison.json"));
+  const std::string csv = slurp(
+      dir / "run" / comparison["controllers"][0]["scenarios"][0]["trajectory"].get<std::string>());
+  ASSERT_EQ(csv.substr(0, csv.find('\n')), "time,x1,x2,x3,x4,ud1,ud2,ud3,u1,u2,u3");
+  std::vector<std::string> first_row;
+  std::stringstream row(
+      csv.substr(csv.find('\n') + 1, csv.find('\n', csv.find('\n') + 1) - csv.find('\n') - 1));
+  for (std::string cell; std::getline(row, cell, ',');) first_row.push_back(cell);
+  ASSERT_EQ(first_row.size(), 11u);
+  // Blocks in drawing order: per position panel, each controller's curve then its markers
+  // (the tuned one's distances next); the first curve is controller 0's x1, the first curve
+  // after the position and rate figures its ud1.
+  const auto block = [&](int k) {
+    const std::string head = "$c" + std::to_string(k) + " << EOD\n";
+    const std::size_t at = gp.find(head);
+    return at == std::string::npos
+               ? std::string()
+               : gp.substr(at + head.size(), gp.find('\n', at + head.size()) - at - head.size());
+  };
+  EXPECT_EQ(block(1), "0," + first_row[1]);  // x1
+  const std::size_t fig6 = gp.find("fig6-inputs");
+  ASSERT_NE(fig6, std::string::npos);
+  const std::size_t first_u = gp.find("$c", gp.find("plot ", fig6));
+  const int k = std::stoi(gp.substr(first_u + 2));
+  EXPECT_EQ(block(k), "0," + first_row[5]);  // ud1
   EXPECT_NE(gp.find("q2 x_2 [rad]"), std::string::npos);
   EXPECT_NE(gp.find("'u_{d3}'"), std::string::npos);
   EXPECT_EQ(gp.find("'u_{d4}'"), std::string::npos);
+}
+
+namespace {
+
+// A finished run of the paper's job at its full 30 s (3 000 samples per trajectory) with a
+// token search, and its SVG figures.
+std::filesystem::path full_length_run(const std::string& name) {
+  const auto dir = fresh_dir(name);
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/table1.json");
+  nlohmann::json j = nlohmann::json::parse(in);
+  j["tuning"]["algorithm"]["population"] = 4;
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  tune::TbbEvaluator evaluator(2);
+  tune::write_outputs(tune::tune(tune::parse_job(j, "table1"), evaluator), dir / "run");
+  tune::render_report(dir / "run", {.html = false, .format = tune::FigureFormat::svg});
+  return dir / "run";
+}
+
+// The text of one figure's part of report.gp.
+std::string figure_script(const std::string& gp, const std::string& figure) {
+  const std::size_t at = gp.find("set output 'figures/" + figure);
+  if (at == std::string::npos) return "";
+  const std::size_t end = gp.find("set output", at + 1);
+  return gp.substr(at, end == std::string::npos ? std::string::npos : end - at);
+}
+
+std::vector<double> column(const std::string& csv, int col) {
+  std::vector<double> v;
+  std::stringstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::stringstream cells(line);
+    std::string cell;
+    for (int c = 0; c <= col; ++c) std::getline(cells, cell, ',');
+    v.push_back(std::stod(cell));
+  }
+  return v;
+}
+
+}  // namespace
+
+// SVGs carry what the eye can see: the 30 s run's fig6 was 1.2 MB with every sample.
+TEST(Report, SvgFiguresAreDecimatedToWhatTheEyeCanSee) {
+  const auto run = full_length_run("report-decimated");
+  EXPECT_LE(std::filesystem::file_size(run / "figures" / "fig6-inputs.svg"), 200u * 1024);
+  for (const char* name : kFigures)
+    EXPECT_LE(std::filesystem::file_size(run / "figures" / (std::string(name) + ".svg")),
+              400u * 1024)
+        << name;
+  // Nothing a reader would see is lost: every curve keeps its extremes. The chattering
+  // NFTSMC's first command, a dense band after the first fault, is the hard case.
+  const std::string gp = slurp(run / "figures" / "report.gp");
+  const json comparison = json::parse(slurp(run / "comparison.json"));
+  const std::string csv =
+      slurp(run / comparison["controllers"][0]["scenarios"][0]["trajectory"].get<std::string>());
+  const std::vector<double> ud1 = column(csv, 7);
+  ASSERT_EQ(ud1.size(), 3000u);
+  const std::string fig6 = figure_script(gp, "fig6-inputs");
+  const std::size_t first_u = fig6.find("$c", fig6.find("plot "));
+  const std::string name = fig6.substr(first_u, fig6.find(' ', first_u) - first_u);
+  const std::size_t at = gp.find(name + " << EOD\n");
+  ASSERT_NE(at, std::string::npos) << name;
+  const std::string data = gp.substr(at, gp.find("EOD\n", at + name.size() + 8) - at);
+  const int points = count_lines(data) - 1;
+  EXPECT_LT(points, 1200);  // of 3 000 samples
+  EXPECT_GT(points, 100);   // the band is there
+  for (double extreme :
+       {*std::min_element(ud1.begin(), ud1.end()), *std::max_element(ud1.begin(), ud1.end())}) {
+    char text[40];
+    std::snprintf(text, sizeof text, ",%.9g\n", extreme);
+    EXPECT_NE(data.find(text), std::string::npos) << "extreme " << text;
+  }
+}
+
+// One palette everywhere (viridis, perceptually uniform and colour-blind safe), and curves told
+// apart by dash and marker as well as colour; the actuator panels share one y scale; the
+// convergence plot shows relative improvement; the state figures have panels of differences.
+TEST(Report, FiguresReadWellInGreyAndForColourBlindReaders) {
+  const auto run = full_length_run("report-styles");
+  const std::string gp = slurp(run / "figures" / "report.gp");
+  std::vector<std::string> viridis;
+  for (int i = 0; i <= 1000; ++i) viridis.push_back(tune::plot::viridis(i / 1000.0));
+  const auto near_viridis = [&](const std::string& hex) {
+    const auto rgb = [](const std::string& h, int c) {
+      return std::stoi(h.substr(1 + 2 * c, 2), nullptr, 16);
+    };
+    for (const std::string& v : viridis) {
+      int d = 0;
+      for (int c = 0; c < 3; ++c) d += std::abs(rgb(hex, c) - rgb(v, c));
+      if (d <= 3) return true;
+    }
+    return false;
+  };
+  std::set<std::string> styles;
+  std::size_t at = 0;
+  int lines = 0;
+  while ((at = gp.find("set style line ", at)) != std::string::npos) {
+    const std::string line = gp.substr(at, gp.find('\n', at) - at);
+    ++at;
+    const std::size_t hash = line.find("'#");
+    ASSERT_NE(hash, std::string::npos) << line;
+    EXPECT_TRUE(near_viridis(line.substr(hash + 1, 7))) << line;
+    EXPECT_NE(line.find(" dt "), std::string::npos) << line;
+    EXPECT_NE(line.find(" pt "), std::string::npos) << line;
+    styles.insert(line.substr(line.find(" lc ")));
+    ++lines;
+  }
+  EXPECT_GE(lines, 4);
+  // Four controllers, four actuators: four distinct (colour, dash, marker) styles.
+  EXPECT_EQ(styles.size(), 4u);
+
+  // fig6: one y range for every panel, and it holds every plotted value.
+  const std::string fig6 = figure_script(gp, "fig6-inputs");
+  ASSERT_FALSE(fig6.empty());
+  const std::size_t yr = fig6.find("set yrange [");
+  ASSERT_NE(yr, std::string::npos);
+  EXPECT_EQ(fig6.find("set yrange", yr + 1), std::string::npos);
+  const double lo = std::stod(fig6.substr(yr + 12)),
+               hi = std::stod(fig6.substr(fig6.find(':', yr) + 1));
+  const json comparison = json::parse(slurp(run / "comparison.json"));
+  for (const json& c : comparison["controllers"]) {
+    const std::string csv = slurp(run / c["scenarios"][0]["trajectory"].get<std::string>());
+    for (int col = 7; col <= 14; ++col)
+      for (double u : column(csv, col)) {
+        ASSERT_GE(u, lo) << c["label"] << " column " << col;
+        ASSERT_LE(u, hi) << c["label"] << " column " << col;
+      }
+  }
+
+  // fig5 in % below the job's own controller.
+  const json gains = json::parse(slurp(run / "gains.json"));
+  char ref[64];
+  std::snprintf(ref, sizeof ref, "100*(1 - %.9g/$2)", gains["baseline"]["fitness"].get<double>());
+  EXPECT_NE(figure_script(gp, "fig5-fitness").find(ref), std::string::npos) << ref;
+
+  // fig3: beside each angle, the distance of the three others from the tuned controller.
+  const std::string fig3 = figure_script(gp, "fig3-attitude");
+  for (const char* label : {"|x_1 − x_1^{tuned}|", "|x_2 − x_2^{tuned}|", "|x_3 − x_3^{tuned}|"})
+    EXPECT_NE(fig3.find(label), std::string::npos) << label;
+  EXPECT_NE(fig3.find("keyentry with linespoints ls 1 title 'optimal PI-FOSMC'"),
+            std::string::npos);
+}
+
+TEST(Report, PageShowsSettingsAsATableAndTheLandscape) {
+  const auto run = finished_run("report-page");
+  tune::LandscapeOptions o;
+  o.n1 = o.n2 = 3;
+  tune::TbbEvaluator evaluator(2);
+  tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "landscape", o,
+                          evaluator);
+  const std::string html = slurp(tune::render_report(run).html);
+  EXPECT_NE(html.find("<h2>Landscape</h2>"), std::string::npos);
+  std::size_t images = 0;
+  for (std::size_t p = 0; (p = html.find("data:image/png;base64,", p)) != std::string::npos; ++p)
+    ++images;
+  EXPECT_EQ(images, 6u);
+  for (const char* row : {"<tr><td>controller.Kp</td><td>", "<tr><td>plant.inertia</td><td>[",
+                          "<tr><td>scenarios[0].faults[0].actuator</td><td>1</td></tr>"})
+    EXPECT_NE(html.find(row), std::string::npos) << row;
 }
 
 TEST(Report, LandscapeOfALogScaleParameterIsEvenInItsLogarithm) {

@@ -15,10 +15,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Okabe-Ito: told apart by readers with any common colour-vision deficiency; dashes as well.
-constexpr const char* kColours[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
-                                    "#E69F00", "#56B4E9", "#000000", "#F0E442"};
-constexpr int kColourCount = sizeof kColours / sizeof kColours[0];
 // An ECDF of more points than this is thinned: the eye cannot see them and the script grows.
 constexpr std::size_t kMaxCdfPoints = 2000;
 
@@ -28,8 +24,8 @@ fs::path draw_evaluation(const EvaluationResult& r, const fs::path& dir, FigureF
   const bool include = r.job.ensemble && r.job.ensemble->unrecoverable == Unrecoverable::include;
   const fs::path figure = dir / (std::string("evaluation") + plot::extension(format));
   std::ostringstream g;
-  g << plot::kStyles << plot::terminal(format, 1300, 560) << "set output "
-    << plot::gp(figure.filename().string()) << "\n";
+  g << plot::styles(static_cast<int>(r.controllers.size())) << plot::terminal(format, 1300, 560)
+    << "set output " << plot::gp(figure.filename().string()) << "\n";
   std::vector<std::size_t> finite_counts, diverged_counts, zero_counts;
   for (std::size_t c = 0; c < r.controllers.size(); ++c) {
     std::vector<double> v;
@@ -73,8 +69,8 @@ fs::path draw_evaluation(const EvaluationResult& r, const fs::path& dir, FigureF
     std::string title = r.controllers[c].label;
     if (diverged_counts[c] > 0) title += " (" + std::to_string(diverged_counts[c]) + " diverged)";
     if (zero_counts[c] > 0) title += " (" + std::to_string(zero_counts[c]) + " at 0, not drawn)";
-    g << (c ? ", \\\n     " : "") << "$cdf" << c << " using 1:2 with steps lw 2 lc rgb '"
-      << kColours[c % kColourCount] << "' dt " << c % 5 + 1 << " title " << plot::gp(title);
+    g << (c ? ", \\\n     " : "") << "$cdf" << c << " using 1:2 with steps ls " << c + 1
+      << " lw 2 title " << plot::gp(title);
   }
   g << "\nunset logscale x\nset format x '%g'\nset rmargin 10\nunset xlabel\nset ylabel "
     << plot::gp(what) << "\nset logscale y\nset format y '%.2g'\nset autoscale y\nset xrange [-0.6:"
@@ -87,8 +83,8 @@ fs::path draw_evaluation(const EvaluationResult& r, const fs::path& dir, FigureF
   bool any = false;
   for (std::size_t c = 0; c < r.controllers.size(); ++c) {
     if (finite_counts[c] == 0) continue;
-    g << (any ? ", \\\n     " : "") << "$box" << c << " using (" << c << "):1 lc rgb '"
-      << kColours[c % kColourCount] << "' ps 0.4";
+    g << (any ? ", \\\n     " : "") << "$box" << c << " using (" << c << "):1 ls " << c + 1
+      << " ps 0.4";
     any = true;
   }
   if (!any) g << "NaN notitle";

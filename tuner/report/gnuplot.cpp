@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -76,28 +77,55 @@ std::string onset_marks(const std::vector<double>& onsets, bool labels) {
   return s;
 }
 
-std::string series_plot(const std::vector<Series>& series, const std::string& using_expr,
-                        bool titles) {
-  std::string s = "plot ";
-  for (std::size_t i = 0; i < series.size(); ++i) {
-    if (i) s += ", \\\n     ";
-    s += gp(series[i].file) + " skip 1 using " + using_expr + " with lines ls " +
-         std::to_string(i + 1) + " lw 1.4" +
-         (titles ? " title " + gp(series[i].label) : " notitle");
-  }
-  return s + "\n";
+namespace {
+// viridis (matplotlib's default map) at five stops; between them, linear in sRGB.
+constexpr unsigned char kViridis[5][3] = {{0x44, 0x01, 0x54},
+                                          {0x3b, 0x52, 0x8b},
+                                          {0x21, 0x91, 0x8c},
+                                          {0x5e, 0xc9, 0x62},
+                                          {0xfd, 0xe7, 0x25}};
+// Dash types and filled markers, in the order series take them.
+constexpr int kDashes[] = {1, 2, 4, 5, 3};
+constexpr int kMarkers[] = {7, 5, 9, 13, 11, 3};
+}  // namespace
+
+std::string viridis(double t) {
+  t = std::clamp(t, 0.0, 1.0) * 4;
+  const int i = std::min(3, static_cast<int>(t));
+  const double f = t - i;
+  char buf[8];
+  int rgb[3];
+  for (int c = 0; c < 3; ++c)
+    rgb[c] =
+        static_cast<int>(std::lround(kViridis[i][c] + f * (kViridis[i + 1][c] - kViridis[i][c])));
+  std::snprintf(buf, sizeof buf, "#%02x%02x%02x", rgb[0], rgb[1], rgb[2]);
+  return buf;
 }
 
-const char* const kStyles =
-    "set datafile separator ','\n"
-    "set style line 1 lc rgb '#d62728'\n"
-    "set style line 2 lc rgb '#1f77b4'\n"
-    "set style line 3 lc rgb '#2ca02c'\n"
-    "set style line 4 lc rgb '#9467bd'\n"
-    "set style line 5 lc rgb '#ff7f0e'\n"
-    "set style line 6 lc rgb '#8c564b'\n"
-    "set grid lc rgb '#dddddd'\n"
-    "set key outside right top vertical box opaque\n";
+std::string palette() {
+  std::string s = "set palette defined (";
+  for (int i = 0; i < 5; ++i)
+    s += (i ? ", " : "") + detail::format_number(i / 4.0, "%g") + " '" + viridis(i / 4.0) + "'";
+  return s + ")\n";
+}
+
+std::string line_styles(int count) {
+  std::string s;
+  for (int i = 0; i < count; ++i) {
+    // From the dark end to 0.85: the yellow end vanishes on white paper.
+    const double t = count > 1 ? 0.85 * i / (count - 1) : 0.0;
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "set style line %d lc rgb '%s' dt %d pt %d lw 1.6 ps 0.9\n",
+                  i + 1, viridis(t).c_str(), kDashes[i % 5], kMarkers[i % 6]);
+    s += buf;
+  }
+  return s;
+}
+
+std::string styles(int count) {
+  return "set datafile separator ','\n" + line_styles(count) +
+         "set grid lc rgb '#dddddd'\nset key outside right top vertical box opaque\n";
+}
 
 }  // namespace plot
 

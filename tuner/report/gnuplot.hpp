@@ -15,18 +15,24 @@ const char* extension(FigureFormat f);
 // Colour-bar tics for a log scale over [lo, hi].
 std::string colour_tics(double lo, double hi);
 
+// viridis at t in [0, 1] as '#rrggbb': perceptually uniform, readable in grey and with the
+// common colour-vision deficiencies. Every figure takes its colours from it.
+std::string viridis(double t);
+// `set palette` for colour maps (landscapes).
+std::string palette();
+// Line styles 1..count: viridis colours from dark to light, each with its own dash type and
+// marker, so curves stay apart in print, in grey and for colour-blind readers.
+std::string line_styles(int count);
+// What every script starts with: CSV data, line styles 1..count, grid and key.
+std::string styles(int count = 6);
+
 struct Series {
   std::string label;
-  std::string file;  // relative to the directory the script runs in
+  std::string file;    // relative to the directory the script runs in
+  bool tuned = false;  // the controller the run tuned: the others are compared with it
 };
 
 // Vertical dashed lines at the fault onsets, optionally labelled.
 std::string onset_marks(const std::vector<double>& onsets, bool labels = true);
-// One line per series of the CSV columns `using_expr`.
-std::string series_plot(const std::vector<Series>& series, const std::string& using_expr,
-                        bool titles);
-
-// Line styles, grid and key every script starts with.
-extern const char* const kStyles;
 
 }  // namespace ftc::tune::plot

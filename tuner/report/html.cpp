@@ -56,6 +56,33 @@ std::string figure_bytes(const fs::path& file) {
   return *bytes;
 }
 
+// The settings of a job as rows of (path, value): objects open into dotted paths, lists of
+// objects into indexed ones, and a list of plain values stays on one row.
+void settings_rows(const nlohmann::ordered_json& j, const std::string& path,
+                   std::ostringstream& h) {
+  const auto scalar_list = [](const nlohmann::ordered_json& a) {
+    for (const auto& e : a)
+      if (e.is_structured()) return false;
+    return true;
+  };
+  if (j.is_object() && !j.empty()) {
+    for (auto it = j.begin(); it != j.end(); ++it)
+      settings_rows(it.value(), path.empty() ? it.key() : path + "." + it.key(), h);
+  } else if (j.is_array() && !j.empty() && !scalar_list(j)) {
+    for (std::size_t i = 0; i < j.size(); ++i)
+      settings_rows(j[i], path + "[" + std::to_string(i) + "]", h);
+  } else {
+    std::string value;
+    if (j.is_array()) {
+      for (const auto& e : j) value += (value.empty() ? "" : ", ") + e.dump();
+      value = "[" + value + "]";
+    } else {
+      value = j.is_string() ? j.get<std::string>() : j.dump();
+    }
+    h << "<tr><td>" << html_escape(path) << "</td><td>" << html_escape(value) << "</td></tr>\n";
+  }
+}
+
 }  // namespace
 
 std::string report_html(const fs::path& run_dir, const Job& job, const std::string& job_text,
@@ -71,6 +98,7 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
        "color:#222}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid "
        "#ccc;padding:4px 8px;"
        "text-align:right}th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}"
+       ".settings td{text-align:left;font-family:monospace}"
        "img{max-width:100%;border:1px solid #eee}pre{background:#f7f7f7;padding:1em;overflow:auto}"
        "figcaption{color:#555;margin-bottom:2em}</style></head><body>\n";
   h << "<h1>" << html_escape(title) << "</h1>\n";
@@ -138,6 +166,22 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
       << base64(figure_bytes(run_dir / f.file)) << "\"><figcaption>" << html_escape(f.caption)
       << "</figcaption></figure>\n";
 
+  // A landscape drawn into the run directory (`ftctune landscape`'s default place).
+  for (const char* ext : {".png", ".svg"}) {
+    const fs::path file = run_dir / "landscape" / (std::string("landscape") + ext);
+    if (!fs::is_regular_file(file)) continue;
+    const std::optional<std::string> bytes = read_file(file);
+    if (!bytes) continue;
+    h << "<h2>Landscape</h2>\n<figure><img alt=\"objective landscape\" src=\"data:image/"
+      << (ext == std::string(".png") ? "png" : "svg+xml") << ";base64," << base64(*bytes)
+      << "\"><figcaption>The objective over a grid of two tuned parameters, from "
+         "<code>ftctune landscape</code> (landscape/landscape"
+      << ext
+      << "). It shows whether the optimum is a basin or a ridge and "
+         "whether the search bounds cut it off.</figcaption></figure>\n";
+    break;
+  }
+
   h << "<h2>Run</h2>\n<table>\n";
   for (auto it = run.begin(); it != run.end(); ++it)
     h << "<tr><td>" << html_escape(it.key()) << "</td><td>"
@@ -147,7 +191,11 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
     << "</td></tr>\n"
     << "<tr><td>generator</td><td>" << html_escape(gains["generator"].dump())
     << "</td></tr>\n</table>\n";
-  h << "<h2>Job</h2>\n<pre>" << html_escape(job_text) << "</pre>\n</body></html>\n";
+  h << "<h2>Job</h2>\n<table class=\"settings\"><tr><th>setting</th><th>value</th></tr>\n";
+  // In the file's order, which is the order the user wrote (or the loader resolved) them in.
+  settings_rows(nlohmann::ordered_json::parse(job_text, nullptr, false), "", h);
+  h << "</table>\n<details><summary>job.json as written</summary><pre>" << html_escape(job_text)
+    << "</pre></details>\n</body></html>\n";
   return h.str();
 }
 

@@ -136,7 +136,7 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
                              detail::format_number(floor_excess, "%.17g") + " ? ($3/" + best_text +
                              " - 1) : " + detail::format_number(floor_excess, "%.17g") + ")";
   std::ostringstream g;
-  g << plot::kStyles << plot::terminal(options.format, 1000, 800) << "set output "
+  g << plot::styles() << plot::terminal(options.format, 1000, 800) << "set output "
     << plot::gp(r.figure.filename().string()) << "\nset title "
     << plot::gp("Objective (" + metric + ") of " + job.name + " over " + params[0] + " and " +
                 params[1] + ": lowest " + detail::format_number(r.best_objective, "%.7g"))
@@ -144,12 +144,10 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
     << plot::colour_tics(floor_excess, most_excess) << "set cblabel "
     << plot::gp(metric + " / lowest " + metric + " - 1 (log scale; lower is better)")
     << " noenhanced\n"
-    // viridis: perceptually uniform and readable with the common colour-vision deficiencies
-    << "set palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', "
-       "1 '#fde725')\nset xlabel "
-    << plot::gp(label(0)) << " noenhanced\nset ylabel " << plot::gp(label(1))
-    << " noenhanced\nset xrange [" << range(0, options.n1) << "]\nset yrange ["
-    << range(1, options.n2) << "]\nset rmargin 14\nset key outside top center horizontal\n"
+    << plot::palette() << "set xlabel " << plot::gp(label(0)) << " noenhanced\nset ylabel "
+    << plot::gp(label(1)) << " noenhanced\nset xrange [" << range(0, options.n1)
+    << "]\nset yrange [" << range(1, options.n2)
+    << "]\nset rmargin 14\nset key outside top center horizontal\n"
     << "plot 'landscape.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2") << ":"
     << excess << " with image notitle";
   if (!options.history.empty()) {

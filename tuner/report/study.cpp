@@ -26,8 +26,9 @@ fs::path draw_study(const fs::path& dir, const std::string& title,
   const bool log_scale = hi >= 10 * lo;
   const fs::path figure = dir / (std::string("study") + plot::extension(format));
   std::ostringstream g;
-  g << plot::kStyles << plot::terminal(format, 1000, 600) << "set output " << plot::gp(figure.filename().string())
-    << "\nset title " << plot::gp(title) << " font ',13'\nset ylabel " << plot::gp(objective_label) << "\n"
+  g << plot::styles() << plot::terminal(format, 1000, 600) << "set output "
+    << plot::gp(figure.filename().string()) << "\nset title " << plot::gp(title)
+    << " font ',13'\nset ylabel " << plot::gp(objective_label) << "\n"
     << (log_scale ? "set logscale y\nset format y '%.3g'\n" : "set format y '%.6g'\n")
     << "set xrange [-0.6:" << series.size() - 0.4 << "]\nset xtics noenhanced rotate by -30 left (";
   for (std::size_t i = 0; i < series.size(); ++i)
@@ -57,9 +58,11 @@ fs::path draw_study(const fs::path& dir, const std::string& title,
     if (!std::isfinite(m)) continue;
     g << static_cast<double>(i) - 0.35 << "," << detail::format_number(m, "%.17g") << ",0.7,0\n";
   }
-  g << "EOD\nplot $runs using 1:2 with points pt 7 ps 1.1 lc rgb '#1f77b4' title 'best "
+  g << "EOD\nplot $runs using 1:2 with points pt 7 ps 1.1 lc rgb '" << plot::viridis(0.45)
+    << "' title 'best "
        "objective of one run (one point per seed)', \\\n"
-    << "     $medians using 1:2:3:4 with vectors nohead lw 3 lc rgb '#d62728' title 'median'\n";
+    << "     $medians using 1:2:3:4 with vectors nohead lw 3 lc rgb '" << plot::viridis(0)
+    << "' title 'median'\n";
   write_file_atomic(dir / "study.gp", g.str());
   run_gnuplot(dir, "study.gp");
   return figure;
