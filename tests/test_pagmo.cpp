@@ -377,8 +377,8 @@ TEST(PagmoTuning, ResumedRunGivesTheSameGainsFile) {
   const std::string uninterrupted = gains(job, 2);
   std::string checkpoint;
   RunOptions stop;
-  stop.observer = [&](const HistoryRow& h, const Optimizer& o) {
-    checkpoint = o.state().dump();
+  stop.observer = [&](const HistoryRow& h, const Optimizer& o, const std::vector<Trial>& trials) {
+    checkpoint = run_checkpoint(o, trials).dump();
     return h.iteration < 1;
   };
   TbbEvaluator one(1);

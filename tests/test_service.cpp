@@ -48,11 +48,12 @@ json long_job(const std::string& name = "long") {
   return j;
 }
 
-std::string expected_gains(const json& job) {
+// A file of the uninterrupted run of `job`, as `ftctune run` writes it.
+std::string expected_file(const json& job, const std::string& name) {
   tune::TbbEvaluator evaluator(2);
-  return tune::output_files(tune::tune(tune::parse_job(job, "expected"), evaluator))
-      .at("gains.json");
+  return tune::output_files(tune::tune(tune::parse_job(job, "expected"), evaluator)).at(name);
 }
+std::string expected_gains(const json& job) { return expected_file(job, "gains.json"); }
 
 struct Service {
   explicit Service(tune::ServiceOptions o = {}) : dir(fresh_dir("service")) {
@@ -392,6 +393,9 @@ TEST(Service, RecoversFromSigkillWithoutLosingOrRepeatingJobs) {
     EXPECT_EQ(c.Get(("/v1/jobs/" + ids[k] + "/gains").c_str())->body, expected_gains(jobs[k]))
         << "job " << k;
   }
+  // The resumed job's trials table holds the trials from before the kill too.
+  EXPECT_EQ(c.Get(("/v1/jobs/" + killed + "/trials").c_str())->body,
+            expected_file(jobs[0], "trials.csv"));
   EXPECT_EQ(json::parse(c.Get("/v1/jobs")->body)["total"], 3);
 }
 

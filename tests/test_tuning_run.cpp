@@ -154,13 +154,15 @@ TEST(Cli, RunWithoutTuningSectionExitsTwo) {
   EXPECT_NE(r.err.find("/tuning: is required by ftctune run"), std::string::npos) << r.err;
 }
 
-TEST(TuningRun, ResumedRunGivesTheSameGainsFile) {
+TEST(TuningRun, ResumedRunGivesTheSameGainsFileAndTrials) {
   const tune::Job job = short_job();
-  const std::string uninterrupted = tune::gains_document(tuned(job, 2)).dump();
+  const tune::TuningOutcome whole = tuned(job, 2);
+  const std::string uninterrupted = tune::gains_document(whole).dump();
   std::string checkpoint;
   tune::RunOptions stop;
-  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o) {
-    checkpoint = o.state().dump();
+  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
+                      const std::vector<tune::Trial>& trials) {
+    checkpoint = tune::run_checkpoint(o, trials).dump();
     return h.iteration < 1;
   };
   const tune::TuningOutcome partial = tuned(job, 1, std::nullopt, stop);
@@ -169,7 +171,29 @@ TEST(TuningRun, ResumedRunGivesTheSameGainsFile) {
   const json state = json::parse(checkpoint);
   tune::RunOptions resume;
   resume.resume = &state;
-  EXPECT_EQ(tune::gains_document(tuned(job, 2, std::nullopt, resume)).dump(), uninterrupted);
+  const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
+  EXPECT_EQ(tune::gains_document(resumed).dump(), uninterrupted);
+  // Every trial, those before the checkpoint included, with "best so far" counted across it.
+  EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+  EXPECT_GT(whole.trials.size(), partial.trials.size());
+
+  // A bare optimiser state (what service stores written before trials were kept) still resumes,
+  // with the trials since the resume.
+  const json bare = state["optimizer"];
+  resume.resume = &bare;
+  const tune::TuningOutcome from_bare = tuned(job, 2, std::nullopt, resume);
+  EXPECT_EQ(tune::gains_document(from_bare).dump(), uninterrupted);
+  EXPECT_EQ(from_bare.trials.size(), whole.trials.size() - partial.trials.size());
+
+  json broken = state;
+  broken["trials"][0] = "not a trial";
+  resume.resume = &broken;
+  try {
+    tuned(job, 2, std::nullopt, resume);
+    ADD_FAILURE() << "a damaged checkpoint resumed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/trials"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Cli, EnsembleRunGivesTheSameGainsFileOnOneAndTwoThreads) {

@@ -112,7 +112,8 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   tune::TbbEvaluator evaluator(o.threads);
   tune::RunOptions ro;
   ro.seed = o.seed;
-  ro.observer = [&](const tune::HistoryRow& h, const tune::Optimizer&) {
+  ro.observer = [&](const tune::HistoryRow& h, const tune::Optimizer&,
+                    const std::vector<tune::Trial>&) {
     const double elapsed = std::chrono::duration<double>(clock::now() - t0).count();
     const double eta = h.evaluations > 0 ? elapsed * static_cast<double>(total - h.evaluations) /
                                                static_cast<double>(h.evaluations)

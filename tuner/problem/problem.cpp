@@ -259,4 +259,9 @@ std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batc
   return J;
 }
 
+void ProblemFitness::resume_trials(std::vector<Trial> before) {
+  trials_ = std::move(before);
+  for (const Trial& t : trials_) best_ = std::max(best_, t.fitness);
+}
+
 }  // namespace ftc::tune

@@ -6,6 +6,7 @@
 #include <limits>
 #include <span>
 
+#include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/tune/io/sha256.hpp"
 
@@ -26,6 +27,56 @@ std::string display_name(sim::ControllerType t) {
 }
 
 std::string canonical_job_sha256(const Job& job) { return sha256_hex(to_json(job).dump()); }
+
+namespace {
+
+// A trial as a compact row: [iteration, index, [parameters], objective, fitness, diverged,
+// [objective per scenario], accepted]; a diverged objective (inf) is null.
+nlohmann::json trial_json(const Trial& t) {
+  nlohmann::json scen = nlohmann::json::array();
+  for (double v : t.scenario_objectives) scen.push_back(json_io::json_number(v));
+  return nlohmann::json::array({t.iteration, t.index, t.parameters,
+                                json_io::json_number(t.objective), t.fitness, t.diverged, scen,
+                                t.accepted});
+}
+
+std::vector<Trial> trials_from_json(const nlohmann::json& rows) {
+  const auto bad = [] {
+    return InputError("checkpoint", "/trials", "is not a list of trials written by ftctune");
+  };
+  if (!rows.is_array()) throw bad();
+  std::vector<Trial> out;
+  for (const nlohmann::json& r : rows) {
+    if (!r.is_array() || r.size() != 8 || !r[0].is_number_integer() || !r[1].is_number_integer() ||
+        !r[2].is_array() || !r[4].is_number() || !r[5].is_number_integer() || !r[6].is_array() ||
+        !r[7].is_boolean())
+      throw bad();
+    Trial t;
+    t.iteration = r[0].get<int>();
+    t.index = r[1].get<int>();
+    for (const nlohmann::json& p : r[2]) {
+      if (!p.is_number()) throw bad();
+      t.parameters.push_back(p.get<double>());
+    }
+    t.objective = json_io::json_number_or(r[3], std::numeric_limits<double>::infinity());
+    t.fitness = r[4].get<double>();
+    t.diverged = r[5].get<int>();
+    for (const nlohmann::json& v : r[6])
+      t.scenario_objectives.push_back(
+          json_io::json_number_or(v, std::numeric_limits<double>::infinity()));
+    t.accepted = r[7].get<bool>();
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+}  // namespace
+
+nlohmann::json run_checkpoint(const Optimizer& optimizer, const std::vector<Trial>& trials) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const Trial& t : trials) rows.push_back(trial_json(t));
+  return {{"optimizer", optimizer.state()}, {"trials", std::move(rows)}};
+}
 
 TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, AlgorithmPtr algorithm,
                    std::uint64_t seed, BatchEvaluator& evaluator, const RunOptions& options) {
@@ -57,13 +108,18 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
     row.best = problem.to_parameters(row.best);
     return row;
   };
+  ProblemFitness fitness(problem, evaluator);
   IterationObserver observer;
   if (options.observer)
     observer = [&](const HistoryRow& h, const Optimizer& o) {
-      return options.observer(in_values(h), o);
+      return options.observer(in_values(h), o, fitness.trials());
     };
-  ProblemFitness fitness(problem, evaluator);
-  r.optimization = run_optimizer(optimizer, fitness, observer, options.resume);
+  const nlohmann::json* optimizer_state = options.resume;
+  if (options.resume && options.resume->is_object() && options.resume->contains("optimizer")) {
+    optimizer_state = &(*options.resume)["optimizer"];
+    fitness.resume_trials(trials_from_json(options.resume->value("trials", nlohmann::json())));
+  }
+  r.optimization = run_optimizer(optimizer, fitness, observer, optimizer_state);
   r.simulations = fitness.simulations();
   r.trials = fitness.trials();
   r.tuned_controller = problem.controller_for(r.optimization.best);

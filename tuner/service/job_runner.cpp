@@ -79,12 +79,12 @@ void JobRunner::run(const JobRecord& rec) {
     } else {
       spdlog::info("job {} ({}) started", id, rec.name);
     }
-    ro.observer = [&](const HistoryRow& h, const Optimizer& o) {
+    ro.observer = [&](const HistoryRow& h, const Optimizer& o, const std::vector<Trial>& trials) {
       json best = json::object();
       for (std::size_t i = 0; i < names.size() && i < h.best.size(); ++i)
         best[names[i]] = h.best[i];
       store_.record_progress(id, h.iteration, h.evaluations, h.best_fitness, best,
-                             o.state().dump());
+                             run_checkpoint(o, trials).dump());
       return !stopping_ && !store_.cancel_requested(id);
     };
     const std::unique_ptr<BatchEvaluator> evaluator = make_evaluator_();

@@ -164,6 +164,9 @@ class ProblemFitness final : public BatchFitness {
   }
   std::int64_t simulations() const { return simulations_; }
   const std::vector<Trial>& trials() const { return trials_; }
+  // Continues the record of a run resumed from a checkpoint: the trials before it come first,
+  // and "best so far" counts them, as in the run that was interrupted.
+  void resume_trials(std::vector<Trial> before);
 
  private:
   const TuningProblem& problem_;

@@ -5,6 +5,7 @@
 // clock or the host, so the outcome depends only on the job and the seed; run metadata is the
 // caller's. The documents a run writes are in run/documents.hpp.
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -19,12 +20,23 @@
 
 namespace ftc::tune {
 
+// Called after every iteration with the trials so far (all of them, those before a resume
+// included); return false to stop.
+using RunObserver =
+    std::function<bool(const HistoryRow&, const Optimizer&, const std::vector<Trial>& trials)>;
+
 struct RunOptions {
-  std::optional<std::uint64_t> seed;       // overrides tuning.seed
-  IterationObserver observer;              // progress; return false to stop
-  const nlohmann::json* resume = nullptr;  // an Optimizer::state() to continue from
-  bool compare = true;                     // simulate the comparison controllers after tuning
+  std::optional<std::uint64_t> seed;  // overrides tuning.seed
+  RunObserver observer;               // progress and checkpoints
+  // A run_checkpoint() to continue from (or, as older service stores hold, a bare
+  // Optimizer::state(): then trials.csv starts at the resume).
+  const nlohmann::json* resume = nullptr;
+  bool compare = true;  // simulate the comparison controllers after tuning
 };
+
+// What a run needs to continue after an iteration: the optimiser's state and every trial so
+// far, so that the resumed run writes the same gains file and the same trials.csv.
+nlohmann::json run_checkpoint(const Optimizer& optimizer, const std::vector<Trial>& trials);
 
 // Trajectories of the comparison are recorded every 10 ms of simulated time.
 inline constexpr double kComparisonRecordInterval = 0.01;
