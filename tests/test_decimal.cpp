@@ -8,6 +8,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "io/decimal.hpp"
 
@@ -97,4 +98,28 @@ TEST(Decimal, F6MatchesPrintfOnSampleTimes) {
        {-0.0, -1e-9, -0.5, 0.0000005, 1e4, 12345.678, 1e20, -1e300,
         std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()})
     EXPECT_EQ(f6(v), printf_f6(v)) << "value " << printf_g9(v);
+}
+
+// A row at a time, as the trajectory writer prints, gives the same text as number by number,
+// for lists of any length (blocks of 16 inside) and with the slow path's values mixed in.
+TEST(Decimal, G9ListMatchesOneByOne) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> mantissa(-10.0, 10.0);
+  std::uniform_int_distribution<int> exponent(-20, 12);
+  const double specials[] = {0.0,
+                             -0.0,
+                             std::numeric_limits<double>::infinity(),
+                             std::numeric_limits<double>::quiet_NaN(),
+                             1e-300,
+                             3e15};
+  for (std::size_t count : {0u, 1u, 15u, 16u, 17u, 33u, 100u}) {
+    std::vector<double> v(count);
+    for (std::size_t i = 0; i < count; ++i)
+      v[i] = i % 7 == 3 ? specials[i % 6] : mantissa(rng) * std::pow(10.0, exponent(rng));
+    std::string expected;
+    for (double x : v) expected += "," + printf_g9(x);
+    std::string buf(count * 24 + 8, '\0');
+    char* end = ftc::tune::detail::write_g9_list(buf.data(), v.data(), v.size(), ',');
+    EXPECT_EQ(std::string(buf.data(), end), expected) << count << " numbers";
+  }
 }

@@ -322,8 +322,8 @@ std::string trajectory_csv(const sim::Trajectory& tr) {
   // write_f6 and write_g9 print exactly what printf's %.6f and %.9g print, without parsing a
   // format string or touching the locale per number (io/decimal.cpp says how).
   const std::size_t columns = 1 + 2 * static_cast<std::size_t>(tr.axes + tr.actuators);
-  // A row takes at most 17 characters per %.9g number and 330 for the %.6f time.
-  const std::size_t row_max = columns * 17 + 330;
+  // Room for a row: 24 bytes per %.9g number (io/decimal.hpp) and 330 for the %.6f time.
+  const std::size_t row_max = columns * 24 + 330;
   std::size_t used = s.size();
   s.resize(used + tr.rows() * columns * 12 + row_max);
   char* out = s.data() + used;
@@ -335,10 +335,7 @@ std::string trajectory_csv(const sim::Trajectory& tr) {
     }
     const std::span<const double> row = tr.row(r);
     out = detail::write_f6(out, row[0]);
-    for (std::size_t i = 1; i < row.size(); ++i) {
-      *out++ = ',';
-      out = detail::write_g9(out, row[i]);
-    }
+    out = detail::write_g9_list(out, row.data() + 1, row.size() - 1, ',');
     *out++ = '\n';
   }
   s.resize(static_cast<std::size_t>(out - s.data()));
