@@ -105,3 +105,78 @@ TEST(Runtime, ReadmeExampleLoadsAndSteps) {
   EXPECT_THROW(ftc::runtime::load_controller(file, plant, 0.002), ftc::InputError);
   EXPECT_THROW(ftc::runtime::load_controller(dir / "missing.json", plant, 0.001), ftc::InputError);
 }
+
+TEST(GainsFile, NumbersOutOfRangeAndDuplicateKeysAreInputErrorsWithThePath) {
+  const auto dir = fresh_dir("gains-strict");
+  std::string text = tune::gains_document(tuned(short_job(), 2)).dump(2);
+  const auto load = [&](const std::string& t) -> FieldError {
+    std::ofstream(dir / "g.json") << t;
+    try {
+      runtime::read_gains(dir / "g.json");
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.source(), (dir / "g.json").string());
+      return e.errors().front();
+    }
+    ADD_FAILURE() << "accepted";
+    return {};
+  };
+  const std::string ts = "\"sample_time\": 0.001";
+  ASSERT_NE(text.find(ts), std::string::npos);
+  std::string big = text;
+  big.replace(big.find(ts), ts.size(), "\"sample_time\": 1e400");
+  FieldError e = load(big);
+  EXPECT_EQ(e.path, "/sample_time");
+  EXPECT_NE(e.message.find("out of the range of a double"), std::string::npos) << e.message;
+
+  std::string twice = text;
+  twice.replace(twice.find(ts), ts.size(), ts + ", \"sample_time\": 0.002");
+  e = load(twice);
+  EXPECT_EQ(e.path, "/sample_time");
+  EXPECT_NE(e.message.find("duplicate key"), std::string::npos) << e.message;
+}
+
+// A crude fuzzer of the flight-software contract: whatever a gains file holds, the loader and
+// make_controller either succeed or throw InputError, never another exception.
+TEST(GainsFile, EveryMalformedDocumentIsAnInputError) {
+  const json doc = tune::gains_document(tuned(short_job(), 2));
+  const std::vector<json> replacements = {
+      json(nullptr), json(true), json(0), json(-1), json(0.5), json(1e308), json(-1e308),
+      json(5e-324), json(std::numeric_limits<std::int64_t>::min()),
+      json(std::numeric_limits<std::uint64_t>::max()), json(""), json("x"), json::array(),
+      json::array({1, 2, 3}), json::object(), json({{"a", 1}})};
+  const sim::Spacecraft plant;
+  int cases = 0;
+  const auto check = [&](const json& d, const std::string& what) {
+    ++cases;
+    try {
+      const runtime::Gains g = runtime::parse_gains(d, "g.json");
+      auto c = runtime::make_controller(g, plant, g.sample_time);
+      c->reset();
+      (void)c->step(0.0, sim::Vec3(0.1, 0, 0), sim::Vec3::Zero(), sim::Vec3::Zero());
+    } catch (const InputError&) {
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << what << ": " << e.what();
+    }
+  };
+  const json flat = doc.flatten();
+  for (auto it = flat.begin(); it != flat.end(); ++it) {
+    const json::json_pointer p(it.key());
+    for (const json& r : replacements) {
+      json d = doc;
+      d[p] = r;
+      check(d, it.key() + " = " + r.dump());
+    }
+    json d = doc;
+    if (json& parent = d[p.parent_pointer()]; parent.is_object()) {
+      parent.erase(p.back());
+      check(d, it.key() + " removed");
+    }
+  }
+  for (auto it = doc.begin(); it != doc.end(); ++it)
+    for (const json& r : replacements) {
+      json d = doc;
+      d[it.key()] = r;
+      check(d, it.key() + " = " + r.dump());
+    }
+  EXPECT_GT(cases, 500);
+}
