@@ -164,3 +164,73 @@ TEST(Cli, NegativeThreadCountsAreRefusedEverywhere) {
         << c << ": " << r.err;
   }
 }
+
+TEST(Cli, NumberOutOfRangeOrDuplicateKeyInAFileExitsTwo) {
+  const auto dir = fresh_dir("strict-json");
+  std::string job = slurp(std::filesystem::path(FTC_SOURCE_DIR) / "jobs" / "table1.json");
+  const std::string name = "\"name\": \"table1\"";
+  ASSERT_NE(job.find(name), std::string::npos);
+  std::ofstream(dir / "twice.json")
+      << std::string(job).replace(job.find(name), name.size(), name + ", \"name\": \"other\"");
+  std::ofstream(dir / "gains.json") << R"({"schema": "ftctune.gains/1", "sample_time": -1e400})";
+  json big = json::parse(job);
+  big["controller"]["Kp"] = "HERE";
+  std::string text = big.dump();
+  std::ofstream(dir / "big.json") << text.replace(text.find("\"HERE\""), 6, "1e400");
+
+  CliResult r = run_cli("validate '" + (dir / "big.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/controller/Kp: invalid JSON: number 1e400 is out of the range"),
+            std::string::npos)
+      << r.err;
+  r = run_cli("validate '" + (dir / "twice.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/name: duplicate key"), std::string::npos) << r.err;
+  r = run_cli("simulate jobs/table1.json --gains '" + (dir / "gains.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("gains.json: /sample_time: invalid JSON: number -1e400"), std::string::npos)
+      << r.err;
+}
+
+TEST(Cli, SeedMustBeANonNegativeInteger) {
+  const auto dir = fresh_dir("seed");
+  for (const char* c : {"run jobs/table1.json", "evaluate jobs/robust-faults.json",
+                        "ensemble jobs/robust-faults.json"})
+    for (const char* seed : {"-1", "1.5", "18446744073709551616", "x"}) {
+      const CliResult r = run_cli(std::string(c) + " --seed " + seed, dir);
+      EXPECT_EQ(r.exit_code, 2) << c << " --seed " << seed << ": " << r.err;
+      EXPECT_NE(r.err.find("--seed: a seed is an integer in 0..18446744073709551615"),
+                std::string::npos)
+          << r.err;
+    }
+}
+
+TEST(Cli, SetValueOutOfRangeExitsTwo) {
+  const auto dir = fresh_dir("set-range");
+  const CliResult r =
+      run_cli("simulate jobs/table1.json --set Kp=1e400 --out '" + dir.string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--set: Kp: value \"1e400\" is not a finite number"), std::string::npos)
+      << r.err;
+}
+
+TEST(Cli, OutputThatCannotBeADirectoryExitsTwoWithTheReason) {
+  const auto dir = fresh_dir("out-null");
+  std::ofstream(dir / "file") << "x";
+  const std::string file = (dir / "file").string();
+  for (const std::string c :
+       {"run jobs/table1.json --out /dev/null", "simulate jobs/table1.json --out /dev/null",
+        "evaluate jobs/robust-faults.json --out /dev/null",
+        "study jobs/table1.json --algorithms bat --seeds 1 --budget 20 --out /dev/null"}) {
+    const CliResult r = run_cli(c, dir);
+    EXPECT_EQ(r.exit_code, 2) << c << ": " << r.err;
+    EXPECT_NE(r.err.find("--out: /dev/null exists and is not a directory"), std::string::npos)
+        << c << ": " << r.err;
+  }
+  CliResult r = run_cli("simulate jobs/table1.json --out '" + file + "/sub'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(file + " is not a directory"), std::string::npos) << r.err;
+  r = run_cli("ensemble jobs/robust-faults.json --count 2 --out '" + dir.string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
+}
