@@ -296,6 +296,41 @@ TEST(Service, TokenIsRequiredWhenConfigured) {
   EXPECT_THROW(tune::TuningService{open}, InputError);
 }
 
+TEST(Service, BodyThatIsNotUtf8IsA400ThatDoesNotEchoIt) {
+  Service s;
+  auto& c = *s.client;
+  std::string text = tiny_job().dump();
+  text.replace(text.find("\"tiny\""), 6, "\"ti\xff\xfeny\"");
+  for (const std::string& body : {text, std::string("{\"name\": 1, \xc0\xaf}")}) {
+    const auto r = c.Post("/v1/jobs", body, "application/json");
+    expect_error(r, 400, "invalid_json");
+    EXPECT_NE(r->body.find("not UTF-8"), std::string::npos) << r->body;
+    for (char ch : r->body) ASSERT_LT(static_cast<unsigned char>(ch), 0x80) << r->body;
+  }
+  // A path that decodes to bytes that are not UTF-8 still gets a JSON error, not a 500.
+  const auto r = c.Get("/v1/jobs/%FF%FE");
+  expect_error(r, 404, "not_found");
+  EXPECT_EQ(s.get("/v1/jobs")["total"], 0);
+}
+
+TEST(Service, NumberOutOfRangeOrDuplicateKeyIsA400NamingThePath) {
+  Service s;
+  auto& c = *s.client;
+  json j = tiny_job();
+  j["controller"]["Kp"] = "HERE";
+  std::string big = j.dump();
+  big.replace(big.find("\"HERE\""), 6, "1e400");
+  std::string twice = tiny_job().dump();
+  twice.replace(twice.find("\"name\":"), 7, "\"name\":\"x\",\"name\":");
+  for (const auto& [body, path] : {std::pair{big, "/controller/Kp"}, std::pair{twice, "/name"}}) {
+    const auto r = c.Post("/v1/jobs", body, "application/json");
+    expect_error(r, 400, "invalid_json");
+    const json e = json::parse(r->body)["error"];
+    ASSERT_EQ(e["details"].size(), 1u) << r->body;
+    EXPECT_EQ(e["details"][0]["path"], path) << r->body;
+  }
+}
+
 TEST(Service, StoreIsLockedAgainstASecondServer) {
   Service s;
   tune::ServiceOptions o;
