@@ -331,6 +331,26 @@ TEST(Service, NumberOutOfRangeOrDuplicateKeyIsA400NamingThePath) {
   }
 }
 
+TEST(Service, LoopbackIsJudgedByTheResolvedAddresses) {
+  for (const char* host : {"127.0.0.1", "127.0.0.2", "localhost", "::1"})
+    EXPECT_TRUE(tune::is_loopback(host)) << host;
+  // 127.x.example starts like a loopback address but names nothing (or anything).
+  for (const char* host : {"127.x.example", "0.0.0.0", "::", "", "127.0.0.1.invalid"})
+    EXPECT_FALSE(tune::is_loopback(host)) << host;
+  tune::ServiceOptions o;
+  o.bind = "127.x.example";
+  const auto errs = o.validate();
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_NE(errs[0].message.find("refusing to listen on 127.x.example without --token-file"),
+            std::string::npos)
+      << errs[0].message;
+  EXPECT_NE(errs[0].message.find("cannot resolve it"), std::string::npos) << errs[0].message;
+  o.bind = "0.0.0.0";
+  EXPECT_NE(o.validate().at(0).message.find("it resolves to 0.0.0.0"), std::string::npos);
+  o.token = "t";
+  EXPECT_TRUE(o.validate().empty());
+}
+
 TEST(Service, StoreIsLockedAgainstASecondServer) {
   Service s;
   tune::ServiceOptions o;

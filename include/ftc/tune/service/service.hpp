@@ -38,6 +38,8 @@ struct ServiceOptions {
   std::vector<FieldError> validate() const;
 };
 
+// True when every address `host` resolves to is a loopback one (127.0.0.0/8, ::1); false when
+// it cannot be resolved.
 bool is_loopback(const std::string& host);
 
 class TuningService {
