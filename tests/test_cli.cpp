@@ -1,4 +1,7 @@
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 
 #include <nlohmann/json.hpp>
 
@@ -233,4 +236,34 @@ TEST(Cli, OutputThatCannotBeADirectoryExitsTwoWithTheReason) {
   r = run_cli("ensemble jobs/robust-faults.json --count 2 --out '" + dir.string() + "'", dir);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
+}
+
+TEST(Cli, ServeOnAPortInUseExitsTwo) {
+  const auto dir = fresh_dir("serve-in-use");
+  // A listener that shares its port with whoever asks (SO_REUSEPORT), as earlier ftctune
+  // servers did: the kernel would split connections between it and a second server.
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  ASSERT_GE(fd, 0);
+  int yes = 1;
+  ::setsockopt(fd, SOL_SOCKET, SO_REUSEPORT, &yes, sizeof yes);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  ASSERT_EQ(::listen(fd, 4), 0);
+  socklen_t len = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  const int port = ntohs(a.sin_port);
+  // `timeout` ends a server that started anyway, which is then a failure, not a hang.
+  const std::string cmd = "cd '" FTC_SOURCE_DIR "' && timeout -s KILL 20 '" FTC_CLI
+                          "' serve --port " +
+                          std::to_string(port) + " --store '" + (dir / "store").string() + "' >'" +
+                          (dir / "out").string() + "' 2>'" + (dir / "err").string() + "'";
+  const int status = std::system(cmd.c_str());
+  ::close(fd);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2) << slurp(dir / "err");
+  EXPECT_NE(slurp(dir / "err").find("127.0.0.1:" + std::to_string(port) + ": address in use"),
+            std::string::npos)
+      << slurp(dir / "err");
 }

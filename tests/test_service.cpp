@@ -351,6 +351,22 @@ TEST(Service, LoopbackIsJudgedByTheResolvedAddresses) {
   EXPECT_TRUE(o.validate().empty());
 }
 
+TEST(Service, SecondServerOnAPortInUseIsRefused) {
+  Service first;
+  tune::ServiceOptions o;
+  o.port = first.port;
+  o.store = first.dir / "second-store";
+  o.threads = 1;
+  tune::TuningService second(o);
+  try {
+    second.start();
+    ADD_FAILURE() << "a second server listens on port " << first.port;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("address in use"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(first.get("/healthz")["status"], "ok");
+}
+
 TEST(Service, StoreIsLockedAgainstASecondServer) {
   Service s;
   tune::ServiceOptions o;

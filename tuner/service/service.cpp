@@ -6,7 +6,9 @@
 #include <spdlog/spdlog.h>
 #include <sys/socket.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <thread>
 
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
@@ -50,6 +52,20 @@ std::string not_loopback(const std::string& host) {
   }
   ::freeaddrinfo(found);
   return outside.empty() ? "" : std::string("it resolves to ").append(outside);
+}
+
+// Why a bind failed, from its errno.
+std::string bind_failure(int err) {
+  switch (err) {
+    case EADDRINUSE:
+      return "address in use (is another server listening on that port?)";
+    case EADDRNOTAVAIL:
+      return "not an address of this machine";
+    case EACCES:
+      return "permission denied (ports below 1024 need privileges)";
+    default:
+      return err != 0 ? std::strerror(err) : "the address cannot be bound";
+  }
 }
 
 }  // namespace
@@ -108,13 +124,26 @@ int TuningService::start() {
   if (s.recovered > 0)
     spdlog::info("{} job(s) left running by an earlier server are queued again", s.recovered);
   s.api.configure(s.http);
+  // cpp-httplib's default sets SO_REUSEPORT, with which a second server on the same port binds
+  // too and the kernel splits the connections between the two. SO_REUSEADDR alone still allows
+  // a restart while old connections linger in TIME_WAIT.
+  s.http.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   int port = s.opt.port;
-  if (port == 0) {
-    port = s.http.bind_to_any_port(s.opt.bind);
-    if (port <= 0) throw std::runtime_error("cannot bind to " + s.opt.bind);
-  } else if (!s.http.bind_to_port(s.opt.bind, port)) {
-    throw std::runtime_error("cannot bind to " + s.opt.bind + ":" + std::to_string(port) +
-                             " (in use, or not an address of this machine)");
+  errno = 0;
+  const bool bound = port == 0 ? (port = s.http.bind_to_any_port(s.opt.bind)) > 0
+                               : s.http.bind_to_port(s.opt.bind, port);
+  if (!bound) {
+    const int err = errno;
+    throw InputError(s.opt.port == 0 ? "--bind" : "--port", "",
+                     std::string("cannot listen on ")
+                         .append(s.opt.bind)
+                         .append(":")
+                         .append(std::to_string(s.opt.port))
+                         .append(": ")
+                         .append(bind_failure(err)));
   }
   s.listener = std::thread([&s] { s.http.listen_after_bind(); });
   while (!s.http.is_running()) std::this_thread::sleep_for(std::chrono::milliseconds(1));

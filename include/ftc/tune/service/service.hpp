@@ -51,6 +51,8 @@ class TuningService {
   TuningService& operator=(const TuningService&) = delete;
 
   // Recovers crashed jobs, binds, starts the listener and the workers; returns the bound port.
+  // Throws InputError when the address cannot be bound (in use by another server, not an
+  // address of this machine).
   int start();
   // Graceful shutdown, see above. Idempotent.
   void stop();
