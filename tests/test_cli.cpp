@@ -1,4 +1,7 @@
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 
 #include <nlohmann/json.hpp>
 
@@ -163,4 +166,104 @@ TEST(Cli, NegativeThreadCountsAreRefusedEverywhere) {
     EXPECT_NE(r.err.find("--threads: Value -1 not in range 0 to 4096"), std::string::npos)
         << c << ": " << r.err;
   }
+}
+
+TEST(Cli, NumberOutOfRangeOrDuplicateKeyInAFileExitsTwo) {
+  const auto dir = fresh_dir("strict-json");
+  std::string job = slurp(std::filesystem::path(FTC_SOURCE_DIR) / "jobs" / "table1.json");
+  const std::string name = "\"name\": \"table1\"";
+  ASSERT_NE(job.find(name), std::string::npos);
+  std::ofstream(dir / "twice.json")
+      << std::string(job).replace(job.find(name), name.size(), name + ", \"name\": \"other\"");
+  std::ofstream(dir / "gains.json") << R"({"schema": "ftctune.gains/1", "sample_time": -1e400})";
+  json big = json::parse(job);
+  big["controller"]["Kp"] = "HERE";
+  std::string text = big.dump();
+  std::ofstream(dir / "big.json") << text.replace(text.find("\"HERE\""), 6, "1e400");
+
+  CliResult r = run_cli("validate '" + (dir / "big.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/controller/Kp: invalid JSON: number 1e400 is out of the range"),
+            std::string::npos)
+      << r.err;
+  r = run_cli("validate '" + (dir / "twice.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/name: duplicate key"), std::string::npos) << r.err;
+  r = run_cli("simulate jobs/table1.json --gains '" + (dir / "gains.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("gains.json: /sample_time: invalid JSON: number -1e400"), std::string::npos)
+      << r.err;
+}
+
+TEST(Cli, SeedMustBeANonNegativeInteger) {
+  const auto dir = fresh_dir("seed");
+  for (const char* c : {"run jobs/table1.json", "evaluate jobs/robust-faults.json",
+                        "ensemble jobs/robust-faults.json"})
+    for (const char* seed : {"-1", "1.5", "18446744073709551616", "x"}) {
+      const CliResult r = run_cli(std::string(c) + " --seed " + seed, dir);
+      EXPECT_EQ(r.exit_code, 2) << c << " --seed " << seed << ": " << r.err;
+      EXPECT_NE(r.err.find("--seed: a seed is an integer in 0..18446744073709551615"),
+                std::string::npos)
+          << r.err;
+    }
+}
+
+TEST(Cli, SetValueOutOfRangeExitsTwo) {
+  const auto dir = fresh_dir("set-range");
+  const CliResult r =
+      run_cli("simulate jobs/table1.json --set Kp=1e400 --out '" + dir.string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--set: Kp: value \"1e400\" is not a finite number"), std::string::npos)
+      << r.err;
+}
+
+TEST(Cli, OutputThatCannotBeADirectoryExitsTwoWithTheReason) {
+  const auto dir = fresh_dir("out-null");
+  std::ofstream(dir / "file") << "x";
+  const std::string file = (dir / "file").string();
+  for (const std::string c :
+       {"run jobs/table1.json --out /dev/null", "simulate jobs/table1.json --out /dev/null",
+        "evaluate jobs/robust-faults.json --out /dev/null",
+        "study jobs/table1.json --algorithms bat --seeds 1 --budget 20 --out /dev/null"}) {
+    const CliResult r = run_cli(c, dir);
+    EXPECT_EQ(r.exit_code, 2) << c << ": " << r.err;
+    EXPECT_NE(r.err.find("--out: /dev/null exists and is not a directory"), std::string::npos)
+        << c << ": " << r.err;
+  }
+  CliResult r = run_cli("simulate jobs/table1.json --out '" + file + "/sub'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(file + " is not a directory"), std::string::npos) << r.err;
+  r = run_cli("ensemble jobs/robust-faults.json --count 2 --out '" + dir.string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
+}
+
+TEST(Cli, ServeOnAPortInUseExitsTwo) {
+  const auto dir = fresh_dir("serve-in-use");
+  // A listener that shares its port with whoever asks (SO_REUSEPORT), as earlier ftctune
+  // servers did: the kernel would split connections between it and a second server.
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  ASSERT_GE(fd, 0);
+  int yes = 1;
+  ::setsockopt(fd, SOL_SOCKET, SO_REUSEPORT, &yes, sizeof yes);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  ASSERT_EQ(::listen(fd, 4), 0);
+  socklen_t len = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  const int port = ntohs(a.sin_port);
+  // `timeout` ends a server that started anyway, which is then a failure, not a hang.
+  const std::string cmd = "cd '" FTC_SOURCE_DIR "' && timeout -s KILL 20 '" FTC_CLI
+                          "' serve --port " +
+                          std::to_string(port) + " --store '" + (dir / "store").string() + "' >'" +
+                          (dir / "out").string() + "' 2>'" + (dir / "err").string() + "'";
+  const int status = std::system(cmd.c_str());
+  ::close(fd);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2) << slurp(dir / "err");
+  EXPECT_NE(slurp(dir / "err").find("127.0.0.1:" + std::to_string(port) + ": address in use"),
+            std::string::npos)
+      << slurp(dir / "err");
 }

@@ -6,6 +6,7 @@
 
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
+#include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "ftc/sim/spacecraft.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
@@ -104,4 +105,137 @@ TEST(Runtime, ReadmeExampleLoadsAndSteps) {
   EXPECT_NE(u_d, ftc::sim::Vec4::Zero());
   EXPECT_THROW(ftc::runtime::load_controller(file, plant, 0.002), ftc::InputError);
   EXPECT_THROW(ftc::runtime::load_controller(dir / "missing.json", plant, 0.001), ftc::InputError);
+}
+
+TEST(GainsFile, NumbersOutOfRangeAndDuplicateKeysAreInputErrorsWithThePath) {
+  const auto dir = fresh_dir("gains-strict");
+  std::string text = tune::gains_document(tuned(short_job(), 2)).dump(2);
+  const auto load = [&](const std::string& t) -> FieldError {
+    std::ofstream(dir / "g.json") << t;
+    try {
+      runtime::read_gains(dir / "g.json");
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.source(), (dir / "g.json").string());
+      return e.errors().front();
+    }
+    ADD_FAILURE() << "accepted";
+    return {};
+  };
+  const std::string ts = "\"sample_time\": 0.001";
+  ASSERT_NE(text.find(ts), std::string::npos);
+  std::string big = text;
+  big.replace(big.find(ts), ts.size(), "\"sample_time\": 1e400");
+  FieldError e = load(big);
+  EXPECT_EQ(e.path, "/sample_time");
+  EXPECT_NE(e.message.find("out of the range of a double"), std::string::npos) << e.message;
+
+  std::string twice = text;
+  twice.replace(twice.find(ts), ts.size(), ts + ", \"sample_time\": 0.002");
+  e = load(twice);
+  EXPECT_EQ(e.path, "/sample_time");
+  EXPECT_NE(e.message.find("duplicate key"), std::string::npos) << e.message;
+}
+
+// A crude fuzzer of the flight-software contract: whatever a gains file holds, the loader and
+// make_controller either succeed or throw InputError, never another exception.
+TEST(GainsFile, EveryMalformedDocumentIsAnInputError) {
+  const json doc = tune::gains_document(tuned(short_job(), 2));
+  const std::vector<json> replacements = {json(nullptr),
+                                          json(true),
+                                          json(0),
+                                          json(-1),
+                                          json(0.5),
+                                          json(1e308),
+                                          json(-1e308),
+                                          json(5e-324),
+                                          json(std::numeric_limits<std::int64_t>::min()),
+                                          json(std::numeric_limits<std::uint64_t>::max()),
+                                          json(""),
+                                          json("x"),
+                                          json::array(),
+                                          json::array({1, 2, 3}),
+                                          json::object(),
+                                          json({{"a", 1}})};
+  const sim::Spacecraft plant;
+  int cases = 0;
+  const auto check = [&](const json& d, const std::string& what) {
+    ++cases;
+    try {
+      const runtime::Gains g = runtime::parse_gains(d, "g.json");
+      auto c = runtime::make_controller(g, plant, g.sample_time);
+      c->reset();
+      (void)c->step(0.0, sim::Vec3(0.1, 0, 0), sim::Vec3::Zero(), sim::Vec3::Zero());
+    } catch (const InputError&) {
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << what << ": " << e.what();
+    }
+  };
+  const json flat = doc.flatten();
+  for (auto it = flat.begin(); it != flat.end(); ++it) {
+    const json::json_pointer p(it.key());
+    for (const json& r : replacements) {
+      json d = doc;
+      d[p] = r;
+      check(d, it.key() + " = " + r.dump());
+    }
+    json d = doc;
+    if (json& parent = d[p.parent_pointer()]; parent.is_object()) {
+      parent.erase(p.back());
+      check(d, it.key() + " removed");
+    }
+  }
+  for (auto it = doc.begin(); it != doc.end(); ++it)
+    for (const json& r : replacements) {
+      json d = doc;
+      d[it.key()] = r;
+      check(d, it.key() + " = " + r.dump());
+    }
+  EXPECT_GT(cases, 500);
+}
+
+TEST(GainsFile, GainsOfATuningWhereEveryCandidateDivergedAreRefused) {
+  json doc = tune::gains_document(tuned(short_job(), 2));
+  for (const json& fitness : {json(0.0), json(nullptr), json(-1.0)}) {
+    doc["fitness"] = fitness;
+    try {
+      runtime::parse_gains(doc, "g.json");
+      ADD_FAILURE() << "accepted fitness " << fitness.dump();
+    } catch (const InputError& e) {
+      ASSERT_EQ(e.errors().size(), 1u) << e.what();
+      EXPECT_EQ(e.errors()[0].path, "/fitness");
+      EXPECT_NE(e.errors()[0].message.find("every candidate diverged"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+TEST(GainsFile, GainsForAnotherPlantAreRefused) {
+  const runtime::Gains g = runtime::parse_gains(tune::gains_document(tuned(short_job(), 2)), "g");
+  ASSERT_EQ(g.plant.model, "spacecraft");
+  try {
+    runtime::make_controller(g, sim::Manipulator(), g.sample_time);
+    ADD_FAILURE() << "spacecraft gains accepted for a manipulator";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.errors()[0].path, "/plant/model");
+    EXPECT_NE(std::string(e.what()).find(
+                  "tuned for a \"spacecraft\" plant, but the controller is to run on a "
+                  "\"manipulator\" plant"),
+              std::string::npos)
+        << e.what();
+  }
+
+  // The parameters are compared when the caller states them.
+  EXPECT_NO_THROW(runtime::check_plant(g, {"spacecraft", {}}));  // the defaults, as tuned
+  EXPECT_NO_THROW(runtime::check_plant(g, {"spacecraft", {20, 17, 15, 1.1e-3}}));
+  try {
+    runtime::check_plant(g, {"spacecraft", {25, 17, 15, 1.1e-3}});
+    ADD_FAILURE() << "accepted another inertia";
+  } catch (const InputError& e) {
+    ASSERT_EQ(e.errors().size(), 1u) << e.what();
+    EXPECT_EQ(e.errors()[0].path, "/plant/inertia/0");
+    EXPECT_NE(e.errors()[0].message.find("tuned for 20, the plant has 25"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(runtime::check_plant(g, {"manipulator", {}}), InputError);
+  EXPECT_THROW(runtime::check_plant(g, {"spacecraft", {20, 17}}), InputError);
 }

@@ -1,10 +1,12 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli_runner.hpp"
 #include "ftc/tune/job/job.hpp"
 
 using nlohmann::json;
@@ -199,6 +201,89 @@ TEST(JobLoader, SyntaxErrorNamesLine) {
     const std::string what = e.what();
     EXPECT_NE(what.find("broken.json: invalid JSON"), std::string::npos) << what;
     EXPECT_NE(what.find("line 4"), std::string::npos) << what;
+  }
+}
+
+// The one error of parsing `text` as a job (its path and message); fails when it is accepted.
+FieldError only_error(const std::string& text) {
+  try {
+    tune::parse_job_text(text, "job.json");
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.errors().size(), 1u) << e.what();
+    return e.errors().front();
+  }
+  ADD_FAILURE() << "accepted: " << text;
+  return {};
+}
+
+TEST(JobLoader, NumberOutOfRangeIsAnInputErrorNamingItsPath) {
+  json j = table1();
+  j["controller"]["Kp"] = "HERE";
+  std::string text = j.dump(2);
+  text.replace(text.find("\"HERE\""), 6, "1e400");
+  FieldError e = only_error(text);
+  EXPECT_EQ(e.path, "/controller/Kp");
+  EXPECT_NE(e.message.find("number 1e400 is out of the range of a double"), std::string::npos)
+      << e.message;
+  e = only_error(R"({"scenarios": [{"duration": 1}, {"duration": -1e999}]})");
+  EXPECT_EQ(e.path, "/scenarios/1/duration");
+  e = only_error(R"({"a": [[1, 2], [3, 1E+400]]})");
+  EXPECT_EQ(e.path, "/a/1/1");
+  EXPECT_EQ(only_error("1e400").path, "");
+}
+
+TEST(JobLoader, DuplicateKeysAreRejectedWithTheirPath) {
+  FieldError e = only_error(R"({"name": "a", "schema": "ftctune.job/1", "name": "b"})");
+  EXPECT_EQ(e.path, "/name");
+  EXPECT_NE(e.message.find("duplicate key"), std::string::npos) << e.message;
+  e = only_error(
+      R"({"controller": {"Kp": 1}, "scenarios": [{}, {"faults": [{"a/b": 1, "a/b": 2}]}]})");
+  EXPECT_EQ(e.path, "/scenarios/1/faults/0/a~1b");
+}
+
+TEST(JobLoader, TextThatIsNotUtf8IsRejectedWithoutQuotingIt) {
+  for (const std::string& text :
+       {std::string("{\"name\": \"a\xff\"}"), std::string("{\"name\": \"\xc3\"}"),
+        std::string("{\n \xe9 }"), std::string("{\"name\": \"\xed\xa0\x80\"}")}) {
+    const FieldError e = only_error(text);
+    EXPECT_NE(e.message.find("invalid JSON: not UTF-8"), std::string::npos) << e.message;
+    for (char c : e.message) EXPECT_LT(static_cast<unsigned char>(c), 0x80) << e.message;
+  }
+  EXPECT_NE(only_error("{\n \xe9 }").message.find("line 2, column 2"), std::string::npos);
+  // Well-formed UTF-8 is fine.
+  try {
+    tune::parse_job_text("{\"name\": \"\xc3\xa9\xf0\x9f\x9b\xb0\"}", "job.json");
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).find("UTF-8"), std::string::npos) << e.what();
+  }
+}
+
+TEST(JobLoader, DeepNestingIsAnInputError) {
+  const FieldError e = only_error(std::string(100000, '[') + std::string(100000, ']'));
+  EXPECT_NE(e.message.find("nested deeper than 256 levels"), std::string::npos) << e.message;
+}
+
+TEST(JobLoader, ScenariosFileIsReadAsStrictly) {
+  const std::filesystem::path dir = ftc::testing::fresh_dir("scenarios-file");
+  {
+    std::ofstream f(dir / "members.json");
+    f << R"({"schema": "ftctune.scenarios/1", "scenarios": [{"duration": 1, "duration": 2}]})";
+  }
+  json j = table1();
+  j["scenarios"] = {{"file", "members.json"}};
+  {
+    std::ofstream f(dir / "job.json");
+    f << j.dump();
+  }
+  try {
+    tune::load_job(dir / "job.json");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    ASSERT_FALSE(e.errors().empty());
+    EXPECT_EQ(e.errors().front().path, "/scenarios/file");
+    EXPECT_NE(e.errors().front().message.find("/scenarios/0/duration: duplicate key"),
+              std::string::npos)
+        << e.what();
   }
 }
 

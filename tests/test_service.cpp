@@ -297,6 +297,77 @@ TEST(Service, TokenIsRequiredWhenConfigured) {
   EXPECT_THROW(tune::TuningService{open}, InputError);
 }
 
+TEST(Service, BodyThatIsNotUtf8IsA400ThatDoesNotEchoIt) {
+  Service s;
+  auto& c = *s.client;
+  std::string text = tiny_job().dump();
+  text.replace(text.find("\"tiny\""), 6, "\"ti\xff\xfeny\"");
+  for (const std::string& body : {text, std::string("{\"name\": 1, \xc0\xaf}")}) {
+    const auto r = c.Post("/v1/jobs", body, "application/json");
+    expect_error(r, 400, "invalid_json");
+    EXPECT_NE(r->body.find("not UTF-8"), std::string::npos) << r->body;
+    for (char ch : r->body) ASSERT_LT(static_cast<unsigned char>(ch), 0x80) << r->body;
+  }
+  // A path that decodes to bytes that are not UTF-8 still gets a JSON error, not a 500.
+  const auto r = c.Get("/v1/jobs/%FF%FE");
+  expect_error(r, 404, "not_found");
+  EXPECT_EQ(s.get("/v1/jobs")["total"], 0);
+}
+
+TEST(Service, NumberOutOfRangeOrDuplicateKeyIsA400NamingThePath) {
+  Service s;
+  auto& c = *s.client;
+  json j = tiny_job();
+  j["controller"]["Kp"] = "HERE";
+  std::string big = j.dump();
+  big.replace(big.find("\"HERE\""), 6, "1e400");
+  std::string twice = tiny_job().dump();
+  twice.replace(twice.find("\"name\":"), 7, "\"name\":\"x\",\"name\":");
+  for (const auto& [body, path] : {std::pair{big, "/controller/Kp"}, std::pair{twice, "/name"}}) {
+    const auto r = c.Post("/v1/jobs", body, "application/json");
+    expect_error(r, 400, "invalid_json");
+    const json e = json::parse(r->body)["error"];
+    ASSERT_EQ(e["details"].size(), 1u) << r->body;
+    EXPECT_EQ(e["details"][0]["path"], path) << r->body;
+  }
+}
+
+TEST(Service, LoopbackIsJudgedByTheResolvedAddresses) {
+  for (const char* host : {"127.0.0.1", "127.0.0.2", "localhost", "::1"})
+    EXPECT_TRUE(tune::is_loopback(host)) << host;
+  // 127.x.example starts like a loopback address but names nothing (or anything).
+  for (const char* host : {"127.x.example", "0.0.0.0", "::", "", "127.0.0.1.invalid"})
+    EXPECT_FALSE(tune::is_loopback(host)) << host;
+  tune::ServiceOptions o;
+  o.bind = "127.x.example";
+  const auto errs = o.validate();
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_NE(errs[0].message.find("refusing to listen on 127.x.example without --token-file"),
+            std::string::npos)
+      << errs[0].message;
+  EXPECT_NE(errs[0].message.find("cannot resolve it"), std::string::npos) << errs[0].message;
+  o.bind = "0.0.0.0";
+  EXPECT_NE(o.validate().at(0).message.find("it resolves to 0.0.0.0"), std::string::npos);
+  o.token = "t";
+  EXPECT_TRUE(o.validate().empty());
+}
+
+TEST(Service, SecondServerOnAPortInUseIsRefused) {
+  Service first;
+  tune::ServiceOptions o;
+  o.port = first.port;
+  o.store = first.dir / "second-store";
+  o.threads = 1;
+  tune::TuningService second(o);
+  try {
+    second.start();
+    ADD_FAILURE() << "a second server listens on port " << first.port;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("address in use"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(first.get("/healthz")["status"], "ok");
+}
+
 TEST(Service, StoreIsLockedAgainstASecondServer) {
   Service s;
   tune::ServiceOptions o;

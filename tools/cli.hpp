@@ -37,6 +37,13 @@ int render_run_report(const std::string& dir, const std::string& format, bool qu
 sim::ControllerConfig select_controller(const tune::Job& job, const std::string& type,
                                         const std::vector<std::string>& sets);
 
+// Checks of option values, run while the command line is parsed (so a bad value is exit 2
+// before any work): a seed in 0..2^64-1 (CLI11 alone reads -1 as 2^64-1), a directory that
+// exists or can be created and written, a file that can be created in its directory.
+CLI::Validator seed_value();
+CLI::Validator output_directory();
+CLI::Validator output_file();
+
 // Default output directory of a job: out/<job name>.
 std::filesystem::path default_out_dir(const tune::Job& job);
 std::filesystem::path default_out_dir_for(const std::string& job_name);

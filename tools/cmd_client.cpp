@@ -215,7 +215,8 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
     sub->add_flag("--wait", *wait, "Follow the progress, then fetch the gains file");
     sub->add_option("-o,--output", *out,
                     "With --wait: where to write the gains (default "
-                    "out/<job name>/service-<id>/gains.json)");
+                    "out/<job name>/service-<id>/gains.json)")
+        ->check(output_file());
     sub->add_flag("--force", *force, "Replace the output file if it exists");
     common(sub);
     sub->callback([&action, &g, o, job, wait, out, force] {
@@ -296,8 +297,10 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
   fetch->add_flag("--all", *all,
                   "Also history.csv, trials.csv, comparison.json, comparison.md and report.html, "
                   "beside the gains file");
-  fetch->add_option("-o,--output", *out,
-                    "Output file (default out/<job name>/service-<id>/gains.json)");
+  fetch
+      ->add_option("-o,--output", *out,
+                   "Output file (default out/<job name>/service-<id>/gains.json)")
+      ->check(output_file());
   fetch->add_flag("--force", *force, "Replace the output file if it exists");
   id_command("cancel", "Cancel a queued or running job", [o](Api& api, const std::string& id) {
     const std::string body = api.post("/v1/jobs/" + id + "/cancel", "");

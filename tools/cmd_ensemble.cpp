@@ -61,9 +61,10 @@ void add_ensemble_command(CLI::App& app, const Globals& g, Action& action) {
   CLI::App* sub = app.add_subcommand(
       "ensemble", "Expand a job's ensemble into a scenarios file (ftctune.scenarios/1)");
   sub->add_option("job", opts->job, "Job file with an ensemble (ftctune.job/1)")->required();
-  sub->add_option("--seed", opts->seed, "Seed instead of the ensemble's own");
+  sub->add_option("--seed", opts->seed, "Seed instead of the ensemble's own")->check(seed_value());
   sub->add_option("--count", opts->count, "Members instead of the ensemble's count");
-  sub->add_option("--out", opts->out, "Write to this file (default: standard output)");
+  sub->add_option("--out", opts->out, "Write to this file (default: standard output)")
+      ->check(output_file());
   sub->footer(
       "\nExamples:\n  ftctune ensemble jobs/robust-faults.json --out members.json\n"
       "  ftctune ensemble jobs/robust-faults.json --seed 8 --count 1000 --out held-out.json\n"

@@ -91,9 +91,11 @@ void add_evaluate_command(CLI::App& app, const Globals& g, Action& action) {
                   "A gains file to evaluate, FILE or LABEL=FILE (repeatable)")
       ->allow_extra_args(false);
   sub->add_option("--seed", opts->seed,
-                  "Ensemble seed of the held-out members (default: the job's seed + 1)");
+                  "Ensemble seed of the held-out members (default: the job's seed + 1)")
+      ->check(seed_value());
   sub->add_option("--count", opts->count, "Ensemble members (default: the job's count)");
-  sub->add_option("--out", opts->out, "Output directory (default out/<job name>/evaluation)");
+  sub->add_option("--out", opts->out, "Output directory (default out/<job name>/evaluation)")
+      ->check(output_directory());
   sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 4096));
   sub->add_flag("!--no-figure", opts->figure, "Skip the figure (no gnuplot needed)");

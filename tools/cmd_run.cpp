@@ -202,10 +202,12 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
   auto opts = std::make_shared<RunCliOptions>();
   CLI::App* sub = app.add_subcommand("run", "Tune a job's controller and write the gains file");
   sub->add_option("job", opts->job, "Job file (ftctune.job/1)")->required();
-  sub->add_option("--out", opts->out, "Output directory (default out/<job name>)");
+  sub->add_option("--out", opts->out, "Output directory (default out/<job name>)")
+      ->check(output_directory());
   sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 4096));
-  sub->add_option("--seed", opts->seed, "Seed instead of the job's tuning.seed");
+  sub->add_option("--seed", opts->seed, "Seed instead of the job's tuning.seed")
+      ->check(seed_value());
   sub->add_flag(
       "--baseline", opts->baseline,
       "Also run random search with the same budget (history-random.csv, drawn in Fig. 5)");

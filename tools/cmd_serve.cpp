@@ -42,13 +42,7 @@ int run_serve(ServeOptions o) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
   tune::TuningService service(o.service);
-  int port = 0;
-  try {
-    port = service.start();
-  } catch (const std::runtime_error& e) {
-    std::fprintf(stderr, "ftctune: error: %s\n", e.what());
-    return 1;
-  }
+  const int port = service.start();  // a bind failure is an InputError: exit 2
   std::printf("ftctune serve: listening on http://%s:%d (store %s, %d concurrent job%s%s)\n",
               o.service.bind.c_str(), port, o.service.store.c_str(), o.service.concurrent_jobs,
               o.service.concurrent_jobs == 1 ? "" : "s", o.service.token ? ", token required" : "");

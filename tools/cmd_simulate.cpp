@@ -121,7 +121,8 @@ void add_simulate_command(CLI::App& app, const Globals& g, Action& action) {
       ->allow_extra_args(false);
   sub->add_option("--gains", opts->gains,
                   "Simulate the controller of a gains file (ftctune.gains/1)");
-  sub->add_option("--out", opts->out, "Output directory (default out/<job name>/simulate)");
+  sub->add_option("--out", opts->out, "Output directory (default out/<job name>/simulate)")
+      ->check(output_directory());
   sub->add_option("--record-every", opts->record_interval,
                   "Trajectory sampling interval in seconds (default 0.01)");
   sub->callback([&action, &g, opts] { action = [&g, opts] { return run_simulate(*opts, g); }; });

@@ -321,7 +321,8 @@ void add_study_command(CLI::App& app, const Globals& g, Action& action) {
       ->required();
   sub->add_option("--threads", o->threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 4096));
-  sub->add_option("--out", o->out, "Output directory (default out/<job name>/study)");
+  sub->add_option("--out", o->out, "Output directory (default out/<job name>/study)")
+      ->check(output_directory());
   sub->callback([&action, &g, o] { action = [&g, o] { return run_study(*o, g); }; });
 }
 

@@ -1,6 +1,12 @@
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 #include <nlohmann/json.hpp>
 
 #include "cli.hpp"
+#include "ftc/runtime/json_reader.hpp"
 
 namespace ftc::cli {
 
@@ -39,11 +45,12 @@ sim::ControllerConfig select_controller(const tune::Job& job, const std::string&
                                json_io::did_you_mean(key, sim::controller_field_names(base.type))});
       continue;
     }
-    try {
-      j[key] = json::parse(s.substr(eq + 1));
-    } catch (const json::parse_error&) {
-      errs.push_back({key, "value \"" + s.substr(eq + 1) + "\" is not a number"});
-    }
+    const std::string text = s.substr(eq + 1);
+    const json v = json::parse(text, nullptr, false);
+    if (v.is_discarded())  // a syntax error, or a number beyond the range of a double
+      errs.push_back({key, "value \"" + json_io::printable(text) + "\" is not a finite number"});
+    else
+      j[key] = v;
   }
   throw_if_errors("--set", errs);
   sim::ControllerConfig c = tune::parse_controller(j, "", errs);
@@ -53,6 +60,65 @@ sim::ControllerConfig select_controller(const tune::Job& job, const std::string&
     if (!e.path.empty() && e.path[0] == '/') e.path.erase(0, 1);
   throw_if_errors("--set", errs);
   return c;
+}
+
+namespace {
+
+// Why `dir` cannot be made into a directory to write in ("" when it can): it, or the nearest of
+// its ancestors that exists, must be a directory this process may write to.
+std::string directory_problem(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path at = fs::absolute(dir, ec);
+  if (ec) return ec.message();
+  while (!fs::exists(at, ec) && at.has_parent_path() && at.parent_path() != at)
+    at = at.parent_path();
+  if (!fs::is_directory(at, ec))
+    return at == fs::absolute(dir, ec) ? dir.string() + " exists and is not a directory"
+                                       : std::string("cannot create ")
+                                             .append(dir.string())
+                                             .append(": ")
+                                             .append(at.string())
+                                             .append(" is not a directory");
+  if (::access(at.c_str(), W_OK | X_OK) != 0)
+    return std::string("cannot write in ")
+        .append(at.string())
+        .append(": ")
+        .append(std::strerror(errno));
+  return "";
+}
+
+}  // namespace
+
+CLI::Validator seed_value() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        errno = 0;
+        char* end = nullptr;
+        if (!s.empty() && s.find_first_not_of("0123456789") == std::string::npos) {
+          std::strtoull(s.c_str(), &end, 10);
+          if (errno == 0 && *end == '\0') return "";
+        }
+        return std::string("a seed is an integer in 0..18446744073709551615, got \"")
+            .append(json_io::printable(s))
+            .append("\"");
+      },
+      "SEED");
+}
+
+CLI::Validator output_directory() {
+  return CLI::Validator([](std::string& s) { return directory_problem(s); }, "DIR");
+}
+
+CLI::Validator output_file() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        const std::filesystem::path p(s);
+        std::error_code ec;
+        if (std::filesystem::is_directory(p, ec)) return s + " is a directory";
+        return directory_problem(p.has_parent_path() ? p.parent_path() : ".");
+      },
+      "FILE");
 }
 
 std::filesystem::path default_out_dir(const tune::Job& job) {

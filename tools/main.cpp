@@ -1,11 +1,12 @@
 // ftctune: tunes fault-tolerant sliding-mode controllers offline.
-// Exit codes: 0 success, 2 invalid input (one line naming the file and JSON path), 1 internal
-// error.
+// Exit codes: 0 success, 2 invalid input (one line naming the file and JSON path) or a path that
+// cannot be written, 1 internal error.
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <map>
 #include <string>
 
@@ -114,6 +115,11 @@ int main(int argc, char** argv) {
   try {
     return action();
   } catch (const ftc::InputError& e) {
+    std::fprintf(stderr, "ftctune: error: %s\n", e.what());
+    return 2;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A path the user gave or the machine's state (a file where a directory should be, no
+    // permission, a full disk), not a defect of ftctune.
     std::fprintf(stderr, "ftctune: error: %s\n", e.what());
     return 2;
   } catch (const std::exception& e) {

@@ -95,10 +95,24 @@ std::shared_ptr<const schema::Object<Gains>> make_gains_shape() {
               else if (!v.is_null())
                 e.push_back({path, "expected a number or null"});
             },
-            [](const Gains&, const std::string&, Errors&) {}, [](const Gains&, json&) {},
+            // The format records a failed tuning; the loader refuses to deploy one.
+            [](const Gains& g, const std::string& path, Errors& e) {
+              if (!g.fitness)
+                e.push_back({path,
+                             "is null: every candidate diverged in tuning, so these gains "
+                             "must not be deployed"});
+              else if (!(*g.fitness > 0) || !std::isfinite(*g.fitness))
+                e.push_back({path, "is " + json_io::number_text(*g.fitness) +
+                                       ": every candidate diverged in tuning (a usable "
+                                       "controller has a fitness > 0), so these gains must "
+                                       "not be deployed"});
+            },
+            [](const Gains&, json&) {},
             [] {
               return json{{"type", json::array({"number", "null"})},
-                          {"description", "J = 1/objective of the tuned controller"}};
+                          {"description",
+                           "J = 1/objective of the tuned controller; 0 or null when every "
+                           "candidate diverged, which the loader refuses"}};
             }});
   o->field(informational("baseline", "object", "the job's own controller and its score"));
   o->field(informational("optimizer", "object", "algorithm, settings, seed, evaluations"));
@@ -172,6 +186,45 @@ json gains_json_schema() {
   return schema::document(gains_shape().json_schema(),
                           "https://ftctune.example/schemas/ftctune.gains-1.json",
                           "ftctune gains file (ftctune.gains/1)");
+}
+
+void check_plant_model(const Gains& gains, const std::string& model) {
+  if (gains.plant.model != model)
+    throw InputError("gains", "/plant/model",
+                     "the gains were tuned for a \"" + gains.plant.model +
+                         "\" plant, but the controller is to run on a \"" + model + "\" plant");
+}
+
+void check_plant(const Gains& gains, const sim::PlantSpec& expected) {
+  check_plant_model(gains, expected.model);
+  const sim::PlantKind* kind = sim::find_plant_kind(expected.model);
+  if (!kind) return;  // a model the loader would have refused: never the file's
+  const std::vector<double> want = expected.values.empty() ? kind->defaults() : expected.values;
+  const std::vector<double>& got = gains.plant.values;
+  if (want.size() != kind->value_count() || got.size() != want.size())
+    throw InputError("plant", "",
+                     std::string("a ")
+                         .append(expected.model)
+                         .append(" plant has ")
+                         .append(std::to_string(kind->value_count()))
+                         .append(" parameter values, the expected plant gives ")
+                         .append(std::to_string(want.size())));
+  Errors errs;
+  std::size_t offset = 0;
+  for (const sim::PlantParameter& p : kind->parameters) {
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const std::size_t k = offset + i;
+      if (std::abs(got[k] - want[k]) <= 1e-12 * std::abs(want[k])) continue;
+      std::string path = "/plant/" + json_io::pointer_escape(p.name);
+      if (p.size() > 1) path.append("/").append(std::to_string(i));
+      errs.push_back({path, std::string("the gains were tuned for ")
+                                .append(json_io::number_text(got[k], 17))
+                                .append(", the plant has ")
+                                .append(json_io::number_text(want[k], 17))});
+    }
+    offset += p.size();
+  }
+  throw_if_errors("gains", std::move(errs));
 }
 
 void check_sample_time(const Gains& gains, double sample_time) {

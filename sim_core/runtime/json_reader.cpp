@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -84,15 +85,212 @@ std::string did_you_mean(const std::string& name, const std::vector<std::string>
   return best.empty() || ties > 0 ? "" : "; did you mean \"" + best + "\"?";
 }
 
-json parse_json_text(const std::string& text, const std::string& source) {
-  try {
-    return json::parse(text);
-  } catch (const json::parse_error& e) {
-    std::string msg = e.what();  // drop the "[json.exception.parse_error.101] " prefix
-    if (auto pos = msg.find("] "); msg.rfind("[json.exception", 0) == 0 && pos != std::string::npos)
-      msg = msg.substr(pos + 2);
-    throw InputError(source, "", "invalid JSON: " + msg);
+namespace {
+
+// Length of the UTF-8 sequence starting at text[i], or 0 when it is not well formed (overlong
+// forms, surrogates and code points above U+10FFFF included).
+std::size_t utf8_sequence(std::string_view text, std::size_t i) {
+  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char b = byte(i);
+  if (b < 0x80) return 1;
+  std::size_t n = 0;
+  unsigned char lo = 0x80, hi = 0xBF;  // the valid range of the second byte
+  if (b >= 0xC2 && b <= 0xDF) {
+    n = 2;
+  } else if (b >= 0xE0 && b <= 0xEF) {
+    n = 3;
+    if (b == 0xE0) lo = 0xA0;
+    if (b == 0xED) hi = 0x9F;
+  } else if (b >= 0xF0 && b <= 0xF4) {
+    n = 4;
+    if (b == 0xF0) lo = 0x90;
+    if (b == 0xF4) hi = 0x8F;
+  } else {
+    return 0;
   }
+  if (i + n > text.size() || byte(i + 1) < lo || byte(i + 1) > hi) return 0;
+  for (std::size_t k = 2; k < n; ++k)
+    if (byte(i + k) < 0x80 || byte(i + k) > 0xBF) return 0;
+  return n;
+}
+
+// "line L, column C" of a byte offset (both from 1; the column counts bytes).
+std::string line_column(std::string_view text, std::size_t offset) {
+  offset = std::min(offset, text.size());
+  const std::size_t line =
+      1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + offset, '\n'));
+  const std::size_t nl = text.rfind('\n', offset == 0 ? 0 : offset - 1);
+  const std::size_t column =
+      nl == std::string_view::npos || nl >= offset ? offset + 1 : offset - nl;
+  return std::string("line ")
+      .append(std::to_string(line))
+      .append(", column ")
+      .append(std::to_string(column));
+}
+
+// Deeper nesting than any ftctune file has; the limit keeps recursive code that later walks the
+// document (copies, dumps) off the end of the stack.
+constexpr std::size_t kMaxDepth = 256;
+
+// Builds the document like json::parse, but tracks the JSON path of the value being read, so an
+// error (a number out of range, a duplicate key) names it, and stops at the first problem
+// instead of throwing library exceptions.
+class StrictReader : public json::json_sax_t {
+ public:
+  StrictReader(json& root, std::string_view text) : root_(root), text_(text) {}
+
+  const std::optional<FieldError>& error() const { return error_; }
+
+  bool null() override { return put(nullptr) != nullptr; }
+  bool boolean(bool v) override { return put(v) != nullptr; }
+  bool number_integer(number_integer_t v) override { return put(v) != nullptr; }
+  bool number_unsigned(number_unsigned_t v) override { return put(v) != nullptr; }
+  bool number_float(number_float_t v, const string_t&) override { return put(v) != nullptr; }
+  bool string(string_t& v) override { return put(std::move(v)) != nullptr; }
+  bool binary(binary_t& v) override { return put(std::move(v)) != nullptr; }
+  bool start_object(std::size_t) override { return open(json::object()); }
+  bool start_array(std::size_t) override { return open(json::array()); }
+  bool end_object() override { return close(); }
+  bool end_array() override { return close(); }
+
+  bool key(string_t& k) override {
+    Frame& f = frames_.back();
+    f.key = std::move(k);
+    if (f.value->contains(f.key)) {
+      // Which of two values a reader takes differs between JSON libraries (RFC 8259, 4).
+      error_ = FieldError{path(), "duplicate key (a key may appear only once in an object)"};
+      return false;
+    }
+    return true;
+  }
+
+  bool parse_error(std::size_t position, const std::string& token,
+                   const json::exception& e) override {
+    if (e.id == 406) {  // a number beyond the range of a double
+      const std::size_t start = position >= token.size() ? position - token.size() : position;
+      error_ = FieldError{path(), std::string("invalid JSON: number ")
+                                      .append(token)
+                                      .append(" is out of the range of a double, at ")
+                                      .append(line_column(text_, start))};
+      return false;
+    }
+    std::string msg = e.what();  // drop the "[json.exception.parse_error.101] " prefix
+    if (auto p = msg.find("] "); msg.rfind("[json.exception", 0) == 0 && p != std::string::npos)
+      msg = msg.substr(p + 2);
+    error_ = FieldError{"", "invalid JSON: " + msg};
+    return false;
+  }
+
+ private:
+  struct Frame {
+    json* value;
+    std::string key;  // objects: the key being read
+  };
+
+  // The JSON pointer of the value being read: an array's last element while it is open, the
+  // next one otherwise.
+  std::string path() const {
+    std::string p;
+    for (std::size_t i = 0; i < frames_.size(); ++i) {
+      const Frame& f = frames_[i];
+      if (f.value->is_object()) {
+        p.append("/").append(pointer_escape(f.key));
+      } else {
+        const std::size_t n = f.value->size();
+        p.append("/").append(std::to_string(i + 1 < frames_.size() && n > 0 ? n - 1 : n));
+      }
+    }
+    return p;
+  }
+
+  template <class V>
+  json* put(V&& v) {
+    if (frames_.empty()) {
+      root_ = json(std::forward<V>(v));
+      return &root_;
+    }
+    json& parent = *frames_.back().value;
+    if (parent.is_array()) {
+      parent.push_back(json(std::forward<V>(v)));
+      return &parent.back();
+    }
+    json& slot = parent[frames_.back().key];
+    slot = json(std::forward<V>(v));
+    return &slot;
+  }
+
+  bool open(json&& empty) {
+    if (frames_.size() >= kMaxDepth) {
+      error_ = FieldError{
+          path(),
+          std::string("nested deeper than ").append(std::to_string(kMaxDepth)).append(" levels")};
+      return false;
+    }
+    json* v = put(std::move(empty));
+    frames_.push_back({v, {}});
+    return true;
+  }
+
+  bool close() {
+    frames_.pop_back();
+    return true;
+  }
+
+  json& root_;
+  std::string_view text_;
+  std::vector<Frame> frames_;
+  std::optional<FieldError> error_;
+};
+
+}  // namespace
+
+std::optional<std::size_t> invalid_utf8(std::string_view text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const std::size_t n = utf8_sequence(text, i);
+    if (n == 0) return i;
+    i += n;
+  }
+  return std::nullopt;
+}
+
+std::string printable(std::string_view text) {
+  std::string s;
+  for (std::size_t i = 0; i < text.size();) {
+    const std::size_t n = utf8_sequence(text, i);
+    if (n == 0) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02X", static_cast<unsigned char>(text[i]));
+      s += buf;
+      ++i;
+    } else {
+      s.append(text.substr(i, n));
+      i += n;
+    }
+  }
+  return s;
+}
+
+json parse_json_text(const std::string& text, const std::string& source) {
+  // JSON text is UTF-8 (RFC 8259, 8.1). Checked first, so that no message below quotes a broken
+  // byte (a service would fail to encode its error response).
+  if (const auto bad = invalid_utf8(text)) {
+    char byte[8];
+    std::snprintf(byte, sizeof byte, "0x%02X", static_cast<unsigned char>(text[*bad]));
+    throw InputError(source, "",
+                     std::string("invalid JSON: not UTF-8 (byte ")
+                         .append(byte)
+                         .append(" at ")
+                         .append(line_column(text, *bad))
+                         .append(")"));
+  }
+  json doc;
+  StrictReader reader(doc, text);
+  if (!json::sax_parse(text, &reader)) {
+    if (!reader.error()) throw InputError(source, "", "invalid JSON");
+    const FieldError& e = *reader.error();
+    throw InputError(source, e.path, printable(e.message));
+  }
+  return doc;
 }
 
 json json_number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }

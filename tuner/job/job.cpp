@@ -757,11 +757,19 @@ Job parse_job(const json& j_in, const std::string& source,
       const std::filesystem::path file = *base_dir / ref["file"].get<std::string>();
       const std::optional<std::string> text = read_file(file);
       json doc;
+      bool parsed = false;
       if (!text) {
         errs.push_back({"/scenarios/file", "cannot open " + file.string()});
       } else {
-        doc = json::parse(*text, nullptr, false);
-        if (doc.is_discarded() || !doc.is_object())
+        try {
+          doc = json_io::parse_json_text(*text, file.string());
+          parsed = true;
+        } catch (const InputError& e) {
+          errs.push_back({"/scenarios/file", e.what()});
+        }
+      }
+      if (parsed) {
+        if (!doc.is_object())
           errs.push_back({"/scenarios/file", file.string() + " is not a JSON object"});
         else if (!doc.contains("schema") || !doc["schema"].is_string() ||
                  doc["schema"].get<std::string>() != kScenariosSchema)

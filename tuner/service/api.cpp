@@ -20,17 +20,23 @@ using nlohmann::json;
 
 namespace {
 
+// Responses never fail to encode: a message that quotes request bytes which are not UTF-8 (a
+// path, a header) gets U+FFFD in their place instead of a 500.
+std::string encode(const json& body) {
+  return body.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
 void send_error(httplib::Response& res, int status, const std::string& code,
                 const std::string& message, json details = json::array()) {
   res.status = status;
   res.set_content(
-      json{{"error", {{"code", code}, {"message", message}, {"details", details}}}}.dump(),
+      encode(json{{"error", {{"code", code}, {"message", message}, {"details", details}}}}),
       "application/json");
 }
 
 void send_json(httplib::Response& res, int status, const json& body) {
   res.status = status;
-  res.set_content(body.dump(), "application/json");
+  res.set_content(encode(body), "application/json");
 }
 
 json nullable(const std::string& s) { return s.empty() ? json(nullptr) : json(s); }

@@ -1,8 +1,14 @@
 #include "ftc/tune/service/service.hpp"
 
+#include <arpa/inet.h>
+#include <netdb.h>
+#include <netinet/in.h>
 #include <spdlog/spdlog.h>
+#include <sys/socket.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <thread>
 
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
@@ -15,16 +21,66 @@ namespace ftc::tune {
 
 using nlohmann::json;
 
-bool is_loopback(const std::string& host) {
-  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+namespace {
+
+// Why `host` is not loopback only ("" when it is): the addresses it resolves to are compared,
+// not its spelling, since a name like 127.x.example may resolve anywhere, and the server listens
+// on whichever of its addresses binds.
+std::string not_loopback(const std::string& host) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_PASSIVE;
+  addrinfo* found = nullptr;
+  if (const int rc = ::getaddrinfo(host.c_str(), nullptr, &hints, &found); rc != 0)
+    return std::string("cannot resolve it: ").append(::gai_strerror(rc));
+  if (found == nullptr) return "it resolves to no address";
+  std::string outside;
+  for (const addrinfo* a = found; a != nullptr; a = a->ai_next) {
+    bool loopback = false;
+    char text[INET6_ADDRSTRLEN] = "?";
+    if (a->ai_family == AF_INET) {
+      const in_addr& v4 = reinterpret_cast<const sockaddr_in*>(a->ai_addr)->sin_addr;
+      loopback = (ntohl(v4.s_addr) >> 24) == 127;
+      ::inet_ntop(AF_INET, &v4, text, sizeof text);
+    } else if (a->ai_family == AF_INET6) {
+      const in6_addr& v6 = reinterpret_cast<const sockaddr_in6*>(a->ai_addr)->sin6_addr;
+      loopback = IN6_IS_ADDR_LOOPBACK(&v6) || (IN6_IS_ADDR_V4MAPPED(&v6) && v6.s6_addr[12] == 127);
+      ::inet_ntop(AF_INET6, &v6, text, sizeof text);
+    }
+    if (!loopback && outside.empty()) outside = text;
+  }
+  ::freeaddrinfo(found);
+  return outside.empty() ? "" : std::string("it resolves to ").append(outside);
 }
+
+// Why a bind failed, from its errno.
+std::string bind_failure(int err) {
+  switch (err) {
+    case EADDRINUSE:
+      return "address in use (is another server listening on that port?)";
+    case EADDRNOTAVAIL:
+      return "not an address of this machine";
+    case EACCES:
+      return "permission denied (ports below 1024 need privileges)";
+    default:
+      return err != 0 ? std::strerror(err) : "the address cannot be bound";
+  }
+}
+
+}  // namespace
+
+bool is_loopback(const std::string& host) { return not_loopback(host).empty(); }
 
 std::vector<FieldError> ServiceOptions::validate() const {
   std::vector<FieldError> errs;
-  if (!is_loopback(bind) && !token)
-    errs.push_back({"--bind", "refusing to listen on " + bind +
-                                  " (not loopback) without --token-file: anyone who can reach it "
-                                  "could submit jobs"});
+  if (!token)
+    if (const std::string why = not_loopback(bind); !why.empty())
+      errs.push_back({"--bind", std::string("refusing to listen on ")
+                                    .append(bind)
+                                    .append(" without --token-file: it is not loopback (")
+                                    .append(why)
+                                    .append("), so anyone who can reach it could submit jobs")});
   if (port < 0 || port > 65535) errs.push_back({"--port", "must be in 0..65535"});
   if (concurrent_jobs < 1 || concurrent_jobs > 64)
     errs.push_back({"--concurrent-jobs", "must be in 1..64"});
@@ -68,13 +124,26 @@ int TuningService::start() {
   if (s.recovered > 0)
     spdlog::info("{} job(s) left running by an earlier server are queued again", s.recovered);
   s.api.configure(s.http);
+  // cpp-httplib's default sets SO_REUSEPORT, with which a second server on the same port binds
+  // too and the kernel splits the connections between the two. SO_REUSEADDR alone still allows
+  // a restart while old connections linger in TIME_WAIT.
+  s.http.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   int port = s.opt.port;
-  if (port == 0) {
-    port = s.http.bind_to_any_port(s.opt.bind);
-    if (port <= 0) throw std::runtime_error("cannot bind to " + s.opt.bind);
-  } else if (!s.http.bind_to_port(s.opt.bind, port)) {
-    throw std::runtime_error("cannot bind to " + s.opt.bind + ":" + std::to_string(port) +
-                             " (in use, or not an address of this machine)");
+  errno = 0;
+  const bool bound = port == 0 ? (port = s.http.bind_to_any_port(s.opt.bind)) > 0
+                               : s.http.bind_to_port(s.opt.bind, port);
+  if (!bound) {
+    const int err = errno;
+    throw InputError(s.opt.port == 0 ? "--bind" : "--port", "",
+                     std::string("cannot listen on ")
+                         .append(s.opt.bind)
+                         .append(":")
+                         .append(std::to_string(s.opt.port))
+                         .append(": ")
+                         .append(bind_failure(err)));
   }
   s.listener = std::thread([&s] { s.http.listen_after_bind(); });
   while (!s.http.is_running()) std::this_thread::sleep_for(std::chrono::milliseconds(1));

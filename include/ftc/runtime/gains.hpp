@@ -7,8 +7,12 @@
 //   4> controller->reset(); every Ts:  u_d = controller->step(t, X1, X2, a);
 //
 // The loader refuses a file with another schema, a missing or unknown field, a controller
-// field out of its valid range, tuned values that disagree with the controller, or gains tuned
-// for another sample time than the caller's — each with an InputError naming the JSON path.
+// field out of its valid range, tuned values that disagree with the controller, a fitness of 0
+// or null (every candidate diverged in tuning), or gains tuned for another sample time or
+// another plant model than the caller's — each with an InputError naming the JSON path. The
+// plant's parameters are compared when the caller gives them (check_plant). The file carries
+// the SHA-256 of its job, which needs the job (and the tuner) to check, and no hash of its own;
+// it is written atomically, so a torn file is a JSON error.
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json_fwd.hpp>
@@ -31,7 +35,7 @@ struct Gains {
   std::vector<std::pair<std::string, double>> tuned;  // name → value
   double sample_time = 0.0;                           // Ts the gains were tuned for, s
   sim::PlantSpec plant;                               // the plant they were tuned on
-  std::optional<double> fitness;                      // null in the file: every candidate diverged
+  std::optional<double> fitness;  // > 0: the loader refuses a null or 0 (all candidates diverged)
   std::string job_name;
   std::string job_sha256;
 };
@@ -47,13 +51,20 @@ nlohmann::json gains_json_schema();
 // 1e-12 relative: a Ts written in a file and re-read may differ in its last bit).
 void check_sample_time(const Gains& gains, double sample_time);
 
+// Throws InputError when the gains were tuned on another plant model (Plant::model()).
+void check_plant_model(const Gains& gains, const std::string& model);
+// Throws InputError, naming each parameter that differs (equal within 1e-12 relative), when
+// the gains were tuned on another plant than `expected` (empty values: the model's defaults).
+void check_plant(const Gains& gains, const sim::PlantSpec& expected);
+
 // Builds the controller for a plant of any shape; throws InputError when `sample_time` differs
-// from the gains' one.
+// from the gains' one or `plant` is of another model than the one they were tuned on.
 template <int N, int M>
 std::unique_ptr<sim::Controller<N, M>> make_controller(const Gains& gains,
                                                        const sim::Plant<N, M>& plant,
                                                        double sample_time) {
   check_sample_time(gains, sample_time);
+  check_plant_model(gains, plant.model());
   return sim::make_controller(gains.controller, plant, sample_time);
 }
 template <int N, int M>

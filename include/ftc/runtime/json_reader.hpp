@@ -8,6 +8,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ftc/sim/input_error.hpp"
@@ -60,9 +61,16 @@ class ObjectReader {
   std::set<std::string> seen_;
 };
 
-// Parses JSON text; a syntax error is an InputError(source) "invalid JSON: ... at line L, column
-// C".
+// Parses JSON text strictly; every problem is an InputError(source): a syntax error or text
+// that is not UTF-8 ("invalid JSON: ... at line L, column C"), a number beyond the range of a
+// double and a key that appears twice in an object (each with its JSON path), nesting deeper
+// than 256 levels.
 nlohmann::json parse_json_text(const std::string& text, const std::string& source);
+
+// Offset of the first byte that is not part of well-formed UTF-8, nullopt when all are.
+std::optional<std::size_t> invalid_utf8(std::string_view text);
+// `text` with every byte that is not well-formed UTF-8 written as \xHH: safe to quote.
+std::string printable(std::string_view text);
 
 // The whole file, or nullopt when it cannot be opened (callers word the error for their input).
 std::optional<std::string> read_file(const std::filesystem::path& path);

@@ -38,6 +38,8 @@ struct ServiceOptions {
   std::vector<FieldError> validate() const;
 };
 
+// True when every address `host` resolves to is a loopback one (127.0.0.0/8, ::1); false when
+// it cannot be resolved.
 bool is_loopback(const std::string& host);
 
 class TuningService {
@@ -49,6 +51,8 @@ class TuningService {
   TuningService& operator=(const TuningService&) = delete;
 
   // Recovers crashed jobs, binds, starts the listener and the workers; returns the bound port.
+  // Throws InputError when the address cannot be bound (in use by another server, not an
+  // address of this machine).
   int start();
   // Graceful shutdown, see above. Idempotent.
   void stop();
