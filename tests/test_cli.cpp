@@ -6,6 +6,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "short_job.hpp"
 
 using nlohmann::json;
 using namespace ftc::testing;
@@ -266,4 +268,24 @@ TEST(Cli, ServeOnAPortInUseExitsTwo) {
   EXPECT_NE(slurp(dir / "err").find("127.0.0.1:" + std::to_string(port) + ": address in use"),
             std::string::npos)
       << slurp(dir / "err");
+}
+
+// A run whose every candidate diverges writes its files for diagnosis but exits 1, also with
+// --quiet, and its gains file is one the runtime loader refuses.
+TEST(Cli, RunWhoseEveryCandidateDivergesExitsOne) {
+  const auto dir = fresh_dir("cli-all-diverge");
+  json j = short_table1_job();
+  // c2 above about 9e4 diverges at 1 ms sampling (see TuningRun.FinishesWhenSomeCandidatesDiverge).
+  j["tuning"]["parameters"] = {{"c2", {2e5, 3e5}}};
+  ftc::tune::write_file_atomic(dir / "job.json", j.dump(2));
+  const CliResult r = run_cli(
+      "run -q --out '" + (dir / "out").string() + "' '" + (dir / "job.json").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("every candidate diverged"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("must not be deployed"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::is_regular_file(dir / "out" / "gains.json"));
+  const CliResult sim = run_cli("simulate --gains '" + (dir / "out" / "gains.json").string() +
+                                    "' '" + (dir / "job.json").string() + "' -q",
+                                dir);
+  EXPECT_EQ(sim.exit_code, 2) << sim.err;
 }

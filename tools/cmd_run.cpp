@@ -163,8 +163,6 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   run["job_file"] = o.job;
   tune::write_file_atomic(out / "run.json", run.dump(2) + "\n");
 
-  if (r.optimization.best_fitness == 0.0)
-    spdlog::warn("every candidate diverged: the gains file holds a diverging controller");
   for (const std::string& w : r.warnings) spdlog::warn("{}", w);
   if (!g.quiet) {
     std::printf("tuned %s: %s\n", tune::display_name(job.controller.type).c_str(),
@@ -192,8 +190,19 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
         "job.json, run.json%s} and trajectories/\n",
         out.c_str(), o.baseline ? ", history-random.csv" : "");
   }
-  if (o.report) return render_run_report(out.string(), "html", g.quiet);
-  return 0;
+  const int report_status = o.report ? render_run_report(out.string(), "html", g.quiet) : 0;
+  // Gains that diverge on what the objective counts must not reach a spacecraft: the files stay
+  // for diagnosis (and the gains loader refuses them), and the exit status says so, --quiet or
+  // not.
+  if (!(r.optimization.best_fitness > 0.0)) {
+    std::fprintf(stderr,
+                 "ftctune: error: every candidate diverged (fitness 0): %s/gains.json holds a "
+                 "diverging controller and must not be deployed; narrow "
+                 "tuning.parameters or check the scenarios\n",
+                 out.c_str());
+    return 1;
+  }
+  return report_status;
 }
 
 }  // namespace
