@@ -289,3 +289,25 @@ TEST(Cli, RunWhoseEveryCandidateDivergesExitsOne) {
                                 dir);
   EXPECT_EQ(sim.exit_code, 2) << sim.err;
 }
+
+// A token file others can read is refused before the server starts, as ssh refuses such a key.
+TEST(Cli, ServeRefusesATokenFileOthersCanRead) {
+  const auto dir = fresh_dir("serve-token-mode");
+  const auto token = dir / "token";
+  ftc::tune::write_file_atomic(token, "s3cret\n");
+  std::filesystem::permissions(
+      token,
+      std::filesystem::perms::owner_read | std::filesystem::perms::owner_write |
+          std::filesystem::perms::group_read | std::filesystem::perms::others_read,
+      std::filesystem::perm_options::replace);
+  const std::string cmd = "cd '" FTC_SOURCE_DIR "' && timeout -s KILL 20 '" FTC_CLI
+                          "' serve --port 0 --token-file '" +
+                          token.string() + "' --store '" + (dir / "store").string() +
+                          "' >/dev/null 2>'" + (dir / "err").string() + "'";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2) << slurp(dir / "err");
+  EXPECT_NE(slurp(dir / "err").find("is accessible by other users (mode 0644); chmod 600"),
+            std::string::npos)
+      << slurp(dir / "err");
+}

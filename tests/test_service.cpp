@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 
 #include <atomic>
 #include <chrono>
@@ -372,7 +373,26 @@ TEST(Service, StoreIsLockedAgainstASecondServer) {
   Service s;
   tune::ServiceOptions o;
   o.store = s.dir / "store";
-  EXPECT_THROW(tune::TuningService{o}, std::runtime_error);
+  try {
+    tune::TuningService second{o};
+    ADD_FAILURE() << "a second server opened the store";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("is in use by another ftctune serve"), std::string::npos)
+        << e.what();
+  }
+}
+
+// The store holds every user's jobs and results: only its owner may read it.
+TEST(Service, StoreIsPrivateToItsOwner) {
+  Service s;
+  const auto mode = [](const std::filesystem::path& p) {
+    struct stat st {};
+    EXPECT_EQ(::stat(p.c_str(), &st), 0) << p;
+    return st.st_mode & 07777;
+  };
+  EXPECT_EQ(mode(s.dir / "store"), 0700u);
+  for (const char* f : {"lock", "ftctune.db", "ftctune.db-wal"})
+    EXPECT_EQ(mode(s.dir / "store" / f), 0600u) << f;
 }
 
 TEST(Service, FiftyConcurrentSubmissionsAllComplete) {

@@ -1,5 +1,6 @@
 // ftctune serve: the tuning service. SIGTERM or SIGINT shut it down gracefully.
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 
 #include <csignal>
 #include <cstdio>
@@ -21,6 +22,14 @@ struct ServeOptions {
 };
 
 std::string read_token(const std::string& file) {
+  // A token others can read is no secret: refuse it as ssh refuses a private key.
+  struct stat st {};
+  if (::stat(file.c_str(), &st) == 0 && (st.st_mode & (S_IRWXG | S_IRWXO)) != 0) {
+    char mode[8];
+    std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
+    throw InputError("--token-file", "",
+                     file + " is accessible by other users (mode " + mode + "); chmod 600 " + file);
+  }
   const std::optional<std::string> text = tune::read_file(file);
   if (!text) throw InputError("--token-file", "", "cannot read " + file);
   std::string t = *text;

@@ -3,14 +3,19 @@
 #include <fcntl.h>
 #include <sqlite3.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <random>
 #include <stdexcept>
+
+#include "ftc/sim/input_error.hpp"
 
 namespace ftc::tune {
 
@@ -176,15 +181,31 @@ class JobStore::Statement {
 };
 
 JobStore::JobStore(const std::filesystem::path& directory) {
-  std::filesystem::create_directories(directory);
+  namespace fs = std::filesystem;
+  // Jobs, results and the queue are the server owner's alone: the directory is 0700 and its
+  // files 0600 (SQLite gives its -wal and -shm files the database file's mode).
+  fs::create_directories(directory);
+  fs::permissions(directory, fs::perms::owner_all, fs::perm_options::replace);
   // One server per store: two would run the same queue and jobs twice.
   const std::string lock = (directory / "lock").string();
-  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (lock_fd_ < 0 || ::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
-    if (lock_fd_ >= 0) ::close(lock_fd_);
-    throw std::runtime_error("the store " + directory.string() + " is in use by another server");
+  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+  if (lock_fd_ < 0)
+    throw InputError(
+        "--store", "",
+        std::string("cannot open ").append(lock).append(": ").append(std::strerror(errno)));
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    ::close(lock_fd_);
+    throw InputError("--store", "",
+                     directory.string() +
+                         " is in use by another ftctune serve (one server per "
+                         "store); stop it or give another --store");
   }
+  ::fchmod(lock_fd_, 0600);
   db_path_ = directory / "ftctune.db";
+  if (const int fd = ::open(db_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600); fd >= 0) {
+    ::fchmod(fd, 0600);
+    ::close(fd);
+  }
   if (sqlite3_open_v2(db_path_.c_str(), &db_,
                       SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
                       nullptr) != SQLITE_OK) {
