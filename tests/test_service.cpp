@@ -228,6 +228,42 @@ TEST(Service, RejectsBadRequestsWithJsonErrors) {
 
   expect_error(c.Post("/v1/jobs", std::string(20 * 1024, ' '), "application/json"), 413,
                "payload_too_large");
+  // Chunked (no Content-Length): the limit holds while the body arrives; the server keeps at
+  // most the limit of it and answers 413 (it used to hold all 8 MiB, then say 400).
+  {
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(s.port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    const std::string head =
+        "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+        "Transfer-Encoding: chunked\r\n\r\n";
+    ASSERT_EQ(::send(fd, head.data(), head.size(), MSG_NOSIGNAL),
+              static_cast<ssize_t>(head.size()));
+    const std::string chunk = "10000\r\n" + std::string(0x10000, ' ') + "\r\n";
+    std::size_t sent = 0;
+    for (int i = 0; i < 128; ++i) {  // 8 MiB
+      const ssize_t n = ::send(fd, chunk.data(), chunk.size(), MSG_NOSIGNAL);
+      if (n <= 0) break;
+      sent += static_cast<std::size_t>(n);
+    }
+    ::send(fd, "0\r\n\r\n", 5, MSG_NOSIGNAL);
+    timeval wait{10, 0};
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &wait, sizeof wait);
+    std::string reply;
+    char buf[4096];
+    while (reply.find("payload_too_large") == std::string::npos) {
+      const ssize_t got = ::recv(fd, buf, sizeof buf, 0);
+      if (got <= 0) break;
+      reply.append(buf, static_cast<std::size_t>(got));
+    }
+    ::close(fd);
+    EXPECT_EQ(reply.rfind("HTTP/1.1 413", 0), 0u) << reply;
+    EXPECT_NE(reply.find("payload_too_large"), std::string::npos) << reply;
+    EXPECT_EQ(sent, 128u * chunk.size());
+  }
   r = c.Post("/v1/jobs", short_table1_job().dump(), "application/json");  // 9 × 5000 steps… fits
   EXPECT_EQ(r->status, 201) << r->body;
   r = c.Post("/v1/jobs", long_job().dump(), "application/json");  // 488 × 10000 = 4.9e6 > 1e6

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <charconv>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -308,12 +309,44 @@ void Api::configure(httplib::Server& http) {
   const auto handler = [this](const httplib::Request& req, httplib::Response& res) {
     dispatch(req, res);
   };
+  // Bodies are read here, not by the library: it holds a chunked body (no Content-Length) in
+  // memory whole before any limit applies, so a 300 MB chunked POST took 600 MB. This keeps at
+  // most the limit, chunked or not (the library refuses a Content-Length above it unread).
+  const auto with_body = [this](const httplib::Request& req, httplib::Response& res,
+                                const httplib::ContentReader& read) {
+    httplib::Request r = req;
+    bool too_large = false;
+    // Past the limit the rest is read and dropped, not kept: closing on unread bytes would
+    // reset the connection, and the client would lose the 413 that says why.
+    const bool complete = read([&](const char* data, std::size_t n) {
+      too_large = too_large || r.body.size() + n > opt_.max_body_bytes;
+      if (!too_large) r.body.append(data, n);
+      return true;
+    });
+    // The library reads nothing of a body whose Content-Length is above the limit.
+    if (!complete && req.has_header("Content-Length")) {
+      const std::string length = req.get_header_value("Content-Length");
+      std::uint64_t n = 0;
+      const auto [end, ec] = std::from_chars(length.data(), length.data() + length.size(), n);
+      too_large =
+          ec == std::errc::result_out_of_range || (ec == std::errc() && n > opt_.max_body_bytes);
+    }
+    if (!complete && !too_large) {
+      send_error(res, 400, "bad_request", "the request body could not be read");
+      return;
+    }
+    if (too_large) {
+      send_error(res, 413, "payload_too_large", "the request body exceeds the server's limit");
+      return;
+    }
+    dispatch(r, res);
+  };
   // One catch-all route per method: dispatch() tells 404 (no such resource) from 405.
   http.Get(".*", handler);
-  http.Post(".*", handler);
-  http.Put(".*", handler);
-  http.Patch(".*", handler);
-  http.Delete(".*", handler);
+  http.Post(".*", with_body);
+  http.Put(".*", with_body);
+  http.Patch(".*", with_body);
+  http.Delete(".*", with_body);
   http.Options(".*", handler);
   http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
     if (authorised(req)) return httplib::Server::HandlerResponse::Unhandled;
