@@ -1,6 +1,8 @@
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
+#include <sys/file.h>
 #include <sys/socket.h>
 
 #include <nlohmann/json.hpp>
@@ -310,4 +312,47 @@ TEST(Cli, ServeRefusesATokenFileOthersCanRead) {
   EXPECT_NE(slurp(dir / "err").find("is accessible by other users (mode 0644); chmod 600"),
             std::string::npos)
       << slurp(dir / "err");
+}
+
+// Two runs into one directory would interleave their files: the second is refused while the
+// first holds the directory.
+TEST(Cli, RunRefusesAnOutputDirectoryAnotherRunIsWriting) {
+  const auto dir = fresh_dir("run-locked");
+  std::filesystem::create_directories(dir / "out");
+  const int fd = ::open((dir / "out").c_str(), O_RDONLY | O_DIRECTORY);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);  // as a running `ftctune run` holds it
+  const CliResult r =
+      run_cli("run jobs/table1.json -q --out '" + (dir / "out").string() + "'", dir);
+  ::close(fd);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("is being written by another ftctune run"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "gains.json"));
+}
+
+// A full disk in the middle of writing a run: exit 2 naming the file and the errno, and no
+// gains.json, so the half-written directory is never taken for a finished run.
+TEST(Cli, RunStoppedByAFullDiskLeavesNoGainsFile) {
+  const auto dir = fresh_dir("run-disk-full");
+  json j = short_table1_job();
+  ftc::tune::write_file_atomic(dir / "job.json", j.dump(2));
+  const std::string job = "'" + (dir / "job.json").string() + "'";
+  // Step 3 is run.json's rename (written first); step 12 falls among the run's other files.
+  for (const char* step : {"3", "12"}) {
+    const auto out = dir / (std::string("out-") + step);
+    ::setenv("FTCTUNE_FAIL_IO", step, 1);
+    const CliResult r = run_cli("run -q " + job + " --out '" + out.string() + "'", dir);
+    ::unsetenv("FTCTUNE_FAIL_IO");
+    EXPECT_EQ(r.exit_code, 2) << step << ": " << r.err;
+    EXPECT_NE(r.err.find("No space left on device"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(out.string()), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out / "gains.json")) << step;
+    // No temporary file is left behind.
+    for (const auto& e : std::filesystem::recursive_directory_iterator(out))
+      EXPECT_EQ(e.path().string().find(".tmp."), std::string::npos) << e.path();
+    // Once there is space again, --force makes the run whole.
+    const CliResult again = run_cli("run -q --force " + job + " --out '" + out.string() + "'", dir);
+    EXPECT_EQ(again.exit_code, 0) << again.err;
+    EXPECT_TRUE(std::filesystem::exists(out / "gains.json"));
+  }
 }

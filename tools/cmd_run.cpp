@@ -1,5 +1,7 @@
 // ftctune run JOB: tune the job's controller and write the gains file and its companions.
+#include <fcntl.h>
 #include <spdlog/spdlog.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -57,31 +59,74 @@ std::string params_text(const std::vector<std::string>& names, const tune::Decis
   return s;
 }
 
-// Whether a directory holds an ftctune run (what `run` writes first and last).
+// Whether a directory holds an ftctune run (run.json and gains.json are what `run` writes first
+// and last).
 bool holds_run(const std::filesystem::path& d) {
   std::error_code ec;
   return std::filesystem::exists(d / "gains.json", ec) ||
          std::filesystem::exists(d / "run.json", ec);
 }
 
-// Where a run writes. A run is never written over silently: a given --out that holds a run is
-// refused, the default out/<name> moves on to out/<name>-2, -3, ... (with a warning); --force
+// Where a run writes, locked for the run. A run is never written over silently: a given --out
+// that holds a run, or that another run is writing, is refused; the default out/<name> moves on
+// to out/<name>-2, -3, ... (with a warning); --force
 // replaces the run (its files are cleared only once the new run has finished, see
 // clear_previous_run). Other files in the directory (an evaluation, a landscape, fetched
 // service results) are not a run and are left alone.
-std::filesystem::path run_directory(const std::filesystem::path& wanted, bool given, bool force) {
+// An exclusive lock on the output directory for the whole run (flock on the directory itself,
+// released when the process ends, however it ends): two runs into one directory would
+// interleave their files.
+class DirectoryLock {
+ public:
+  explicit DirectoryLock(const std::filesystem::path& dir) {
+    std::filesystem::create_directories(dir);
+    fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd_ < 0)
+      throw std::filesystem::filesystem_error("cannot open", dir,
+                                              std::error_code(errno, std::generic_category()));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      fd_ = -1;
+    }
+  }
+  ~DirectoryLock() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  DirectoryLock(const DirectoryLock&) = delete;
+  DirectoryLock& operator=(const DirectoryLock&) = delete;
+  bool held() const { return fd_ >= 0; }
+
+ private:
+  int fd_ = -1;
+};
+
+std::unique_ptr<DirectoryLock> run_directory(std::filesystem::path& out, bool given, bool force) {
   namespace fs = std::filesystem;
-  if (!holds_run(wanted) || force) return wanted;
-  if (given)
-    throw InputError("--out", "",
-                     wanted.string() +
-                         " already holds a run; choose another directory, or pass "
-                         "--force to replace that run");
-  fs::path out = wanted;
-  for (int k = 2; holds_run(out); ++k) out = wanted.string() + "-" + std::to_string(k);
-  spdlog::warn("{} already holds a run: writing to {} (--force replaces it instead)",
-               wanted.string(), out.string());
-  return out;
+  const fs::path wanted = out;
+  for (int k = 2;; ++k) {
+    if (!holds_run(out) || force) {
+      auto lock = std::make_unique<DirectoryLock>(out);
+      if (lock->held()) {
+        if (out != wanted)
+          spdlog::warn(
+              "{} already holds a run or is in use: writing to {} (--force replaces a "
+              "run instead)",
+              wanted.string(), out.string());
+        return lock;
+      }
+      if (given)
+        throw InputError("--out", "",
+                         out.string() +
+                             " is being written by another ftctune run; wait for it to finish "
+                             "or choose another directory");
+    } else if (given) {
+      throw InputError("--out", "",
+                       out.string() +
+                           " already holds a run; choose another directory, or pass "
+                           "--force to replace that run");
+    }
+    out = wanted.string() + "-" + std::to_string(k);
+  }
 }
 
 // With --force, after the new run has finished and before its files are written: remove what a
@@ -100,8 +145,8 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   const tune::Job job = tune::load_job(o.job);
   if (!job.tuning)
     throw InputError(o.job, "/tuning", "is required by ftctune run (what should be tuned?)");
-  const fs::path out = run_directory(o.out.empty() ? default_out_dir(job) : fs::path(o.out),
-                                     !o.out.empty(), o.force);
+  fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
+  const std::unique_ptr<DirectoryLock> lock = run_directory(out, !o.out.empty(), o.force);
   const std::int64_t total = job.tuning->algorithm->evaluations();
   std::vector<std::string> names;
   for (const tune::ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
@@ -133,9 +178,9 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   bar.clear();
   const double wall = std::chrono::duration<double>(clock::now() - t0).count();
 
-  if (o.force) clear_previous_run(out);
-  const std::vector<std::string> written = tune::write_outputs(r, out);
-  std::int64_t baseline_simulations = 0;
+  // All computing first, then the files, gains.json last: a run stopped on the way (a full
+  // disk, a kill) leaves no gains.json, so nothing takes its files for a finished run.
+  std::optional<tune::TuningOutcome> random_baseline;
   if (o.baseline) {
     // Random search with the same budget and seed: what the algorithm buys (Fig. 5).
     tune::Job random = job;
@@ -143,25 +188,30 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     tune::RunOptions rr;
     rr.seed = o.seed;
     rr.compare = false;
-    const tune::TuningOutcome b = tune::tune(random, evaluator, rr);
-    baseline_simulations = b.simulations;
-    tune::write_file_atomic(out / "history-random.csv", tune::history_csv(b));
+    random_baseline = tune::tune(random, evaluator, rr);
     spdlog::info("random search with the same budget: best J = {:.6g} ({})",
-                 b.optimization.best_fitness, params_text(names, b.optimization.best));
+                 random_baseline->optimization.best_fitness,
+                 params_text(names, random_baseline->optimization.best));
   }
   json run = tune::run_metadata(r, wall);
   // Every file of the run, and every simulation, the random-search baseline's included.
-  json files = written;
-  if (o.baseline) {
+  json files = json::array();
+  for (const auto& [name, content] : tune::output_files(r)) files.push_back(name);
+  if (random_baseline) {
     files.push_back("history-random.csv");
-    run["simulations"] = run["simulations"].get<std::int64_t>() + baseline_simulations;
+    run["simulations"] = run["simulations"].get<std::int64_t>() + random_baseline->simulations;
   }
   files.push_back("run.json");
   run["files"] = files;
   run["started_at"] = started;
   run["host"] = hostname();
   run["job_file"] = o.job;
+
+  if (o.force) clear_previous_run(out);
+  if (random_baseline)
+    tune::write_file_atomic(out / "history-random.csv", tune::history_csv(*random_baseline));
   tune::write_file_atomic(out / "run.json", run.dump(2) + "\n");
+  tune::write_outputs(r, out);
 
   for (const std::string& w : r.warnings) spdlog::warn("{}", w);
   if (!g.quiet) {

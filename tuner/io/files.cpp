@@ -3,16 +3,60 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 
 namespace ftc::tune {
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
   write_file_atomic(path, [&](const ChunkSink& sink) { sink(content); });
+}
+
+namespace {
+
+std::atomic<int> g_fail_after{-1};  // -1: not yet read from the environment
+std::atomic<int> g_fail_errno{ENOSPC};
+
+// True when this I/O step is the one to fail (errno set as the real call would).
+bool injected_failure() {
+  int n = g_fail_after.load();
+  if (n < 0) {
+    int after = 0, error = ENOSPC;
+    if (const char* e = std::getenv("FTCTUNE_FAIL_IO"))
+      if (std::sscanf(e, "%d:%d", &after, &error) < 1) after = 0;
+    int expected = -1;
+    g_fail_after.compare_exchange_strong(expected, after);
+    if (expected == -1) g_fail_errno = error;
+    n = g_fail_after.load();
+  }
+  while (n > 0) {
+    if (g_fail_after.compare_exchange_weak(n, n - 1)) {
+      if (n == 1) {
+        errno = g_fail_errno.load();
+        return true;
+      }
+      return false;
+    }
+  }
+  return false;
+}
+
+[[noreturn]] void io_error(const std::string& step, const std::filesystem::path& p, int error) {
+  throw std::filesystem::filesystem_error(step, p, std::error_code(error, std::generic_category()));
+}
+
+}  // namespace
+
+void inject_io_failure(int after, int error) {
+  g_fail_errno = error;
+  g_fail_after = after;
 }
 
 void write_file_atomic(const std::filesystem::path& path,
@@ -21,32 +65,50 @@ void write_file_atomic(const std::filesystem::path& path,
   if (path.has_parent_path()) fs::create_directories(path.parent_path());
   const fs::path tmp = path.string() + ".tmp." + std::to_string(::getpid());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw std::runtime_error("cannot write " + tmp.string());
-  const auto fail = [&](const std::string& what) {
+  if (fd < 0) io_error("cannot create", tmp, errno);
+  const auto fail = [&](const std::string& step, int error) {
     ::close(fd);
     ::unlink(tmp.c_str());
-    throw std::runtime_error(what + " " + tmp.string());
+    io_error(step, path, error);
   };
+  int write_error = 0;
   try {
     produce([&](std::string_view chunk) {
       std::size_t done = 0;
       while (done < chunk.size()) {
-        const ssize_t n = ::write(fd, chunk.data() + done, chunk.size() - done);
-        if (n < 0) throw std::runtime_error("cannot write");
+        const ssize_t n =
+            injected_failure() ? -1 : ::write(fd, chunk.data() + done, chunk.size() - done);
+        if (n < 0) {
+          if (errno == EINTR) continue;
+          write_error = errno;
+          throw std::runtime_error("write");
+        }
         done += static_cast<std::size_t>(n);
       }
     });
-  } catch (const std::exception& e) {
-    fail(e.what());
+  } catch (...) {
+    if (write_error != 0) fail("cannot write", write_error);
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw;
   }
   // fsync before rename: after a crash the new name holds either the old or the whole new file.
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+  if (injected_failure() || ::fsync(fd) != 0) fail("cannot sync", errno);
+  if (::close(fd) != 0) {
+    const int error = errno;
     ::unlink(tmp.c_str());
-    throw std::runtime_error("cannot write " + tmp.string());
+    io_error("cannot write", path, error);
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+  if (injected_failure() || std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int error = errno;
     ::unlink(tmp.c_str());
-    throw std::runtime_error("cannot rename " + tmp.string() + " to " + path.string());
+    io_error("cannot rename into place", path, error);
+  }
+  // And the directory, so that the rename itself survives a crash.
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
   }
 }
 

@@ -306,10 +306,15 @@ json run_metadata(const TuningOutcome& r, double wall_seconds) {
 
 std::vector<std::string> write_outputs(const TuningOutcome& r, const std::filesystem::path& dir) {
   std::vector<std::string> names;
-  for (const auto& [name, content] : output_files(r)) {
-    write_file_atomic(dir / name, content);
-    names.push_back(name);
-  }
+  const std::map<std::string, std::string> files = output_files(r);
+  // gains.json last: a directory that has it holds every other file of the same run.
+  for (const auto& [name, content] : files)
+    if (name != "gains.json") {
+      write_file_atomic(dir / name, content);
+      names.push_back(name);
+    }
+  write_file_atomic(dir / "gains.json", files.at("gains.json"));
+  names.push_back("gains.json");
   return names;
 }
 

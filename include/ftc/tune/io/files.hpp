@@ -14,12 +14,20 @@ namespace ftc::tune {
 
 using json_io::read_file;
 
-// Creates parent directories as needed. Throws std::runtime_error on I/O failure.
+// Creates parent directories as needed. The file and then its directory are synced, so after
+// a crash the name holds the old or the whole new content. Throws std::filesystem::
+// filesystem_error naming the step, the file and the errno (e.g. "No space left on device").
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 // The same for content produced piece by piece (a large file never held in memory whole):
 // `produce` hands each chunk to the sink it is given.
 using ChunkSink = std::function<void(std::string_view)>;
 void write_file_atomic(const std::filesystem::path& path,
                        const std::function<void(const ChunkSink&)>& produce);
+
+// A test seam for I/O failures that needs no root and no full disk: the next `after`-th write,
+// fsync or rename of write_file_atomic (counting from 1, over all three) fails with `error`
+// (ENOSPC by default), once. 0 turns it off. Also set from the environment variable
+// FTCTUNE_FAIL_IO=N[:errno] when the first file is written, so that CLI tests can use it.
+void inject_io_failure(int after, int error = 28 /* ENOSPC */);
 
 }  // namespace ftc::tune

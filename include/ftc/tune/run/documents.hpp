@@ -46,7 +46,8 @@ std::map<std::string, std::string> output_files(const TuningOutcome& r);
 // simulations, peak memory of the process, seed, generator. Callers add where and when.
 nlohmann::json run_metadata(const TuningOutcome& r, double wall_seconds);
 
-// Writes output_files() into `dir`, each atomically; returns their names.
+// Writes output_files() into `dir`, each atomically, gains.json last (so a directory with a
+// gains.json holds the rest of its run); returns their names in the order written.
 std::vector<std::string> write_outputs(const TuningOutcome& r, const std::filesystem::path& dir);
 
 }  // namespace ftc::tune
