@@ -272,9 +272,9 @@ TEST(Cli, ServeOnAPortInUseExitsTwo) {
       << slurp(dir / "err");
 }
 
-// A run whose every candidate diverges writes its files for diagnosis but exits 1, also with
-// --quiet, and its gains file is one the runtime loader refuses.
-TEST(Cli, RunWhoseEveryCandidateDivergesExitsOne) {
+// A run whose every candidate diverges writes its files for diagnosis but exits 3 (not 1, an
+// internal error), also with --quiet, and its gains file is one the runtime loader refuses.
+TEST(Cli, RunWhoseEveryCandidateDivergesExitsThree) {
   const auto dir = fresh_dir("cli-all-diverge");
   json j = short_table1_job();
   // c2 above about 9e4 diverges at 1 ms sampling (see TuningRun.FinishesWhenSomeCandidatesDiverge).
@@ -282,7 +282,7 @@ TEST(Cli, RunWhoseEveryCandidateDivergesExitsOne) {
   ftc::tune::write_file_atomic(dir / "job.json", j.dump(2));
   const CliResult r = run_cli(
       "run -q --out '" + (dir / "out").string() + "' '" + (dir / "job.json").string() + "'", dir);
-  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_NE(r.err.find("every candidate diverged"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("must not be deployed"), std::string::npos) << r.err;
   EXPECT_TRUE(std::filesystem::is_regular_file(dir / "out" / "gains.json"));

@@ -19,7 +19,7 @@ std::string g9(double v) {
   return std::string(buf, ftc::tune::detail::write_g9(buf, v));
 }
 std::string f6(double v) {
-  char buf[48];
+  char buf[400];  // the room write_f6 needs from 1e15 up
   return std::string(buf, ftc::tune::detail::write_f6(buf, v));
 }
 std::string printf_g9(double v) {

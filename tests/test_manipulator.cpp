@@ -261,7 +261,8 @@ TEST(Manipulator, OpenLoopConservesEnergy) {
 // q(0) = (0.5, −0.4) rad under a sinusoidal disturbance on both joints and a 30 % loss of
 // effectiveness of actuator 1 (the shoulder motor) at 3 s. The Table 1 gains were designed for
 // the spacecraft, and larger losses on this arm are not all recovered by them (see
-// docs/model.md (the manipulator section)), so the fault here is one they are expected to ride through.
+// docs/model.md (the manipulator section)), so the fault here is one they are expected to ride
+// through.
 namespace {
 
 constexpr double kFaultOnset = 3.0;  // s

@@ -279,8 +279,9 @@ TEST(Report, SvgFiguresAreDecimatedToWhatTheEyeCanSee) {
     EXPECT_LE(std::filesystem::file_size(run / "figures" / (std::string(name) + ".svg")),
               400u * 1024)
         << name;
-  // Nothing a reader would see is lost: every curve keeps its extremes. The chattering
-  // NFTSMC's first command, a dense band after the first fault, is the hard case.
+  // Nothing a reader would see is lost: a curve keeps its extremes (within half a pixel; here the
+  // values themselves). The chattering NFTSMC's first command, a dense band after the first fault,
+  // is the hard case.
   const std::string gp = slurp(run / "figures" / "report.gp");
   const json comparison = json::parse(slurp(run / "comparison.json"));
   const std::string csv =

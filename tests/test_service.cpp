@@ -228,6 +228,9 @@ TEST(Service, RejectsBadRequestsWithJsonErrors) {
 
   expect_error(c.Post("/v1/jobs", std::string(20 * 1024, ' '), "application/json"), 413,
                "payload_too_large");
+  // A form upload is no job (the library could not even hand its parts over): 415, not 500.
+  expect_error(c.Post("/v1/jobs", httplib::MultipartFormDataItems{{"job", "{}", "job.json", ""}}),
+               415, "unsupported_media_type");
   // Chunked (no Content-Length): the limit holds while the body arrives; the server keeps at
   // most the limit of it and answers 413 (it used to hold all 8 MiB, then say 400).
   {

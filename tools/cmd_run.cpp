@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "cli.hpp"
@@ -106,7 +107,9 @@ std::unique_ptr<DirectoryLock> run_directory(std::filesystem::path& out, bool gi
   for (int k = 2;; ++k) {
     if (!holds_run(out) || force) {
       auto lock = std::make_unique<DirectoryLock>(out);
-      if (lock->held()) {
+      // Another run may have finished there between the look and the lock.
+      if (lock->held() && holds_run(out) && !force) lock.reset();
+      if (lock && lock->held()) {
         if (out != wanted)
           spdlog::warn(
               "{} already holds a run or is in use: writing to {} (--force replaces a "
@@ -114,7 +117,8 @@ std::unique_ptr<DirectoryLock> run_directory(std::filesystem::path& out, bool gi
               wanted.string(), out.string());
         return lock;
       }
-      if (given)
+      // --force names the run to replace: never another directory's.
+      if (given || force)
         throw InputError("--out", "",
                          out.string() +
                              " is being written by another ftctune run; wait for it to finish "
@@ -195,8 +199,9 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   }
   json run = tune::run_metadata(r, wall);
   // Every file of the run, and every simulation, the random-search baseline's included.
+  const std::map<std::string, std::string> outputs = tune::output_files(r);
   json files = json::array();
-  for (const auto& [name, content] : tune::output_files(r)) files.push_back(name);
+  for (const auto& [name, content] : outputs) files.push_back(name);
   if (random_baseline) {
     files.push_back("history-random.csv");
     run["simulations"] = run["simulations"].get<std::int64_t>() + random_baseline->simulations;
@@ -211,7 +216,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   if (random_baseline)
     tune::write_file_atomic(out / "history-random.csv", tune::history_csv(*random_baseline));
   tune::write_file_atomic(out / "run.json", run.dump(2) + "\n");
-  tune::write_outputs(r, out);
+  tune::write_output_files(outputs, out);
 
   for (const std::string& w : r.warnings) spdlog::warn("{}", w);
   if (!g.quiet) {
@@ -243,14 +248,14 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   const int report_status = o.report ? render_run_report(out.string(), "html", g.quiet) : 0;
   // Gains that diverge on what the objective counts must not reach a spacecraft: the files stay
   // for diagnosis (and the gains loader refuses them), and the exit status says so, --quiet or
-  // not.
+  // not, with a code of its own (3) that scripts can tell from an internal error (1).
   if (!(r.optimization.best_fitness > 0.0)) {
     std::fprintf(stderr,
                  "ftctune: error: every candidate diverged (fitness 0): %s/gains.json holds a "
                  "diverging controller and must not be deployed; narrow "
                  "tuning.parameters or check the scenarios\n",
                  out.c_str());
-    return 1;
+    return 3;
   }
   return report_status;
 }

@@ -1,6 +1,6 @@
 // ftctune: tunes fault-tolerant sliding-mode controllers offline.
 // Exit codes: 0 success, 2 invalid input (one line naming the file and JSON path) or a path that
-// cannot be written, 1 internal error.
+// cannot be written (a full disk too), 3 a run whose every candidate diverged, 1 internal error.
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 

@@ -90,8 +90,14 @@ int decimal_exponent(double a) {
   return k;
 }
 
+// The exact, slower path, into a buffer of its own: the caller's room is what the header
+// promises, not what to_chars would need for any value.
 char* slow(char* out, double v, std::chars_format f, int precision) {
-  return std::to_chars(out, out + 330, v, f, precision).ptr;
+  char buf[400];
+  const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, v, f, precision);
+  const std::size_t n = static_cast<std::size_t>(r.ptr - buf);
+  std::memcpy(out, buf, n);
+  return out + n;
 }
 
 }  // namespace

@@ -106,10 +106,15 @@ void write_file_atomic(const std::filesystem::path& path,
   }
   // And the directory, so that the rename itself survives a crash.
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
-  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dfd >= 0) {
-    ::fsync(dfd);
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd < 0) io_error("cannot sync directory of", path, errno);
+  // EINVAL: a file system that cannot sync directories (some network and FUSE ones).
+  if (::fsync(dfd) != 0 && errno != EINVAL) {
+    const int error = errno;
     ::close(dfd);
+    io_error("cannot sync directory of", path, error);
   }
+  ::close(dfd);
 }
 
 }  // namespace ftc::tune

@@ -216,7 +216,9 @@ std::string range_text(const Frame& f) {
 // Style 1 is the tuned controller's (darkest, solid); the others follow in their order.
 std::vector<int> style_ranks(const std::vector<Series>& series) {
   std::vector<int> rank(series.size());
-  int next = 1;
+  const bool any_tuned =
+      std::any_of(series.begin(), series.end(), [](const Series& s) { return s.tuned; });
+  int next = any_tuned ? 1 : 0;
   for (std::size_t i = 0; i < series.size(); ++i)
     if (!series[i].tuned) rank[i] = next++;
   for (std::size_t i = 0; i < series.size(); ++i)

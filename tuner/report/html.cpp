@@ -170,6 +170,10 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
   for (const char* ext : {".png", ".svg"}) {
     const fs::path file = run_dir / "landscape" / (std::string("landscape") + ext);
     if (!fs::is_regular_file(file)) continue;
+    // `run --force` keeps landscape/: one drawn before this run's gains may be of other gains'
+    // job and path, so only a landscape drawn after the run is shown.
+    std::error_code ec;
+    if (fs::last_write_time(file, ec) < fs::last_write_time(run_dir / "gains.json", ec)) break;
     const std::optional<std::string> bytes = read_file(file);
     if (!bytes) continue;
     h << "<h2>Landscape</h2>\n<figure><img alt=\"objective landscape\" src=\"data:image/"

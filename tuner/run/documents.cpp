@@ -305,8 +305,12 @@ json run_metadata(const TuningOutcome& r, double wall_seconds) {
 }
 
 std::vector<std::string> write_outputs(const TuningOutcome& r, const std::filesystem::path& dir) {
+  return write_output_files(output_files(r), dir);
+}
+
+std::vector<std::string> write_output_files(const std::map<std::string, std::string>& files,
+                                            const std::filesystem::path& dir) {
   std::vector<std::string> names;
-  const std::map<std::string, std::string> files = output_files(r);
   // gains.json last: a directory that has it holds every other file of the same run.
   for (const auto& [name, content] : files)
     if (name != "gains.json") {

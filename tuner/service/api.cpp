@@ -311,17 +311,30 @@ void Api::configure(httplib::Server& http) {
   };
   // Bodies are read here, not by the library: it holds a chunked body (no Content-Length) in
   // memory whole before any limit applies, so a 300 MB chunked POST took 600 MB. This keeps at
-  // most the limit, chunked or not (the library refuses a Content-Length above it unread).
+  // most the limit, chunked or not (a declared Content-Length above it the library reads past
+  // without keeping, then fails the read).
   const auto with_body = [this](const httplib::Request& req, httplib::Response& res,
                                 const httplib::ContentReader& read) {
+    // Form uploads are not part of the API (and the library cannot hand their parts to one
+    // receiver).
+    if (req.is_multipart_form_data()) {
+      send_error(res, 415, "unsupported_media_type", "send the job as application/json");
+      return;
+    }
     httplib::Request r = req;
     bool too_large = false;
+    std::size_t dropped = 0;
     // Past the limit the rest is read and dropped, not kept: closing on unread bytes would
-    // reset the connection, and the client would lose the 413 that says why.
+    // reset the connection, and the client would lose the 413 that says why. Up to a point: a
+    // client that keeps sending past 8 MiB more is cut off (and may not see the answer).
+    constexpr std::size_t kMaxDropped = 8u << 20;
     const bool complete = read([&](const char* data, std::size_t n) {
       too_large = too_large || r.body.size() + n > opt_.max_body_bytes;
-      if (!too_large) r.body.append(data, n);
-      return true;
+      if (!too_large)
+        r.body.append(data, n);
+      else
+        dropped += n;
+      return dropped <= kMaxDropped;
     });
     // The library reads nothing of a body whose Content-Length is above the limit.
     if (!complete && req.has_header("Content-Length")) {
@@ -336,6 +349,7 @@ void Api::configure(httplib::Server& http) {
       return;
     }
     if (too_large) {
+      if (!complete) res.set_header("Connection", "close");
       send_error(res, 413, "payload_too_large", "the request body exceeds the server's limit");
       return;
     }

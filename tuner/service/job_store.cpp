@@ -182,10 +182,11 @@ class JobStore::Statement {
 
 JobStore::JobStore(const std::filesystem::path& directory) {
   namespace fs = std::filesystem;
-  // Jobs, results and the queue are the server owner's alone: the directory is 0700 and its
-  // files 0600 (SQLite gives its -wal and -shm files the database file's mode).
-  fs::create_directories(directory);
-  fs::permissions(directory, fs::perms::owner_all, fs::perm_options::replace);
+  // Jobs, results and the queue are the server owner's alone: a directory created here is 0700
+  // and the files are 0600 (SQLite gives its -wal and -shm files the database file's mode).
+  // A directory the user already had (even `--store .`) keeps its mode.
+  if (fs::create_directories(directory))
+    fs::permissions(directory, fs::perms::owner_all, fs::perm_options::replace);
   // One server per store: two would run the same queue and jobs twice.
   const std::string lock = (directory / "lock").string();
   lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);

@@ -49,5 +49,8 @@ nlohmann::json run_metadata(const TuningOutcome& r, double wall_seconds);
 // Writes output_files() into `dir`, each atomically, gains.json last (so a directory with a
 // gains.json holds the rest of its run); returns their names in the order written.
 std::vector<std::string> write_outputs(const TuningOutcome& r, const std::filesystem::path& dir);
+// The same for files output_files() has already rendered.
+std::vector<std::string> write_output_files(const std::map<std::string, std::string>& files,
+                                            const std::filesystem::path& dir);
 
 }  // namespace ftc::tune
