@@ -72,10 +72,14 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows) {
 
 }  // namespace
 
-nlohmann::json run_checkpoint(const Optimizer& optimizer, const std::vector<Trial>& trials) {
+nlohmann::json trials_json(const std::vector<Trial>& trials, std::size_t from) {
   nlohmann::json rows = nlohmann::json::array();
-  for (const Trial& t : trials) rows.push_back(trial_json(t));
-  return {{"optimizer", optimizer.state()}, {"trials", std::move(rows)}};
+  for (std::size_t i = from; i < trials.size(); ++i) rows.push_back(trial_json(trials[i]));
+  return rows;
+}
+
+nlohmann::json run_checkpoint(const Optimizer& optimizer, const std::vector<Trial>& trials) {
+  return {{"optimizer", optimizer.state()}, {"trials", trials_json(trials)}};
 }
 
 TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, AlgorithmPtr algorithm,

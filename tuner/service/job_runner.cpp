@@ -71,8 +71,18 @@ void JobRunner::run(const JobRecord& rec) {
     const std::optional<std::string> checkpoint = store_.checkpoint(id);
     json state;
     RunOptions ro;
+    std::size_t stored_trials = 0;
     if (checkpoint) {
+      // The optimiser's state, with the trials recorded beside it. (A checkpoint that already
+      // holds its trials is taken whole.)
       state = json::parse(*checkpoint);
+      if (!state.contains("optimizer")) {
+        json trials = json::array();
+        for (const std::string& rows : store_.checkpoint_trials(id))
+          for (json& t : json::parse(rows)) trials.push_back(std::move(t));
+        state = {{"optimizer", std::move(state)}, {"trials", std::move(trials)}};
+      }
+      stored_trials = state["trials"].size();
       ro.resume = &state;
       spdlog::info("job {} resumes after iteration {} (attempt {})", id, rec.iteration,
                    rec.attempts);
@@ -83,8 +93,9 @@ void JobRunner::run(const JobRecord& rec) {
       json best = json::object();
       for (std::size_t i = 0; i < names.size() && i < h.best.size(); ++i)
         best[names[i]] = h.best[i];
-      store_.record_progress(id, h.iteration, h.evaluations, h.best_fitness, best,
-                             run_checkpoint(o, trials).dump());
+      store_.record_progress(id, h.iteration, h.evaluations, h.best_fitness, best, o.state().dump(),
+                             trials_json(trials, stored_trials).dump());
+      stored_trials = trials.size();
       return !stopping_ && !store_.cancel_requested(id);
     };
     const std::unique_ptr<BatchEvaluator> evaluator = make_evaluator_();

@@ -65,6 +65,13 @@ CREATE TABLE IF NOT EXISTS jobs (
   checkpoint        TEXT
 );
 CREATE INDEX IF NOT EXISTS jobs_by_status ON jobs(status, seq);
+-- The trials of a running job, one row per iteration, appended beside its checkpoint.
+CREATE TABLE IF NOT EXISTS checkpoint_trials (
+  job_id    TEXT NOT NULL,
+  iteration INTEGER NOT NULL,
+  trials    TEXT NOT NULL,
+  PRIMARY KEY (job_id, iteration)
+);
 CREATE TABLE IF NOT EXISTS artifacts (
   job_id  TEXT NOT NULL,
   name    TEXT NOT NULL,
@@ -310,6 +317,9 @@ void JobStore::set_finished(const std::string& id, JobStatus status, const std::
               "checkpoint = NULL WHERE id = ?");
   u.bind(1, std::string(to_string(status))).bind(2, error).bind(3, now).bind(4, now).bind(5, id);
   u.step();
+  Statement d(db_, "DELETE FROM checkpoint_trials WHERE job_id = ?");
+  d.bind(1, id);
+  d.step();
 }
 
 std::string JobStore::job_json(const std::string& id) {
@@ -360,9 +370,12 @@ std::optional<JobRecord> JobStore::claim_next() {
 
 void JobStore::record_progress(const std::string& id, int iteration, std::int64_t evaluations,
                                double best_fitness, const nlohmann::json& best,
-                               const std::string& checkpoint) {
+                               const std::string& checkpoint, const std::string& new_trials) {
   transaction(
       [&] {
+        Statement t(db_, "INSERT OR REPLACE INTO checkpoint_trials VALUES (?, ?, ?)");
+        t.bind(1, id).bind(2, std::int64_t{iteration}).bind(3, new_trials);
+        t.step();
         Statement u(db_,
                     "UPDATE jobs SET iteration = ?, evaluations = ?, best_fitness = ?, best = ?, "
                     "checkpoint = ?, updated_at = ? WHERE id = ?");
@@ -375,6 +388,15 @@ void JobStore::record_progress(const std::string& id, int iteration, std::int64_
         u.step();
       },
       /*synced=*/false);
+}
+
+std::vector<std::string> JobStore::checkpoint_trials(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "SELECT trials FROM checkpoint_trials WHERE job_id = ? ORDER BY iteration");
+  q.bind(1, id);
+  std::vector<std::string> out;
+  while (q.step()) out.push_back(q.text(0));
+  return out;
 }
 
 std::optional<std::string> JobStore::checkpoint(const std::string& id) {

@@ -72,11 +72,14 @@ class JobStore {
 
   // Oldest queued job, now running (attempts + 1); none when the queue is empty.
   std::optional<JobRecord> claim_next();
-  // Progress and optimiser checkpoint after an iteration, in one transaction.
+  // Progress, optimiser checkpoint and the iteration's new trials (a JSON array) after an
+  // iteration, in one transaction.
   void record_progress(const std::string& id, int iteration, std::int64_t evaluations,
                        double best_fitness, const nlohmann::json& best,
-                       const std::string& checkpoint);
+                       const std::string& checkpoint, const std::string& new_trials);
   std::optional<std::string> checkpoint(const std::string& id);
+  // The trials recorded with the checkpoints so far: one JSON array per iteration, in order.
+  std::vector<std::string> checkpoint_trials(const std::string& id);
 
   void finish_succeeded(const std::string& id, const std::map<std::string, std::string>& artifacts);
   void finish_failed(const std::string& id, const std::string& error);
