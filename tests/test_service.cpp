@@ -13,6 +13,7 @@
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
+#include "ftc/tune/service/job_store.hpp"
 #include "ftc/tune/service/service.hpp"
 #include "server_process.hpp"
 #include "service/httplib.hpp"
@@ -610,4 +611,41 @@ TEST(Cli, ClientCommandsTalkToTheService) {
   EXPECT_NE(r.err.find("exists already; pass --force"), std::string::npos) << r.err;
   EXPECT_EQ(
       run_cli("fetch " + id.substr(0, 6) + " --force -o '" + all + "'" + server, dir).exit_code, 0);
+}
+
+// A job that takes the server down each time it runs is not retried forever: after
+// max_attempts starts, crash recovery fails it with the reason; younger jobs go back to the queue.
+TEST(Service, CrashRecoveryGivesUpAJobAfterItsAttempts) {
+  const auto dir = fresh_dir("retry-cap");
+  std::string doomed, young;
+  {
+    tune::JobStore store(dir / "store");
+    const auto submit = [&](const std::string& name) {
+      tune::Submission sub;
+      sub.job_json = tiny_job(name).dump();
+      sub.name = name;
+      sub.iterations = 1;
+      sub.total_evaluations = 1;
+      return store.submit(sub).first.id;
+    };
+    doomed = submit("doomed");
+    // Started, and the server "crashed" under it, twice; the third start crashes too.
+    for (int i = 0; i < 2; ++i) {
+      ASSERT_EQ(store.claim_next()->id, doomed);
+      const tune::JobStore::Recovery r = store.recover(3);
+      EXPECT_EQ(r.requeued, 1);
+      EXPECT_EQ(r.failed, 0);
+    }
+    ASSERT_EQ(store.claim_next()->id, doomed);
+    young = submit("young");
+    ASSERT_EQ(store.claim_next()->id, young);
+    const tune::JobStore::Recovery r = store.recover(3);
+    EXPECT_EQ(r.failed, 1);
+    EXPECT_EQ(r.requeued, 1);
+    const tune::JobRecord d = *store.get(doomed);
+    EXPECT_EQ(d.status, tune::JobStatus::failed);
+    EXPECT_EQ(d.attempts, 3);
+    EXPECT_NE(d.error.find("given up after 3 starts"), std::string::npos) << d.error;
+    EXPECT_EQ(store.get(young)->status, tune::JobStatus::queued);
+  }
 }

@@ -85,6 +85,9 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
   sub->add_option(
       "--max-steps", o->service.max_steps,
       "Largest accepted job: evaluations x simulated steps per evaluation (default 2e9)");
+  sub->add_option("--max-attempts", o->service.max_attempts,
+                  "Starts of a job before crash recovery gives it up as failed (default 5)")
+      ->check(CLI::Range(1, 1000));
   sub->callback([&action, o] { action = [o] { return run_serve(*o); }; });
 }
 

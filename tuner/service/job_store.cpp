@@ -457,12 +457,27 @@ bool JobStore::cancel_requested(const std::string& id) {
   return q.step() && q.integer(0) != 0;
 }
 
-int JobStore::recover() {
+JobStore::Recovery JobStore::recover(int max_attempts) {
   return transaction([&] {
+    Recovery r;
+    std::vector<std::pair<std::string, int>> given_up;
+    {
+      Statement q(db_, "SELECT id, attempts FROM jobs WHERE status = 'running' AND attempts >= ?");
+      q.bind(1, std::int64_t{max_attempts});
+      while (q.step()) given_up.emplace_back(q.text(0), static_cast<int>(q.integer(1)));
+    }
+    for (const auto& [id, attempts] : given_up) {
+      set_finished(id, JobStatus::failed,
+                   "given up after " + std::to_string(attempts) +
+                       " starts: the server stopped while it ran each time (a crash, a kill or "
+                       "running out of memory); not retried again");
+      ++r.failed;
+    }
     Statement u(db_, "UPDATE jobs SET status = 'queued', updated_at = ? WHERE status = 'running'");
     u.bind(1, now_iso());
     u.step();
-    return sqlite3_changes(db_);
+    r.requeued = sqlite3_changes(db_);
+    return r;
   });
 }
 

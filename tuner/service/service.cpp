@@ -86,6 +86,7 @@ std::vector<FieldError> ServiceOptions::validate() const {
     errs.push_back({"--concurrent-jobs", "must be in 1..64"});
   if (token && token->empty()) errs.push_back({"--token-file", "the token is empty"});
   if (max_body_bytes < 1024) errs.push_back({"--max-body-kib", "must be at least 1 KiB"});
+  if (max_attempts < 1) errs.push_back({"--max-attempts", "must be at least 1"});
   if (!(max_steps > 0)) errs.push_back({"--max-steps", "must be > 0"});
   return errs;
 }
@@ -120,9 +121,13 @@ TuningService::~TuningService() { stop(); }
 
 int TuningService::start() {
   Impl& s = *impl_;
-  s.recovered = s.store.recover();
-  if (s.recovered > 0)
-    spdlog::info("{} job(s) left running by an earlier server are queued again", s.recovered);
+  const JobStore::Recovery rec = s.store.recover(s.opt.max_attempts);
+  s.recovered = rec.requeued;
+  if (rec.requeued > 0)
+    spdlog::info("{} job(s) left running by an earlier server are queued again", rec.requeued);
+  if (rec.failed > 0)
+    spdlog::warn("{} job(s) left running by an earlier server have been started {} times: failed",
+                 rec.failed, s.opt.max_attempts);
   s.api.configure(s.http);
   // cpp-httplib's default sets SO_REUSEPORT, with which a second server on the same port binds
   // too and the kernel splits the connections between the two. SO_REUSEADDR alone still allows

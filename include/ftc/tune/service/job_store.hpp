@@ -90,8 +90,13 @@ class JobStore {
   std::optional<JobRecord> request_cancel(const std::string& id);
   bool cancel_requested(const std::string& id);
 
-  // At start-up: jobs left running by a crash go back to the queue. Returns how many.
-  int recover();
+  // At start-up: jobs left running by a crash go back to the queue, unless they have been started
+  // `max_attempts` times already: a job that takes the server down each time it runs (or is
+  // killed with it) would otherwise be retried forever. Those fail, with the reason.
+  struct Recovery {
+    int requeued = 0, failed = 0;
+  };
+  Recovery recover(int max_attempts);
   std::optional<std::string> artifact(const std::string& id, const std::string& name);
   std::map<std::string, std::string> artifacts(const std::string& id);
   // Adds or replaces one artifact of a finished job (a report rendered later).

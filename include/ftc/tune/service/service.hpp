@@ -31,6 +31,7 @@ struct ServiceOptions {
       token;  // when set, every request needs "Authorization: Bearer <token>"
   std::size_t max_body_bytes = 1 << 20;
   double max_steps = 2e9;  // budget: evaluations × simulated steps per evaluation
+  int max_attempts = 5;    // starts of a job before a crash recovery gives it up
   // How each job's simulations run; default a TbbEvaluator with `threads` workers.
   std::function<std::unique_ptr<BatchEvaluator>()> evaluator;
 
