@@ -611,6 +611,36 @@ TEST(Cli, ClientCommandsTalkToTheService) {
   EXPECT_NE(r.err.find("exists already; pass --force"), std::string::npos) << r.err;
   EXPECT_EQ(
       run_cli("fetch " + id.substr(0, 6) + " --force -o '" + all + "'" + server, dir).exit_code, 0);
+
+  // Retention: a job that finished less than a day ago survives --prune 1; --prune 0 removes
+  // every finished job with its results, and delete removes one.
+  r = run_cli("jobs --prune 1" + server, dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("deleted 0 finished jobs older than 1 day"), std::string::npos) << r.out;
+  r = run_cli("jobs --prune 0" + server, dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("deleted 1 finished job older than 0 days"), std::string::npos) << r.out;
+  r = run_cli("status " + id + server, dir);
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  r = run_cli("delete " + id + server, dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("no job " + id), std::string::npos) << r.err;
+}
+
+// DELETE removes a finished job with its results; a queued or running one is refused.
+TEST(Service, DeleteRemovesFinishedJobsOnly) {
+  Service s;
+  auto& c = *s.client;
+  const std::string done = s.submit(tiny_job())["id"];
+  s.wait_done(done);
+  const std::string waiting = s.submit(long_job())["id"];
+  const auto r = c.Delete(("/v1/jobs/" + waiting).c_str());
+  expect_error(r, 409, "conflict");
+  EXPECT_EQ(c.Delete(("/v1/jobs/" + done).c_str())->status, 200);
+  expect_error(c.Get(("/v1/jobs/" + done).c_str()), 404, "not_found");
+  expect_error(c.Get(("/v1/jobs/" + done + "/gains").c_str()), 404, "not_found");
+  expect_error(c.Delete(("/v1/jobs/" + done).c_str()), 404, "not_found");
+  c.Post(("/v1/jobs/" + waiting + "/cancel").c_str(), "", "application/json");
 }
 
 // A job that takes the server down each time it runs is not retried forever: after

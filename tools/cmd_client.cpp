@@ -60,6 +60,7 @@ class Api {
   std::string post(const std::string& path, const std::string& body) {
     return check(client_->Post(path.c_str(), body, "application/json"), path);
   }
+  std::string del(const std::string& path) { return check(client_->Delete(path.c_str()), path); }
 
  private:
   std::string check(const httplib::Result& r, const std::string& path) {
@@ -314,17 +315,55 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
     }
     return 0;
   });
+  id_command("delete", "Delete a finished job and its results from the service",
+             [o](Api& api, const std::string& id) {
+               const std::string body = api.del("/v1/jobs/" + id);
+               if (o->json_output)
+                 print_json(body);
+               else
+                 std::printf("%s deleted\n", id.c_str());
+               return 0;
+             });
   {
     auto status = std::make_shared<std::string>();
     auto limit = std::make_shared<int>(20);
-    CLI::App* sub = app.add_subcommand("jobs", "List jobs, newest first");
+    auto prune_days = std::make_shared<double>(-1);
+    CLI::App* sub = app.add_subcommand("jobs", "List jobs, newest first; or prune old ones");
     sub->add_option("--status", *status, "Only jobs in this status");
     sub->add_option("--limit", *limit, "How many (default 20)");
+    sub->add_option("--prune", *prune_days,
+                    "Delete the finished jobs (succeeded, failed, cancelled) that finished more "
+                    "than this many days ago, with their results")
+        ->check(CLI::Range(0.0, 1e6));
     common(sub);
-    sub->callback([&action, o, status, limit] {
-      action = [o, status, limit] {
+    sub->callback([&action, o, status, limit, prune_days] {
+      action = [o, status, limit, prune_days] {
         return guarded([&] {
           Api api(*o);
+          if (*prune_days >= 0) {
+            // Oldest last in the list: walk it all, then delete, so paging is not disturbed.
+            const double now =
+                std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+                    .count();
+            const double cutoff = now - *prune_days * 86400;
+            std::vector<std::string> old;
+            for (int offset = 0;; offset += 500) {
+              const json page =
+                  json::parse(api.get("/v1/jobs?limit=500&offset=" + std::to_string(offset)));
+              for (const json& job : page["jobs"]) {
+                const std::string st = job["status"];
+                const double finished = iso_seconds(job["finished_at"]);
+                if ((st == "succeeded" || st == "failed" || st == "cancelled") &&
+                    std::isfinite(finished) && finished <= cutoff)
+                  old.push_back(job["id"]);
+              }
+              if (page["jobs"].size() < 500) break;
+            }
+            for (const std::string& id : old) api.del("/v1/jobs/" + id);
+            std::printf("deleted %zu finished job%s older than %g day%s\n", old.size(),
+                        old.size() == 1 ? "" : "s", *prune_days, *prune_days == 1 ? "" : "s");
+            return 0;
+          }
           std::string path = "/v1/jobs?limit=" + std::to_string(*limit);
           if (!status->empty()) path += "&status=" + *status;
           const std::string body = api.get(path);

@@ -38,7 +38,9 @@ const std::map<std::string, std::string> kExamples = {
     {"status", "  ftctune status 3f9c0a7d12e4b6a1\n  ftctune status 3f9c0a7d12e4b6a1 --json"},
     {"fetch", "  ftctune fetch 3f9c0a7d12e4b6a1\n  ftctune fetch 3f9c0a7d12e4b6a1 -o gains.json"},
     {"cancel", "  ftctune cancel 3f9c0a7d12e4b6a1"},
-    {"jobs", "  ftctune jobs\n  ftctune jobs --status running --limit 5"},
+    {"jobs",
+     "  ftctune jobs\n  ftctune jobs --status running --limit 5\n  ftctune jobs --prune 30"},
+    {"delete", "  ftctune delete 3f9c0a7d12e4b6a1"},
     {"help", "  ftctune help\n  ftctune help simulate"},
 };
 

@@ -138,7 +138,21 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   }
   const std::string& id = p[2];
   if (p.size() == 3) {
-    if (m != "GET") return method_not_allowed(res, "GET");
+    if (m == "DELETE") {
+      switch (store_.remove(id)) {
+        case JobStore::Removal::not_found:
+          return send_error(res, 404, "not_found", "no job " + id);
+        case JobStore::Removal::active:
+          return send_error(res, 409, "conflict",
+                            "job " + id +
+                                " is queued or running: cancel it, and delete it once "
+                                "it has stopped");
+        case JobStore::Removal::removed:
+          spdlog::info("job {} deleted", id);
+          return send_json(res, 200, {{"id", id}, {"deleted", true}});
+      }
+    }
+    if (m != "GET") return method_not_allowed(res, "GET, DELETE");
     const auto job = store_.get(id);
     if (!job) return send_error(res, 404, "not_found", "no job " + id);
     return send_json(res, 200, job_json_view(*job));

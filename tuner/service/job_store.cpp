@@ -457,6 +457,27 @@ bool JobStore::cancel_requested(const std::string& id) {
   return q.step() && q.integer(0) != 0;
 }
 
+JobStore::Removal JobStore::remove(const std::string& id) {
+  return transaction([&] {
+    std::string status;
+    {
+      Statement q(db_, "SELECT status FROM jobs WHERE id = ?");
+      q.bind(1, id);
+      if (!q.step()) return Removal::not_found;
+      status = q.text(0);
+    }
+    if (status == "queued" || status == "running") return Removal::active;
+    for (const char* sql :
+         {"DELETE FROM artifacts WHERE job_id = ?",
+          "DELETE FROM checkpoint_trials WHERE job_id = ?", "DELETE FROM jobs WHERE id = ?"}) {
+      Statement d(db_, sql);
+      d.bind(1, id);
+      d.step();
+    }
+    return Removal::removed;
+  });
+}
+
 JobStore::Recovery JobStore::recover(int max_attempts) {
   return transaction([&] {
     Recovery r;

@@ -89,6 +89,10 @@ class JobStore {
   // Returns the record after the change, or nullopt for an unknown id.
   std::optional<JobRecord> request_cancel(const std::string& id);
   bool cancel_requested(const std::string& id);
+  // Removes a finished (succeeded, failed, cancelled) job and its files. A queued or running
+  // job is not removed: it must be cancelled and stop first.
+  enum class Removal { removed, not_found, active };
+  Removal remove(const std::string& id);
 
   // At start-up: jobs left running by a crash go back to the queue, unless they have been started
   // `max_attempts` times already: a job that takes the server down each time it runs (or is
