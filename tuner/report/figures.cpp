@@ -375,12 +375,11 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
         : type == "random" ? "random search"
         : type == "pagmo"  ? "pagmo " + gains["optimizer"].value("name", std::string("?"))
                            : type;
-    const json none;
-    const json& baseline = gains.contains("baseline") ? gains["baseline"] : none;
-    const double baseline_j =
-        baseline.is_object() && baseline.contains("fitness") && baseline["fitness"].is_number()
-            ? baseline["fitness"].get<double>()
-            : NAN;
+    // A number of the gains file, NaN where it has none.
+    const auto number_at = [&](const char* pointer) {
+      return json_number_or(gains.value(json::json_pointer(pointer), json()), NAN);
+    };
+    const double baseline_j = number_at("/baseline/fitness");
     const bool have_baseline = std::isfinite(baseline_j) && baseline_j > 0;
     // Improvement in % = 100 (1 - objective / reference objective) = 100 (1 - J_ref / J).
     const std::string reference = have_baseline ? num(baseline_j) : "J0";
@@ -394,11 +393,7 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
       << "\nset format y '%.3g'\nset key inside right bottom opaque box\n";
     if (!have_baseline)
       g << "J0 = 0\nstats 'history.csv' skip 1 every ::0::0 using 2 nooutput\nJ0 = STATS_max\n";
-    const json& nf = gains.contains("noise_floor") ? gains["noise_floor"] : none;
-    const double floor =
-        nf.is_object() && nf.contains("relative_spread") && nf["relative_spread"].is_number()
-            ? nf["relative_spread"].get<double>()
-            : NAN;
+    const double floor = number_at("/noise_floor/relative_spread");
     if (std::isfinite(floor) && floor > 0)
       g << "set arrow from graph 0, first " << num(100 * floor) << " to graph 1, first "
         << num(100 * floor) << " nohead dt 3 lw 1.2 lc rgb 'gray40' front\nset label "

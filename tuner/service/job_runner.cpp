@@ -73,16 +73,12 @@ void JobRunner::run(const JobRecord& rec) {
     RunOptions ro;
     std::size_t stored_trials = 0;
     if (checkpoint) {
-      // The optimiser's state, with the trials recorded beside it. (A checkpoint that already
-      // holds its trials is taken whole.)
-      state = json::parse(*checkpoint);
-      if (!state.contains("optimizer")) {
-        json trials = json::array();
-        for (const std::string& rows : store_.checkpoint_trials(id))
-          for (json& t : json::parse(rows)) trials.push_back(std::move(t));
-        state = {{"optimizer", std::move(state)}, {"trials", std::move(trials)}};
-      }
-      stored_trials = state["trials"].size();
+      // The optimiser's state, with the trials recorded beside it.
+      json trials = json::array();
+      for (const std::string& rows : store_.checkpoint_trials(id))
+        for (json& t : json::parse(rows)) trials.push_back(std::move(t));
+      stored_trials = trials.size();
+      state = {{"optimizer", json::parse(*checkpoint)}, {"trials", std::move(trials)}};
       ro.resume = &state;
       spdlog::info("job {} resumes after iteration {} (attempt {})", id, rec.iteration,
                    rec.attempts);
