@@ -9,6 +9,7 @@
 
 #include "cli_runner.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/run/checkpoint.hpp"
 #include "short_job.hpp"
 
 using nlohmann::json;
@@ -355,4 +356,129 @@ TEST(Cli, RunStoppedByAFullDiskLeavesNoGainsFile) {
     EXPECT_EQ(again.exit_code, 0) << again.err;
     EXPECT_TRUE(std::filesystem::exists(out / "gains.json"));
   }
+}
+
+// --- run checkpoints (--checkpoint, --resume) ---
+
+namespace {
+
+// The short Table 1 job with more iterations, written to `dir`.
+std::filesystem::path checkpoint_job(const std::filesystem::path& dir, int iterations) {
+  json j = short_table1_job();
+  j["tuning"]["algorithm"]["iterations"] = iterations;
+  ftc::tune::write_file_atomic(dir / "job.json", j.dump(2));
+  return dir / "job.json";
+}
+
+// The checkpoint a run of `job` writes after its first iteration, made in process.
+std::string first_checkpoint(const std::filesystem::path& job_file, std::uint64_t seed) {
+  const ftc::tune::Job job = ftc::tune::load_job(job_file);
+  std::string text;
+  ftc::tune::RunOptions o;
+  o.observer = [&](const ftc::tune::HistoryRow& h, const ftc::tune::Optimizer& opt,
+                   const std::vector<ftc::tune::Trial>& trials) {
+    text = ftc::tune::checkpoint_text(ftc::tune::canonical_job_sha256(job), seed, h.iteration,
+                                      ftc::tune::run_checkpoint(opt, trials));
+    return false;  // stop after the first iteration
+  };
+  tuned(job, 2, seed, o);
+  return text;
+}
+
+void expect_same_files(const std::filesystem::path& a, const std::filesystem::path& b) {
+  for (const char* f : {"gains.json", "trials.csv", "history.csv", "comparison.json"})
+    EXPECT_EQ(slurp(a / f), slurp(b / f)) << f;
+}
+
+}  // namespace
+
+// SIGKILL in the middle of a checkpointed run, then --resume: the files of an uninterrupted
+// run, byte for byte, and no checkpoint left once it has finished.
+TEST(Cli, ResumeAfterSigkillWritesTheFilesOfAnUninterruptedRun) {
+  const auto dir = fresh_dir("cli-resume-kill");
+  const auto job = checkpoint_job(dir, 150);
+  const std::string out = (dir / "killed").string();
+  const CliResult whole = run_cli(
+      "run -q --threads 2 --out '" + (dir / "whole").string() + "' '" + job.string() + "'", dir);
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  // One thread, so that the run is still going when it is killed.
+  ftc::tune::write_file_atomic(
+      dir / "kill.sh", "'" FTC_CLI "' run -q --threads 1 --checkpoint --out '" + out + "' '" +
+                           job.string() + "' & pid=$!\nwhile [ ! -f '" + out +
+                           "/checkpoint.json' ]; do sleep 0.02; done\nsleep 0.2\nkill -9 $pid\n"
+                           "wait $pid\nexit 0\n");
+  ASSERT_EQ(std::system(("bash '" + (dir / "kill.sh").string() + "'").c_str()), 0);
+  ASSERT_FALSE(std::filesystem::exists(dir / "killed" / "gains.json"))
+      << "finished before the kill";
+  const json cp = json::parse(slurp(dir / "killed" / "checkpoint.json"));
+  EXPECT_EQ(cp["schema"], "ftctune.checkpoint/1");
+  EXPECT_GE(cp["iteration"].get<int>(), 1);
+
+  // Without --resume (or --force) the interrupted run is not written over.
+  const CliResult again = run_cli("run -q --out '" + out + "' '" + job.string() + "'", dir);
+  EXPECT_EQ(again.exit_code, 2);
+  EXPECT_NE(again.err.find("holds an interrupted run (checkpoint.json); pass --resume"),
+            std::string::npos)
+      << again.err;
+
+  const CliResult resumed =
+      run_cli("run --threads 2 --resume --out '" + out + "' '" + job.string() + "'", dir);
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("resuming from"), std::string::npos) << resumed.err;
+  expect_same_files(dir / "whole", dir / "killed");
+  EXPECT_FALSE(std::filesystem::exists(dir / "killed" / "checkpoint.json"));
+}
+
+// A checkpoint that is damaged, of another job or of another seed is refused with the reason
+// (exit 2), never silently taken for a fresh start; a sound one resumes to the same files.
+TEST(Cli, ResumeRefusesADamagedOrForeignCheckpoint) {
+  const auto dir = fresh_dir("cli-resume-refuse");
+  const auto job = checkpoint_job(dir, 3);
+  const std::uint64_t seed = ftc::tune::load_job(job).tuning->seed;
+  const std::string good = first_checkpoint(job, seed);
+  const auto resume = [&](const std::string& name, const std::string& text,
+                          const std::string& extra = "") {
+    const auto out = dir / name;
+    std::filesystem::create_directories(out);
+    ftc::tune::write_file_atomic(out / "checkpoint.json", text);
+    return run_cli("run -q --resume --out '" + out.string() + "' '" + job.string() + "'" + extra,
+                   dir);
+  };
+
+  json tampered = json::parse(good);
+  ASSERT_GE(tampered["state"]["trials"].size(), 2u);
+  tampered["state"]["trials"][0] = tampered["state"]["trials"][1];
+  CliResult r = resume("tampered", tampered.dump());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("the checkpoint is damaged (its state does not match its digest)"),
+            std::string::npos)
+      << r.err;
+
+  r = resume("truncated", good.substr(0, good.size() / 2));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("the checkpoint is damaged (not valid JSON)"), std::string::npos) << r.err;
+
+  r = resume("not-a-checkpoint", R"({"schema": "ftctune.gains/1"})");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("is not an ftctune checkpoint"), std::string::npos) << r.err;
+
+  json other = json::parse(good);
+  other["job_sha256"] = std::string(64, 'a');
+  r = resume("other-job", other.dump());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("was written by a run of another job"), std::string::npos) << r.err;
+
+  r = resume("other-seed", good, " --seed " + std::to_string(seed + 1));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("was written by a run with seed " + std::to_string(seed)), std::string::npos)
+      << r.err;
+  for (const char* d : {"tampered", "truncated", "other-job", "other-seed"})
+    EXPECT_FALSE(std::filesystem::exists(dir / d / "gains.json")) << d;
+
+  r = resume("sound", good);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CliResult whole =
+      run_cli("run -q --out '" + (dir / "whole").string() + "' '" + job.string() + "'", dir);
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  expect_same_files(dir / "whole", dir / "sound");
 }

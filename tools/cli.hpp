@@ -4,16 +4,19 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "ftc/sim/controller_config.hpp"
+#include "ftc/tune/evaluators/batch_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
 
 namespace ftc::cli {
 
 struct Globals {
   bool quiet = false;
+  bool verbose = false;
 };
 
 using Action = std::function<int()>;
@@ -28,6 +31,31 @@ void add_schema_command(CLI::App& app, const Globals& g, Action& action);
 void add_study_command(CLI::App& app, const Globals& g, Action& action);
 void add_ensemble_command(CLI::App& app, const Globals& g, Action& action);
 void add_evaluate_command(CLI::App& app, const Globals& g, Action& action);
+
+// The MPI job this process is a rank of (`mpirun -np N ftctune ...`), from MPI_Init to
+// MPI_Finalize; nothing at all for a process not started by an MPI launcher. Rank 0 runs the
+// command; the other ranks serve() it until it finishes.
+class Ranks {
+ public:
+  Ranks(int& argc, char**& argv);
+  ~Ranks();
+  Ranks(const Ranks&) = delete;
+  Ranks& operator=(const Ranks&) = delete;
+  bool leader() const { return rank_ == 0; }
+  // Started by mpirun, but built without MPI (the message is printed): exit 2.
+  bool failed() const { return failed_; }
+  int serve();  // a worker rank's whole life; its exit code
+
+ private:
+  int rank_ = 0, size_ = 1;
+  bool failed_ = false;
+};
+// Processes taking part in the simulations: the MPI job's ranks, or 1.
+int mpi_ranks();
+// The evaluator of a command's simulations: all ranks' threads under mpirun (`threads` per
+// rank), else this machine's `threads` (<= 0: every core). Throws InputError for a bad
+// FTCTUNE_RANK_TIMEOUT (seconds a rank holding work may stay silent; default 10).
+std::unique_ptr<tune::BatchEvaluator> make_evaluator(int threads);
 
 // Renders the report of a run directory; format html, png or svg.
 int render_run_report(const std::string& dir, const std::string& format, bool quiet);

@@ -5,7 +5,6 @@
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/report/evaluation.hpp"
 #include "ftc/tune/run/evaluate.hpp"
@@ -57,8 +56,8 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   options.progress = [&](std::int64_t done, std::int64_t total) {
     bar.draw(done, total, elapsed());
   };
-  tune::TbbEvaluator evaluator(o.threads);
-  const tune::EvaluationResult r = tune::evaluate_out_of_sample(job, options, evaluator);
+  const std::unique_ptr<tune::BatchEvaluator> evaluator = make_evaluator(o.threads);
+  const tune::EvaluationResult r = tune::evaluate_out_of_sample(job, options, *evaluator);
   bar.clear();
   tune::write_evaluation(r, out);
   fs::path figure;
@@ -71,8 +70,8 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
       s0.unrecoverable, s0.counted < s0.scenarios ? " (left out)" : "");
   std::fputs(tune::evaluation_table(r).c_str(), stdout);
   std::printf("  %lld simulations on %d thread%s in %.2f s\n",
-              static_cast<long long>(r.simulations), evaluator.concurrency(),
-              evaluator.concurrency() == 1 ? "" : "s", elapsed());
+              static_cast<long long>(r.simulations), evaluator->concurrency(),
+              evaluator->concurrency() == 1 ? "" : "s", elapsed());
   std::printf("  wrote %s/{evaluation.json, evaluation.csv%s, worst/}\n", out.c_str(),
               figure.empty() ? "" : (", " + figure.filename().string()).c_str());
   return 0;

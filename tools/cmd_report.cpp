@@ -6,7 +6,6 @@
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/report/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
 #include "progress.hpp"
@@ -64,7 +63,7 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
   spdlog::info("evaluating a {} grid over {} ({} simulations per point)", o.grid,
                o.params.empty() ? "the first two tuned parameters" : o.params,
                job.scenarios.size());
-  tune::TbbEvaluator evaluator(o.threads);
+  const std::unique_ptr<tune::BatchEvaluator> evaluator = make_evaluator(o.threads);
   ProgressBar bar(!g.quiet);
   int last_tenth = 0;
   lo.progress = [&](std::int64_t done, std::int64_t total) {
@@ -79,7 +78,7 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
     }
     bar.draw(done, total, elapsed);
   };
-  const tune::LandscapeResult r = tune::compute_landscape(job, out, lo, evaluator);
+  const tune::LandscapeResult r = tune::compute_landscape(job, out, lo, *evaluator);
   bar.clear();
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!g.quiet) {

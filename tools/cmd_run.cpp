@@ -13,9 +13,9 @@
 
 #include "cli.hpp"
 #include "ftc/runtime/controller_json.hpp"
-#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/random_search.hpp"
+#include "ftc/tune/run/checkpoint.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "progress.hpp"
@@ -33,7 +33,13 @@ struct RunCliOptions {
   bool report = false;
   bool baseline = false;
   bool force = false;
+  bool checkpoint = false;     // after every iteration, from the first
+  bool no_checkpoint = false;  // never (else: once the run looks like taking over a minute)
+  bool resume = false;
 };
+
+// A run projected to take longer than this checkpoints after every iteration unless told not to.
+constexpr double kCheckpointAfterSeconds = 60.0;
 
 std::string utc_now() {
   const std::time_t t = std::time(nullptr);
@@ -60,12 +66,19 @@ std::string params_text(const std::vector<std::string>& names, const tune::Decis
   return s;
 }
 
-// Whether a directory holds an ftctune run (run.json and gains.json are what `run` writes first
-// and last).
+// Whether a directory holds an ftctune run: a finished one (run.json and gains.json are what
+// `run` writes first and last) or an interrupted one (its checkpoint).
 bool holds_run(const std::filesystem::path& d) {
   std::error_code ec;
   return std::filesystem::exists(d / "gains.json", ec) ||
-         std::filesystem::exists(d / "run.json", ec);
+         std::filesystem::exists(d / "run.json", ec) ||
+         std::filesystem::exists(d / tune::kCheckpointFile, ec);
+}
+
+bool holds_interrupted_run(const std::filesystem::path& d) {
+  std::error_code ec;
+  return std::filesystem::exists(d / tune::kCheckpointFile, ec) &&
+         !std::filesystem::exists(d / "gains.json", ec);
 }
 
 // Where a run writes, locked for the run. A run is never written over silently: a given --out
@@ -124,10 +137,13 @@ std::unique_ptr<DirectoryLock> run_directory(std::filesystem::path& out, bool gi
                              " is being written by another ftctune run; wait for it to finish "
                              "or choose another directory");
     } else if (given) {
-      throw InputError("--out", "",
-                       out.string() +
-                           " already holds a run; choose another directory, or pass "
-                           "--force to replace that run");
+      throw InputError(
+          "--out", "",
+          out.string() + (holds_interrupted_run(out)
+                              ? " holds an interrupted run (checkpoint.json); pass --resume to "
+                                "continue it, or --force to start it over"
+                              : " already holds a run; choose another directory, or pass "
+                                "--force to replace that run"));
     }
     out = wanted.string() + "-" + std::to_string(k);
   }
@@ -137,9 +153,9 @@ std::unique_ptr<DirectoryLock> run_directory(std::filesystem::path& out, bool gi
 // run writes, so that no figure or trajectory of the earlier run is left beside the new ones.
 void clear_previous_run(const std::filesystem::path& out) {
   if (!holds_run(out)) return;
-  for (const char* f :
-       {"gains.json", "history.csv", "trials.csv", "history-random.csv", "comparison.json",
-        "comparison.md", "run.json", "job.json", "report.html", "figures", "trajectories"})
+  for (const char* f : {"gains.json", "history.csv", "trials.csv", "history-random.csv",
+                        "comparison.json", "comparison.md", "run.json", "job.json", "report.html",
+                        "figures", "trajectories", tune::kCheckpointFile})
     std::filesystem::remove_all(out / f);
 }
 
@@ -150,7 +166,30 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   if (!job.tuning)
     throw InputError(o.job, "/tuning", "is required by ftctune run (what should be tuned?)");
   fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
-  const std::unique_ptr<DirectoryLock> lock = run_directory(out, !o.out.empty(), o.force);
+  const std::uint64_t seed = o.seed.value_or(job.tuning->seed);
+  const std::string job_sha = tune::canonical_job_sha256(job);
+  std::unique_ptr<DirectoryLock> lock;
+  std::optional<tune::Checkpoint> resumed;
+  if (o.resume) {
+    // The same directory whatever it holds: the interrupted run is there.
+    lock = std::make_unique<DirectoryLock>(out);
+    if (!lock->held())
+      throw InputError("--out", "",
+                       out.string() + " is being written by another ftctune run; wait for it");
+    if (fs::exists(out / tune::kCheckpointFile)) {
+      resumed = tune::read_checkpoint(out / tune::kCheckpointFile, job_sha, seed);
+      spdlog::info("resuming from {} after iteration {}", (out / tune::kCheckpointFile).string(),
+                   resumed->iteration);
+    } else if (fs::exists(out / "gains.json")) {
+      throw InputError("--resume", "",
+                       out.string() + " holds a finished run (gains.json): nothing to resume");
+    } else {
+      // A batch script can always pass --resume: its first start has nothing to resume.
+      spdlog::info("no checkpoint in {}: starting from the first iteration", out.string());
+    }
+  } else {
+    lock = run_directory(out, !o.out.empty(), o.force);
+  }
   const std::int64_t total = job.tuning->algorithm->evaluations();
   std::vector<std::string> names;
   for (const tune::ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
@@ -158,15 +197,31 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   const std::string started = utc_now();
   const auto t0 = clock::now();
   ProgressBar bar(!g.quiet);
-  tune::TbbEvaluator evaluator(o.threads);
+  const std::unique_ptr<tune::BatchEvaluator> evaluator = make_evaluator(o.threads);
   tune::RunOptions ro;
   ro.seed = o.seed;
-  ro.observer = [&](const tune::HistoryRow& h, const tune::Optimizer&,
-                    const std::vector<tune::Trial>&) {
+  if (resumed) ro.resume = &resumed->state;
+  // Checkpoints: asked for, continuing one, or once the run looks like taking over a minute.
+  bool checkpointing = !o.no_checkpoint && (o.checkpoint || resumed);
+  // Evaluations done before this process started (one trial each), for the ETA.
+  const auto evaluations_before =
+      static_cast<std::int64_t>(resumed ? resumed->state.value("trials", json::array()).size() : 0);
+  ro.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& optimizer,
+                    const std::vector<tune::Trial>& trials) {
     const double elapsed = std::chrono::duration<double>(clock::now() - t0).count();
-    const double eta = h.evaluations > 0 ? elapsed * static_cast<double>(total - h.evaluations) /
-                                               static_cast<double>(h.evaluations)
-                                         : 0.0;
+    const double done = static_cast<double>(h.evaluations - evaluations_before);
+    const double eta = done > 0 ? elapsed * static_cast<double>(total - h.evaluations) / done : 0.0;
+    if (!checkpointing && !o.no_checkpoint && elapsed + eta > kCheckpointAfterSeconds) {
+      checkpointing = true;
+      spdlog::info(
+          "this run will take over a minute: it writes {} after every iteration "
+          "(ftctune run --resume continues from it)",
+          (out / tune::kCheckpointFile).string());
+    }
+    if (checkpointing)
+      tune::write_file_atomic(out / tune::kCheckpointFile,
+                              tune::checkpoint_text(job_sha, seed, h.iteration,
+                                                    tune::run_checkpoint(optimizer, trials)));
     bar.clear();
     spdlog::info(
         "iteration {}/{}: best J = {:.6g} ({}), {}/{} evaluations, {:.1f} s elapsed, ETA {:.1f} s",
@@ -178,7 +233,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   spdlog::info("tuning {} of job {}: {} evaluations of {} scenario{}, {} algorithm",
                fmt::join(names, ", "), job.name, total, job.scenario_count(),
                job.scenario_count() == 1 ? "" : "s", job.tuning->algorithm->type());
-  const tune::TuningOutcome r = tune::tune(job, evaluator, ro);
+  const tune::TuningOutcome r = tune::tune(job, *evaluator, ro);
   bar.clear();
   const double wall = std::chrono::duration<double>(clock::now() - t0).count();
 
@@ -192,7 +247,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     tune::RunOptions rr;
     rr.seed = o.seed;
     rr.compare = false;
-    random_baseline = tune::tune(random, evaluator, rr);
+    random_baseline = tune::tune(random, *evaluator, rr);
     spdlog::info("random search with the same budget: best J = {:.6g} ({})",
                  random_baseline->optimization.best_fitness,
                  params_text(names, random_baseline->optimization.best));
@@ -212,11 +267,13 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   run["host"] = hostname();
   run["job_file"] = o.job;
 
-  if (o.force) clear_previous_run(out);
+  if (o.force && !o.resume) clear_previous_run(out);
   if (random_baseline)
     tune::write_file_atomic(out / "history-random.csv", tune::history_csv(*random_baseline));
   tune::write_file_atomic(out / "run.json", run.dump(2) + "\n");
   tune::write_output_files(outputs, out);
+  // gains.json is in place: the run is finished, and its checkpoint of no more use.
+  fs::remove(out / tune::kCheckpointFile);
 
   for (const std::string& w : r.warnings) spdlog::warn("{}", w);
   if (!g.quiet) {
@@ -277,6 +334,16 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
       "Also run random search with the same budget (history-random.csv, drawn in Fig. 5)");
   sub->add_flag("--report", opts->report, "Then draw the figures and report.html (ftctune report)");
   sub->add_flag("--force", opts->force, "Replace the run in an output directory that holds one");
+  CLI::Option* checkpoint = sub->add_flag(
+      "--checkpoint", opts->checkpoint,
+      "Write <out>/checkpoint.json after every iteration (default: once the run looks like "
+      "taking over a minute)");
+  sub->add_flag("--no-checkpoint", opts->no_checkpoint, "Never write a checkpoint")
+      ->excludes(checkpoint);
+  sub->add_flag("--resume", opts->resume,
+                "Continue the interrupted run in --out (or out/<job name>) from its checkpoint; "
+                "without one, start from the first iteration")
+      ->excludes("--force");
   sub->callback([&action, &g, opts] { action = [&g, opts] { return run_tuning(*opts, g); }; });
 }
 

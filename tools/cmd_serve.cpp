@@ -50,6 +50,18 @@ int run_serve(ServeOptions o) {
   sigaddset(&signals, SIGINT);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
+  // Under mpirun each job runs on every rank, one job at a time (MPI calls are serialized).
+  if (mpi_ranks() > 1) {
+    if (o.service.concurrent_jobs != 1)
+      throw InputError(
+          "--concurrent-jobs", "",
+          "must be 1 under mpirun: each job runs on all " + std::to_string(mpi_ranks()) + " ranks");
+    // Greets the ranks once now, so a rank that does not answer stops the start, not a job.
+    const int threads = o.service.threads;
+    spdlog::info("serving with {} MPI ranks ({} threads)", mpi_ranks(),
+                 make_evaluator(threads)->concurrency());
+    o.service.evaluator = [threads] { return make_evaluator(threads); };
+  }
   tune::TuningService service(o.service);
   const int port = service.start();  // a bind failure is an InputError: exit 2
   std::printf("ftctune serve: listening on http://%s:%d (store %s, %d concurrent job%s%s)\n",

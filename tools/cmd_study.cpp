@@ -13,7 +13,6 @@
 #include <nlohmann/json.hpp>
 
 #include "cli.hpp"
-#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/pagmo.hpp"
 #include "ftc/tune/report/study.hpp"
@@ -202,9 +201,9 @@ int run_study(const StudyCli& o, const Globals& g) {
   const tune::TuningProblem problem(job);
   const tune::SearchSpace& space = problem.space();
 
-  tune::TbbEvaluator evaluator(o.threads);
+  const std::unique_ptr<tune::BatchEvaluator> evaluator = make_evaluator(o.threads);
   spdlog::info("study of job {}: {} algorithm(s) x {} seed(s), {} evaluations each, {} thread(s)",
-               job.name, names.size(), seeds.size(), o.budget, evaluator.concurrency());
+               job.name, names.size(), seeds.size(), o.budget, evaluator->concurrency());
   std::vector<Run> runs;
   const std::size_t total = names.size() * seeds.size();
   for (std::size_t a = 0; a < names.size(); ++a)
@@ -215,7 +214,7 @@ int run_study(const StudyCli& o, const Globals& g) {
       const auto t0 = clock::now();
       const std::unique_ptr<tune::Optimizer> optimizer = algorithms[a]->make(seed, space);
       const tune::TuningOutcome r =
-          tune::tune(problem, *optimizer, algorithms[a], seed, evaluator, ro);
+          tune::tune(problem, *optimizer, algorithms[a], seed, *evaluator, ro);
       Run run;
       run.algorithm = names[a];
       run.seed = seed;

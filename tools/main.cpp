@@ -54,6 +54,8 @@ int main(int argc, char** argv) {
   app.fallthrough();  // global flags such as -q may also follow the subcommand
   ftc::cli::Globals globals;
   app.add_flag("-q,--quiet", globals.quiet, "Only errors on stderr");
+  app.add_flag("-v,--verbose", globals.verbose,
+               "More detail on stderr; under mpirun, every rank logs (else rank 0 only)");
 
   ftc::cli::Action action;
   ftc::cli::add_run_command(app, globals, action);
@@ -112,7 +114,18 @@ int main(int argc, char** argv) {
   auto logger = spdlog::stderr_color_mt("ftctune");
   spdlog::set_default_logger(logger);
   spdlog::set_pattern("%^[%l]%$ %v");
-  spdlog::set_level(globals.quiet ? spdlog::level::err : spdlog::level::info);
+  spdlog::set_level(globals.quiet     ? spdlog::level::err
+                    : globals.verbose ? spdlog::level::debug
+                                      : spdlog::level::info);
+
+  // Under mpirun every rank parsed the same command line; rank 0 runs it, the others simulate
+  // for it (and log nothing unless --verbose).
+  ftc::cli::Ranks ranks(argc, argv);
+  if (ranks.failed()) return 2;
+  if (!ranks.leader()) {
+    if (!globals.verbose) spdlog::set_level(spdlog::level::off);
+    return ranks.serve();
+  }
 
   try {
     return action();

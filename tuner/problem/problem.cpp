@@ -1,6 +1,7 @@
 #include "ftc/tune/problem/problem.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -9,6 +10,14 @@
 #include "ftc/tune/job/ensemble.hpp"
 
 namespace ftc::tune {
+namespace {
+
+std::uint64_t next_identity() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
+
+}  // namespace
 
 double fitness_of(double objective) {
   if (!std::isfinite(objective) || objective < 0) return 0.0;
@@ -27,7 +36,9 @@ TuningProblem::TuningProblem(Job job)
           job.scenarios.size()) {}
 
 TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed)
-    : job_(std::make_shared<const Job>(std::move(job))), listed_(listed) {
+    : job_(std::make_shared<const Job>(std::move(job))),
+      listed_(listed),
+      identity_(next_identity()) {
   throw_if_errors("job " + job_->name, job_->validate());
   plant_ = sim::make_plant(job_->plant);
   scenarios_ = std::make_shared<const std::vector<sim::Scenario>>(std::move(scenarios));
@@ -174,6 +185,7 @@ TuningProblem TuningProblem::perturbed(std::uint64_t seed, std::uint64_t k, doub
   for (sim::Scenario& s : *scenarios)
     for (double& x : s.initial_state) x *= 1.0 + eps * (2.0 * r.uniform() - 1.0);
   p.scenarios_ = std::move(scenarios);
+  p.identity_ = next_identity();
   return p;
 }
 

@@ -297,6 +297,9 @@ json run_metadata(const TuningOutcome& r, double wall_seconds) {
   rusage ru{};
   const long max_rss_kib = ::getrusage(RUSAGE_SELF, &ru) == 0 ? ru.ru_maxrss : -1;
   return {{"threads", r.threads},
+          {"ranks", r.threads_per_rank.size()},
+          {"threads_per_rank", r.threads_per_rank},
+          {"evaluator", r.evaluator},
           {"wall_seconds", wall_seconds},
           {"simulations", r.simulations},
           {"max_rss_kib", max_rss_kib},

@@ -97,6 +97,7 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   r.seed = seed;
   r.algorithm = std::move(algorithm);
   r.threads = evaluator.concurrency();
+  r.threads_per_rank = evaluator.threads_per_rank();
   r.evaluator = evaluator.name();
 
   r.scenarios = problem.scenarios();

@@ -43,6 +43,8 @@ class BatchEvaluator {
   virtual std::vector<TaskResult> run(const TuningProblem& problem, const SimulationBatch& batch) = 0;
   // Simulations it can run at once (threads); for run.json and progress lines.
   virtual int concurrency() const = 0;
+  // Threads on each process taking part (one entry unless the evaluator spans processes).
+  virtual std::vector<int> threads_per_rank() const { return {concurrency()}; }
   virtual std::string name() const = 0;
 };
 

@@ -76,6 +76,10 @@ class TuningProblem {
   TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed);
 
   const Job& job() const { return *job_; }
+  // Tells problems apart without comparing them: copies share it, every other problem (a
+  // perturbed() one included) has its own. An evaluator that ships the problem to other
+  // processes sends it again only when this changes.
+  std::uint64_t identity() const { return identity_; }
   const sim::AnyPlant& plant() const { return *plant_; }
   // The search space in search coordinates: ln x for a parameter on a log scale, x otherwise.
   const SearchSpace& space() const { return space_; }
@@ -134,6 +138,7 @@ class TuningProblem {
   std::shared_ptr<const std::vector<sim::Scenario>> scenarios_;
   std::vector<bool> recoverable_, counted_;
   std::size_t listed_ = 0;
+  std::uint64_t identity_ = 0;
   SearchSpace space_;
   std::vector<Scale> scales_;                            // one per coordinate
   std::vector<double sim::ControllerConfig::*> fields_;  // one per coordinate

@@ -82,6 +82,7 @@ struct TuningOutcome {
   int unrecoverable = 0, left_out = 0;
   std::vector<bool> listed_recoverable;  // per listed scenario (SPEC §12)
   int threads = 0;                       // the evaluator's concurrency
+  std::vector<int> threads_per_rank;     // its threads on each MPI rank (one entry without MPI)
   std::string evaluator;                 // its name
   std::int64_t simulations = 0;
   bool completed() const { return optimization.completed; }

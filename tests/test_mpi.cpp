@@ -1,0 +1,292 @@
+// The MPI evaluator end to end: `mpirun -np N ftctune ...` against a plain run, a worker rank
+// that hangs or dies, and the service under mpirun. mpirun refuses to start as root unless told;
+// the tests tell it in the command they run, never in the environment of the user.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli_runner.hpp"
+#include "short_job.hpp"
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+using ftc::testing::fresh_dir;
+using ftc::testing::run_cli;
+using ftc::testing::slurp;
+using nlohmann::json;
+using namespace std::chrono_literals;
+
+#ifndef FTC_WITH_MPI
+#define REQUIRE_MPI() GTEST_SKIP() << "ftctune was built without MPI"
+#else
+#define REQUIRE_MPI() (void)0
+#endif
+
+const std::string kAsRoot = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ";
+
+// `mpirun -np N ftctune ARGS`, from the source directory; --oversubscribe lets 3 ranks share 2
+// cores, --bind-to none lets each rank's threads use every core.
+ftc::testing::CliResult mpirun_cli(int ranks, const std::string& args, const fs::path& scratch,
+                                   const std::string& env = "") {
+  const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+  const std::string cmd = "cd '" FTC_SOURCE_DIR "' && " + kAsRoot + env + " mpirun -np " +
+                          std::to_string(ranks) + " --oversubscribe --bind-to none '" FTC_CLI "' " +
+                          args + " >'" + out.string() + "' 2>'" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  ftc::testing::CliResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+fs::path write_job(const fs::path& dir, const json& j) {
+  const fs::path p = dir / "job.json";
+  std::ofstream(p) << j.dump(2);
+  return p;
+}
+
+// The run files that must not depend on how the simulations were spread.
+void expect_same_run(const fs::path& a, const fs::path& b) {
+  for (const char* f : {"gains.json", "trials.csv", "history.csv", "comparison.json"}) {
+    ASSERT_TRUE(fs::exists(a / f)) << a / f;
+    ASSERT_TRUE(fs::exists(b / f)) << b / f;
+    EXPECT_EQ(slurp(a / f), slurp(b / f)) << f;
+  }
+}
+
+TEST(Mpi, GainsAreByteIdenticalForOneProcessOneRankAndThreeRanks) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-same");
+  const auto plain =
+      run_cli("run jobs/table1.json -q --threads 2 --out '" + (dir / "plain").string() + "'", dir);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto one = mpirun_cli(
+      1, "run jobs/table1.json -q --threads 1 --out '" + (dir / "one").string() + "'", dir);
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const auto three = mpirun_cli(
+      3, "run jobs/table1.json -q --threads 1 --out '" + (dir / "three").string() + "'", dir);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  expect_same_run(dir / "plain", dir / "one");
+  expect_same_run(dir / "plain", dir / "three");
+  // run.json says how it ran.
+  const json run = json::parse(slurp(dir / "three" / "run.json"));
+  EXPECT_EQ(run["evaluator"], "mpi");
+  EXPECT_EQ(run["ranks"], 3);
+  EXPECT_EQ(run["threads_per_rank"], json::array({1, 1, 1}));
+  EXPECT_EQ(run["threads"], 3);
+}
+
+TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-ensemble");
+  const fs::path job = write_job(dir, ftc::testing::short_ensemble_job());
+  const auto plain =
+      run_cli("run '" + job.string() + "' -q --out '" + (dir / "plain").string() + "'", dir);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto three = mpirun_cli(
+      3, "run '" + job.string() + "' -q --threads 2 --out '" + (dir / "three").string() + "'", dir);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  expect_same_run(dir / "plain", dir / "three");
+  // Out-of-sample evaluation spreads its slices over the ranks as well.
+  const auto e_plain = run_cli("evaluate '" + job.string() + "' -q --gains '" +
+                                   (dir / "plain" / "gains.json").string() +
+                                   "' --no-figure --out '" + (dir / "eval-plain").string() + "'",
+                               dir);
+  ASSERT_EQ(e_plain.exit_code, 0) << e_plain.err;
+  const auto e_three = mpirun_cli(3,
+                                  "evaluate '" + job.string() + "' -q --gains '" +
+                                      (dir / "plain" / "gains.json").string() +
+                                      "' --no-figure --out '" + (dir / "eval-three").string() + "'",
+                                  dir);
+  ASSERT_EQ(e_three.exit_code, 0) << e_three.err;
+  EXPECT_EQ(slurp(dir / "eval-plain" / "evaluation.csv"),
+            slurp(dir / "eval-three" / "evaluation.csv"));
+}
+
+// mpirun with a long run in the background; finds the process of a given rank by its
+// environment.
+class MpiRun {
+ public:
+  MpiRun(int ranks, const std::vector<std::string>& args, const fs::path& log,
+         const std::vector<std::string>& env = {}) {
+    std::vector<std::string> a = {"mpirun",          "-np",       std::to_string(ranks),
+                                  "--oversubscribe", "--bind-to", "none"};
+    for (const std::string& e : env) {
+      a.push_back("-x");
+      a.push_back(e);
+    }
+    a.push_back(FTC_CLI);
+    a.insert(a.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& s : a) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    std::vector<std::string> envs = {"OMPI_ALLOW_RUN_AS_ROOT=1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1",
+                                     marker_ + "=1"};
+    for (const std::string& e : env) envs.push_back(e);
+    for (char** e = environ; *e; ++e) envs.emplace_back(*e);
+    std::vector<char*> envp;
+    for (std::string& s : envs) envp.push_back(s.data());
+    envp.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT, 0644);
+    posix_spawn_file_actions_adddup2(&fa, STDOUT_FILENO, STDERR_FILENO);
+    if (posix_spawnp(&pid_, "mpirun", &fa, nullptr, argv.data(), envp.data()) != 0)
+      throw std::runtime_error("cannot start mpirun");
+    posix_spawn_file_actions_destroy(&fa);
+  }
+  ~MpiRun() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+  }
+  // The pid of rank `r` of this run (0 while it has not started).
+  pid_t rank_pid(int r) const {
+    const std::string want = "OMPI_COMM_WORLD_RANK=" + std::to_string(r);
+    for (const auto& e : fs::directory_iterator("/proc")) {
+      const std::string name = e.path().filename();
+      if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+      std::ifstream in(e.path() / "environ", std::ios::binary);
+      std::string env((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      bool rank = false, ours = false;
+      for (std::size_t i = 0; i < env.size();) {
+        const std::size_t end = env.find('\0', i);
+        const std::string v = env.substr(i, end - i);
+        rank |= v == want;
+        ours |= v == marker_ + "=1";
+        i = end == std::string::npos ? env.size() : end + 1;
+      }
+      if (rank && ours) return std::stoi(name);
+    }
+    return 0;
+  }
+  // The exit status (or -signal) once it has ended, or nullopt after `limit`.
+  std::optional<int> wait_for(std::chrono::seconds limit) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < end) {
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+      }
+      std::this_thread::sleep_for(20ms);
+    }
+    return std::nullopt;
+  }
+  pid_t pid() const { return pid_; }
+
+ private:
+  pid_t pid_ = -1;
+  std::string marker_ = "FTC_TEST_MPI_RUN_" + std::to_string(::getpid());
+};
+
+// Waits until `file` holds `text` (or the time is up).
+bool wait_for_text(const fs::path& file, const std::string& text, std::chrono::seconds limit) {
+  const auto end = std::chrono::steady_clock::now() + limit;
+  while (std::chrono::steady_clock::now() < end) {
+    if (slurp(file).find(text) != std::string::npos) return true;
+    std::this_thread::sleep_for(20ms);
+  }
+  return false;
+}
+
+// Table 1 for long enough to be stopped in the middle.
+fs::path long_job(const fs::path& dir) {
+  json j = json::parse(slurp(fs::path(FTC_SOURCE_DIR) / "jobs" / "table1.json"));
+  j["name"] = "table1-long";
+  j["tuning"]["algorithm"]["iterations"] = 400;
+  return write_job(dir, j);
+}
+
+// A worker that stops answering (SIGSTOP: alive, silent) ends the run within the rank timeout:
+// exit 1, the rank named, no gains file.
+TEST(Mpi, WorkerRankThatHangsStopsTheRunNamingIt) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-hang");
+  const fs::path job = long_job(dir);
+  MpiRun run(3, {"run", job.string(), "--threads", "1", "--out", (dir / "out").string()},
+             dir / "log.txt", {"FTCTUNE_RANK_TIMEOUT=3"});
+  ASSERT_TRUE(wait_for_text(dir / "log.txt", "iteration 2/", 60s)) << slurp(dir / "log.txt");
+  const pid_t worker = run.rank_pid(2);
+  ASSERT_GT(worker, 0);
+  ::kill(worker, SIGSTOP);
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::optional<int> status = run.wait_for(30s);
+  ASSERT_TRUE(status) << "still running 30 s after a rank hung";
+  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(*status, 1);
+  EXPECT_LT(took, 30.0);
+  const std::string log = slurp(dir / "log.txt");
+  EXPECT_NE(log.find("rank 2 (on "), std::string::npos) << log;
+  EXPECT_NE(log.find("has not answered for 3 s"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(dir / "out" / "gains.json"));
+}
+
+// A worker that dies is noticed by mpirun, which ends the job at once and names the rank; its
+// exit status is mpirun's (128 + the signal), not ftctune's.
+TEST(Mpi, WorkerRankThatDiesStopsTheRunNamingIt) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-kill");
+  const fs::path job = long_job(dir);
+  MpiRun run(3, {"run", job.string(), "--threads", "1", "--out", (dir / "out").string()},
+             dir / "log.txt");
+  ASSERT_TRUE(wait_for_text(dir / "log.txt", "iteration 2/", 60s)) << slurp(dir / "log.txt");
+  const pid_t worker = run.rank_pid(1);
+  ASSERT_GT(worker, 0);
+  ::kill(worker, SIGKILL);
+  const std::optional<int> status = run.wait_for(30s);
+  ASSERT_TRUE(status) << "still running 30 s after a rank died";
+  EXPECT_NE(*status, 0);
+  const std::string log = slurp(dir / "log.txt");
+  EXPECT_NE(log.find("rank 1"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(dir / "out" / "gains.json"));
+}
+
+// Rank 0 serves HTTP and runs each job on every rank; the workers leave when the service stops.
+TEST(Mpi, ServeUnderMpirunRunsJobsOnEveryRankAndStopsCleanly) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-serve");
+  const auto plain =
+      run_cli("run jobs/table1.json -q --out '" + (dir / "plain").string() + "'", dir);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const int port = 20000 + static_cast<int>(::getpid() % 20000);
+  MpiRun serve(2,
+               {"serve", "--port", std::to_string(port), "--store", (dir / "store").string(),
+                "--threads", "1"},
+               dir / "log.txt");
+  ASSERT_TRUE(wait_for_text(dir / "log.txt", "listening on", 60s)) << slurp(dir / "log.txt");
+  EXPECT_NE(slurp(dir / "log.txt").find("serving with 2 MPI ranks"), std::string::npos);
+  const std::string server = " --server http://127.0.0.1:" + std::to_string(port);
+  const auto submit = run_cli("submit jobs/table1.json --wait -q" + server + " -o '" +
+                                  (dir / "fetched.json").string() + "'",
+                              dir);
+  ASSERT_EQ(submit.exit_code, 0) << submit.err << slurp(dir / "log.txt");
+  EXPECT_EQ(slurp(dir / "fetched.json"), slurp(dir / "plain" / "gains.json"));
+  // SIGTERM to rank 0: it stops in order and releases the worker; every process ends.
+  const pid_t leader = serve.rank_pid(0), worker = serve.rank_pid(1);
+  ASSERT_GT(leader, 0);
+  ASSERT_GT(worker, 0);
+  ::kill(leader, SIGTERM);
+  const std::optional<int> status = serve.wait_for(30s);
+  ASSERT_TRUE(status) << slurp(dir / "log.txt");
+  EXPECT_EQ(*status, 0) << slurp(dir / "log.txt");
+  EXPECT_NE(::kill(worker, 0), 0) << "the worker rank outlived the service";
+}
+
+}  // namespace
