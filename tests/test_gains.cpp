@@ -239,3 +239,59 @@ TEST(GainsFile, GainsForAnotherPlantAreRefused) {
   EXPECT_THROW(runtime::check_plant(g, {"manipulator", {}}), InputError);
   EXPECT_THROW(runtime::check_plant(g, {"spacecraft", {20, 17}}), InputError);
 }
+
+// Gains of a run stopped before its last iteration are the best of a partial search.
+TEST(GainsFile, GainsOfAnUnfinishedTuningAreRefused) {
+  json doc = tune::gains_document(tuned(short_job(), 2));
+  ASSERT_EQ(doc["optimizer"]["completed"], true);
+  EXPECT_NO_THROW(runtime::parse_gains(doc, "g.json"));
+  doc["optimizer"]["completed"] = false;
+  try {
+    runtime::parse_gains(doc, "g.json");
+    ADD_FAILURE() << "gains of an unfinished run accepted";
+  } catch (const InputError& e) {
+    ASSERT_EQ(e.errors().size(), 1u) << e.what();
+    EXPECT_EQ(e.errors()[0].path, "/optimizer/completed");
+    EXPECT_NE(e.errors()[0].message.find("stopped before its last iteration"), std::string::npos)
+        << e.what();
+  }
+}
+
+// check_job tells gains from the job they were tuned on; `simulate --gains` on another job
+// warns that its metrics are not the tuned objective.
+TEST(GainsFile, CheckJobComparesTheJobsSha256) {
+  const tune::Job job = short_job();
+  const runtime::Gains g = runtime::parse_gains(tune::gains_document(tuned(job, 2)), "g");
+  EXPECT_NO_THROW(runtime::check_job(g, tune::canonical_job_sha256(job)));
+  tune::Job other = job;
+  other.scenarios[0].disturbance.clear();
+  try {
+    runtime::check_job(g, tune::canonical_job_sha256(other));
+    ADD_FAILURE() << "gains accepted for another job";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.errors()[0].path, "/job/sha256");
+    EXPECT_NE(std::string(e.what()).find("tuned on job \"table1-short\""), std::string::npos)
+        << e.what();
+  }
+
+  const auto dir = fresh_dir("gains-other-job");
+  std::ofstream(dir / "gains.json") << tune::gains_document(tuned(job, 2)).dump(2);
+  json j = short_table1_job();
+  std::ofstream(dir / "same.json") << j.dump(2);
+  j["scenarios"][0]["disturbance"] = json::array();
+  std::ofstream(dir / "other.json") << j.dump(2);
+  const auto same =
+      run_cli("simulate '" + (dir / "same.json").string() + "' --gains '" +
+                  (dir / "gains.json").string() + "' --out '" + (dir / "s1").string() + "'",
+              dir);
+  ASSERT_EQ(same.exit_code, 0) << same.err;
+  EXPECT_EQ(same.err.find("not the objective"), std::string::npos) << same.err;
+  const auto other_run =
+      run_cli("simulate '" + (dir / "other.json").string() + "' --gains '" +
+                  (dir / "gains.json").string() + "' --out '" + (dir / "s2").string() + "'",
+              dir);
+  ASSERT_EQ(other_run.exit_code, 0) << other_run.err;
+  EXPECT_NE(other_run.err.find("the metrics below are not the objective they were tuned to"),
+            std::string::npos)
+      << other_run.err;
+}

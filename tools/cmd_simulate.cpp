@@ -13,6 +13,7 @@
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/version.hpp"
 
 namespace ftc::cli {
@@ -45,6 +46,13 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
       throw InputError("--gains", "", "cannot be combined with --controller or --set");
     const runtime::Gains gains = runtime::read_gains(o.gains);
     for (const sim::Scenario& s : job.scenarios) runtime::check_sample_time(gains, s.sample_time);
+    // Replaying gains on other scenarios is a fair question, so another job is only a warning:
+    // the metrics are then not the objective the gains were tuned to.
+    try {
+      runtime::check_job(gains, tune::canonical_job_sha256(job));
+    } catch (const InputError& e) {
+      spdlog::warn("{}: the metrics below are not the objective they were tuned to", e.what());
+    }
     controller = gains.controller;
   } else {
     controller = select_controller(job, o.controller, o.sets);

@@ -115,7 +115,22 @@ std::shared_ptr<const schema::Object<Gains>> make_gains_shape() {
                            "candidate diverged, which the loader refuses"}};
             }});
   o->field(informational("baseline", "object", "the job's own controller and its score"));
-  o->field(informational("optimizer", "object", "algorithm, settings, seed, evaluations"));
+  // The optimiser's record, read for one flag: gains of a run stopped before its last
+  // iteration are the best of a partial search, not the tuning's answer.
+  {
+    schema::Object<Gains>::Field f =
+        informational("optimizer", "object", "algorithm, settings, seed, evaluations, completed");
+    const auto kind = f.read;
+    f.read = [kind](const json& v, const std::string& path, Gains& g, Errors& e) {
+      kind(v, path, g, e);
+      if (v.is_object() && v.contains("completed") && v["completed"] != json(true))
+        e.push_back({path + "/completed",
+                     "is " + v["completed"].dump() +
+                         ": the tuning was stopped before its last iteration, so these are the "
+                         "best gains of a partial search and must not be deployed"});
+    };
+    o->field(std::move(f));
+  }
   o->field(informational("history", "array", "one row per iteration"));
   o->field({"job", true,
             [](const json& v, const std::string& path, Gains& g, Errors& e) {
@@ -186,6 +201,14 @@ json gains_json_schema() {
   return schema::document(gains_shape().json_schema(),
                           "https://ftctune.example/schemas/ftctune.gains-1.json",
                           "ftctune gains file (ftctune.gains/1)");
+}
+
+void check_job(const Gains& gains, const std::string& job_sha256) {
+  if (gains.job_sha256 != job_sha256)
+    throw InputError("gains", "/job/sha256",
+                     "the gains were tuned on job \"" + gains.job_name + "\" (SHA-256 " +
+                         gains.job_sha256.substr(0, 12) + "…), not on this job (" +
+                         job_sha256.substr(0, 12) + "…)");
 }
 
 void check_plant_model(const Gains& gains, const std::string& model) {

@@ -444,11 +444,14 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
   };
 
   const int workers = s.size - 1;
+  const auto t0 = clock::now();
+  std::size_t bytes_out = 0, bytes_in = 0, packs = 0;
   if (workers > 0) {
     if (problem.identity() != s.problem_sent) {
       const std::string text = problem_message(problem);
       const std::vector<char> bytes(text.begin(), text.end());
       for (int w = 1; w <= workers; ++w) send(w, kProblem, bytes);
+      bytes_out += bytes.size() * static_cast<std::size_t>(workers);
       s.problem_sent = problem.identity();
     }
     Writer b;
@@ -456,6 +459,7 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
     b.put_vector(
         std::vector<sim::ControllerConfig>(batch.candidates.begin(), batch.candidates.end()));
     for (int w = 1; w <= workers; ++w) send(w, kBatch, b);
+    bytes_out += b.bytes().size() * static_cast<std::size_t>(workers);
   }
 
   // Rank 0's own threads take tasks one at a time, its recorded ones first.
@@ -504,6 +508,7 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
       continue;
     }
     backoff.reset();
+    bytes_in += m->bytes.size();
     Worker& wk = ws[static_cast<std::size_t>(m->source)];
     wk.heard = clock::now();
     if (m->tag == kHeartbeat) continue;
@@ -540,9 +545,16 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
     Writer p;
     p.put_vector(tasks);
     send(m->source, kPack, p);
+    bytes_out += p.bytes().size();
+    ++packs;
     wk.pack = std::make_pair(first, count);
   }
   compute.join();
+  spdlog::debug(
+      "mpi batch: {} tasks, {} packs to {} worker ranks, {:.1f} kB out, {:.1f} kB in, "
+      "{:.1f} ms",
+      n, packs, workers, bytes_out / 1e3, bytes_in / 1e3,
+      std::chrono::duration<double, std::milli>(clock::now() - t0).count());
   return results;
 }
 

@@ -8,11 +8,12 @@
 //
 // The loader refuses a file with another schema, a missing or unknown field, a controller
 // field out of its valid range, tuned values that disagree with the controller, a fitness of 0
-// or null (every candidate diverged in tuning), or gains tuned for another sample time or
-// another plant model than the caller's — each with an InputError naming the JSON path. The
-// plant's parameters are compared when the caller gives them (check_plant). The file carries
-// the SHA-256 of its job, which needs the job (and the tuner) to check, and no hash of its own;
-// it is written atomically, so a torn file is a JSON error.
+// or null (every candidate diverged in tuning), a run stopped before its last iteration
+// (optimizer.completed false), or gains tuned for another sample time or another plant model
+// than the caller's — each with an InputError naming the JSON path. The plant's parameters are
+// compared when the caller gives them (check_plant), the job when the caller knows its SHA-256
+// (check_job). The file has no hash of its own; it is written atomically, so a torn file is a
+// JSON error.
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json_fwd.hpp>
@@ -51,6 +52,9 @@ nlohmann::json gains_json_schema();
 // 1e-12 relative: a Ts written in a file and re-read may differ in its last bit).
 void check_sample_time(const Gains& gains, double sample_time);
 
+// Throws InputError when the gains were tuned on another job than the one whose canonical
+// SHA-256 is given (`ftctune validate` prints it; the tuner's canonical_job_sha256()).
+void check_job(const Gains& gains, const std::string& job_sha256);
 // Throws InputError when the gains were tuned on another plant model (Plant::model()).
 void check_plant_model(const Gains& gains, const std::string& model);
 // Throws InputError, naming each parameter that differs (equal within 1e-12 relative), when
