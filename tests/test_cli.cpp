@@ -5,6 +5,7 @@
 #include <sys/file.h>
 #include <sys/socket.h>
 
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
@@ -347,15 +348,36 @@ TEST(Cli, RunStoppedByAFullDiskLeavesNoGainsFile) {
     EXPECT_EQ(r.exit_code, 2) << step << ": " << r.err;
     EXPECT_NE(r.err.find("No space left on device"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find(out.string()), std::string::npos) << r.err;
-    EXPECT_FALSE(std::filesystem::exists(out / "gains.json")) << step;
-    // No temporary file is left behind.
+    // The files were staged: nothing of the run (no temporary file either) is in its directory.
     for (const auto& e : std::filesystem::recursive_directory_iterator(out))
-      EXPECT_EQ(e.path().string().find(".tmp."), std::string::npos) << e.path();
-    // Once there is space again, --force makes the run whole.
-    const CliResult again = run_cli("run -q --force " + job + " --out '" + out.string() + "'", dir);
+      ADD_FAILURE() << step << ": left behind " << e.path();
+    // Once there is space again, the run goes through.
+    const CliResult again = run_cli("run -q " + job + " --out '" + out.string() + "'", dir);
     EXPECT_EQ(again.exit_code, 0) << again.err;
     EXPECT_TRUE(std::filesystem::exists(out / "gains.json"));
   }
+}
+
+// A --force run that a full disk stops leaves the run it was to replace whole: never the files
+// of two seeds side by side.
+TEST(Cli, ForcedRunStoppedByAFullDiskLeavesTheEarlierRunWhole) {
+  const auto dir = fresh_dir("run-disk-full-force");
+  ftc::tune::write_file_atomic(dir / "job.json", short_table1_job().dump(2));
+  const std::string job = "'" + (dir / "job.json").string() + "'";
+  const auto out = dir / "out";
+  ASSERT_EQ(run_cli("run -q --seed 1 " + job + " --out '" + out.string() + "'", dir).exit_code, 0);
+  std::map<std::string, std::string> before;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(out))
+    if (e.is_regular_file()) before[e.path().string()] = slurp(e.path());
+  ::setenv("FTCTUNE_FAIL_IO", "12", 1);
+  const CliResult r =
+      run_cli("run -q --force --seed 2 " + job + " --out '" + out.string() + "'", dir);
+  ::unsetenv("FTCTUNE_FAIL_IO");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  std::map<std::string, std::string> after;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(out))
+    if (e.is_regular_file()) after[e.path().string()] = slurp(e.path());
+  EXPECT_EQ(after, before);
 }
 
 // --- run checkpoints (--checkpoint, --resume) ---

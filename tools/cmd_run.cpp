@@ -4,6 +4,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -37,6 +38,18 @@ struct RunCliOptions {
   bool no_checkpoint = false;  // never (else: once the run looks like taking over a minute)
   bool resume = false;
 };
+
+// Where a run stages its files inside its directory, followed by the process id.
+constexpr const char* kStagingPrefix = ".staging-";
+
+// The staging directories of runs killed before they finished (only a run holding the lock
+// writes there, so any found by the holder are left over).
+void remove_stale_staging(const std::filesystem::path& out) {
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(out, ec))
+    if (e.path().filename().string().rfind(kStagingPrefix, 0) == 0)
+      std::filesystem::remove_all(e.path(), ec);
+}
 
 // A run projected to take longer than this checkpoints after every iteration unless told not to.
 constexpr double kCheckpointAfterSeconds = 60.0;
@@ -190,6 +203,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   } else {
     lock = run_directory(out, !o.out.empty(), o.force);
   }
+  remove_stale_staging(out);
   const std::int64_t total = job.tuning->algorithm->evaluations();
   std::vector<std::string> names;
   for (const tune::ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
@@ -267,11 +281,32 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   run["host"] = hostname();
   run["job_file"] = o.job;
 
+  // The files go to a staging directory inside `out` first, each synced: a full disk or a kill
+  // on the way leaves `out` as it was, an earlier run included. Only then does the new run take
+  // its place, entry by entry by rename (which needs no space) with gains.json last.
+  const fs::path staging = out / (std::string(kStagingPrefix).append(std::to_string(::getpid())));
+  std::vector<std::string> entries;
+  const auto add_entry = [&](const std::string& file) {
+    const std::string top = fs::path(file).begin()->string();  // trajectories/a/b.csv: the folder
+    if (std::find(entries.begin(), entries.end(), top) == entries.end()) entries.push_back(top);
+  };
+  try {
+    fs::remove_all(staging);
+    if (random_baseline) {
+      tune::write_file_atomic(staging / "history-random.csv", tune::history_csv(*random_baseline));
+      add_entry("history-random.csv");
+    }
+    tune::write_file_atomic(staging / "run.json", run.dump(2) + "\n");
+    add_entry("run.json");
+    for (const std::string& f : tune::write_output_files(outputs, staging)) add_entry(f);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(staging, ec);
+    throw;
+  }
   if (o.force && !o.resume) clear_previous_run(out);
-  if (random_baseline)
-    tune::write_file_atomic(out / "history-random.csv", tune::history_csv(*random_baseline));
-  tune::write_file_atomic(out / "run.json", run.dump(2) + "\n");
-  tune::write_output_files(outputs, out);
+  tune::move_into(staging, out, entries);
+  fs::remove(staging);
   // gains.json is in place: the run is finished, and its checkpoint of no more use.
   fs::remove(out / tune::kCheckpointFile);
 

@@ -105,16 +105,27 @@ void write_file_atomic(const std::filesystem::path& path,
     io_error("cannot rename into place", path, error);
   }
   // And the directory, so that the rename itself survives a crash.
-  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  sync_directory(path.has_parent_path() ? path.parent_path() : fs::path("."));
+}
+
+void sync_directory(const std::filesystem::path& dir) {
   const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd < 0) io_error("cannot sync directory of", path, errno);
+  if (dfd < 0) io_error("cannot sync directory", dir, errno);
   // EINVAL: a file system that cannot sync directories (some network and FUSE ones).
   if (::fsync(dfd) != 0 && errno != EINVAL) {
     const int error = errno;
     ::close(dfd);
-    io_error("cannot sync directory of", path, error);
+    io_error("cannot sync directory", dir, error);
   }
   ::close(dfd);
+}
+
+void move_into(const std::filesystem::path& staging, const std::filesystem::path& dir,
+               const std::vector<std::string>& names) {
+  for (const std::string& name : names)
+    if (injected_failure() || std::rename((staging / name).c_str(), (dir / name).c_str()) != 0)
+      io_error("cannot move into place", dir / name, errno);
+  sync_directory(dir);
 }
 
 }  // namespace ftc::tune
