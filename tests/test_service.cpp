@@ -1,16 +1,25 @@
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
+#include <poll.h>
+#include <sys/mount.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
+#include <functional>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "cli_runner.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/tune/service/job_store.hpp"
@@ -60,7 +69,7 @@ std::string expected_gains(const json& job) { return expected_file(job, "gains.j
 struct Service {
   explicit Service(tune::ServiceOptions o = {}) : dir(fresh_dir("service")) {
     o.port = 0;
-    o.store = dir / "store";
+    if (o.store == tune::ServiceOptions{}.store) o.store = dir / "store";
     if (o.threads == 0) o.threads = 2;
     service = std::make_unique<tune::TuningService>(o);
     port = service->start();
@@ -97,6 +106,103 @@ struct Service {
   int port = 0;
   std::unique_ptr<httplib::Client> client;
 };
+
+// Polls until the job runs and has completed `iterations` iterations.
+void wait_running(Service& s, const std::string& id, int iterations) {
+  json v;
+  for (int i = 0; i < 4000; ++i) {
+    v = s.get("/v1/jobs/" + id);
+    if (v["status"] == "running" && !v["progress"]["iteration"].is_null() &&
+        v["progress"]["iteration"].get<int>() >= iterations)
+      return;
+    std::this_thread::sleep_for(5ms);
+  }
+  FAIL() << "job " << id << " never ran " << iterations << " iterations: " << v.dump();
+}
+
+// Polls /healthz until `holds` says yes (or 60 s pass); returns the last answer.
+json wait_health(Service& s, const std::function<bool(const json&)>& holds) {
+  json h;
+  for (int i = 0; i < 6000; ++i) {
+    h = s.get("/healthz");
+    if (holds(h)) break;
+    std::this_thread::sleep_for(10ms);
+  }
+  return h;
+}
+
+// Frees the store's "disk" (the seam of job_store.hpp) however the test ends.
+struct FreeDiskOnExit {
+  ~FreeDiskOnExit() { tune::inject_store_full(0); }
+};
+
+// A connection to the server from a chosen loopback address (all of 127.0.0.0/8 reaches the
+// loopback interface), so that one test can be several clients.
+int connect_from(const char* source, int port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  ::inet_pton(AF_INET, source, &a.sin_addr);
+  a.sin_port = 0;
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+bool send_all(int fd, const std::string& data) {
+  return ::send(fd, data.data(), data.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(data.size());
+}
+
+// What the server sends on `fd` until it closes the connection (then *closed) or `timeout`
+// passes.
+std::string read_until_closed(int fd, std::chrono::milliseconds timeout, bool* closed = nullptr) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  std::string reply;
+  if (closed) *closed = false;
+  for (auto now = std::chrono::steady_clock::now(); now < end;
+       now = std::chrono::steady_clock::now()) {
+    pollfd p{fd, POLLIN, 0};
+    const auto left = std::chrono::ceil<std::chrono::milliseconds>(end - now).count();
+    if (::poll(&p, 1, static_cast<int>(left)) <= 0) break;
+    char buf[4096];
+    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+    if (n <= 0) {
+      if (closed) *closed = true;
+      break;
+    }
+    reply.append(buf, static_cast<std::size_t>(n));
+  }
+  return reply;
+}
+
+// One request from `source`, and the whole reply.
+std::string raw_request(const char* source, int port, const std::string& request) {
+  const int fd = connect_from(source, port);
+  if (fd < 0) return "";
+  send_all(fd, request);
+  std::string reply = read_until_closed(fd, 30s);
+  ::close(fd);
+  return reply;
+}
+
+std::string post_job(const json& job) {
+  const std::string body = job.dump();
+  return "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nConnection: close\r\nContent-Type: "
+         "application/json\r\nContent-Length: " +
+         std::to_string(body.size()) + "\r\n\r\n" + body;
+}
+
+int status_of(const std::string& reply) {
+  return reply.rfind("HTTP/1.1 ", 0) == 0 ? std::atoi(reply.c_str() + 9) : -1;
+}
 
 void expect_error(const httplib::Result& r, int status, const std::string& code) {
   ASSERT_TRUE(r);
@@ -656,7 +762,7 @@ TEST(Service, CrashRecoveryGivesUpAJobAfterItsAttempts) {
       sub.name = name;
       sub.iterations = 1;
       sub.total_evaluations = 1;
-      return store.submit(sub).first.id;
+      return store.submit(sub).record.id;
     };
     doomed = submit("doomed");
     // Started, and the server "crashed" under it, twice; the third start crashes too.
@@ -678,4 +784,381 @@ TEST(Service, CrashRecoveryGivesUpAJobAfterItsAttempts) {
     EXPECT_NE(d.error.find("given up after 3 starts"), std::string::npos) << d.error;
     EXPECT_EQ(store.get(young)->status, tune::JobStatus::queued);
   }
+}
+
+// A store that cannot write (a full disk) refuses the write whole: nothing changes, reads go on,
+// and the same write succeeds once there is room.
+TEST(Service, StoreOnAFullDiskRefusesWritesAndChangesNothing) {
+  const auto dir = fresh_dir("store-full");
+  FreeDiskOnExit free_disk;
+  tune::JobStore store(dir / "store");
+  tune::Submission sub;
+  sub.job_json = tiny_job().dump();
+  sub.name = "tiny";
+  sub.iterations = 1;
+  sub.total_evaluations = 2;
+  const std::string id = store.submit(sub).record.id;
+  tune::inject_store_full(1);
+  try {
+    store.submit(sub);
+    ADD_FAILURE() << "a submission was written to a full disk";
+  } catch (const tune::StoreError& e) {
+    EXPECT_TRUE(e.full());
+    EXPECT_TRUE(e.transient());
+    EXPECT_NE(std::string(e.what()).find("database or disk is full"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(store.claim_next(), tune::StoreError);
+  EXPECT_EQ(store.count(std::nullopt), 1);
+  EXPECT_EQ(store.get(id)->status, tune::JobStatus::queued);
+  EXPECT_EQ(store.get(id)->attempts, 0);
+  tune::inject_store_full(0);
+  const std::optional<tune::JobRecord> claimed = store.claim_next();
+  ASSERT_TRUE(claimed);
+  EXPECT_EQ(claimed->id, id);
+  EXPECT_EQ(claimed->attempts, 1);
+}
+
+// Issue 13, defect 1: a full disk cost a finished job its results, failed it and left the next
+// job `running` until a restart. Now the results wait in memory and are written once there is
+// room, without a restart; nothing else starts meanwhile, cancel still works, and new
+// submissions get 507.
+TEST(Service, FullDiskKeepsAFinishedJobsResultsUntilTheStoreWritesAgain) {
+  tune::ServiceOptions o;
+  o.store_retry_seconds = 0.1;
+  Service s(o);
+  FreeDiskOnExit free_disk;
+  const json job = long_job();
+  const std::string a = s.submit(job)["id"];
+  const std::string queued = s.submit(tiny_job("queued"))["id"];
+  wait_running(s, a, 2);
+  tune::inject_store_full(1);
+
+  auto r = s.client->Post("/v1/jobs", tiny_job("refused").dump(), "application/json");
+  expect_error(r, 507, "insufficient_storage");
+  EXPECT_NE(r->body.find("database or disk is full"), std::string::npos) << r->body;
+  EXPECT_EQ(r->get_header_value("Retry-After"), "1");
+  // The store cannot record the cancellation: it holds in memory (the job is not started).
+  r = s.client->Post(("/v1/jobs/" + queued + "/cancel").c_str(), "", "application/json");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202) << r->body;
+  EXPECT_TRUE(json::parse(r->body)["cancel_requested"].get<bool>());
+
+  // The running job finishes (its checkpoints are refused too); its results wait in memory.
+  json health = wait_health(s, [](const json& h) { return h["store"]["unstored_jobs"] == 1; });
+  ASSERT_EQ(health["store"]["unstored_jobs"], 1) << health.dump();
+  EXPECT_EQ(health["status"], "degraded");
+  EXPECT_FALSE(health["store"]["writable"].get<bool>());
+  EXPECT_EQ(health["store"]["unrecorded_cancels"], 1);
+  const json held = s.get("/v1/jobs/" + a);
+  EXPECT_EQ(held["status"], "running");
+  EXPECT_EQ(held["unstored"]["status"], "succeeded") << held.dump();
+  expect_error(s.client->Get(("/v1/jobs/" + a + "/gains").c_str()), 409, "not_ready");
+  r = s.client->Post("/v1/jobs", tiny_job("refused").dump(), "application/json");
+  expect_error(r, 507, "insufficient_storage");
+  EXPECT_NE(r->body.find("1 finished job waits in memory"), std::string::npos) << r->body;
+  std::this_thread::sleep_for(300ms);  // a few retries: none gets through, nothing else starts
+  EXPECT_EQ(s.get("/v1/jobs/" + queued)["attempts"], 0);
+  EXPECT_EQ(s.get("/v1/jobs?status=running")["total"], 1);
+
+  tune::inject_store_full(0);
+  const json done = s.wait_done(a, 10s);
+  EXPECT_EQ(done["status"], "succeeded");
+  EXPECT_TRUE(done["unstored"].is_null());
+  EXPECT_EQ(done["finished_at"], held["unstored"]["finished_at"]);  // when it finished
+  EXPECT_EQ(s.client->Get(("/v1/jobs/" + a + "/gains").c_str())->body, expected_gains(job));
+  const json cancelled = s.wait_done(queued, 10s);
+  EXPECT_EQ(cancelled["status"], "cancelled");
+  EXPECT_EQ(cancelled["attempts"], 0);
+  health = wait_health(s, [](const json& h) { return h["status"] == "ok"; });
+  EXPECT_EQ(health["status"], "ok") << health.dump();
+  EXPECT_TRUE(health["store"]["error"].is_null());
+  const std::string after = s.submit(tiny_job("after"))["id"];
+  EXPECT_EQ(s.wait_done(after)["status"], "succeeded");
+  EXPECT_EQ(s.get("/v1/jobs?status=running")["total"], 0);
+
+  // The files layer's seam: a report drawn on a full temporary disk is a 507 too, and the next
+  // request draws it.
+  tune::inject_io_failure(1);
+  expect_error(s.client->Get(("/v1/jobs/" + a + "/report").c_str()), 507, "insufficient_storage");
+  EXPECT_EQ(s.client->Get(("/v1/jobs/" + a + "/report").c_str())->status, 200);
+}
+
+// Cancelling a job whose results are held drops them: it ends cancelled once the store writes.
+TEST(Service, CancellingAJobWhoseResultsAreHeldDropsThem) {
+  tune::ServiceOptions o;
+  o.store_retry_seconds = 0.1;
+  Service s(o);
+  FreeDiskOnExit free_disk;
+  const std::string a = s.submit(long_job())["id"];
+  wait_running(s, a, 2);
+  tune::inject_store_full(1);
+  const json health =
+      wait_health(s, [](const json& h) { return h["store"]["unstored_jobs"] == 1; });
+  ASSERT_EQ(health["store"]["unstored_jobs"], 1) << health.dump();
+  auto r = s.client->Post(("/v1/jobs/" + a + "/cancel").c_str(), "", "application/json");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202) << r->body;
+  EXPECT_EQ(json::parse(r->body)["unstored"]["status"], "cancelled") << r->body;
+  expect_error(s.client->Post(("/v1/jobs/" + a + "/cancel").c_str(), "", "application/json"), 409,
+               "conflict");
+  tune::inject_store_full(0);
+  EXPECT_EQ(s.wait_done(a, 10s)["status"], "cancelled");
+  expect_error(s.client->Get(("/v1/jobs/" + a + "/gains").c_str()), 409, "not_ready");
+}
+
+// The same on a real full disk: a small tmpfs holds the store. Needs root (to mount it); skipped
+// elsewhere.
+TEST(Service, RealFullDiskOnATmpfs) {
+  if (::geteuid() != 0) GTEST_SKIP() << "mounting a tmpfs needs root";
+  const auto dir = fresh_dir("tmpfs");
+  const auto mnt = dir / "mnt";
+  std::filesystem::create_directories(mnt);
+  if (::mount("tmpfs", mnt.c_str(), "tmpfs", 0, "size=8m,mode=0700") != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs: " << std::strerror(errno);
+  struct Unmount {
+    std::filesystem::path at;
+    ~Unmount() { ::umount2(at.c_str(), MNT_DETACH); }
+  } unmount{mnt};
+  tune::ServiceOptions o;
+  o.store = mnt / "store";
+  o.store_retry_seconds = 0.1;
+  Service s(o);
+  // Fill the disk, then free 192 KiB: room for the submission and the checkpoints, not for the
+  // results (about 0.5 MB).
+  const auto filler = mnt / "filler";
+  {
+    const int fd = ::open(filler.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0600);
+    ASSERT_GE(fd, 0);
+    const std::string chunk(1 << 16, 'x');
+    off_t size = 0;
+    for (ssize_t n; (n = ::write(fd, chunk.data(), chunk.size())) > 0;) size += n;
+    EXPECT_EQ(errno, ENOSPC);
+    ASSERT_EQ(::ftruncate(fd, size - (192 << 10)), 0);
+    ::close(fd);
+  }
+  const json job = short_table1_job();
+  const std::string id = s.submit(job)["id"];
+  const json health =
+      wait_health(s, [](const json& h) { return h["store"]["unstored_jobs"] == 1; });
+  ASSERT_EQ(health["store"]["unstored_jobs"], 1) << health.dump();
+  expect_error(s.client->Post("/v1/jobs", tiny_job().dump(), "application/json"), 507,
+               "insufficient_storage");
+  std::filesystem::remove(filler);
+  EXPECT_EQ(s.wait_done(id, 10s)["status"], "succeeded");
+  EXPECT_EQ(s.client->Get(("/v1/jobs/" + id + "/gains").c_str())->body, expected_gains(job));
+  EXPECT_EQ(s.submit(tiny_job())["status"], "queued");
+}
+
+// Issue 13, defect 2: what one job may store is bounded. A job that cannot fit is refused when
+// submitted; one that outgrows the limit fails with the reason, while it runs (its checkpointed
+// trials) or at its end (its result files).
+TEST(Service, StoredBytesPerJobAreBounded) {
+  tune::ServiceOptions o;
+  o.max_stored_bytes = 1 << 20;
+  Service s(o);
+  const auto scenario_of = [](double duration) {
+    json j = tiny_job("long-scenario");
+    j["scenarios"][0]["duration"] = duration;
+    j["objective"]["window"] = {0, duration};
+    return j;
+  };
+  // 600 s: 20000 rows (the default limit) × 15 numbers × 4 controllers is above 1 MiB.
+  auto r = s.client->Post("/v1/jobs", scenario_of(600).dump(), "application/json");
+  expect_error(r, 400, "job_too_large");
+  EXPECT_NE(r->body.find("would take at least 9.6 MB"), std::string::npos) << r->body;
+
+  // 17.5 s: estimated below the limit, stored above it.
+  json v = s.wait_done(s.submit(scenario_of(17.5))["id"]);
+  EXPECT_EQ(v["status"], "failed");
+  EXPECT_NE(v["error"].get<std::string>().find("its results take 1.4 MB, above the server's "
+                                               "limit of 1.0 MB per job (--max-stored-mib)"),
+            std::string::npos)
+      << v.dump();
+
+  // 14000 evaluations: estimated at 0.9 MB, their trials outgrow the limit in the checkpoints.
+  json many = tiny_job("many-trials");
+  many["tuning"]["algorithm"]["population"] = 100;
+  many["tuning"]["algorithm"]["iterations"] = 139;
+  v = s.wait_done(s.submit(many)["id"]);
+  EXPECT_EQ(v["status"], "failed");
+  EXPECT_NE(v["error"].get<std::string>().find("its checkpoint (the optimiser's state and the "
+                                               "trials so far) reached"),
+            std::string::npos)
+      << v.dump();
+  EXPECT_LT(v["progress"]["iteration"].get<int>(), 139) << "it stopped when it crossed the limit";
+  EXPECT_EQ(s.get("/healthz")["status"], "ok");
+}
+
+// The service stores trajectories for the report at no more than --trajectory-rows rows: a
+// longer scenario is recorded every k-th 10 ms sample (the same rows, fewer of them); the
+// metrics, computed from every sample, do not change.
+TEST(Service, StoredTrajectoriesAreDecimatedToTheRowLimit) {
+  tune::ServiceOptions o;
+  o.trajectory_rows = 100;
+  Service s(o);
+  const json job = short_table1_job();  // 5 s: 500 rows of 10 ms
+  const std::string id = s.submit(job)["id"];
+  ASSERT_EQ(s.wait_done(id)["status"], "succeeded");
+  const std::string comparison = s.client->Get(("/v1/jobs/" + id + "/comparison").c_str())->body;
+  EXPECT_EQ(s.client->Get(("/v1/jobs/" + id + "/report").c_str())->status, 200);
+  s.service.reset();  // frees the store for the reading below
+
+  tune::TbbEvaluator evaluator(2);
+  const std::map<std::string, std::string> full =
+      tune::output_files(tune::tune(tune::parse_job(job, "full"), evaluator));
+  EXPECT_EQ(comparison, full.at("comparison.json"));
+  tune::JobStore store(s.dir / "store");
+  int trajectories = 0;
+  for (const auto& [name, csv] : store.artifacts(id)) {
+    if (name.rfind("trajectories/", 0) != 0) continue;
+    ++trajectories;
+    const auto lines = [](const std::string& text) {
+      std::vector<std::string> out;
+      std::istringstream in(text);
+      for (std::string line; std::getline(in, line);) out.push_back(line);
+      return out;
+    };
+    const std::vector<std::string> kept = lines(csv), all = lines(full.at(name));
+    ASSERT_EQ(all.size(), 501u) << name;
+    ASSERT_EQ(kept.size(), 101u) << name;  // the header and 100 rows
+    for (std::size_t k = 0; k < 100; ++k) EXPECT_EQ(kept[1 + k], all[1 + 5 * k]) << name << k;
+  }
+  EXPECT_EQ(trajectories, 4);
+}
+
+// Issue 13, defect 2: the queue has a quota, per client address (429) and in all (503), both
+// with Retry-After; a resubmission with a used Idempotency-Key still finds its job.
+TEST(Service, QueueQuotaAnswers429PerClientAnd503WhenFull) {
+  tune::ServiceOptions o;
+  o.max_queued = 3;
+  o.max_queued_per_client = 2;
+  Service s(o);
+  const std::string running = s.submit(long_job())["id"];
+  wait_running(s, running, 0);  // running jobs do not count
+  httplib::Headers key = {{"Idempotency-Key", "first"}};
+  auto r = s.client->Post("/v1/jobs", key, tiny_job("1").dump(), "application/json");
+  ASSERT_EQ(r->status, 201) << r->body;
+  const std::string first = json::parse(r->body)["id"];
+  s.submit(tiny_job("2"));
+  r = s.client->Post("/v1/jobs", tiny_job("3").dump(), "application/json");
+  expect_error(r, 429, "too_many_jobs");
+  EXPECT_EQ(r->get_header_value("Retry-After"), "60");
+  EXPECT_NE(r->body.find("this client (127.0.0.1) has 2 jobs queued"), std::string::npos)
+      << r->body;
+
+  std::string reply = raw_request("127.0.0.2", s.port, post_job(tiny_job("other-client")));
+  EXPECT_EQ(status_of(reply), 201) << reply;
+  reply = raw_request("127.0.0.3", s.port, post_job(tiny_job("third-client")));
+  EXPECT_EQ(status_of(reply), 503) << reply;
+  EXPECT_NE(reply.find("\"queue_full\""), std::string::npos) << reply;
+  EXPECT_NE(reply.find("Retry-After: 60"), std::string::npos) << reply;
+
+  r = s.client->Post("/v1/jobs", key, tiny_job("1").dump(), "application/json");
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(json::parse(r->body)["id"], first);
+  EXPECT_EQ(s.get("/v1/jobs?status=queued")["total"], 3);
+  s.client->Post(("/v1/jobs/" + running + "/cancel").c_str(), "", "application/json");
+}
+
+// Issue 13, defect 3: clients trickling their requests a line at a time no longer hold the
+// server's threads: one address gets at most --max-connections-per-client of them (the rest are
+// answered 429 at once), a request's headers and body each have a deadline (408, connection
+// closed), and /healthz from another client is answered throughout. Here 12 connections from
+// 127.0.0.2 send a header line every 0.5 s, well within the 5 s any one wait is allowed.
+TEST(Service, SlowClientsAreCutOffAndHealthStaysAnswered) {
+  tune::ServiceOptions o;
+  o.header_timeout = 1.5;
+  o.body_timeout = 1.5;
+  o.max_connections = 8;
+  o.max_connections_per_client = 4;
+  Service s(o);
+  using Clock = std::chrono::steady_clock;
+  struct Trickler {
+    int fd = -1;
+    std::string reply;
+    bool closed = false;
+    double closed_after = 0;  // seconds from its first byte
+  };
+  std::vector<Trickler> tricklers(12);
+  std::vector<std::thread> threads;
+  for (Trickler& t : tricklers)
+    threads.emplace_back([&t, port = s.port] {
+      t.fd = connect_from("127.0.0.2", port);
+      if (t.fd < 0) return;
+      const auto start = Clock::now();
+      send_all(t.fd, "GET /healthz HTTP/1.1\r\n");
+      for (int line = 0; line < 12 && !t.closed; ++line) {  // 6 s of header lines
+        t.reply += read_until_closed(t.fd, 500ms, &t.closed);
+        if (!t.closed && !send_all(t.fd, "X-Slow: " + std::to_string(line) + "\r\n")) break;
+      }
+      if (!t.closed) t.reply += read_until_closed(t.fd, 3s, &t.closed);
+      t.closed_after = std::chrono::duration<double>(Clock::now() - start).count();
+      ::close(t.fd);
+    });
+  // Meanwhile another client asks for /healthz every 0.25 s.
+  std::this_thread::sleep_for(200ms);
+  double slowest = 0;
+  for (int i = 0; i < 12; ++i) {
+    const auto t0 = Clock::now();
+    const auto r = s.client->Get("/healthz");
+    slowest = std::max(slowest, std::chrono::duration<double>(Clock::now() - t0).count());
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200);
+    std::this_thread::sleep_for(250ms);
+  }
+  for (std::thread& t : threads) t.join();
+  EXPECT_LT(slowest, 0.5) << "/healthz waited behind the slow clients";
+  int refused = 0, timed_out = 0;
+  for (const Trickler& t : tricklers) {
+    ASSERT_GE(t.fd, 0);
+    EXPECT_TRUE(t.closed) << t.reply;
+    if (status_of(t.reply) == 429) {
+      ++refused;
+      EXPECT_NE(t.reply.find("too_many_connections"), std::string::npos) << t.reply;
+      EXPECT_LT(t.closed_after, 1.0);
+    } else {
+      ++timed_out;
+      EXPECT_EQ(status_of(t.reply), 408) << t.reply;
+      EXPECT_NE(t.reply.find("request_timeout"), std::string::npos) << t.reply;
+      EXPECT_GT(t.closed_after, 1.4);  // the header deadline, not anything sooner
+      EXPECT_LT(t.closed_after, 3.0);
+    }
+  }
+  EXPECT_EQ(refused, 8);
+  EXPECT_EQ(timed_out, 4);
+
+  // A body sent a byte at a time (0.2 s apart) is cut off at its deadline too.
+  const int fd = connect_from("127.0.0.2", s.port);
+  ASSERT_GE(fd, 0);
+  const auto start = Clock::now();
+  ASSERT_TRUE(send_all(fd,
+                       "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                       "Content-Length: 1000\r\n\r\n"));
+  std::string reply;
+  bool closed = false;
+  for (int i = 0; i < 40 && !closed; ++i) {
+    reply += read_until_closed(fd, 200ms, &closed);
+    if (!closed && !send_all(fd, " ")) break;
+  }
+  if (!closed) reply += read_until_closed(fd, 3s, &closed);
+  const double took = std::chrono::duration<double>(Clock::now() - start).count();
+  ::close(fd);
+  EXPECT_TRUE(closed);
+  EXPECT_EQ(status_of(reply), 408) << reply;
+  EXPECT_NE(reply.find("the request body did not arrive within 1.5 s"), std::string::npos) << reply;
+  EXPECT_GT(took, 1.4);
+  EXPECT_LT(took, 3.0);
+}
+
+// The limits `serve` takes are checked before it starts: exit 2 with the reason.
+TEST(Cli, ServeRefusesLimitsThatCannotHold) {
+  const auto dir = fresh_dir("serve-limits");
+  CliResult r = run_cli(
+      "serve --port 0 --store store --max-connections 8 --max-connections-per-client 8", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("below --max-connections"), std::string::npos) << r.err;
+  r = run_cli("serve --port 0 --store store --max-stored-mib 1000", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--max-stored-mib"), std::string::npos) << r.err;
 }

@@ -107,6 +107,10 @@ std::string describe(const json& j) {
     }
   }
   if (!j["error"].is_null()) s += "\n  error: " + j["error"].get<std::string>();
+  if (j.contains("unstored") && j["unstored"].is_object())
+    s += "\n  finished (" + j["unstored"]["status"].get<std::string>() + ") at " +
+         j["unstored"]["finished_at"].get<std::string>() +
+         "; its results wait in the server's memory until its store can write them";
   return s;
 }
 

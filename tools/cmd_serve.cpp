@@ -19,6 +19,7 @@ struct ServeOptions {
   tune::ServiceOptions service;
   std::string token_file;
   std::size_t max_body_kib = 1024;
+  std::uint64_t max_stored_mib = 256;
 };
 
 std::string read_token(const std::string& file) {
@@ -41,6 +42,7 @@ std::string read_token(const std::string& file) {
 int run_serve(ServeOptions o) {
   if (!o.token_file.empty()) o.service.token = read_token(o.token_file);
   o.service.max_body_bytes = o.max_body_kib * 1024;
+  o.service.max_stored_bytes = o.max_stored_mib << 20;
 
   // Block the shutdown signals in every thread (the workers inherit the mask); this thread
   // waits for them with sigwait.
@@ -100,6 +102,31 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
   sub->add_option("--max-attempts", o->service.max_attempts,
                   "Starts of a job before crash recovery gives it up as failed (default 5)")
       ->check(CLI::Range(1, 1000));
+  sub->add_option("--max-stored-mib", o->max_stored_mib,
+                  "Largest result of one job in MiB, trials checkpoints included (default 256)")
+      ->check(CLI::Range(1, 900));
+  sub->add_option("--trajectory-rows", o->service.trajectory_rows,
+                  "Rows per stored comparison trajectory: longer scenarios are recorded more "
+                  "coarsely than every 10 ms (default 20000)")
+      ->check(CLI::Range(std::int64_t{100}, std::int64_t{100000000}));
+  sub->add_option("--max-queued", o->service.max_queued,
+                  "Jobs the queue holds; more get 503 (default 500; 0 = no limit)")
+      ->check(CLI::Range(std::int64_t{0}, std::int64_t{1000000000}));
+  sub->add_option("--max-queued-per-client", o->service.max_queued_per_client,
+                  "Queued jobs per client address; more get 429 (default 100; 0 = no limit)")
+      ->check(CLI::Range(std::int64_t{0}, std::int64_t{1000000000}));
+  sub->add_option("--header-timeout", o->service.header_timeout,
+                  "Seconds a request's headers may take from its first byte (default 10)")
+      ->check(CLI::Range(0.1, 3600.0));
+  sub->add_option("--body-timeout", o->service.body_timeout,
+                  "Seconds a request's body may take after its headers (default 60)")
+      ->check(CLI::Range(0.1, 3600.0));
+  sub->add_option("--max-connections", o->service.max_connections,
+                  "Connections served at once (default 64)")
+      ->check(CLI::Range(2, 1024));
+  sub->add_option("--max-connections-per-client", o->service.max_connections_per_client,
+                  "Connections one address may hold at once; more get 429 (default 16)")
+      ->check(CLI::Range(1, 1023));
   sub->callback([&action, o] { action = [o] { return run_serve(*o); }; });
 }
 

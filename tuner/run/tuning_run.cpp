@@ -147,9 +147,8 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   r.comparison.push_back({"optimal " + name, "tuned", r.tuned_controller, {}, {}});
   controllers.push_back(r.tuned_controller);
 
-  const auto every = std::max<std::int64_t>(
-      1, std::llround(kComparisonRecordInterval / job.scenarios.front().sample_time));
-  std::vector<CandidateOutcome> outcomes = problem.evaluate(controllers, evaluator, every);
+  std::vector<CandidateOutcome> outcomes = problem.evaluate(
+      controllers, evaluator, comparison_record_every(job, options.max_trajectory_rows));
   for (std::size_t i = 0; i < outcomes.size(); ++i) {
     r.comparison[i].summary = problem.summarize(outcomes[i].evaluation);
     r.comparison[i].outcome = std::move(outcomes[i]);
@@ -174,6 +173,16 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
       (nf.objective_max - nf.objective_min) / r.best().outcome.evaluation.objective;
   r.noise_floor = nf;
   return r;
+}
+
+std::int64_t comparison_record_every(const Job& job, std::int64_t max_rows) {
+  std::int64_t every = std::max<std::int64_t>(
+      1, std::llround(kComparisonRecordInterval / job.scenarios.front().sample_time));
+  // Rows are the samples k with k % every == 0: ceil(samples / every) of them.
+  if (max_rows > 0)
+    for (const sim::Scenario& s : job.scenarios)
+      every = std::max(every, (s.samples() + max_rows - 1) / max_rows);
+  return every;
 }
 
 std::vector<std::string> bound_warnings(const Job& job, const Decision& x) {

@@ -4,7 +4,9 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -13,7 +15,9 @@
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/version.hpp"
+#include "service/http_server.hpp"
 
 namespace ftc::tune::service_detail {
 
@@ -102,7 +106,65 @@ std::vector<std::string> split_path(const std::string& path) {
   return parts;
 }
 
+std::string megabytes(double bytes) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f MB", bytes / 1e6);
+  return buf;
+}
+
+// A low estimate of the bytes of a job's result files: its comparison trajectories (the rows the
+// service records, of one time and 2(n + m) numbers) and trials.csv (a row per evaluation), at
+// kBytesPerNumber, fewer than the ~12 a number takes in the Table 1 job's files. It refuses at
+// once a job that could only fail at its end; the runner checks the real size.
+double estimated_result_bytes(const Job& job, std::int64_t trajectory_rows) {
+  constexpr double kBytesPerNumber = 8;
+  const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
+  const double width = kind ? 1 + 2.0 * (kind->axes + kind->actuators) : 1;
+  const std::int64_t every = comparison_record_every(job, trajectory_rows);
+  double rows = 0;
+  for (const sim::Scenario& s : job.scenarios)
+    rows += static_cast<double>((s.samples() + every - 1) / every);
+  const double controllers = static_cast<double>(job.compare.size()) + 2;
+  // iteration, index, the parameters, objective, fitness, diverged, accepted.
+  const double trial_numbers = 6.0 + static_cast<double>(job.tuning->parameters.size());
+  return kBytesPerNumber *
+         (rows * width * controllers +
+          static_cast<double>(job.tuning->algorithm->evaluations()) * trial_numbers);
+}
+
+std::string seconds_text(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g s", s);
+  return buf;
+}
+
 }  // namespace
+
+json Api::view(const JobRecord& r) {
+  json j = job_json_view(r);
+  j["unstored"] = nullptr;
+  if (const std::optional<Unstored> u = runner_.unstored(r.id))
+    j["unstored"] = {{"status", to_string(u->status)},
+                     {"finished_at", u->finished_at},
+                     {"bytes", u->bytes},
+                     {"error", nullable(u->error)}};
+  if (runner_.cancel_deferred(r.id)) j["cancel_requested"] = true;
+  return j;
+}
+
+void Api::insufficient_storage(httplib::Response& res, const std::string& why) {
+  const StoreHealth h = runner_.health();
+  std::string message = "the job store cannot write (" + why + ")";
+  if (h.unstored > 0)
+    message += "; " + std::to_string(h.unstored) + " finished job" + (h.unstored == 1 ? "" : "s") +
+               " wait" + (h.unstored == 1 ? "s" : "") + " in memory to be stored";
+  message += ": free space where the store is; the server tries again every " +
+             seconds_text(opt_.store_retry_seconds);
+  res.set_header("Retry-After",
+                 std::to_string(static_cast<long>(std::ceil(opt_.store_retry_seconds))));
+  send_error(res, 507, "insufficient_storage", message,
+             json{{"unstored_jobs", h.unstored}, {"unrecorded_cancels", h.cancels}});
+}
 
 bool Api::authorised(const httplib::Request& req) const {
   if (!opt_.token) return true;
@@ -123,11 +185,18 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   const std::string& m = req.method;
   if (p.size() == 1 && p[0] == "healthz") {
     if (m != "GET") return method_not_allowed(res, "GET");
+    const StoreHealth h = runner_.health();
+    const bool writable = !h.error && !h.owes();
     return send_json(res, 200,
-                     {{"status", "ok"},
+                     {{"status", writable ? "ok" : "degraded"},
                       {"version", kVersion},
                       {"queued", store_.count(JobStatus::queued)},
-                      {"running", store_.count(JobStatus::running)}});
+                      {"running", store_.count(JobStatus::running)},
+                      {"store",
+                       {{"writable", writable},
+                        {"error", h.error ? json(*h.error) : json(nullptr)},
+                        {"unstored_jobs", h.unstored},
+                        {"unrecorded_cancels", h.cancels}}}});
   }
   if (p.size() < 2 || p[0] != "v1" || p[1] != "jobs")
     return send_error(res, 404, "not_found", "no such resource: " + req.path);
@@ -139,7 +208,9 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   const std::string& id = p[2];
   if (p.size() == 3) {
     if (m == "DELETE") {
-      switch (store_.remove(id)) {
+      const JobStore::Removal removal = store_.remove(id);
+      runner_.store_wrote();
+      switch (removal) {
         case JobStore::Removal::not_found:
           return send_error(res, 404, "not_found", "no job " + id);
         case JobStore::Removal::active:
@@ -155,7 +226,7 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
     if (m != "GET") return method_not_allowed(res, "GET, DELETE");
     const auto job = store_.get(id);
     if (!job) return send_error(res, 404, "not_found", "no job " + id);
-    return send_json(res, 200, job_json_view(*job));
+    return send_json(res, 200, view(*job));
   }
   if (p.size() == 4 && p[3] == "cancel") {
     if (m != "POST") return method_not_allowed(res, "POST");
@@ -202,7 +273,21 @@ void Api::submit(const httplib::Request& req, httplib::Response& res) {
                           fmt_g(opt_.max_steps),
                       json{{{"steps", steps}, {"budget", opt_.max_steps}}});
 
+  if (const double bytes = estimated_result_bytes(job, opt_.trajectory_rows);
+      bytes > static_cast<double>(opt_.max_stored_bytes))
+    return send_error(res, 400, "job_too_large",
+                      "the job's results would take at least " + megabytes(bytes) +
+                          " (its comparison trajectories and trials), above the server's limit "
+                          "of " +
+                          megabytes(static_cast<double>(opt_.max_stored_bytes)) +
+                          " per job: ask for fewer evaluations, scenarios or compared controllers",
+                      json{{"bytes", bytes}, {"limit", opt_.max_stored_bytes}});
+  // A store that owes finished jobs their results takes no new ones until it has written them.
+  if (const StoreHealth h = runner_.health(); h.owes())
+    return insufficient_storage(res, h.error.value_or("it has refused writes"));
+
   Submission s;
+  s.client = req.remote_addr;
   s.job_json = to_json(job).dump();
   s.name = job.name;
   s.iterations = job.tuning->algorithm->iterations();
@@ -214,14 +299,31 @@ void Api::submit(const httplib::Request& req, httplib::Response& res) {
                         "Idempotency-Key is longer than 200 characters");
     s.idempotency_key = key;
   }
-  const auto [record, created] = store_.submit(s);
+  const Submitted done = store_.submit(s, {opt_.max_queued, opt_.max_queued_per_client});
+  runner_.store_wrote();
+  const JobRecord& record = done.record;
+  const bool created = done.created;
+  if (done.refused != Submitted::Refusal::none) {
+    // A queue slot frees when a job starts; a minute is a guess at when, not a promise.
+    res.set_header("Retry-After", "60");
+    if (done.refused == Submitted::Refusal::client_quota)
+      return send_error(res, 429, "too_many_jobs",
+                        "this client (" + s.client + ") has " + std::to_string(done.queued) +
+                            " jobs queued, the most the server queues per client "
+                            "(--max-queued-per-client): submit more once some have started",
+                        json{{"queued", done.queued}, {"limit", opt_.max_queued_per_client}});
+    return send_error(res, 503, "queue_full",
+                      "the queue holds " + std::to_string(done.queued) +
+                          " jobs, the most the server queues (--max-queued): try again later",
+                      json{{"queued", done.queued}, {"limit", opt_.max_queued}});
+  }
   if (!created && store_.job_json(record.id) != s.job_json)
     return send_error(
         res, 409, "idempotency_conflict",
         "Idempotency-Key was already used for job " + record.id + " with a different job");
   if (created) {
     spdlog::info("job {} ({}) queued", record.id, record.name);
-    on_submit_();
+    runner_.notify();
   }
   res.set_header("Location", "/v1/jobs/" + record.id);
   send_json(
@@ -244,7 +346,7 @@ void Api::list(const httplib::Request& req, httplib::Response& res) {
     return send_error(res, 400, "invalid_parameter", "offset must be a non-negative integer");
   json jobs = json::array();
   for (const JobRecord& r : store_.list(status, static_cast<int>(limit), static_cast<int>(offset)))
-    jobs.push_back(job_json_view(r));
+    jobs.push_back(view(r));
   send_json(
       res, 200,
       {{"jobs", jobs}, {"total", store_.count(status)}, {"limit", limit}, {"offset", offset}});
@@ -253,15 +355,33 @@ void Api::list(const httplib::Request& req, httplib::Response& res) {
 void Api::cancel(const std::string& id, httplib::Response& res) {
   const auto before = store_.get(id);
   if (!before) return send_error(res, 404, "not_found", "no job " + id);
-  if (is_terminal(before->status))
-    return send_error(
-        res, 409, "conflict",
-        "job " + id + " has already " +
-            (before->status == JobStatus::cancelled ? std::string("been cancelled")
-                                                    : std::string(to_string(before->status))));
-  const auto after = store_.request_cancel(id);
+  const auto finished = [&](JobStatus s) {
+    send_error(res, 409, "conflict",
+               "job " + id + " has already " +
+                   (s == JobStatus::cancelled ? std::string("been cancelled")
+                                              : std::string(to_string(s))));
+  };
+  // Finished, with its results held in memory: a succeeded one is cancelled (they are dropped).
+  if (const std::optional<JobStatus> held = runner_.cancel_unstored(id)) {
+    if (*held != JobStatus::succeeded) return finished(*held);
+    spdlog::info("job {}: cancelled; its results, held in memory, are dropped", id);
+    return send_json(res, 202, view(*before));
+  }
+  if (is_terminal(before->status)) return finished(before->status);
+  std::optional<JobRecord> after;
+  try {
+    after = store_.request_cancel(id);
+    runner_.store_wrote();
+  } catch (const StoreError& e) {
+    if (!e.transient()) throw;
+    // Applied in memory (a running job stops after its iteration), recorded when the store
+    // writes again, before any job is claimed.
+    runner_.store_failed(e);
+    runner_.defer_cancel(id);
+    after = before;
+  }
   spdlog::info("job {}: cancel requested ({})", id, to_string(after->status));
-  send_json(res, 202, job_json_view(*after));
+  send_json(res, 202, view(*after));
 }
 
 void Api::result(const httplib::Request& req, httplib::Response& res, const std::string& id,
@@ -315,7 +435,14 @@ std::string Api::report(const std::string& id) {
   for (const auto& [name, content] : store_.artifacts(id)) write_file_atomic(dir / name, content);
   const ReportResult r = render_report(dir, ReportOptions{});
   const std::string html = read_file(r.html).value_or("");
-  store_.put_artifact(id, "report.html", html);
+  try {
+    store_.put_artifact(id, "report.html", html);
+    runner_.store_wrote();
+  } catch (const StoreError& e) {
+    // Served all the same; drawn again on the next request.
+    if (e.transient()) runner_.store_failed(e);
+    spdlog::warn("job {}: report not kept: {}", id, e.what());
+  }
   return html;
 }
 
@@ -359,6 +486,13 @@ void Api::configure(httplib::Server& http) {
           ec == std::errc::result_out_of_range || (ec == std::errc() && n > opt_.max_body_bytes);
     }
     if (!complete && !too_large) {
+      if (GuardedServer::request_timed_out()) {
+        res.set_header("Connection", "close");
+        send_error(res, 408, "request_timeout",
+                   "the request body did not arrive within " + seconds_text(opt_.body_timeout) +
+                       " of its headers");
+        return;
+      }
       send_error(res, 400, "bad_request", "the request body could not be read");
       return;
     }
@@ -385,18 +519,37 @@ void Api::configure(httplib::Server& http) {
   });
   // Errors the library produces itself (413 above the body limit, 400 for a malformed
   // request, 404 for an unknown method) get the same JSON body as ours.
-  http.set_error_handler([](const httplib::Request&, httplib::Response& res) {
+  http.set_error_handler([this](const httplib::Request&, httplib::Response& res) {
     if (!res.body.empty()) return;
-    if (res.status == 413)
+    // The parser's 400 for a request whose reading ran out of time.
+    if (res.status == 400 && GuardedServer::request_timed_out())
+      send_error(res, 408, "request_timeout",
+                 "the request did not arrive in time (its headers are due within " +
+                     seconds_text(opt_.header_timeout) + " of its first byte, its body within " +
+                     seconds_text(opt_.body_timeout) + " of its headers)");
+    else if (res.status == 413)
       send_error(res, 413, "payload_too_large", "the request body exceeds the server's limit");
     else
       send_error(res, res.status, "http_error", "HTTP status " + std::to_string(res.status));
   });
   http.set_exception_handler(
-      [](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+      [this](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
         std::string what = "unknown error";
         try {
           std::rethrow_exception(ep);
+        } catch (const StoreError& e) {
+          if (e.transient()) {
+            runner_.store_failed(e);
+            return insufficient_storage(res, e.what());
+          }
+          what = e.what();
+        } catch (const std::filesystem::filesystem_error& e) {
+          // A report drawn in a temporary directory on a full disk.
+          if (e.code() == std::errc::no_space_on_device || e.code().value() == EDQUOT) {
+            res.set_header("Retry-After", "60");
+            return send_error(res, 507, "insufficient_storage", e.what());
+          }
+          what = e.what();
         } catch (const std::exception& e) {
           what = e.what();
         } catch (...) {
@@ -405,9 +558,6 @@ void Api::configure(httplib::Server& http) {
         send_error(res, 500, "internal_error", what);
       });
   http.set_payload_max_length(opt_.max_body_bytes);
-  http.set_read_timeout(5, 0);
-  http.set_write_timeout(5, 0);
-  http.set_keep_alive_timeout(5);
 }
 
 }  // namespace ftc::tune::service_detail

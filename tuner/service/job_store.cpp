@@ -16,6 +16,7 @@
 #include <stdexcept>
 
 #include "ftc/sim/input_error.hpp"
+#include "service/store_vfs.hpp"
 
 namespace ftc::tune {
 
@@ -62,7 +63,8 @@ CREATE TABLE IF NOT EXISTS jobs (
   error             TEXT NOT NULL DEFAULT '',
   cancel_requested  INTEGER NOT NULL DEFAULT 0,
   attempts          INTEGER NOT NULL DEFAULT 0,
-  checkpoint        TEXT
+  checkpoint        TEXT,
+  client            TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX IF NOT EXISTS jobs_by_status ON jobs(status, seq);
 -- The trials of a running job, one row per iteration, appended beside its checkpoint.
@@ -71,6 +73,11 @@ CREATE TABLE IF NOT EXISTS checkpoint_trials (
   iteration INTEGER NOT NULL,
   trials    TEXT NOT NULL,
   PRIMARY KEY (job_id, iteration)
+);
+-- What the store knows about itself; 'probe' is rewritten to learn whether the disk takes writes.
+CREATE TABLE IF NOT EXISTS meta (
+  key   TEXT PRIMARY KEY,
+  value TEXT NOT NULL
 );
 CREATE TABLE IF NOT EXISTS artifacts (
   job_id  TEXT NOT NULL,
@@ -86,6 +93,26 @@ constexpr const char* kColumns =
     "attempts";
 
 }  // namespace
+
+bool StoreError::full() const { return code_ == SQLITE_FULL; }
+
+bool StoreError::transient() const {
+  switch (code_) {
+    case SQLITE_FULL:
+    case SQLITE_IOERR:
+    case SQLITE_BUSY:
+    case SQLITE_LOCKED:
+    case SQLITE_NOMEM:
+    case SQLITE_READONLY:
+    case SQLITE_CANTOPEN:
+    case SQLITE_PROTOCOL:
+      return true;
+    default:
+      return false;
+  }
+}
+
+std::string JobStore::timestamp() { return now_iso(); }
 
 const char* to_string(JobStatus s) {
   switch (s) {
@@ -114,15 +141,17 @@ std::optional<JobStatus> job_status_from_string(std::string_view s) {
 class JobStore::Statement {
  public:
   Statement(sqlite3* db, const char* sql) : db_(db) {
-    if (sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr) != SQLITE_OK) fail("prepare");
+    if (const int rc = sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr); rc != SQLITE_OK)
+      fail(rc, "prepare: ");
   }
   ~Statement() { sqlite3_finalize(stmt_); }
   Statement& bind(int i, const std::string& v) {
     sqlite3_bind_text(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
     return *this;
   }
+  // Not copied (a result file can be a few hundred MB): `v` must outlive the statement.
   Statement& bind_blob(int i, const std::string& v) {
-    sqlite3_bind_blob(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+    sqlite3_bind_blob64(stmt_, i, v.data(), v.size(), SQLITE_STATIC);
     return *this;
   }
   Statement& bind(int i, std::int64_t v) {
@@ -141,7 +170,7 @@ class JobStore::Statement {
     const int rc = sqlite3_step(stmt_);
     if (rc == SQLITE_ROW) return true;
     if (rc == SQLITE_DONE) return false;
-    fail("step");
+    fail(rc, "");
   }
   std::string text(int c) const {
     const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, c));
@@ -180,8 +209,8 @@ class JobStore::Statement {
   }
 
  private:
-  [[noreturn]] void fail(const char* what) const {
-    throw std::runtime_error(std::string("job store: ") + what + ": " + sqlite3_errmsg(db_));
+  [[noreturn]] void fail(int rc, const char* what) const {
+    throw StoreError(std::string("job store: ") + what + sqlite3_errmsg(db_), rc & 0xff);
   }
   sqlite3* db_;
   sqlite3_stmt* stmt_ = nullptr;
@@ -216,7 +245,7 @@ JobStore::JobStore(const std::filesystem::path& directory) {
   }
   if (sqlite3_open_v2(db_path_.c_str(), &db_,
                       SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
-                      nullptr) != SQLITE_OK) {
+                      service_detail::store_vfs()) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
     ::close(lock_fd_);
@@ -226,6 +255,13 @@ JobStore::JobStore(const std::filesystem::path& directory) {
   exec("PRAGMA journal_mode=WAL");
   exec("PRAGMA synchronous=FULL");
   exec(kSchema);
+  // Stores made before the queue quota have no client column.
+  bool has_client = false;
+  {
+    Statement q(db_, "SELECT 1 FROM pragma_table_info('jobs') WHERE name = 'client'");
+    has_client = q.step();
+  }
+  if (!has_client) exec("ALTER TABLE jobs ADD COLUMN client TEXT NOT NULL DEFAULT ''");
 }
 
 JobStore::~JobStore() {
@@ -235,10 +271,10 @@ JobStore::~JobStore() {
 
 void JobStore::exec(const char* sql) {
   char* err = nullptr;
-  if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+  if (const int rc = sqlite3_exec(db_, sql, nullptr, nullptr, &err); rc != SQLITE_OK) {
     const std::string msg = err ? err : "unknown error";
     sqlite3_free(err);
-    throw std::runtime_error(std::string("job store: ") + msg);
+    throw StoreError(std::string("job store: ") + msg, rc & 0xff);
   }
 }
 
@@ -272,29 +308,55 @@ auto JobStore::transaction(F&& body, bool synced) {
   }
 }
 
-std::pair<JobRecord, bool> JobStore::submit(const Submission& s) {
+Submitted JobStore::submit(const Submission& s, const QueueQuota& quota) {
   return transaction([&] {
+    Submitted out;
     if (s.idempotency_key) {
       Statement q(
           db_,
           (std::string("SELECT ") + kColumns + " FROM jobs WHERE idempotency_key = ?").c_str());
       q.bind(1, *s.idempotency_key);
-      if (q.step()) return std::make_pair(q.record(), false);
+      if (q.step()) {
+        out.record = q.record();
+        return out;
+      }
     }
+    const auto queued = [&](const std::string* client) {
+      Statement q(db_, client ? "SELECT COUNT(*) FROM jobs WHERE status = 'queued' AND client = ?"
+                              : "SELECT COUNT(*) FROM jobs WHERE status = 'queued'");
+      if (client) q.bind(1, *client);
+      q.step();
+      return q.integer(0);
+    };
+    if (quota.per_client > 0)
+      if (const std::int64_t n = queued(&s.client); n >= quota.per_client) {
+        out.refused = Submitted::Refusal::client_quota;
+        out.queued = n;
+        return out;
+      }
+    if (quota.total > 0)
+      if (const std::int64_t n = queued(nullptr); n >= quota.total) {
+        out.refused = Submitted::Refusal::queue_full;
+        out.queued = n;
+        return out;
+      }
     const std::string now = now_iso();
     const std::string id = new_id();
-    Statement ins(
-        db_,
-        "INSERT INTO jobs (id, name, status, job_json, idempotency_key, created_at, "
-        "updated_at, iterations, total_evaluations) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?)");
+    Statement ins(db_,
+                  "INSERT INTO jobs (id, name, status, job_json, idempotency_key, created_at, "
+                  "updated_at, iterations, total_evaluations, client) "
+                  "VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?, ?)");
     ins.bind(1, id).bind(2, s.name).bind(3, s.job_json);
     if (s.idempotency_key)
       ins.bind(4, *s.idempotency_key);
     else
       ins.bind_null(4);
     ins.bind(5, now).bind(6, now).bind(7, std::int64_t{s.iterations}).bind(8, s.total_evaluations);
+    ins.bind(9, s.client);
     ins.step();
-    return std::make_pair(*select_job(id), true);
+    out.record = *select_job(id);
+    out.created = true;
+    return out;
   });
 }
 
@@ -310,12 +372,14 @@ std::optional<JobRecord> JobStore::select_job(const std::string& id) {
   return q.record();
 }
 
-void JobStore::set_finished(const std::string& id, JobStatus status, const std::string& error) {
+void JobStore::set_finished(const std::string& id, JobStatus status, const std::string& error,
+                            const std::string& finished_at) {
   const std::string now = now_iso();
   Statement u(db_,
               "UPDATE jobs SET status = ?, error = ?, finished_at = ?, updated_at = ?, "
               "checkpoint = NULL WHERE id = ?");
-  u.bind(1, std::string(to_string(status))).bind(2, error).bind(3, now).bind(4, now).bind(5, id);
+  u.bind(1, std::string(to_string(status))).bind(2, error);
+  u.bind(3, finished_at.empty() ? now : finished_at).bind(4, now).bind(5, id);
   u.step();
   Statement d(db_, "DELETE FROM checkpoint_trials WHERE job_id = ?");
   d.bind(1, id);
@@ -408,19 +472,21 @@ std::optional<std::string> JobStore::checkpoint(const std::string& id) {
 }
 
 void JobStore::finish_succeeded(const std::string& id,
-                                const std::map<std::string, std::string>& artifacts) {
+                                const std::map<std::string, std::string>& artifacts,
+                                const std::string& finished_at) {
   transaction([&] {
     for (const auto& [name, content] : artifacts) insert_artifact(id, name, content);
-    set_finished(id, JobStatus::succeeded, "");
+    set_finished(id, JobStatus::succeeded, "", finished_at);
   });
 }
 
-void JobStore::finish_failed(const std::string& id, const std::string& error) {
-  transaction([&] { set_finished(id, JobStatus::failed, error); });
+void JobStore::finish_failed(const std::string& id, const std::string& error,
+                             const std::string& finished_at) {
+  transaction([&] { set_finished(id, JobStatus::failed, error, finished_at); });
 }
 
-void JobStore::finish_cancelled(const std::string& id) {
-  transaction([&] { set_finished(id, JobStatus::cancelled, ""); });
+void JobStore::finish_cancelled(const std::string& id, const std::string& finished_at) {
+  transaction([&] { set_finished(id, JobStatus::cancelled, "", finished_at); });
 }
 
 void JobStore::requeue(const std::string& id) {
@@ -499,6 +565,14 @@ JobStore::Recovery JobStore::recover(int max_attempts) {
     u.step();
     r.requeued = sqlite3_changes(db_);
     return r;
+  });
+}
+
+void JobStore::probe() {
+  transaction([&] {
+    Statement u(db_, "INSERT OR REPLACE INTO meta (key, value) VALUES ('probe', ?)");
+    u.bind(1, now_iso());
+    u.step();
   });
 }
 

@@ -8,12 +8,14 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <thread>
 
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/service/job_store.hpp"
 #include "service/api.hpp"
+#include "service/http_server.hpp"
 #include "service/httplib.hpp"
 #include "service/job_runner.hpp"
 
@@ -88,15 +90,49 @@ std::vector<FieldError> ServiceOptions::validate() const {
   if (max_body_bytes < 1024) errs.push_back({"--max-body-kib", "must be at least 1 KiB"});
   if (max_attempts < 1) errs.push_back({"--max-attempts", "must be at least 1"});
   if (!(max_steps > 0)) errs.push_back({"--max-steps", "must be > 0"});
+  // SQLite stores no value above 1e9 bytes; every result file of a job is below its limit.
+  if (max_stored_bytes < (std::uint64_t{1} << 20) || max_stored_bytes > (std::uint64_t{900} << 20))
+    errs.push_back({"--max-stored-mib", "must be in 1..900"});
+  if (trajectory_rows < 100) errs.push_back({"--trajectory-rows", "must be at least 100"});
+  if (max_queued < 0) errs.push_back({"--max-queued", "must be >= 0 (0: no limit)"});
+  if (max_queued_per_client < 0)
+    errs.push_back({"--max-queued-per-client", "must be >= 0 (0: no limit)"});
+  if (!(header_timeout >= 0.1 && header_timeout <= 3600))
+    errs.push_back({"--header-timeout", "must be in 0.1..3600 seconds"});
+  if (!(body_timeout >= 0.1 && body_timeout <= 3600))
+    errs.push_back({"--body-timeout", "must be in 0.1..3600 seconds"});
+  if (max_connections < 2 || max_connections > 1024)
+    errs.push_back({"--max-connections", "must be in 2..1024"});
+  if (max_connections_per_client < 1 || max_connections_per_client >= max_connections)
+    errs.push_back({"--max-connections-per-client",
+                    "must be at least 1 and below --max-connections (so that one client cannot "
+                    "take every connection)"});
+  if (!(store_retry_seconds > 0)) errs.push_back({"store_retry_seconds", "must be > 0"});
   return errs;
 }
+
+namespace {
+
+service_detail::ConnectionLimits connection_limits(const ServiceOptions& o) {
+  const auto ms = [](double seconds) {
+    return std::chrono::milliseconds(std::llround(seconds * 1000));
+  };
+  service_detail::ConnectionLimits l;
+  l.header_timeout = ms(o.header_timeout);
+  l.body_timeout = ms(o.body_timeout);
+  l.per_client = o.max_connections_per_client;
+  l.threads = o.max_connections;
+  return l;
+}
+
+}  // namespace
 
 struct TuningService::Impl {
   ServiceOptions opt;
   JobStore store;
   service_detail::JobRunner runner;
   service_detail::Api api;
-  httplib::Server http;
+  service_detail::GuardedServer http;
   std::thread listener;
   int recovered = 0;
   bool started = false;
@@ -104,12 +140,15 @@ struct TuningService::Impl {
   explicit Impl(ServiceOptions o)
       : opt(std::move(o)),
         store(opt.store),
-        runner(store, opt.concurrent_jobs,
+        runner(store,
+               {opt.concurrent_jobs, opt.store_retry_seconds, opt.max_stored_bytes,
+                opt.trajectory_rows},
                opt.evaluator ? opt.evaluator
                              : service_detail::JobRunner::EvaluatorFactory([t = opt.threads] {
                                  return std::make_unique<TbbEvaluator>(t);
                                })),
-        api(opt, store, [this] { runner.notify(); }) {}
+        api(opt, store, runner),
+        http(connection_limits(opt)) {}
 };
 
 TuningService::TuningService(ServiceOptions options) {

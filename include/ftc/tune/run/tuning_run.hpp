@@ -32,6 +32,9 @@ struct RunOptions {
   // Optimizer::state(): then trials.csv starts at the resume).
   const nlohmann::json* resume = nullptr;
   bool compare = true;  // simulate the comparison controllers after tuning
+  // At most this many rows per comparison trajectory (0: no limit): a longer scenario is
+  // recorded at a coarser interval than kComparisonRecordInterval. The metrics do not change.
+  std::int64_t max_trajectory_rows = 0;
 };
 
 // What a run needs to continue after an iteration: the optimiser's state and every trial so
@@ -43,6 +46,9 @@ nlohmann::json trials_json(const std::vector<Trial>& trials, std::size_t from = 
 
 // Trajectories of the comparison are recorded every 10 ms of simulated time.
 inline constexpr double kComparisonRecordInterval = 0.01;
+// The samples between recorded rows of the comparison's trajectories: 10 ms, or coarser so that
+// no trajectory has more than `max_rows` rows (0: no limit).
+std::int64_t comparison_record_every(const Job& job, std::int64_t max_rows = 0);
 
 struct ComparedController {
   std::string label;

@@ -4,7 +4,7 @@
 // is one committed transaction, so a killed server loses nothing that was acknowledged.
 // Submissions, results and cancellations are synced to disk (synchronous=FULL); per-iteration
 // progress is not, which costs at most a resumed iteration after a power cut. Thread-safe (one
-// connection behind a mutex).
+// connection behind a mutex). SQLite's errors are StoreErrors; a failed write changes nothing.
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -12,6 +12,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -51,7 +52,40 @@ struct Submission {
   int iterations = 0;
   std::int64_t total_evaluations = 0;
   std::optional<std::string> idempotency_key;
+  std::string client;  // who submitted it (the peer address), for the per-client queue quota
 };
+
+// How many jobs may wait in the queue, in all and per client; 0: no limit.
+struct QueueQuota {
+  std::int64_t total = 0;
+  std::int64_t per_client = 0;
+};
+
+struct Submitted {
+  enum class Refusal { none, queue_full, client_quota };
+  Refusal refused = Refusal::none;
+  std::int64_t queued = 0;  // when refused: the jobs queued (in all, or the client's)
+  JobRecord record;         // the job (the existing one for a reused idempotency key)
+  bool created = false;
+};
+
+// What SQLite refused, with its primary result code. transient(): a full disk, an I/O error, a
+// busy or read-only database, no memory: the same write may succeed later, unchanged.
+class StoreError : public std::runtime_error {
+ public:
+  StoreError(const std::string& what, int code) : std::runtime_error(what), code_(code) {}
+  int code() const { return code_; }
+  bool full() const;  // SQLITE_FULL: the disk (or the quota) is full
+  bool transient() const;
+
+ private:
+  int code_;
+};
+
+// A test seam for a full disk that needs no root: from the `after`-th write to any store's files
+// (counting from this call, from 1), every write fails with SQLITE_FULL, as it does once a disk
+// has filled up, until inject_store_full(0) frees the "disk".
+void inject_store_full(int after);
 
 class JobStore {
  public:
@@ -62,8 +96,9 @@ class JobStore {
 
   const std::filesystem::path& database() const { return db_path_; }
 
-  // A new queued job; with an idempotency key already used, the existing job and false.
-  std::pair<JobRecord, bool> submit(const Submission& s);
+  // A new queued job; with an idempotency key already used, the existing job (not created).
+  // Refused, and nothing written, when the queue or the client's share of it is full.
+  Submitted submit(const Submission& s, const QueueQuota& quota = {});
   std::optional<JobRecord> get(const std::string& id);
   std::string job_json(const std::string& id);
   // Newest first.
@@ -81,9 +116,13 @@ class JobStore {
   // The trials recorded with the checkpoints so far: one JSON array per iteration, in order.
   std::vector<std::string> checkpoint_trials(const std::string& id);
 
-  void finish_succeeded(const std::string& id, const std::map<std::string, std::string>& artifacts);
-  void finish_failed(const std::string& id, const std::string& error);
-  void finish_cancelled(const std::string& id);
+  // The final state; `finished_at` (UTC ISO 8601) is when the job ended, "" for now (a result
+  // the store could not take at once is written later).
+  void finish_succeeded(const std::string& id, const std::map<std::string, std::string>& artifacts,
+                        const std::string& finished_at = "");
+  void finish_failed(const std::string& id, const std::string& error,
+                     const std::string& finished_at = "");
+  void finish_cancelled(const std::string& id, const std::string& finished_at = "");
   void requeue(const std::string& id);  // back to the queue, checkpoint kept
   // Queued: cancelled at once. Running: flagged, the worker stops after its iteration.
   // Returns the record after the change, or nullopt for an unknown id.
@@ -102,6 +141,10 @@ class JobStore {
   };
   Recovery recover(int max_attempts);
   std::optional<std::string> artifact(const std::string& id, const std::string& name);
+  // A small synced write that changes nothing else: whether the disk takes writes again.
+  void probe();
+  // The current time as the store writes it (UTC ISO 8601, milliseconds).
+  static std::string timestamp();
   std::map<std::string, std::string> artifacts(const std::string& id);
   // Adds or replaces one artifact of a finished job (a report rendered later).
   void put_artifact(const std::string& id, const std::string& name, const std::string& content);
@@ -111,7 +154,8 @@ class JobStore {
   void exec(const char* sql);
   // Both expect the caller to hold the lock (inside transaction() or get()).
   std::optional<JobRecord> select_job(const std::string& id);
-  void set_finished(const std::string& id, JobStatus status, const std::string& error);
+  void set_finished(const std::string& id, JobStatus status, const std::string& error,
+                    const std::string& finished_at = "");
   void insert_artifact(const std::string& id, const std::string& name, const std::string& content);
   template <class F>
   auto transaction(F&& body, bool synced = true);

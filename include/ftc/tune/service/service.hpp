@@ -9,6 +9,7 @@
 // stops accepting requests, lets each running job finish its current iteration, checkpoints
 // it back into the queue, and returns.
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -32,6 +33,23 @@ struct ServiceOptions {
   std::size_t max_body_bytes = 1 << 20;
   double max_steps = 2e9;  // budget: evaluations × simulated steps per evaluation
   int max_attempts = 5;    // starts of a job before a crash recovery gives it up
+  // What one job may store: its result files, and its checkpointed trials while it runs.
+  std::uint64_t max_stored_bytes = std::uint64_t{256} << 20;
+  // Rows per stored comparison trajectory: a scenario longer than this many 10 ms rows is
+  // recorded at a coarser interval.
+  std::int64_t trajectory_rows = 20000;
+  // Jobs waiting in the queue, in all and per client address (0: no limit).
+  std::int64_t max_queued = 500;
+  std::int64_t max_queued_per_client = 100;
+  // Slow clients: a request's header block must arrive within header_timeout of its first byte
+  // and its body within body_timeout of the headers' end; connections are served by
+  // max_connections threads, at most max_connections_per_client of them from one address.
+  double header_timeout = 10;
+  double body_timeout = 60;
+  int max_connections = 64;
+  int max_connections_per_client = 16;
+  // How often results the store could not take (a full disk) are tried again.
+  double store_retry_seconds = 5;
   // How each job's simulations run; default a TbbEvaluator with `threads` workers.
   std::function<std::unique_ptr<BatchEvaluator>()> evaluator;
 
