@@ -201,10 +201,12 @@ std::optional<Message> try_receive(int source) {
   return m;
 }
 
-// Sleeps between probes: 20 µs at first, doubling to 1 ms while nothing comes, and 20 ms once
-// nothing has come for a second (a worker rank of an idle service).
+// Sleeps between probes: 20 µs at first, doubling up to `cap` while nothing comes, and to 20 ms
+// once nothing has come for a second (a worker rank of an idle service). Inside a batch the cap
+// is 200 µs: the last results of an iteration are waited for, and each sleep adds to its time.
 class Backoff {
  public:
+  explicit Backoff(std::chrono::microseconds cap = std::chrono::microseconds(1000)) : cap_(cap) {}
   void reset() {
     wait_ = std::chrono::microseconds(20);
     since_ = clock::now();
@@ -212,16 +214,19 @@ class Backoff {
   void pause() {
     std::this_thread::sleep_for(wait_);
     const bool idle = clock::now() - since_ > std::chrono::seconds(1);
-    wait_ = std::min(wait_ * 2, std::chrono::microseconds(idle ? 20000 : 1000));
+    wait_ = std::min(wait_ * 2, idle ? std::chrono::microseconds(20000) : cap_);
   }
 
  private:
+  std::chrono::microseconds cap_;
   std::chrono::microseconds wait_{20};
   clock::time_point since_ = clock::now();
 };
 
-Message receive_from(int source) {
-  Backoff b;
+constexpr std::chrono::microseconds kInBatch{200};
+
+Message receive_from(int source, std::chrono::microseconds cap = std::chrono::microseconds(1000)) {
+  Backoff b(cap);
   for (;;) {
     if (std::optional<Message> m = try_receive(source)) return std::move(*m);
     b.pause();
@@ -322,7 +327,7 @@ int Session::serve() {
           req.put<std::int32_t>(capacity);
           send(0, kRequest, req);
           for (;;) {
-            Message p = receive_from(0);
+            Message p = receive_from(0, kInBatch);
             if (p.tag == kDone) break;
             if (p.tag != kPack) abort_job("unexpected message from rank 0 inside a batch");
             Reader pr(p.bytes);
@@ -490,7 +495,7 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
   std::vector<Worker> ws(static_cast<std::size_t>(s.size));
   const double total_threads = std::max(1, concurrency());
   const auto timeout = std::chrono::duration<double>(s.options.rank_timeout);
-  Backoff backoff;
+  Backoff backoff(kInBatch);
   for (int active = workers; active > 0 || !local_done;) {
     std::optional<Message> m = workers > 0 ? try_receive(MPI_ANY_SOURCE) : std::nullopt;
     if (!m) {
