@@ -568,15 +568,15 @@ void validate_job(const Job& job, Errors& errs) {
     const sim::ControllerField* f = sim::find_controller_field(b.name);
     if (!f || !f->applies_to(job.controller.type)) {
       std::string tunable;
-      std::vector<std::string> names;
+      std::vector<std::string> tunable_names;
       for (const sim::ControllerField& g : sim::controller_fields())
         if (g.applies_to(job.controller.type) && g.tunable()) {
           tunable += (tunable.empty() ? "" : ", ") + std::string(g.name);
-          names.emplace_back(g.name);
+          tunable_names.emplace_back(g.name);
         }
       errs.push_back({p, "is not a parameter of controller " +
-                             std::string(sim::to_string(job.controller.type)) +
-                             " (tunable: " + tunable + ")" + json_io::did_you_mean(b.name, names)});
+                             std::string(sim::to_string(job.controller.type)) + " (tunable: " +
+                             tunable + ")" + json_io::did_you_mean(b.name, tunable_names)});
       continue;
     }
     if (!f->tunable()) {
