@@ -446,63 +446,83 @@ std::string Api::report(const std::string& id) {
   return html;
 }
 
+bool Api::authenticate(const httplib::Request& req, httplib::Response& res) const {
+  if (authorised(req)) return true;
+  res.set_header("WWW-Authenticate", "Bearer");
+  send_error(res, 401, "unauthorized",
+             "a valid \"Authorization: Bearer <token>\" header is required");
+  return false;
+}
+
+// Bodies are read here, not by the library: it holds a chunked body (no Content-Length) in
+// memory whole before any limit applies, so a 300 MB chunked POST took 600 MB. This keeps at
+// most the limit, chunked or not (a declared Content-Length above it the library reads past
+// without keeping, then fails the read).
+void Api::receive(const httplib::Request& req, httplib::Response& res,
+                  const httplib::ContentReader& read) {
+  // Form uploads are not part of the API (and the library cannot hand their parts to one
+  // receiver).
+  if (req.is_multipart_form_data()) {
+    send_error(res, 415, "unsupported_media_type", "send the job as application/json");
+    return;
+  }
+  httplib::Request r = req;
+  bool too_large = false;
+  std::size_t dropped = 0;
+  // Past the limit the rest is read and dropped, not kept: closing on unread bytes would
+  // reset the connection, and the client would lose the 413 that says why. Up to a point: a
+  // client that keeps sending past 8 MiB more is cut off (and may not see the answer).
+  constexpr std::size_t kMaxDropped = 8u << 20;
+  const bool complete = read([&](const char* data, std::size_t n) {
+    too_large = too_large || r.body.size() + n > opt_.max_body_bytes;
+    if (!too_large)
+      r.body.append(data, n);
+    else
+      dropped += n;
+    return dropped <= kMaxDropped;
+  });
+  // The library reads nothing of a body whose Content-Length is above the limit.
+  if (!complete && req.has_header("Content-Length")) {
+    const std::string length = req.get_header_value("Content-Length");
+    std::uint64_t n = 0;
+    const auto [end, ec] = std::from_chars(length.data(), length.data() + length.size(), n);
+    too_large =
+        ec == std::errc::result_out_of_range || (ec == std::errc() && n > opt_.max_body_bytes);
+  }
+  if (!complete && !too_large) {
+    if (GuardedServer::request_timed_out()) {
+      res.set_header("Connection", "close");
+      send_error(res, 408, "request_timeout",
+                 "the request body did not arrive within " + seconds_text(opt_.body_timeout) +
+                     " of its headers");
+      return;
+    }
+    send_error(res, 400, "bad_request", "the request body could not be read");
+    return;
+  }
+  if (too_large) {
+    if (!complete) res.set_header("Connection", "close");
+    send_error(res, 413, "payload_too_large", "the request body exceeds the server's limit");
+    return;
+  }
+  dispatch(r, res);
+}
+
+void Api::handle(const httplib::Request& req, httplib::Response& res,
+                 const httplib::ContentReader* body) {
+  if (!authenticate(req, res)) return;
+  if (body)
+    receive(req, res, *body);
+  else
+    dispatch(req, res);
+}
+
 void Api::configure(httplib::Server& http) {
   const auto handler = [this](const httplib::Request& req, httplib::Response& res) {
     dispatch(req, res);
   };
-  // Bodies are read here, not by the library: it holds a chunked body (no Content-Length) in
-  // memory whole before any limit applies, so a 300 MB chunked POST took 600 MB. This keeps at
-  // most the limit, chunked or not (a declared Content-Length above it the library reads past
-  // without keeping, then fails the read).
   const auto with_body = [this](const httplib::Request& req, httplib::Response& res,
-                                const httplib::ContentReader& read) {
-    // Form uploads are not part of the API (and the library cannot hand their parts to one
-    // receiver).
-    if (req.is_multipart_form_data()) {
-      send_error(res, 415, "unsupported_media_type", "send the job as application/json");
-      return;
-    }
-    httplib::Request r = req;
-    bool too_large = false;
-    std::size_t dropped = 0;
-    // Past the limit the rest is read and dropped, not kept: closing on unread bytes would
-    // reset the connection, and the client would lose the 413 that says why. Up to a point: a
-    // client that keeps sending past 8 MiB more is cut off (and may not see the answer).
-    constexpr std::size_t kMaxDropped = 8u << 20;
-    const bool complete = read([&](const char* data, std::size_t n) {
-      too_large = too_large || r.body.size() + n > opt_.max_body_bytes;
-      if (!too_large)
-        r.body.append(data, n);
-      else
-        dropped += n;
-      return dropped <= kMaxDropped;
-    });
-    // The library reads nothing of a body whose Content-Length is above the limit.
-    if (!complete && req.has_header("Content-Length")) {
-      const std::string length = req.get_header_value("Content-Length");
-      std::uint64_t n = 0;
-      const auto [end, ec] = std::from_chars(length.data(), length.data() + length.size(), n);
-      too_large =
-          ec == std::errc::result_out_of_range || (ec == std::errc() && n > opt_.max_body_bytes);
-    }
-    if (!complete && !too_large) {
-      if (GuardedServer::request_timed_out()) {
-        res.set_header("Connection", "close");
-        send_error(res, 408, "request_timeout",
-                   "the request body did not arrive within " + seconds_text(opt_.body_timeout) +
-                       " of its headers");
-        return;
-      }
-      send_error(res, 400, "bad_request", "the request body could not be read");
-      return;
-    }
-    if (too_large) {
-      if (!complete) res.set_header("Connection", "close");
-      send_error(res, 413, "payload_too_large", "the request body exceeds the server's limit");
-      return;
-    }
-    dispatch(r, res);
-  };
+                                const httplib::ContentReader& read) { receive(req, res, read); };
   // One catch-all route per method: dispatch() tells 404 (no such resource) from 405.
   http.Get(".*", handler);
   http.Post(".*", with_body);
@@ -511,11 +531,8 @@ void Api::configure(httplib::Server& http) {
   http.Delete(".*", with_body);
   http.Options(".*", handler);
   http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-    if (authorised(req)) return httplib::Server::HandlerResponse::Unhandled;
-    res.set_header("WWW-Authenticate", "Bearer");
-    send_error(res, 401, "unauthorized",
-               "a valid \"Authorization: Bearer <token>\" header is required");
-    return httplib::Server::HandlerResponse::Handled;
+    return authenticate(req, res) ? httplib::Server::HandlerResponse::Unhandled
+                                  : httplib::Server::HandlerResponse::Handled;
   });
   // Errors the library produces itself (413 above the body limit, 400 for a malformed
   // request, 404 for an unknown method) get the same JSON body as ours.

@@ -22,8 +22,21 @@ class Api {
   // Installs the routes and handlers on a server.
   void configure(httplib::Server& http);
 
+  // What the handlers configure() installs do with one request the library has parsed: the
+  // token check, then, for a method with a body (`body` not null), reading it under the size
+  // limit, then the resource. Exceptions escape (the server's exception handler answers them:
+  // 500, or 507 for a store that cannot write). This is the API without a socket, for the fuzz
+  // target.
+  void handle(const httplib::Request& req, httplib::Response& res,
+              const httplib::ContentReader* body);
+
  private:
   bool authorised(const httplib::Request& req) const;
+  // False after answering 401.
+  bool authenticate(const httplib::Request& req, httplib::Response& res) const;
+  // Reads the body under the limit (413 above it), then dispatches.
+  void receive(const httplib::Request& req, httplib::Response& res,
+               const httplib::ContentReader& read);
   void method_not_allowed(httplib::Response& res, const char* allow);
   void dispatch(const httplib::Request& req, httplib::Response& res);
   void submit(const httplib::Request& req, httplib::Response& res);
