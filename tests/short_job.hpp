@@ -43,6 +43,19 @@ inline nlohmann::json short_ensemble_job() {
   return j;
 }
 
+// Tiny: 2 bats × 1 iteration on 50 ms of simulated time.
+inline nlohmann::json tiny_job(const std::string& name = "tiny") {
+  nlohmann::json j = short_table1_job();
+  j["name"] = name;
+  j["scenarios"][0]["duration"] = 0.05;
+  j["scenarios"][0]["faults"][0]["onset"] = 0.01;
+  j["scenarios"][0]["faults"][1]["onset"] = 0.03;
+  j["objective"]["window"] = {0, 0.05};
+  j["tuning"]["algorithm"]["population"] = 2;
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  return j;
+}
+
 inline tune::Job short_job() { return tune::parse_job(short_table1_job(), "short"); }
 
 // A tuning run on `threads` TBB workers.

@@ -35,19 +35,6 @@ using namespace std::chrono_literals;
 
 namespace {
 
-// Tiny: 2 bats × 1 iteration on 50 ms of simulated time.
-json tiny_job(const std::string& name = "tiny") {
-  json j = short_table1_job();
-  j["name"] = name;
-  j["scenarios"][0]["duration"] = 0.05;
-  j["scenarios"][0]["faults"][0]["onset"] = 0.01;
-  j["scenarios"][0]["faults"][1]["onset"] = 0.03;
-  j["objective"]["window"] = {0, 0.05};
-  j["tuning"]["algorithm"]["population"] = 2;
-  j["tuning"]["algorithm"]["iterations"] = 1;
-  return j;
-}
-
 // Long enough to be caught running: 8 bats × 60 iterations on 10 s (about 1.5 s on 2 threads).
 json long_job(const std::string& name = "long") {
   json j = short_table1_job();
