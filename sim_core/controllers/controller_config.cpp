@@ -109,7 +109,16 @@ std::vector<FieldError> ControllerConfig::validate(const std::string& path) cons
   for (const ControllerField& f : kFields) {
     if (!f.applies_to(type)) continue;
     const double v = this->*f.member;
-    if (f.optional && std::isnan(v)) continue;
+    if (f.optional && std::isnan(v)) {
+      // An absent α1 is α2 / (2 - α2), which is in (0, 1) for any α2 in (0, 1) but rounds to
+      // 0 for an α2 near the smallest double. Said once: a bad α2 has its own error.
+      const double derived = resolved_alpha1();
+      if (check_value(*this, *find_controller_field("alpha2"), alpha2).empty())
+        if (std::string msg = check_value(*this, f, derived); !msg.empty())
+          errs.push_back({path + "/" + f.name,
+                          "is absent, and its default α2 / (2 - α2) " + msg + ": give alpha1"});
+      continue;
+    }
     std::string msg = check_value(*this, f, v);
     if (!msg.empty()) errs.push_back({path + "/" + f.name, std::move(msg)});
   }
