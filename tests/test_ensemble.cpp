@@ -293,6 +293,85 @@ TEST(Ensemble, CommandWritesMembersThatAJobLoadsBack) {
   EXPECT_EQ(errs[0].path, "/scenarios/0/recoverable");
 }
 
+// Found by fuzz_job: the canonical JSON (what the service stores and its worker reads) wrote
+// "actuators": [] for faults that name none, which the loader refuses.
+TEST(Ensemble, FaultsWithoutActuatorsReadBackFromTheCanonicalJson) {
+  json j = robust_job();
+  j["ensemble"]["faults"].erase("actuators");
+  j["ensemble"]["faults"]["count"] = {1, 4};
+  const tune::Job job = parse(j);
+  const json canonical = tune::to_json(job);
+  EXPECT_FALSE(canonical["ensemble"]["faults"].contains("actuators")) << canonical.dump();
+  const tune::Job again = tune::parse_job(canonical, "canonical");
+  EXPECT_EQ(tune::to_json(again).dump(), canonical.dump());
+  EXPECT_EQ(tune::to_json(tune::ensemble_member(again, 7, 3)),
+            tune::to_json(tune::ensemble_member(job, 7, 3)));
+}
+
+// Found by fuzz_ensemble: a base scenario named with 100 characters was accepted, but its
+// members' names are longer than a scenario name may be, so the file `ftctune ensemble` wrote
+// was refused by the same job.
+TEST(Ensemble, MemberNamesLongerThanAScenarioNameAreRefused) {
+  const std::string base(98, 'b');
+  json j = robust_job();
+  j["scenarios"][0]["name"] = base;
+  j["ensemble"]["base"] = base;
+  j["ensemble"]["count"] = 10;  // the longest member is <base>-9: 100 characters
+  EXPECT_TRUE(errors_of(j).empty());
+  j["ensemble"]["count"] = 11;  // <base>-10: 101
+  std::vector<FieldError> errs = errors_of(j);
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_EQ(errs[0].path, "/ensemble/base");
+  EXPECT_NE(errs[0].message.find("\"" + base + "-10\" would be longer than 100 characters"),
+            std::string::npos)
+      << errs[0].message;
+  // Without a base the first scenario is it; a --count above the job's is checked the same way.
+  j["ensemble"].erase("base");
+  errs = errors_of(j);
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_EQ(errs[0].path, "/scenarios/0/name");
+  j["ensemble"]["count"] = 10;
+  EXPECT_THROW(tune::ensemble_count(parse(j), 11), InputError);
+  EXPECT_EQ(tune::ensemble_count(parse(j), 10), 10);
+}
+
+// Found by fuzz_ensemble: a disturbance amplitude of 1e300 scaled by up to 1.8e19 gave members
+// an infinite amplitude, so the job was accepted and its members file refused. The ends of each
+// scale's range are checked against the base, and a uniform range too wide to draw from is
+// refused.
+TEST(Ensemble, ScalesThatWouldTakeAMemberOutOfRangeAreRefused) {
+  const auto only_error = [](const json& j) {
+    const std::vector<FieldError> errs = errors_of(j);
+    return errs.size() == 1 ? errs[0] : FieldError{"", std::to_string(errs.size()) + " errors"};
+  };
+  json j = robust_job();
+  j["scenarios"][0]["disturbance"][1]["amplitude"] = 1e300;
+  EXPECT_TRUE(errors_of(j).empty());  // unscaled, 1e300 is a valid amplitude
+  j["ensemble"]["disturbance_scale"] = {{"uniform", {0.5, 1.8446744073709552e19}}};
+  FieldError e = only_error(j);
+  EXPECT_EQ(e.path, "/ensemble/disturbance_scale");
+  EXPECT_NE(e.message.find("/disturbance/1/amplitude"), std::string::npos) << e.message;
+
+  j = robust_job();
+  j["ensemble"]["inertia_scale"] = {{"log_uniform", {0.5, 1e307}}};
+  e = only_error(j);
+  EXPECT_EQ(e.path, "/ensemble/inertia_scale");
+  EXPECT_NE(e.message.find("a member scaled by 1e+307 would have /inertia"), std::string::npos)
+      << e.message;
+
+  j = robust_job();
+  j["ensemble"]["initial_state_scale"] = -1.5e308;  // times the state's 1.5: -inf
+  EXPECT_EQ(only_error(j).path, "/ensemble/initial_state_scale");
+
+  j = robust_job();
+  j["ensemble"]["faults"]["offset"] = {{"uniform", {-1e308, 1e308}}};
+  e = only_error(j);
+  EXPECT_EQ(e.path, "/ensemble/faults/offset/uniform");
+  EXPECT_NE(e.message.find("too wide"), std::string::npos) << e.message;
+  j["ensemble"]["faults"]["offset"] = {{"uniform", {-1e307, 1e307}}};
+  EXPECT_TRUE(errors_of(j).empty());
+}
+
 TEST(Ensemble, CommandRefusesAJobWithoutEnsemble) {
   const ftc::testing::CliResult r =
       ftc::testing::run_cli("ensemble jobs/table1.json", ftc::testing::fresh_dir("ensemble-none"));

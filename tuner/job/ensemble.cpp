@@ -69,7 +69,7 @@ std::int64_t ensemble_count(const Job& job, std::optional<std::int64_t> count) {
                      "must be between 1 and " + std::to_string(kMaxEnsembleCount) + ", got " +
                          std::to_string(*count));
   const std::int64_t n = count.value_or(job.ensemble->count);
-  throw_if_errors("--count " + std::to_string(n), member_name_clashes(job, n));
+  throw_if_errors("--count " + std::to_string(n), member_name_errors(job, n));
   return n;
 }
 
@@ -81,22 +81,12 @@ const sim::Scenario& ensemble_base(const Job& job) {
   throw InputError("job " + job.name, "/ensemble/base", "no scenario is named \"" + base + "\"");
 }
 
-sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k) {
-  const EnsembleConfig& e = *job.ensemble;
+sim::Scenario scaled_base(const Job& job, const std::array<double, 3>& inertia_factor,
+                          const std::vector<double>& state_factor, double disturbance_factor) {
   const sim::Scenario& base = ensemble_base(job);
   const sim::PlantKind& kind = *sim::find_plant_kind(job.plant.model);
-  SplitMix64 r = SplitMix64::member(seed, static_cast<std::uint64_t>(k));
-  const auto factor = [&](const std::optional<Distribution>& d) {
-    const double u = r.uniform();  // consumed whether or not the scale is given
-    return d ? d->draw(u) : 1.0;
-  };
-
   sim::Scenario s = base;
-  s.name = base.name + "-" + std::to_string(k);
-
   // 3 inertia factors (axes 1-3), onto the base's true inertia or the plant's.
-  std::array<double, 3> inertia_factor{};
-  for (double& f : inertia_factor) f = factor(e.inertia_scale);
   if (const std::size_t at = kind.offset("inertia"); at != std::string_view::npos) {
     std::vector<double> inertia = base.inertia;
     if (inertia.empty())
@@ -109,16 +99,32 @@ sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k
       inertia[i] *= inertia_factor[i];
     s.inertia = std::move(inertia);
   }
-  // Six initial-state factors whatever the plant (SPEC §12 fixes the draw order): a plant with
-  // fewer than six components uses the first 2n, one with more would draw one per component.
-  const std::size_t draws = std::max<std::size_t>(6, s.initial_state.size());
-  for (std::size_t i = 0; i < draws; ++i) {
-    const double f = factor(e.initial_state_scale);
-    if (i < s.initial_state.size()) s.initial_state[i] *= f;
-  }
-  // One factor on every disturbance amplitude.
+  for (std::size_t i = 0; i < s.initial_state.size() && i < state_factor.size(); ++i)
+    s.initial_state[i] *= state_factor[i];
+  for (sim::DisturbanceTerm& t : s.disturbance) t.amplitude *= disturbance_factor;
+  return s;
+}
+
+sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k) {
+  const EnsembleConfig& e = *job.ensemble;
+  const sim::Scenario& base = ensemble_base(job);
+  const sim::PlantKind& kind = *sim::find_plant_kind(job.plant.model);
+  SplitMix64 r = SplitMix64::member(seed, static_cast<std::uint64_t>(k));
+  const auto factor = [&](const std::optional<Distribution>& d) {
+    const double u = r.uniform();  // consumed whether or not the scale is given
+    return d ? d->draw(u) : 1.0;
+  };
+
+  // The draws in the order SPEC §12 fixes: 3 inertia factors, then six initial-state factors
+  // whatever the plant (a plant with fewer than six components uses the first 2n, one with more
+  // would draw one per component), then one factor on every disturbance amplitude.
+  std::array<double, 3> inertia_factor{};
+  for (double& f : inertia_factor) f = factor(e.inertia_scale);
+  std::vector<double> state_factor(std::max<std::size_t>(6, base.initial_state.size()));
+  for (double& f : state_factor) f = factor(e.initial_state_scale);
   const double d = factor(e.disturbance_scale);
-  for (sim::DisturbanceTerm& t : s.disturbance) t.amplitude *= d;
+  sim::Scenario s = scaled_base(job, inertia_factor, state_factor, d);
+  s.name = base.name + "-" + std::to_string(k);
 
   if (!e.faults) return s;
   const FaultDistribution& fd = *e.faults;
@@ -226,6 +232,8 @@ class DistributionShape final : public schema::Shape<Distribution> {
     if (d.a > d.b)
       errs.push_back({p, "lower end " + json_io::number_text(d.a) + " is above upper end " +
                              json_io::number_text(d.b)});
+    else if (!std::isfinite(d.b - d.a))  // a draw is a + (b - a) u (SPEC §12)
+      errs.push_back({p, "is too wide: b - a is beyond the range of a double"});
     else if ((d.kind == Distribution::Kind::log_uniform || positive_) && !(d.a > 0))
       errs.push_back(
           {p + "/0", std::string("must be > 0 for ") +
@@ -367,7 +375,10 @@ std::shared_ptr<const Obj<FaultDistribution>> make_faults_shape() {
               }
             },
             [](const F&, const std::string&, Errors&) {},  // against the plant: job rule
-            [](const F& f, json& o) { o["actuators"] = f.actuators; },
+            // None listed means every actuator: the key stays out (an empty list is refused).
+            [](const F& f, json& o) {
+              if (!f.actuators.empty()) o["actuators"] = f.actuators;
+            },
             [] {
               return json{{"type", "array"},
                           {"items", {{"type", "integer"}, {"minimum", 1}}},

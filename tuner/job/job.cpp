@@ -31,8 +31,9 @@ void append(Errors& to, Errors from) {
   to.insert(to.end(), std::make_move_iterator(from.begin()), std::make_move_iterator(from.end()));
 }
 
+constexpr std::size_t kMaxNameLength = 100;
 bool safe_name(const std::string& s) {
-  if (s.empty() || s.size() > 100 || s[0] == '.') return false;
+  if (s.empty() || s.size() > kMaxNameLength || s[0] == '.') return false;
   for (char c : s)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'))
       return false;
@@ -440,6 +441,51 @@ class CompareShape final : public schema::Shape<CompareEntry> {
 
 // --- the job ----------------------------------------------------------------------------------
 
+// A member's scaled values are the base's times a factor from each scale's range, so the ends of
+// the ranges give every value's extremes: the base scaled by each end of each scale must be a
+// valid scenario, or some member would not be (an amplitude of 1e300 scaled by 1e10 is inf).
+void validate_scale_ends(const Job& job, const sim::PlantKind& kind, Errors& errs) {
+  const EnsembleConfig& e = *job.ensemble;
+  const std::string& base_name =
+      e.base.empty() && !job.scenarios.empty() ? job.scenarios.front().name : e.base;
+  const auto base = std::find_if(job.scenarios.begin(), job.scenarios.end(),
+                                 [&](const sim::Scenario& s) { return s.name == base_name; });
+  if (base == job.scenarios.end() || !base->validate("", kind.axes, kind.actuators).empty())
+    return;  // its own errors say what is wrong
+  const std::vector<double> ones(std::max<std::size_t>(6, base->initial_state.size()), 1.0);
+  const std::pair<const char*, const std::optional<Distribution>*> scales[] = {
+      {"inertia_scale", &e.inertia_scale},
+      {"initial_state_scale", &e.initial_state_scale},
+      {"disturbance_scale", &e.disturbance_scale}};
+  for (const auto& [name, scale] : scales) {
+    if (!*scale) continue;
+    for (const double f : {(*scale)->a, (*scale)->b}) {
+      std::array<double, 3> inertia{1.0, 1.0, 1.0};
+      std::vector<double> state = ones;
+      double disturbance = 1.0;
+      if (scale == &e.inertia_scale) inertia.fill(f);
+      if (scale == &e.initial_state_scale) state.assign(state.size(), f);
+      if (scale == &e.disturbance_scale) disturbance = f;
+      const sim::Scenario m = scaled_base(job, inertia, state, disturbance);
+      Errors wrong = m.validate("", kind.axes, kind.actuators);
+      if (!m.inertia.empty()) {
+        try {
+          append(wrong,
+                 kind.validate(kind.with_inertia(job.plant.values, m.inertia, "/inertia"), ""));
+        } catch (const InputError& ie) {
+          append(wrong, ie.errors());
+        }
+      }
+      if (!wrong.empty()) {
+        errs.push_back({"/ensemble/" + std::string(name),
+                        "a member scaled by " + json_io::number_text(f) + " would have " +
+                            wrong.front().path + " " + wrong.front().message});
+        break;
+      }
+    }
+  }
+}
+
 // The ensemble against the job: its base, the plant's actuators and inertia, member names.
 void validate_ensemble(const Job& job, const sim::PlantKind& kind, Errors& errs) {
   const EnsembleConfig& e = *job.ensemble;
@@ -472,19 +518,29 @@ void validate_ensemble(const Job& job, const sim::PlantKind& kind, Errors& errs)
                                                     " listed actuators"});
   }
   if (!job.scenarios.empty()) {
-    std::vector<FieldError> clashes = member_name_clashes(job, e.count);
+    std::vector<FieldError> clashes = member_name_errors(job, e.count);
     errs.insert(errs.end(), clashes.begin(), clashes.end());
   }
+  validate_scale_ends(job, kind, errs);
 }
 
 }  // namespace
 
-std::vector<FieldError> member_name_clashes(const Job& job, std::int64_t count) {
+std::vector<FieldError> member_name_errors(const Job& job, std::int64_t count) {
   // Member k is named <base>-k; none may take another scenario's name.
   std::vector<FieldError> errs;
   if (!job.ensemble || job.scenarios.empty()) return errs;
   const std::string& base =
       job.ensemble->base.empty() ? job.scenarios.front().name : job.ensemble->base;
+  // Nor be longer than a scenario name may be (the members are written as scenarios).
+  const std::string longest = base + "-" + std::to_string(std::max<std::int64_t>(count, 1) - 1);
+  const bool base_exists = std::any_of(job.scenarios.begin(), job.scenarios.end(),
+                                       [&](const sim::Scenario& s) { return s.name == base; });
+  if (base_exists && safe_name(base) && !safe_name(longest))
+    errs.push_back({job.ensemble->base.empty() ? "/scenarios/0/name" : "/ensemble/base",
+                    "member names such as \"" + longest + "\" would be longer than " +
+                        std::to_string(kMaxNameLength) +
+                        " characters: shorten the base scenario's name"});
   for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
     const std::string& n = job.scenarios[i].name;
     if (n.size() > base.size() + 1 && n.compare(0, base.size() + 1, base + "-") == 0) {

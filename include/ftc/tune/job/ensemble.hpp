@@ -81,6 +81,12 @@ struct EnsembleConfig {
 
 inline constexpr std::int64_t kMaxEnsembleCount = 1000000;
 
+// The ensemble's base scenario with factors applied as the scales apply them: one per inertia
+// axis, one per initial-state component, one on every disturbance amplitude. A member is this
+// with its drawn factors, then its drawn faults.
+sim::Scenario scaled_base(const Job& job, const std::array<double, 3>& inertia_factor,
+                          const std::vector<double>& state_factor, double disturbance_factor);
+
 // Member k (0-based) of the job's ensemble with the given seed, named `<base>-<k>`. The job must
 // be valid (parse_job checked the ensemble against its plant and scenarios).
 sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k);
@@ -89,13 +95,14 @@ std::vector<sim::Scenario> expand_ensemble(const Job& job,
                                            std::optional<std::uint64_t> seed = std::nullopt,
                                            std::optional<std::int64_t> count = std::nullopt);
 
-// The listed scenarios whose names an ensemble of `count` members would take again (member k is
-// `<base>-<k>`), as errors at their paths.
-std::vector<FieldError> member_name_clashes(const Job& job, std::int64_t count);
+// What is wrong with the names of an ensemble of `count` members (member k is `<base>-<k>`), as
+// errors at their paths: listed scenarios whose names a member would take again, and member
+// names longer than a scenario name may be.
+std::vector<FieldError> member_name_errors(const Job& job, std::int64_t count);
 
 // The member count a command asked for (`--count`), or the ensemble's own: throws InputError
 // (source "--count") when it is outside 1..kMaxEnsembleCount or would give a member the name of
-// a listed scenario. The job must have an ensemble.
+// a listed scenario or a name too long. The job must have an ensemble.
 std::int64_t ensemble_count(const Job& job, std::optional<std::int64_t> count);
 
 // The base scenario of the job's ensemble.
