@@ -423,14 +423,19 @@ TEST(Cli, ResumeAfterSigkillWritesTheFilesOfAnUninterruptedRun) {
   const CliResult whole = run_cli(
       "run -q --threads 2 --out '" + (dir / "whole").string() + "' '" + job.string() + "'", dir);
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  // The killed run replaces (--force) a finished run of another seed, whose files, its
+  // trajectories/ folder included, are in the way when the resumed run moves its own in.
+  ASSERT_EQ(run_cli("run -q --seed 5 --out '" + out + "' '" + job.string() + "'", dir).exit_code,
+            0);
   // One thread, so that the run is still going when it is killed.
   ftc::tune::write_file_atomic(
-      dir / "kill.sh", "'" FTC_CLI "' run -q --threads 1 --checkpoint --out '" + out + "' '" +
-                           job.string() + "' & pid=$!\nwhile [ ! -f '" + out +
+      dir / "kill.sh", "'" FTC_CLI "' run -q --threads 1 --force --checkpoint --out '" + out +
+                           "' '" + job.string() + "' & pid=$!\nwhile [ ! -f '" + out +
                            "/checkpoint.json' ]; do sleep 0.02; done\nsleep 0.2\nkill -9 $pid\n"
                            "wait $pid\nexit 0\n");
   ASSERT_EQ(std::system(("bash '" + (dir / "kill.sh").string() + "'").c_str()), 0);
-  ASSERT_FALSE(std::filesystem::exists(dir / "killed" / "gains.json"))
+  // A finished run removes its checkpoint.
+  ASSERT_TRUE(std::filesystem::exists(dir / "killed" / "checkpoint.json"))
       << "finished before the kill";
   const json cp = json::parse(slurp(dir / "killed" / "checkpoint.json"));
   EXPECT_EQ(cp["schema"], "ftctune.checkpoint/1");

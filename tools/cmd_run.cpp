@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -88,10 +89,11 @@ bool holds_run(const std::filesystem::path& d) {
          std::filesystem::exists(d / tune::kCheckpointFile, ec);
 }
 
+// A finished run removes its checkpoint, so one that is there was left by a run that did not
+// finish (perhaps one replacing a finished run with --force).
 bool holds_interrupted_run(const std::filesystem::path& d) {
   std::error_code ec;
-  return std::filesystem::exists(d / tune::kCheckpointFile, ec) &&
-         !std::filesystem::exists(d / "gains.json", ec);
+  return std::filesystem::exists(d / tune::kCheckpointFile, ec);
 }
 
 // Where a run writes, locked for the run. A run is never written over silently: a given --out
@@ -112,8 +114,15 @@ class DirectoryLock {
       throw std::filesystem::filesystem_error("cannot open", dir,
                                               std::error_code(errno, std::generic_category()));
     if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-      ::close(fd_);
-      fd_ = -1;
+      if (errno == EWOULDBLOCK) {
+        ::close(fd_);
+        fd_ = -1;
+      } else {
+        // Some network and cluster file systems cannot lock (NFS without lockd, Lustre
+        // without flock): run unlocked rather than call that another run.
+        spdlog::warn("cannot lock {} ({}): a second run into it would not be noticed", dir.string(),
+                     std::strerror(errno));
+      }
     }
   }
   ~DirectoryLock() {
@@ -166,9 +175,9 @@ std::unique_ptr<DirectoryLock> run_directory(std::filesystem::path& out, bool gi
 // run writes, so that no figure or trajectory of the earlier run is left beside the new ones.
 void clear_previous_run(const std::filesystem::path& out) {
   if (!holds_run(out)) return;
-  for (const char* f : {"gains.json", "history.csv", "trials.csv", "history-random.csv",
-                        "comparison.json", "comparison.md", "run.json", "job.json", "report.html",
-                        "figures", "trajectories", tune::kCheckpointFile})
+  for (const char* f :
+       {"gains.json", "history.csv", "trials.csv", "history-random.csv", "comparison.json",
+        "comparison.md", "run.json", "job.json", "report.html", "figures", "trajectories"})
     std::filesystem::remove_all(out / f);
 }
 
@@ -194,8 +203,11 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
       spdlog::info("resuming from {} after iteration {}", (out / tune::kCheckpointFile).string(),
                    resumed->iteration);
     } else if (fs::exists(out / "gains.json")) {
-      throw InputError("--resume", "",
-                       out.string() + " holds a finished run (gains.json): nothing to resume");
+      throw InputError(
+          "--resume", "",
+          out.string() +
+              " holds a finished run (gains.json): nothing to resume (a run written elsewhere is "
+              "resumed with --out DIR)");
     } else {
       // A batch script can always pass --resume: its first start has nothing to resume.
       spdlog::info("no checkpoint in {}: starting from the first iteration", out.string());
@@ -304,7 +316,10 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     fs::remove_all(staging, ec);
     throw;
   }
-  if (o.force && !o.resume) clear_previous_run(out);
+  // What is in the way goes first: the run --force replaces, or what an earlier start of a
+  // resumed run left (rename cannot replace a directory that has files). The checkpoint stays
+  // until gains.json is in place.
+  if (o.force || o.resume) clear_previous_run(out);
   tune::move_into(staging, out, entries);
   fs::remove(staging);
   // gains.json is in place: the run is finished, and its checkpoint of no more use.

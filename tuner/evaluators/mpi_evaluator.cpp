@@ -180,6 +180,33 @@ void send(int to, int tag, const std::vector<char>& bytes) {
 void send(int to, int tag, const Writer& w) { send(to, tag, w.bytes()); }
 void send_empty(int to, int tag) { send(to, tag, std::vector<char>{}); }
 
+// Rank 0's sends to workers. A message above MPI's eager limit waits until the receiver takes
+// it, and a hung receiver never does: rank 0 sends without blocking, to every rank at once, and
+// gives up on a rank that has not taken its message within the rank timeout.
+void send_to_ranks(const std::vector<int>& to, int tag, const std::vector<char>& bytes,
+                   double timeout_s) {
+  std::vector<MPI_Request> req(to.size());
+  for (std::size_t i = 0; i < to.size(); ++i)
+    MPI_Isend(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, to[i], tag, MPI_COMM_WORLD,
+              &req[i]);
+  const auto deadline = clock::now() + std::chrono::duration<double>(timeout_s);
+  for (;;) {
+    int done = 0;
+    MPI_Testall(static_cast<int>(req.size()), req.data(), &done, MPI_STATUSES_IGNORE);
+    if (done) return;
+    if (clock::now() > deadline)
+      for (std::size_t i = 0; i < to.size(); ++i) {
+        int one = 0;
+        MPI_Test(&req[i], &one, MPI_STATUS_IGNORE);
+        if (!one)
+          abort_job("rank " + std::to_string(to[i]) + " has not taken a message for " +
+                    std::to_string(static_cast<int>(timeout_s)) +
+                    " s: it hung or was lost; stopping the run (no gains file is written)");
+      }
+    std::this_thread::sleep_for(std::chrono::microseconds(50));
+  }
+}
+
 struct Message {
   int source = 0, tag = 0;
   std::vector<char> bytes;
@@ -337,11 +364,18 @@ int Session::serve() {
             std::mutex mu;
             std::condition_variable cv;
             bool done = false;
+            std::string failed;  // what escaped the pack (out of memory): ends the job below
             std::thread compute([&] {
-              std::vector<TaskResult> out =
-                  evaluator->run(*problem, {candidates, tasks, record_every});
+              std::vector<TaskResult> out;
+              std::string error;
+              try {
+                out = evaluator->run(*problem, {candidates, tasks, record_every});
+              } catch (const std::exception& e) {
+                error = e.what();
+              }
               std::lock_guard lock(mu);
               results = std::move(out);
+              failed = std::move(error);
               done = true;
               cv.notify_one();
             });
@@ -354,6 +388,7 @@ int Session::serve() {
               }
             }
             compute.join();
+            if (!failed.empty()) throw std::runtime_error(failed);
             send(0, kResult, results_message(capacity, results));
           }
           break;
@@ -393,7 +428,9 @@ MpiEvaluator::MpiEvaluator(Session& session, MpiOptions options)
   s.threads[0] = s.arena.max_concurrency();
   Writer hello;
   hello.put<std::int32_t>(options.threads);
-  for (int w = 1; w < s.size; ++w) send(w, kHello, hello);
+  std::vector<int> all;
+  for (int w = 1; w < s.size; ++w) all.push_back(w);
+  send_to_ranks(all, kHello, hello.bytes(), options.rank_timeout);
   const auto deadline = clock::now() + std::chrono::duration<double>(options.rank_timeout);
   Backoff b;
   for (int answered = 1; answered < s.size;) {
@@ -451,11 +488,13 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
   const int workers = s.size - 1;
   const auto t0 = clock::now();
   std::size_t bytes_out = 0, bytes_in = 0, packs = 0;
+  std::vector<int> ranks;
+  for (int w = 1; w <= workers; ++w) ranks.push_back(w);
   if (workers > 0) {
     if (problem.identity() != s.problem_sent) {
       const std::string text = problem_message(problem);
       const std::vector<char> bytes(text.begin(), text.end());
-      for (int w = 1; w <= workers; ++w) send(w, kProblem, bytes);
+      send_to_ranks(ranks, kProblem, bytes, s.options.rank_timeout);
       bytes_out += bytes.size() * static_cast<std::size_t>(workers);
       s.problem_sent = problem.identity();
     }
@@ -463,26 +502,31 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
     b.put<std::int64_t>(batch.record_every);
     b.put_vector(
         std::vector<sim::ControllerConfig>(batch.candidates.begin(), batch.candidates.end()));
-    for (int w = 1; w <= workers; ++w) send(w, kBatch, b);
+    send_to_ranks(ranks, kBatch, b.bytes(), s.options.rank_timeout);
     bytes_out += b.bytes().size() * static_cast<std::size_t>(workers);
   }
 
   // Rank 0's own threads take tasks one at a time, its recorded ones first.
   std::atomic<bool> local_done{false};
+  std::string local_error;  // what escaped rank 0's own simulations (out of memory)
   std::thread compute([&] {
-    s.arena.execute([&] {
-      const std::size_t slots = static_cast<std::size_t>(s.arena.max_concurrency());
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots, 1),
-                        [&](const tbb::blocked_range<std::size_t>&) {
-                          for (std::size_t i; (i = next_local++) < local.size();)
-                            results[local[i]] = run_task(problem, batch, local[i]);
-                          for (;;) {
-                            const auto [first, count] = take(1);
-                            if (count == 0) break;
-                            results[shared[first]] = run_task(problem, batch, shared[first]);
-                          }
-                        });
-    });
+    try {
+      s.arena.execute([&] {
+        const std::size_t slots = static_cast<std::size_t>(s.arena.max_concurrency());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots, 1),
+                          [&](const tbb::blocked_range<std::size_t>&) {
+                            for (std::size_t i; (i = next_local++) < local.size();)
+                              results[local[i]] = run_task(problem, batch, local[i]);
+                            for (;;) {
+                              const auto [first, count] = take(1);
+                              if (count == 0) break;
+                              results[shared[first]] = run_task(problem, batch, shared[first]);
+                            }
+                          });
+      });
+    } catch (const std::exception& e) {
+      local_error = e.what();
+    }
     local_done = true;
   });
 
@@ -496,63 +540,69 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
   const double total_threads = std::max(1, concurrency());
   const auto timeout = std::chrono::duration<double>(s.options.rank_timeout);
   Backoff backoff(kInBatch);
-  for (int active = workers; active > 0 || !local_done;) {
-    std::optional<Message> m = workers > 0 ? try_receive(MPI_ANY_SOURCE) : std::nullopt;
-    if (!m) {
-      const auto now = clock::now();
-      for (int w = 1; w <= workers; ++w) {
-        const Worker& wk = ws[static_cast<std::size_t>(w)];
-        if (wk.active && now - wk.heard > timeout)
-          abort_job("rank " + std::to_string(w) + " (on " + s.host[static_cast<std::size_t>(w)] +
-                    ") has not answered for " +
-                    std::to_string(static_cast<int>(s.options.rank_timeout)) +
-                    " s while holding work: it hung or was lost; stopping the run (no gains file "
-                    "is written)");
+  // A malformed message ends the job (its compute thread cannot be left running otherwise).
+  try {
+    for (int active = workers; active > 0 || !local_done;) {
+      if (local_done && !local_error.empty()) abort_job("rank 0: " + local_error);
+      std::optional<Message> m = workers > 0 ? try_receive(MPI_ANY_SOURCE) : std::nullopt;
+      if (!m) {
+        const auto now = clock::now();
+        for (int w = 1; w <= workers; ++w) {
+          const Worker& wk = ws[static_cast<std::size_t>(w)];
+          if (wk.active && now - wk.heard > timeout)
+            abort_job("rank " + std::to_string(w) + " (on " + s.host[static_cast<std::size_t>(w)] +
+                      ") has not answered for " +
+                      std::to_string(static_cast<int>(s.options.rank_timeout)) +
+                      " s while holding work: it hung or was lost; stopping the run (no gains file "
+                      "is written)");
+        }
+        backoff.pause();
+        continue;
       }
-      backoff.pause();
-      continue;
-    }
-    backoff.reset();
-    bytes_in += m->bytes.size();
-    Worker& wk = ws[static_cast<std::size_t>(m->source)];
-    wk.heard = clock::now();
-    if (m->tag == kHeartbeat) continue;
-    if (m->tag != kRequest && m->tag != kResult)
-      abort_job("unexpected message from rank " + std::to_string(m->source));
-    Reader r(m->bytes);
-    const int capacity = std::max(1, r.get<std::int32_t>());
-    if (m->tag == kResult) {
-      if (!wk.pack) abort_job("rank " + std::to_string(m->source) + " sent results it owed none");
-      const auto [first, count] = *wk.pack;
-      if (r.get<std::uint64_t>() != count)
-        abort_job("rank " + std::to_string(m->source) + " sent the wrong number of results");
-      for (std::size_t i = 0; i < count; ++i) {
-        TaskResult& t = results[shared[first + i]];
-        t.metrics = get_metrics(r);
-        t.error = r.get_string();
+      backoff.reset();
+      bytes_in += m->bytes.size();
+      Worker& wk = ws[static_cast<std::size_t>(m->source)];
+      wk.heard = clock::now();
+      if (m->tag == kHeartbeat) continue;
+      if (m->tag != kRequest && m->tag != kResult)
+        abort_job("unexpected message from rank " + std::to_string(m->source));
+      Reader r(m->bytes);
+      const int capacity = std::max(1, r.get<std::int32_t>());
+      if (m->tag == kResult) {
+        if (!wk.pack) abort_job("rank " + std::to_string(m->source) + " sent results it owed none");
+        const auto [first, count] = *wk.pack;
+        if (r.get<std::uint64_t>() != count)
+          abort_job("rank " + std::to_string(m->source) + " sent the wrong number of results");
+        for (std::size_t i = 0; i < count; ++i) {
+          TaskResult& t = results[shared[first + i]];
+          t.metrics = get_metrics(r);
+          t.error = r.get_string();
+        }
+        wk.pack.reset();
       }
-      wk.pack.reset();
+      // Guided self-scheduling: a share of what is left in proportion to the rank's threads, at
+      // least one task per thread, so the packs shrink as the batch ends.
+      const std::size_t left = shared.size() - std::min(next_shared.load(), shared.size());
+      const auto want = static_cast<std::size_t>(std::max<double>(
+          capacity, std::ceil(static_cast<double>(left) * capacity / (2.0 * total_threads))));
+      const auto [first, count] = take(want);
+      if (count == 0) {
+        send_to_ranks({m->source}, kDone, {}, s.options.rank_timeout);
+        wk.active = false;
+        --active;
+        continue;
+      }
+      std::vector<SimulationTask> tasks(count);
+      for (std::size_t i = 0; i < count; ++i) tasks[i] = batch.tasks[shared[first + i]];
+      Writer p;
+      p.put_vector(tasks);
+      send_to_ranks({m->source}, kPack, p.bytes(), s.options.rank_timeout);
+      bytes_out += p.bytes().size();
+      ++packs;
+      wk.pack = std::make_pair(first, count);
     }
-    // Guided self-scheduling: a share of what is left in proportion to the rank's threads, at
-    // least one task per thread, so the packs shrink as the batch ends.
-    const std::size_t left = shared.size() - std::min(next_shared.load(), shared.size());
-    const auto want = static_cast<std::size_t>(std::max<double>(
-        capacity, std::ceil(static_cast<double>(left) * capacity / (2.0 * total_threads))));
-    const auto [first, count] = take(want);
-    if (count == 0) {
-      send_empty(m->source, kDone);
-      wk.active = false;
-      --active;
-      continue;
-    }
-    std::vector<SimulationTask> tasks(count);
-    for (std::size_t i = 0; i < count; ++i) tasks[i] = batch.tasks[shared[first + i]];
-    Writer p;
-    p.put_vector(tasks);
-    send(m->source, kPack, p);
-    bytes_out += p.bytes().size();
-    ++packs;
-    wk.pack = std::make_pair(first, count);
+  } catch (const std::exception& e) {
+    abort_job(std::string("rank 0: ").append(e.what()));
   }
   compute.join();
   spdlog::debug(
