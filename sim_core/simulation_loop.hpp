@@ -20,7 +20,7 @@ namespace ftc::sim::detail {
 // Δ(t) and the fault effect depend on time only, and RK4 asks for them on the grid of half
 // steps t_k, t_k + h/2, t_k + h, ... (the midpoint serves two stages, the end of a step is the
 // next step's start). They are filled a block of Phasor::kMaxSteps half steps at a time: the
-// sinusoids advance along the grid by rotation from a libm anchor at the block's first instant,
+// sinusoids advance along the grid by rotation from an anchor (lanes/elementary.hpp) at the block's first instant,
 // into one table per sinusoid, and Disturbance::evaluate and FaultSet::evaluate then run each
 // term over the whole block. Term by term over a block is a few instructions per instant,
 // where one instant at a time spent about 300 on bookkeeping. The block is of fixed size, so

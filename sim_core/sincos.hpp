@@ -2,19 +2,21 @@
 // Cheap sin and cos for the hot loop, in two forms.
 //
 // SinCosTracker: sin and cos of an argument that moves in small steps (an attitude angle from
-// one RK4 stage and sample to the next). From an anchor a with s = sin a, c = cos a by libm,
+// one RK4 stage and sample to the next). From an anchor a with s = sin a, c = cos a by lane::sincos
+// (lanes/elementary.hpp),
 //
 //   sin(a + δ) = s cos δ + c sin δ,   cos(a + δ) = c cos δ - s sin δ
 //
 // with sin δ and cos δ from their Taylor series. For |δ| ≤ kReach = 0.02 the first omitted
-// terms (δ⁹/9!, δ⁸/8!) are below 1e-18, so the result is within about one ulp of libm's, at a
-// fifth of the cost. Farther away the tracker re-anchors with libm. It is deterministic: the
-// same sequence of arguments gives the same bits.
+// terms (δ⁹/9!, δ⁸/8!) are below 1e-18, so the result is within about one ulp of the exact values,
+// at a fifth of the cost. Farther away the tracker re-anchors. It is deterministic: the same
+// sequence of arguments gives the same bits.
 #include <cmath>
 #include <limits>
 #include <vector>
 
 #include "ftc/sim/types.hpp"
+#include "lanes/elementary.hpp"
 
 namespace ftc::sim {
 
@@ -26,8 +28,7 @@ class SinCosTracker {
     const double d = x - anchor_;
     if (!(std::abs(d) <= kReach)) {  // also true for the NaN anchor of a fresh tracker
       anchor_ = x;
-      s_ = std::sin(x);
-      c_ = std::cos(x);
+      lane::sincos(x, s_, c_);
       s = s_;
       c = c_;
       return;
@@ -45,27 +46,27 @@ class SinCosTracker {
 };
 
 // Phasor: sin and cos of ω t + φ on a uniform time grid t_n = t_a + n·dt, for the sinusoids of
-// the disturbance and of bias faults. anchor(t) sets the value at t with libm; each advance()
-// rotates it through the fixed angle ω·dt,
+// the disturbance and of bias faults. anchor(t) sets the value at t with lane::sincos; each
+// advance() rotates it through the fixed angle ω·dt,
 //
 //   (s, c) ← (s C + c S, c C − s S),   C = cos ω dt, S = sin ω dt,
 //
 // four multiplications instead of a sin and a cos. A rotation adds about one ulp of error, so
 // callers re-anchor at least every kMaxSteps advances, which keeps the values within 1e-14 of
-// libm's at the paper's frequencies (tests/test_plant.cpp; at large ω t the rounding of the
-// argument ω t + φ itself, a few ulp of it, dominates both).
+// the exact values at the paper's frequencies (tests/test_plant.cpp; at large ω t the rounding of
+// the argument ω t + φ itself, a few ulp of it, dominates both).
 class Phasor {
  public:
   static constexpr int kMaxSteps = 32;
 
   Phasor() = default;
-  Phasor(double omega, double phase, double dt)
-      : omega_(omega), phase_(phase), C_(std::cos(omega * dt)), S_(std::sin(omega * dt)) {}
+  Phasor(double omega, double phase, double dt) : omega_(omega), phase_(phase) {
+    lane::sincos(omega * dt, S_, C_);
+  }
 
   void anchor(double t) {
     const double a = omega_ * t + phase_;
-    s_ = std::sin(a);
-    c_ = std::cos(a);
+    lane::sincos(a, s_, c_);
   }
   void advance() {
     const double s = s_ * C_ + c_ * S_;

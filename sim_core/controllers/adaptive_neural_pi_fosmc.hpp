@@ -3,14 +3,11 @@
 // Model-free: f(X) and the fault/disturbance bound are replaced by an integral RBF network Ω
 // and an adaptive switching gain K̂a.
 //
-//   ψ_j  = exp(-‖X - μ_j‖² / σ²),  j = 1..l,  X ∈ R^2n, μ_j = c_j (1,…,1), c_j evenly on centre_range
-//   sF   = a + C(X),   sPI = Kp sF + Ki I
-//   u_d  = -G⁺ (Ω + C(X) + (Ki/Kp) I + ur)
-//   I   += Ts · sF
-//   ur  += Ts · (K̂a + ζ) ⊙ sigm(sPI)
-//   K̂a  += Ts · |sPI| / λ               (per axis, K̂a(0) = ka0)
-//   Ω   += Ts · Wᵀ ψ                     (W is l×n, the weights θ̂)
-//   W   += Ts · weight_rate · ψ sPIᵀ     (weight_rate = 1/α of eq. 30)
+//   ψ_j  = exp(-‖X - μ_j‖² / σ²),  j = 1..l,  X ∈ R^2n, μ_j = c_j (1,…,1), c_j evenly on
+//   centre_range sF   = a + C(X),   sPI = Kp sF + Ki I u_d  = -G⁺ (Ω + C(X) + (Ki/Kp) I + ur) I +=
+//   Ts · sF ur  += Ts · (K̂a + ζ) ⊙ sigm(sPI) K̂a  += Ts · |sPI| / λ               (per axis, K̂a(0) =
+//   ka0) Ω   += Ts · Wᵀ ψ                     (W is l×n, the weights θ̂) W   += Ts · weight_rate · ψ
+//   sPIᵀ     (weight_rate = 1/α of eq. 30)
 //
 // Units (spacecraft): Ω, ur rad/s²; K̂a, ζ rad/s³; λ and weight_rate set the adaptation speeds.
 // The state is updated in the order above, each from the values of sample k (forward Euler).
@@ -21,6 +18,7 @@
 #include "controllers/plant_model.hpp"
 #include "controllers/sliding.hpp"
 #include "ftc/sim/controller.hpp"
+#include "lanes/elementary.hpp"
 
 namespace ftc::sim {
 
@@ -73,7 +71,7 @@ class AdaptiveNeuralPiFosmc final : public Controller<N, M> {
     Activations psi(l_);
     for (int j = 0; j < l_; ++j) {
       const double d2 = (x.array() - centres_[j]).square().sum();
-      psi[j] = std::exp(-d2 * inv_w2);
+      psi[j] = lane::exp(-d2 * inv_w2);
     }
 
     I_ += Ts_ * sF;

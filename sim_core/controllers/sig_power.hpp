@@ -20,14 +20,13 @@
 #include <cstdint>
 
 #include "ftc/sim/types.hpp"
+#include "lanes/elementary.hpp"
 
 namespace ftc::sim {
 
 // sig^a for any exponent, as exp(a ln|x|): SigPower's fallback, and the definition it is
 // tested against.
-inline double sig(double x, double a) {
-  return x == 0.0 ? 0.0 : std::copysign(std::exp(a * std::log(std::abs(x))), x);
-}
+inline double sig(double x, double a) { return lane::sig(x, a); }
 
 class SigPower {
  public:

@@ -9,6 +9,7 @@
 
 #include "controllers/sig_power.hpp"
 #include "ftc/sim/types.hpp"
+#include "lanes/elementary.hpp"
 
 namespace ftc::sim {
 
@@ -21,9 +22,9 @@ FTC_HOT_INLINE Vec<N> sig(const Vec<N>& x, const SigPower& p) {
 }
 
 // tanh(y) is ±1 in double precision once |y| > 19.06 (1 - tanh y ≈ 2 e^{-2y} < 2^-54); past
-// that point the sign alone gives the same bits without a call into libm.
+// that point the sign alone gives the same bits without evaluating tanh.
 FTC_HOT_INLINE double sigm_scalar(double y) {
-  return std::abs(y) > 19.5 ? std::copysign(1.0, y) : std::tanh(y);
+  return std::abs(y) > 19.5 ? std::copysign(1.0, y) : lane::tanh(y);
 }
 template <int N>
 FTC_HOT_INLINE Vec<N> sigm(const Vec<N>& s, double theta) {

@@ -40,7 +40,7 @@ Manipulator::Manipulator(const ManipulatorParams& params) : params_(params) {
 double Manipulator::energy(const State& x) const {
   const Vector q = x.head<2>(), qd = x.tail<2>();
   const double kinetic = 0.5 * qd.dot(mass_matrix(q) * qd);
-  const double potential = b1_ * std::sin(q[0]) + b2_ * std::sin(q[0] + q[1]);
+  const double potential = b1_ * math::sin(q[0]) + b2_ * math::sin(q[0] + q[1]);
   return kinetic + potential;
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "checks.hpp"
+#include "ftc/sim/elementary.hpp"
 #include "plants/kinds.hpp"
 #include "plants/plant_adapter.hpp"
 #include "plants/spacecraft_dynamics.hpp"
@@ -38,8 +39,7 @@ Spacecraft::Spacecraft(const SpacecraftParams& params) : params_(params) {
 Vec3 Spacecraft::f(const State& x) const {
   double s[3], c[3];
   for (int i = 0; i < 3; ++i) {
-    s[i] = std::sin(x[i]);
-    c[i] = std::cos(x[i]);
+    math::sincos(x[i], s[i], c[i]);
   }
   return f_trig(x, s, c);
 }

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "ftc/sim/elementary.hpp"
 #include "ftc/sim/fields.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/types.hpp"
@@ -40,8 +41,8 @@ class Disturbance {
   // Δ at n instants into out(0) .. out(n-1) (each a Vec<N>&), given
   // value(i, k, shape) = shape(frequency_i t_k + phase_i)
   // of term i at instant k. The simulator fills a block of instants at once from phasor tables;
-  // at(t) is the case n = 1 with libm. Terms are summed in order, as the definition
-  // reads, so both agree bit for bit on the same sinusoid values.
+  // at(t) is the case n = 1, evaluating the sinusoids directly. Terms are summed in order, as the
+  // definition reads, so both agree bit for bit on the same sinusoid values.
   template <class Value, class Out>
   void evaluate(std::size_t n, Value&& value, Out&& out) const;
   const std::vector<DisturbanceTerm>& terms() const { return terms_; }
@@ -67,7 +68,7 @@ Vec<N> Disturbance::at(double t) const {
       1,
       [&](std::size_t i, std::size_t, Shape shape) {
         const double x = terms_[i].frequency * t + terms_[i].phase;
-        return shape == Shape::sin ? std::sin(x) : std::cos(x);
+        return shape == Shape::sin ? math::sin(x) : math::cos(x);
       },
       [&](std::size_t) -> Vec<N>& { return d; });
   return d;

@@ -16,6 +16,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "ftc/sim/elementary.hpp"
 #include "ftc/sim/fields.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/types.hpp"
@@ -34,7 +35,7 @@ struct FaultProfile {
   double rho(double tau) const {  // ρ(τ)
     if (tau < 0.0) return 0.0;
     if (type == FaultProfileType::abrupt) return 1.0;
-    return 1.0 - std::exp(-rate * tau);
+    return 1.0 - math::exp(-rate * tau);
   }
 };
 
@@ -80,7 +81,8 @@ class FaultSet {
   // The effects at the instants t[0..n) into out(0) .. out(n-1) (each a FaultEffect<M>&), given
   // cosine(i, k) = cos(ω_i t_k + φ_i)
   // of fault i at instant k (read for bias faults only). The simulator fills a block of
-  // instants at once from phasor tables; effect(t) is the case n = 1 with libm.
+  // instants at once from phasor tables; effect(t) is the case n = 1, evaluating the cosines
+  // directly.
   template <class Cos, class Out>
   void evaluate(std::span<const double> t, Cos&& cosine, Out&& out) const;
   // Applied actuator output for a held command: sat(gain ⊙ u_d + offset).
@@ -138,7 +140,7 @@ FaultEffect<M> FaultSet::effect(double t) const {
   evaluate(
       std::span<const double>(&t, 1),
       [&](std::size_t i, std::size_t) {
-        return std::cos(faults_[i].frequency * t + faults_[i].phase);
+        return math::cos(faults_[i].frequency * t + faults_[i].phase);
       },
       [&](std::size_t) -> FaultEffect<M>& { return e; });
   return e;

@@ -45,6 +45,7 @@
 #include <cmath>
 #include <string>
 
+#include "ftc/sim/elementary.hpp"
 #include "ftc/sim/plant.hpp"
 
 namespace ftc::sim {
@@ -68,8 +69,8 @@ class Manipulator final : public Plant<2, 3> {
   // The inline definitions let the simulation loop, compiled for this class, inline f and G.
   FTC_HOT_INLINE Vector f(const State& x) const override {
     const double q1 = x[0], q2 = x[1], w1 = x[2], w2 = x[3];
-    const double s1 = std::sin(q1), c1 = std::cos(q1);
-    const double s2 = std::sin(q2), c2 = std::cos(q2);
+    const double s1 = math::sin(q1), c1 = math::cos(q1);
+    const double s2 = math::sin(q2), c2 = math::cos(q2);
     const double c12 = c1 * c2 - s1 * s2;  // cos(q1 + q2) from the sines and cosines at hand
     const double h = a2_ * s2;
     const double g2 = b2_ * c12;
@@ -81,7 +82,7 @@ class Manipulator final : public Plant<2, 3> {
   }
 
   FTC_HOT_INLINE InputMatrix G(const State& x) const override {
-    const Inverse Mi = inverse_mass(std::cos(x[1]));
+    const Inverse Mi = inverse_mass(math::cos(x[1]));
     InputMatrix g;
     g << Mi.d11, Mi.d12, Mi.d11 + Mi.d12,  //
         Mi.d12, Mi.d22, Mi.d12 + Mi.d22;
@@ -97,7 +98,7 @@ class Manipulator final : public Plant<2, 3> {
 
   // M(q) in kg·m².
   Mass mass_matrix(const Vector& q) const {
-    const double c2 = std::cos(q[1]);
+    const double c2 = math::cos(q[1]);
     Mass m;
     m << a1_ + 2.0 * a2_ * c2, a3_ + a2_ * c2,  //
         a3_ + a2_ * c2, a3_;
@@ -105,13 +106,13 @@ class Manipulator final : public Plant<2, 3> {
   }
   // C(q, q̇) q̇ in N·m.
   Vector coriolis_torque(const Vector& q, const Vector& qd) const {
-    const double h = a2_ * std::sin(q[1]);
+    const double h = a2_ * math::sin(q[1]);
     return Vector(-h * (2.0 * qd[0] * qd[1] + qd[1] * qd[1]), h * qd[0] * qd[0]);
   }
   // g(q) in N·m.
   Vector gravity_torque(const Vector& q) const {
-    const double g2 = b2_ * std::cos(q[0] + q[1]);
-    return Vector(b1_ * std::cos(q[0]) + g2, g2);
+    const double g2 = b2_ * math::cos(q[0] + q[1]);
+    return Vector(b1_ * math::cos(q[0]) + g2, g2);
   }
   // Kinetic plus potential energy ½ q̇ᵀ M q̇ + V(q) in J (V = 0 with the arm horizontal).
   double energy(const State& x) const;
