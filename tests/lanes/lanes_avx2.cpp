@@ -1,0 +1,11 @@
+// Compiled for avx2 (tests/CMakeLists.txt sets the flags of this file alone).
+#define FTC_LANES_XSIMD 1
+#include "lanes/lane_functions.hpp"
+
+namespace ftc::test {
+
+void lanes_avx2(const double* xs, std::size_t n, double* out) {
+  lanes_for<xsimd::avx2>(xs, n, out);
+}
+
+}  // namespace ftc::test
