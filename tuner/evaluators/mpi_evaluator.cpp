@@ -182,9 +182,10 @@ void send_empty(int to, int tag) { send(to, tag, std::vector<char>{}); }
 
 // Rank 0's sends to workers. A message above MPI's eager limit waits until the receiver takes
 // it, and a hung receiver never does: rank 0 sends without blocking, to every rank at once, and
-// gives up on a rank that has not taken its message within the rank timeout.
+// gives up on a rank that has not taken its message within the rank timeout. `host` names each
+// rank's host once the ranks have said it (the greeting has not yet).
 void send_to_ranks(const std::vector<int>& to, int tag, const std::vector<char>& bytes,
-                   double timeout_s) {
+                   double timeout_s, const std::vector<std::string>* host = nullptr) {
   std::vector<MPI_Request> req(to.size());
   for (std::size_t i = 0; i < to.size(); ++i)
     MPI_Isend(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, to[i], tag, MPI_COMM_WORLD,
@@ -199,9 +200,11 @@ void send_to_ranks(const std::vector<int>& to, int tag, const std::vector<char>&
         int one = 0;
         MPI_Test(&req[i], &one, MPI_STATUS_IGNORE);
         if (!one)
-          abort_job("rank " + std::to_string(to[i]) + " has not taken a message for " +
-                    std::to_string(static_cast<int>(timeout_s)) +
-                    " s: it hung or was lost; stopping the run (no gains file is written)");
+          abort_job("rank " + std::to_string(to[i]) +
+                    (host ? " (on " + (*host)[static_cast<std::size_t>(to[i])] + ")" : "") +
+                    " has not answered for " + std::to_string(static_cast<int>(timeout_s)) +
+                    " s (it did not take a message): it hung or was lost; stopping the run (no "
+                    "gains file is written)");
       }
     std::this_thread::sleep_for(std::chrono::microseconds(50));
   }
@@ -494,7 +497,7 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
     if (problem.identity() != s.problem_sent) {
       const std::string text = problem_message(problem);
       const std::vector<char> bytes(text.begin(), text.end());
-      send_to_ranks(ranks, kProblem, bytes, s.options.rank_timeout);
+      send_to_ranks(ranks, kProblem, bytes, s.options.rank_timeout, &s.host);
       bytes_out += bytes.size() * static_cast<std::size_t>(workers);
       s.problem_sent = problem.identity();
     }
@@ -502,7 +505,7 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
     b.put<std::int64_t>(batch.record_every);
     b.put_vector(
         std::vector<sim::ControllerConfig>(batch.candidates.begin(), batch.candidates.end()));
-    send_to_ranks(ranks, kBatch, b.bytes(), s.options.rank_timeout);
+    send_to_ranks(ranks, kBatch, b.bytes(), s.options.rank_timeout, &s.host);
     bytes_out += b.bytes().size() * static_cast<std::size_t>(workers);
   }
 
@@ -587,7 +590,7 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
           capacity, std::ceil(static_cast<double>(left) * capacity / (2.0 * total_threads))));
       const auto [first, count] = take(want);
       if (count == 0) {
-        send_to_ranks({m->source}, kDone, {}, s.options.rank_timeout);
+        send_to_ranks({m->source}, kDone, {}, s.options.rank_timeout, &s.host);
         wk.active = false;
         --active;
         continue;
@@ -596,7 +599,7 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
       for (std::size_t i = 0; i < count; ++i) tasks[i] = batch.tasks[shared[first + i]];
       Writer p;
       p.put_vector(tasks);
-      send_to_ranks({m->source}, kPack, p.bytes(), s.options.rank_timeout);
+      send_to_ranks({m->source}, kPack, p.bytes(), s.options.rank_timeout, &s.host);
       bytes_out += p.bytes().size();
       ++packs;
       wk.pack = std::make_pair(first, count);
