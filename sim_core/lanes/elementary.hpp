@@ -29,8 +29,8 @@ void sincos_large(double x, double& s, double& c);
 
 namespace detail {
 
-// π/2 = kPio2[0] + kPio2[1] + kPio2[2] + kPio2[3]; the first three have 33 significant bits, so
-// n·kPio2[i] is exact for |n| < 2^20.
+// π/2 = kPio2_1 + kPio2_2 + kPio2_3 + kPio2_3t; the first three have 33 significant bits, so
+// n times each of them is exact for |n| < 2^20.
 inline constexpr double kPio2_1 = 0x1.921fb544p+0;
 inline constexpr double kPio2_2 = 0x1.0b4611a6p-34;
 inline constexpr double kPio2_3 = 0x1.3198a2ep-69;
