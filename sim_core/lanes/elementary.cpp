@@ -31,7 +31,7 @@ std::uint64_t bits_at(int j) {
   return out;
 }
 
-using u128 = unsigned __int128;
+__extension__ typedef unsigned __int128 u128;  // GCC and Clang, on x86-64 and aarch64
 
 }  // namespace
 
