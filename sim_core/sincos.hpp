@@ -2,8 +2,9 @@
 // Cheap sin and cos for the hot loop, in two forms.
 //
 // SinCosTracker: sin and cos of an argument that moves in small steps (an attitude angle from
-// one RK4 stage and sample to the next). From an anchor a with s = sin a, c = cos a by lane::sincos
-// (lanes/elementary.hpp),
+// one RK4 stage and sample to the next). From an anchor a with s = sin a, c = cos a by
+// math::sincos (ftc/sim/elementary.hpp; out of line, as re-anchoring is rare and the loop stays
+// small),
 //
 //   sin(a + δ) = s cos δ + c sin δ,   cos(a + δ) = c cos δ - s sin δ
 //
@@ -15,8 +16,8 @@
 #include <limits>
 #include <vector>
 
+#include "ftc/sim/elementary.hpp"
 #include "ftc/sim/types.hpp"
-#include "lanes/elementary.hpp"
 
 namespace ftc::sim {
 
@@ -28,7 +29,7 @@ class SinCosTracker {
     const double d = x - anchor_;
     if (!(std::abs(d) <= kReach)) {  // also true for the NaN anchor of a fresh tracker
       anchor_ = x;
-      lane::sincos(x, s_, c_);
+      math::sincos(x, s_, c_);
       s = s_;
       c = c_;
       return;
@@ -46,7 +47,7 @@ class SinCosTracker {
 };
 
 // Phasor: sin and cos of ω t + φ on a uniform time grid t_n = t_a + n·dt, for the sinusoids of
-// the disturbance and of bias faults. anchor(t) sets the value at t with lane::sincos; each
+// the disturbance and of bias faults. anchor(t) sets the value at t with math::sincos; each
 // advance() rotates it through the fixed angle ω·dt,
 //
 //   (s, c) ← (s C + c S, c C − s S),   C = cos ω dt, S = sin ω dt,
@@ -61,12 +62,12 @@ class Phasor {
 
   Phasor() = default;
   Phasor(double omega, double phase, double dt) : omega_(omega), phase_(phase) {
-    lane::sincos(omega * dt, S_, C_);
+    math::sincos(omega * dt, S_, C_);
   }
 
   void anchor(double t) {
     const double a = omega_ * t + phase_;
-    lane::sincos(a, s_, c_);
+    math::sincos(a, s_, c_);
   }
   void advance() {
     const double s = s_ * C_ + c_ * S_;

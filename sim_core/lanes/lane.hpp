@@ -36,7 +36,6 @@ struct Traits<double> {
 };
 
 FTC_HOT_INLINE double select(bool m, double a, double b) { return m ? a : b; }
-FTC_HOT_INLINE bool any(bool m) { return m; }
 FTC_HOT_INLINE bool all(bool m) { return m; }
 FTC_HOT_INLINE double abs(double x) {
   return std::bit_cast<double>(std::bit_cast<std::uint64_t>(x) & ~(1ULL << 63));
@@ -46,7 +45,6 @@ FTC_HOT_INLINE double copysign(double x, double y) {
   const std::uint64_t s = std::bit_cast<std::uint64_t>(y) & (1ULL << 63);
   return std::bit_cast<double>((std::bit_cast<std::uint64_t>(x) & ~(1ULL << 63)) | s);
 }
-FTC_HOT_INLINE double sqrt(double x) { return std::sqrt(x); }  // IEEE: correctly rounded
 // 2^k for an integral k in [-1022, 1023] given as a double.
 FTC_HOT_INLINE double pow2i(double k) {
   // k + (2^52 + 1023) holds the biased exponent in its low bits; shifting them up by 52 makes
@@ -97,10 +95,6 @@ FTC_HOT_INLINE xsimd::batch<double, A> select(const xsimd::batch_bool<double, A>
   return xsimd::select(m, a, b);
 }
 template <class A>
-FTC_HOT_INLINE bool any(const xsimd::batch_bool<double, A>& m) {
-  return xsimd::any(m);
-}
-template <class A>
 FTC_HOT_INLINE bool all(const xsimd::batch_bool<double, A>& m) {
   return xsimd::all(m);
 }
@@ -118,10 +112,6 @@ FTC_HOT_INLINE xsimd::batch<double, A> copysign(const xsimd::batch<double, A>& x
                                                 const xsimd::batch<double, A>& y) {
   return xsimd::bitwise_or(xsimd::bitwise_and(x, magnitude_mask<A>()),
                            xsimd::bitwise_and(y, xsimd::batch<double, A>(-0.0)));
-}
-template <class A>
-FTC_HOT_INLINE xsimd::batch<double, A> sqrt(const xsimd::batch<double, A>& x) {
-  return xsimd::sqrt(x);
 }
 template <class A>
 FTC_HOT_INLINE xsimd::batch<double, A> pow2i(const xsimd::batch<double, A>& k) {
