@@ -20,9 +20,9 @@ namespace ftc::sim::detail {
 // Δ(t) and the fault effect depend on time only, and RK4 asks for them on the grid of half
 // steps t_k, t_k + h/2, t_k + h, ... (the midpoint serves two stages, the end of a step is the
 // next step's start). They are filled a block of Phasor::kMaxSteps half steps at a time: the
-// sinusoids advance along the grid by rotation from an anchor (lanes/elementary.hpp) at the block's first instant,
-// into one table per sinusoid, and Disturbance::evaluate and FaultSet::evaluate then run each
-// term over the whole block. Term by term over a block is a few instructions per instant,
+// sinusoids advance along the grid by rotation from an anchor (lanes/elementary.hpp) at the block's
+// first instant, into one table per sinusoid, and Disturbance::evaluate and FaultSet::evaluate then
+// run each term over the whole block. Term by term over a block is a few instructions per instant,
 // where one instant at a time spent about 300 on bookkeeping. The block is of fixed size, so
 // memory does not grow with the duration.
 template <int N, int M>
@@ -196,14 +196,20 @@ SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
   const auto accel = [&](const StateT& s, const Vec<N>& fs, const Entry& e, const Vec<M>& u_d)
                          FTC_HOT_LAMBDA -> Vec<N> {
     const Vec<M> u = faults.apply(e.fault, u_d);
-    Vec<N> a = fs;
-    // lazyProduct: the coefficient-wise product Eigen picks for these sizes anyway, spelled
-    // out so that it inlines into the loop instead of being called per stage.
-    if (constant_G)
-      a.noalias() += G0.lazyProduct(u);
-    else
-      a.noalias() += plant.G(s).lazyProduct(u);
-    a += e.disturbance;
+    // Summed in the order the batch kernels sum (lanes/spacecraft_kernel.hpp), so that a
+    // Controller simulated here issues the commands of a tuning run's lane to the last bit.
+    const auto row_times_u = [&](const Mat<N, M>& G, int i) FTC_HOT_LAMBDA {
+      double g = G(i, 0) * u[0];
+      for (int j = 1; j < M; ++j) g = g + G(i, j) * u[j];
+      return g;
+    };
+    Vec<N> a;
+    if (constant_G) {
+      for (int i = 0; i < N; ++i) a[i] = (fs[i] + row_times_u(G0, i)) + e.disturbance[i];
+    } else {
+      const Mat<N, M> G = plant.G(s);
+      for (int i = 0; i < N; ++i) a[i] = (fs[i] + row_times_u(G, i)) + e.disturbance[i];
+    }
     return a;
   };
   auto ws = make_workspace<P>();
@@ -223,7 +229,8 @@ SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
     const Vec<N> a = accel(x, fx, e[0], u_prev);
 
     const Vec<M> u =
-        controller.step(Measurement<N>{t, x.template head<N>(), x.template tail<N>(), a, &fx});
+        controller.step(Measurement<N>{t, x.template head<N>(), x.template tail<N>(), a, &fx,
+                                       static_cast<const Plant<N, M>*>(&plant)});
     metrics.sample(t, x, u);
     if (options.record_every > 0 && k % options.record_every == 0)
       append_row<N, M>(result.trajectory, t, x, u, faults.apply(e[0].fault, u));

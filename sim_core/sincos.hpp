@@ -25,15 +25,15 @@ class SinCosTracker {
  public:
   static constexpr double kReach = 0.02;
 
+  // The same operations as the batch simulator's AngleTracker (lanes/spacecraft_kernel.hpp),
+  // so that the generic loop and the kernels give the same bits: after re-anchoring, the
+  // series runs with δ = 0.
   FTC_HOT_INLINE void eval(double x, double& s, double& c) {
-    const double d = x - anchor_;
-    if (!(std::abs(d) <= kReach)) {  // also true for the NaN anchor of a fresh tracker
+    if (!(std::abs(x - anchor_) <= kReach)) {  // also true for the NaN anchor of a fresh tracker
       anchor_ = x;
       math::sincos(x, s_, c_);
-      s = s_;
-      c = c_;
-      return;
     }
+    const double d = x - anchor_;
     const double d2 = d * d;
     const double sd = d * (1.0 + d2 * (-1.0 / 6 + d2 * (1.0 / 120 + d2 * (-1.0 / 5040))));
     const double cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24 + d2 * (-1.0 / 720 + d2 * (1.0 / 40320))));

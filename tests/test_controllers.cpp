@@ -6,7 +6,7 @@
 #include <span>
 
 #include "controllers/adaptive_neural_pi_fosmc.hpp"
-#include "controllers/sliding.hpp"
+#include "controllers/laws.hpp"
 #include "ftc/sim/controller.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "ftc/sim/spacecraft.hpp"
@@ -64,7 +64,22 @@ TEST_P(EveryController, StepWithGivenDriftEqualsStepComputingIt) {
   const State x = (State() << kX1, kX2).finished();
   const Vec3 f = plant.f(x);
   for (int k = 0; k < 3; ++k)
-    EXPECT_EQ(a->step(k * kTs, kX1, kX2, kA), b->step(Measurement<3>{k * kTs, kX1, kX2, kA, &f}));
+    EXPECT_EQ(a->step(k * kTs, kX1, kX2, kA),
+              b->step(Measurement<3>{k * kTs, kX1, kX2, kA, &f, &plant}));
+}
+
+// A drift of another plant than the controller's model (a simulation with model mismatch) is
+// not used: the model-based controllers evaluate their own model.
+TEST_P(EveryController, DriftOfAnotherPlantIsIgnored) {
+  const Spacecraft model, other(SpacecraftParams{{22.0, 15.3, 16.5}, 1.1e-3});
+  auto a = make_controller(ControllerConfig::table1(GetParam()), model, kTs);
+  auto b = make_controller(ControllerConfig::table1(GetParam()), model, kTs);
+  const State x = (State() << kX1, kX2).finished();
+  const Vec3 f = other.f(x);
+  ASSERT_NE(f, model.f(x));
+  for (int k = 0; k < 3; ++k)
+    EXPECT_EQ(a->step(k * kTs, kX1, kX2, kA),
+              b->step(Measurement<3>{k * kTs, kX1, kX2, kA, &f, &other}));
 }
 
 TEST_P(EveryController, ResetRestoresInitialState) {

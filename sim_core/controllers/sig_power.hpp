@@ -1,6 +1,7 @@
 #pragma once
 // sig^a(x) = |x|^a sign(x) for one exponent a fixed at construction, without libm in the hot
-// loop.
+// loop, written over the lane type (lanes/lane.hpp) so that the scalar controllers and the SIMD
+// simulator evaluate it with the same operations and get the same bits.
 //
 // The full-order surface evaluates six of these every sample, and as exp(a ln|x|) they were
 // the largest single cost of a simulation (about a fifth of its cycles). With a fixed, the
@@ -12,11 +13,12 @@
 // 2^(a e) and c^a come from tables computed once in long double, r from a table of 1/c, and
 // (1 + r)^a from its binomial series to r^6 (the next term is below 2e-18). Against the power in
 // long double the result is within 5 ulp (mean 0.7 ulp), where exp(a ln|x|) reached 52 ulp
-// (mean 7): tests/test_controllers.cpp. Zero, subnormals and |x| outside [2^-64, 2^64), which a
+// (mean 7): tests/test_sig_power.cpp. Zero, subnormals and |x| outside [2^-64, 2^64), which a
 // controller does not meet in practice, take exp(a ln|x|).
+//
+// In W lanes each lane has its own exponent (candidates may tune α): the lanes' tables lie one
+// after another and each lane reads its own with a gather.
 #include <array>
-#include <bit>
-#include <cmath>
 #include <cstdint>
 
 #include "ftc/sim/types.hpp"
@@ -24,49 +26,87 @@
 
 namespace ftc::sim {
 
-// sig^a for any exponent, as exp(a ln|x|): SigPower's fallback, and the definition it is
-// tested against.
-inline double sig(double x, double a) { return lane::sig(x, a); }
+// The tables of one exponent (computed in sig_power.cpp, once per controller).
+struct SigPowerTables {
+  static constexpr int kIntervals = 128;
+  static constexpr int kExponents = 128;  // e in [-64, 63]
+  static constexpr int kMinBiasedExponent = 1023 - 64;
 
-class SigPower {
+  explicit SigPowerTables(double a);
+
+  double a;
+  std::array<double, 7> b{};                      // binomial coefficients C(a, k)
+  std::array<double, kExponents> scale{};         // 2^(a e)
+  std::array<double, kIntervals> inv_centre{};    // 1/c rounded; r is taken against it
+  std::array<double, kIntervals> centre_power{};  // (1 / inv_centre)^a
+};
+
+inline namespace FTC_ISA_NS {
+
+template <class T>
+class SigPowerLanes {
  public:
-  explicit SigPower(double a);
+  static constexpr int W = lane::kWidth<T>;
+  using Tables = SigPowerTables;
 
-  FTC_HOT_INLINE double operator()(double x) const {
-    const std::uint64_t bits = std::bit_cast<std::uint64_t>(x);
-    const std::uint64_t magnitude = bits & ~kSign;
-    const std::uint64_t slot = (magnitude >> 52) - kMinBiasedExponent;  // wraps when below
-    if (slot >= kExponents) return fallback(x);
-    const Mantissa& t = mantissa_[(magnitude >> 45) & (kIntervals - 1)];
-    const double m = std::bit_cast<double>((magnitude & kFraction) | kOne);
-    const double r = m * t.inv_centre - 1.0;
+  // One exponent per lane: a[0 .. W).
+  explicit SigPowerLanes(const double* a) {
+    for (int l = 0; l < W; ++l) {
+      const Tables t(a[l]);
+      a_[l] = a[l];
+      base_[l] = l * Tables::kIntervals;
+      for (int k = 0; k < 7; ++k) b_[k][l] = t.b[k];
+      for (int i = 0; i < Tables::kIntervals; ++i) {
+        scale_[l * Tables::kIntervals + i] = t.scale[i];
+        inv_centre_[l * Tables::kIntervals + i] = t.inv_centre[i];
+        centre_power_[l * Tables::kIntervals + i] = t.centre_power[i];
+      }
+    }
+  }
+
+  FTC_HOT_INLINE T operator()(const T& x) const {
+    const T mag = lane::abs(x);
+    // Which 2^e and which 1/128 interval of the significand, as doubles (exact small integers).
+    const T slot = lane::biased_exponent(mag) - T(Tables::kMinBiasedExponent);
+    const lane::Mask<T> inside = (slot >= T(0.0)) & (slot < T(Tables::kExponents));
+    const T m = lane::significand(mag);
+    const T interval = lane::floor_int((m - T(1.0)) * T(Tables::kIntervals));
+    const T base = lane::load_lanes<T>(base_);
+    const T inv_centre = lane::gather(inv_centre_, base + interval);
+    const T centre_power = lane::gather(centre_power_, base + interval);
+    const T scale = lane::gather(scale_, base + lane::select(inside, slot, T(0.0)));
+    const T r = m * inv_centre - T(1.0);
     // (1 + r)^a in Estrin form: the terms are independent, which shortens the dependency chain.
-    const double r2 = r * r;
-    const double p =
-        (1.0 + b_[1] * r) + r2 * ((b_[2] + b_[3] * r) + r2 * ((b_[4] + b_[5] * r) + r2 * b_[6]));
-    const double y = scale_[slot] * (t.centre_power * p);
-    return std::bit_cast<double>(std::bit_cast<std::uint64_t>(y) | (bits & kSign));
+    const T r2 = r * r;
+    const T p =
+        (T(1.0) + b(1) * r) + r2 * ((b(2) + b(3) * r) + r2 * ((b(4) + b(5) * r) + r2 * b(6)));
+    const T y = lane::copysign(scale * (centre_power * p), x);
+    if (lane::all(inside)) [[likely]]
+      return y;
+    return lane::select(inside, y, lane::sig(x, lane::load_lanes<T>(a_)));
   }
 
  private:
-  static constexpr std::uint64_t kSign = 0x8000000000000000ULL;
-  static constexpr std::uint64_t kFraction = 0x000FFFFFFFFFFFFFULL;
-  static constexpr std::uint64_t kOne = 0x3FF0000000000000ULL;  // the bits of 1.0
-  static constexpr int kIntervals = 128;
-  static constexpr std::uint64_t kExponents = 128;  // e in [-64, 63]
-  static constexpr std::uint64_t kMinBiasedExponent = 1023 - 64;
+  FTC_HOT_INLINE T b(int k) const { return lane::load_lanes<T>(b_[k]); }
 
-  struct Mantissa {
-    double inv_centre;    // 1/c rounded; r is taken against exactly this value
-    double centre_power;  // (1 / inv_centre)^a
-  };
-
-  double fallback(double x) const { return sig(x, a_); }
-
-  double a_;
-  std::array<double, 7> b_{};               // binomial coefficients C(a, k)
-  std::array<double, kExponents> scale_{};  // 2^(a e)
-  std::array<Mantissa, kIntervals> mantissa_{};
+  double a_[W];
+  double base_[W];  // lane l's tables start at l · 128
+  double b_[7][W];
+  double scale_[W * Tables::kExponents];
+  double inv_centre_[W * Tables::kIntervals];
+  double centre_power_[W * Tables::kIntervals];
 };
+
+}  // namespace FTC_ISA_NS
+
+// The one-lane instance, for the scalar controllers and the tests.
+class SigPower : public SigPowerLanes<double> {
+ public:
+  explicit SigPower(double a) : SigPowerLanes<double>(&a) {}
+};
+
+// sig^a for any exponent, as exp(a ln|x|): SigPower's fallback, and the definition it is
+// tested against.
+inline double sig(double x, double a) { return lane::sig(x, a); }
 
 }  // namespace ftc::sim

@@ -24,8 +24,11 @@
 
 namespace ftc::sim::lane {
 
-// Scalar sin and cos of |x| ≥ 2^19·π/2, infinities and NaN: elementary.cpp.
+// Scalar sin and cos of |x| ≥ 2^19·π/2, infinities and NaN: elementary.cpp (compiled once, for
+// the baseline instruction set, so outside the per-instruction-set namespace).
 void sincos_large(double x, double& s, double& c);
+
+inline namespace FTC_ISA_NS {
 
 namespace detail {
 
@@ -333,4 +336,5 @@ FTC_HOT_INLINE T sig(const T& x, const T& a) {
   return lane::select(x == T(0.0), T(0.0), lane::copysign(p, x));
 }
 
+}  // namespace FTC_ISA_NS
 }  // namespace ftc::sim::lane

@@ -15,6 +15,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #include "ftc/sim/types.hpp"
 
@@ -22,7 +23,17 @@
 #include <xsimd/xsimd.hpp>
 #endif
 
+// Every file that includes this one compiles the lane code for one instruction set, and GCC
+// may emit an out-of-line copy of any inline function in it. Were those copies shared between
+// files compiled for different instruction sets, the linker could keep an AVX-512 copy for the
+// scalar code of a CPU without AVX-512. The inline namespace gives each instruction set's
+// instances their own names (kernel files define FTC_ISA_NS; tests/lane_symbols.sh checks it).
+#ifndef FTC_ISA_NS
+#define FTC_ISA_NS isa_scalar
+#endif
+
 namespace ftc::sim::lane {
+inline namespace FTC_ISA_NS {
 
 // ---- one lane: double, with bool masks -------------------------------------------------------
 
@@ -37,6 +48,11 @@ struct Traits<double> {
 
 FTC_HOT_INLINE double select(bool m, double a, double b) { return m ? a : b; }
 FTC_HOT_INLINE bool all(bool m) { return m; }
+FTC_HOT_INLINE bool any(bool m) { return m; }
+FTC_HOT_INLINE bool mask_not(bool m) { return !m; }
+FTC_HOT_INLINE void store(double x, double* p) { *p = x; }
+// Lane i of a mask as a bool array (one lane here).
+FTC_HOT_INLINE void store_mask(bool m, bool* out) { *out = m; }
 FTC_HOT_INLINE double abs(double x) {
   return std::bit_cast<double>(std::bit_cast<std::uint64_t>(x) & ~(1ULL << 63));
 }
@@ -97,6 +113,23 @@ FTC_HOT_INLINE xsimd::batch<double, A> select(const xsimd::batch_bool<double, A>
 template <class A>
 FTC_HOT_INLINE bool all(const xsimd::batch_bool<double, A>& m) {
   return xsimd::all(m);
+}
+template <class A>
+FTC_HOT_INLINE bool any(const xsimd::batch_bool<double, A>& m) {
+  return xsimd::any(m);
+}
+template <class A>
+FTC_HOT_INLINE xsimd::batch_bool<double, A> mask_not(const xsimd::batch_bool<double, A>& m) {
+  return !m;
+}
+// A batch to W consecutive doubles (unaligned; load_lanes below is the way back).
+template <class A>
+FTC_HOT_INLINE void store(const xsimd::batch<double, A>& x, double* p) {
+  x.store_unaligned(p);
+}
+template <class A>
+FTC_HOT_INLINE void store_mask(const xsimd::batch_bool<double, A>& m, bool* out) {
+  m.store_unaligned(out);
 }
 // The magnitude bits (all but the sign) as a double, for masking.
 template <class A>
@@ -180,4 +213,14 @@ inline constexpr int kWidth = Traits<T>::kWidth;
 template <class T>
 using Mask = typename Traits<T>::Mask;
 
+// W doubles from p into a lane value, for T = double as well.
+template <class T>
+FTC_HOT_INLINE T load_lanes(const double* p) {
+  if constexpr (std::is_same_v<T, double>)
+    return *p;
+  else
+    return T::load_unaligned(p);
+}
+
+}  // namespace FTC_ISA_NS
 }  // namespace ftc::sim::lane

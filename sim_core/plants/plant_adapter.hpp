@@ -10,10 +10,17 @@
 // bloats the loop (16 % slower).
 #include <Eigen/LU>
 #include <functional>
+#include <span>
+#include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
+#include "checks.hpp"
+#include "ftc/sim/isa.hpp"
 #include "ftc/sim/plants.hpp"
+#include "ftc/sim/spacecraft.hpp"
+#include "plants/spacecraft_pack.hpp"
 #include "simulation_loop.hpp"
 
 namespace ftc::sim::detail {
@@ -32,13 +39,50 @@ class PlantAdapter final : public AnyPlant {
 
   SimulationResult simulate(const ControllerConfig& controller, const Scenario& scenario,
                             const SimulationOptions& options) const override {
-    const auto c = make_controller(controller, plant_, scenario.sample_time);
-    throw_if_errors("scenario " + scenario.name, scenario.validate("", P::kAxes, P::kActuators));
-    if (scenario.inertia.empty()) return run(plant_, *c, scenario, options);
-    // Model mismatch: the controller keeps the model, the loop simulates the true plant.
-    const std::vector<double> truth = kind().with_inertia(values_, scenario.inertia, "/inertia");
-    throw_if_errors("scenario " + scenario.name, kind().validate(truth, ""));
-    return run(build_(truth), *c, scenario, options);
+    if constexpr (std::is_same_v<P, Spacecraft>) {
+      // The batch kernel with one lane: the code the SIMD lanes run, so that a simulation
+      // reproduces any lane of a tuning run to the last bit.
+      SimulationResult r;
+      SpacecraftLane lane = spacecraft_lane(controller, scenario, options);
+      lane.result = &r;
+      run_spacecraft_lanes(std::span<SpacecraftLane>(&lane, 1), plant_.G(P::State::Zero()),
+                           plant_.G_pinv(P::State::Zero()), Isa::scalar);
+      return r;
+    } else {
+      const auto c = make_controller(controller, plant_, scenario.sample_time);
+      throw_if_errors("scenario " + scenario.name, scenario.validate("", P::kAxes, P::kActuators));
+      if (scenario.inertia.empty()) return run(plant_, *c, scenario, options);
+      // Model mismatch: the controller keeps the model, the loop simulates the true plant.
+      return run(truth(scenario), *c, scenario, options);
+    }
+  }
+
+  void simulate_pack(std::span<const PackTask> tasks, std::span<SimulationResult> results,
+                     std::span<std::string> errors) const override {
+    if constexpr (std::is_same_v<P, Spacecraft>) {
+      std::vector<SpacecraftLane> lanes;
+      lanes.reserve(tasks.size());
+      for (std::size_t i = 0; i < tasks.size(); ++i) {
+        errors[i].clear();
+        try {
+          lanes.push_back(
+              spacecraft_lane(*tasks[i].controller, *tasks[i].scenario, *tasks[i].options));
+          lanes.back().result = &results[i];
+        } catch (const InputError& e) {
+          errors[i] = e.what();
+        }
+      }
+      run_spacecraft_lanes(lanes, plant_.G(P::State::Zero()), plant_.G_pinv(P::State::Zero()),
+                           active_isa());
+    } else {
+      AnyPlant::simulate_pack(tasks, results, errors);
+    }
+  }
+  int pack_width() const override {
+    if constexpr (std::is_same_v<P, Spacecraft>)
+      return lane_width(active_isa());
+    else
+      return 1;
   }
 
   bool recoverable(const Scenario& scenario) const override {
@@ -67,6 +111,27 @@ class PlantAdapter final : public AnyPlant {
   }
 
  private:
+  // The simulated plant of a scenario that names a true inertia (model mismatch).
+  P truth(const Scenario& scenario) const {
+    const std::vector<double> v = kind().with_inertia(values_, scenario.inertia, "/inertia");
+    throw_if_errors("scenario " + scenario.name, kind().validate(v, ""));
+    return build_(v);
+  }
+
+  // A validated spacecraft simulation for the batch kernels; throws InputError like simulate().
+  SpacecraftLane spacecraft_lane(
+      const ControllerConfig& controller, const Scenario& scenario,
+      const SimulationOptions& options) const requires std::is_same_v<P, Spacecraft> {
+    SpacecraftLane lane;
+    lane.config = checked_config(controller, scenario.sample_time);
+    throw_if_errors("scenario " + scenario.name, scenario.validate("", P::kAxes, P::kActuators));
+    lane.scenario = &scenario;
+    lane.options = &options;
+    lane.model = plant_.f_constants();
+    lane.truth = scenario.inertia.empty() ? lane.model : truth(scenario).f_constants();
+    return lane;
+  }
+
   std::vector<double> values_;
   Build build_;
   P plant_;

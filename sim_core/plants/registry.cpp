@@ -59,6 +59,18 @@ const PlantKind* find_plant_kind(std::string_view model) {
   return nullptr;
 }
 
+void AnyPlant::simulate_pack(std::span<const PackTask> tasks, std::span<SimulationResult> results,
+                             std::span<std::string> errors) const {
+  for (std::size_t i = 0; i < tasks.size(); ++i) {
+    errors[i].clear();
+    try {
+      results[i] = simulate(*tasks[i].controller, *tasks[i].scenario, *tasks[i].options);
+    } catch (const InputError& e) {
+      errors[i] = e.what();
+    }
+  }
+}
+
 std::string plant_model_names() {
   std::string s;
   for (const PlantKind& k : plant_kinds()) s += (s.empty() ? "" : ", ") + k.model;

@@ -17,9 +17,10 @@
 
 namespace ftc::sim {
 
-// One sample of measurements. `f` optionally carries f(X) already computed by the caller (the
-// simulator has it from its acceleration sensor); model-based controllers then skip their own
-// evaluation. The result is bit-identical either way.
+// One sample of measurements. `f` optionally carries f(X) of the plant `f_of` as the caller
+// computed it (the simulator has it from its acceleration sensor); a model-based controller
+// uses it when `f_of` is its own model, and evaluates its model otherwise (model mismatch, or
+// none given).
 template <int N>
 struct Measurement {
   double t = 0.0;
@@ -27,6 +28,7 @@ struct Measurement {
   Vec<N> X2 = Vec<N>::Zero();
   Vec<N> a = Vec<N>::Zero();
   const Vec<N>* f = nullptr;
+  const void* f_of = nullptr;  // the plant (a Plant<N, M>) whose f(X) `f` is
 };
 
 template <int N, int M>

@@ -87,9 +87,18 @@ class FaultSet {
   void evaluate(std::span<const double> t, Cos&& cosine, Out&& out) const;
   // Applied actuator output for a held command: sat(gain ⊙ u_d + offset).
   template <int M>
+  // (The batch kernels clamp with the same comparisons, in the same order.)
   FTC_HOT_INLINE Vec<M> apply(const FaultEffect<M>& e, const Vec<M>& u_d) const {
-    Vec<M> u = e.gain.cwiseProduct(u_d) + e.offset;
-    if (saturation_) u = u.cwiseMax(-*saturation_).cwiseMin(*saturation_);
+    Vec<M> u;
+    for (int j = 0; j < M; ++j) {
+      double v = e.gain[j] * u_d[j] + e.offset[j];
+      if (saturation_) {
+        const double m = *saturation_;
+        v = v < -m ? -m : v;
+        v = v > m ? m : v;
+      }
+      u[j] = v;
+    }
     return u;
   }
   template <int M>

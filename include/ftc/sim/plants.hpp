@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -40,6 +41,13 @@ struct PlantSpec {
 };
 
 class AnyPlant;
+
+// One simulation of a batch: a controller on a scenario with its options.
+struct PackTask {
+  const ControllerConfig* controller = nullptr;
+  const Scenario* scenario = nullptr;
+  const SimulationOptions* options = nullptr;
+};
 
 struct PlantKind {
   std::string model;
@@ -85,6 +93,18 @@ class AnyPlant {
   // result, never an exception.
   virtual SimulationResult simulate(const ControllerConfig& controller, const Scenario& scenario,
                                     const SimulationOptions& options = {}) const = 0;
+
+  // Many simulations, each with exactly the result simulate() gives it (to the last bit), in
+  // SIMD lanes when the plant has a batch kernel (the spacecraft: see ftc/sim/isa.hpp), one
+  // after another otherwise. results[i] and errors[i] belong to tasks[i]; a task whose
+  // controller or scenario is invalid gets the InputError's message in errors[i] instead of a
+  // result. Never throws for a task's sake.
+  virtual void simulate_pack(std::span<const PackTask> tasks, std::span<SimulationResult> results,
+                             std::span<std::string> errors) const;
+  // How many simulations simulate_pack runs in lockstep (1 without a batch kernel); a caller
+  // that hands it that many compatible tasks at a time (same sample time, substeps, duration,
+  // controller type) keeps every lane busy.
+  virtual int pack_width() const { return 1; }
 
   // Whether any gains can control every axis once all of the scenario's faults have started:
   // the actuators still acting (not stuck, not wholly lost) leave G, at the scenario's initial

@@ -39,6 +39,8 @@ class Spacecraft final : public Plant<3, 4> {
   std::string model() const override { return "spacecraft"; }
 
   const SpacecraftParams& params() const { return params_; }
+  // The constants f(X) is built from: (Iy-Iz)/Ix, (Iz-Ix)/Iy, (Ix-Iy)/Iz and ω0.
+  std::array<double, 4> f_constants() const { return {kx_, ky_, kz_, params_.orbital_rate}; }
 
   // The actuator-distribution matrix of eq. (B.4).
   static Mat34 distribution_matrix();

@@ -1,0 +1,78 @@
+#pragma once
+// The batch simulator's interface between the host (plants/spacecraft_pack.cpp: scenarios,
+// disturbances, faults, metrics, trajectories, in plain C++ compiled once) and the kernels
+// (lanes/kernel_<isa>.cpp: the closed loop of W spacecraft in W SIMD lanes, compiled once per
+// instruction set). Only plain arrays cross it, so that nothing compiled for one instruction
+// set is shared with code compiled for another.
+//
+// A pack is up to W simulations in lockstep that share the sample time, the substeps, the
+// number of samples, the controller type (and the network size of the adaptive one) and the
+// input matrix; each lane has its own gains, initial state, true and model plant constants,
+// saturation, disturbance and faults. Lanes beyond `lanes` repeat lane 0 and are ignored.
+#include <cstdint>
+
+#include "ftc/sim/controller_config.hpp"
+
+namespace ftc::sim::detail {
+
+inline constexpr int kMaxLanes = 8;  // AVX-512: 8 doubles
+
+// The exogenous inputs of every lane at one instant (a stage time of RK4): the disturbance Δ(t)
+// and the fault effect u = gain ⊙ u_d + offset, lane-minor so that a kernel loads W at a time.
+struct ExoLanes {
+  double dist[3][kMaxLanes];
+  double gain[4][kMaxLanes];
+  double offset[4][kMaxLanes];
+};
+
+// What the kernel reports for one sample k of every lane: X(t_k), the command u_d(t_k), and
+// whether the step from t_k left the bounds (|X_i| > 1e6, inf or NaN): that lane diverged.
+struct SampleLanes {
+  double x[6][kMaxLanes];
+  double u[4][kMaxLanes];
+  bool diverged[kMaxLanes];
+};
+
+struct PackSetup {
+  int lanes = 1;  // in use, 1 .. W
+  const ControllerConfig* configs[kMaxLanes] = {};
+  // kx, ky, kz, ω0 of the simulated plant (truth) and of the controller's model, per lane.
+  double truth[4][kMaxLanes] = {};
+  double model[4][kMaxLanes] = {};
+  bool mismatch = false;      // some lane's truth differs from its model
+  double G[3 * 4] = {};       // input matrix, row-major
+  double G_pinv[4 * 3] = {};  // its right inverse, row-major
+  double x0[6][kMaxLanes] = {};
+  double saturation[kMaxLanes] = {};  // u_max; +inf for none
+  double Ts = 0.0;
+  int substeps = 1;
+  std::int64_t samples = 0;
+  int block = 16;  // samples per exchange with the host
+};
+
+// The host side, called twice per block of samples (never per sample).
+class PackHost {
+ public:
+  // The inputs of samples k0 .. k0 + n - 1: for sample k0 + i, substep j, instant q (0 start,
+  // 1 midpoint, 2 end), entry ((i · substeps) + j) · 3 + q.
+  virtual const ExoLanes* inputs(std::int64_t k0, int n) = 0;
+  // Samples k0 .. k0 + n - 1 as simulated (lanes that had diverged before are to be ignored).
+  virtual void samples(std::int64_t k0, int n, const SampleLanes* out) = 0;
+
+ protected:
+  ~PackHost() = default;
+};
+
+struct PackFinal {
+  double x[6][kMaxLanes];           // X at the end of each lane's run
+  std::int64_t samples[kMaxLanes];  // samples simulated per lane
+};
+
+// One kernel per instruction set (scalar: T = double, one lane).
+using PackKernel = void (*)(const PackSetup&, PackHost&, PackFinal&);
+void pack_kernel_scalar(const PackSetup&, PackHost&, PackFinal&);
+void pack_kernel_sse2(const PackSetup&, PackHost&, PackFinal&);
+void pack_kernel_avx2(const PackSetup&, PackHost&, PackFinal&);
+void pack_kernel_avx512(const PackSetup&, PackHost&, PackFinal&);
+
+}  // namespace ftc::sim::detail

@@ -1,0 +1,216 @@
+#include "plants/spacecraft_pack.hpp"
+
+#include <algorithm>
+#include <deque>
+#include <limits>
+#include <memory>
+#include <tuple>
+#include <vector>
+
+#include "ftc/sim/disturbance.hpp"
+#include "ftc/sim/faults.hpp"
+#include "ftc/sim/metrics.hpp"
+#include "lanes/pack.hpp"
+#include "simulation_loop.hpp"
+
+namespace ftc::sim::detail {
+namespace {
+
+PackKernel kernel_for(Isa isa) {
+  switch (isa) {
+#if defined(FTC_X86_KERNELS)
+    case Isa::sse2:
+      return pack_kernel_sse2;
+    case Isa::avx2:
+      return pack_kernel_avx2;
+    case Isa::avx512:
+      return pack_kernel_avx512;
+#endif
+    default:
+      return pack_kernel_scalar;
+  }
+}
+
+// The host of one pack: per distinct scenario one ExogenousInputs (lanes of one scenario share
+// it), per lane its metrics and trajectory.
+class Host final : public PackHost {
+ public:
+  Host(std::span<SpacecraftLane* const> lanes, int width, const PackSetup& setup)
+      : lanes_(lanes.begin(), lanes.end()), width_(width), setup_(setup) {
+    for (std::size_t l = 0; l < lanes_.size(); ++l) {
+      const Scenario& s = *lanes_[l]->scenario;
+      std::size_t g = 0;
+      while (g < groups_.size() && groups_[g].scenario != &s) ++g;
+      if (g == groups_.size()) groups_.emplace_back(s);
+      group_of_.push_back(g);
+      std::vector<double> onsets;
+      for (const Fault& f : s.faults) onsets.push_back(f.onset);
+      const SimulationOptions& o = *lanes_[l]->options;
+      metrics_.emplace_back(s.sample_time, o.window, o.extra_windows, std::move(onsets));
+      SimulationResult& r = *lanes_[l]->result;
+      r = SimulationResult{};
+      r.trajectory.axes = 3;
+      r.trajectory.actuators = 4;
+      if (o.record_every > 0)
+        r.trajectory.values.reserve((setup.samples / o.record_every + 1) * r.trajectory.width());
+    }
+    done_.assign(lanes_.size(), false);
+    buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3);
+  }
+
+  const ExoLanes* inputs(std::int64_t k0, int n) override {
+    const int S = setup_.substeps;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < S; ++j)
+        for (std::size_t g = 0; g < groups_.size(); ++g) {
+          const auto* e = groups_[g].exo.step(k0 + i, j);
+          for (int q = 0; q < 3; ++q) {
+            ExoLanes& out = buffer_[(static_cast<std::size_t>(i) * S + j) * 3 + q];
+            for (std::size_t l = 0; l < lanes_.size(); ++l) {
+              if (group_of_[l] != g) continue;
+              for (int r = 0; r < 3; ++r) out.dist[r][l] = e[q].disturbance[r];
+              for (int r = 0; r < 4; ++r) {
+                out.gain[r][l] = e[q].fault.gain[r];
+                out.offset[r][l] = e[q].fault.offset[r];
+              }
+            }
+            if (g + 1 == groups_.size())  // unused lanes repeat lane 0
+              for (int l = static_cast<int>(lanes_.size()); l < width_; ++l) {
+                for (int r = 0; r < 3; ++r) out.dist[r][l] = out.dist[r][0];
+                for (int r = 0; r < 4; ++r) {
+                  out.gain[r][l] = out.gain[r][0];
+                  out.offset[r][l] = out.offset[r][0];
+                }
+              }
+          }
+        }
+    return buffer_.data();
+  }
+
+  void samples(std::int64_t k0, int n, const SampleLanes* out) override {
+    const int S = setup_.substeps;
+    for (std::size_t l = 0; l < lanes_.size(); ++l) {
+      if (done_[l]) continue;
+      const double Ts = setup_.Ts;
+      const std::int64_t every = lanes_[l]->options->record_every;
+      for (int i = 0; i < n; ++i) {
+        const std::int64_t k = k0 + i;
+        const double t = static_cast<double>(k) * Ts;
+        State x;
+        Vec4 u;
+        for (int r = 0; r < 6; ++r) x[r] = out[i].x[r][l];
+        for (int r = 0; r < 4; ++r) u[r] = out[i].u[r][l];
+        metrics_[l].sample(t, x, u);
+        if (every > 0 && k % every == 0) {
+          const ExoLanes& e = buffer_[static_cast<std::size_t>(i) * S * 3];
+          FaultEffect<4> effect;
+          for (int r = 0; r < 4; ++r) {
+            effect.gain[r] = e.gain[r][l];
+            effect.offset[r] = e.offset[r][l];
+          }
+          append_row<3, 4>(lanes_[l]->result->trajectory, t, x, u,
+                           groups_[group_of_[l]].faults.apply(effect, u));
+        }
+        if (out[i].diverged[l]) {
+          metrics_[l].mark_diverged(t + Ts);
+          done_[l] = true;
+          break;
+        }
+      }
+    }
+  }
+
+  void finish(const PackFinal& fin) {
+    for (std::size_t l = 0; l < lanes_.size(); ++l) {
+      SimulationResult& r = *lanes_[l]->result;
+      r.samples = fin.samples[l];
+      r.final_state.resize(6);
+      for (int i = 0; i < 6; ++i) r.final_state[i] = fin.x[i][l];
+      r.metrics = metrics_[l].result();
+    }
+  }
+
+ private:
+  struct Group {
+    explicit Group(const Scenario& s)
+        : scenario(&s),
+          disturbance(s.disturbance),
+          faults(s.faults, s.saturation),
+          exo(disturbance, faults, s.sample_time, s.substeps) {}
+    const Scenario* scenario;
+    Disturbance disturbance;
+    FaultSet faults;
+    ExogenousInputs<3, 4> exo;  // refers to the two above: groups never move (deque)
+  };
+
+  std::vector<SpacecraftLane*> lanes_;
+  int width_;
+  const PackSetup& setup_;
+  std::deque<Group> groups_;
+  std::vector<std::size_t> group_of_;
+  std::vector<MetricsAccumulator<3, 4>> metrics_;
+  std::vector<bool> done_;
+  std::vector<ExoLanes> buffer_;
+};
+
+void run_pack(std::span<SpacecraftLane* const> lanes, const Mat34& G, const Mat43& G_pinv,
+              Isa isa) {
+  const int width = lane_width(isa);
+  PackSetup su;
+  su.lanes = static_cast<int>(lanes.size());
+  const Scenario& s0 = *lanes[0]->scenario;
+  su.Ts = s0.sample_time;
+  su.substeps = s0.substeps;
+  su.samples = s0.samples();
+  su.block = std::max(1, 16 / su.substeps);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) {
+      su.G[i * 4 + j] = G(i, j);
+      su.G_pinv[j * 3 + i] = G_pinv(j, i);
+    }
+  for (int l = 0; l < width; ++l) {
+    const SpacecraftLane& lane = *lanes[l < su.lanes ? l : 0];
+    su.configs[l] = &lane.config;
+    for (int i = 0; i < 4; ++i) {
+      su.truth[i][l] = lane.truth[i];
+      su.model[i][l] = lane.model[i];
+      su.mismatch = su.mismatch || lane.truth[i] != lane.model[i];
+    }
+    for (int i = 0; i < 6; ++i) su.x0[i][l] = lane.scenario->initial_state[i];
+    su.saturation[l] = lane.scenario->saturation.value_or(std::numeric_limits<double>::infinity());
+  }
+  Host host(lanes, width, su);
+  PackFinal fin{};
+  kernel_for(isa)(su, host, fin);
+  host.finish(fin);
+}
+
+}  // namespace
+
+void run_spacecraft_lanes(std::span<SpacecraftLane> lanes, const Mat34& G, const Mat43& G_pinv,
+                          Isa isa) {
+  // Lanes can share a pack when their loops have the same shape: sample time, substeps,
+  // samples, control law (and network size). Packs are formed in task order.
+  using Key = std::tuple<double, int, std::int64_t, ControllerType, double>;
+  const auto key = [](const SpacecraftLane& l) {
+    const bool adaptive = l.config.type == ControllerType::adaptive_neural_pi_fosmc;
+    return Key{l.scenario->sample_time, l.scenario->substeps, l.scenario->samples(), l.config.type,
+               adaptive ? l.config.nodes : 0.0};
+  };
+  const std::size_t width = static_cast<std::size_t>(lane_width(isa));
+  std::vector<bool> taken(lanes.size(), false);
+  std::vector<SpacecraftLane*> pack;
+  for (std::size_t i = 0; i < lanes.size(); ++i) {
+    if (taken[i]) continue;
+    pack.clear();
+    const Key k = key(lanes[i]);
+    for (std::size_t j = i; j < lanes.size() && pack.size() < width; ++j)
+      if (!taken[j] && key(lanes[j]) == k) {
+        taken[j] = true;
+        pack.push_back(&lanes[j]);
+      }
+    run_pack(pack, G, G_pinv, isa);
+  }
+}
+
+}  // namespace ftc::sim::detail
