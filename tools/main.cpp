@@ -12,6 +12,7 @@
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/isa.hpp"
 #include "ftc/version.hpp"
 
 namespace {
@@ -49,7 +50,18 @@ const std::map<std::string, std::string> kExamples = {
 int main(int argc, char** argv) {
   CLI::App app{"ftctune: offline tuning of fault-tolerant sliding-mode controllers"};
   app.name("ftctune");  // usage lines show the command, not the path it was run by
-  app.set_version_flag("--version", std::string(ftc::kToolName) + " " + ftc::kVersion);
+  // The SIMD instruction set of the batch simulator, chosen once (FTCTUNE_ISA overrides it).
+  ftc::sim::Isa isa{};
+  try {
+    isa = ftc::sim::active_isa();
+  } catch (const ftc::InputError& e) {
+    std::fprintf(stderr, "ftctune: error: %s\n", e.what());
+    return 2;
+  }
+  app.set_version_flag("--version", std::string(ftc::kToolName) + " " + ftc::kVersion +
+                                        "\nsimulation lanes: " + ftc::sim::to_string(isa) + " (" +
+                                        std::to_string(ftc::sim::lane_width(isa)) +
+                                        " per core; FTCTUNE_ISA chooses)");
   app.require_subcommand(1);
   app.fallthrough();  // global flags such as -q may also follow the subcommand
   ftc::cli::Globals globals;

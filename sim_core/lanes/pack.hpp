@@ -39,7 +39,10 @@ struct PackSetup {
   // kx, ky, kz, ω0 of the simulated plant (truth) and of the controller's model, per lane.
   double truth[4][kMaxLanes] = {};
   double model[4][kMaxLanes] = {};
-  bool mismatch = false;      // some lane's truth differs from its model
+  bool mismatch = false;  // some lane's truth differs from its model
+  // Every lane has the same exogenous inputs (one scenario): the host fills lane 0 of each
+  // ExoLanes row only, and the kernel broadcasts it.
+  bool shared_inputs = false;
   double G[3 * 4] = {};       // input matrix, row-major
   double G_pinv[4 * 3] = {};  // its right inverse, row-major
   double x0[6][kMaxLanes] = {};

@@ -56,7 +56,7 @@ struct AngleTracker {
   }
 };
 
-template <class T, template <class, int, int> class Law>
+template <class T, template <class, int, int> class Law, bool SharedInputs>
 void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
   constexpr int W = lane::kWidth<T>;
   using Mask = lane::Mask<T>;
@@ -70,6 +70,13 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
   Law<T, 3, 4> law(configs, su.Ts);
 
   const auto row = [](const double* r) { return lane::load_lanes<T>(r); };
+  // An exogenous input: lane 0's value in every lane, or each lane's own.
+  const auto input = [](const double* r) FTC_HOT_LAMBDA {
+    if constexpr (SharedInputs)
+      return T(r[0]);
+    else
+      return lane::load_lanes<T>(r);
+  };
   const T kx = row(su.truth[0]), ky = row(su.truth[1]), kz = row(su.truth[2]), w = row(su.truth[3]);
   const T mkx = row(su.model[0]), mky = row(su.model[1]), mkz = row(su.model[2]),
           mw = row(su.model[3]);
@@ -102,7 +109,7 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
   const auto accel = [&](const V3& f, const ExoLanes& e, const V4& u_d) FTC_HOT_LAMBDA -> V3 {
     V4 u;
     for (int j = 0; j < 4; ++j) {
-      const T v = row(e.gain[j]) * u_d[j] + row(e.offset[j]);
+      const T v = input(e.gain[j]) * u_d[j] + input(e.offset[j]);
       const T lo = lane::select(v < -sat, -sat, v);
       u[j] = lane::select(lo > sat, sat, lo);
     }
@@ -110,7 +117,7 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
     for (int i = 0; i < 3; ++i) {
       T g = G[i * 4] * u[0];
       for (int j = 1; j < 4; ++j) g = g + G[i * 4 + j] * u[j];
-      a[i] = (f[i] + g) + row(e.dist[i]);
+      a[i] = (f[i] + g) + input(e.dist[i]);
     }
     return a;
   };
@@ -199,18 +206,26 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
       for (int r = 0; r < 6; ++r) fin.x[r][l] = lane::lane_of(x[r], l);
 }
 
-// The kernel of one instruction set: the law chosen once per pack.
+// The kernel of one instruction set: the law and the kind of inputs chosen once per pack.
+template <class T, template <class, int, int> class Law>
+void run_law(const PackSetup& su, PackHost& host, PackFinal& fin) {
+  if (su.shared_inputs)
+    run_spacecraft_pack<T, Law, true>(su, host, fin);
+  else
+    run_spacecraft_pack<T, Law, false>(su, host, fin);
+}
+
 template <class T>
 void run_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
   switch (su.configs[0]->type) {
     case ControllerType::nftsmc:
-      return run_spacecraft_pack<T, law::Nftsmc>(su, host, fin);
+      return run_law<T, law::Nftsmc>(su, host, fin);
     case ControllerType::fosmc:
-      return run_spacecraft_pack<T, law::Fosmc>(su, host, fin);
+      return run_law<T, law::Fosmc>(su, host, fin);
     case ControllerType::pi_fosmc:
-      return run_spacecraft_pack<T, law::PiFosmc>(su, host, fin);
+      return run_law<T, law::PiFosmc>(su, host, fin);
     case ControllerType::adaptive_neural_pi_fosmc:
-      return run_spacecraft_pack<T, law::AdaptiveNeuralPiFosmc>(su, host, fin);
+      return run_law<T, law::AdaptiveNeuralPiFosmc>(su, host, fin);
   }
 }
 

@@ -54,36 +54,34 @@ class Host final : public PackHost {
       if (o.record_every > 0)
         r.trajectory.values.reserve((setup.samples / o.record_every + 1) * r.trajectory.width());
     }
+    for (std::size_t l = 0; l < lanes_.size(); ++l)
+      groups_[group_of_[l]].lanes.push_back(static_cast<int>(l));
+    // Unused lanes repeat lane 0.
+    for (int l = static_cast<int>(lanes_.size()); l < width; ++l) groups_[0].lanes.push_back(l);
     done_.assign(lanes_.size(), false);
     buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3);
   }
 
   const ExoLanes* inputs(std::int64_t k0, int n) override {
     const int S = setup_.substeps;
+    // With one scenario only lane 0 is filled (PackSetup::shared_inputs).
+    const int filled = groups_.size() == 1 ? 1 : width_;
     for (int i = 0; i < n; ++i)
-      for (int j = 0; j < S; ++j)
-        for (std::size_t g = 0; g < groups_.size(); ++g) {
-          const auto* e = groups_[g].exo.step(k0 + i, j);
-          for (int q = 0; q < 3; ++q) {
-            ExoLanes& out = buffer_[(static_cast<std::size_t>(i) * S + j) * 3 + q];
-            for (std::size_t l = 0; l < lanes_.size(); ++l) {
-              if (group_of_[l] != g) continue;
-              for (int r = 0; r < 3; ++r) out.dist[r][l] = e[q].disturbance[r];
+      for (int j = 0; j < S; ++j) {
+        ExoLanes* out = &buffer_[(static_cast<std::size_t>(i) * S + j) * 3];
+        for (Group& g : groups_) {
+          const auto* e = g.exo.step(k0 + i, j);
+          for (int q = 0; q < 3; ++q)
+            for (const int l : g.lanes) {
+              if (l >= filled) break;
+              for (int r = 0; r < 3; ++r) out[q].dist[r][l] = e[q].disturbance[r];
               for (int r = 0; r < 4; ++r) {
-                out.gain[r][l] = e[q].fault.gain[r];
-                out.offset[r][l] = e[q].fault.offset[r];
+                out[q].gain[r][l] = e[q].fault.gain[r];
+                out[q].offset[r][l] = e[q].fault.offset[r];
               }
             }
-            if (g + 1 == groups_.size())  // unused lanes repeat lane 0
-              for (int l = static_cast<int>(lanes_.size()); l < width_; ++l) {
-                for (int r = 0; r < 3; ++r) out.dist[r][l] = out.dist[r][0];
-                for (int r = 0; r < 4; ++r) {
-                  out.gain[r][l] = out.gain[r][0];
-                  out.offset[r][l] = out.offset[r][0];
-                }
-              }
-          }
         }
+      }
     return buffer_.data();
   }
 
@@ -103,10 +101,11 @@ class Host final : public PackHost {
         metrics_[l].sample(t, x, u);
         if (every > 0 && k % every == 0) {
           const ExoLanes& e = buffer_[static_cast<std::size_t>(i) * S * 3];
+          const std::size_t from = groups_.size() == 1 ? 0 : l;
           FaultEffect<4> effect;
           for (int r = 0; r < 4; ++r) {
-            effect.gain[r] = e.gain[r][l];
-            effect.offset[r] = e.offset[r][l];
+            effect.gain[r] = e.gain[r][from];
+            effect.offset[r] = e.offset[r][from];
           }
           append_row<3, 4>(lanes_[l]->result->trajectory, t, x, u,
                            groups_[group_of_[l]].faults.apply(effect, u));
@@ -138,6 +137,7 @@ class Host final : public PackHost {
           faults(s.faults, s.saturation),
           exo(disturbance, faults, s.sample_time, s.substeps) {}
     const Scenario* scenario;
+    std::vector<int> lanes;  // in increasing order
     Disturbance disturbance;
     FaultSet faults;
     ExogenousInputs<3, 4> exo;  // refers to the two above: groups never move (deque)
@@ -179,6 +179,9 @@ void run_pack(std::span<SpacecraftLane* const> lanes, const Mat34& G, const Mat4
     for (int i = 0; i < 6; ++i) su.x0[i][l] = lane.scenario->initial_state[i];
     su.saturation[l] = lane.scenario->saturation.value_or(std::numeric_limits<double>::infinity());
   }
+  su.shared_inputs = true;
+  for (const SpacecraftLane* l : lanes)
+    su.shared_inputs = su.shared_inputs && l->scenario == lanes[0]->scenario;
   Host host(lanes, width, su);
   PackFinal fin{};
   kernel_for(isa)(su, host, fin);

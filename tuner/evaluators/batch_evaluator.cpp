@@ -1,6 +1,8 @@
 #include "ftc/tune/evaluators/batch_evaluator.hpp"
 
+#include <algorithm>
 #include <exception>
+#include <tuple>
 
 #include "ftc/tune/problem/problem.hpp"
 
@@ -22,12 +24,81 @@ TaskResult run_task(const TuningProblem& problem, const SimulationBatch& batch, 
   return r;
 }
 
+void run_pack(const TuningProblem& problem, const SimulationBatch& batch,
+              std::span<const std::size_t> pack, std::span<TaskResult> results) {
+  const std::size_t n = pack.size();
+  try {
+    std::vector<sim::SimulationOptions> options(n);
+    std::vector<sim::PackTask> tasks(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const SimulationTask& t = batch.tasks[pack[i]];
+      options[i] = problem.simulation_options(t.scenario, t.record ? batch.record_every : 0);
+      tasks[i] = {&batch.candidates[t.candidate], &problem.scenario(t.scenario), &options[i]};
+    }
+    std::vector<sim::SimulationResult> out(n);
+    std::vector<std::string> errors(n);
+    problem.plant().simulate_pack(tasks, out, errors);
+    for (std::size_t i = 0; i < n; ++i) {
+      TaskResult& r = results[pack[i]];
+      r.error = std::move(errors[i]);
+      if (!r.error.empty()) continue;
+      r.metrics = std::move(out[i].metrics);
+      r.trajectory = std::move(out[i].trajectory);
+    }
+  } catch (const std::exception& e) {  // out of memory: every task of the pack fails
+    for (std::size_t k : pack) results[k].error = e.what();
+  } catch (...) {
+    for (std::size_t k : pack) results[k].error = "unknown error";
+  }
+}
+
+std::vector<std::vector<std::size_t>> plan_packs(const TuningProblem& problem,
+                                                 const SimulationBatch& batch, int workers) {
+  const std::size_t width = static_cast<std::size_t>(std::max(1, problem.plant().pack_width()));
+  // Groups of tasks whose loops have the same shape, in order of first appearance.
+  using Key = std::tuple<double, int, std::int64_t>;
+  std::vector<Key> keys;
+  std::vector<std::vector<std::size_t>> groups;
+  for (std::size_t k = 0; k < batch.tasks.size(); ++k) {
+    const sim::Scenario& s = problem.scenario(batch.tasks[k].scenario);
+    const Key key{s.sample_time, s.substeps, s.samples()};
+    const auto it = std::find(keys.begin(), keys.end(), key);
+    if (it == keys.end()) {
+      keys.push_back(key);
+      groups.push_back({k});
+    } else {
+      groups[static_cast<std::size_t>(it - keys.begin())].push_back(k);
+    }
+  }
+  std::size_t full = 0;
+  for (const auto& g : groups) full += (g.size() + width - 1) / width;
+  // Fewer full packs than workers: split each group further, down to one task a pack.
+  std::size_t size = width;
+  while (size > 1 && full < static_cast<std::size_t>(std::max(1, workers))) {
+    --size;
+    full = 0;
+    for (const auto& g : groups) full += (g.size() + size - 1) / size;
+  }
+  std::vector<std::vector<std::size_t>> packs;
+  for (const auto& g : groups) {
+    const std::size_t count = (g.size() + size - 1) / size;
+    // Even sizes: count packs of ⌈|g|/count⌉ or one less.
+    std::size_t first = 0;
+    for (std::size_t p = 0; p < count; ++p) {
+      const std::size_t take = (g.size() - first + (count - p) - 1) / (count - p);
+      packs.emplace_back(g.begin() + static_cast<std::ptrdiff_t>(first),
+                         g.begin() + static_cast<std::ptrdiff_t>(first + take));
+      first += take;
+    }
+  }
+  return packs;
+}
+
 std::vector<TaskResult> SerialEvaluator::run(const TuningProblem& problem,
                                              const SimulationBatch& batch) {
-  std::vector<TaskResult> results;
-  results.reserve(batch.tasks.size());
-  for (std::size_t k = 0; k < batch.tasks.size(); ++k)
-    results.push_back(run_task(problem, batch, k));
+  std::vector<TaskResult> results(batch.tasks.size());
+  for (const std::vector<std::size_t>& pack : plan_packs(problem, batch, 1))
+    run_pack(problem, batch, pack, results);
   return results;
 }
 

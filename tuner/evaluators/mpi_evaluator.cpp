@@ -352,7 +352,9 @@ int Session::serve() {
           const auto record_every = r.get<std::int64_t>();
           const std::vector<sim::ControllerConfig> candidates =
               r.get_vector<sim::ControllerConfig>();
-          const int capacity = evaluator->concurrency();
+          // Enough tasks to fill the SIMD lanes of every thread.
+          const int capacity =
+              evaluator->concurrency() * std::max(1, problem->plant().pack_width());
           Writer req;
           req.put<std::int32_t>(capacity);
           send(0, kRequest, req);
@@ -509,7 +511,8 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
     bytes_out += b.bytes().size() * static_cast<std::size_t>(workers);
   }
 
-  // Rank 0's own threads take tasks one at a time, its recorded ones first.
+  // Rank 0's own threads take its recorded tasks one at a time, then shared ones a pack at a time.
+  const auto width = static_cast<std::size_t>(std::max(1, problem.plant().pack_width()));
   std::atomic<bool> local_done{false};
   std::string local_error;  // what escaped rank 0's own simulations (out of memory)
   std::thread compute([&] {
@@ -520,10 +523,13 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
                           [&](const tbb::blocked_range<std::size_t>&) {
                             for (std::size_t i; (i = next_local++) < local.size();)
                               results[local[i]] = run_task(problem, batch, local[i]);
+                            // Shared tasks a SIMD pack at a time.
                             for (;;) {
-                              const auto [first, count] = take(1);
+                              const auto [first, count] = take(width);
                               if (count == 0) break;
-                              results[shared[first]] = run_task(problem, batch, shared[first]);
+                              run_pack(problem, batch,
+                                       std::span<const std::size_t>(shared).subspan(first, count),
+                                       results);
                             }
                           });
       });
@@ -586,8 +592,10 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
       // Guided self-scheduling: a share of what is left in proportion to the rank's threads, at
       // least one task per thread, so the packs shrink as the batch ends.
       const std::size_t left = shared.size() - std::min(next_shared.load(), shared.size());
+      // (A rank's capacity is its threads times its SIMD pack width, taken to be rank 0's.)
       const auto want = static_cast<std::size_t>(std::max<double>(
-          capacity, std::ceil(static_cast<double>(left) * capacity / (2.0 * total_threads))));
+          capacity, std::ceil(static_cast<double>(left) * capacity /
+                              (2.0 * total_threads * static_cast<double>(width)))));
       const auto [first, count] = take(want);
       if (count == 0) {
         send_to_ranks({m->source}, kDone, {}, s.options.rank_timeout, &s.host);

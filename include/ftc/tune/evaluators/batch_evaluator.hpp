@@ -40,7 +40,8 @@ class BatchEvaluator {
  public:
   virtual ~BatchEvaluator() = default;
   // One result per task, in task order.
-  virtual std::vector<TaskResult> run(const TuningProblem& problem, const SimulationBatch& batch) = 0;
+  virtual std::vector<TaskResult> run(const TuningProblem& problem,
+                                      const SimulationBatch& batch) = 0;
   // Simulations it can run at once (threads); for run.json and progress lines.
   virtual int concurrency() const = 0;
   // Threads on each process taking part (one entry unless the evaluator spans processes).
@@ -51,6 +52,18 @@ class BatchEvaluator {
 // Task k of a batch, as every evaluator must run it: the problem's simulation, with an exception
 // turned into the task's error.
 TaskResult run_task(const TuningProblem& problem, const SimulationBatch& batch, std::size_t k);
+
+// Tasks batch.tasks[k] for k in `pack`, in the plant's SIMD lanes (sim::AnyPlant::
+// simulate_pack), into results[k]; each result is what run_task gives, to the last bit.
+void run_pack(const TuningProblem& problem, const SimulationBatch& batch,
+              std::span<const std::size_t> pack, std::span<TaskResult> results);
+
+// The batch's tasks in packs for run_pack: tasks that can share lanes (same sample time,
+// substeps and duration) go together, in task order, at most the plant's pack width to a pack;
+// when that leaves fewer packs than `workers`, the packs are made smaller so that every worker
+// gets one. Lanes give the same bits however tasks are packed, so this only affects speed.
+std::vector<std::vector<std::size_t>> plan_packs(const TuningProblem& problem,
+                                                 const SimulationBatch& batch, int workers);
 
 // Runs the tasks one after another on the calling thread (tests, embedding, debugging).
 class SerialEvaluator final : public BatchEvaluator {
