@@ -52,9 +52,17 @@ class SigPowerLanes {
   // One exponent per lane: a[0 .. W).
   explicit SigPowerLanes(const double* a) {
     for (int l = 0; l < W; ++l) {
-      const Tables t(a[l]);
       a_[l] = a[l];
       base_[l] = l * Tables::kIntervals;
+      // Lanes often share an exponent (α is rarely tuned): the tables (256 powl) once.
+      int same = 0;
+      while (same < l && a[same] != a[l]) ++same;
+      if (same < l) {
+        for (int k = 0; k < 7; ++k) b_[k][l] = b_[k][same];
+        base_[l] = base_[same];
+        continue;
+      }
+      const Tables t(a[l]);
       for (int k = 0; k < 7; ++k) b_[k][l] = t.b[k];
       for (int i = 0; i < Tables::kIntervals; ++i) {
         scale_[l * Tables::kIntervals + i] = t.scale[i];

@@ -50,6 +50,7 @@ FTC_HOT_INLINE double select(bool m, double a, double b) { return m ? a : b; }
 FTC_HOT_INLINE bool all(bool m) { return m; }
 FTC_HOT_INLINE bool any(bool m) { return m; }
 FTC_HOT_INLINE bool mask_not(bool m) { return !m; }
+FTC_HOT_INLINE double sqrt(double x) { return std::sqrt(x); }  // correctly rounded (IEEE 754)
 FTC_HOT_INLINE void store(double x, double* p) { *p = x; }
 // Lane i of a mask as a bool array (one lane here).
 FTC_HOT_INLINE void store_mask(bool m, bool* out) { *out = m; }
@@ -121,6 +122,10 @@ FTC_HOT_INLINE bool any(const xsimd::batch_bool<double, A>& m) {
 template <class A>
 FTC_HOT_INLINE xsimd::batch_bool<double, A> mask_not(const xsimd::batch_bool<double, A>& m) {
   return !m;
+}
+template <class A>
+FTC_HOT_INLINE xsimd::batch<double, A> sqrt(const xsimd::batch<double, A>& x) {
+  return xsimd::sqrt(x);  // the vector square root instruction, correctly rounded like sqrtsd
 }
 // A batch to W consecutive doubles (unaligned; load_lanes below is the way back).
 template <class A>

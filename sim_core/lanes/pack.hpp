@@ -16,6 +16,10 @@
 namespace ftc::sim::detail {
 
 inline constexpr int kMaxLanes = 8;  // AVX-512: 8 doubles
+// Metrics the kernel accumulates itself (SPEC §6; the host's MetricsAccumulator otherwise):
+// the objective window and the extra ones, and the peak error after each fault onset.
+inline constexpr int kMaxWindows = 8;
+inline constexpr int kMaxOnsets = 8;
 
 // The exogenous inputs of every lane at one instant (a stage time of RK4): the disturbance Δ(t)
 // and the fault effect u = gain ⊙ u_d + offset, lane-minor so that a kernel loads W at a time.
@@ -51,6 +55,14 @@ struct PackSetup {
   int substeps = 1;
   std::int64_t samples = 0;
   int block = 16;  // samples per exchange with the host
+
+  // The kernel accumulates the metrics (else the host does, from PackHost::samples).
+  bool kernel_metrics = false;
+  bool want_samples = true;  // call PackHost::samples (recording, or the host's metrics)
+  int windows = 0;           // [t0, t1) per lane: 0 the objective window, then the extra ones
+  double window[kMaxWindows][2][kMaxLanes] = {};  // unused: [inf, inf)
+  int onsets = 0;
+  double onset[kMaxOnsets][kMaxLanes] = {};  // unused: inf
 };
 
 // The host side, called twice per block of samples (never per sample).
@@ -69,6 +81,12 @@ class PackHost {
 struct PackFinal {
   double x[6][kMaxLanes];           // X at the end of each lane's run
   std::int64_t samples[kMaxLanes];  // samples simulated per lane
+  bool diverged[kMaxLanes];
+  double diverged_at[kMaxLanes];  // s
+  // With kernel_metrics: as in Metrics, per window and lane.
+  double ise[kMaxWindows][kMaxLanes], iae[kMaxWindows][kMaxLanes], itae[kMaxWindows][kMaxLanes];
+  double max_abs_u[kMaxLanes], control_tv[kMaxLanes];
+  double peak[kMaxOnsets][kMaxLanes];
 };
 
 // One kernel per instruction set (scalar: T = double, one lane).

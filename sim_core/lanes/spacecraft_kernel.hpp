@@ -133,7 +133,33 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
   bool live[W];  // lanes still counting
   for (int l = 0; l < W; ++l) live[l] = l < su.lanes;
   int live_count = su.lanes;
-  for (int l = 0; l < W; ++l) fin.samples[l] = su.samples;
+  for (int l = 0; l < W; ++l) {
+    fin.samples[l] = su.samples;
+    fin.diverged[l] = false;
+  }
+
+  // The metrics, in the operations and order of MetricsAccumulator::sample (ftc/sim/metrics.hpp),
+  // lanes that have diverged masked out.
+  const int nw = su.kernel_metrics ? su.windows : 0, no = su.kernel_metrics ? su.onsets : 0;
+  T w0[kMaxWindows], w1[kMaxWindows], ise[kMaxWindows], iae[kMaxWindows], itae[kMaxWindows];
+  for (int i = 0; i < nw; ++i) {
+    w0[i] = row(su.window[i][0]);
+    w1[i] = row(su.window[i][1]);
+    ise[i] = iae[i] = itae[i] = T(0.0);
+  }
+  T onset[kMaxOnsets], peak[kMaxOnsets];
+  for (int i = 0; i < no; ++i) {
+    onset[i] = row(su.onset[i]);
+    peak[i] = T(std::numeric_limits<double>::quiet_NaN());
+  }
+  T max_abs_u(0.0), control_tv(0.0);
+  Mask counting = T(0.0) == T(0.0);
+  {
+    double c[W];
+    for (int l = 0; l < W; ++l) c[l] = live[l] ? 0.0 : 1.0;
+    counting = lane::load_lanes<T>(c) == T(0.0);
+  }
+  const T Tsv(Ts);
 
   SampleLanes out[32];
   const int block = su.block < 32 ? su.block : 32;
@@ -156,6 +182,37 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
       SampleLanes& o = out[i];
       for (int r = 0; r < 6; ++r) lane::store(x[r], o.x[r]);
       for (int r = 0; r < 4; ++r) lane::store(u[r], o.u[r]);
+      if (su.kernel_metrics) {
+        const double td = static_cast<double>(k) * Ts;
+        const T t(td);
+        const T e2 = (x[0] * x[0] + x[1] * x[1]) + x[2] * x[2];
+        const T e1 = (lane::abs(x[0]) + lane::abs(x[1])) + lane::abs(x[2]);
+        const T ise_k = Tsv * e2, iae_k = Tsv * e1, itae_k = T(Ts * td) * e1;
+        for (int w = 0; w < nw; ++w) {
+          const Mask in = counting & (t >= w0[w]) & (t < w1[w]);
+          ise[w] = lane::select(in, ise[w] + ise_k, ise[w]);
+          iae[w] = lane::select(in, iae[w] + iae_k, iae[w]);
+          itae[w] = lane::select(in, itae[w] + itae_k, itae[w]);
+        }
+        T u_max = lane::abs(u[0]);
+        for (int j = 1; j < 4; ++j) {
+          const T a_j = lane::abs(u[j]);
+          u_max = lane::select(u_max < a_j, a_j, u_max);
+        }
+        max_abs_u = lane::select(counting & (max_abs_u < u_max), u_max, max_abs_u);
+        if (k > 0) {
+          T d2 = (u[0] - u_prev[0]) * (u[0] - u_prev[0]);
+          for (int j = 1; j < 4; ++j) d2 = d2 + (u[j] - u_prev[j]) * (u[j] - u_prev[j]);
+          control_tv = lane::select(counting, control_tv + lane::sqrt(d2), control_tv);
+        }
+        if (no > 0) {
+          const T en = lane::sqrt(e2);
+          for (int f = 0; f < no; ++f) {
+            const Mask m = counting & (t >= onset[f]) & lane::mask_not(peak[f] >= en);
+            peak[f] = lane::select(m, en, peak[f]);
+          }
+        }
+      }
 
       // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
       const V3 a1 = accel(f, e[0], u);
@@ -193,13 +250,26 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
         live[l] = false;
         --live_count;
         fin.samples[l] = k + 1;
+        fin.diverged[l] = true;
+        fin.diverged_at[l] = static_cast<double>(k) * Ts + Ts;
         for (int r = 0; r < 6; ++r) fin.x[r][l] = lane::lane_of(x[r], l);
       }
+      counting = counting & inside;
       for (int r = 0; r < 6; ++r) x[r] = lane::select(inside, x[r], x0[r]);
       for (int r = 0; r < 4; ++r) u_prev[r] = lane::select(inside, u_prev[r], T(0.0));
       law.reset_lanes(inside);
     }
-    host.samples(k - n, n, out);
+    if (su.want_samples) host.samples(k - n, n, out);
+  }
+  for (int l = 0; l < W; ++l) {
+    for (int w = 0; w < nw; ++w) {
+      fin.ise[w][l] = lane::lane_of(ise[w], l);
+      fin.iae[w][l] = lane::lane_of(iae[w], l);
+      fin.itae[w][l] = lane::lane_of(itae[w], l);
+    }
+    for (int f = 0; f < no; ++f) fin.peak[f][l] = lane::lane_of(peak[f], l);
+    fin.max_abs_u[l] = lane::lane_of(max_abs_u, l);
+    fin.control_tv[l] = lane::lane_of(control_tv, l);
   }
   for (int l = 0; l < W; ++l)
     if (live[l] || l >= su.lanes)

@@ -86,6 +86,7 @@ class Host final : public PackHost {
   }
 
   void samples(std::int64_t k0, int n, const SampleLanes* out) override {
+    const bool metrics = !setup_.kernel_metrics;
     const int S = setup_.substeps;
     for (std::size_t l = 0; l < lanes_.size(); ++l) {
       if (done_[l]) continue;
@@ -98,7 +99,7 @@ class Host final : public PackHost {
         Vec4 u;
         for (int r = 0; r < 6; ++r) x[r] = out[i].x[r][l];
         for (int r = 0; r < 4; ++r) u[r] = out[i].u[r][l];
-        metrics_[l].sample(t, x, u);
+        if (metrics) metrics_[l].sample(t, x, u);
         if (every > 0 && k % every == 0) {
           const ExoLanes& e = buffer_[static_cast<std::size_t>(i) * S * 3];
           const std::size_t from = groups_.size() == 1 ? 0 : l;
@@ -111,7 +112,7 @@ class Host final : public PackHost {
                            groups_[group_of_[l]].faults.apply(effect, u));
         }
         if (out[i].diverged[l]) {
-          metrics_[l].mark_diverged(t + Ts);
+          if (metrics) metrics_[l].mark_diverged(t + Ts);
           done_[l] = true;
           break;
         }
@@ -125,7 +126,21 @@ class Host final : public PackHost {
       r.samples = fin.samples[l];
       r.final_state.resize(6);
       for (int i = 0; i < 6; ++i) r.final_state[i] = fin.x[i][l];
-      r.metrics = metrics_[l].result();
+      if (!setup_.kernel_metrics) {
+        r.metrics = metrics_[l].result();
+        continue;
+      }
+      // The kernel's sums, arranged as MetricsAccumulator arranges its own.
+      Metrics m = metrics_[l].result();
+      m.errors = {fin.ise[0][l], fin.iae[0][l], fin.itae[0][l]};
+      for (std::size_t w = 0; w < m.extra.size(); ++w)
+        m.extra[w] = {fin.ise[w + 1][l], fin.iae[w + 1][l], fin.itae[w + 1][l]};
+      m.max_abs_u = fin.max_abs_u[l];
+      m.control_tv = fin.control_tv[l];
+      for (std::size_t f = 0; f < m.peak_error_after_fault.size(); ++f)
+        m.peak_error_after_fault[f] = fin.peak[f][l];
+      if (fin.diverged[l]) m.mark_diverged(fin.diverged_at[l]);
+      r.metrics = std::move(m);
     }
   }
 
@@ -178,6 +193,36 @@ void run_pack(std::span<SpacecraftLane* const> lanes, const Mat34& G, const Mat4
     }
     for (int i = 0; i < 6; ++i) su.x0[i][l] = lane.scenario->initial_state[i];
     su.saturation[l] = lane.scenario->saturation.value_or(std::numeric_limits<double>::infinity());
+  }
+  // The metrics in the kernel, unless a lane has more windows or faults than it keeps.
+  su.kernel_metrics = true;
+  su.want_samples = false;
+  for (const SpacecraftLane* l : lanes) {
+    su.windows = std::max(su.windows, 1 + static_cast<int>(l->options->extra_windows.size()));
+    su.onsets = std::max(su.onsets, static_cast<int>(l->scenario->faults.size()));
+    su.want_samples = su.want_samples || l->options->record_every > 0;
+  }
+  if (su.windows > kMaxWindows || su.onsets > kMaxOnsets) {
+    su.kernel_metrics = false;
+    su.want_samples = true;
+  } else {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    for (int l = 0; l < width; ++l) {
+      const SpacecraftLane& lane = *lanes[l < su.lanes ? l : 0];
+      const SimulationOptions& o = *lane.options;
+      for (int w = 0; w < su.windows; ++w) {
+        const std::size_t e = static_cast<std::size_t>(w);
+        const Window win = w == 0                        ? o.window
+                           : e <= o.extra_windows.size() ? o.extra_windows[e - 1]
+                                                         : Window{inf, inf};
+        su.window[w][0][l] = win.t0;
+        su.window[w][1][l] = win.t1;
+      }
+      for (int f = 0; f < su.onsets; ++f) {
+        const std::size_t e = static_cast<std::size_t>(f);
+        su.onset[f][l] = e < lane.scenario->faults.size() ? lane.scenario->faults[e].onset : inf;
+      }
+    }
   }
   su.shared_inputs = true;
   for (const SpacecraftLane* l : lanes)

@@ -71,16 +71,26 @@ class MetricsAccumulator {
     m_.fault_onsets = std::move(fault_onsets);
   }
 
+  // The sums run in index order, spelled out: the batch simulator accumulates the same
+  // quantities in SIMD lanes (lanes/spacecraft_kernel.hpp) and must get the same bits.
   void sample(double t, const StateOf<N>& x, const Vec<M>& u_d) {
-    const Vec<N> e = x.template head<N>();
-    const double e2 = e.squaredNorm();
-    const double e1 = e.cwiseAbs().sum();
+    double e2 = x[0] * x[0], e1 = std::abs(x[0]);
+    for (int i = 1; i < N; ++i) {
+      e2 = e2 + x[i] * x[i];
+      e1 = e1 + std::abs(x[i]);
+    }
     if (m_.window.contains(t)) add(m_.errors, t, e2, e1);
     for (std::size_t i = 0; i < m_.extra.size(); ++i)
       if (m_.extra_windows[i].contains(t)) add(m_.extra[i], t, e2, e1);
 
-    m_.max_abs_u = std::max(m_.max_abs_u, u_d.cwiseAbs().maxCoeff());
-    if (has_prev_) m_.control_tv += (u_d - u_prev_).norm();
+    double u_max = std::abs(u_d[0]);
+    for (int j = 1; j < M; ++j) u_max = u_max < std::abs(u_d[j]) ? std::abs(u_d[j]) : u_max;
+    m_.max_abs_u = m_.max_abs_u < u_max ? u_max : m_.max_abs_u;
+    if (has_prev_) {
+      double d2 = (u_d[0] - u_prev_[0]) * (u_d[0] - u_prev_[0]);
+      for (int j = 1; j < M; ++j) d2 = d2 + (u_d[j] - u_prev_[j]) * (u_d[j] - u_prev_[j]);
+      m_.control_tv += std::sqrt(d2);
+    }
     u_prev_ = u_d;
     has_prev_ = true;
 
@@ -97,7 +107,7 @@ class MetricsAccumulator {
   void add(ErrorIntegrals& acc, double t, double e2, double e1) const {
     acc.ise += Ts_ * e2;
     acc.iae += Ts_ * e1;
-    acc.itae += Ts_ * t * e1;
+    acc.itae += (Ts_ * t) * e1;
   }
 
   double Ts_;
