@@ -54,13 +54,11 @@ T per_lane(const ControllerConfig* const* configs, Get&& get) {
   return lane::load_lanes<T>(v);
 }
 
-// sigm(y) for y = θ s / 2; tanh is ±1 in double precision past |y| = 19.5 (lane::tanh says so
-// too), which spares the scalar controller most tanh evaluations.
+// sigm(y) for y = θ s / 2; tanh is ±1 in double precision past |y| = 19.5 (lane::tanh gives
+// those bits too), which spares a tanh whenever every lane is that far out.
 template <class T>
 FTC_HOT_INLINE T sigm_of(const T& y) {
-  if constexpr (lane::kWidth<T> == 1) {
-    if (lane::abs(y) > 19.5) return lane::copysign(1.0, y);
-  }
+  if (lane::all(lane::abs(y) > T(19.5))) return lane::copysign(T(1.0), y);
   return lane::tanh(y);
 }
 

@@ -104,27 +104,36 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
       *f_model = {out[0], out[1], out[2]};
     }
   };
-  // dX2/dt = f(X) + G u + Δ(t), u the command u_d after the faults and saturation at the
-  // instant of e.
-  const auto accel = [&](const V3& f, const ExoLanes& e, const V4& u_d) FTC_HOT_LAMBDA -> V3 {
+  // dX2/dt = f(X) + G u + Δ(t), u the command u_d after the faults and saturation at one
+  // instant. The forcing G u and Δ depend on the instant and the held command only, so the two
+  // midpoint stages share it.
+  struct Forcing {
+    V3 Gu, dist;
+  };
+  const auto forcing = [&](const ExoLanes& e, const V4& u_d) FTC_HOT_LAMBDA -> Forcing {
     V4 u;
     for (int j = 0; j < 4; ++j) {
       const T v = input(e.gain[j]) * u_d[j] + input(e.offset[j]);
       const T lo = lane::select(v < -sat, -sat, v);
       u[j] = lane::select(lo > sat, sat, lo);
     }
-    V3 a;
+    Forcing F;
     for (int i = 0; i < 3; ++i) {
       T g = G[i * 4] * u[0];
       for (int j = 1; j < 4; ++j) g = g + G[i * 4 + j] * u[j];
-      a[i] = (f[i] + g) + input(e.dist[i]);
+      F.Gu[i] = g;
+      F.dist[i] = input(e.dist[i]);
     }
-    return a;
+    return F;
   };
-  const auto deriv = [&](const V6& x, const ExoLanes& e, const V4& u_d) FTC_HOT_LAMBDA -> V6 {
+  const auto accel = [&](const V3& f, const Forcing& F) FTC_HOT_LAMBDA -> V3 {
+    return {(f[0] + F.Gu[0]) + F.dist[0], (f[1] + F.Gu[1]) + F.dist[1],
+            (f[2] + F.Gu[2]) + F.dist[2]};
+  };
+  const auto deriv = [&](const V6& x, const Forcing& F) FTC_HOT_LAMBDA -> V6 {
     V3 f;
     drift(x, f, nullptr);
-    const V3 a = accel(f, e, u_d);
+    const V3 a = accel(f, F);
     return {x[3], x[4], x[5], a[0], a[1], a[2]};
   };
 
@@ -171,7 +180,7 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
       const ExoLanes* e = exo + i * S * 3;
       V3 f, f_model;
       drift(x, f, su.mismatch ? &f_model : nullptr);
-      const V3 a = accel(f, e[0], u_prev);
+      const V3 a = accel(f, forcing(e[0], u_prev));
       law::Sample<T, 3> m;
       m.X1 = {x[0], x[1], x[2]};
       m.X2 = {x[3], x[4], x[5]};
@@ -215,18 +224,19 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
       }
 
       // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
-      const V3 a1 = accel(f, e[0], u);
+      const V3 a1 = accel(f, forcing(e[0], u));
       V6 k1{x[3], x[4], x[5], a1[0], a1[1], a1[2]};
       for (int j = 0; j < S; ++j) {
         const ExoLanes* ej = e + j * 3;
-        if (j > 0) k1 = deriv(x, ej[0], u);
+        if (j > 0) k1 = deriv(x, forcing(ej[0], u));
         V6 xs;
         for (int r = 0; r < 6; ++r) xs[r] = x[r] + h2 * k1[r];
-        const V6 k2 = deriv(xs, ej[1], u);
+        const Forcing mid = forcing(ej[1], u);
+        const V6 k2 = deriv(xs, mid);
         for (int r = 0; r < 6; ++r) xs[r] = x[r] + h2 * k2[r];
-        const V6 k3 = deriv(xs, ej[1], u);
+        const V6 k3 = deriv(xs, mid);
         for (int r = 0; r < 6; ++r) xs[r] = x[r] + hv * k3[r];
-        const V6 k4 = deriv(xs, ej[2], u);
+        const V6 k4 = deriv(xs, forcing(ej[2], u));
         for (int r = 0; r < 6; ++r) {
           T sum = k1[r] + T(2.0) * k2[r];
           sum = sum + T(2.0) * k3[r];
