@@ -233,6 +233,18 @@ void run_pack(std::span<SpacecraftLane* const> lanes, const Mat34& G, const Mat4
   host.finish(fin);
 }
 
+// The narrowest instruction set up to `widest` that holds n lanes: a wide register costs more
+// per instruction than a narrow one (AVX-512 on 2 lanes is slower than SSE2), and every
+// instruction set gives the same bits.
+Isa narrowest(Isa widest, std::size_t n) {
+  static const std::vector<Isa> supported = supported_isas();
+  for (Isa isa : supported) {
+    if (isa == widest) break;
+    if (static_cast<std::size_t>(lane_width(isa)) >= n) return isa;
+  }
+  return widest;
+}
+
 }  // namespace
 
 void run_spacecraft_lanes(std::span<SpacecraftLane> lanes, const Mat34& G, const Mat43& G_pinv,
@@ -257,7 +269,7 @@ void run_spacecraft_lanes(std::span<SpacecraftLane> lanes, const Mat34& G, const
         taken[j] = true;
         pack.push_back(&lanes[j]);
       }
-    run_pack(pack, G, G_pinv, isa);
+    run_pack(pack, G, G_pinv, narrowest(isa, pack.size()));
   }
 }
 
