@@ -19,6 +19,8 @@
 // In W lanes each lane has its own exponent (candidates may tune α): the lanes' tables lie one
 // after another and each lane reads its own with a gather.
 #include <array>
+#include <bit>
+#include <cstddef>
 #include <cstdint>
 
 #include "ftc/sim/types.hpp"
@@ -73,6 +75,34 @@ class SigPowerLanes {
   }
 
   FTC_HOT_INLINE T operator()(const T& x) const {
+    if constexpr (W == 1) {
+      return scalar(x);
+    } else {
+      return lanes(x);
+    }
+  }
+
+ private:
+  // One lane: the table indices from the bits in integer arithmetic, the rest as in lanes();
+  // the same indices and operations, so the same bits, and cheaper than the lanes' way.
+  FTC_HOT_INLINE double scalar(double x) const {
+    const std::uint64_t bits = std::bit_cast<std::uint64_t>(x);
+    const std::uint64_t magnitude = bits & ~(1ULL << 63);
+    const std::uint64_t slot = (magnitude >> 52) - Tables::kMinBiasedExponent;  // wraps below
+    if (slot >= static_cast<std::uint64_t>(Tables::kExponents)) [[unlikely]]
+      return lane::sig(x, a_[0]);
+    const std::uint64_t i = static_cast<std::uint64_t>(base_[0]) + ((magnitude >> 45) & 127);
+    const double m =
+        std::bit_cast<double>((magnitude & 0x000FFFFFFFFFFFFFULL) | 0x3FF0000000000000ULL);
+    const double r = m * inv_centre_[i] - 1.0;
+    const double r2 = r * r;
+    const double p = (1.0 + b_[1][0] * r) + r2 * ((b_[2][0] + b_[3][0] * r) +
+                                                  r2 * ((b_[4][0] + b_[5][0] * r) + r2 * b_[6][0]));
+    return lane::copysign(
+        scale_[static_cast<std::size_t>(base_[0]) + slot] * (centre_power_[i] * p), x);
+  }
+
+  FTC_HOT_INLINE T lanes(const T& x) const {
     const T mag = lane::abs(x);
     // Which 2^e and which 1/128 interval of the significand, as doubles (exact small integers).
     const T slot = lane::biased_exponent(mag) - T(Tables::kMinBiasedExponent);
@@ -94,7 +124,6 @@ class SigPowerLanes {
     return lane::select(inside, y, lane::sig(x, lane::load_lanes<T>(a_)));
   }
 
- private:
   FTC_HOT_INLINE T b(int k) const { return lane::load_lanes<T>(b_[k]); }
 
   double a_[W];
