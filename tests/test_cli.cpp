@@ -5,10 +5,13 @@
 #include <sys/file.h>
 #include <sys/socket.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <map>
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
+#include "ftc/sim/isa.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/run/checkpoint.hpp"
 #include "short_job.hpp"
@@ -508,4 +511,77 @@ TEST(Cli, ResumeRefusesADamagedOrForeignCheckpoint) {
       run_cli("run -q --out '" + (dir / "whole").string() + "' '" + job.string() + "'", dir);
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
   expect_same_files(dir / "whole", dir / "sound");
+}
+
+namespace {
+
+// Runs the CLI with FTCTUNE_ISA set to `isa` (the child inherits the environment).
+CliResult run_cli_with_isa(const std::string& isa, const std::string& args,
+                           const std::filesystem::path& scratch) {
+  ::setenv("FTCTUNE_ISA", isa.c_str(), 1);
+  CliResult r = run_cli(args, scratch);
+  ::unsetenv("FTCTUNE_ISA");
+  return r;
+}
+
+}  // namespace
+
+// The gains file does not depend on the instruction set the simulations ran on: every lane
+// gives the scalar code's bits (tests/test_batch_kernel.cpp), so the tuning takes the same path.
+TEST(Cli, GainsAreTheSameBytesUnderEveryInstructionSet) {
+  const auto dir = fresh_dir("cli-isa");
+  for (const std::string job : {"jobs/table1.json", "jobs/table1-adaptive.json"}) {
+    std::string scalar;
+    for (const ftc::sim::Isa isa : ftc::sim::supported_isas()) {
+      const std::string name = ftc::sim::to_string(isa);
+      const auto out = dir / (name + std::to_string(job.size()));
+      const CliResult r =
+          run_cli_with_isa(name, "run -q " + job + " --out '" + out.string() + "'", dir);
+      ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
+      const std::string gains = slurp(out / "gains.json");
+      ASSERT_FALSE(gains.empty());
+      if (isa == ftc::sim::Isa::scalar)
+        scalar = gains;
+      else
+        EXPECT_EQ(gains, scalar) << job << ": gains.json under FTCTUNE_ISA=" << name
+                                 << " differs from the scalar one";
+    }
+  }
+}
+
+TEST(Cli, UnknownInstructionSetExitsTwoAndVersionNamesTheOneInUse) {
+  const auto dir = fresh_dir("cli-isa-bad");
+  const CliResult bad = run_cli_with_isa("avx1024", "validate jobs/table1.json", dir);
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("FTCTUNE_ISA"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("scalar, sse2, avx2, avx512"), std::string::npos) << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  const CliResult v = run_cli_with_isa("sse2", "--version", dir);
+  EXPECT_EQ(v.exit_code, 0);
+  EXPECT_NE(v.out.find("simulation lanes: sse2 (2 per core"), std::string::npos) << v.out;
+  const CliResult d = run_cli("--version", dir);
+  EXPECT_NE(d.out.find(std::string("simulation lanes: ") +
+                       ftc::sim::to_string(ftc::sim::supported_isas().back())),
+            std::string::npos)
+      << d.out;
+}
+
+// `simulate --gains` runs the tuned controller alone, in scalar code; the tuning ran it in SIMD
+// lanes beside other candidates. The objective is the same double.
+TEST(Cli, SimulateWithTheGainsReproducesTheTunedObjectiveExactly) {
+  const auto dir = fresh_dir("cli-replay");
+  for (const std::string job : {"jobs/table1.json", "jobs/table1-adaptive.json"}) {
+    const auto out = dir / ("run" + std::to_string(job.size()));
+    ASSERT_EQ(run_cli("run -q " + job + " --out '" + out.string() + "'", dir).exit_code, 0);
+    const json gains = json::parse(slurp(out / "gains.json"));
+    const auto sim = dir / ("sim" + std::to_string(job.size()));
+    const CliResult r =
+        run_cli("simulate -q " + job + " --gains '" + (out / "gains.json").string() + "' --out '" +
+                    sim.string() + "'",
+                dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json metrics = json::parse(slurp(sim / "metrics.json"));
+    EXPECT_EQ(metrics["objective"].get<double>(), gains["objective"]["value"].get<double>()) << job;
+    EXPECT_EQ(metrics["fitness"].get<double>(), gains["fitness"].get<double>()) << job;
+  }
 }

@@ -1,0 +1,236 @@
+// The batch simulator (sim_core/lanes/spacecraft_kernel.hpp): every lane of a pack, on every
+// instruction set this CPU runs, gives the bits of the same simulation run alone in scalar code,
+// whatever its neighbours do (other gains, other scenarios, divergence, partial packs).
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "checks.hpp"
+#include "ftc/sim/isa.hpp"
+#include "ftc/sim/plants.hpp"
+#include "ftc/sim/spacecraft.hpp"
+#include "plants/spacecraft_pack.hpp"
+
+using namespace ftc::sim;
+
+namespace {
+
+// The paper's scenario shortened to 12 s with the faults at 2 s and 5 s: both faults and the
+// chaotic stretch after them, at a fifth of the cost.
+Scenario short_paper() {
+  Scenario s = Scenario::paper();
+  s.duration = 12.0;
+  s.faults[0].onset = 2.0;
+  s.faults[1].onset = 5.0;
+  return s;
+}
+
+struct Task {
+  ControllerConfig config;
+  Scenario scenario;
+  SimulationOptions options;
+};
+
+// Runs the tasks as lanes of packs on `isa` (all of them in as few packs as fit).
+std::vector<SimulationResult> run(const std::vector<Task>& tasks, Isa isa) {
+  const Spacecraft model;
+  std::vector<SimulationResult> results(tasks.size());
+  std::vector<detail::SpacecraftLane> lanes(tasks.size());
+  for (std::size_t i = 0; i < tasks.size(); ++i) {
+    detail::SpacecraftLane& l = lanes[i];
+    l.config = detail::checked_config(tasks[i].config, tasks[i].scenario.sample_time);
+    l.scenario = &tasks[i].scenario;
+    l.options = &tasks[i].options;
+    l.model = model.f_constants();
+    l.truth = l.model;
+    if (!tasks[i].scenario.inertia.empty()) {
+      SpacecraftParams p;
+      p.inertia = {tasks[i].scenario.inertia[0], tasks[i].scenario.inertia[1],
+                   tasks[i].scenario.inertia[2]};
+      l.truth = Spacecraft(p).f_constants();
+    }
+    l.result = &results[i];
+  }
+  detail::run_spacecraft_lanes(lanes, model.G(State::Zero()), model.G_pinv(State::Zero()), isa);
+  return results;
+}
+
+// Each task alone, in scalar code.
+std::vector<SimulationResult> run_alone(const std::vector<Task>& tasks) {
+  std::vector<SimulationResult> out;
+  for (const Task& t : tasks) out.push_back(run({t}, Isa::scalar)[0]);
+  return out;
+}
+
+bool same_bits(double a, double b) {
+  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
+
+void expect_same(const SimulationResult& a, const SimulationResult& b, const std::string& what) {
+  const auto eq = [&](double x, double y, const char* field) {
+    EXPECT_TRUE(same_bits(x, y)) << what << ": " << field << " " << x << " vs " << y;
+  };
+  EXPECT_EQ(a.samples, b.samples) << what;
+  ASSERT_EQ(a.final_state.size(), b.final_state.size()) << what;
+  for (std::size_t i = 0; i < a.final_state.size(); ++i)
+    eq(a.final_state[i], b.final_state[i], "final_state");
+  const Metrics &m = a.metrics, &n = b.metrics;
+  eq(m.errors.ise, n.errors.ise, "ise");
+  eq(m.errors.iae, n.errors.iae, "iae");
+  eq(m.errors.itae, n.errors.itae, "itae");
+  ASSERT_EQ(m.extra.size(), n.extra.size()) << what;
+  for (std::size_t i = 0; i < m.extra.size(); ++i) {
+    eq(m.extra[i].ise, n.extra[i].ise, "extra ise");
+    eq(m.extra[i].iae, n.extra[i].iae, "extra iae");
+    eq(m.extra[i].itae, n.extra[i].itae, "extra itae");
+  }
+  eq(m.max_abs_u, n.max_abs_u, "max_abs_u");
+  eq(m.control_tv, n.control_tv, "control_tv");
+  ASSERT_EQ(m.peak_error_after_fault.size(), n.peak_error_after_fault.size()) << what;
+  for (std::size_t i = 0; i < m.peak_error_after_fault.size(); ++i)
+    eq(m.peak_error_after_fault[i], n.peak_error_after_fault[i], "peak error");
+  EXPECT_EQ(m.diverged, n.diverged) << what;
+  eq(m.diverged_at, n.diverged_at, "diverged_at");
+  ASSERT_EQ(a.trajectory.values.size(), b.trajectory.values.size()) << what;
+  EXPECT_EQ(std::memcmp(a.trajectory.values.data(), b.trajectory.values.data(),
+                        a.trajectory.values.size() * sizeof(double)),
+            0)
+      << what << ": trajectory";
+}
+
+// Lanes of one controller type with gains that differ lane by lane, among them one that
+// diverges (for the laws with Kp and Ki) and, for NFTSMC, exponents of their own.
+std::vector<Task> varied(ControllerType type, int n) {
+  std::vector<Task> tasks;
+  const Scenario s = short_paper();
+  SimulationOptions o;
+  o.extra_windows = {{0.0, 2.0}, {2.0, 5.0}, {5.0, 12.0}};
+  for (int l = 0; l < n; ++l) {
+    ControllerConfig c = ControllerConfig::table1(type);
+    c.switching_gain *= 1.0 + 0.1 * l;
+    c.c1 *= 1.0 + 0.05 * l;
+    c.Kp = 1.0 + 6.0 * l;
+    c.Ki = 50.0 - 5.0 * l;
+    c.alpha = 1.4 + 0.02 * l;
+    c.sigma1 *= 1.0 + 0.05 * l;
+    if (l == 1 &&
+        (type == ControllerType::pi_fosmc || type == ControllerType::adaptive_neural_pi_fosmc)) {
+      c.Kp = 0.01;  // with Ki = 45: diverges within a fraction of a second
+      c.Ki = 45.0;
+    }
+    tasks.push_back({c, s, o});
+  }
+  return tasks;
+}
+
+}  // namespace
+
+TEST(BatchKernel, EveryLaneGivesTheScalarBitsOnEveryInstructionSet) {
+  for (ControllerType type : kAllControllerTypes)
+    for (Isa isa : supported_isas()) {
+      const int w = lane_width(isa);
+      // A full pack, and one lane more (a partial pack after it).
+      const std::vector<Task> tasks = varied(type, w + 1);
+      const std::vector<SimulationResult> want = run_alone(tasks);
+      const std::vector<SimulationResult> got = run(tasks, isa);
+      for (std::size_t i = 0; i < tasks.size(); ++i)
+        expect_same(
+            got[i], want[i],
+            std::string(to_string(type)) + " on " + to_string(isa) + ", lane " + std::to_string(i));
+      if (type == ControllerType::pi_fosmc) {
+        EXPECT_TRUE(want[1].metrics.diverged) << "the test needs a diverging lane";
+        EXPECT_FALSE(want[0].metrics.diverged);
+      }
+    }
+}
+
+TEST(BatchKernel, PartialPacksGiveTheScalarBits) {
+  for (Isa isa : supported_isas())
+    for (int n : {1, 3, 5}) {
+      const std::vector<Task> tasks = varied(ControllerType::pi_fosmc, n);
+      const std::vector<SimulationResult> want = run_alone(tasks);
+      const std::vector<SimulationResult> got = run(tasks, isa);
+      for (int i = 0; i < n; ++i)
+        expect_same(got[i], want[i],
+                    std::string(to_string(isa)) + ", " + std::to_string(n) + " lanes, lane " +
+                        std::to_string(i));
+    }
+}
+
+// Ensemble members in one pack: other fault onsets and types, disturbances, initial states,
+// saturation and true inertia (model mismatch), with the same duration and sample time.
+TEST(BatchKernel, LanesOfDifferentScenariosGiveTheScalarBits) {
+  std::vector<Task> tasks;
+  for (int l = 0; l < 8; ++l) {
+    Scenario s = short_paper();
+    s.name = "member" + std::to_string(l);
+    s.faults[0].onset = 1.0 + 0.7 * l;
+    s.faults[1].onset = 9.0 - 0.5 * l;
+    if (l % 3 == 1) {
+      s.faults[1].type = FaultType::stuck;
+      s.faults[1].value = 0.5;
+    }
+    if (l % 2 == 1) s.faults[0].profile = {FaultProfileType::incipient, 0.5 + l};
+    for (DisturbanceTerm& d : s.disturbance) d.amplitude *= 1.0 + 0.1 * l;
+    s.initial_state[0] += 0.01 * l;
+    if (l % 4 == 2) s.saturation = 12.0;
+    if (l % 3 == 0) s.inertia = {20.0 * (1.0 + 0.02 * l), 17.0, 15.0 * (1.0 - 0.02 * l)};
+    SimulationOptions o;
+    o.window = {s.faults[0].onset, s.duration};
+    tasks.push_back({ControllerConfig::table1(ControllerType::pi_fosmc), s, o});
+  }
+  const std::vector<SimulationResult> want = run_alone(tasks);
+  for (Isa isa : supported_isas()) {
+    const std::vector<SimulationResult> got = run(tasks, isa);
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+      expect_same(got[i], want[i], std::string(to_string(isa)) + ", member " + std::to_string(i));
+  }
+}
+
+TEST(BatchKernel, RecordedTrajectoriesAreTheScalarOnes) {
+  std::vector<Task> tasks = varied(ControllerType::fosmc, 6);
+  for (Task& t : tasks) t.options.record_every = 50;
+  tasks[2].options.record_every = 0;  // lanes that record and lanes that do not
+  const std::vector<SimulationResult> want = run_alone(tasks);
+  ASSERT_EQ(want[0].trajectory.rows(), 12000u / 50u);
+  for (Isa isa : supported_isas()) {
+    const std::vector<SimulationResult> got = run(tasks, isa);
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+      expect_same(got[i], want[i], std::string(to_string(isa)) + ", lane " + std::to_string(i));
+  }
+}
+
+// The public entry point: simulate_pack gives what simulate gives, task by task, and an
+// invalid task gets its error without disturbing the others.
+TEST(BatchKernel, SimulatePackMatchesSimulateAndReportsBadTasks) {
+  const auto plant = make_plant(PlantSpec{});
+  const std::vector<Task> tasks = varied(ControllerType::pi_fosmc, 5);
+  std::vector<PackTask> pack;
+  for (const Task& t : tasks) pack.push_back({&t.config, &t.scenario, &t.options});
+  ControllerConfig bad = tasks[0].config;
+  bad.theta = -1.0;
+  pack.push_back({&bad, &tasks[0].scenario, &tasks[0].options});
+  std::vector<SimulationResult> results(pack.size());
+  std::vector<std::string> errors(pack.size());
+  plant->simulate_pack(pack, results, errors);
+  for (std::size_t i = 0; i < tasks.size(); ++i) {
+    EXPECT_TRUE(errors[i].empty()) << errors[i];
+    expect_same(results[i], plant->simulate(tasks[i].config, tasks[i].scenario, tasks[i].options),
+                "task " + std::to_string(i));
+  }
+  EXPECT_NE(errors.back().find("theta"), std::string::npos) << errors.back();
+}
+
+TEST(BatchKernel, InstructionSetsAreNamedAndOrdered) {
+  const std::vector<Isa> isas = supported_isas();
+  ASSERT_FALSE(isas.empty());
+  EXPECT_EQ(isas.front(), Isa::scalar);
+  for (std::size_t i = 1; i < isas.size(); ++i)
+    EXPECT_EQ(lane_width(isas[i]), 2 * lane_width(isas[i - 1]));
+  EXPECT_STREQ(to_string(Isa::avx512), "avx512");
+  EXPECT_EQ(lane_width(Isa::avx2), 4);
+}
