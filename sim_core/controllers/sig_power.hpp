@@ -56,12 +56,14 @@ class SigPowerLanes {
     for (int l = 0; l < W; ++l) {
       a_[l] = a[l];
       base_[l] = l * Tables::kIntervals;
+      base_i_[l] = l * Tables::kIntervals;
       // Lanes often share an exponent (α is rarely tuned): the tables (256 powl) once.
       int same = 0;
       while (same < l && a[same] != a[l]) ++same;
       if (same < l) {
         for (int k = 0; k < 7; ++k) b_[k][l] = b_[k][same];
         base_[l] = base_[same];
+        base_i_[l] = base_i_[same];
         continue;
       }
       const Tables t(a[l]);
@@ -102,17 +104,21 @@ class SigPowerLanes {
         scale_[static_cast<std::size_t>(base_[0]) + slot] * (centre_power_[i] * p), x);
   }
 
+  // W lanes: the same table indices as scalar() from the bits in 64-bit integer lanes (a
+  // lane outside the tables reads an arbitrary entry, which the fallback replaces).
   FTC_HOT_INLINE T lanes(const T& x) const {
+    using I = decltype(lane::bits_of(x));
     const T mag = lane::abs(x);
-    // Which 2^e and which 1/128 interval of the significand, as doubles (exact small integers).
-    const T slot = lane::biased_exponent(mag) - T(Tables::kMinBiasedExponent);
-    const lane::Mask<T> inside = (slot >= T(0.0)) & (slot < T(Tables::kExponents));
+    const I bits = lane::bits_of(mag);
+    const lane::Mask<T> inside = (mag >= T(0x1p-64)) & (mag < T(0x1p64));  // false for NaN
+    const I base = I::load_unaligned(base_i_);
+    const I interval = base + ((bits >> 45) & I(Tables::kIntervals - 1));
+    const I slot =
+        base + (((bits >> 52) - I(Tables::kMinBiasedExponent)) & I(Tables::kExponents - 1));
     const T m = lane::significand(mag);
-    const T interval = lane::floor_int((m - T(1.0)) * T(Tables::kIntervals));
-    const T base = lane::load_lanes<T>(base_);
-    const T inv_centre = lane::gather(inv_centre_, base + interval);
-    const T centre_power = lane::gather(centre_power_, base + interval);
-    const T scale = lane::gather(scale_, base + lane::select(inside, slot, T(0.0)));
+    const T inv_centre = lane::gather_at(inv_centre_, interval);
+    const T centre_power = lane::gather_at(centre_power_, interval);
+    const T scale = lane::gather_at(scale_, slot);
     const T r = m * inv_centre - T(1.0);
     // (1 + r)^a in Estrin form: the terms are independent, which shortens the dependency chain.
     const T r2 = r * r;
@@ -128,6 +134,7 @@ class SigPowerLanes {
 
   double a_[W];
   double base_[W];  // lane l's tables start at l · 128
+  std::int64_t base_i_[W];
   double b_[7][W];
   double scale_[W * Tables::kExponents];
   double inv_centre_[W * Tables::kIntervals];

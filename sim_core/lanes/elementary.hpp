@@ -249,10 +249,11 @@ FTC_HOT_INLINE T exp(const T& x) {
   const T r = a - b;
   const T rl = (a - r) - b;
   const T m = lane::floor_int(k * T(1.0 / 64));
-  // j in 0 .. 63, and 0 for a NaN x (which then gives NaN through r), so the table read stays
-  // inside the table.
-  const T j = lane::select(lane::is_nan(xc), T(0.0), k - T(64.0) * m);
-  const T hi = lane::gather(kExp2Hi, j), lo = lane::gather(kExp2Lo, j);
+  // j = k mod 64 in 0 .. 63, read as an integer from the low bits of k + 1.5·2^52 (exact for
+  // |k| < 2^51; k < 0 too, as 2^51 is a multiple of 64); a NaN x reads some entry of the table
+  // and gives NaN through r.
+  const auto j = lane::bits_of(k + T(0x1.8p52)) & 63;
+  const T hi = lane::gather_at(kExp2Hi, j), lo = lane::gather_at(kExp2Lo, j);
   const T r2 = r * r;
   const T p =
       r +

@@ -80,6 +80,8 @@ FTC_HOT_INLINE double significand(double x) {
 }
 // table[i] for an integral i ≥ 0 given as a double.
 FTC_HOT_INLINE double gather(const double* table, double i) { return table[static_cast<int>(i)]; }
+FTC_HOT_INLINE std::int64_t bits_of(double x) { return std::bit_cast<std::int64_t>(x); }
+FTC_HOT_INLINE double gather_at(const double* table, std::int64_t i) { return table[i]; }
 FTC_HOT_INLINE double lane_of(double x, int) { return x; }
 FTC_HOT_INLINE void set_lane(double& x, int, double v) { x = v; }
 FTC_HOT_INLINE bool mask_lane(bool m, int) { return m; }
@@ -179,6 +181,16 @@ FTC_HOT_INLINE xsimd::batch<double, A> gather(const double* table,
   const xsimd::batch<double, A> big(0x1p52);  // i + 2^52 holds i in its low bits
   const I index = xsimd::bitwise_cast<I>(i + big) - xsimd::bitwise_cast<I>(big);
   return xsimd::batch<double, A>::gather(table, index);
+}
+// The bits of x as 64-bit integers, and a table read with integer indices (per lane).
+template <class A>
+FTC_HOT_INLINE xsimd::batch<std::int64_t, A> bits_of(const xsimd::batch<double, A>& x) {
+  return xsimd::bitwise_cast<xsimd::batch<std::int64_t, A>>(x);
+}
+template <class A>
+FTC_HOT_INLINE xsimd::batch<double, A> gather_at(const double* table,
+                                                 const xsimd::batch<std::int64_t, A>& i) {
+  return xsimd::batch<double, A>::gather(table, i);
 }
 template <class A>
 FTC_HOT_INLINE xsimd::batch_bool<double, A> is_nan(const xsimd::batch<double, A>& x) {
