@@ -197,11 +197,11 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
         const T e2 = (x[0] * x[0] + x[1] * x[1]) + x[2] * x[2];
         const T e1 = (lane::abs(x[0]) + lane::abs(x[1])) + lane::abs(x[2]);
         const T ise_k = Tsv * e2, iae_k = Tsv * e1, itae_k = T(Ts * td) * e1;
-        for (int w = 0; w < nw; ++w) {
-          const Mask in = counting & (t >= w0[w]) & (t < w1[w]);
-          ise[w] = lane::select(in, ise[w] + ise_k, ise[w]);
-          iae[w] = lane::select(in, iae[w] + iae_k, iae[w]);
-          itae[w] = lane::select(in, itae[w] + itae_k, itae[w]);
+        for (int wi = 0; wi < nw; ++wi) {
+          const Mask in = counting & (t >= w0[wi]) & (t < w1[wi]);
+          ise[wi] = lane::select(in, ise[wi] + ise_k, ise[wi]);
+          iae[wi] = lane::select(in, iae[wi] + iae_k, iae[wi]);
+          itae[wi] = lane::select(in, itae[wi] + itae_k, itae[wi]);
         }
         T u_max = lane::abs(u[0]);
         for (int j = 1; j < 4; ++j) {
@@ -216,9 +216,9 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
         }
         if (no > 0) {
           const T en = lane::sqrt(e2);
-          for (int f = 0; f < no; ++f) {
-            const Mask m = counting & (t >= onset[f]) & lane::mask_not(peak[f] >= en);
-            peak[f] = lane::select(m, en, peak[f]);
+          for (int fi = 0; fi < no; ++fi) {
+            const Mask rising = counting & (t >= onset[fi]) & lane::mask_not(peak[fi] >= en);
+            peak[fi] = lane::select(rising, en, peak[fi]);
           }
         }
       }
@@ -272,12 +272,12 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
     if (su.want_samples) host.samples(k - n, n, out);
   }
   for (int l = 0; l < W; ++l) {
-    for (int w = 0; w < nw; ++w) {
-      fin.ise[w][l] = lane::lane_of(ise[w], l);
-      fin.iae[w][l] = lane::lane_of(iae[w], l);
-      fin.itae[w][l] = lane::lane_of(itae[w], l);
+    for (int wi = 0; wi < nw; ++wi) {
+      fin.ise[wi][l] = lane::lane_of(ise[wi], l);
+      fin.iae[wi][l] = lane::lane_of(iae[wi], l);
+      fin.itae[wi][l] = lane::lane_of(itae[wi], l);
     }
-    for (int f = 0; f < no; ++f) fin.peak[f][l] = lane::lane_of(peak[f], l);
+    for (int fi = 0; fi < no; ++fi) fin.peak[fi][l] = lane::lane_of(peak[fi], l);
     fin.max_abs_u[l] = lane::lane_of(max_abs_u, l);
     fin.control_tv[l] = lane::lane_of(control_tv, l);
   }
