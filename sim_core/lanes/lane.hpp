@@ -78,8 +78,6 @@ FTC_HOT_INLINE double significand(double x) {
   const std::uint64_t b = std::bit_cast<std::uint64_t>(x);
   return std::bit_cast<double>((b & 0x000FFFFFFFFFFFFFULL) | 0x3FF0000000000000ULL);
 }
-// table[i] for an integral i ≥ 0 given as a double.
-FTC_HOT_INLINE double gather(const double* table, double i) { return table[static_cast<int>(i)]; }
 FTC_HOT_INLINE std::int64_t bits_of(double x) { return std::bit_cast<std::int64_t>(x); }
 FTC_HOT_INLINE double gather_at(const double* table, std::int64_t i) { return table[i]; }
 FTC_HOT_INLINE double lane_of(double x, int) { return x; }
@@ -174,23 +172,28 @@ FTC_HOT_INLINE xsimd::batch<double, A> significand(const xsimd::batch<double, A>
   return xsimd::bitwise_cast<xsimd::batch<double, A>>((b & U(0x000FFFFFFFFFFFFFULL)) |
                                                       U(0x3FF0000000000000ULL));
 }
-template <class A>
-FTC_HOT_INLINE xsimd::batch<double, A> gather(const double* table,
-                                              const xsimd::batch<double, A>& i) {
-  using I = xsimd::batch<std::int64_t, A>;
-  const xsimd::batch<double, A> big(0x1p52);  // i + 2^52 holds i in its low bits
-  const I index = xsimd::bitwise_cast<I>(i + big) - xsimd::bitwise_cast<I>(big);
-  return xsimd::batch<double, A>::gather(table, index);
-}
 // The bits of x as 64-bit integers, and a table read with integer indices (per lane).
 template <class A>
 FTC_HOT_INLINE xsimd::batch<std::int64_t, A> bits_of(const xsimd::batch<double, A>& x) {
   return xsimd::bitwise_cast<xsimd::batch<std::int64_t, A>>(x);
 }
+// xsimd 8.1's batch::gather names its kernel with explicit template arguments that drop the
+// AVX2 and AVX-512 overloads, so it always took the generic path: one insert per lane, each
+// through an out-of-line mask constructor (7 % of the adaptive controller's time in AVX-512).
+// Calling the instruction set's kernel directly gives the gather instruction; the same table
+// entries, so the same bits.
 template <class A>
 FTC_HOT_INLINE xsimd::batch<double, A> gather_at(const double* table,
                                                  const xsimd::batch<std::int64_t, A>& i) {
-  return xsimd::batch<double, A>::gather(table, i);
+  if constexpr (std::is_same_v<A, xsimd::avx512f> || std::is_base_of_v<xsimd::avx2, A>) {
+    return xsimd::kernel::gather<A>(table, i, A{});
+  } else {
+    alignas(A::alignment()) std::int64_t k[xsimd::batch<double, A>::size];
+    alignas(A::alignment()) double v[xsimd::batch<double, A>::size];
+    i.store_aligned(k);
+    for (std::size_t l = 0; l < xsimd::batch<double, A>::size; ++l) v[l] = table[k[l]];
+    return xsimd::batch<double, A>::load_aligned(v);
+  }
 }
 template <class A>
 FTC_HOT_INLINE xsimd::batch_bool<double, A> is_nan(const xsimd::batch<double, A>& x) {
