@@ -234,21 +234,18 @@ FTC_HOT_INLINE void sincos(const T& x, T& s, T& c) {
   }
 }
 
-// e^x.
+namespace detail {
+// e^x = 2^m · y for |x| ≤ 746: x = (64 m + j) ln2/64 + r, |r| ≤ ln2/128, y = 2^(j/64) · e^r in
+// [1, 2) up to rounding, with 2^(j/64) from the table in double-double and e^r - 1 from its
+// Taylor series to r^7 (remainder < 1e-19).
 template <class T>
-FTC_HOT_INLINE T exp(const T& x) {
-  using namespace detail;
-  // Clamped so that k stays in range; e^x overflows past 709.79 and underflows to 0 below
-  // -745.14, which the clamped values still do. NaN passes through.
-  const T xc = lane::select(x > T(710.0), T(710.0), lane::select(x < T(-746.0), T(-746.0), x));
-  // x = (64 m + j) ln2/64 + r, |r| ≤ ln2/128: e^x = 2^m · 2^(j/64) · e^r, with 2^(j/64) from the
-  // table in double-double and e^r - 1 from its Taylor series to r^7 (remainder < 1e-19).
-  const T k = lane::round_to_int(xc * T(k64ByLn2));
-  const T a = xc - k * T(kLn2By64Hi);  // exact: k has at most 17 bits
+FTC_HOT_INLINE T exp_reduced(const T& x, T& m) {
+  const T k = lane::round_to_int(x * T(k64ByLn2));
+  const T a = x - k * T(kLn2By64Hi);  // exact: k has at most 17 bits
   const T b = k * T(kLn2By64Lo);
   const T r = a - b;
   const T rl = (a - r) - b;
-  const T m = lane::floor_int(k * T(1.0 / 64));
+  m = lane::floor_int(k * T(1.0 / 64));
   // j = k mod 64 in 0 .. 63, read as an integer from the low bits of k + 1.5·2^52 (exact for
   // |k| < 2^51; k < 0 too, as 2^51 is a multiple of 64); a NaN x reads some entry of the table
   // and gives NaN through r.
@@ -259,7 +256,26 @@ FTC_HOT_INLINE T exp(const T& x) {
       r +
       (rl + r2 * ((T(1.0 / 2) + r * T(1.0 / 6)) + r2 * ((T(1.0 / 24) + r * T(1.0 / 120)) +
                                                         r2 * (T(1.0 / 720) + r * T(1.0 / 5040)))));
-  const T y = hi + (lo + hi * p);
+  return hi + (lo + hi * p);
+}
+}  // namespace detail
+
+// e^x.
+template <class T>
+FTC_HOT_INLINE T exp(const T& x) {
+  using namespace detail;
+  // For |x| < 700 (false for NaN) e^x is a normal number and y · 2^m is exact: one product,
+  // the same bits as the two below.
+  if (lane::all(lane::abs(x) < T(700.0))) [[likely]] {
+    T m;
+    const T y = exp_reduced(x, m);
+    return y * lane::pow2i(m);
+  }
+  // Clamped so that k stays in range; e^x overflows past 709.79 and underflows to 0 below
+  // -745.14, which the clamped values still do. NaN passes through.
+  const T xc = lane::select(x > T(710.0), T(710.0), lane::select(x < T(-746.0), T(-746.0), x));
+  T m;
+  const T y = exp_reduced(xc, m);
   // 2^m in two factors, so that m down to -1075 and up to 1024 is representable; the first
   // product is exact, the second rounds once (into the subnormals or to infinity at the ends).
   const T h = lane::round_to_int(m * T(0.5));
