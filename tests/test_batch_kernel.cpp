@@ -98,11 +98,12 @@ void expect_same(const SimulationResult& a, const SimulationResult& b, const std
   ASSERT_EQ(a.trajectory.values.size(), b.trajectory.values.size()) << what;
   // Bit for bit (NaN and -0.0 included); memcmp may not be given the null data() of an empty
   // vector, even for 0 bytes (UBSan's find).
-  if (!a.trajectory.values.empty())
+  if (!a.trajectory.values.empty()) {
     EXPECT_EQ(std::memcmp(a.trajectory.values.data(), b.trajectory.values.data(),
                           a.trajectory.values.size() * sizeof(double)),
               0)
         << what << ": trajectory";
+  }
 }
 
 // Lanes of one controller type with gains that differ lane by lane, among them one that

@@ -21,12 +21,18 @@ inline constexpr int kMaxLanes = 8;  // AVX-512: 8 doubles
 inline constexpr int kMaxWindows = 8;
 inline constexpr int kMaxOnsets = 8;
 
-// The exogenous inputs of every lane at one instant (a stage time of RK4): the disturbance Δ(t)
-// and the fault effect u = gain ⊙ u_d + offset, lane-minor so that a kernel loads W at a time.
-struct ExoLanes {
-  double dist[3][kMaxLanes];
-  double gain[4][kMaxLanes];
-  double offset[4][kMaxLanes];
+// The exogenous inputs at one instant (a stage time of RK4): the disturbance Δ(t) and the fault
+// effect u = gain ⊙ u_d + offset, as kCount rows of `stride` doubles each. The stride is 1 when
+// every lane has the same inputs (PackSetup::shared_inputs: the kernel broadcasts the value) and
+// the pack's width otherwise (one value per lane, lane-minor, so that a kernel loads W at a
+// time). Packed tight: with one double per row a block of instants takes 4 kB, where rows of 8
+// took 34 kB, more than the level-1 cache, for the same 4 kB of values.
+struct ExoRows {
+  static constexpr int kDist = 0;    // Δ(t), 3 rows
+  static constexpr int kGain = 3;    // the faults' gains, 4 rows
+  static constexpr int kOffset = 7;  // the faults' offsets, 4 rows
+  static constexpr int kCount = 11;
+  static constexpr int stride(bool shared, int width) { return shared ? 1 : width; }
 };
 
 // What the kernel reports for one sample k of every lane: X(t_k), the command u_d(t_k), and
@@ -44,8 +50,8 @@ struct PackSetup {
   double truth[4][kMaxLanes] = {};
   double model[4][kMaxLanes] = {};
   bool mismatch = false;  // some lane's truth differs from its model
-  // Every lane has the same exogenous inputs (one scenario): the host fills lane 0 of each
-  // ExoLanes row only, and the kernel broadcasts it.
+  // Every lane has the same exogenous inputs (one scenario): the host writes one value per
+  // row (ExoRows), and the kernel broadcasts it.
   bool shared_inputs = false;
   double G[3 * 4] = {};       // input matrix, row-major
   double G_pinv[4 * 3] = {};  // its right inverse, row-major
@@ -69,8 +75,8 @@ struct PackSetup {
 class PackHost {
  public:
   // The inputs of samples k0 .. k0 + n - 1: for sample k0 + i, substep j, instant q (0 start,
-  // 1 midpoint, 2 end), entry ((i · substeps) + j) · 3 + q.
-  virtual const ExoLanes* inputs(std::int64_t k0, int n) = 0;
+  // 1 midpoint, 2 end), the ExoRows of instant ((i · substeps) + j) · 3 + q, one after another.
+  virtual const double* inputs(std::int64_t k0, int n) = 0;
   // Samples k0 .. k0 + n - 1 as simulated (lanes that had diverged before are to be ignored).
   virtual void samples(std::int64_t k0, int n, const SampleLanes* out) = 0;
 

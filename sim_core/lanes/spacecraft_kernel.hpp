@@ -70,12 +70,14 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
   Law<T, 3, 4> law(configs, su.Ts);
 
   const auto row = [](const double* r) { return lane::load_lanes<T>(r); };
-  // An exogenous input: lane 0's value in every lane, or each lane's own.
-  const auto input = [](const double* r) FTC_HOT_LAMBDA {
+  // Row r of an instant's exogenous inputs (ExoRows): one value for every lane, or each lane's own.
+  constexpr int kStride = ExoRows::stride(SharedInputs, W);
+  constexpr int kInstant = ExoRows::kCount * kStride;
+  const auto input = [](const double* e, int r) FTC_HOT_LAMBDA {
     if constexpr (SharedInputs)
-      return T(r[0]);
+      return T(e[r]);
     else
-      return lane::load_lanes<T>(r);
+      return lane::load_lanes<T>(e + r * kStride);
   };
   const T kx = row(su.truth[0]), ky = row(su.truth[1]), kz = row(su.truth[2]), w = row(su.truth[3]);
   const T mkx = row(su.model[0]), mky = row(su.model[1]), mkz = row(su.model[2]),
@@ -110,10 +112,10 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
   struct Forcing {
     V3 Gu, dist;
   };
-  const auto forcing = [&](const ExoLanes& e, const V4& u_d) FTC_HOT_LAMBDA -> Forcing {
+  const auto forcing = [&](const double* e, const V4& u_d) FTC_HOT_LAMBDA -> Forcing {
     V4 u;
     for (int j = 0; j < 4; ++j) {
-      const T v = input(e.gain[j]) * u_d[j] + input(e.offset[j]);
+      const T v = input(e, ExoRows::kGain + j) * u_d[j] + input(e, ExoRows::kOffset + j);
       const T lo = lane::select(v < -sat, -sat, v);
       u[j] = lane::select(lo > sat, sat, lo);
     }
@@ -122,7 +124,7 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
       T g = G[i * 4] * u[0];
       for (int j = 1; j < 4; ++j) g = g + G[i * 4 + j] * u[j];
       F.Gu[i] = g;
-      F.dist[i] = input(e.dist[i]);
+      F.dist[i] = input(e, ExoRows::kDist + i);
     }
     return F;
   };
@@ -175,12 +177,12 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
   std::int64_t k = 0;
   while (k < su.samples && live_count > 0) {
     const int n = static_cast<int>(su.samples - k < block ? su.samples - k : block);
-    const ExoLanes* exo = host.inputs(k, n);
+    const double* exo = host.inputs(k, n);
     for (int i = 0; i < n; ++i, ++k) {
-      const ExoLanes* e = exo + i * S * 3;
+      const double* e = exo + i * S * 3 * kInstant;
       V3 f, f_model;
       drift(x, f, su.mismatch ? &f_model : nullptr);
-      const V3 a = accel(f, forcing(e[0], u_prev));
+      const V3 a = accel(f, forcing(e, u_prev));
       law::Sample<T, 3> m;
       m.X1 = {x[0], x[1], x[2]};
       m.X2 = {x[3], x[4], x[5]};
@@ -224,19 +226,19 @@ void run_spacecraft_pack(const PackSetup& su, PackHost& host, PackFinal& fin) {
       }
 
       // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
-      const V3 a1 = accel(f, forcing(e[0], u));
+      const V3 a1 = accel(f, forcing(e, u));
       V6 k1{x[3], x[4], x[5], a1[0], a1[1], a1[2]};
       for (int j = 0; j < S; ++j) {
-        const ExoLanes* ej = e + j * 3;
-        if (j > 0) k1 = deriv(x, forcing(ej[0], u));
+        const double* ej = e + j * 3 * kInstant;
+        if (j > 0) k1 = deriv(x, forcing(ej, u));
         V6 xs;
         for (int r = 0; r < 6; ++r) xs[r] = x[r] + h2 * k1[r];
-        const Forcing mid = forcing(ej[1], u);
+        const Forcing mid = forcing(ej + kInstant, u);
         const V6 k2 = deriv(xs, mid);
         for (int r = 0; r < 6; ++r) xs[r] = x[r] + h2 * k2[r];
         const V6 k3 = deriv(xs, mid);
         for (int r = 0; r < 6; ++r) xs[r] = x[r] + hv * k3[r];
-        const V6 k4 = deriv(xs, forcing(ej[2], u));
+        const V6 k4 = deriv(xs, forcing(ej + 2 * kInstant, u));
         for (int r = 0; r < 6; ++r) {
           T sum = k1[r] + T(2.0) * k2[r];
           sum = sum + T(2.0) * k3[r];

@@ -59,27 +59,33 @@ class Host final : public PackHost {
     // Unused lanes repeat lane 0.
     for (int l = static_cast<int>(lanes_.size()); l < width; ++l) groups_[0].lanes.push_back(l);
     done_.assign(lanes_.size(), false);
-    buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3);
+    buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3 * ExoRows::kCount *
+                   ExoRows::stride(setup.shared_inputs, width));
   }
 
-  const ExoLanes* inputs(std::int64_t k0, int n) override {
+  const double* inputs(std::int64_t k0, int n) override {
     const int S = setup_.substeps;
-    // With one scenario only lane 0 is filled (PackSetup::shared_inputs).
-    const int filled = groups_.size() == 1 ? 1 : width_;
+    // With one scenario one value per row (PackSetup::shared_inputs), else one per lane.
+    const bool shared = setup_.shared_inputs;
+    const int stride = ExoRows::stride(shared, width_);
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < S; ++j) {
-        ExoLanes* out = &buffer_[(static_cast<std::size_t>(i) * S + j) * 3];
+        double* out =
+            &buffer_[(static_cast<std::size_t>(i) * S + j) * 3 * ExoRows::kCount * stride];
         for (Group& g : groups_) {
           const auto* e = g.exo.step(k0 + i, j);
-          for (int q = 0; q < 3; ++q)
+          for (int q = 0; q < 3; ++q) {
+            double* rows = out + q * ExoRows::kCount * stride;
             for (const int l : g.lanes) {
-              if (l >= filled) break;
-              for (int r = 0; r < 3; ++r) out[q].dist[r][l] = e[q].disturbance[r];
+              if (shared && l > 0) break;
+              for (int r = 0; r < 3; ++r)
+                rows[(ExoRows::kDist + r) * stride + l] = e[q].disturbance[r];
               for (int r = 0; r < 4; ++r) {
-                out[q].gain[r][l] = e[q].fault.gain[r];
-                out[q].offset[r][l] = e[q].fault.offset[r];
+                rows[(ExoRows::kGain + r) * stride + l] = e[q].fault.gain[r];
+                rows[(ExoRows::kOffset + r) * stride + l] = e[q].fault.offset[r];
               }
             }
+          }
         }
       }
     return buffer_.data();
@@ -101,12 +107,14 @@ class Host final : public PackHost {
         for (int r = 0; r < 4; ++r) u[r] = out[i].u[r][l];
         if (metrics) metrics_[l].sample(t, x, u);
         if (every > 0 && k % every == 0) {
-          const ExoLanes& e = buffer_[static_cast<std::size_t>(i) * S * 3];
-          const std::size_t from = groups_.size() == 1 ? 0 : l;
+          const std::size_t stride = ExoRows::stride(setup_.shared_inputs, width_);
+          const double* e =
+              &buffer_[static_cast<std::size_t>(i) * S * 3 * ExoRows::kCount * stride];
+          const std::size_t from = setup_.shared_inputs ? 0 : l;
           FaultEffect<4> effect;
           for (int r = 0; r < 4; ++r) {
-            effect.gain[r] = e.gain[r][from];
-            effect.offset[r] = e.offset[r][from];
+            effect.gain[r] = e[(ExoRows::kGain + r) * stride + from];
+            effect.offset[r] = e[(ExoRows::kOffset + r) * stride + from];
           }
           append_row<3, 4>(lanes_[l]->result->trajectory, t, x, u,
                            groups_[group_of_[l]].faults.apply(effect, u));
@@ -165,7 +173,7 @@ class Host final : public PackHost {
   std::vector<std::size_t> group_of_;
   std::vector<MetricsAccumulator<3, 4>> metrics_;
   std::vector<bool> done_;
-  std::vector<ExoLanes> buffer_;
+  std::vector<double> buffer_;  // the inputs of a block (PackHost::inputs)
 };
 
 void run_pack(std::span<SpacecraftLane* const> lanes, const Mat34& G, const Mat43& G_pinv,
