@@ -185,7 +185,7 @@ FTC_HOT_INLINE xsimd::batch<std::int64_t, A> bits_of(const xsimd::batch<double, 
 template <class A>
 FTC_HOT_INLINE xsimd::batch<double, A> gather_at(const double* table,
                                                  const xsimd::batch<std::int64_t, A>& i) {
-  if constexpr (std::is_same_v<A, xsimd::avx512f> || std::is_base_of_v<xsimd::avx2, A>) {
+  if constexpr (std::is_base_of_v<xsimd::avx512f, A> || std::is_base_of_v<xsimd::avx2, A>) {
     return xsimd::kernel::gather<A>(table, i, A{});
   } else {
     alignas(A::alignment()) std::int64_t k[xsimd::batch<double, A>::size];
