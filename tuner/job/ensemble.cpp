@@ -343,8 +343,8 @@ std::shared_ptr<const Obj<FaultDistribution>> make_faults_shape() {
               f.count_hi = static_cast<int>(std::clamp(hi, -1LL, 1000000LL));
             },
             [](const F&, const std::string&, Errors&) {},  // against the actuators: rule below
-            [](const F& f, json& o) {
-              o["count"] = {f.count_lo, f.count_hi};
+            [](const F& f, json& obj) {
+              obj["count"] = {f.count_lo, f.count_hi};
             },
             [] {
               return json{{"type", "array"},
@@ -376,8 +376,8 @@ std::shared_ptr<const Obj<FaultDistribution>> make_faults_shape() {
             },
             [](const F&, const std::string&, Errors&) {},  // against the plant: job rule
             // None listed means every actuator: the key stays out (an empty list is refused).
-            [](const F& f, json& o) {
-              if (!f.actuators.empty()) o["actuators"] = f.actuators;
+            [](const F& f, json& obj) {
+              if (!f.actuators.empty()) obj["actuators"] = f.actuators;
             },
             [] {
               return json{{"type", "array"},
@@ -445,7 +445,7 @@ std::shared_ptr<const Obj<EnsembleConfig>> make_ensemble_shape() {
                 errs.push_back({path, "must be an integer in 1..1000000 (got " +
                                           std::to_string(e.count) + ")"});
             },
-            [](const E& e, json& o) { o["count"] = e.count; },
+            [](const E& e, json& obj) { obj["count"] = e.count; },
             [] {
               return json{{"type", "integer"},
                           {"minimum", 1},

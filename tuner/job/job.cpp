@@ -153,8 +153,8 @@ Ptr<sim::Scenario> make_scenario_shape() {
          s.inertia = std::move(x);
        },
        [](const S&, const std::string&, Errors&) {},  // against the plant: job rule
-       [](const S& s, json& o) {
-         if (!s.inertia.empty()) o["inertia"] = s.inertia;
+       [](const S& s, json& obj) {
+         if (!s.inertia.empty()) obj["inertia"] = s.inertia;
        },
        [] {
          return json{{"type", "array"},
@@ -216,14 +216,14 @@ Ptr<ObjectiveConfig> make_objective_shape() {
                               const char* doc) -> Obj<O>::Field {
     return {key,
             false,
-            [m](const json& v, const std::string& path, O& o, Errors& e) {
-              schema::detail::read_number(v, path, o.*m, e);
+            [m](const json& v, const std::string& path, O& obj, Errors& e) {
+              schema::detail::read_number(v, path, obj.*m, e);
             },
-            [m, r](const O& o, const std::string& path, Errors& e) {
-              if (std::string msg = r.check(o.*m); !msg.empty()) e.push_back({path, msg});
+            [m, r](const O& obj, const std::string& path, Errors& e) {
+              if (std::string msg = r.check(obj.*m); !msg.empty()) e.push_back({path, msg});
             },
-            [m, key, when](const O& o, json& out) {
-              if (o.aggregate == when) out[key] = o.*m;
+            [m, key, when](const O& obj, json& out) {
+              if (obj.aggregate == when) out[key] = obj.*m;
             },
             [r, doc] {
               json s = schema::detail::number_schema(doc, r);
@@ -236,20 +236,20 @@ Ptr<ObjectiveConfig> make_objective_shape() {
   o->field(conditional("alpha", &O::alpha, {0.0, false, 1.0, true}, Aggregate::cvar,
                        "alpha in [0, 1) of aggregate cvar: the mean of the worst 1 - alpha"));
   o->field({"window_from", false,
-            [](const json& v, const std::string& path, O& o, Errors& e) {
+            [](const json& v, const std::string& path, O& obj, Errors& e) {
               if (!v.is_string())
                 e.push_back({path, "expected a string, got " + json_io::json_type_name(v)});
               else if (v == "start")
-                o.window_from = WindowFrom::start;
+                obj.window_from = WindowFrom::start;
               else if (v == "first_fault")
-                o.window_from = WindowFrom::first_fault;
+                obj.window_from = WindowFrom::first_fault;
               else
                 e.push_back({path, schema::detail::choice_error({"start", "first_fault"},
                                                                 v.get<std::string>())});
             },
             [](const O&, const std::string&, Errors&) {},
-            [](const O& o, json& out) {
-              if (o.window_from == WindowFrom::first_fault) out["window_from"] = "first_fault";
+            [](const O& obj, json& out) {
+              if (obj.window_from == WindowFrom::first_fault) out["window_from"] = "first_fault";
             },
             [] {
               return json{{"type", "string"},
@@ -259,10 +259,10 @@ Ptr<ObjectiveConfig> make_objective_shape() {
                            "measure the window from each run's start or from each scenario's "
                            "earliest fault onset"}};
             }});
-  o->rule([](const O& o, const std::string& path, Errors& e) {
-    if (o.aggregate != Aggregate::quantile && o.q != 0.9)
+  o->rule([](const O& obj, const std::string& path, Errors& e) {
+    if (obj.aggregate != Aggregate::quantile && obj.q != 0.9)
       e.push_back({path + "/q", "is used only with aggregate \"quantile\""});
-    if (o.aggregate != Aggregate::cvar && o.alpha != 0.9)
+    if (obj.aggregate != Aggregate::cvar && obj.alpha != 0.9)
       e.push_back({path + "/alpha", "is used only with aggregate \"cvar\""});
   });
   return o;
