@@ -10,7 +10,8 @@
 //   |x|^a = 2^(a e) · c^a · (1 + r)^a,   c = the centre of m's 1/128 interval (by its top 7
 //                                        mantissa bits),  r = m / c - 1,  |r| <= 1/256
 //
-// 2^(a e) and c^a come from tables computed once in long double, r from a table of 1/c, and
+// 2^(a e) and c^a come from tables computed once per exponent in double-double arithmetic (IEEE
+// operations only, so the same bits on every CPU; sig_power.cpp), r from a table of 1/c, and
 // (1 + r)^a from its binomial series to r^6 (the next term is below 2e-18). Against the power in
 // long double the result is within 5 ulp (mean 0.7 ulp), where exp(a ln|x|) reached 52 ulp
 // (mean 7): tests/test_sig_power.cpp. Zero, subnormals and |x| outside [2^-64, 2^64), which a
@@ -57,7 +58,7 @@ class SigPowerLanes {
       a_[l] = a[l];
       base_[l] = l * Tables::kIntervals;
       base_i_[l] = l * Tables::kIntervals;
-      // Lanes often share an exponent (α is rarely tuned): the tables (256 powl) once.
+      // Lanes often share an exponent (α is rarely tuned): the tables (256 powers) once.
       int same = 0;
       while (same < l && a[same] != a[l]) ++same;
       if (same < l) {
