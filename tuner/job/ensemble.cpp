@@ -6,6 +6,7 @@
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/runtime/schema.hpp"
+#include "ftc/sim/elementary.hpp"
 #include "ftc/sim/plants.hpp"
 #include "job/shapes.hpp"
 
@@ -41,7 +42,8 @@ double Distribution::draw(double u) const {
     case Kind::uniform:
       return a + (b - a) * u;
     case Kind::log_uniform:
-      return std::exp(std::log(a) + (std::log(b) - std::log(a)) * u);
+      // ftctune's own exp and log, not libm's: the members are the same on every CPU.
+      return sim::math::exp(sim::math::log(a) + (sim::math::log(b) - sim::math::log(a)) * u);
   }
   return a;
 }

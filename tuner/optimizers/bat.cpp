@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/elementary.hpp"
 
 namespace ftc::tune {
 
@@ -123,7 +124,8 @@ void BatAlgorithm::iterate(BatchFitness& fitness) {
 
   const std::vector<double> J = evaluate(fitness, candidates);
 
-  const double pulse = c.pulse_rate * (1.0 - std::exp(-c.pulse_rate_growth * t));
+  // ftctune's exp, not libm's, so that the schedule is the same bits on every CPU.
+  const double pulse = c.pulse_rate * (1.0 - sim::math::exp(-c.pulse_rate_growth * t));
   for (std::size_t i = 0; i < bats_.size(); ++i) {
     Bat& b = bats_[i];
     if (rng_.uniform() < b.loudness && J[i] >= b.fitness) {

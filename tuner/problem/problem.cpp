@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/elementary.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 
 namespace ftc::tune {
@@ -53,8 +54,8 @@ TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std:
     const sim::ControllerField* f = sim::find_controller_field(b.name);
     space_.names.push_back(b.name);
     const bool log = b.scale == Scale::log;
-    space_.lower.push_back(log ? std::log(b.lower) : b.lower);
-    space_.upper.push_back(log ? std::log(b.upper) : b.upper);
+    space_.lower.push_back(log ? sim::math::log(b.lower) : b.lower);
+    space_.upper.push_back(log ? sim::math::log(b.upper) : b.upper);
     scales_.push_back(b.scale);
     fields_.push_back(f->member);  // validate() made sure the field exists and is tunable
   }
@@ -76,7 +77,7 @@ Decision TuningProblem::to_parameters(std::span<const double> y) const {
       // exp(ln b) may miss b by an ulp either way: a search at its bound gives the bound itself.
       x[j] = y[j] >= space_.upper[j]   ? b.upper
              : y[j] <= space_.lower[j] ? b.lower
-                                       : std::clamp(std::exp(y[j]), b.lower, b.upper);
+                                       : std::clamp(sim::math::exp(y[j]), b.lower, b.upper);
     }
   return x;
 }

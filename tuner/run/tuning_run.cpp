@@ -8,6 +8,7 @@
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/controller_config.hpp"
+#include "ftc/sim/elementary.hpp"
 #include "ftc/tune/io/sha256.hpp"
 
 namespace ftc::tune {
@@ -192,7 +193,7 @@ std::vector<std::string> bound_warnings(const Job& job, const Decision& x) {
   for (std::size_t j = 0; j < ps.size() && j < x.size(); ++j) {
     const ParameterBounds& b = ps[j];
     const bool log = b.scale == Scale::log;
-    const auto c = [&](double v) { return log ? std::log(v) : v; };
+    const auto c = [&](double v) { return log ? sim::math::log(v) : v; };
     const double tol = 1e-3 * (c(b.upper) - c(b.lower));
     const bool at_lower = c(x[j]) - c(b.lower) <= tol, at_upper = c(b.upper) - c(x[j]) <= tol;
     if (!at_lower && !at_upper) continue;
