@@ -556,9 +556,27 @@ TEST(Cli, UnknownInstructionSetExitsTwoAndVersionNamesTheOneInUse) {
   EXPECT_NE(bad.err.find("FTCTUNE_ISA"), std::string::npos) << bad.err;
   EXPECT_NE(bad.err.find("scalar, sse2, avx2, avx512"), std::string::npos) << bad.err;
   EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
-  const CliResult v = run_cli_with_isa("sse2", "--version", dir);
-  EXPECT_EQ(v.exit_code, 0);
-  EXPECT_NE(v.out.find("simulation lanes: sse2 (2 per core"), std::string::npos) << v.out;
+  // Every instruction set the CPU and the build have can be chosen; one they lack is refused by
+  // name (on aarch64 only scalar is built).
+  const std::vector<ftc::sim::Isa> supported = ftc::sim::supported_isas();
+  for (ftc::sim::Isa isa :
+       {ftc::sim::Isa::scalar, ftc::sim::Isa::sse2, ftc::sim::Isa::avx2, ftc::sim::Isa::avx512}) {
+    const std::string name = ftc::sim::to_string(isa);
+    const CliResult v = run_cli_with_isa(name, "--version", dir);
+    if (std::find(supported.begin(), supported.end(), isa) != supported.end()) {
+      EXPECT_EQ(v.exit_code, 0) << name << ": " << v.err;
+      EXPECT_NE(v.out.find("simulation lanes: " + name + " (" +
+                           std::to_string(ftc::sim::lane_width(isa)) + " per core"),
+                std::string::npos)
+          << v.out;
+    } else {
+      EXPECT_EQ(v.exit_code, 2) << name;
+      EXPECT_NE(
+          v.err.find("is \"" + name + "\", which this CPU or build cannot run (it can: scalar"),
+          std::string::npos)
+          << v.err;
+    }
+  }
   const CliResult d = run_cli("--version", dir);
   EXPECT_NE(d.out.find(std::string("simulation lanes: ") +
                        ftc::sim::to_string(ftc::sim::supported_isas().back())),
