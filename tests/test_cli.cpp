@@ -528,7 +528,26 @@ CliResult run_cli_with_isa(const std::string& isa, const std::string& args,
 
 // The gains file does not depend on the instruction set the simulations ran on: every lane
 // gives the scalar code's bits (tests/test_batch_kernel.cpp), so the tuning takes the same path.
+// Nor on the CPU: the tuned gains and each iteration's best fitness are the ones `ftctune run`
+// wrote on x86-64 and, under qemu, on aarch64 (tools/test --aarch64) on 2026-11-25.
 TEST(Cli, GainsAreTheSameBytesUnderEveryInstructionSet) {
+  struct Recorded {
+    double Kp, Ki;
+    std::vector<double> best_fitness;
+  };
+  const std::map<std::string, Recorded> recorded = {
+      {"jobs/table1.json",
+       {1.2813446875159336,
+        50.0,
+        {0.7503333271579694, 0.7507799421830366, 0.7507807356486825, 0.7507807356486825,
+         0.7507807356486825, 0.7507807356486825, 0.7507807356486825, 0.7507807356486825,
+         0.7507807356486825, 0.7507807356486825, 0.7507807356486825}}},
+      {"jobs/table1-adaptive.json",
+       {1.0,
+        42.54125471239895,
+        {0.7503280382217092, 0.7507799213756619, 0.7507807352160112, 0.7507808846985218,
+         0.7507808846985218, 0.7507808846985218, 0.7507809172601402, 0.7507809172601402,
+         0.7507809172601402, 0.750781061252312, 0.750781061252312}}}};
   const auto dir = fresh_dir("cli-isa");
   for (const std::string job : {"jobs/table1.json", "jobs/table1-adaptive.json"}) {
     std::string scalar;
@@ -540,9 +559,16 @@ TEST(Cli, GainsAreTheSameBytesUnderEveryInstructionSet) {
       ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
       const std::string gains = slurp(out / "gains.json");
       ASSERT_FALSE(gains.empty());
-      if (isa == ftc::sim::Isa::scalar)
+      if (isa == ftc::sim::Isa::scalar) {
         scalar = gains;
-      else
+        const nlohmann::json g = nlohmann::json::parse(gains);
+        const Recorded& want = recorded.at(job);
+        EXPECT_EQ(g["tuned"]["Kp"].get<double>(), want.Kp) << job;
+        EXPECT_EQ(g["tuned"]["Ki"].get<double>(), want.Ki) << job;
+        std::vector<double> best;
+        for (const auto& h : g["history"]) best.push_back(h["best_fitness"].get<double>());
+        EXPECT_EQ(best, want.best_fitness) << job;
+      } else
         EXPECT_EQ(gains, scalar) << job << ": gains.json under FTCTUNE_ISA=" << name
                                  << " differs from the scalar one";
     }
