@@ -1,7 +1,7 @@
 # Cross-compiles ftctune for 64-bit Arm (aarch64) with Debian's cross compiler and multiarch
 # arm64 libraries, and runs the tests under qemu-user: `tools/test --aarch64` uses it (see
-# docs/architecture.md, "Portability"). The x86-64 SIMD kernels are not built for aarch64; the
-# scalar path is the one that runs, and it must give the same bits as on x86-64.
+# docs/architecture.md, "Runtime dispatch"). The x86-64 SIMD kernels are not built for aarch64;
+# the scalar path is the one that runs, and it must give the same bits as on x86-64.
 set(CMAKE_SYSTEM_NAME Linux)
 set(CMAKE_SYSTEM_PROCESSOR aarch64)
 set(CMAKE_CXX_COMPILER aarch64-linux-gnu-g++)
