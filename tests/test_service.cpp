@@ -97,7 +97,7 @@ struct Service {
 // Polls until the job runs and has completed `iterations` iterations.
 void wait_running(Service& s, const std::string& id, int iterations) {
   json v;
-  for (int i = 0; i < 4000; ++i) {
+  for (int i = 0; i < 4000 * FTC_TEST_SLOWDOWN; ++i) {
     v = s.get("/v1/jobs/" + id);
     if (v["status"] == "running" && !v["progress"]["iteration"].is_null() &&
         v["progress"]["iteration"].get<int>() >= iterations)
@@ -107,10 +107,11 @@ void wait_running(Service& s, const std::string& id, int iterations) {
   FAIL() << "job " << id << " never ran " << iterations << " iterations: " << v.dump();
 }
 
-// Polls /healthz until `holds` says yes (or 60 s pass); returns the last answer.
+// Polls /healthz until `holds` says yes (or 60 s pass, stretched under an emulator); returns
+// the last answer.
 json wait_health(Service& s, const std::function<bool(const json&)>& holds) {
   json h;
-  for (int i = 0; i < 6000; ++i) {
+  for (int i = 0; i < 6000 * FTC_TEST_SLOWDOWN; ++i) {
     h = s.get("/healthz");
     if (holds(h)) break;
     std::this_thread::sleep_for(10ms);
@@ -214,7 +215,7 @@ TEST(Service, LifecycleGivesTheSameGainsAsRun) {
   std::set<std::string> seen;
   int last_iteration = -1;
   json view;
-  for (int i = 0; i < 6000; ++i) {
+  for (int i = 0; i < 6000 * FTC_TEST_SLOWDOWN; ++i) {
     view = s.get("/v1/jobs/" + id);
     seen.insert(view["status"].get<std::string>());
     if (!view["progress"]["iteration"].is_null()) {
@@ -273,7 +274,7 @@ TEST(Service, CancelsQueuedAndRunningJobs) {
   EXPECT_EQ(json::parse(r->body)["status"], "cancelled");
 
   json view;
-  for (int i = 0; i < 2000; ++i) {
+  for (int i = 0; i < 2000 * FTC_TEST_SLOWDOWN; ++i) {
     view = s.get("/v1/jobs/" + running);
     if (view["status"] == "running" && !view["progress"]["iteration"].is_null()) break;
     std::this_thread::sleep_for(5ms);
@@ -563,7 +564,7 @@ TEST(Service, ConcurrentJobsRunSideBySideWithTheSameGains) {
   std::vector<std::string> ids;
   for (const json& j : jobs) ids.push_back(s.submit(j)["id"]);
   bool both_running = false;
-  for (int i = 0; i < 4000 && !both_running; ++i) {
+  for (int i = 0; i < 4000 * FTC_TEST_SLOWDOWN && !both_running; ++i) {
     both_running = s.get("/v1/jobs?status=running")["total"] == 2;
     if (!both_running) std::this_thread::sleep_for(2ms);
   }
@@ -592,7 +593,7 @@ TEST(Service, RecoversFromSigkillWithoutLosingOrRepeatingJobs) {
       ids.push_back(json::parse(r->body)["id"]);
     }
     // Kill it while the first job is in the middle of its run.
-    for (int i = 0; i < 4000 && killed.empty(); ++i) {
+    for (int i = 0; i < 4000 * FTC_TEST_SLOWDOWN && killed.empty(); ++i) {
       auto r = c.Get(("/v1/jobs/" + ids[0]).c_str());
       const json v = json::parse(r->body);
       if (v["status"] == "running" && !v["progress"]["iteration"].is_null() &&
@@ -632,7 +633,7 @@ TEST(Service, SigtermCheckpointsTheRunningJobAndExits) {
     ServerProcess server(dir / "store", dir / "serve.log");
     httplib::Client c("127.0.0.1", server.port());
     id = json::parse(c.Post("/v1/jobs", job.dump(), "application/json")->body)["id"];
-    for (int i = 0; i < 4000; ++i) {
+    for (int i = 0; i < 4000 * FTC_TEST_SLOWDOWN; ++i) {
       const json v = json::parse(c.Get(("/v1/jobs/" + id).c_str())->body);
       if (v["status"] == "running" && !v["progress"]["iteration"].is_null()) break;
       std::this_thread::sleep_for(2ms);
@@ -642,7 +643,7 @@ TEST(Service, SigtermCheckpointsTheRunningJobAndExits) {
   ServerProcess server(dir / "store", dir / "serve.log");
   httplib::Client c("127.0.0.1", server.port());
   json v;
-  for (int i = 0; i < 6000; ++i) {
+  for (int i = 0; i < 6000 * FTC_TEST_SLOWDOWN; ++i) {
     v = json::parse(c.Get(("/v1/jobs/" + id).c_str())->body);
     if (v["status"] == "succeeded") break;
     std::this_thread::sleep_for(10ms);
