@@ -113,6 +113,7 @@ const std::array<DD, 64>& exp2_sixty_fourths() {
 // two, 2^g = e^(g ln 2) from exp_small.
 double exp2_dd(DD p) {
   const double m = std::nearbyint(p.hi * 64.0);
+  if (std::isnan(m)) return m;  // a NaN exponent (or ∞ · 0): a NaN entry, not a bad cast
   if (m > 64.0 * 2000.0) return INFINITY;
   if (m < -64.0 * 2000.0) return 0.0;
   const DD g = two_sum(p.hi - m * 0x1p-6, p.lo);  // the subtraction is exact (Sterbenz)
