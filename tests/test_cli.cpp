@@ -430,12 +430,14 @@ TEST(Cli, ResumeAfterSigkillWritesTheFilesOfAnUninterruptedRun) {
   // trajectories/ folder included, are in the way when the resumed run moves its own in.
   ASSERT_EQ(run_cli("run -q --seed 5 --out '" + out + "' '" + job.string() + "'", dir).exit_code,
             0);
-  // One thread, so that the run is still going when it is killed.
-  ftc::tune::write_file_atomic(
-      dir / "kill.sh", "'" FTC_CLI "' run -q --threads 1 --force --checkpoint --out '" + out +
-                           "' '" + job.string() + "' & pid=$!\nwhile [ ! -f '" + out +
-                           "/checkpoint.json' ]; do sleep 0.02; done\nsleep 0.2\nkill -9 $pid\n"
-                           "wait $pid\nexit 0\n");
+  // One thread, so that the run is still going when it is killed; 0.2 s after the first
+  // checkpoint (stretched under an emulator) it has written a later one.
+  std::string script = "'" FTC_CLI "' run -q --threads 1 --force --checkpoint --out '" + out +
+                       "' '" + job.string() + "' & pid=$!\n";
+  script += "while [ ! -f '" + out + "/checkpoint.json' ]; do sleep 0.02; done\n";
+  script += "sleep " + std::to_string(0.2 * FTC_TEST_SLOWDOWN) + "\n";
+  script += "kill -9 $pid\nwait $pid\nexit 0\n";
+  ftc::tune::write_file_atomic(dir / "kill.sh", script);
   ASSERT_EQ(std::system(("bash '" + (dir / "kill.sh").string() + "'").c_str()), 0);
   // A finished run removes its checkpoint.
   ASSERT_TRUE(std::filesystem::exists(dir / "killed" / "checkpoint.json"))
