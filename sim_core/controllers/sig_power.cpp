@@ -94,23 +94,9 @@ DD exp_small(DD s) {
   return sum;
 }
 
-// 2^(j/64) for j in [0, 64), computed once: e^(j ln 2 / 2^13), within exp_small's range, squared
-// seven times (which turns its 2^-105 error into about 2^-98).
-const std::array<DD, 64>& exp2_sixty_fourths() {
-  static const std::array<DD, 64> t = [] {
-    std::array<DD, 64> v{};
-    for (int j = 0; j < 64; ++j) {
-      DD x = exp_small(mul(kLn2, j * 0x1p-13));
-      for (int k = 0; k < 7; ++k) x = mul(x, x);
-      v[j] = x;
-    }
-    return v;
-  }();
-  return t;
-}
-
-// 2^p for p = m/64 + g with m an integer and |g| <= 1/128: 2^(m/64) from a table and a power of
-// two, 2^g = e^(g ln 2) from exp_small.
+// 2^p for p = m/64 + g with m an integer and |g| <= 1/128: 2^(m/64) from exp's table of 2^(j/64)
+// as double-doubles (lanes/elementary.hpp, within 2^-107) and a power of two, 2^g = e^(g ln 2)
+// from exp_small.
 double exp2_dd(DD p) {
   const double m = std::nearbyint(p.hi * 64.0);
   if (std::isnan(m)) return m;  // a NaN exponent (or ∞ · 0): a NaN entry, not a bad cast
@@ -120,7 +106,8 @@ double exp2_dd(DD p) {
   const int mi = static_cast<int>(m);
   const int j = ((mi % 64) + 64) % 64;
   const int n = (mi - j) / 64;
-  const DD y = mul(exp2_sixty_fourths()[j], exp_small(mul(kLn2, g.hi)));
+  const DD y =
+      mul(DD{lane::detail::kExp2Hi[j], lane::detail::kExp2Lo[j]}, exp_small(mul(kLn2, g.hi)));
   // g.lo is below 2^-53 |p|; its share, g.lo ln 2 · 2^g, enters to first order.
   const DD z = add(y, mul(y, kLn2.hi * g.lo));
   return times_power_of_two(z.hi + z.lo, n);
