@@ -1,8 +1,11 @@
 #pragma once
-// The closed loop of SPEC §4, compiled per plant class so that its f and G inline into it (the
-// controller is called through its interface: plants/plant_adapter.hpp says why). Private to
-// sim_core: each plant's .cpp instantiates it through PlantAdapter, registry.cpp for the
-// Plant<n, m> interface.
+// The closed loop of SPEC §4 for a Controller object (the runtime's sim::simulate(plant,
+// controller, ...), registry.cpp), compiled per plant class so that its f and G inline into it;
+// the controller is called through its interface. It runs the operations of the batch kernel
+// (lanes/closed_loop.hpp), which AnyPlant's simulations run, so that a runtime controller
+// replays a tuning run's lane to the last bit (tests/test_batch_kernel.cpp). Also the host
+// side's pieces the kernels share: the exogenous inputs and the recorded rows. Private to
+// sim_core.
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -145,6 +148,17 @@ FTC_HOT_INLINE typename P::Vector drift(const P& plant, const typename P::State&
     return plant.f(x, ws);
 }
 
+// G(X), from the workspace's sines and cosines when the plant has a G for it
+// (Manipulator::G(x, ws)): those f(x, ws) used at the same X.
+template <class P, class W>
+FTC_HOT_INLINE typename P::InputMatrix input_matrix(const P& plant, const typename P::State& x,
+                                                    W& ws) {
+  if constexpr (requires { plant.G(x, ws); })
+    return plant.G(x, ws);
+  else
+    return plant.G(x);
+}
+
 // One recorded sample; out of line, as it is rare and would bloat the loop.
 template <int N, int M>
 [[gnu::noinline]] void append_row(Trajectory& tr, double t, const StateOf<N>& x, const Vec<M>& u_d,
@@ -192,11 +206,12 @@ SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
 
   const bool constant_G = plant.input_matrix_is_constant();
   const Mat<N, M> G0 = plant.G(x0);
+  auto ws = make_workspace<P>();
   // dX2/dt = f(X) + G(X) u + Δ(t), with u the command u_d after the faults of time t.
   const auto accel = [&](const StateT& s, const Vec<N>& fs, const Entry& e, const Vec<M>& u_d)
                          FTC_HOT_LAMBDA -> Vec<N> {
     const Vec<M> u = faults.apply(e.fault, u_d);
-    // Summed in the order the batch kernels sum (lanes/spacecraft_kernel.hpp), so that a
+    // Summed in the order the batch kernels sum (lanes/closed_loop.hpp), so that a
     // Controller simulated here issues the commands of a tuning run's lane to the last bit.
     const auto row_times_u = [&](const Mat<N, M>& G, int i) FTC_HOT_LAMBDA {
       double g = G(i, 0) * u[0];
@@ -207,12 +222,11 @@ SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
     if (constant_G) {
       for (int i = 0; i < N; ++i) a[i] = (fs[i] + row_times_u(G0, i)) + e.disturbance[i];
     } else {
-      const Mat<N, M> G = plant.G(s);
+      const Mat<N, M> G = input_matrix(plant, s, ws);
       for (int i = 0; i < N; ++i) a[i] = (fs[i] + row_times_u(G, i)) + e.disturbance[i];
     }
     return a;
   };
-  auto ws = make_workspace<P>();
   // dX/dt at state s and stage inputs e, with the command of this sample held.
   const auto deriv = [&](const StateT& s, const Entry& e) FTC_HOT_LAMBDA -> StateT {
     StateT d;

@@ -25,7 +25,7 @@ class SinCosTracker {
  public:
   static constexpr double kReach = 0.02;
 
-  // The same operations as the batch simulator's AngleTracker (lanes/spacecraft_kernel.hpp),
+  // The same operations as the batch simulator's AngleTracker (lanes/angle_tracker.hpp),
   // so that the generic loop and the kernels give the same bits: after re-anchoring, the
   // series runs with δ = 0.
   FTC_HOT_INLINE void eval(double x, double& s, double& c) {

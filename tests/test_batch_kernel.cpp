@@ -1,6 +1,7 @@
-// The batch simulator (sim_core/lanes/spacecraft_kernel.hpp): every lane of a pack, on every
+// The batch simulator (sim_core/lanes/closed_loop.hpp): every lane of a pack, on every
 // instruction set this CPU runs, gives the bits of the same simulation run alone in scalar code,
-// whatever its neighbours do (other gains, other scenarios, divergence, partial packs).
+// whatever its neighbours do (other gains, other scenarios, divergence, partial packs), for
+// every registered plant.
 #include <gtest/gtest.h>
 
 #include <bit>
@@ -12,8 +13,8 @@
 #include "checks.hpp"
 #include "ftc/sim/isa.hpp"
 #include "ftc/sim/plants.hpp"
+#include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/spacecraft.hpp"
-#include "plants/spacecraft_pack.hpp"
 
 using namespace ftc::sim;
 
@@ -35,34 +36,24 @@ struct Task {
   SimulationOptions options;
 };
 
-// Runs the tasks as lanes of packs on `isa` (all of them in as few packs as fit).
-std::vector<SimulationResult> run(const std::vector<Task>& tasks, Isa isa) {
-  const Spacecraft model;
+// Runs the tasks as lanes of packs on `isa` (all of them in as few packs as fit), on the plant
+// of `spec` (the spacecraft by default).
+std::vector<SimulationResult> run(const std::vector<Task>& tasks, Isa isa,
+                                  const PlantSpec& spec = {}) {
+  const auto plant = make_plant(spec);
+  std::vector<PackTask> pack;
+  for (const Task& t : tasks) pack.push_back({&t.config, &t.scenario, &t.options});
   std::vector<SimulationResult> results(tasks.size());
-  std::vector<detail::SpacecraftLane> lanes(tasks.size());
-  for (std::size_t i = 0; i < tasks.size(); ++i) {
-    detail::SpacecraftLane& l = lanes[i];
-    l.config = detail::checked_config(tasks[i].config, tasks[i].scenario.sample_time);
-    l.scenario = &tasks[i].scenario;
-    l.options = &tasks[i].options;
-    l.model = model.f_constants();
-    l.truth = l.model;
-    if (!tasks[i].scenario.inertia.empty()) {
-      SpacecraftParams p;
-      p.inertia = {tasks[i].scenario.inertia[0], tasks[i].scenario.inertia[1],
-                   tasks[i].scenario.inertia[2]};
-      l.truth = Spacecraft(p).f_constants();
-    }
-    l.result = &results[i];
-  }
-  detail::run_spacecraft_lanes(lanes, model.G(State::Zero()), model.G_pinv(State::Zero()), isa);
+  std::vector<std::string> errors(tasks.size());
+  plant->simulate_pack(pack, results, errors, isa);
+  for (const std::string& e : errors) EXPECT_EQ(e, "");
   return results;
 }
 
 // Each task alone, in scalar code.
-std::vector<SimulationResult> run_alone(const std::vector<Task>& tasks) {
+std::vector<SimulationResult> run_alone(const std::vector<Task>& tasks, const PlantSpec& spec = {}) {
   std::vector<SimulationResult> out;
-  for (const Task& t : tasks) out.push_back(run({t}, Isa::scalar)[0]);
+  for (const Task& t : tasks) out.push_back(run({t}, Isa::scalar, spec)[0]);
   return out;
 }
 
@@ -227,6 +218,97 @@ TEST(BatchKernel, SimulatePackMatchesSimulateAndReportsBadTasks) {
                 "task " + std::to_string(i));
   }
   EXPECT_NE(errors.back().find("theta"), std::string::npos) << errors.back();
+}
+
+namespace {
+
+PlantSpec arm_spec() {
+  PlantSpec spec;
+  spec.model = "manipulator";
+  return spec;
+}
+
+// The arm (G and G⁺ depend on the state) through the same kernel: varied gains, a diverging
+// lane, a loss of effectiveness and a stuck actuator, a disturbance on both joints.
+std::vector<Task> varied_arm(ControllerType type, int n) {
+  std::vector<Task> tasks;
+  Scenario s;
+  s.name = "arm";
+  s.duration = 4.0;
+  s.initial_state = {0.5, -0.4, 0.0, 0.0};
+  s.disturbance = {{1, Shape::sin, 0.2, 1.0, 0.0}, {2, Shape::cos, 0.2, 2.0, 0.0}};
+  Fault loe;
+  loe.actuator = 1;
+  loe.type = FaultType::loss_of_effectiveness;
+  loe.onset = 1.0;
+  loe.fraction = 0.3;
+  Fault stuck;
+  stuck.actuator = 3;
+  stuck.type = FaultType::stuck;
+  stuck.onset = 2.5;
+  stuck.value = 0.2;
+  s.faults = {loe, stuck};
+  SimulationOptions o;
+  o.extra_windows = {{0.0, 1.0}, {1.0, 4.0}};
+  for (int l = 0; l < n; ++l) {
+    ControllerConfig c = ControllerConfig::table1(type);
+    c.switching_gain *= 1.0 + 0.1 * l;
+    c.c1 *= 1.0 + 0.05 * l;
+    c.Kp = 1.0 + 6.0 * l;
+    c.Ki = 50.0 - 5.0 * l;
+    if (l == 1 &&
+        (type == ControllerType::pi_fosmc || type == ControllerType::adaptive_neural_pi_fosmc)) {
+      c.Kp = 0.01;
+      c.Ki = 45.0;
+    }
+    Scenario sl = s;
+    if (l % 2 == 1) sl.saturation = 20.0;
+    if (l % 3 == 2) sl.initial_state[1] += 0.1 * l;
+    tasks.push_back({c, sl, o});
+  }
+  return tasks;
+}
+
+}  // namespace
+
+TEST(BatchKernel, EveryArmLaneGivesTheScalarBitsOnEveryInstructionSet) {
+  for (ControllerType type : kAllControllerTypes)
+    for (Isa isa : supported_isas()) {
+      const std::vector<Task> tasks = varied_arm(type, lane_width(isa) + 1);
+      const std::vector<SimulationResult> want = run_alone(tasks, arm_spec());
+      const std::vector<SimulationResult> got = run(tasks, isa, arm_spec());
+      for (std::size_t i = 0; i < tasks.size(); ++i)
+        expect_same(got[i], want[i],
+                    std::string("arm, ") + to_string(type) + " on " + to_string(isa) +
+                        ", lane " + std::to_string(i));
+    }
+}
+
+// Recorded trajectories of the arm, lanes that record among lanes that do not, as alone.
+TEST(BatchKernel, ArmTrajectoriesAreTheScalarOnes) {
+  std::vector<Task> tasks = varied_arm(ControllerType::fosmc, 5);
+  for (std::size_t i = 0; i < tasks.size(); ++i) tasks[i].options.record_every = i == 2 ? 0 : 25;
+  const std::vector<SimulationResult> want = run_alone(tasks, arm_spec());
+  ASSERT_EQ(want[0].trajectory.rows(), 4000u / 25u);
+  for (Isa isa : supported_isas()) {
+    const std::vector<SimulationResult> got = run(tasks, isa, arm_spec());
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+      expect_same(got[i], want[i], std::string("arm, ") + to_string(isa) + ", lane " +
+                                       std::to_string(i));
+  }
+}
+
+// The arm's lane is the loop a Controller object runs in (sim::simulate with the class's f and
+// G from the same angle trackers): the runtime controller replays a tuning run's lane.
+TEST(BatchKernel, ArmLaneIsTheControllerLoop) {
+  const Manipulator arm;
+  const auto any = make_plant(arm_spec());
+  for (ControllerType type : kAllControllerTypes) {
+    const Task t = varied_arm(type, 1)[0];
+    auto c = make_controller(t.config, arm, t.scenario.sample_time);
+    expect_same(any->simulate(t.config, t.scenario, t.options), simulate(arm, *c, t.scenario, t.options),
+                std::string("arm, ") + to_string(type));
+  }
 }
 
 TEST(BatchKernel, InstructionSetsAreNamedAndOrdered) {

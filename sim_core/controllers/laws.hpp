@@ -5,8 +5,8 @@
 // operations in the same order, so a lane gives the bits the scalar controller gives.
 //
 // Notation (SPEC §5): X1 positions, X2 rates, a the measured accelerations, f = f(X) from the
-// controller's plant model, G⁺ the right inverse of the input matrix (m×n, the same for all
-// lanes: a pack shares its plant model), u_d the command.
+// controller's plant model, G⁺ the right inverse of the input matrix (m×n: the same for all
+// lanes when G is constant, each lane's own at its state otherwise), u_d the command.
 //
 //   sig^a(x) = |x|^a sign(x),  sigm(s) = tanh(θ s / 2),  C(X) = c2 sig^α2(X2) + c1 sig^α1(X1)
 //
@@ -62,9 +62,10 @@ FTC_HOT_INLINE T sigm_of(const T& y) {
   return lane::tanh(y);
 }
 
-// u = -(G⁺ v), G⁺ row-major m×n.
-template <class T, int N, int M>
-FTC_HOT_INLINE void command(const double* G_pinv, const V<T, N>& v, V<T, M>& u) {
+// u = -(G⁺ v), G⁺ row-major m×n: the same for every lane (double) or each lane's own (T, a
+// plant whose G depends on X).
+template <class T, int N, int M, class GP>
+FTC_HOT_INLINE void command(const GP* G_pinv, const V<T, N>& v, V<T, M>& u) {
   for (int i = 0; i < M; ++i) {
     T s = T(G_pinv[i * N]) * v[0];
     for (int k = 1; k < N; ++k) s = s + T(G_pinv[i * N + k]) * v[k];
@@ -116,7 +117,8 @@ class Fosmc {
     for (T& v : ur_) v = lane::select(keep, v, T(0.0));
   }
 
-  FTC_HOT_INLINE void step(const Sample<T, N>& m, const double* G_pinv, V<T, M>& u) {
+  template <class GP>
+  FTC_HOT_INLINE void step(const Sample<T, N>& m, const GP* G_pinv, V<T, M>& u) {
     const V<T, N> C = fosm_(m.X1, m.X2);
     V<T, N> sF, v;
     for (int i = 0; i < N; ++i) {
@@ -158,7 +160,8 @@ class PiFosmc {
     }
   }
 
-  FTC_HOT_INLINE void step(const Sample<T, N>& m, const double* G_pinv, V<T, M>& u) {
+  template <class GP>
+  FTC_HOT_INLINE void step(const Sample<T, N>& m, const GP* G_pinv, V<T, M>& u) {
     const V<T, N> C = fosm_(m.X1, m.X2);
     V<T, N> sF, sPI, v;
     for (int i = 0; i < N; ++i) {
@@ -199,7 +202,8 @@ class Nftsmc {
   void reset() {}  // memoryless
   void reset_lanes(const lane::Mask<T>&) {}
 
-  FTC_HOT_INLINE void step(const Sample<T, N>& m, const double* G_pinv, V<T, M>& u) {
+  template <class GP>
+  FTC_HOT_INLINE void step(const Sample<T, N>& m, const GP* G_pinv, V<T, M>& u) {
     V<T, N> v;
     for (int i = 0; i < N; ++i) {
       const T s = (m.X1[i] + sigma1_ * pow_alpha_(m.X1[i])) + sigma2_ * pow_pq_(m.X2[i]);
@@ -269,7 +273,8 @@ class AdaptiveNeuralPiFosmc {
     }
   }
 
-  FTC_HOT_INLINE void step(const Sample<T, N>& m, const double* G_pinv, V<T, M>& u) {
+  template <class GP>
+  FTC_HOT_INLINE void step(const Sample<T, N>& m, const GP* G_pinv, V<T, M>& u) {
     const V<T, N> C = fosm_(m.X1, m.X2);
     V<T, N> sF, sPI, v;
     for (int i = 0; i < N; ++i) {

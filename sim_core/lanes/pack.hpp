@@ -1,14 +1,16 @@
 #pragma once
-// The batch simulator's interface between the host (plants/spacecraft_pack.cpp: scenarios,
+// The batch simulator's interface between the host (plants/lane_host.hpp: scenarios,
 // disturbances, faults, metrics, trajectories, in plain C++ compiled once) and the kernels
-// (lanes/kernel_<isa>.cpp: the closed loop of W spacecraft in W SIMD lanes, compiled once per
-// instruction set). Only plain arrays cross it, so that nothing compiled for one instruction
-// set is shared with code compiled for another.
+// (lanes/closed_loop.hpp: the closed loop of W simulations of one plant in W SIMD lanes,
+// compiled once per plant and instruction set). Only plain arrays cross it, so that nothing
+// compiled for one instruction set is shared with code compiled for another. Every array is
+// sized by the plant's shape: n axes, m actuators (template parameters N, M).
 //
 // A pack is up to W simulations in lockstep that share the sample time, the substeps, the
-// number of samples, the controller type (and the network size of the adaptive one) and the
-// input matrix; each lane has its own gains, initial state, true and model plant constants,
-// saturation, disturbance and faults. Lanes beyond `lanes` repeat lane 0 and are ignored.
+// number of samples, the controller type (and the network size of the adaptive one) and, when
+// the plant's G is constant, the input matrix; each lane has its own gains, initial state, true
+// and model plant constants, saturation, disturbance and faults. Lanes beyond `lanes` repeat
+// lane 0 and are ignored.
 #include <cstdint>
 
 #include "ftc/sim/controller_config.hpp"
@@ -16,6 +18,8 @@
 namespace ftc::sim::detail {
 
 inline constexpr int kMaxLanes = 8;  // AVX-512: 8 doubles
+// The constants a plant's f and G are built from, per lane (Spacecraft::f_constants()).
+inline constexpr int kMaxPlantConstants = 8;
 // Metrics the kernel accumulates itself (SPEC §6; the host's MetricsAccumulator otherwise):
 // the objective window and the extra ones, and the peak error after each fault onset.
 inline constexpr int kMaxWindows = 8;
@@ -27,35 +31,40 @@ inline constexpr int kMaxOnsets = 8;
 // the pack's width otherwise (one value per lane, lane-minor, so that a kernel loads W at a
 // time). Packed tight: with one double per row a block of instants takes 4 kB, where rows of 8
 // took 34 kB, more than the level-1 cache, for the same 4 kB of values.
+template <int N, int M>
 struct ExoRows {
-  static constexpr int kDist = 0;    // Δ(t), 3 rows
-  static constexpr int kGain = 3;    // the faults' gains, 4 rows
-  static constexpr int kOffset = 7;  // the faults' offsets, 4 rows
-  static constexpr int kCount = 11;
+  static constexpr int kDist = 0;        // Δ(t), N rows
+  static constexpr int kGain = N;        // the faults' gains, M rows
+  static constexpr int kOffset = N + M;  // the faults' offsets, M rows
+  static constexpr int kCount = N + 2 * M;
   static constexpr int stride(bool shared, int width) { return shared ? 1 : width; }
 };
 
 // What the kernel reports for one sample k of every lane: X(t_k), the command u_d(t_k), and
 // whether the step from t_k left the bounds (|X_i| > 1e6, inf or NaN): that lane diverged.
+template <int N, int M>
 struct SampleLanes {
-  double x[6][kMaxLanes];
-  double u[4][kMaxLanes];
+  double x[2 * N][kMaxLanes];
+  double u[M][kMaxLanes];
   bool diverged[kMaxLanes];
 };
 
+template <int N, int M>
 struct PackSetup {
   int lanes = 1;  // in use, 1 .. W
   const ControllerConfig* configs[kMaxLanes] = {};
-  // kx, ky, kz, ω0 of the simulated plant (truth) and of the controller's model, per lane.
-  double truth[4][kMaxLanes] = {};
-  double model[4][kMaxLanes] = {};
+  // The constants of the simulated plant (truth) and of the controller's model, per lane.
+  double truth[kMaxPlantConstants][kMaxLanes] = {};
+  double model[kMaxPlantConstants][kMaxLanes] = {};
   bool mismatch = false;  // some lane's truth differs from its model
   // Every lane has the same exogenous inputs (one scenario): the host writes one value per
   // row (ExoRows), and the kernel broadcasts it.
   bool shared_inputs = false;
-  double G[3 * 4] = {};       // input matrix, row-major
-  double G_pinv[4 * 3] = {};  // its right inverse, row-major
-  double x0[6][kMaxLanes] = {};
+  // For a plant whose G is constant (the same for every lane): G and its right inverse,
+  // row-major. Unused otherwise (the plant's lane code forms G(X) and G⁺(X)).
+  double G[N * M] = {};
+  double G_pinv[M * N] = {};
+  double x0[2 * N][kMaxLanes] = {};
   double saturation[kMaxLanes] = {};  // u_max; +inf for none
   double Ts = 0.0;
   int substeps = 1;
@@ -72,20 +81,22 @@ struct PackSetup {
 };
 
 // The host side, called twice per block of samples (never per sample).
+template <int N, int M>
 class PackHost {
  public:
   // The inputs of samples k0 .. k0 + n - 1: for sample k0 + i, substep j, instant q (0 start,
   // 1 midpoint, 2 end), the ExoRows of instant ((i · substeps) + j) · 3 + q, one after another.
   virtual const double* inputs(std::int64_t k0, int n) = 0;
   // Samples k0 .. k0 + n - 1 as simulated (lanes that had diverged before are to be ignored).
-  virtual void samples(std::int64_t k0, int n, const SampleLanes* out) = 0;
+  virtual void samples(std::int64_t k0, int n, const SampleLanes<N, M>* out) = 0;
 
  protected:
   ~PackHost() = default;
 };
 
+template <int N, int M>
 struct PackFinal {
-  double x[6][kMaxLanes];           // X at the end of each lane's run
+  double x[2 * N][kMaxLanes];       // X at the end of each lane's run
   std::int64_t samples[kMaxLanes];  // samples simulated per lane
   bool diverged[kMaxLanes];
   double diverged_at[kMaxLanes];  // s
@@ -95,11 +106,26 @@ struct PackFinal {
   double peak[kMaxOnsets][kMaxLanes];
 };
 
-// One kernel per instruction set (scalar: T = double, one lane).
-using PackKernel = void (*)(const PackSetup&, PackHost&, PackFinal&);
-void pack_kernel_scalar(const PackSetup&, PackHost&, PackFinal&);
-void pack_kernel_sse2(const PackSetup&, PackHost&, PackFinal&);
-void pack_kernel_avx2(const PackSetup&, PackHost&, PackFinal&);
-void pack_kernel_avx512(const PackSetup&, PackHost&, PackFinal&);
+template <int N, int M>
+using PackKernel = void (*)(const PackSetup<N, M>&, PackHost<N, M>&, PackFinal<N, M>&);
+
+// The kernel of plant class P (its lane code: PlantLanes<P>, lanes/closed_loop.hpp), one per
+// instruction set, each in the namespace of its instruction set (lanes/lane.hpp says why).
+// Defined by the plant's lanes file compiled once per instruction set (FTC_PLANT_KERNEL and
+// ftc_plant_kernels() in sim_core/CMakeLists.txt).
+#ifndef FTC_ISA_NS
+#define FTC_ISA_NS isa_scalar
+#endif
+inline namespace FTC_ISA_NS {}  // inline from its first declaration on (the others are not)
+#define FTC_DECLARE_PACK_KERNEL(ns)                                                          \
+  namespace ns {                                                                             \
+  template <class P, int N, int M>                                                           \
+  void pack_kernel(const PackSetup<N, M>&, PackHost<N, M>&, PackFinal<N, M>&);              \
+  }
+FTC_DECLARE_PACK_KERNEL(isa_scalar)
+FTC_DECLARE_PACK_KERNEL(isa_sse2)
+FTC_DECLARE_PACK_KERNEL(isa_avx2)
+FTC_DECLARE_PACK_KERNEL(isa_avx512)
+#undef FTC_DECLARE_PACK_KERNEL
 
 }  // namespace ftc::sim::detail

@@ -7,6 +7,7 @@
 
 #include "checks.hpp"
 #include "plants/kinds.hpp"
+#include "plants/manipulator_dynamics.hpp"
 #include "plants/plant_adapter.hpp"
 
 namespace ftc::sim {
@@ -35,6 +36,24 @@ Manipulator::Manipulator(const ManipulatorParams& params) : params_(params) {
   a3_ = m2 * lc2 * lc2 + I2;
   b1_ = (m1 * lc1 + m2 * l1) * g0;
   b2_ = m2 * lc2 * g0;
+}
+
+Manipulator::Vector Manipulator::f(const State& x) const {
+  double s1, c1, s2, c2;
+  math::sincos(x[0], s1, c1);
+  math::sincos(x[1], s2, c2);
+  double out[2];
+  arm_f<double>(a2_, b1_, b2_, arm_inverse_mass<double>(a1_, a2_, a3_, c2), s1, c1, s2, c2, x[2],
+                x[3], out);
+  return Vector(out[0], out[1]);
+}
+
+Manipulator::InputMatrix Manipulator::G(const State& x) const {
+  const ArmInverseMass<double> Mi = arm_inverse_mass<double>(a1_, a2_, a3_, math::cos(x[1]));
+  InputMatrix g;
+  g << Mi.d11, Mi.d12, Mi.d11 + Mi.d12,  //
+      Mi.d12, Mi.d22, Mi.d12 + Mi.d22;
+  return g;
 }
 
 double Manipulator::energy(const State& x) const {

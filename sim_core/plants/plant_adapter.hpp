@@ -1,27 +1,20 @@
 #pragma once
-// AnyPlant for a concrete plant class P: the loop compiled for P, so that its f and G inline.
-// Private to sim_core; each plant's .cpp builds its PlantKind with it.
-//
-// The controller is called through its interface, one virtual call a sample. Compiling the loop
-// for each controller class as well was measured slower (10 % on the landscape): GCC's inliner
-// then spends its budget on the controller and leaves the plant's f out of line. For the same
-// reason this header must not see the controller classes (their make_controller lives in
-// controllers/factory.cpp): with them in sight GCC devirtualises the call speculatively and
-// bloats the loop (16 % slower).
+// AnyPlant for a concrete plant class P: its simulations run in P's batch kernels
+// (plants/lane_host.hpp, lanes/closed_loop.hpp), a single one in one lane of the scalar kernel.
+// P gives f_constants() (the per-lane constants its lane code, PlantLanes<P>, reads) and its
+// kernels (its lanes file, compiled per instruction set). Private to sim_core; each plant's .cpp
+// builds its PlantKind with it.
 #include <Eigen/LU>
 #include <functional>
 #include <span>
 #include <string>
-#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "checks.hpp"
 #include "ftc/sim/isa.hpp"
 #include "ftc/sim/plants.hpp"
-#include "ftc/sim/spacecraft.hpp"
-#include "plants/spacecraft_pack.hpp"
-#include "simulation_loop.hpp"
+#include "plants/lane_host.hpp"
 
 namespace ftc::sim::detail {
 
@@ -37,53 +30,37 @@ class PlantAdapter final : public AnyPlant {
   const PlantKind& kind() const override { return *find_plant_kind(plant_.model()); }
   const P& plant() const { return plant_; }
 
+  // One lane of the plant's batch kernel: the code the SIMD lanes run, so that a simulation
+  // reproduces any lane of a tuning run to the last bit.
   SimulationResult simulate(const ControllerConfig& controller, const Scenario& scenario,
                             const SimulationOptions& options) const override {
-    if constexpr (std::is_same_v<P, Spacecraft>) {
-      // The batch kernel with one lane: the code the SIMD lanes run, so that a simulation
-      // reproduces any lane of a tuning run to the last bit.
-      SimulationResult r;
-      SpacecraftLane lane = spacecraft_lane(controller, scenario, options);
-      lane.result = &r;
-      run_spacecraft_lanes(std::span<SpacecraftLane>(&lane, 1), plant_.G(P::State::Zero()),
-                           plant_.G_pinv(P::State::Zero()), Isa::scalar);
-      return r;
-    } else {
-      const auto c = make_controller(controller, plant_, scenario.sample_time);
-      throw_if_errors("scenario " + scenario.name, scenario.validate("", P::kAxes, P::kActuators));
-      if (scenario.inertia.empty()) return run(plant_, *c, scenario, options);
-      // Model mismatch: the controller keeps the model, the loop simulates the true plant.
-      return run(truth(scenario), *c, scenario, options);
-    }
+    SimulationResult r;
+    LaneTask lane = lane_task(controller, scenario, options);
+    lane.result = &r;
+    run(std::span<LaneTask>(&lane, 1), Isa::scalar);
+    return r;
   }
 
   void simulate_pack(std::span<const PackTask> tasks, std::span<SimulationResult> results,
                      std::span<std::string> errors) const override {
-    if constexpr (std::is_same_v<P, Spacecraft>) {
-      std::vector<SpacecraftLane> lanes;
-      lanes.reserve(tasks.size());
-      for (std::size_t i = 0; i < tasks.size(); ++i) {
-        errors[i].clear();
-        try {
-          lanes.push_back(
-              spacecraft_lane(*tasks[i].controller, *tasks[i].scenario, *tasks[i].options));
-          lanes.back().result = &results[i];
-        } catch (const InputError& e) {
-          errors[i] = e.what();
-        }
+    simulate_pack(tasks, results, errors, active_isa());
+  }
+  void simulate_pack(std::span<const PackTask> tasks, std::span<SimulationResult> results,
+                     std::span<std::string> errors, Isa isa) const override {
+    std::vector<LaneTask> lanes;
+    lanes.reserve(tasks.size());
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+      errors[i].clear();
+      try {
+        lanes.push_back(lane_task(*tasks[i].controller, *tasks[i].scenario, *tasks[i].options));
+        lanes.back().result = &results[i];
+      } catch (const InputError& e) {
+        errors[i] = e.what();
       }
-      run_spacecraft_lanes(lanes, plant_.G(P::State::Zero()), plant_.G_pinv(P::State::Zero()),
-                           active_isa());
-    } else {
-      AnyPlant::simulate_pack(tasks, results, errors);
     }
+    run(lanes, isa);
   }
-  int pack_width() const override {
-    if constexpr (std::is_same_v<P, Spacecraft>)
-      return lane_width(active_isa());
-    else
-      return 1;
-  }
+  int pack_width() const override { return lane_width(active_isa()); }
 
   bool recoverable(const Scenario& scenario) const override {
     constexpr int N = P::kAxes, M = P::kActuators;
@@ -118,23 +95,39 @@ class PlantAdapter final : public AnyPlant {
     return build_(v);
   }
 
-  // A validated spacecraft simulation for the batch kernels; throws InputError like simulate().
-  SpacecraftLane spacecraft_lane(
-      const ControllerConfig& controller, const Scenario& scenario,
-      const SimulationOptions& options) const requires std::is_same_v<P, Spacecraft> {
-    SpacecraftLane lane;
+  // A validated simulation for the batch kernels; throws InputError like simulate().
+  LaneTask lane_task(const ControllerConfig& controller, const Scenario& scenario,
+                     const SimulationOptions& options) const {
+    LaneTask lane;
     lane.config = checked_config(controller, scenario.sample_time);
     throw_if_errors("scenario " + scenario.name, scenario.validate("", P::kAxes, P::kActuators));
     lane.scenario = &scenario;
     lane.options = &options;
-    lane.model = plant_.f_constants();
-    lane.truth = scenario.inertia.empty() ? lane.model : truth(scenario).f_constants();
+    const auto model = plant_.f_constants();
+    static_assert(model.size() <= kMaxPlantConstants);
+    std::copy(model.begin(), model.end(), lane.model.begin());
+    lane.truth = lane.model;
+    if (!scenario.inertia.empty()) {
+      const auto truth_constants = truth(scenario).f_constants();
+      std::copy(truth_constants.begin(), truth_constants.end(), lane.truth.begin());
+    }
     return lane;
+  }
+
+  void run(std::span<LaneTask> lanes, Isa isa) const {
+    if (constant_G_)
+      run_lanes<P>(lanes, &G_, &G_pinv_, isa);
+    else
+      run_lanes<P>(lanes, nullptr, nullptr, isa);
   }
 
   std::vector<double> values_;
   Build build_;
   P plant_;
+  // G and G⁺ when constant (read once, as the scalar controllers do).
+  bool constant_G_ = plant_.input_matrix_is_constant();
+  Mat<P::kAxes, P::kActuators> G_ = plant_.G(P::State::Zero());
+  Mat<P::kActuators, P::kAxes> G_pinv_ = plant_.G_pinv(P::State::Zero());
 };
 
 }  // namespace ftc::sim::detail

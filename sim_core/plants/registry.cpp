@@ -7,6 +7,7 @@
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/spacecraft.hpp"
 #include "plants/kinds.hpp"
+#include "plants/manipulator_dynamics.hpp"
 #include "plants/spacecraft_dynamics.hpp"
 #include "simulation_loop.hpp"
 
@@ -61,6 +62,11 @@ const PlantKind* find_plant_kind(std::string_view model) {
 
 void AnyPlant::simulate_pack(std::span<const PackTask> tasks, std::span<SimulationResult> results,
                              std::span<std::string> errors) const {
+  simulate_pack(tasks, results, errors, active_isa());
+}
+
+void AnyPlant::simulate_pack(std::span<const PackTask> tasks, std::span<SimulationResult> results,
+                             std::span<std::string> errors, Isa /*isa*/) const {
   for (std::size_t i = 0; i < tasks.size(); ++i) {
     errors[i].clear();
     try {

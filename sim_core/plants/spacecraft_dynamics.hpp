@@ -21,7 +21,7 @@ FTC_HOT_INLINE Vec3 Spacecraft::f(const State& x, Workspace& ws) const {
 }
 
 // Appendix B (B.1–B.3), with the erratum of B.3 (s_2 x3 read as sin² x3), over the lane type
-// T: the scalar plant and the batch simulator's W plants in lockstep (lanes/spacecraft_pack.hpp)
+// T: the scalar plant and the batch simulator's W plants in lockstep (lanes/closed_loop.hpp, plants/spacecraft_lanes.cpp)
 // evaluate the same operations. kx, ky, kz are (Iy-Iz)/Ix, (Iz-Ix)/Iy, (Ix-Iy)/Iz, w the
 // orbital rate ω0; s and c the sines and cosines of the attitude angles x1, x2, x3. The terms
 // are grouped by powers of ω0 and shared trigonometric products are formed once;

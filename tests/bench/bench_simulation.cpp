@@ -11,7 +11,6 @@
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "ftc/sim/spacecraft.hpp"
-#include "plants/spacecraft_pack.hpp"
 
 using namespace ftc::sim;
 
@@ -53,7 +52,9 @@ BENCHMARK(BM_PaperScenarioTuner)->DenseRange(0, 3)->Unit(benchmark::kMillisecond
 // paper's scenario, through the kernel of one instruction set. ns_per_sample is per sample and
 // per candidate: the figure the SIMD targets are stated in. With ->Threads(2) each thread runs
 // its own packs (both cores busy).
-static void BM_Lanes(benchmark::State& state) {
+// A full pack of W candidates of one controller type on `plant` through AnyPlant::simulate_pack
+// on one instruction set.
+static void run_lanes(benchmark::State& state, const PlantSpec& spec, const Scenario& s) {
   const auto type = static_cast<ControllerType>(state.range(0));
   const auto isa = static_cast<Isa>(state.range(1));
   bool supported = false;
@@ -63,35 +64,71 @@ static void BM_Lanes(benchmark::State& state) {
     return;
   }
   const int width = lane_width(isa);
-  const Spacecraft plant;
-  const Scenario s = Scenario::paper();
+  const auto plant = make_plant(spec);
   const SimulationOptions options;
-  std::vector<SimulationResult> results(width);
-  std::vector<detail::SpacecraftLane> lanes(width);
+  std::vector<ControllerConfig> configs(width);
+  std::vector<PackTask> tasks(width);
   for (int l = 0; l < width; ++l) {
-    ControllerConfig c = ControllerConfig::table1(type);
+    ControllerConfig& c = configs[l];
+    c = ControllerConfig::table1(type);
     c.Kp *= 1.0 + 0.01 * l;
     c.switching_gain *= 1.0 - 0.01 * l;
-    lanes[l].config = detail::checked_config(c, s.sample_time);
-    lanes[l].scenario = &s;
-    lanes[l].options = &options;
-    lanes[l].truth = lanes[l].model = plant.f_constants();
-    lanes[l].result = &results[l];
+    tasks[l] = {&c, &s, &options};
   }
-  const Mat34 G = plant.G(State::Zero());
-  const Mat43 Gp = plant.G_pinv(State::Zero());
+  std::vector<SimulationResult> results(width);
+  std::vector<std::string> errors(width);
   double ise = 0;
   for (auto _ : state) {
-    detail::run_spacecraft_lanes(lanes, G, Gp, isa);
+    plant->simulate_pack(tasks, results, errors, isa);
     ise += results[0].metrics.errors.ise;
   }
   benchmark::DoNotOptimize(ise);
-  state.SetLabel(std::string(to_string(type)) + " " + to_string(isa));
+  state.SetLabel(spec.model + " " + to_string(type) + " " + to_string(isa));
   state.counters["ns_per_sample"] =
       benchmark::Counter(static_cast<double>(state.iterations()) * s.samples() * width,
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
+
+static void BM_Lanes(benchmark::State& state) {
+  run_lanes(state, PlantSpec{}, Scenario::paper());
+}
+
+// The arm under the paper's kind of load: 30 s at 1 ms, a sinusoidal disturbance on both
+// joints, a loss of effectiveness and a stuck actuator.
+static Scenario arm_scenario() {
+  Scenario s;
+  s.name = "arm";
+  s.duration = 30.0;
+  s.initial_state = {0.5, -0.4, 0.0, 0.0};
+  s.disturbance = {{1, Shape::sin, 0.2, 1.0, 0.0}, {2, Shape::cos, 0.2, 2.0, 0.0}};
+  Fault loe;
+  loe.actuator = 1;
+  loe.type = FaultType::loss_of_effectiveness;
+  loe.onset = 10.0;
+  loe.fraction = 0.3;
+  Fault stuck;
+  stuck.actuator = 3;
+  stuck.type = FaultType::stuck;
+  stuck.onset = 20.0;
+  stuck.value = 0.2;
+  s.faults = {loe, stuck};
+  return s;
+}
+
+static void BM_ArmLanes(benchmark::State& state) {
+  PlantSpec spec;
+  spec.model = "manipulator";
+  run_lanes(state, spec, arm_scenario());
+}
+
 BENCHMARK(BM_Lanes)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2, 3}})
+    ->Unit(benchmark::kMillisecond)
+    ->Threads(1)
+    ->Threads(2)
+    ->UseRealTime();
+
+BENCHMARK(BM_ArmLanes)
     ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2, 3}})
     ->Unit(benchmark::kMillisecond)
     ->Threads(1)

@@ -66,28 +66,16 @@ class Manipulator final : public Plant<2, 3> {
   // and a negative gravity.
   explicit Manipulator(const ManipulatorParams& params = {});
 
-  // The inline definitions let the simulation loop, compiled for this class, inline f and G.
-  FTC_HOT_INLINE Vector f(const State& x) const override {
-    const double q1 = x[0], q2 = x[1], w1 = x[2], w2 = x[3];
-    const double s1 = math::sin(q1), c1 = math::cos(q1);
-    const double s2 = math::sin(q2), c2 = math::cos(q2);
-    const double c12 = c1 * c2 - s1 * s2;  // cos(q1 + q2) from the sines and cosines at hand
-    const double h = a2_ * s2;
-    const double g2 = b2_ * c12;
-    // −(C q̇ + g).
-    const double r1 = h * (2.0 * w1 * w2 + w2 * w2) - (b1_ * c1 + g2);
-    const double r2 = -h * w1 * w1 - g2;
-    const Inverse Mi = inverse_mass(c2);
-    return Vector(Mi.d11 * r1 + Mi.d12 * r2, Mi.d12 * r1 + Mi.d22 * r2);
-  }
+  // Scratch space of one simulation for evaluating f and G at the nearby states of successive
+  // RK4 stages (defined in sim_core; the simulator owns one).
+  struct Workspace;
 
-  FTC_HOT_INLINE InputMatrix G(const State& x) const override {
-    const Inverse Mi = inverse_mass(math::cos(x[1]));
-    InputMatrix g;
-    g << Mi.d11, Mi.d12, Mi.d11 + Mi.d12,  //
-        Mi.d12, Mi.d22, Mi.d12 + Mi.d22;
-    return g;
-  }
+  Vector f(const State& x) const override;
+  InputMatrix G(const State& x) const override;
+  // The same f and G, from the sines and cosines kept in `ws` (equal to f(x), G(x) within an
+  // ulp): what the simulator evaluates.
+  Vector f(const State& x, Workspace& ws) const;
+  InputMatrix G(const State& x, Workspace& ws) const;
 
   // G⁺ = B⁺ M(q): the Moore–Penrose right inverse of G without inverting GGᵀ.
   InputInverse G_pinv(const State& x) const override {
@@ -124,17 +112,10 @@ class Manipulator final : public Plant<2, 3> {
   // B⁺ = Bᵀ(BBᵀ)⁻¹ = [[2, −1], [−1, 2], [1, 1]] / 3.
   static InputInverse actuator_pinv();
 
- private:
-  // M⁻¹ = [[d11, d12], [d12, d22]].
-  struct Inverse {
-    double d11, d12, d22;
-  };
-  FTC_HOT_INLINE Inverse inverse_mass(double c2) const {
-    const double m11 = a1_ + 2.0 * a2_ * c2, m12 = a3_ + a2_ * c2, m22 = a3_;
-    const double k = 1.0 / (m11 * m22 - m12 * m12);
-    return {m22 * k, -m12 * k, m11 * k};
-  }
+ // The constants f and G are built from: a1, a2, a3, b1, b2 (below).
+  std::array<double, 5> f_constants() const { return {a1_, a2_, a3_, b1_, b2_}; }
 
+ private:
   ManipulatorParams params_;
   double a1_;  // m1 lc1² + m2 (l1² + lc2²) + I1 + I2: M11 less its cos q2 term, kg·m²
   double a2_;  // m2 l1 lc2, kg·m²

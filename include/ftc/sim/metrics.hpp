@@ -72,7 +72,7 @@ class MetricsAccumulator {
   }
 
   // The sums run in index order, spelled out: the batch simulator accumulates the same
-  // quantities in SIMD lanes (lanes/spacecraft_kernel.hpp) and must get the same bits.
+  // quantities in SIMD lanes (lanes/closed_loop.hpp) and must get the same bits.
   void sample(double t, const StateOf<N>& x, const Vec<M>& u_d) {
     double e2 = x[0] * x[0], e1 = std::abs(x[0]);
     for (int i = 1; i < N; ++i) {

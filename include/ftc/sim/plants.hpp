@@ -16,6 +16,7 @@
 
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/isa.hpp"
 #include "ftc/sim/range.hpp"
 #include "ftc/sim/scenario.hpp"
 #include "ftc/sim/simulation.hpp"
@@ -95,12 +96,16 @@ class AnyPlant {
                                     const SimulationOptions& options = {}) const = 0;
 
   // Many simulations, each with exactly the result simulate() gives it (to the last bit), in
-  // SIMD lanes when the plant has a batch kernel (the spacecraft: see ftc/sim/isa.hpp), one
-  // after another otherwise. results[i] and errors[i] belong to tasks[i]; a task whose
+  // SIMD lanes of the plant's batch kernel (see ftc/sim/isa.hpp; every registered plant has
+  // one), one after another otherwise. results[i] and errors[i] belong to tasks[i]; a task whose
   // controller or scenario is invalid gets the InputError's message in errors[i] instead of a
   // result. Never throws for a task's sake.
   virtual void simulate_pack(std::span<const PackTask> tasks, std::span<SimulationResult> results,
                              std::span<std::string> errors) const;
+  // The same on a given instruction set (one of supported_isas()): the results do not depend on
+  // it (tests and benchmarks compare them).
+  virtual void simulate_pack(std::span<const PackTask> tasks, std::span<SimulationResult> results,
+                             std::span<std::string> errors, Isa isa) const;
   // How many simulations simulate_pack runs in lockstep (1 without a batch kernel); a caller
   // that hands it that many compatible tasks at a time (same sample time, substeps, duration,
   // controller type) keeps every lane busy.

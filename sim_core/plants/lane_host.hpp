@@ -1,6 +1,10 @@
-#include "plants/spacecraft_pack.hpp"
-
+#pragma once
+// Any plant's simulations through its batch kernels (lanes/pack.hpp, lanes/closed_loop.hpp):
+// grouping into packs, and the host side of a pack (exogenous inputs, metrics, trajectories),
+// in plain C++ compiled once, for plant class P. Private to sim_core (plants/plant_adapter.hpp).
 #include <algorithm>
+#include <array>
+#include <span>
 #include <deque>
 #include <limits>
 #include <memory>
@@ -9,33 +13,52 @@
 
 #include "ftc/sim/disturbance.hpp"
 #include "ftc/sim/faults.hpp"
+#include "ftc/sim/isa.hpp"
 #include "ftc/sim/metrics.hpp"
+#include "ftc/sim/scenario.hpp"
+#include "ftc/sim/simulation.hpp"
 #include "lanes/pack.hpp"
 #include "simulation_loop.hpp"
 
 namespace ftc::sim::detail {
-namespace {
 
-PackKernel kernel_for(Isa isa) {
+// One validated simulation: its controller (checked, α1 resolved), scenario and options, the
+// constants of the simulated plant and of the controller's model (the plant's f_constants()).
+struct LaneTask {
+  ControllerConfig config;
+  const Scenario* scenario = nullptr;
+  const SimulationOptions* options = nullptr;
+  std::array<double, kMaxPlantConstants> truth{}, model{};
+  SimulationResult* result = nullptr;
+};
+
+namespace lane_host {
+
+// Plant P's kernel for an instruction set.
+template <class P, int N, int M>
+PackKernel<N, M> kernel_for(Isa isa) {
   switch (isa) {
 #if defined(FTC_X86_KERNELS)
     case Isa::sse2:
-      return pack_kernel_sse2;
+      return &isa_sse2::pack_kernel<P, N, M>;
     case Isa::avx2:
-      return pack_kernel_avx2;
+      return &isa_avx2::pack_kernel<P, N, M>;
     case Isa::avx512:
-      return pack_kernel_avx512;
+      return &isa_avx512::pack_kernel<P, N, M>;
 #endif
     default:
-      return pack_kernel_scalar;
+      return &isa_scalar::pack_kernel<P, N, M>;
   }
 }
 
 // The host of one pack: per distinct scenario one ExogenousInputs (lanes of one scenario share
 // it), per lane its metrics and trajectory.
-class Host final : public PackHost {
+template <int N, int M>
+class Host final : public PackHost<N, M> {
+  using Exo = ExoRows<N, M>;
+
  public:
-  Host(std::span<SpacecraftLane* const> lanes, int width, const PackSetup& setup)
+  Host(std::span<LaneTask* const> lanes, int width, const PackSetup<N, M>& setup)
       : lanes_(lanes.begin(), lanes.end()), width_(width), setup_(setup) {
     for (std::size_t l = 0; l < lanes_.size(); ++l) {
       const Scenario& s = *lanes_[l]->scenario;
@@ -49,8 +72,8 @@ class Host final : public PackHost {
       metrics_.emplace_back(s.sample_time, o.window, o.extra_windows, std::move(onsets));
       SimulationResult& r = *lanes_[l]->result;
       r = SimulationResult{};
-      r.trajectory.axes = 3;
-      r.trajectory.actuators = 4;
+      r.trajectory.axes = N;
+      r.trajectory.actuators = M;
       if (o.record_every > 0)
         r.trajectory.values.reserve((setup.samples / o.record_every + 1) * r.trajectory.width());
     }
@@ -59,30 +82,30 @@ class Host final : public PackHost {
     // Unused lanes repeat lane 0.
     for (int l = static_cast<int>(lanes_.size()); l < width; ++l) groups_[0].lanes.push_back(l);
     done_.assign(lanes_.size(), false);
-    buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3 * ExoRows::kCount *
-                   ExoRows::stride(setup.shared_inputs, width));
+    buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3 * Exo::kCount *
+                   Exo::stride(setup.shared_inputs, width));
   }
 
   const double* inputs(std::int64_t k0, int n) override {
     const int S = setup_.substeps;
     // With one scenario one value per row (PackSetup::shared_inputs), else one per lane.
     const bool shared = setup_.shared_inputs;
-    const int stride = ExoRows::stride(shared, width_);
+    const int stride = Exo::stride(shared, width_);
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < S; ++j) {
         double* out =
-            &buffer_[(static_cast<std::size_t>(i) * S + j) * 3 * ExoRows::kCount * stride];
+            &buffer_[(static_cast<std::size_t>(i) * S + j) * 3 * Exo::kCount * stride];
         for (Group& g : groups_) {
           const auto* e = g.exo.step(k0 + i, j);
           for (int q = 0; q < 3; ++q) {
-            double* rows = out + q * ExoRows::kCount * stride;
+            double* rows = out + q * Exo::kCount * stride;
             for (const int l : g.lanes) {
               if (shared && l > 0) break;
-              for (int r = 0; r < 3; ++r)
-                rows[(ExoRows::kDist + r) * stride + l] = e[q].disturbance[r];
-              for (int r = 0; r < 4; ++r) {
-                rows[(ExoRows::kGain + r) * stride + l] = e[q].fault.gain[r];
-                rows[(ExoRows::kOffset + r) * stride + l] = e[q].fault.offset[r];
+              for (int r = 0; r < N; ++r)
+                rows[(Exo::kDist + r) * stride + l] = e[q].disturbance[r];
+              for (int r = 0; r < M; ++r) {
+                rows[(Exo::kGain + r) * stride + l] = e[q].fault.gain[r];
+                rows[(Exo::kOffset + r) * stride + l] = e[q].fault.offset[r];
               }
             }
           }
@@ -91,7 +114,7 @@ class Host final : public PackHost {
     return buffer_.data();
   }
 
-  void samples(std::int64_t k0, int n, const SampleLanes* out) override {
+  void samples(std::int64_t k0, int n, const SampleLanes<N, M>* out) override {
     const bool metrics = !setup_.kernel_metrics;
     const int S = setup_.substeps;
     for (std::size_t l = 0; l < lanes_.size(); ++l) {
@@ -101,22 +124,22 @@ class Host final : public PackHost {
       for (int i = 0; i < n; ++i) {
         const std::int64_t k = k0 + i;
         const double t = static_cast<double>(k) * Ts;
-        State x;
-        Vec4 u;
-        for (int r = 0; r < 6; ++r) x[r] = out[i].x[r][l];
-        for (int r = 0; r < 4; ++r) u[r] = out[i].u[r][l];
+        StateOf<N> x;
+        Vec<M> u;
+        for (int r = 0; r < 2 * N; ++r) x[r] = out[i].x[r][l];
+        for (int r = 0; r < M; ++r) u[r] = out[i].u[r][l];
         if (metrics) metrics_[l].sample(t, x, u);
         if (every > 0 && k % every == 0) {
-          const std::size_t stride = ExoRows::stride(setup_.shared_inputs, width_);
+          const std::size_t stride = Exo::stride(setup_.shared_inputs, width_);
           const double* e =
-              &buffer_[static_cast<std::size_t>(i) * S * 3 * ExoRows::kCount * stride];
+              &buffer_[static_cast<std::size_t>(i) * S * 3 * Exo::kCount * stride];
           const std::size_t from = setup_.shared_inputs ? 0 : l;
-          FaultEffect<4> effect;
-          for (int r = 0; r < 4; ++r) {
-            effect.gain[r] = e[(ExoRows::kGain + r) * stride + from];
-            effect.offset[r] = e[(ExoRows::kOffset + r) * stride + from];
+          FaultEffect<M> effect;
+          for (int r = 0; r < M; ++r) {
+            effect.gain[r] = e[(Exo::kGain + r) * stride + from];
+            effect.offset[r] = e[(Exo::kOffset + r) * stride + from];
           }
-          append_row<3, 4>(lanes_[l]->result->trajectory, t, x, u,
+          append_row<N, M>(lanes_[l]->result->trajectory, t, x, u,
                            groups_[group_of_[l]].faults.apply(effect, u));
         }
         if (out[i].diverged[l]) {
@@ -128,12 +151,12 @@ class Host final : public PackHost {
     }
   }
 
-  void finish(const PackFinal& fin) {
+  void finish(const PackFinal<N, M>& fin) {
     for (std::size_t l = 0; l < lanes_.size(); ++l) {
       SimulationResult& r = *lanes_[l]->result;
       r.samples = fin.samples[l];
-      r.final_state.resize(6);
-      for (int i = 0; i < 6; ++i) r.final_state[i] = fin.x[i][l];
+      r.final_state.resize(2 * N);
+      for (int i = 0; i < 2 * N; ++i) r.final_state[i] = fin.x[i][l];
       if (!setup_.kernel_metrics) {
         r.metrics = metrics_[l].result();
         continue;
@@ -163,49 +186,52 @@ class Host final : public PackHost {
     std::vector<int> lanes;  // in increasing order
     Disturbance disturbance;
     FaultSet faults;
-    ExogenousInputs<3, 4> exo;  // refers to the two above: groups never move (deque)
+    ExogenousInputs<N, M> exo;  // refers to the two above: groups never move (deque)
   };
 
-  std::vector<SpacecraftLane*> lanes_;
+  std::vector<LaneTask*> lanes_;
   int width_;
-  const PackSetup& setup_;
+  const PackSetup<N, M>& setup_;
   std::deque<Group> groups_;
   std::vector<std::size_t> group_of_;
-  std::vector<MetricsAccumulator<3, 4>> metrics_;
+  std::vector<MetricsAccumulator<N, M>> metrics_;
   std::vector<bool> done_;
   std::vector<double> buffer_;  // the inputs of a block (PackHost::inputs)
 };
 
-void run_pack(std::span<SpacecraftLane* const> lanes, const Mat34& G, const Mat43& G_pinv,
+// G and G⁺ when the plant's are constant (else null: its lane code forms them).
+template <class P, int N, int M>
+void run_pack(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M, N>* G_pinv,
               Isa isa) {
   const int width = lane_width(isa);
-  PackSetup su;
+  PackSetup<N, M> su;
   su.lanes = static_cast<int>(lanes.size());
   const Scenario& s0 = *lanes[0]->scenario;
   su.Ts = s0.sample_time;
   su.substeps = s0.substeps;
   su.samples = s0.samples();
   su.block = std::max(1, 16 / su.substeps);
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 4; ++j) {
-      su.G[i * 4 + j] = G(i, j);
-      su.G_pinv[j * 3 + i] = G_pinv(j, i);
-    }
+  if (G && G_pinv)
+    for (int i = 0; i < N; ++i)
+      for (int j = 0; j < M; ++j) {
+        su.G[i * M + j] = (*G)(i, j);
+        su.G_pinv[j * N + i] = (*G_pinv)(j, i);
+      }
   for (int l = 0; l < width; ++l) {
-    const SpacecraftLane& lane = *lanes[l < su.lanes ? l : 0];
+    const LaneTask& lane = *lanes[l < su.lanes ? l : 0];
     su.configs[l] = &lane.config;
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < kMaxPlantConstants; ++i) {
       su.truth[i][l] = lane.truth[i];
       su.model[i][l] = lane.model[i];
       su.mismatch = su.mismatch || lane.truth[i] != lane.model[i];
     }
-    for (int i = 0; i < 6; ++i) su.x0[i][l] = lane.scenario->initial_state[i];
+    for (int i = 0; i < 2 * N; ++i) su.x0[i][l] = lane.scenario->initial_state[i];
     su.saturation[l] = lane.scenario->saturation.value_or(std::numeric_limits<double>::infinity());
   }
   // The metrics in the kernel, unless a lane has more windows or faults than it keeps.
   su.kernel_metrics = true;
   su.want_samples = false;
-  for (const SpacecraftLane* l : lanes) {
+  for (const LaneTask* l : lanes) {
     su.windows = std::max(su.windows, 1 + static_cast<int>(l->options->extra_windows.size()));
     su.onsets = std::max(su.onsets, static_cast<int>(l->scenario->faults.size()));
     su.want_samples = su.want_samples || l->options->record_every > 0;
@@ -216,7 +242,7 @@ void run_pack(std::span<SpacecraftLane* const> lanes, const Mat34& G, const Mat4
   } else {
     constexpr double inf = std::numeric_limits<double>::infinity();
     for (int l = 0; l < width; ++l) {
-      const SpacecraftLane& lane = *lanes[l < su.lanes ? l : 0];
+      const LaneTask& lane = *lanes[l < su.lanes ? l : 0];
       const SimulationOptions& o = *lane.options;
       for (int w = 0; w < su.windows; ++w) {
         const std::size_t e = static_cast<std::size_t>(w);
@@ -233,18 +259,18 @@ void run_pack(std::span<SpacecraftLane* const> lanes, const Mat34& G, const Mat4
     }
   }
   su.shared_inputs = true;
-  for (const SpacecraftLane* l : lanes)
+  for (const LaneTask* l : lanes)
     su.shared_inputs = su.shared_inputs && l->scenario == lanes[0]->scenario;
-  Host host(lanes, width, su);
-  PackFinal fin{};
-  kernel_for(isa)(su, host, fin);
+  Host<N, M> host(lanes, width, su);
+  PackFinal<N, M> fin{};
+  kernel_for<P, N, M>(isa)(su, host, fin);
   host.finish(fin);
 }
 
 // The narrowest instruction set up to `widest` that holds n lanes: a wide register costs more
 // per instruction than a narrow one (AVX-512 on 2 lanes is slower than SSE2), and every
 // instruction set gives the same bits.
-Isa narrowest(Isa widest, std::size_t n) {
+inline Isa narrowest(Isa widest, std::size_t n) {
   static const std::vector<Isa> supported = supported_isas();
   for (Isa isa : supported) {
     if (isa == widest) break;
@@ -253,21 +279,25 @@ Isa narrowest(Isa widest, std::size_t n) {
   return widest;
 }
 
-}  // namespace
+}  // namespace lane_host
 
-void run_spacecraft_lanes(std::span<SpacecraftLane> lanes, const Mat34& G, const Mat43& G_pinv,
-                          Isa isa) {
+// Runs the lanes of plant class P in packs of the instruction set's width (lanes that cannot
+// share a pack run in different ones), writing each result. G and G_pinv: the plant's when
+// constant, else null.
+template <class P>
+void run_lanes(std::span<LaneTask> lanes, const Mat<P::kAxes, P::kActuators>* G,
+               const Mat<P::kActuators, P::kAxes>* G_pinv, Isa isa) {
   // Lanes can share a pack when their loops have the same shape: sample time, substeps,
   // samples, control law (and network size). Packs are formed in task order.
   using Key = std::tuple<double, int, std::int64_t, ControllerType, double>;
-  const auto key = [](const SpacecraftLane& l) {
+  const auto key = [](const LaneTask& l) {
     const bool adaptive = l.config.type == ControllerType::adaptive_neural_pi_fosmc;
     return Key{l.scenario->sample_time, l.scenario->substeps, l.scenario->samples(), l.config.type,
                adaptive ? l.config.nodes : 0.0};
   };
   const std::size_t width = static_cast<std::size_t>(lane_width(isa));
   std::vector<bool> taken(lanes.size(), false);
-  std::vector<SpacecraftLane*> pack;
+  std::vector<LaneTask*> pack;
   for (std::size_t i = 0; i < lanes.size(); ++i) {
     if (taken[i]) continue;
     pack.clear();
@@ -277,7 +307,8 @@ void run_spacecraft_lanes(std::span<SpacecraftLane> lanes, const Mat34& G, const
         taken[j] = true;
         pack.push_back(&lanes[j]);
       }
-    run_pack(pack, G, G_pinv, narrowest(isa, pack.size()));
+    lane_host::run_pack<P, P::kAxes, P::kActuators>(pack, G, G_pinv,
+                                                    lane_host::narrowest(isa, pack.size()));
   }
 }
 

@@ -1,0 +1,350 @@
+#pragma once
+// The closed loop (SPEC §4) for W simulations of one plant in lockstep, one per lane of T, with
+// the control law Law (controllers/laws.hpp), written once for every plant. A plant gives its
+// dynamics as lane code, PlantLanes<P> (plants/<plant>_lanes.cpp), the way controllers/laws.hpp
+// gives the laws: the constants per lane (the PackSetup's truth and model rows, read once) apart
+// from what changes (the state X, which the loop owns, and the plant's scratch space, such as
+// angle trackers). With T = double it is the scalar simulator: AnyPlant::simulate() and the SIMD
+// lanes run this same code, which is why a lane reproduces the scalar run to the last bit.
+//
+//   per sample k, t = k Ts, for every lane:
+//     a_k = f(X) + G(X)·applied(t, u_{k-1}) + Δ(t)   acceleration sensor, before the new command
+//     u_k = law(X1, X2, a_k, f_model(X), G⁺_model(X))
+//     substeps × RK4 with u_k held; faults and Δ at each stage time
+//     a lane with |X_i| > 1e6, inf or NaN has diverged: it stops counting, restarts from X(0)
+//     with a reset controller (so that it takes no slow paths), and the host ignores it
+//   the pack ends when every lane has diverged or all samples are done
+//
+// PlantLanes<P> gives the plant's shape, static constexpr int N, M, and for the lane type T a
+// class Lanes<T> with
+//   static constexpr bool kConstantInput;
+//   Lanes(const PackSetup<N, M>&)                       the constants of every lane
+//   void drift(const V<2N>& x, V<N>& f, V<N>* f_model)  f(X) of the truth (and of the model)
+// and, when G depends on X (kConstantInput false; else the loop uses PackSetup::G and G_pinv),
+//   void input(const V<M>& u, V<N>& Gu)  G(X) u at the X of the last drift() call, summed
+//                                        G(i,0) u0 + G(i,1) u1 + ... in that order
+//   void pinv(const V<2N>& x, T* out)    the model's G⁺(X), row-major m×n, as Plant::G_pinv
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <type_traits>
+
+#include "controllers/laws.hpp"
+#include "lanes/angle_tracker.hpp"
+#include "lanes/elementary.hpp"
+#include "lanes/pack.hpp"
+
+namespace ftc::sim::detail {
+inline namespace FTC_ISA_NS {
+
+// The lane code of plant class P: specialised in the plant's lanes file.
+template <class P>
+struct PlantLanes;
+
+template <class T, class P, template <class, int, int> class Law, bool SharedInputs, int N, int M>
+void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin) {
+  using Plant = typename PlantLanes<P>::template Lanes<T>;
+  static_assert(PlantLanes<P>::N == N && PlantLanes<P>::M == M);
+  constexpr int S2 = 2 * N;
+  constexpr bool kConstantInput = Plant::kConstantInput;
+  constexpr int W = lane::kWidth<T>;
+  using Mask = lane::Mask<T>;
+  using VN = std::array<T, N>;
+  using VM = std::array<T, M>;
+  using VS = std::array<T, S2>;
+  using Exo = ExoRows<N, M>;
+  static_assert(W <= kMaxLanes);
+
+  const ControllerConfig* configs[W];
+  for (int l = 0; l < W; ++l) configs[l] = su.configs[l < su.lanes ? l : 0];
+  Law<T, N, M> law(configs, su.Ts);
+
+  const auto row = [](const double* r) { return lane::load_lanes<T>(r); };
+  // Row r of an instant's exogenous inputs (ExoRows): one value for every lane, or each lane's own.
+  constexpr int kStride = Exo::stride(SharedInputs, W);
+  constexpr int kInstant = Exo::kCount * kStride;
+  const auto input = [](const double* e, int r) FTC_HOT_LAMBDA {
+    if constexpr (SharedInputs)
+      return T(e[r]);
+    else
+      return lane::load_lanes<T>(e + r * kStride);
+  };
+  Plant plant(su);
+  const T sat = row(su.saturation);
+  VS x0;
+  for (int i = 0; i < S2; ++i) x0[i] = row(su.x0[i]);
+  T G[N * M];
+  if constexpr (kConstantInput)
+    for (int i = 0; i < N * M; ++i) G[i] = T(su.G[i]);
+
+  const double Ts = su.Ts;
+  const double h = Ts / su.substeps;
+  const T hv(h), h2(0.5 * h), h6(h / 6.0);
+  const int S = su.substeps;
+
+  // dX2/dt = f(X) + G u + Δ(t), u the command u_d after the faults and saturation at one
+  // instant. The applied u (and with a constant G the forcing G u) and Δ depend on the instant
+  // and the held command only, so the two midpoint stages share them.
+  struct NoGu {};
+  struct Forcing {
+    [[no_unique_address]] std::conditional_t<kConstantInput, VN, NoGu> Gu;
+    VN dist;
+    VM u;
+  };
+  const auto forcing = [&](const double* e, const VM& u_d) FTC_HOT_LAMBDA -> Forcing {
+    Forcing F;
+    for (int j = 0; j < M; ++j) {
+      const T v = input(e, Exo::kGain + j) * u_d[j] + input(e, Exo::kOffset + j);
+      const T lo = lane::select(v < -sat, -sat, v);
+      F.u[j] = lane::select(lo > sat, sat, lo);
+    }
+    for (int i = 0; i < N; ++i) {
+      if constexpr (kConstantInput) {
+        T g = G[i * M] * F.u[0];
+        for (int j = 1; j < M; ++j) g = g + G[i * M + j] * F.u[j];
+        F.Gu[i] = g;
+      }
+      F.dist[i] = input(e, Exo::kDist + i);
+    }
+    return F;
+  };
+  // The acceleration at the state of the last drift() call.
+  const auto accel = [&](const VN& f, const Forcing& F) FTC_HOT_LAMBDA -> VN {
+    VN a;
+    if constexpr (kConstantInput) {
+      for (int i = 0; i < N; ++i) a[i] = (f[i] + F.Gu[i]) + F.dist[i];
+    } else {
+      VN Gu;
+      plant.input(F.u, Gu);
+      for (int i = 0; i < N; ++i) a[i] = (f[i] + Gu[i]) + F.dist[i];
+    }
+    return a;
+  };
+  const auto deriv = [&](const VS& x, const Forcing& F) FTC_HOT_LAMBDA -> VS {
+    VN f;
+    plant.drift(x, f, nullptr);
+    const VN a = accel(f, F);
+    VS d;
+    for (int i = 0; i < N; ++i) {
+      d[i] = x[N + i];
+      d[N + i] = a[i];
+    }
+    return d;
+  };
+
+  VS x = x0;
+  VM u_prev;
+  u_prev.fill(T(0.0));
+  bool live[W];  // lanes still counting
+  for (int l = 0; l < W; ++l) live[l] = l < su.lanes;
+  int live_count = su.lanes;
+  for (int l = 0; l < W; ++l) {
+    fin.samples[l] = su.samples;
+    fin.diverged[l] = false;
+  }
+
+  // The metrics, in the operations and order of MetricsAccumulator::sample (ftc/sim/metrics.hpp),
+  // lanes that have diverged masked out.
+  const int nw = su.kernel_metrics ? su.windows : 0, no = su.kernel_metrics ? su.onsets : 0;
+  T w0[kMaxWindows], w1[kMaxWindows], ise[kMaxWindows], iae[kMaxWindows], itae[kMaxWindows];
+  for (int i = 0; i < nw; ++i) {
+    w0[i] = row(su.window[i][0]);
+    w1[i] = row(su.window[i][1]);
+    ise[i] = iae[i] = itae[i] = T(0.0);
+  }
+  T onset[kMaxOnsets], peak[kMaxOnsets];
+  for (int i = 0; i < no; ++i) {
+    onset[i] = row(su.onset[i]);
+    peak[i] = T(std::numeric_limits<double>::quiet_NaN());
+  }
+  T max_abs_u(0.0), control_tv(0.0);
+  Mask counting = T(0.0) == T(0.0);
+  {
+    double c[W];
+    for (int l = 0; l < W; ++l) c[l] = live[l] ? 0.0 : 1.0;
+    counting = lane::load_lanes<T>(c) == T(0.0);
+  }
+  const T Tsv(Ts);
+
+  SampleLanes<N, M> out[32];
+  const int block = su.block < 32 ? su.block : 32;
+  std::int64_t k = 0;
+  while (k < su.samples && live_count > 0) {
+    const int n = static_cast<int>(su.samples - k < block ? su.samples - k : block);
+    const double* exo = host.inputs(k, n);
+    for (int i = 0; i < n; ++i, ++k) {
+      const double* e = exo + i * S * 3 * kInstant;
+      VN f, f_model;
+      plant.drift(x, f, su.mismatch ? &f_model : nullptr);
+      const VN a = accel(f, forcing(e, u_prev));
+      law::Sample<T, N> m;
+      for (int r = 0; r < N; ++r) {
+        m.X1[r] = x[r];
+        m.X2[r] = x[N + r];
+      }
+      m.a = a;
+      m.f = su.mismatch ? f_model : f;
+      VM u;
+      if constexpr (kConstantInput) {
+        law.step(m, su.G_pinv, u);
+      } else {
+        T G_pinv[M * N];
+        plant.pinv(x, G_pinv);
+        law.step(m, static_cast<const T*>(G_pinv), u);
+      }
+      SampleLanes<N, M>& o = out[i];
+      for (int r = 0; r < S2; ++r) lane::store(x[r], o.x[r]);
+      for (int r = 0; r < M; ++r) lane::store(u[r], o.u[r]);
+      if (su.kernel_metrics) {
+        const double td = static_cast<double>(k) * Ts;
+        const T t(td);
+        // In MetricsAccumulator::sample's order: ((e0 + e1) + e2) + ...
+        T e2 = x[0] * x[0], e1 = lane::abs(x[0]);
+        for (int r = 1; r < N; ++r) {
+          e2 = e2 + x[r] * x[r];
+          e1 = e1 + lane::abs(x[r]);
+        }
+        const T ise_k = Tsv * e2, iae_k = Tsv * e1, itae_k = T(Ts * td) * e1;
+        for (int wi = 0; wi < nw; ++wi) {
+          const Mask in = counting & (t >= w0[wi]) & (t < w1[wi]);
+          ise[wi] = lane::select(in, ise[wi] + ise_k, ise[wi]);
+          iae[wi] = lane::select(in, iae[wi] + iae_k, iae[wi]);
+          itae[wi] = lane::select(in, itae[wi] + itae_k, itae[wi]);
+        }
+        T u_max = lane::abs(u[0]);
+        for (int j = 1; j < M; ++j) {
+          const T a_j = lane::abs(u[j]);
+          u_max = lane::select(u_max < a_j, a_j, u_max);
+        }
+        max_abs_u = lane::select(counting & (max_abs_u < u_max), u_max, max_abs_u);
+        if (k > 0) {
+          T d2 = (u[0] - u_prev[0]) * (u[0] - u_prev[0]);
+          for (int j = 1; j < M; ++j) d2 = d2 + (u[j] - u_prev[j]) * (u[j] - u_prev[j]);
+          control_tv = lane::select(counting, control_tv + lane::sqrt(d2), control_tv);
+        }
+        if (no > 0) {
+          const T en = lane::sqrt(e2);
+          for (int fi = 0; fi < no; ++fi) {
+            const Mask rising = counting & (t >= onset[fi]) & lane::mask_not(peak[fi] >= en);
+            peak[fi] = lane::select(rising, en, peak[fi]);
+          }
+        }
+      }
+
+      // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
+      const VN a1 = accel(f, forcing(e, u));
+      VS k1;
+      for (int r = 0; r < N; ++r) {
+        k1[r] = x[N + r];
+        k1[N + r] = a1[r];
+      }
+      for (int j = 0; j < S; ++j) {
+        const double* ej = e + j * 3 * kInstant;
+        if (j > 0) k1 = deriv(x, forcing(ej, u));
+        VS xs;
+        for (int r = 0; r < S2; ++r) xs[r] = x[r] + h2 * k1[r];
+        const Forcing mid = forcing(ej + kInstant, u);
+        const VS k2 = deriv(xs, mid);
+        for (int r = 0; r < S2; ++r) xs[r] = x[r] + h2 * k2[r];
+        const VS k3 = deriv(xs, mid);
+        for (int r = 0; r < S2; ++r) xs[r] = x[r] + hv * k3[r];
+        const VS k4 = deriv(xs, forcing(ej + 2 * kInstant, u));
+        for (int r = 0; r < S2; ++r) {
+          T sum = k1[r] + T(2.0) * k2[r];
+          sum = sum + T(2.0) * k3[r];
+          sum = sum + k4[r];
+          x[r] = x[r] + h6 * sum;
+        }
+      }
+      u_prev = u;
+
+      Mask inside = lane::abs(x[0]) <= T(1e6);  // false for NaN
+      for (int r = 1; r < S2; ++r) inside = inside & (lane::abs(x[r]) <= T(1e6));
+      if (lane::all(inside)) [[likely]] {
+        for (int l = 0; l < W; ++l) o.diverged[l] = false;
+        continue;
+      }
+      // Lanes that left the bounds: those still counting end here (their final state is this
+      // one), and every such lane restarts from X(0) with a reset controller.
+      lane::store_mask(lane::mask_not(inside), o.diverged);
+      for (int l = 0; l < W; ++l) {
+        if (!o.diverged[l] || !live[l]) continue;
+        live[l] = false;
+        --live_count;
+        fin.samples[l] = k + 1;
+        fin.diverged[l] = true;
+        fin.diverged_at[l] = static_cast<double>(k) * Ts + Ts;
+        for (int r = 0; r < S2; ++r) fin.x[r][l] = lane::lane_of(x[r], l);
+      }
+      counting = counting & inside;
+      for (int r = 0; r < S2; ++r) x[r] = lane::select(inside, x[r], x0[r]);
+      for (int r = 0; r < M; ++r) u_prev[r] = lane::select(inside, u_prev[r], T(0.0));
+      law.reset_lanes(inside);
+    }
+    if (su.want_samples) host.samples(k - n, n, out);
+  }
+  for (int l = 0; l < W; ++l) {
+    for (int wi = 0; wi < nw; ++wi) {
+      fin.ise[wi][l] = lane::lane_of(ise[wi], l);
+      fin.iae[wi][l] = lane::lane_of(iae[wi], l);
+      fin.itae[wi][l] = lane::lane_of(itae[wi], l);
+    }
+    for (int fi = 0; fi < no; ++fi) fin.peak[fi][l] = lane::lane_of(peak[fi], l);
+    fin.max_abs_u[l] = lane::lane_of(max_abs_u, l);
+    fin.control_tv[l] = lane::lane_of(control_tv, l);
+  }
+  for (int l = 0; l < W; ++l)
+    if (live[l] || l >= su.lanes)
+      for (int r = 0; r < S2; ++r) fin.x[r][l] = lane::lane_of(x[r], l);
+}
+
+// The kernel of one instruction set: the law and the kind of inputs chosen once per pack.
+template <class T, class P, template <class, int, int> class Law, int N, int M>
+void run_law(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin) {
+  if (su.shared_inputs)
+    run_closed_loop<T, P, Law, true>(su, host, fin);
+  else
+    run_closed_loop<T, P, Law, false>(su, host, fin);
+}
+
+template <class T, class P, int N, int M>
+void run_pack(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin) {
+  switch (su.configs[0]->type) {
+    case ControllerType::nftsmc:
+      return run_law<T, P, law::Nftsmc>(su, host, fin);
+    case ControllerType::fosmc:
+      return run_law<T, P, law::Fosmc>(su, host, fin);
+    case ControllerType::pi_fosmc:
+      return run_law<T, P, law::PiFosmc>(su, host, fin);
+    case ControllerType::adaptive_neural_pi_fosmc:
+      return run_law<T, P, law::AdaptiveNeuralPiFosmc>(su, host, fin);
+  }
+}
+
+// The lane type of the instruction set this file is compiled for (FTC_LANE_ARCH, set by
+// ftc_plant_kernels() in sim_core/CMakeLists.txt): one double without it.
+#if defined(FTC_LANE_ARCH)
+using NativeLane = xsimd::batch<double, xsimd::FTC_LANE_ARCH>;
+#else
+using NativeLane = double;
+#endif
+
+template <class P, int N, int M>
+void pack_kernel(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin) {
+  run_pack<NativeLane, P>(su, host, fin);
+}
+
+}  // namespace FTC_ISA_NS
+}  // namespace ftc::sim::detail
+
+// In a plant's lanes file, after its PlantLanes<P>: the kernel of P for the instruction set the
+// file is compiled for (lanes/pack.hpp declares one per instruction set).
+#define FTC_PLANT_KERNEL(P)                                                                     \
+  template void ftc::sim::detail::FTC_ISA_NS::pack_kernel<P, ftc::sim::detail::PlantLanes<P>::N, \
+                                                          ftc::sim::detail::PlantLanes<P>::M>(  \
+      const ftc::sim::detail::PackSetup<ftc::sim::detail::PlantLanes<P>::N,                    \
+                                        ftc::sim::detail::PlantLanes<P>::M>&,                  \
+      ftc::sim::detail::PackHost<ftc::sim::detail::PlantLanes<P>::N,                           \
+                                 ftc::sim::detail::PlantLanes<P>::M>&,                         \
+      ftc::sim::detail::PackFinal<ftc::sim::detail::PlantLanes<P>::N,                          \
+                                  ftc::sim::detail::PlantLanes<P>::M>&);
