@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 #include <vector>
 
@@ -159,6 +160,27 @@ FTC_HOT_INLINE typename P::InputMatrix input_matrix(const P& plant, const typena
     return plant.G(x);
 }
 
+// The command after the faults, the saturation and the limits for a plant whose actuators work
+// about an operating point (actuator_trim(), as Hexarotor's): the faults act on u0 + u_d. The
+// operations of the batch kernel's (lanes/closed_loop.hpp).
+template <class P>
+concept TrimmedPlant = requires(const P& p) { p.actuator_trim(); };
+
+template <int M, class Trim>
+FTC_HOT_INLINE Vec<M> apply_trimmed(const Trim& t, const FaultSet& faults,
+                                    const FaultEffect<M>& e, const Vec<M>& u_d) {
+  const double m = faults.saturation().value_or(std::numeric_limits<double>::infinity());
+  Vec<M> u;
+  for (int j = 0; j < M; ++j) {
+    double v = (e.gain[j] * (t.u0[j] + u_d[j]) + e.offset[j]) - t.u0[j];
+    v = v < -m ? -m : v;
+    v = v > m ? m : v;
+    v = v < t.lo[j] ? t.lo[j] : v;
+    u[j] = v > t.hi[j] ? t.hi[j] : v;
+  }
+  return u;
+}
+
 // One recorded sample; out of line, as it is rare and would bloat the loop.
 template <int N, int M>
 [[gnu::noinline]] void append_row(Trajectory& tr, double t, const StateOf<N>& x, const Vec<M>& u_d,
@@ -208,9 +230,15 @@ SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
   const Mat<N, M> G0 = plant.G(x0);
   auto ws = make_workspace<P>();
   // dX2/dt = f(X) + G(X) u + Δ(t), with u the command u_d after the faults of time t.
+  const auto applied = [&](const FaultEffect<M>& fe, const Vec<M>& u_d) FTC_HOT_LAMBDA {
+    if constexpr (TrimmedPlant<P>)
+      return apply_trimmed<M>(plant.actuator_trim(), faults, fe, u_d);
+    else
+      return faults.apply(fe, u_d);
+  };
   const auto accel = [&](const StateT& s, const Vec<N>& fs, const Entry& e, const Vec<M>& u_d)
                          FTC_HOT_LAMBDA -> Vec<N> {
-    const Vec<M> u = faults.apply(e.fault, u_d);
+    const Vec<M> u = applied(e.fault, u_d);
     // Summed in the order the batch kernels sum (lanes/closed_loop.hpp), so that a
     // Controller simulated here issues the commands of a tuning run's lane to the last bit.
     const auto row_times_u = [&](const Mat<N, M>& G, int i) FTC_HOT_LAMBDA {
@@ -247,7 +275,7 @@ SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
                                        static_cast<const Plant<N, M>*>(&plant)});
     metrics.sample(t, x, u);
     if (options.record_every > 0 && k % options.record_every == 0)
-      append_row<N, M>(result.trajectory, t, x, u, faults.apply(e[0].fault, u));
+      append_row<N, M>(result.trajectory, t, x, u, applied(e[0].fault, u));
 
     u_held = u;
     // Stage 1 of the first substep is at (t, X): f(X) and Δ(t) are already known.

@@ -18,6 +18,7 @@
 // PlantLanes<P> gives the plant's shape, static constexpr int N, M, and for the lane type T a
 // class Lanes<T> with
 //   static constexpr bool kConstantInput;
+//   static constexpr bool kTrimmed;   actuators about an operating point (PackSetup::u0, lo, hi)
 //   Lanes(const PackSetup<N, M>&)                       the constants of every lane
 //   void drift(const V<2N>& x, V<N>& f, V<N>* f_model)  f(X) of the truth (and of the model)
 // and, when G depends on X (kConstantInput false; else the loop uses PackSetup::G and G_pinv),
@@ -71,6 +72,14 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
   };
   Plant plant(su);
   const T sat = row(su.saturation);
+  constexpr bool kTrimmed = Plant::kTrimmed;
+  std::array<T, M> u0, lo_u, hi_u;
+  if constexpr (kTrimmed)
+    for (int j = 0; j < M; ++j) {
+      u0[j] = row(su.u0[j]);
+      lo_u[j] = row(su.lo[j]);
+      hi_u[j] = row(su.hi[j]);
+    }
   VS x0;
   for (int i = 0; i < S2; ++i) x0[i] = row(su.x0[i]);
   T G[N * M];
@@ -94,9 +103,19 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
   const auto forcing = [&](const double* e, const VM& u_d) FTC_HOT_LAMBDA -> Forcing {
     Forcing F;
     for (int j = 0; j < M; ++j) {
-      const T v = input(e, Exo::kGain + j) * u_d[j] + input(e, Exo::kOffset + j);
-      const T lo = lane::select(v < -sat, -sat, v);
-      F.u[j] = lane::select(lo > sat, sat, lo);
+      if constexpr (kTrimmed) {
+        // The faults act on the physical output u0 + u_d; then the saturation and the limits.
+        const T v =
+            (input(e, Exo::kGain + j) * (u0[j] + u_d[j]) + input(e, Exo::kOffset + j)) - u0[j];
+        const T lo = lane::select(v < -sat, -sat, v);
+        const T s = lane::select(lo > sat, sat, lo);
+        const T l = lane::select(s < lo_u[j], lo_u[j], s);
+        F.u[j] = lane::select(l > hi_u[j], hi_u[j], l);
+      } else {
+        const T v = input(e, Exo::kGain + j) * u_d[j] + input(e, Exo::kOffset + j);
+        const T lo = lane::select(v < -sat, -sat, v);
+        F.u[j] = lane::select(lo > sat, sat, lo);
+      }
     }
     for (int i = 0; i < N; ++i) {
       if constexpr (kConstantInput) {

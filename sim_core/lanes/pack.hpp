@@ -20,6 +20,8 @@ namespace ftc::sim::detail {
 inline constexpr int kMaxLanes = 8;  // AVX-512: 8 doubles
 // The constants a plant's f and G are built from, per lane (Spacecraft::f_constants()).
 inline constexpr int kMaxPlantConstants = 8;
+// Actuators of a plant with an operating point (PackSetup::trimmed).
+inline constexpr int kMaxActuators = 8;
 // Metrics the kernel accumulates itself (SPEC §6; the host's MetricsAccumulator otherwise):
 // the objective window and the extra ones, and the peak error after each fault onset.
 inline constexpr int kMaxWindows = 8;
@@ -66,6 +68,13 @@ struct PackSetup {
   double G_pinv[M * N] = {};
   double x0[2 * N][kMaxLanes] = {};
   double saturation[kMaxLanes] = {};  // u_max; +inf for none
+  // For a plant whose actuators work about an operating point (PlantLanes' kTrimmed: a rotor's
+  // hover thrust), per actuator and lane: u is a deviation from u0, the faults act on the
+  // physical output u0 + u (a loss of effectiveness scales it, a stuck actuator holds it), and
+  // the deviation is held within [lo, hi] (the rotor's 0 .. max thrust, less u0) after them.
+  double u0[M][kMaxLanes] = {};
+  double lo[M][kMaxLanes] = {};
+  double hi[M][kMaxLanes] = {};
   double Ts = 0.0;
   int substeps = 1;
   std::int64_t samples = 0;

@@ -29,6 +29,9 @@ struct LaneTask {
   const Scenario* scenario = nullptr;
   const SimulationOptions* options = nullptr;
   std::array<double, kMaxPlantConstants> truth{}, model{};
+  // The simulated plant's operating point and limits per actuator (PackSetup::u0, lo, hi), for
+  // a plant that has them.
+  std::array<double, kMaxActuators> u0{}, lo{}, hi{};
   SimulationResult* result = nullptr;
 };
 
@@ -139,8 +142,7 @@ class Host final : public PackHost<N, M> {
             effect.gain[r] = e[(Exo::kGain + r) * stride + from];
             effect.offset[r] = e[(Exo::kOffset + r) * stride + from];
           }
-          append_row<N, M>(lanes_[l]->result->trajectory, t, x, u,
-                           groups_[group_of_[l]].faults.apply(effect, u));
+          append_row<N, M>(lanes_[l]->result->trajectory, t, x, u, applied(l, effect, u));
         }
         if (out[i].diverged[l]) {
           if (metrics) metrics_[l].mark_diverged(t + Ts);
@@ -150,6 +152,25 @@ class Host final : public PackHost<N, M> {
       }
     }
   }
+
+  // The command after the faults, the saturation and (for a plant with an operating point) the
+  // limits, as the kernel forms it (lanes/closed_loop.hpp).
+  Vec<M> applied(std::size_t l, const FaultEffect<M>& e, const Vec<M>& u_d) const {
+    const FaultSet& faults = groups_[group_of_[l]].faults;
+    if (!trimmed_) return faults.apply(e, u_d);
+    const LaneTask& lane = *lanes_[l];
+    const double m = faults.saturation().value_or(std::numeric_limits<double>::infinity());
+    Vec<M> u;
+    for (int j = 0; j < M; ++j) {
+      double v = (e.gain[j] * (lane.u0[j] + u_d[j]) + e.offset[j]) - lane.u0[j];
+      v = v < -m ? -m : v;
+      v = v > m ? m : v;
+      v = v < lane.lo[j] ? lane.lo[j] : v;
+      u[j] = v > lane.hi[j] ? lane.hi[j] : v;
+    }
+    return u;
+  }
+  bool trimmed_ = false;
 
   void finish(const PackFinal<N, M>& fin) {
     for (std::size_t l = 0; l < lanes_.size(); ++l) {
@@ -202,7 +223,7 @@ class Host final : public PackHost<N, M> {
 // G and G⁺ when the plant's are constant (else null: its lane code forms them).
 template <class P, int N, int M>
 void run_pack(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M, N>* G_pinv,
-              Isa isa) {
+              bool trimmed, Isa isa) {
   const int width = lane_width(isa);
   PackSetup<N, M> su;
   su.lanes = static_cast<int>(lanes.size());
@@ -226,6 +247,11 @@ void run_pack(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M,
       su.mismatch = su.mismatch || lane.truth[i] != lane.model[i];
     }
     for (int i = 0; i < 2 * N; ++i) su.x0[i][l] = lane.scenario->initial_state[i];
+    for (int j = 0; trimmed && j < M; ++j) {  // M ≤ kMaxActuators then (PlantAdapter)
+      su.u0[j][l] = lane.u0[j];
+      su.lo[j][l] = lane.lo[j];
+      su.hi[j][l] = lane.hi[j];
+    }
     su.saturation[l] = lane.scenario->saturation.value_or(std::numeric_limits<double>::infinity());
   }
   // The metrics in the kernel, unless a lane has more windows or faults than it keeps.
@@ -262,6 +288,7 @@ void run_pack(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M,
   for (const LaneTask* l : lanes)
     su.shared_inputs = su.shared_inputs && l->scenario == lanes[0]->scenario;
   Host<N, M> host(lanes, width, su);
+  host.trimmed_ = trimmed;
   PackFinal<N, M> fin{};
   kernel_for<P, N, M>(isa)(su, host, fin);
   host.finish(fin);
@@ -286,7 +313,7 @@ inline Isa narrowest(Isa widest, std::size_t n) {
 // constant, else null.
 template <class P>
 void run_lanes(std::span<LaneTask> lanes, const Mat<P::kAxes, P::kActuators>* G,
-               const Mat<P::kActuators, P::kAxes>* G_pinv, Isa isa) {
+               const Mat<P::kActuators, P::kAxes>* G_pinv, bool trimmed, Isa isa) {
   // Lanes can share a pack when their loops have the same shape: sample time, substeps,
   // samples, control law (and network size). Packs are formed in task order.
   using Key = std::tuple<double, int, std::int64_t, ControllerType, double>;
@@ -307,7 +334,7 @@ void run_lanes(std::span<LaneTask> lanes, const Mat<P::kAxes, P::kActuators>* G,
         taken[j] = true;
         pack.push_back(&lanes[j]);
       }
-    lane_host::run_pack<P, P::kAxes, P::kActuators>(pack, G, G_pinv,
+    lane_host::run_pack<P, P::kAxes, P::kActuators>(pack, G, G_pinv, trimmed,
                                                     lane_host::narrowest(isa, pack.size()));
   }
 }

@@ -20,6 +20,7 @@ struct PlantLanes<Manipulator> {
   template <class T>
   class Lanes {
    public:
+    static constexpr bool kTrimmed = false;
     static constexpr bool kConstantInput = false;
 
     explicit Lanes(const PackSetup<N, M>& su)

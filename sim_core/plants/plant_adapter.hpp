@@ -65,10 +65,13 @@ class PlantAdapter final : public AnyPlant {
   bool recoverable(const Scenario& scenario) const override {
     constexpr int N = P::kAxes, M = P::kActuators;
     std::array<bool, M> stuck{};
-    std::array<double, M> lost{};
+    std::array<double, M> stuck_at{}, lost{};
     for (const Fault& f : scenario.faults) {
       if (f.actuator < 1 || f.actuator > M) continue;  // reported by validation
-      if (f.type == FaultType::stuck) stuck[f.actuator - 1] = true;
+      if (f.type == FaultType::stuck) {
+        stuck[f.actuator - 1] = true;
+        stuck_at[f.actuator - 1] = f.value;
+      }
       if (f.type == FaultType::loss_of_effectiveness) lost[f.actuator - 1] += f.fraction;
     }
     typename P::State x0 = P::State::Zero();
@@ -84,7 +87,12 @@ class PlantAdapter final : public AnyPlant {
     if (acting.cols() < N) return false;
     Eigen::FullPivLU<Eigen::MatrixXd> lu(acting);
     lu.setThreshold(1e-9);
-    return lu.rank() == N;
+    if (lu.rank() != N) return false;
+    // A plant with an operating point (a rotor's hover thrust) must also be able to hold it
+    // with what is left, within its limits (Hexarotor::trim_feasible).
+    if constexpr (requires { plant_.trim_feasible(stuck, stuck_at, lost); })
+      return plant_.trim_feasible(stuck, stuck_at, lost);
+    return true;
   }
 
  private:
@@ -108,17 +116,36 @@ class PlantAdapter final : public AnyPlant {
     std::copy(model.begin(), model.end(), lane.model.begin());
     lane.truth = lane.model;
     if (!scenario.inertia.empty()) {
-      const auto truth_constants = truth(scenario).f_constants();
+      const P simulated = truth(scenario);
+      const auto truth_constants = simulated.f_constants();
       std::copy(truth_constants.begin(), truth_constants.end(), lane.truth.begin());
+      trim(simulated, lane);
+    } else {
+      trim(plant_, lane);
     }
     return lane;
   }
 
+  // A plant whose actuators work about an operating point gives actuator_trim(): u0 and the
+  // limits of the deviation per actuator (PackSetup::u0, lo, hi).
+  static constexpr bool kTrimmed = requires(const P& p) { p.actuator_trim(); };
+  static void trim(const P& p, LaneTask& lane) {
+    if constexpr (kTrimmed) {
+      static_assert(P::kActuators <= kMaxActuators);
+      const auto t = p.actuator_trim();
+      for (int j = 0; j < P::kActuators; ++j) {
+        lane.u0[j] = t.u0[j];
+        lane.lo[j] = t.lo[j];
+        lane.hi[j] = t.hi[j];
+      }
+    }
+  }
+
   void run(std::span<LaneTask> lanes, Isa isa) const {
     if (constant_G_)
-      run_lanes<P>(lanes, &G_, &G_pinv_, isa);
+      run_lanes<P>(lanes, &G_, &G_pinv_, kTrimmed, isa);
     else
-      run_lanes<P>(lanes, nullptr, nullptr, isa);
+      run_lanes<P>(lanes, nullptr, nullptr, kTrimmed, isa);
   }
 
   std::vector<double> values_;

@@ -18,6 +18,7 @@ struct PlantLanes<Spacecraft> {
   template <class T>
   class Lanes {
    public:
+    static constexpr bool kTrimmed = false;
     static constexpr bool kConstantInput = true;
 
     explicit Lanes(const PackSetup<N, M>& su)
