@@ -8,7 +8,9 @@
 #include <new>
 
 #include "ftc/sim/controller.hpp"
+#include "ftc/sim/hexarotor.hpp"
 #include "ftc/sim/manipulator.hpp"
+#include "ftc/sim/plants.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "ftc/sim/spacecraft.hpp"
 
@@ -35,6 +37,21 @@ long allocations_for(const P& plant, Scenario s, ControllerType type, double dur
   const SimulationResult r = simulate(plant, *c, s);
   const long after = g_allocations.load();
   EXPECT_FALSE(r.metrics.diverged);
+  return after - before;
+}
+
+// The same through the plant registry: one lane of the plant's batch kernel (AnyPlant::simulate).
+long kernel_allocations_for(const std::string& model, Scenario s, ControllerType type,
+                            double duration) {
+  PlantSpec spec;
+  spec.model = model;
+  const auto plant = make_plant(spec);
+  s.duration = duration;
+  const ControllerConfig c = ControllerConfig::table1(type);
+  const long before = g_allocations.load();
+  const SimulationResult r = plant->simulate(c, s);
+  const long after = g_allocations.load();
+  EXPECT_EQ(r.samples, s.samples());
   return after - before;
 }
 
@@ -70,6 +87,33 @@ TEST_P(AllocationFree, ManipulatorLoopAllocatesNothing) {
   const long long_run = allocations_for(plant, arm_scenario(), GetParam(), 30.0);
   EXPECT_EQ(short_run, long_run) << "allocations grow with the number of samples";
   EXPECT_LT(short_run, 100) << "setup (validation, metrics storage) should stay small";
+}
+
+// The hexarotor about hover: a 30 % loss of effectiveness of rotor 1.
+Scenario hexarotor_scenario() {
+  Scenario s;
+  s.initial_state = {0.2, -0.15, 0.1, 0.0, 0.0, 0.0};
+  s.disturbance = {{1, Shape::sin, 0.2, 1.0, 0.0}};
+  Fault loe;
+  loe.actuator = 1;
+  loe.type = FaultType::loss_of_effectiveness;
+  loe.onset = 0.5;
+  loe.fraction = 0.3;
+  s.faults = {loe};
+  return s;
+}
+
+TEST_P(AllocationFree, KernelsAllocateNothingPerSample) {
+  const std::pair<const char*, Scenario> plants[] = {{"spacecraft", Scenario::paper()},
+                                                     {"manipulator", arm_scenario()},
+                                                     {"hexarotor", hexarotor_scenario()}};
+  for (const auto& [model, s] : plants) {
+    kernel_allocations_for(model, s, GetParam(), 0.1);  // first use: sig^a tables, ISA choice
+    const long short_run = kernel_allocations_for(model, s, GetParam(), 1.0);
+    const long long_run = kernel_allocations_for(model, s, GetParam(), 30.0);
+    EXPECT_EQ(short_run, long_run) << model << ": allocations grow with the number of samples";
+    EXPECT_LT(short_run, 100) << model << ": setup should stay small";
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Simulation, AllocationFree, ::testing::ValuesIn(kAllControllerTypes),

@@ -9,5 +9,7 @@ template std::unique_ptr<Controller<3, 4>> make_controller<3, 4>(const Controlle
                                                                  const Plant<3, 4>&, double);
 template std::unique_ptr<Controller<2, 3>> make_controller<2, 3>(const ControllerConfig&,
                                                                  const Plant<2, 3>&, double);
+template std::unique_ptr<Controller<3, 6>> make_controller<3, 6>(const ControllerConfig&,
+                                                                 const Plant<3, 6>&, double);
 
 }  // namespace ftc::sim

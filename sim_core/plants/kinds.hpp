@@ -6,5 +6,6 @@ namespace ftc::sim::detail {
 
 PlantKind spacecraft_kind();
 PlantKind manipulator_kind();
+PlantKind hexarotor_kind();
 
 }  // namespace ftc::sim::detail

@@ -3,6 +3,7 @@
 // generic simulate(), and, for a new shape (n, m), the two instantiations.
 #include <tuple>
 
+#include "ftc/sim/hexarotor.hpp"
 #include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/spacecraft.hpp"
@@ -14,14 +15,14 @@
 namespace ftc::sim {
 
 const std::vector<PlantKind>& plant_kinds() {
-  static const std::vector<PlantKind> kinds = {detail::spacecraft_kind(),
-                                               detail::manipulator_kind()};  // <- add here
+  static const std::vector<PlantKind> kinds = {detail::spacecraft_kind(), detail::manipulator_kind(),
+                                               detail::hexarotor_kind()};  // <- add here
   return kinds;
 }
 
 namespace {
 
-using RegisteredPlants = std::tuple<Spacecraft, Manipulator>;  // <- and here
+using RegisteredPlants = std::tuple<Spacecraft, Manipulator, Hexarotor>;  // <- and here
 
 // The loop compiled for the registered class the plant is (found by dynamic_cast), or for the
 // Plant<N, M> interface when it is none of them.
@@ -52,6 +53,8 @@ SimulationResult simulate(const Plant<N, M>& plant, Controller<N, M>& controller
 template SimulationResult simulate<3, 4>(const Plant<3, 4>&, Controller<3, 4>&, const Scenario&,
                                          const SimulationOptions&);
 template SimulationResult simulate<2, 3>(const Plant<2, 3>&, Controller<2, 3>&, const Scenario&,
+                                         const SimulationOptions&);
+template SimulationResult simulate<3, 6>(const Plant<3, 6>&, Controller<3, 6>&, const Scenario&,
                                          const SimulationOptions&);
 
 const PlantKind* find_plant_kind(std::string_view model) {

@@ -1,0 +1,199 @@
+#include "ftc/sim/hexarotor.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "checks.hpp"
+#include "plants/hexarotor_dynamics.hpp"
+#include "plants/kinds.hpp"
+#include "plants/plant_adapter.hpp"
+
+namespace ftc::sim {
+
+Hexarotor::Hexarotor(const HexarotorParams& params) : params_(params) {
+  std::vector<FieldError> errs;
+  // In the order of the parameters in a job file, so that errors are listed as they appear.
+  for (int i = 0; i < 3; ++i)
+    detail::check_positive(errs, "/inertia/" + std::to_string(i), params.inertia[i]);
+  detail::check_positive(errs, "/mass", params.mass);
+  detail::check_positive(errs, "/arm_length", params.arm_length);
+  detail::check_positive(errs, "/max_thrust", params.max_thrust);
+  detail::check_positive(errs, "/moment_constant", params.moment_constant);
+  detail::check_positive(errs, "/gravity", params.gravity);
+  if (errs.empty() && !(6.0 * params.max_thrust > params.mass * params.gravity))
+    errs.push_back({"/max_thrust", "six rotors at " + std::to_string(params.max_thrust) +
+                                       " N cannot carry the weight m g = " +
+                                       std::to_string(params.mass * params.gravity) + " N"});
+  throw_if_errors("plant", std::move(errs));
+
+  const double Ix = params.inertia[0], Iy = params.inertia[1], Iz = params.inertia[2];
+  kx_ = (Iy - Iz) / Ix;
+  ky_ = (Iz - Ix) / Iy;
+  kz_ = (Ix - Iy) / Iz;
+  hover_ = params.mass * params.gravity / 6.0;
+  double G[18], Gp[18];
+  const double I[3] = {Ix, Iy, Iz};
+  hexarotor_input<double>(I, params.arm_length, params.moment_constant, G, Gp);
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 6; ++i) {
+      G_(k, i) = G[k * 6 + i];
+      G_pinv_(i, k) = Gp[i * 3 + k];
+    }
+}
+
+Hexarotor::Vector Hexarotor::f(const State& x) const {
+  double out[3];
+  hexarotor_f<double>(kx_, ky_, kz_, x[3], x[4], x[5], out);
+  return Vector(out[0], out[1], out[2]);
+}
+
+std::array<double, 5> Hexarotor::f_constants() const {
+  return {params_.inertia[0], params_.inertia[1], params_.inertia[2], params_.arm_length,
+          params_.moment_constant};
+}
+
+Hexarotor::Trim Hexarotor::actuator_trim() const {
+  Trim t;
+  t.u0.fill(hover_);
+  t.lo.fill(-hover_);
+  t.hi.fill(params_.max_thrust - hover_);
+  return t;
+}
+
+Hexarotor::InputMatrix Hexarotor::torque_matrix() const {
+  InputMatrix A;
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 6; ++i)
+      A(k, i) = hexarotor_torque<double>(k, i, params_.arm_length, params_.moment_constant);
+  return A;
+}
+
+double Hexarotor::trim_margin(const std::array<bool, 6>& stuck,
+                              const std::array<double, 6>& stuck_at,
+                              const std::array<double, 6>& lost) const {
+  constexpr double kInfeasible = -std::numeric_limits<double>::infinity();
+  const InputMatrix A = torque_matrix();
+  const double Tmax = params_.max_thrust;
+  // The rotors that still act, their upper limits, and what the others leave to them:
+  // E T = c with E = [A; 1 … 1] over the acting rotors, c = (0, 0, 0, m g) less the others.
+  std::vector<int> acting;
+  std::vector<double> cap;
+  Eigen::Vector4d c(0.0, 0.0, 0.0, params_.mass * params_.gravity);
+  for (int j = 0; j < 6; ++j) {
+    double fixed = 0.0;
+    if (stuck[j]) {
+      fixed = std::clamp(stuck_at[j], 0.0, Tmax);
+    } else if (lost[j] < 1.0) {
+      acting.push_back(j);
+      cap.push_back((1.0 - lost[j]) * Tmax);
+      continue;
+    }
+    c.head<3>() -= A.col(j) * fixed;
+    c[3] -= fixed;
+  }
+  const int k = static_cast<int>(acting.size());
+  if (k == 0) return kInfeasible;
+  Eigen::MatrixXd E(4, k);
+  for (int i = 0; i < k; ++i) {
+    E.block<3, 1>(0, i) = A.col(acting[i]);
+    E(3, i) = 1.0;
+  }
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(E);
+  lu.setThreshold(1e-12);
+  const Eigen::VectorXd Tp = lu.solve(c);
+  if ((E * Tp - c).norm() > 1e-9 * (1.0 + c.norm())) return kInfeasible;
+  const int d = k - static_cast<int>(lu.rank());
+  // The thrusts Tp + Z z; maximise t subject to t ≤ T_i ≤ cap_i − t: rows a·(z, t) ≤ b.
+  const Eigen::MatrixXd Z = d > 0 ? Eigen::MatrixXd(lu.kernel()) : Eigen::MatrixXd(k, 0);
+  const int rows = 2 * k, vars = d + 1;
+  Eigen::MatrixXd a(rows, vars);
+  Eigen::VectorXd b(rows);
+  for (int i = 0; i < k; ++i) {
+    a.block(i, 0, 1, d) = -Z.row(i);
+    a(i, d) = 1.0;
+    b[i] = Tp[i];
+    a.block(k + i, 0, 1, d) = Z.row(i);
+    a(k + i, d) = 1.0;
+    b[k + i] = cap[static_cast<std::size_t>(i)] - Tp[i];
+  }
+  // The optimum lies at a vertex: vars of the rows active. Few enough to try them all.
+  double best = kInfeasible;
+  std::vector<int> pick(static_cast<std::size_t>(vars));
+  const auto visit = [&](const auto& self, int from, int depth) -> void {
+    if (depth == vars) {
+      Eigen::MatrixXd S(vars, vars);
+      Eigen::VectorXd s(vars);
+      for (int r = 0; r < vars; ++r) {
+        S.row(r) = a.row(pick[static_cast<std::size_t>(r)]);
+        s[r] = b[pick[static_cast<std::size_t>(r)]];
+      }
+      Eigen::FullPivLU<Eigen::MatrixXd> slu(S);
+      if (!slu.isInvertible()) return;
+      const Eigen::VectorXd y = slu.solve(s);
+      if (((a * y - b).array() > 1e-9 * Tmax).any()) return;
+      best = std::max(best, y[d]);
+      return;
+    }
+    for (int r = from; r < rows; ++r) {
+      pick[static_cast<std::size_t>(depth)] = r;
+      self(self, r + 1, depth + 1);
+    }
+  };
+  visit(visit, 0, 0);
+  return best;
+}
+
+bool Hexarotor::trim_feasible(const std::array<bool, 6>& stuck,
+                              const std::array<double, 6>& stuck_at,
+                              const std::array<double, 6>& lost) const {
+  return trim_margin(stuck, stuck_at, lost) > 1e-9 * params_.max_thrust;
+}
+
+}  // namespace ftc::sim
+
+namespace ftc::sim::detail {
+
+PlantKind hexarotor_kind() {
+  PlantKind k;
+  k.model = "hexarotor";
+  k.description =
+      "hexarotor attitude (roll, pitch, yaw) in hover, 6 rotors in the standard hexagonal "
+      "layout; commands are thrust deviations from hover";
+  k.axes = 3;
+  k.actuators = 6;
+  const HexarotorParams d;
+  const Range positive = Range::positive();
+  k.parameters = {
+      {"inertia", {d.inertia[0], d.inertia[1], d.inertia[2]}, positive, "kg·m²",
+       "principal moments of inertia Ix, Iy, Iz"},
+      {"mass", {d.mass}, positive, "kg", "mass m (sets the hover thrust m g / 6 per rotor)"},
+      {"arm_length", {d.arm_length}, positive, "m", "distance l from the centre to each rotor"},
+      {"max_thrust", {d.max_thrust}, positive, "N", "largest thrust T_max of one rotor"},
+      {"moment_constant", {d.moment_constant}, positive, "m",
+       "yaw (drag) torque per newton of a rotor's thrust"},
+      {"gravity", {d.gravity}, positive, "m/s²", "gravitational acceleration g"}};
+  k.default_initial_state = {0.2, -0.15, 0.1, 0.0, 0.0, 0.0};
+  k.positions = "attitude angles";
+  k.rates = "angular rates";
+  k.axis_names = {"roll", "pitch", "yaw"};
+  k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
+    return std::make_unique<PlantAdapter<Hexarotor>>(v, [](const std::vector<double>& w) {
+      HexarotorParams p;
+      p.inertia = {w.at(0), w.at(1), w.at(2)};
+      p.mass = w.at(3);
+      p.arm_length = w.at(4);
+      p.max_thrust = w.at(5);
+      p.moment_constant = w.at(6);
+      p.gravity = w.at(7);
+      return Hexarotor(p);
+    });
+  };
+  return k;
+}
+
+}  // namespace ftc::sim::detail
