@@ -128,6 +128,41 @@ BENCHMARK(BM_Lanes)
     ->Threads(2)
     ->UseRealTime();
 
+// The hexarotor about hover: 30 s at 1 ms, a disturbance on roll and yaw, a loss of
+// effectiveness of rotor 1 and a thrust bias on rotor 4.
+static Scenario hexarotor_scenario() {
+  Scenario s;
+  s.name = "hover";
+  s.duration = 30.0;
+  s.initial_state = {0.2, -0.15, 0.1, 0.0, 0.0, 0.0};
+  s.disturbance = {{1, Shape::sin, 0.2, 1.0, 0.0}, {3, Shape::cos, 0.1, 2.0, 0.0}};
+  Fault loe;
+  loe.actuator = 1;
+  loe.type = FaultType::loss_of_effectiveness;
+  loe.onset = 10.0;
+  loe.fraction = 0.4;
+  Fault bias;
+  bias.actuator = 4;
+  bias.type = FaultType::bias;
+  bias.onset = 20.0;
+  bias.offset = 0.5;
+  s.faults = {loe, bias};
+  return s;
+}
+
+static void BM_HexarotorLanes(benchmark::State& state) {
+  PlantSpec spec;
+  spec.model = "hexarotor";
+  run_lanes(state, spec, hexarotor_scenario());
+}
+
+BENCHMARK(BM_HexarotorLanes)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2, 3}})
+    ->Unit(benchmark::kMillisecond)
+    ->Threads(1)
+    ->Threads(2)
+    ->UseRealTime();
+
 BENCHMARK(BM_ArmLanes)
     ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2, 3}})
     ->Unit(benchmark::kMillisecond)
