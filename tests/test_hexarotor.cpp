@@ -1,13 +1,16 @@
 // The hexarotor's attitude plant: f and G against hand-computed values, G G⁺ = I, hover held
 // without a command, the hover offset under rotor faults, every lane of its kernel giving the
 // scalar bits, and the recoverability rule (SPEC §12 plus hover within the rotor limits) on a
-// recoverable and an unrecoverable rotor fault checked by hand.
+// recoverable and an unrecoverable rotor fault checked by hand; and a job that only another
+// plant accepts, rejected at its JSON path.
 #include <gtest/gtest.h>
 
 #include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <span>
 #include <string>
 #include <vector>
@@ -18,6 +21,7 @@
 #include "ftc/sim/isa.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/simulation.hpp"
+#include "ftc/tune/job/job.hpp"
 
 using namespace ftc;
 using namespace ftc::sim;
@@ -241,4 +245,44 @@ TEST(Hexarotor, PiFosmcLevelsItThroughARotorLoss) {
   ASSERT_FALSE(r.metrics.diverged);
   EXPECT_LT(std::abs(r.final_state[0]) + std::abs(r.final_state[1]) + std::abs(r.final_state[2]),
             0.01);
+}
+
+// A job that is fine for one plant and wrong for another gets the error at its JSON path (exit
+// 2 through the CLI): a fault on rotor 7 of six, a true inertia or an ensemble inertia scale for
+// the arm, which has no parameter "inertia".
+TEST(HexarotorJob, RejectsWhatOnlyAnotherPlantAccepts) {
+  const auto errors_of = [](const nlohmann::json& j) {
+    try {
+      tune::parse_job(j, "job.json");
+    } catch (const InputError& e) {
+      return e.errors();
+    }
+    return std::vector<FieldError>{};
+  };
+  const auto has = [](const std::vector<FieldError>& errs, const std::string& path,
+                      const std::string& message) {
+    for (const FieldError& e : errs)
+      if (e.path == path && e.message.find(message) != std::string::npos) return true;
+    return false;
+  };
+  const auto read = [](const std::string& name) {
+    std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/" + name);
+    return nlohmann::json::parse(in);
+  };
+  nlohmann::json hex = read("hexarotor.json");
+  EXPECT_TRUE(errors_of(hex).empty());
+  hex["scenarios"][0]["faults"][0]["actuator"] = 7;
+  EXPECT_TRUE(has(errors_of(hex), "/scenarios/0/faults/0/actuator", "1..6"));
+
+  nlohmann::json arm = read("manipulator.json");
+  arm["scenarios"][0]["inertia"] = {0.1, 0.1};
+  EXPECT_TRUE(has(errors_of(arm), "/scenarios/0/inertia", "no inertia parameter"));
+  arm = read("manipulator.json");
+  arm["ensemble"] = {{"count", 4}, {"seed", 1}, {"inertia_scale", {{"uniform", {0.8, 1.2}}}}};
+  EXPECT_TRUE(has(errors_of(arm), "/ensemble/inertia_scale", "no inertia"));
+  // The same keys are fine for the hexarotor, which has one.
+  hex = read("hexarotor.json");
+  hex["scenarios"][0]["inertia"] = {0.012, 0.015, 0.021};
+  hex["ensemble"] = {{"count", 4}, {"seed", 1}, {"inertia_scale", {{"uniform", {0.8, 1.2}}}}};
+  EXPECT_TRUE(errors_of(hex).empty());
 }
