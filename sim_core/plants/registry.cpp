@@ -1,6 +1,7 @@
-// The registered plants. Adding a plant takes its own header and .cpp (its class, its
-// PlantKind) plus the lines marked below: the list of kinds, the list of classes for the
-// generic simulate(), and, for a new shape (n, m), the two instantiations.
+// The registered plants. Adding a plant takes its own files (its class, its PlantKind, its
+// dynamics and lane code: docs/architecture.md, "Plant seam") plus the lines marked below: the
+// list of kinds, the list of classes for the runtime's simulate() with a Controller object,
+// and, for a new shape (n, m), the two instantiations.
 #include <tuple>
 
 #include "ftc/sim/hexarotor.hpp"

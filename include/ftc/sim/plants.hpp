@@ -4,8 +4,9 @@
 // controllers compiled for its shape, behind one dimension-free interface. This is the seam the
 // tuner uses; it never sees n or m as types.
 //
-// Shipped: "spacecraft" (n = 3, m = 4; the paper's plant) and "manipulator" (a planar two-link
-// arm, n = 2, m = 3). To add one, see sim_core/plants/registry.cpp.
+// Shipped: "spacecraft" (n = 3, m = 4; the paper's plant), "manipulator" (a planar two-link
+// arm, n = 2, m = 3) and "hexarotor" (attitude in hover, n = 3, m = 6). To add one, see
+// docs/architecture.md ("Plant seam").
 #include <functional>
 #include <limits>
 #include <memory>
