@@ -263,6 +263,30 @@ TEST(Service, LifecycleGivesTheSameGainsAsRun) {
   EXPECT_EQ(s.get("/healthz")["status"], "ok");
 }
 
+// RFC 9112 §6.3: a request without Content-Length (nor Transfer-Encoding) has an empty body.
+// POST /cancel without one cancels; PUT and PATCH without one get 405 like with a body. They
+// were read as bodies until the deadline and answered 400.
+TEST(Service, RequestWithoutContentLengthHasAnEmptyBody) {
+  Service s;
+  const std::string running = s.submit(long_job())["id"];
+  const std::string queued = s.submit(tiny_job())["id"];
+  const auto t0 = std::chrono::steady_clock::now();
+  std::string reply = raw_request("127.0.0.1", s.port,
+                                  "POST /v1/jobs/" + queued +
+                                      "/cancel HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+  EXPECT_EQ(status_of(reply), 202) << reply;
+  EXPECT_NE(reply.find("\"cancelled\""), std::string::npos) << reply;
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 5s);  // not waiting for a body
+  for (const char* method : {"PUT", "PATCH"}) {
+    reply = raw_request("127.0.0.1", s.port,
+                        std::string(method) + " /v1/jobs/" + queued +
+                            " HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+    EXPECT_EQ(status_of(reply), 405) << method << ": " << reply;
+  }
+  auto r = s.client->Post(("/v1/jobs/" + running + "/cancel").c_str(), "", "application/json");
+  ASSERT_TRUE(r);
+}
+
 TEST(Service, CancelsQueuedAndRunningJobs) {
   Service s;
   const std::string running = s.submit(long_job())["id"];

@@ -26,7 +26,11 @@ std::vector<std::string> lines(const std::string& text) {
 std::string job_file(const std::filesystem::path& dir) {
   std::ofstream f(dir / "job.json");
   f << short_table1_job().dump(2);
-  return "'" + (dir / "job.json").string() + "'";
+  // Built by appends: GCC 12 warned -Wrestrict on the concatenation.
+  std::string quoted = "'";
+  quoted += (dir / "job.json").string();
+  quoted += "'";
+  return quoted;
 }
 
 }  // namespace
@@ -81,6 +85,13 @@ TEST(Study, BadAlgorithmsSeedsAndBudgetsExitTwo) {
       {"--algorithms bat --seeds 3-1 --budget 20", "--seeds: range \"3-1\" runs backwards"},
       {"--algorithms bat --seeds 1,x --budget 20", "\"x\" is not a seed or a range"},
       {"--algorithms bat --seeds 1-3,2 --budget 20", "seed 2 is given twice"},
+      {"--algorithms bat --seeds 5,1-10 --budget 20", "seed 5 is given twice"},
+      // The cap is on the total, and ranges are not expanded to check it.
+      {"--algorithms bat --seeds 1-100000,100001-200000 --budget 20",
+       "--seeds: gives more than 100000 seeds in all"},
+      {"--algorithms bat --seeds 1-10000000 --budget 20", "gives more than 100000 seeds in all"},
+      {"--algorithms bat --seeds 0-18446744073709551615 --budget 20",
+       "gives more than 100000 seeds in all"},
       {"--algorithms bat --seeds -1 --budget 20", "\"-1\" is not a seed"},
       {"--algorithms bat --seeds 1 --budget 5",
        "--budget: 5 evaluations do not pay for one generation of bat"},

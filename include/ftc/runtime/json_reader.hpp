@@ -72,7 +72,13 @@ std::optional<std::size_t> invalid_utf8(std::string_view text);
 // `text` with every byte that is not well-formed UTF-8 written as \xHH: safe to quote.
 std::string printable(std::string_view text);
 
+// The most bytes an input file (a job, a scenarios file, gains, a checkpoint) may hold.
+inline constexpr std::uint64_t kMaxInputFileBytes = std::uint64_t{256} << 20;
+
 // The whole file, or nullopt when it cannot be opened (callers word the error for their input).
+// Throws InputError when it is not a regular file (a directory, a FIFO, which is not waited
+// for, a device such as /dev/zero, through a link or not) or holds more than
+// kMaxInputFileBytes.
 std::optional<std::string> read_file(const std::filesystem::path& path);
 
 // Numbers in output JSON: non-finite values (a diverged run's +inf) are written as null, and
