@@ -181,6 +181,32 @@ TEST(Cli, NegativeThreadCountsAreRefusedEverywhere) {
   }
 }
 
+// `jobs --prune` takes a finite number of days: NaN passed CLI11's range check and pruned nothing.
+TEST(Cli, PruneDaysMustBeAFiniteNumber) {
+  const auto dir = fresh_dir("prune-nan");
+  for (const char* days : {"nan", "inf", "-1", "1e7", "3x"}) {
+    const CliResult r =
+        run_cli("jobs --server http://127.0.0.1:9 --prune " + std::string(days), dir);
+    EXPECT_EQ(r.exit_code, 2) << days << ": " << r.err;
+    EXPECT_NE(r.err.find("--prune: days are a number in 0..1000000"), std::string::npos)
+        << days << ": " << r.err;
+  }
+}
+
+// An IPv6 address is printed in brackets in the server's URL (RFC 3986).
+TEST(Cli, ServeOnIpv6PrintsTheAddressInBrackets) {
+  const auto dir = fresh_dir("serve-ipv6");
+  const std::string cmd = "cd '" FTC_SOURCE_DIR "' && timeout -s TERM 2 '" FTC_CLI
+                          "' serve --bind ::1 --port 0 --store '" +
+                          (dir / "store").string() + "' >'" + (dir / "out").string() + "' 2>'" +
+                          (dir / "err").string() + "'";
+  (void)std::system(cmd.c_str());
+  if (slurp(dir / "err").find("cannot listen") != std::string::npos)
+    GTEST_SKIP() << "no IPv6 loopback here: " << slurp(dir / "err");
+  EXPECT_NE(slurp(dir / "out").find("listening on http://[::1]:"), std::string::npos)
+      << slurp(dir / "out") << slurp(dir / "err");
+}
+
 TEST(Cli, NumberOutOfRangeOrDuplicateKeyInAFileExitsTwo) {
   const auto dir = fresh_dir("strict-json");
   std::string job = slurp(std::filesystem::path(FTC_SOURCE_DIR) / "jobs" / "table1.json");
