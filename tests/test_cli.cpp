@@ -181,6 +181,26 @@ TEST(Cli, NegativeThreadCountsAreRefusedEverywhere) {
   }
 }
 
+// Memory by design: a run that would not fit the memory budget (FTCTUNE_MEMORY_MIB here) is
+// refused before any work, exit 2, saying how much it would need.
+TEST(Cli, RunAboveTheMemoryBudgetIsRefusedBeforeTheWork) {
+  const auto dir = fresh_dir("memory-budget");
+  json j = short_table1_job();
+  j["ensemble"] = {{"count", 100000}, {"seed", 1}};
+  ftc::tune::write_file_atomic(dir / "job.json", j.dump());
+  ::setenv("FTCTUNE_MEMORY_MIB", "100", 1);
+  const CliResult r =
+      run_cli("run -q '" + (dir / "job.json").string() + "' --out '" + (dir / "out").string() + "'",
+              dir);
+  ::unsetenv("FTCTUNE_MEMORY_MIB");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("the job would need about 279 MB of memory (100001 scenarios"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("more than the budget of 105 MB"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "gains.json"));
+}
+
 // `jobs --prune` takes a finite number of days: NaN passed CLI11's range check and pruned nothing.
 TEST(Cli, PruneDaysMustBeAFiniteNumber) {
   const auto dir = fresh_dir("prune-nan");

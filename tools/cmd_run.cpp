@@ -19,6 +19,7 @@
 #include "ftc/tune/optimizers/random_search.hpp"
 #include "ftc/tune/run/checkpoint.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "progress.hpp"
 
@@ -257,6 +258,8 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   const tune::Job job = tune::load_job(o.job);
   if (!job.tuning)
     throw InputError(o.job, "/tuning", "is required by ftctune run (what should be tuned?)");
+  // Memory by design: a job whose run would not fit is refused before any work.
+  tune::check_memory_budget(job, tune::memory_budget_bytes(), o.job);
   fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
   const std::uint64_t seed = o.seed.value_or(job.tuning->seed);
   const std::string job_sha = tune::canonical_job_sha256(job);

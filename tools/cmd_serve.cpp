@@ -24,6 +24,7 @@ struct ServeOptions {
   std::string token_file;
   std::size_t max_body_kib = 1024;
   std::uint64_t max_stored_mib = 256;
+  std::uint64_t max_job_mib = 1024;
 };
 
 std::string read_token(const std::string& file) {
@@ -73,6 +74,7 @@ int run_serve(ServeOptions o) {
   if (!o.token_file.empty()) o.service.token = read_token(o.token_file);
   o.service.max_body_bytes = o.max_body_kib * 1024;
   o.service.max_stored_bytes = o.max_stored_mib << 20;
+  o.service.max_job_memory_bytes = o.max_job_mib << 20;
 
   // Block the shutdown signals in every thread (the workers inherit the mask); this thread
   // waits for them with sigwait.
@@ -141,6 +143,10 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
   sub->add_option("--max-stored-mib", o->max_stored_mib,
                   "Largest result of one job in MiB, trials checkpoints included (default 256)")
       ->check(CLI::Range(1, 900));
+  sub->add_option("--max-job-mib", o->max_job_mib,
+                  "Most memory one job may need, by its estimate, in MiB; larger jobs get 413 "
+                  "(default 1024)")
+      ->check(CLI::Range(64, 1 << 20));
   sub->add_option("--trajectory-rows", o->service.trajectory_rows,
                   "Rows per stored comparison trajectory: longer scenarios are recorded more "
                   "coarsely than every 10 ms (default 20000)")
