@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <new>
 #include <nlohmann/json.hpp>
 
 #include "ftc/runtime/json_reader.hpp"
@@ -579,6 +580,11 @@ void Api::configure(httplib::Server& http) {
             return send_error(res, 507, "insufficient_storage", e.what());
           }
           what = e.what();
+        } catch (const std::bad_alloc&) {
+          // An allocation the machine could not give: a clean answer, never an abort.
+          spdlog::error("request failed: out of memory");
+          return send_error(res, 500, "out_of_memory",
+                            "the server ran out of memory serving this request");
         } catch (const std::exception& e) {
           what = e.what();
         } catch (...) {
