@@ -11,8 +11,12 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <mutex>
+#include <random>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -647,6 +651,91 @@ TEST(Service, RecoversFromSigkillWithoutLosingOrRepeatingJobs) {
   EXPECT_EQ(c.Get(("/v1/jobs/" + killed + "/trials").c_str())->body,
             expected_file(jobs[0], "trials.csv"));
   EXPECT_EQ(json::parse(c.Get("/v1/jobs")->body)["total"], 3);
+}
+
+// A bounded soak: the server is SIGKILLed at seeded random moments while 20 jobs are submitted
+// from 4 clients (each retrying with its Idempotency-Key until acknowledged) and run; every
+// acknowledged job finishes exactly once, with the gains file of an uninterrupted run. The
+// longer version is FTC_SOAK_JOBS and FTC_SOAK_KILLS in the environment (docs/reliability.md).
+TEST(Service, SoakOfSigkillsLosesAndRepeatsNoJob) {
+  const auto env_int = [](const char* name, int fallback) {
+    const char* v = std::getenv(name);
+    return v && *v ? std::max(1, std::atoi(v)) : fallback;
+  };
+  const int n_jobs = env_int("FTC_SOAK_JOBS", 20), kills = env_int("FTC_SOAK_KILLS", 3);
+  const auto dir = fresh_dir("soak");
+  std::vector<json> jobs;
+  for (int i = 0; i < n_jobs; ++i) {
+    json j = short_table1_job();
+    j["name"] = "soak-" + std::to_string(i);
+    j["tuning"]["seed"] = 100 + i;
+    j["tuning"]["algorithm"]["iterations"] = 30;  // about 0.25 s: kills land inside runs
+    jobs.push_back(std::move(j));
+  }
+  std::mutex port_mutex;
+  auto server = std::make_unique<ServerProcess>(dir / "store", dir / "serve.log");
+  int port = server->port();
+  std::vector<std::string> ids(static_cast<std::size_t>(n_jobs));
+  std::vector<std::thread> clients;
+  for (int c = 0; c < 4; ++c)
+    clients.emplace_back([&, c] {
+      for (int i = c; i < n_jobs; i += 4) {
+        const httplib::Headers key = {{"Idempotency-Key", "soak-" + std::to_string(i)}};
+        const auto deadline = std::chrono::steady_clock::now() + 120s * FTC_TEST_SLOWDOWN;
+        while (std::chrono::steady_clock::now() < deadline) {
+          int p = 0;
+          {
+            std::lock_guard<std::mutex> lock(port_mutex);
+            p = port;
+          }
+          httplib::Client cl("127.0.0.1", p);
+          cl.set_connection_timeout(1, 0);
+          cl.set_read_timeout(5, 0);
+          auto r = cl.Post("/v1/jobs", key, jobs[static_cast<std::size_t>(i)].dump(),
+                           "application/json");
+          if (r && (r->status == 201 || r->status == 200)) {  // 200: a retry of a stored one
+            ids[static_cast<std::size_t>(i)] = json::parse(r->body)["id"];
+            break;
+          }
+          std::this_thread::sleep_for(20ms);
+        }
+      }
+    });
+  std::mt19937 moments(29);
+  for (int k = 0; k < kills; ++k) {
+    std::this_thread::sleep_for(
+        std::chrono::milliseconds(std::uniform_int_distribution<int>(300, 1500)(moments)));
+    EXPECT_EQ(server->signal_and_wait(SIGKILL), -SIGKILL);
+    server = std::make_unique<ServerProcess>(dir / "store", dir / "serve.log");
+    std::lock_guard<std::mutex> lock(port_mutex);
+    port = server->port();
+  }
+  for (std::thread& t : clients) t.join();
+
+  httplib::Client c("127.0.0.1", server->port());
+  c.set_read_timeout(30, 0);
+  int resumed = 0;  // jobs a kill interrupted, run again from their checkpoint
+  for (int i = 0; i < n_jobs; ++i) {
+    const std::string& id = ids[static_cast<std::size_t>(i)];
+    ASSERT_FALSE(id.empty()) << "job " << i << " was never acknowledged";
+    json v;
+    const auto deadline = std::chrono::steady_clock::now() + 120s * FTC_TEST_SLOWDOWN;
+    while (std::chrono::steady_clock::now() < deadline) {
+      v = json::parse(c.Get(("/v1/jobs/" + id).c_str())->body);
+      if (v["status"] != "queued" && v["status"] != "running") break;
+      std::this_thread::sleep_for(20ms);
+    }
+    ASSERT_EQ(v["status"], "succeeded") << "job " << i << ": " << v.dump();
+    if (v["attempts"].get<int>() > 1) ++resumed;
+    EXPECT_EQ(c.Get(("/v1/jobs/" + id + "/gains").c_str())->body,
+              expected_gains(jobs[static_cast<std::size_t>(i)]))
+        << "job " << i;
+  }
+  std::printf("soak: %d jobs, %d kills, %d jobs resumed after a kill\n", n_jobs, kills, resumed);
+  // Exactly once: the store holds each job once, however often its submission was retried.
+  EXPECT_EQ(json::parse(c.Get("/v1/jobs")->body)["total"], n_jobs);
+  EXPECT_EQ(std::set<std::string>(ids.begin(), ids.end()).size(),
+            static_cast<std::size_t>(n_jobs));
 }
 
 TEST(Service, SigtermCheckpointsTheRunningJobAndExits) {
