@@ -216,11 +216,15 @@ TEST(Cli, PruneDaysMustBeAFiniteNumber) {
 // An IPv6 address is printed in brackets in the server's URL (RFC 3986).
 TEST(Cli, ServeOnIpv6PrintsTheAddressInBrackets) {
   const auto dir = fresh_dir("serve-ipv6");
-  const std::string cmd = "cd '" FTC_SOURCE_DIR "' && timeout -s TERM 2 '" FTC_CLI
-                          "' serve --bind ::1 --port 0 --store '" +
-                          (dir / "store").string() + "' >'" + (dir / "out").string() + "' 2>'" +
-                          (dir / "err").string() + "'";
-  (void)std::system(cmd.c_str());
+  // Stopped (SIGTERM) once it has said where it listens, or once it has given up.
+  std::string script = "cd '" FTC_SOURCE_DIR "'\n'" FTC_CLI "' serve --bind ::1 --port 0 --store '";
+  script += (dir / "store").string() + "' >'" + (dir / "out").string() + "' 2>'";
+  script += (dir / "err").string() + "' & pid=$!\n";
+  script += "for i in $(seq 400); do grep -q listening '" + (dir / "out").string();
+  script += "' && break; kill -0 $pid 2>/dev/null || break; sleep 0.05; done\n";
+  script += "kill $pid 2>/dev/null; wait $pid\nexit 0\n";
+  ftc::tune::write_file_atomic(dir / "serve.sh", script);
+  ASSERT_EQ(std::system(("bash '" + (dir / "serve.sh").string() + "'").c_str()), 0);
   if (slurp(dir / "err").find("cannot listen") != std::string::npos)
     GTEST_SKIP() << "no IPv6 loopback here: " << slurp(dir / "err");
   EXPECT_NE(slurp(dir / "out").find("listening on http://[::1]:"), std::string::npos)
