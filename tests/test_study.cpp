@@ -68,6 +68,26 @@ TEST(Study, WritesOneRowPerRunTheTableAndTheFigure) {
   EXPECT_EQ(png.substr(1, 3), "PNG");
 }
 
+// Memory by design: a study whose runs would not fit the budget is refused before any run.
+TEST(Study, StudyAboveTheMemoryBudgetIsRefusedBeforeAnyRun) {
+  const auto dir = fresh_dir("study-memory");
+  nlohmann::json j = short_table1_job();
+  j["ensemble"] = {{"count", 100000}, {"seed", 1}};
+  std::ofstream(dir / "job.json") << j.dump();
+  ::setenv("FTCTUNE_MEMORY_MIB", "100", 1);
+  const CliResult r = run_cli("study '" + (dir / "job.json").string() +
+                                  "' --algorithms bat --seeds 1-3 --budget 100 --out '" +
+                                  (dir / "o").string() + "'",
+                              dir);
+  ::unsetenv("FTCTUNE_MEMORY_MIB");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("would need about 352 MB of memory (100001 scenarios at about 2 kB each, "
+                       "and one objective per scenario for each of its 100 evaluations)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o"));
+}
+
 TEST(Study, BadAlgorithmsSeedsAndBudgetsExitTwo) {
   const auto dir = fresh_dir("study-errors");
   const std::string job = job_file(dir);

@@ -16,6 +16,7 @@
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/pagmo.hpp"
 #include "ftc/tune/report/study.hpp"
+#include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::cli {
@@ -212,6 +213,9 @@ int run_study(const StudyCli& o, const Globals& g) {
   std::vector<tune::AlgorithmPtr> algorithms;
   for (const std::string& n : names)
     algorithms.push_back(sized(n, *job.tuning->algorithm, o.budget));
+  // Memory by design: the runs go one at a time, each holding what a run of the budget holds.
+  tune::check_memory_budget(job, static_cast<double>(o.budget), tune::memory_budget_bytes(),
+                            o.job);
   const fs::path out = o.out.empty() ? default_out_dir(job) / "study" : fs::path(o.out);
   const tune::TuningProblem problem(job);
   const tune::SearchSpace& space = problem.space();

@@ -10,12 +10,15 @@
 
 namespace ftc::tune {
 
-double estimated_run_bytes(const Job& job) {
+double estimated_run_bytes(const Job& job, double evaluations) {
   const auto scenarios = static_cast<double>(job.scenario_count());
-  const double evaluations =
-      job.tuning ? static_cast<double>(job.tuning->algorithm->evaluations()) : 1.0;
   return kRunBaseBytes + scenarios * kBytesPerScenario +
          evaluations * scenarios * kBytesPerTrialObjective;
+}
+
+double estimated_run_bytes(const Job& job) {
+  return estimated_run_bytes(
+      job, job.tuning ? static_cast<double>(job.tuning->algorithm->evaluations()) : 1.0);
 }
 
 double memory_budget_bytes() {
@@ -38,17 +41,25 @@ std::string bytes_text(double bytes) {
   return buf;
 }
 
-void check_memory_budget(const Job& job, double budget, const std::string& source) {
-  const double need = estimated_run_bytes(job);
+void check_memory_budget(const Job& job, double evaluations, double budget,
+                         const std::string& source) {
+  const double need = estimated_run_bytes(job, evaluations);
   if (need <= budget) return;
+  char evals[32];
+  std::snprintf(evals, sizeof evals, "%.15g", evaluations);
   throw InputError(
       source, "",
       "the job would need about " + bytes_text(need) + " of memory (" +
           std::to_string(job.scenario_count()) + " scenarios at about 2 kB each, and one " +
-          "objective per scenario for each of its " +
-          std::to_string(job.tuning ? job.tuning->algorithm->evaluations() : 1) +
+          "objective per scenario for each of its " + evals +
           " evaluations), more than the budget of " + bytes_text(budget) +
           ": give fewer ensemble members or evaluations (FTCTUNE_MEMORY_MIB sets the budget)");
+}
+
+void check_memory_budget(const Job& job, double budget, const std::string& source) {
+  check_memory_budget(
+      job, job.tuning ? static_cast<double>(job.tuning->algorithm->evaluations()) : 1.0, budget,
+      source);
 }
 
 }  // namespace ftc::tune

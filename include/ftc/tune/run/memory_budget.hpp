@@ -18,6 +18,8 @@ inline constexpr double kBytesPerTrialObjective = 8.0;
 // The bytes a tuning run of `job` holds at its peak (its trials: evaluations × scenarios
 // objectives), by the figures above.
 double estimated_run_bytes(const Job& job);
+// The same for a run of `evaluations` evaluations (a study's budget) instead of the job's own.
+double estimated_run_bytes(const Job& job, double evaluations);
 
 // The memory a run may take: FTCTUNE_MEMORY_MIB (a positive number of MiB) when set, else three
 // quarters of the machine's physical memory.
@@ -26,6 +28,8 @@ double memory_budget_bytes();
 // Throws InputError(source, "", ...) naming what the job would need and the budget when the
 // estimate is above `budget`.
 void check_memory_budget(const Job& job, double budget, const std::string& source);
+void check_memory_budget(const Job& job, double evaluations, double budget,
+                         const std::string& source);
 
 // "1.9 GB", "650 MB": a byte count for messages.
 std::string bytes_text(double bytes);
