@@ -194,7 +194,7 @@ TEST(Cli, RunAboveTheMemoryBudgetIsRefusedBeforeTheWork) {
               dir);
   ::unsetenv("FTCTUNE_MEMORY_MIB");
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("the job would need about 279 MB of memory (100001 scenarios"),
+  EXPECT_NE(r.err.find("the job would need about 433 MB of memory (100001 scenarios"),
             std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("more than the budget of 105 MB"), std::string::npos) << r.err;

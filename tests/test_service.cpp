@@ -1066,12 +1066,12 @@ TEST(Service, JobAboveTheMemoryBudgetIsRefusedWith413) {
   j["ensemble"] = {{"count", 1000000}, {"seed", 1}};
   auto r = s.client->Post("/v1/jobs", j.dump(), "application/json");
   expect_error(r, 413, "job_too_large");
-  EXPECT_NE(r->body.find("the job would need about 2.15 GB of memory (1000001 scenarios"),
+  EXPECT_NE(r->body.find("the job would need about 3.68 GB of memory (1000001 scenarios"),
             std::string::npos)
       << r->body;
   EXPECT_NE(r->body.find("above the server's limit of 1.07 GB per job"), std::string::npos)
       << r->body;
-  j["ensemble"]["count"] = 1000;  // about 70 MB
+  j["ensemble"]["count"] = 1000;  // about 71 MB
   r = s.client->Post("/v1/jobs", j.dump(), "application/json");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 201) << r->body;

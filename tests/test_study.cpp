@@ -81,7 +81,7 @@ TEST(Study, StudyAboveTheMemoryBudgetIsRefusedBeforeAnyRun) {
                               dir);
   ::unsetenv("FTCTUNE_MEMORY_MIB");
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("would need about 352 MB of memory (100001 scenarios at about 2 kB each, "
+  EXPECT_NE(r.err.find("would need about 506 MB of memory (100001 scenarios at about 3.5 kB each, "
                        "and one objective per scenario for each of its 100 evaluations)"),
             std::string::npos)
       << r.err;

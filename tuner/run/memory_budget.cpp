@@ -50,7 +50,7 @@ void check_memory_budget(const Job& job, double evaluations, double budget,
   throw InputError(
       source, "",
       "the job would need about " + bytes_text(need) + " of memory (" +
-          std::to_string(job.scenario_count()) + " scenarios at about 2 kB each, and one " +
+          std::to_string(job.scenario_count()) + " scenarios at about 3.5 kB each, and one " +
           "objective per scenario for each of its " + evals +
           " evaluations), more than the budget of " + bytes_text(budget) +
           ": give fewer ensemble members or evaluations (FTCTUNE_MEMORY_MIB sets the budget)");

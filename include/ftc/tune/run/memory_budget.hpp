@@ -2,7 +2,7 @@
 // Memory by design: what a tuning run must hold is estimated up front, and a job over the budget
 // is refused before any work (exit 2 in the CLI, 413 in the service), saying how much it would
 // need. The figures are measured (docs/reliability.md): a run holds every scenario, its ensemble
-// expanded, with its per-scenario state (about 2 kB each), and for every trial one objective per
+// expanded, with its per-scenario state (about 3.5 kB each, the service's figure), and for every trial one objective per
 // scenario (8 bytes). `evaluate` and `ensemble` stream their members and are not bounded by it.
 #include <cstdint>
 #include <string>
@@ -12,7 +12,7 @@
 namespace ftc::tune {
 
 inline constexpr double kRunBaseBytes = 64.0 * (1 << 20);  // the process, the job, the pools
-inline constexpr double kBytesPerScenario = 2048.0;        // measured: 1.98 kB (1e5 members)
+inline constexpr double kBytesPerScenario = 3584.0;  // measured: 1.98 kB in run, 3.2 kB served
 inline constexpr double kBytesPerTrialObjective = 8.0;
 
 // The bytes a tuning run of `job` holds at its peak (its trials: evaluations × scenarios
