@@ -199,6 +199,47 @@ TEST(Cli, RunAboveTheMemoryBudgetIsRefusedBeforeTheWork) {
       << r.err;
   EXPECT_NE(r.err.find("more than the budget of 105 MB"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "gains.json"));
+  // A budget that is not a positive number is bad input, not silently the default.
+  for (const char* bad : {"abc", "0", "-5", "12MB"}) {
+    ::setenv("FTCTUNE_MEMORY_MIB", bad, 1);
+    const CliResult b = run_cli(
+        "run -q '" + (dir / "job.json").string() + "' --out '" + (dir / "out").string() + "'", dir);
+    ::unsetenv("FTCTUNE_MEMORY_MIB");
+    EXPECT_EQ(b.exit_code, 2) << bad << ": " << b.err;
+    EXPECT_NE(b.err.find("FTCTUNE_MEMORY_MIB: must be a positive number of MiB (got \"" +
+                         std::string(bad) + "\")"),
+              std::string::npos)
+        << b.err;
+  }
+}
+
+// A directory kept from an interrupted run (.staging-PID holding a whole run, .previous-PID) is
+// never reused or deleted by a later run that gets the same process id (PID 1 in every
+// container): the run is exec'd by a shell that first makes both directories under its own pid.
+TEST(Cli, RunNeverReusesADirectoryKeptForRecovery) {
+  const auto dir = fresh_dir("kept-dirs");
+  ftc::tune::write_file_atomic(dir / "job.json", short_table1_job().dump());
+  const auto out = dir / "out";
+  // A finished run first, so that --force has an earlier run to set aside.
+  ASSERT_EQ(run_cli("run -q '" + (dir / "job.json").string() + "' --out '" + out.string() + "'",
+                    dir)
+                .exit_code,
+            0);
+  const std::string script = "cd '" + out.string() +
+                             "' && mkdir .staging-$$ .previous-$$ && echo kept > .staging-$$/gains.json"
+                             " && echo kept > .previous-$$/gains.json && echo $$ > '" +
+                             (dir / "pid").string() + "' && exec '" FTC_CLI "' run '" +
+                             (dir / "job.json").string() + "' --out '" + out.string() +
+                             "' --force 2>'" + (dir / "err").string() + "'";
+  const int status = std::system(("sh -c \"" + script + "\"").c_str());
+  EXPECT_EQ(status, 0) << slurp(dir / "err");
+  const std::string pid = slurp(dir / "pid").substr(0, slurp(dir / "pid").find('\n'));
+  for (const char* prefix : {".staging-", ".previous-"}) {
+    const auto kept = out / (prefix + pid);
+    EXPECT_EQ(slurp(kept / "gains.json"), "kept\n") << kept;
+  }
+  EXPECT_NE(slurp(out / "gains.json").find("\"schema\": \"ftctune.gains/1\""), std::string::npos);
+  EXPECT_NE(slurp(dir / "err").find(".staging-" + pid), std::string::npos) << slurp(dir / "err");
 }
 
 // `jobs --prune` takes a finite number of days: NaN passed CLI11's range check and pruned nothing.

@@ -721,19 +721,26 @@ TEST(Service, SoakOfSigkillsLosesAndRepeatsNoJob) {
     json v;
     const auto deadline = std::chrono::steady_clock::now() + 120s * FTC_TEST_SLOWDOWN;
     while (std::chrono::steady_clock::now() < deadline) {
-      v = json::parse(c.Get(("/v1/jobs/" + id).c_str())->body);
+      const auto r = c.Get(("/v1/jobs/" + id).c_str());
+      ASSERT_TRUE(r) << "the server did not answer for job " << i;
+      v = json::parse(r->body);
       if (v["status"] != "queued" && v["status"] != "running") break;
       std::this_thread::sleep_for(20ms);
     }
     ASSERT_EQ(v["status"], "succeeded") << "job " << i << ": " << v.dump();
     if (v["attempts"].get<int>() > 1) ++resumed;
-    EXPECT_EQ(c.Get(("/v1/jobs/" + id + "/gains").c_str())->body,
-              expected_gains(jobs[static_cast<std::size_t>(i)]))
-        << "job " << i;
+    const auto g = c.Get(("/v1/jobs/" + id + "/gains").c_str());
+    ASSERT_TRUE(g) << "the server did not answer for job " << i << "'s gains";
+    EXPECT_EQ(g->body, expected_gains(jobs[static_cast<std::size_t>(i)])) << "job " << i;
   }
+  // How many kills landed inside a job depends on the machine's speed, so it is reported (in
+  // the test's output and its XML property), not asserted.
   std::printf("soak: %d jobs, %d kills, %d jobs resumed after a kill\n", n_jobs, kills, resumed);
+  ::testing::Test::RecordProperty("resumed", resumed);
   // Exactly once: the store holds each job once, however often its submission was retried.
-  EXPECT_EQ(json::parse(c.Get("/v1/jobs")->body)["total"], n_jobs);
+  const auto all = c.Get("/v1/jobs");
+  ASSERT_TRUE(all);
+  EXPECT_EQ(json::parse(all->body)["total"], n_jobs);
   EXPECT_EQ(std::set<std::string>(ids.begin(), ids.end()).size(),
             static_cast<std::size_t>(n_jobs));
 }
@@ -1075,6 +1082,9 @@ TEST(Service, JobAboveTheMemoryBudgetIsRefusedWith413) {
   r = s.client->Post("/v1/jobs", j.dump(), "application/json");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 201) << r->body;
+  // Accepted is all this test needs: the job is cancelled rather than left running.
+  const std::string id = json::parse(r->body)["id"];
+  s.client->Post(("/v1/jobs/" + id + "/cancel").c_str(), "", "application/json");
 }
 
 TEST(Service, StoredBytesPerJobAreBounded) {

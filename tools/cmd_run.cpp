@@ -2,9 +2,11 @@
 #include <fcntl.h>
 #include <spdlog/spdlog.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -45,6 +47,20 @@ struct RunCliOptions {
 constexpr const char* kStagingPrefix = ".staging-";
 
 constexpr const char* kPreviousPrefix = ".previous-";
+
+// A new directory out/PREFIX<pid>, or out/PREFIX<pid>-K when that name is taken: a directory
+// kept from an earlier run (which the next run names for recovery) is never reused, even when
+// the process id comes round again, as it does for PID 1 in a container.
+std::filesystem::path unique_dir(const std::filesystem::path& out, const char* prefix) {
+  const std::string base = std::string(prefix) + std::to_string(::getpid());
+  for (unsigned k = 0;; ++k) {
+    const std::filesystem::path p = out / (k ? base + "-" + std::to_string(k) : base);
+    if (::mkdir(p.c_str(), 0755) == 0) return p;
+    if (errno != EEXIST)
+      throw std::filesystem::filesystem_error("cannot create the directory", p,
+                                              std::error_code(errno, std::generic_category()));
+  }
+}
 
 // What runs stopped before they finished left behind (only a run holding the lock writes
 // there, so any found by the holder are left over). A staging directory without gains.json was
@@ -211,15 +227,14 @@ constexpr const char* kRunEntries[] = {
 void replace_run(const std::filesystem::path& out, const std::filesystem::path& staging,
                  const std::vector<std::string>& entries, bool replace) {
   namespace fs = std::filesystem;
-  const fs::path previous =
-      out / (std::string(kPreviousPrefix).append(std::to_string(::getpid())));
+  fs::path previous;  // made when the first entry is set aside
   std::vector<std::string> set_aside, moved;
   try {
     if (replace && holds_run(out)) {
       for (const char* f : kRunEntries) {
         std::error_code ec;
         if (!fs::exists(fs::symlink_status(out / f, ec))) continue;
-        if (set_aside.empty()) fs::create_directory(previous);
+        if (set_aside.empty()) previous = unique_dir(out, kPreviousPrefix);
         tune::move_into(out, previous, {f});
         set_aside.push_back(f);
       }
@@ -241,13 +256,13 @@ void replace_run(const std::filesystem::path& out, const std::filesystem::path& 
           (set_aside.empty() ? std::string()
                              : " and the earlier run's in " + previous.string()) +
           ": move them back into " + out.string() + " by hand");
-    fs::remove(previous, ec);
+    if (!previous.empty()) fs::remove(previous, ec);
     fs::remove_all(staging, ec);
     tune::sync_directory(out);
     throw;
   }
   std::error_code ec;
-  fs::remove_all(previous, ec);
+  if (!previous.empty()) fs::remove_all(previous, ec);
   fs::remove(staging, ec);
   tune::sync_directory(out);
 }
@@ -379,14 +394,13 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   // The files go to a staging directory inside `out` first, each synced: a full disk or a kill
   // on the way leaves `out` as it was, an earlier run included. Only then does the new run take
   // its place, entry by entry by rename (which needs no space) with gains.json last.
-  const fs::path staging = out / (std::string(kStagingPrefix).append(std::to_string(::getpid())));
+  const fs::path staging = unique_dir(out, kStagingPrefix);
   std::vector<std::string> entries;
   const auto add_entry = [&](const std::string& file) {
     const std::string top = fs::path(file).begin()->string();  // trajectories/a/b.csv: the folder
     if (std::find(entries.begin(), entries.end(), top) == entries.end()) entries.push_back(top);
   };
   try {
-    fs::remove_all(staging);
     if (random_baseline) {
       tune::write_file_atomic(staging / "history-random.csv", tune::history_csv(*random_baseline));
       add_entry("history-random.csv");

@@ -43,7 +43,11 @@ double sphere(const Decision& x) {
 
 }  // namespace
 
-FTC_FUZZ_JSON_INPUT()
+// The first byte picks the algorithm; the state after it is mutated as a JSON document.
+extern "C" std::size_t LLVMFuzzerCustomMutator(std::uint8_t* data, std::size_t size,
+                                               std::size_t max_size, unsigned int seed) {
+  return ftc::fuzz::mutate_json(data, size, max_size, seed, /*offset=*/1);
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
@@ -56,7 +60,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // into one); an accepted state runs on to the end of the run.
     const auto optimizer = a->make(1, space());
     const OptimizationResult r = run_optimizer(*optimizer, fitness, {}, &state, "/optimizer");
-    fuzz::remember_accepted(text);
+    // The whole input, selector byte included, so that a replay picks the same algorithm.
+    fuzz::remember_accepted(std::string_view(reinterpret_cast<const char*>(data), size));
     fuzz::nothing_escapes("a run resumed from an accepted state", [&] {
       if (!r.completed || optimizer->iteration() != a->iterations())
         fuzz::finding("a resumed run stopped at iteration " +

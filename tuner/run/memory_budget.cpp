@@ -26,6 +26,8 @@ double memory_budget_bytes() {
     char* end = nullptr;
     const double mib = std::strtod(e, &end);
     if (*end == '\0' && std::isfinite(mib) && mib > 0) return mib * (1 << 20);
+    throw InputError("FTCTUNE_MEMORY_MIB", "",
+                     std::string("must be a positive number of MiB (got \"") + e + "\")");
   }
   const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
   if (pages <= 0 || page <= 0) return 4.0 * (1u << 30);  // unknown: 4 GiB

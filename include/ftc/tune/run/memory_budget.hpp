@@ -21,7 +21,8 @@ double estimated_run_bytes(const Job& job);
 // The same for a run of `evaluations` evaluations (a study's budget) instead of the job's own.
 double estimated_run_bytes(const Job& job, double evaluations);
 
-// The memory a run may take: FTCTUNE_MEMORY_MIB (a positive number of MiB) when set, else three
+// The memory a run may take: FTCTUNE_MEMORY_MIB (a positive number of MiB; anything else is an
+// InputError) when set, else three
 // quarters of the machine's physical memory.
 double memory_budget_bytes();
 
