@@ -4,15 +4,19 @@
 #include <netinet/in.h>
 #include <sys/file.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
 #include "ftc/sim/isa.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/io/sha256.hpp"
 #include "ftc/tune/run/checkpoint.hpp"
 #include "short_job.hpp"
 
@@ -177,6 +181,97 @@ TEST(Cli, NegativeThreadCountsAreRefusedEverywhere) {
   }
 }
 
+// Memory by design: a run that would not fit the memory budget (FTCTUNE_MEMORY_MIB here) is
+// refused before any work, exit 2, saying how much it would need.
+TEST(Cli, RunAboveTheMemoryBudgetIsRefusedBeforeTheWork) {
+  const auto dir = fresh_dir("memory-budget");
+  json j = short_table1_job();
+  j["ensemble"] = {{"count", 100000}, {"seed", 1}};
+  ftc::tune::write_file_atomic(dir / "job.json", j.dump());
+  ::setenv("FTCTUNE_MEMORY_MIB", "100", 1);
+  const CliResult r =
+      run_cli("run -q '" + (dir / "job.json").string() + "' --out '" + (dir / "out").string() + "'",
+              dir);
+  ::unsetenv("FTCTUNE_MEMORY_MIB");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("the job would need about 433 MB of memory (100001 scenarios"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("more than the budget of 105 MB"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "gains.json"));
+  // A budget that is not a positive number is bad input, not silently the default.
+  for (const char* bad : {"abc", "0", "-5", "12MB"}) {
+    ::setenv("FTCTUNE_MEMORY_MIB", bad, 1);
+    const CliResult b = run_cli(
+        "run -q '" + (dir / "job.json").string() + "' --out '" + (dir / "out").string() + "'", dir);
+    ::unsetenv("FTCTUNE_MEMORY_MIB");
+    EXPECT_EQ(b.exit_code, 2) << bad << ": " << b.err;
+    EXPECT_NE(b.err.find("FTCTUNE_MEMORY_MIB: must be a positive number of MiB (got \"" +
+                         std::string(bad) + "\")"),
+              std::string::npos)
+        << b.err;
+  }
+}
+
+// A directory kept from an interrupted run (.staging-PID holding a whole run, .previous-PID) is
+// never reused or deleted by a later run that gets the same process id (PID 1 in every
+// container): the run is exec'd by a shell that first makes both directories under its own pid.
+TEST(Cli, RunNeverReusesADirectoryKeptForRecovery) {
+  const auto dir = fresh_dir("kept-dirs");
+  ftc::tune::write_file_atomic(dir / "job.json", short_table1_job().dump());
+  const auto out = dir / "out";
+  // A finished run first, so that --force has an earlier run to set aside.
+  ASSERT_EQ(run_cli("run -q '" + (dir / "job.json").string() + "' --out '" + out.string() + "'",
+                    dir)
+                .exit_code,
+            0);
+  const std::string script = "cd '" + out.string() +
+                             "' && mkdir .staging-$$ .previous-$$ && echo kept > .staging-$$/gains.json"
+                             " && echo kept > .previous-$$/gains.json && echo $$ > '" +
+                             (dir / "pid").string() + "' && exec '" FTC_CLI "' run '" +
+                             (dir / "job.json").string() + "' --out '" + out.string() +
+                             "' --force 2>'" + (dir / "err").string() + "'";
+  const int status = std::system(("sh -c \"" + script + "\"").c_str());
+  EXPECT_EQ(status, 0) << slurp(dir / "err");
+  const std::string pid = slurp(dir / "pid").substr(0, slurp(dir / "pid").find('\n'));
+  for (const char* prefix : {".staging-", ".previous-"}) {
+    const auto kept = out / (prefix + pid);
+    EXPECT_EQ(slurp(kept / "gains.json"), "kept\n") << kept;
+  }
+  EXPECT_NE(slurp(out / "gains.json").find("\"schema\": \"ftctune.gains/1\""), std::string::npos);
+  EXPECT_NE(slurp(dir / "err").find(".staging-" + pid), std::string::npos) << slurp(dir / "err");
+}
+
+// `jobs --prune` takes a finite number of days: NaN passed CLI11's range check and pruned nothing.
+TEST(Cli, PruneDaysMustBeAFiniteNumber) {
+  const auto dir = fresh_dir("prune-nan");
+  for (const char* days : {"nan", "inf", "-1", "1e7", "3x"}) {
+    const CliResult r =
+        run_cli("jobs --server http://127.0.0.1:9 --prune " + std::string(days), dir);
+    EXPECT_EQ(r.exit_code, 2) << days << ": " << r.err;
+    EXPECT_NE(r.err.find("--prune: days are a number in 0..1000000"), std::string::npos)
+        << days << ": " << r.err;
+  }
+}
+
+// An IPv6 address is printed in brackets in the server's URL (RFC 3986).
+TEST(Cli, ServeOnIpv6PrintsTheAddressInBrackets) {
+  const auto dir = fresh_dir("serve-ipv6");
+  // Stopped (SIGTERM) once it has said where it listens, or once it has given up.
+  std::string script = "cd '" FTC_SOURCE_DIR "'\n'" FTC_CLI "' serve --bind ::1 --port 0 --store '";
+  script += (dir / "store").string() + "' >'" + (dir / "out").string() + "' 2>'";
+  script += (dir / "err").string() + "' & pid=$!\n";
+  script += "for i in $(seq 400); do grep -q listening '" + (dir / "out").string();
+  script += "' && break; kill -0 $pid 2>/dev/null || break; sleep 0.05; done\n";
+  script += "kill $pid 2>/dev/null; wait $pid\nexit 0\n";
+  ftc::tune::write_file_atomic(dir / "serve.sh", script);
+  ASSERT_EQ(std::system(("bash '" + (dir / "serve.sh").string() + "'").c_str()), 0);
+  if (slurp(dir / "err").find("cannot listen") != std::string::npos)
+    GTEST_SKIP() << "no IPv6 loopback here: " << slurp(dir / "err");
+  EXPECT_NE(slurp(dir / "out").find("listening on http://[::1]:"), std::string::npos)
+      << slurp(dir / "out") << slurp(dir / "err");
+}
+
 TEST(Cli, NumberOutOfRangeOrDuplicateKeyInAFileExitsTwo) {
   const auto dir = fresh_dir("strict-json");
   std::string job = slurp(std::filesystem::path(FTC_SOURCE_DIR) / "jobs" / "table1.json");
@@ -247,6 +342,134 @@ TEST(Cli, OutputThatCannotBeADirectoryExitsTwoWithTheReason) {
   EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
 }
 
+// `ensemble --out` replaces only a regular file: a symbolic link (to /dev/full, say) or a FIFO
+// is refused before any work, exit 2, and left as it was.
+TEST(Cli, EnsembleOutThatIsNotARegularFileIsRefused) {
+  const auto dir = fresh_dir("ensemble-out-special");
+  std::ofstream(dir / "precious") << "keep";
+  std::filesystem::create_symlink(dir / "precious", dir / "link.json");
+  ASSERT_EQ(::mkfifo((dir / "fifo.json").c_str(), 0600), 0);
+  for (const char* name : {"link.json", "fifo.json"}) {
+    const CliResult r = run_cli("ensemble jobs/robust-faults.json --count 2 --out '" +
+                                    (dir / name).string() + "'",
+                                dir);
+    EXPECT_EQ(r.exit_code, 2) << name << ": " << r.err;
+    EXPECT_NE(r.err.find((dir / name).string() + " is a"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("only in place of a regular file"), std::string::npos) << r.err;
+  }
+  EXPECT_TRUE(std::filesystem::is_symlink(dir / "link.json"));
+  EXPECT_TRUE(std::filesystem::is_fifo(dir / "fifo.json"));
+  EXPECT_EQ(slurp(dir / "precious"), "keep");
+}
+
+// A figure is the earlier one or the whole new one: gnuplot failing (exit 1) or leaving a
+// truncated PNG with exit 0 (as on a full disk) is exit 2 with one clear line, and the earlier
+// figure stays. A stand-in gnuplot on PATH plays both.
+TEST(Cli, GnuplotFailureIsAnErrorAndLeavesTheEarlierFigure) {
+  const auto dir = fresh_dir("gnuplot-failure");
+  const std::string out = (dir / "landscape").string();
+  const std::string args = "landscape -q jobs/table1.json --grid 3x3 --out '" + out + "'";
+  ASSERT_EQ(run_cli(args, dir).exit_code, 0);
+  const std::string before = slurp(dir / "landscape" / "landscape.png");
+  ASSERT_GT(before.size(), 100u);
+  std::filesystem::create_directories(dir / "bin");
+  ftc::tune::write_file_atomic(dir / "bin" / "failing", "#!/bin/sh\necho 'no font' >&2\nexit 1\n");
+  ftc::tune::write_file_atomic(
+      dir / "bin" / "truncating",
+      "#!/bin/sh\nout=$(sed -n \"s/^set output '\\(.*\\)'$/\\1/p\" \"$1\")\n"
+      "printf '\\211PNG\\r\\n\\032\\nIHDR' > \"$out\"\nexit 0\n");
+  const char* path = std::getenv("PATH");
+  const std::string saved = path ? path : "";
+  for (const char* kind : {"failing", "truncating"}) {
+    std::filesystem::create_directories(dir / kind);
+    std::filesystem::copy_file(dir / "bin" / kind, dir / kind / "gnuplot");
+    std::filesystem::permissions(dir / kind / "gnuplot", std::filesystem::perms::owner_all);
+    ::setenv("PATH", ((dir / kind).string() + ":" + saved).c_str(), 1);
+    const CliResult r = run_cli(args + " --force", dir);
+    ::setenv("PATH", saved.c_str(), 1);
+    EXPECT_EQ(r.exit_code, 2) << kind << ": " << r.err;
+    EXPECT_NE(r.err.find(std::string(kind) == "failing" ? "gnuplot failed on" : "incomplete"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("no figure written"), std::string::npos) << r.err;
+    EXPECT_EQ(slurp(dir / "landscape" / "landscape.png"), before) << kind;
+    for (const auto& e : std::filesystem::directory_iterator(dir / "landscape"))
+      EXPECT_EQ(e.path().string().find("partial"), std::string::npos) << e.path();
+  }
+}
+
+// landscape: the grid is N1xN2 and nothing else, and --out is checked before the work: a
+// directory that cannot be written, or one holding a landscape (--force replaces it).
+TEST(Cli, LandscapeChecksItsGridAndOutputBeforeTheWork) {
+  const auto dir = fresh_dir("landscape-checks");
+  const std::string out = (dir / "l").string();
+  for (const char* grid : {"3x3x3", "3x3junk", "2x3.9", "x3", "3x", "3"}) {
+    const CliResult r = run_cli(
+        "landscape -q jobs/table1.json --grid '" + std::string(grid) + "' --out '" + out + "'",
+        dir);
+    EXPECT_EQ(r.exit_code, 2) << grid << ": " << r.err;
+    EXPECT_NE(r.err.find("--grid: expected N1xN2"), std::string::npos) << grid << ": " << r.err;
+  }
+  const std::string args = "landscape -q jobs/table1.json --grid 2x2 --out '" + out + "'";
+  ASSERT_EQ(run_cli(args, dir).exit_code, 0);
+  CliResult r = run_cli(args, dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(out + " already holds a landscape"), std::string::npos) << r.err;
+  EXPECT_EQ(run_cli(args + " --force", dir).exit_code, 0);
+  std::ofstream(dir / "file") << "x";
+  r = run_cli("landscape -q jobs/table1.json --grid 2x2 --out '" + (dir / "file").string() + "'",
+              dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--out: " + (dir / "file").string() + " exists and is not a directory"),
+            std::string::npos)
+      << r.err;
+  if (::geteuid() != 0) {  // root writes anywhere
+    std::filesystem::create_directory(dir / "ro");
+    std::filesystem::permissions(dir / "ro", std::filesystem::perms::owner_read |
+                                                 std::filesystem::perms::owner_exec);
+    r = run_cli("landscape -q jobs/table1.json --grid 2x2 --out '" + (dir / "ro" / "l").string() +
+                    "'",
+                dir);
+    std::filesystem::permissions(dir / "ro", std::filesystem::perms::owner_all);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("--out: cannot write in " + (dir / "ro").string()), std::string::npos)
+        << r.err;
+  }
+}
+
+// An input that is not a regular file is refused at once: a directory given as the job ("is a
+// directory", not "invalid JSON"), a FIFO (which used to hang, waiting for a writer) as the job
+// or the checkpoint, a link to /dev/zero (which used to be read up to 2 GB).
+TEST(Cli, InputThatIsNotARegularFileIsRefusedWithoutWaiting) {
+  const auto dir = fresh_dir("input-special");
+  ASSERT_EQ(::mkfifo((dir / "fifo.json").c_str(), 0600), 0);
+  std::filesystem::create_symlink("/dev/zero", dir / "zero.json");
+  std::filesystem::create_directory(dir / "dir.json");
+  const struct {
+    const char* name;
+    const char* kind;
+  } cases[] = {{"dir.json", "is a directory"},
+               {"fifo.json", "is a FIFO"},
+               {"zero.json", "is a character device"}};
+  for (const auto& c : cases) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const CliResult r = run_cli("validate '" + (dir / c.name).string() + "'", dir);
+    EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find((dir / c.name).string()), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(std::string(c.kind) + ", not a file to read"), std::string::npos)
+        << r.err;
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(10)) << c.name;
+  }
+  // A FIFO as the checkpoint of a run to resume.
+  std::filesystem::create_directory(dir / "out");
+  ASSERT_EQ(::mkfifo((dir / "out" / "checkpoint.json").c_str(), 0600), 0);
+  const CliResult r =
+      run_cli("run -q --resume jobs/table1.json --out '" + (dir / "out").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("checkpoint.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("is a FIFO, not a file to read"), std::string::npos) << r.err;
+}
+
 TEST(Cli, ServeOnAPortInUseExitsTwo) {
   const auto dir = fresh_dir("serve-in-use");
   // A listener that shares its port with whoever asks (SO_REUSEPORT), as earlier ftctune
@@ -275,6 +498,7 @@ TEST(Cli, ServeOnAPortInUseExitsTwo) {
   EXPECT_NE(slurp(dir / "err").find("127.0.0.1:" + std::to_string(port) + ": address in use"),
             std::string::npos)
       << slurp(dir / "err");
+  EXPECT_FALSE(std::filesystem::exists(dir / "store"));  // refused before the store was made
 }
 
 // A run whose every candidate diverges writes its files for diagnosis but exits 3 (not 1, an
@@ -381,6 +605,106 @@ TEST(Cli, ForcedRunStoppedByAFullDiskLeavesTheEarlierRunWhole) {
   for (const auto& e : std::filesystem::recursive_directory_iterator(out))
     if (e.is_regular_file()) after[e.path().string()] = slurp(e.path());
   EXPECT_EQ(after, before);
+}
+
+namespace {
+
+std::map<std::string, std::string> files_under(const std::filesystem::path& dir) {
+  std::map<std::string, std::string> m;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
+    m[e.path().lexically_relative(dir).string()] = e.is_regular_file() ? slurp(e.path()) : "";
+  return m;
+}
+
+}  // namespace
+
+// --force's move phase: an I/O failure at any of its renames (setting the earlier run aside,
+// moving the new one in) undoes the moves made, so the earlier run is whole and alone again.
+TEST(Cli, ForcedRunFailingInTheMovePhaseKeepsTheEarlierRun) {
+  const auto dir = fresh_dir("run-move-phase");
+  ftc::tune::write_file_atomic(dir / "job.json", short_table1_job().dump(2));
+  const std::string job = "'" + (dir / "job.json").string() + "'";
+  const auto out = dir / "out";
+  ASSERT_EQ(run_cli("run -q --seed 1 " + job + " --out '" + out.string() + "'", dir).exit_code, 0);
+  const auto before = files_under(out);
+  std::filesystem::copy(out, dir / "pristine", std::filesystem::copy_options::recursive);
+  const auto forced = [&](int step) {
+    ::setenv("FTCTUNE_FAIL_IO", std::to_string(step).c_str(), 1);
+    const CliResult r =
+        run_cli("run -q --force --seed 2 " + job + " --out '" + out.string() + "'", dir);
+    ::unsetenv("FTCTUNE_FAIL_IO");
+    return r;
+  };
+  // The I/O steps of the whole run: the least step that is never reached, by bisection.
+  int lo = 1, hi = 256;  // forced(lo) fails, forced(hi) succeeds
+  ASSERT_NE(forced(lo).exit_code, 0);
+  while (hi - lo > 1) {
+    const int mid = (lo + hi) / 2;
+    const CliResult r = forced(mid);
+    if (r.exit_code == 0) {
+      hi = mid;
+      // Back to the earlier run for the next try.
+      std::filesystem::remove_all(out);
+      std::filesystem::copy(dir / "pristine", out, std::filesystem::copy_options::recursive);
+    } else {
+      lo = mid;
+    }
+    ASSERT_EQ(files_under(out), before) << "step " << mid << ": " << r.err;
+  }
+  // The last steps are the moves: each entry of the earlier run set aside, each of the new one
+  // moved in.
+  std::size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(out)) ++entries;
+  int moves = 0;
+  for (int step = lo; step > 0 && moves < static_cast<int>(2 * entries); --step, ++moves) {
+    const CliResult r = forced(step);
+    EXPECT_EQ(r.exit_code, 2) << step << ": " << r.err;
+    EXPECT_NE(r.err.find("cannot move into place: No space left on device"), std::string::npos)
+        << step << ": " << r.err;
+    EXPECT_EQ(files_under(out), before) << "step " << step << ": " << r.err;
+  }
+  EXPECT_EQ(moves, static_cast<int>(2 * entries));
+}
+
+// What a run killed in its move phase leaves (the new run's whole files in a staging directory,
+// the earlier run set aside) is kept and named by the next run, never deleted; a staging
+// directory from a run killed while writing (no gains.json) is removed.
+TEST(Cli, RunNamesAndKeepsWhatAnInterruptedMoveLeft) {
+  const auto dir = fresh_dir("run-leftovers");
+  ftc::tune::write_file_atomic(dir / "job.json", short_table1_job().dump(2));
+  const std::string job = "'" + (dir / "job.json").string() + "'";
+  const auto out = dir / "out";
+  ASSERT_EQ(run_cli("run -q " + job + " --out '" + out.string() + "'", dir).exit_code, 0);
+  ftc::tune::write_file_atomic(out / ".staging-999999" / "gains.json", "{}");
+  ftc::tune::write_file_atomic(out / ".previous-999999" / "gains.json", "{}");
+  ftc::tune::write_file_atomic(out / ".staging-999998" / "run.json", "{}");
+  const CliResult r = run_cli("run --force " + job + " --out '" + out.string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find((out / ".staging-999999").string() + " holds the whole files of a run"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find((out / ".previous-999999").string() + " holds the earlier run"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(std::filesystem::exists(out / ".staging-999999" / "gains.json"));
+  EXPECT_TRUE(std::filesystem::exists(out / ".previous-999999" / "gains.json"));
+  EXPECT_FALSE(std::filesystem::exists(out / ".staging-999998"));
+}
+
+// Standard output that cannot be written (a full disk behind it) is exit 2 with a message, not
+// exit 0 with the output lost.
+TEST(Cli, WriteErrorOnStandardOutputExitsTwo) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const auto dir = fresh_dir("stdout-full");
+  for (const char* c : {"schema job", "ensemble jobs/robust-faults.json --count 3"}) {
+    const std::string cmd = "cd '" FTC_SOURCE_DIR "' && '" FTC_CLI "' " + std::string(c) +
+                            " >/dev/full 2>'" + (dir / "err").string() + "'";
+    const int status = std::system(cmd.c_str());
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << c << ": " << status;
+    EXPECT_NE(slurp(dir / "err").find("ftctune: error: cannot write to standard output"),
+              std::string::npos)
+        << c << ": " << slurp(dir / "err");
+  }
 }
 
 // --- run checkpoints (--checkpoint, --resume) ---
@@ -513,6 +837,37 @@ TEST(Cli, ResumeRefusesADamagedOrForeignCheckpoint) {
       run_cli("run -q --out '" + (dir / "whole").string() + "' '" + job.string() + "'", dir);
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
   expect_same_files(dir / "whole", dir / "sound");
+}
+
+// A forged checkpoint, its state_sha256 recomputed as a forger would, is refused with exit 2,
+// the checkpoint file and the field's path; it used to crash (t beyond the run) or be taken
+// (t = -1, evaluations 1e18, wrong-length points, a garbage engine state).
+TEST(Cli, ResumeRefusesAForgedCheckpointNamingTheFileAndField) {
+  const auto dir = fresh_dir("cli-resume-forged");
+  const auto job = checkpoint_job(dir, 3);
+  const std::uint64_t seed = ftc::tune::load_job(job).tuning->seed;
+  const json good = json::parse(first_checkpoint(job, seed));
+  int n = 0;
+  const auto forged = [&](const std::function<void(json&)>& forge, const std::string& path) {
+    json cp = good;
+    forge(cp["state"]["optimizer"]);
+    cp["state_sha256"] = ftc::tune::sha256_hex(cp["state"].dump());
+    const auto out = dir / ("forged-" + std::to_string(n++));
+    std::filesystem::create_directories(out);
+    ftc::tune::write_file_atomic(out / "checkpoint.json", cp.dump());
+    const CliResult r =
+        run_cli("run -q --resume --out '" + out.string() + "' '" + job.string() + "'", dir);
+    EXPECT_EQ(r.exit_code, 2) << path << "\n" << r.err;
+    EXPECT_NE(r.err.find((out / "checkpoint.json").string()), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(path + ":"), std::string::npos) << path << "\n" << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out / "gains.json")) << path;
+  };
+  for (const json& t : {json(4), json(61), json(100), json(1e9), json(-1)})
+    forged([&](json& o) { o["t"] = t; }, "/state/optimizer/t");
+  forged([](json& o) { o["evaluations"] = 1e18; }, "/state/optimizer/evaluations");
+  forged([](json& o) { o["bats"][0]["x"].push_back(1.0); }, "/state/optimizer/bats/0/x");
+  forged([](json& o) { o["best"].erase(0); }, "/state/optimizer/best");
+  forged([](json& o) { o["rng"] = "0 1 2 garbage"; }, "/state/optimizer/rng");
 }
 
 namespace {

@@ -450,3 +450,25 @@ TEST(Ensemble, EveryPlantDrawsSixInitialStateFactors) {
     EXPECT_EQ(tune::ensemble_member(job, 5, k).disturbance[0].amplitude, a * r.uniform());
   }
 }
+
+// `ftctune ensemble` writes its members one at a time (memory does not grow with the count),
+// and the bytes are those of the whole document's dump(2), to standard output and to --out.
+TEST(Ensemble, StreamedScenariosFileIsTheWholeDocumentsDump) {
+  const auto dir = ftc::testing::fresh_dir("ensemble-stream");
+  for (const char* count : {"1", "7"}) {
+    const ftc::testing::CliResult r =
+        ftc::testing::run_cli(std::string("ensemble jobs/robust-faults.json --count ") + count, dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json doc = json::parse(r.out);
+    EXPECT_EQ(r.out, doc.dump(2) + "\n") << count;
+    EXPECT_EQ(doc["scenarios"].size(), static_cast<std::size_t>(std::stoi(count)));
+    EXPECT_EQ(doc["schema"], "ftctune.scenarios/1");
+    const auto file = dir / (std::string("members-") + count + ".json");
+    ASSERT_EQ(ftc::testing::run_cli(std::string("ensemble -q jobs/robust-faults.json --count ") +
+                                        count + " --out '" + file.string() + "'",
+                                    dir)
+                  .exit_code,
+              0);
+    EXPECT_EQ(ftc::testing::slurp(file), r.out) << count;
+  }
+}

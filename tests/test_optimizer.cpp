@@ -9,6 +9,7 @@
 
 using namespace ftc::tune;
 using namespace ftc::testing;
+using nlohmann::json;
 
 TEST(Optimizer, ObserverCanStopTheRun) {
   int calls = 0;
@@ -46,5 +47,93 @@ TEST(Optimizer, ResumeFromSavedStateContinuesExactly) {
     }
     EXPECT_TRUE(resumed.completed);
     EXPECT_EQ(resumed.evaluations, uninterrupted.evaluations);
+  }
+}
+
+// A checkpoint's digest proves it intact, not sound: a forged state (the digest recomputed, as a
+// forger would) is refused field by field, with the field's path, and never crashes the run.
+TEST(Optimizer, ForgedStatesAreRefusedWithTheFieldsPath) {
+  const SearchSpace s = box(3, -2, 2);
+  CheckingEvaluator ev(s, rosenbrock);
+  for (const AlgorithmPtr& c : {bat(6, 8), random(6, 8)}) {
+    json good;
+    {
+      auto o = c->make(11, s);
+      run_optimizer(*o, ev, [&](const HistoryRow& h, const Optimizer& opt) {
+        good = opt.state();
+        return h.iteration < 3;
+      });
+    }
+    const auto refused = [&](const json& state, const std::string& path) {
+      auto o = c->make(11, s);
+      try {
+        run_optimizer(*o, ev, {}, &state, "/optimizer");
+      } catch (const ftc::InputError& e) {
+        EXPECT_EQ(e.source(), "checkpoint");
+        ASSERT_FALSE(e.errors().empty());
+        EXPECT_EQ(e.errors()[0].path, path) << e.what();
+        return;
+      }
+      ADD_FAILURE() << c->type() << ": accepted a forged state (" << path << ")";
+    };
+    {
+      auto o = c->make(11, s);
+      EXPECT_NO_THROW(run_optimizer(*o, ev, {}, &good, "/optimizer"));
+    }
+    for (const json& t : {json(9), json(100), json(1e9), json(-1), json(2.5), json("3"),
+                          json(18446744073709551615ull)}) {
+      json forged = good;
+      forged["t"] = t;
+      refused(forged, "/optimizer/t");
+    }
+    for (const json& e : {json(1e18), json(0), json(25), json(-24)}) {
+      json forged = good;
+      forged["evaluations"] = e;
+      refused(forged, "/optimizer/evaluations");
+    }
+    json forged = good;
+    forged["t"] = 2;  // a consistent count but a history of four rows
+    forged["evaluations"] = 18;
+    refused(forged, "/optimizer/history");
+    forged = good;
+    forged["history"][2]["evaluations"] = 12;
+    refused(forged, "/optimizer/history/2/evaluations");
+    for (const json& rng : {json("garbage"), json(""), json(42), json(good["rng"].get<std::string>() + " 7")}) {
+      forged = good;
+      forged["rng"] = rng;
+      refused(forged, "/optimizer/rng");
+    }
+    forged = good;
+    forged["best"].push_back(0.5);
+    refused(forged, "/optimizer/best");
+    forged = good;
+    forged["best"][1] = 7.0;  // outside [-2, 2]
+    refused(forged, "/optimizer/best/1");
+    forged = good;
+    forged["best"][0] = 1.5;  // inside, but not the last history row's
+    refused(forged, "/optimizer/history/3/best");
+    forged = good;
+    forged["best_fitness"] = "high";
+    refused(forged, "/optimizer/best_fitness");
+    forged = good;
+    forged.erase("history");
+    refused(forged, "/optimizer/history");
+    if (c->type() == "bat") {
+      forged = good;
+      forged["bats"][0]["x"] = json::array({0.0, 0.0});
+      refused(forged, "/optimizer/bats/0/x");
+      forged = good;
+      forged["bats"][5]["x"][2] = -3.0;
+      refused(forged, "/optimizer/bats/5/x/2");
+      forged = good;
+      forged["bats"][1]["loudness"] = 2.0;
+      refused(forged, "/optimizer/bats/1/loudness");
+      forged = good;
+      forged["bats"][1]["pulse_rate"] = -0.1;
+      refused(forged, "/optimizer/bats/1/pulse_rate");
+      forged = good;
+      forged["bats"].erase(4);
+      refused(forged, "/optimizer/bats");
+    }
   }
 }

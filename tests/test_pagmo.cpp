@@ -256,7 +256,34 @@ TEST(PagmoOptimizer, RejectsCheckpointsOfOtherRunsAndDamagedOnes) {
   rejected(pso, damaged, "does not replay");
   json short_log = good;
   short_log["fitness_log"].erase(short_log["fitness_log"].size() - 1);
-  rejected(pso, short_log, "does not replay");
+  rejected(pso, short_log, "/fitness_log: holds");
+  // Forged states (a forger recomputes the checkpoint's digest): every field is checked.
+  for (const json& t : {json(6), json(61), json(1e9), json(-1)}) {
+    json forged = good;
+    forged["t"] = t;
+    rejected(pso, forged, "/t: expected an integer in [0, 5]");
+  }
+  json forged = good;
+  forged["evaluations"] = 1e18;
+  rejected(pso, forged, "/evaluations: expected an integer in [0, 36]");
+  forged = good;
+  forged["rng"] = "garbage";
+  rejected(pso, forged, "/rng: is not the state of the random engine");
+  forged = good;
+  forged["best"] = json::array({1.0});
+  rejected(pso, forged, "/best: holds 1 elements, expected 2");
+  forged = good;
+  forged["pagmo_seeds"][0] = -1;
+  rejected(pso, forged, "/pagmo_seeds/0");
+  forged = good;
+  forged["pagmo_seeds"] = json::array({1});
+  rejected(pso, forged, "/pagmo_seeds: holds 1 elements");
+  forged = good;
+  forged["finished"] = "no";
+  rejected(pso, forged, "/finished");
+  forged = good;
+  forged["fitness_log"][3] = "x";
+  rejected(pso, forged, "/fitness_log/3");
 }
 
 TEST(PagmoSettings, ErrorsNameTheirJsonPath) {

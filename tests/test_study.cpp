@@ -26,7 +26,11 @@ std::vector<std::string> lines(const std::string& text) {
 std::string job_file(const std::filesystem::path& dir) {
   std::ofstream f(dir / "job.json");
   f << short_table1_job().dump(2);
-  return "'" + (dir / "job.json").string() + "'";
+  // Built by appends: GCC 12 warned -Wrestrict on the concatenation.
+  std::string quoted = "'";
+  quoted += (dir / "job.json").string();
+  quoted += "'";
+  return quoted;
 }
 
 }  // namespace
@@ -64,6 +68,26 @@ TEST(Study, WritesOneRowPerRunTheTableAndTheFigure) {
   EXPECT_EQ(png.substr(1, 3), "PNG");
 }
 
+// Memory by design: a study whose runs would not fit the budget is refused before any run.
+TEST(Study, StudyAboveTheMemoryBudgetIsRefusedBeforeAnyRun) {
+  const auto dir = fresh_dir("study-memory");
+  nlohmann::json j = short_table1_job();
+  j["ensemble"] = {{"count", 100000}, {"seed", 1}};
+  std::ofstream(dir / "job.json") << j.dump();
+  ::setenv("FTCTUNE_MEMORY_MIB", "100", 1);
+  const CliResult r = run_cli("study '" + (dir / "job.json").string() +
+                                  "' --algorithms bat --seeds 1-3 --budget 100 --out '" +
+                                  (dir / "o").string() + "'",
+                              dir);
+  ::unsetenv("FTCTUNE_MEMORY_MIB");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("would need about 506 MB of memory (100001 scenarios at about 3.5 kB each, "
+                       "and one objective per scenario for each of its 100 evaluations)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o"));
+}
+
 TEST(Study, BadAlgorithmsSeedsAndBudgetsExitTwo) {
   const auto dir = fresh_dir("study-errors");
   const std::string job = job_file(dir);
@@ -81,6 +105,13 @@ TEST(Study, BadAlgorithmsSeedsAndBudgetsExitTwo) {
       {"--algorithms bat --seeds 3-1 --budget 20", "--seeds: range \"3-1\" runs backwards"},
       {"--algorithms bat --seeds 1,x --budget 20", "\"x\" is not a seed or a range"},
       {"--algorithms bat --seeds 1-3,2 --budget 20", "seed 2 is given twice"},
+      {"--algorithms bat --seeds 5,1-10 --budget 20", "seed 5 is given twice"},
+      // The cap is on the total, and ranges are not expanded to check it.
+      {"--algorithms bat --seeds 1-100000,100001-200000 --budget 20",
+       "--seeds: gives more than 100000 seeds in all"},
+      {"--algorithms bat --seeds 1-10000000 --budget 20", "gives more than 100000 seeds in all"},
+      {"--algorithms bat --seeds 0-18446744073709551615 --budget 20",
+       "gives more than 100000 seeds in all"},
       {"--algorithms bat --seeds -1 --budget 20", "\"-1\" is not a seed"},
       {"--algorithms bat --seeds 1 --budget 5",
        "--budget: 5 evaluations do not pay for one generation of bat"},

@@ -338,7 +338,17 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
     sub->add_option("--prune", *prune_days,
                     "Delete the finished jobs (succeeded, failed, cancelled) that finished more "
                     "than this many days ago, with their results")
-        ->check(CLI::Range(0.0, 1e6));
+        ->check(CLI::Validator(
+            [](std::string& text) -> std::string {
+              // CLI::Range lets NaN through (no comparison is true), which pruned nothing.
+              char* end = nullptr;
+              const double v = std::strtod(text.c_str(), &end);
+              if (text.empty() || *end != '\0' || !std::isfinite(v) || v < 0 || v > 1e6)
+                return "days are a number in 0..1000000, got \"" + json_io::printable(text) +
+                       "\"";
+              return "";
+            },
+            "DAYS"));
     common(sub);
     sub->callback([&action, o, status, limit, prune_days] {
       action = [o, status, limit, prune_days] {

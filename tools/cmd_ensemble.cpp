@@ -1,7 +1,8 @@
 // ftctune ensemble JOB: the members of a job's ensemble as an ftctune.scenarios/1 file, which a
 // job can name instead of listing its scenarios (to freeze a set, inspect it or edit it).
 #include <cstdio>
-#include <iostream>
+#include <functional>
+#include <string_view>
 #include <nlohmann/json.hpp>
 
 #include "cli.hpp"
@@ -22,31 +23,54 @@ struct EnsembleOptions {
   std::string out;
 };
 
+// The scenarios document, member by member: the bytes of json::dump(2) of the whole document
+// (its keys in order: job, scenarios, schema, seed), but never more than one member in memory,
+// so that a million members take no more memory than ten.
+void write_members(const tune::Job& job, std::uint64_t seed, std::int64_t count,
+                   const sim::AnyPlant& plant, int& unrecoverable,
+                   const std::function<void(std::string_view)>& out) {
+  out("{\n  \"job\": " + json(job.name).dump() + ",\n  \"scenarios\": [");
+  std::string chunk;
+  for (std::int64_t k = 0; k < count; ++k) {
+    const sim::Scenario s = tune::ensemble_member(job, seed, k);
+    json j = tune::to_json(s);
+    const bool ok = plant.recoverable(s);
+    unrecoverable += ok ? 0 : 1;
+    j["recoverable"] = ok;
+    // Each line of the member indented by the two levels it sits at.
+    chunk += k == 0 ? "\n    " : ",\n    ";
+    const std::string text = j.dump(2);
+    for (char c : text) {
+      chunk += c;
+      if (c == '\n') chunk += "    ";
+    }
+    if (chunk.size() >= (1 << 16)) {
+      out(chunk);
+      chunk.clear();
+    }
+  }
+  chunk += count > 0 ? "\n  ],\n" : "],\n";
+  chunk += "  \"schema\": " + json(tune::kScenariosSchema).dump() + ",\n  \"seed\": " +
+           json(seed).dump() + "\n}\n";
+  out(chunk);
+}
+
 int run_ensemble(const EnsembleOptions& o, const Globals& g) {
   const tune::Job job = tune::load_job(o.job);
   if (!job.ensemble) throw InputError(o.job, "/ensemble", "the job has no ensemble to expand");
   const std::uint64_t seed = o.seed.value_or(job.ensemble->seed);
   const std::int64_t count = tune::ensemble_count(job, o.count);
   const std::unique_ptr<sim::AnyPlant> plant = sim::make_plant(job.plant);
-  json members = json::array();
   int unrecoverable = 0;
-  for (std::int64_t k = 0; k < count; ++k) {
-    const sim::Scenario s = tune::ensemble_member(job, seed, k);
-    json j = tune::to_json(s);
-    const bool ok = plant->recoverable(s);
-    unrecoverable += ok ? 0 : 1;
-    j["recoverable"] = ok;
-    members.push_back(std::move(j));
-  }
-  const json doc = {{"schema", tune::kScenariosSchema},
-                    {"job", job.name},
-                    {"seed", seed},
-                    {"scenarios", std::move(members)}};
   if (o.out.empty()) {
-    std::cout << doc.dump(2) << "\n";
+    write_members(job, seed, count, *plant, unrecoverable, [](std::string_view chunk) {
+      std::fwrite(chunk.data(), 1, chunk.size(), stdout);
+    });
     return 0;
   }
-  tune::write_file_atomic(o.out, doc.dump(2) + "\n");
+  tune::write_file_atomic(o.out, [&](const tune::ChunkSink& sink) {
+    write_members(job, seed, count, *plant, unrecoverable, sink);
+  });
   if (!g.quiet)
     std::printf("wrote %lld members of %s (seed %llu, %d unrecoverable) to %s\n",
                 static_cast<long long>(count), job.name.c_str(),

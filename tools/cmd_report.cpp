@@ -1,6 +1,7 @@
 // ftctune report RUN_DIR and ftctune landscape JOB: figures engineers can look at.
 #include <spdlog/spdlog.h>
 
+#include <charconv>
 #include <chrono>
 #include <cstdio>
 
@@ -38,13 +39,23 @@ namespace {
 struct LandscapeCli {
   std::string job, grid = "41x41", params, out, history, format = "png";
   int threads = 0;
+  bool force = false;
 };
+
+// "N1xN2": two whole numbers and an x, nothing else ("3x3x3", "3x3junk" and "2x3.9" are not).
+bool parse_grid(const std::string& text, int& n1, int& n2) {
+  const char* end = text.data() + text.size();
+  const auto [x, e1] = std::from_chars(text.data(), end, n1);
+  if (e1 != std::errc() || x == text.data() || x == end || *x != 'x') return false;
+  const auto [last, e2] = std::from_chars(x + 1, end, n2);
+  return e2 == std::errc() && last != x + 1 && last == end;
+}
 
 int run_landscape(const LandscapeCli& o, const Globals& g) {
   namespace fs = std::filesystem;
   const tune::Job job = tune::load_job(o.job);
   tune::LandscapeOptions lo;
-  if (std::sscanf(o.grid.c_str(), "%dx%d", &lo.n1, &lo.n2) != 2)
+  if (!parse_grid(o.grid, lo.n1, lo.n2))
     throw InputError("--grid", "", "expected N1xN2, e.g. 41x41 (got \"" + o.grid + "\")");
   for (std::size_t i = 0; i < o.params.size();) {
     const std::size_t j = std::min(o.params.find(',', i), o.params.size());
@@ -55,6 +66,19 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
     throw InputError("--format", "", "must be png or svg (got \"" + o.format + "\")");
   lo.format = o.format == "png" ? tune::FigureFormat::png : tune::FigureFormat::svg;
   const fs::path out = o.out.empty() ? default_out_dir(job) / "landscape" : fs::path(o.out);
+  // Before the work: a directory that can be written, and not one holding a landscape already
+  // (like `run`, --force replaces it).
+  {
+    std::string dir = out.string();
+    if (const std::string problem = output_directory()(dir); !problem.empty())
+      throw InputError("--out", "", problem);
+    std::error_code ec;
+    if (!o.force && (fs::exists(out / "landscape.csv", ec) || fs::exists(out / "landscape.gp", ec)))
+      throw InputError("--out", "",
+                       out.string() +
+                           " already holds a landscape; choose another directory, or pass "
+                           "--force to replace it");
+  }
   // The run's best-so-far path, when the job has been run into its default directory.
   lo.history = o.history.empty() && fs::is_regular_file(default_out_dir(job) / "history.csv")
                    ? default_out_dir(job) / "history.csv"
@@ -118,6 +142,7 @@ void add_report_commands(CLI::App& app, const Globals& g, Action& action) {
     sub->add_option("--threads", o->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(0, 4096));
     sub->add_option("--format", o->format, "png (default) or svg");
+    sub->add_flag("--force", o->force, "Replace the landscape the --out directory holds");
     sub->callback([&action, &g, o] { action = [&g, o] { return run_landscape(*o, g); }; });
   }
 }

@@ -2,9 +2,11 @@
 #include <fcntl.h>
 #include <spdlog/spdlog.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +21,7 @@
 #include "ftc/tune/optimizers/random_search.hpp"
 #include "ftc/tune/run/checkpoint.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "progress.hpp"
 
@@ -43,13 +46,51 @@ struct RunCliOptions {
 // Where a run stages its files inside its directory, followed by the process id.
 constexpr const char* kStagingPrefix = ".staging-";
 
-// The staging directories of runs killed before they finished (only a run holding the lock
-// writes there, so any found by the holder are left over).
-void remove_stale_staging(const std::filesystem::path& out) {
+constexpr const char* kPreviousPrefix = ".previous-";
+
+// A new directory out/PREFIX<pid>, or out/PREFIX<pid>-K when that name is taken: a directory
+// kept from an earlier run (which the next run names for recovery) is never reused, even when
+// the process id comes round again, as it does for PID 1 in a container.
+std::filesystem::path unique_dir(const std::filesystem::path& out, const char* prefix) {
+  const std::string base = std::string(prefix) + std::to_string(::getpid());
+  for (unsigned k = 0;; ++k) {
+    const std::filesystem::path p = out / (k ? base + "-" + std::to_string(k) : base);
+    if (::mkdir(p.c_str(), 0755) == 0) return p;
+    if (errno != EEXIST)
+      throw std::filesystem::filesystem_error("cannot create the directory", p,
+                                              std::error_code(errno, std::generic_category()));
+  }
+}
+
+// What runs stopped before they finished left behind (only a run holding the lock writes
+// there, so any found by the holder are left over). A staging directory without gains.json was
+// stopped while its files were written, and goes. One with gains.json holds a whole run that was
+// stopped while moving into place, and a .previous-PID directory the run a --force was
+// replacing: both are kept, and named, for the user to recover.
+void handle_leftovers(const std::filesystem::path& out) {
+  namespace fs = std::filesystem;
   std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(out, ec))
-    if (e.path().filename().string().rfind(kStagingPrefix, 0) == 0)
-      std::filesystem::remove_all(e.path(), ec);
+  std::vector<fs::path> found;
+  for (const auto& e : fs::directory_iterator(out, ec)) found.push_back(e.path());
+  std::sort(found.begin(), found.end());
+  for (const fs::path& p : found) {
+    const std::string name = p.filename().string();
+    if (name.rfind(kStagingPrefix, 0) == 0) {
+      if (!fs::exists(p / "gains.json", ec)) {
+        fs::remove_all(p, ec);
+        continue;
+      }
+      spdlog::warn(
+          "{} holds the whole files of a run stopped while it moved them into {}: kept (move "
+          "them into {} to recover that run, or remove the directory)",
+          p.string(), out.string(), out.string());
+    } else if (name.rfind(kPreviousPrefix, 0) == 0) {
+      spdlog::warn(
+          "{} holds the earlier run that a --force run was replacing when it stopped: kept (move "
+          "its files back into {} to recover that run, or remove the directory)",
+          p.string(), out.string());
+    }
+  }
 }
 
 // A run projected to take longer than this checkpoints after every iteration unless told not to.
@@ -100,7 +141,7 @@ bool holds_interrupted_run(const std::filesystem::path& d) {
 // that holds a run, or that another run is writing, is refused; the default out/<name> moves on
 // to out/<name>-2, -3, ... (with a warning); --force
 // replaces the run (its files are cleared only once the new run has finished, see
-// clear_previous_run). Other files in the directory (an evaluation, a landscape, fetched
+// replace_run). Other files in the directory (an evaluation, a landscape, fetched
 // service results) are not a run and are left alone.
 // An exclusive lock on the output directory for the whole run (flock on the directory itself,
 // released when the process ends, however it ends): two runs into one directory would
@@ -171,14 +212,59 @@ std::unique_ptr<DirectoryLock> run_directory(std::filesystem::path& out, bool gi
   }
 }
 
-// With --force, after the new run has finished and before its files are written: remove what a
-// run writes, so that no figure or trajectory of the earlier run is left beside the new ones.
-void clear_previous_run(const std::filesystem::path& out) {
-  if (!holds_run(out)) return;
-  for (const char* f :
-       {"gains.json", "history.csv", "trials.csv", "history-random.csv", "comparison.json",
-        "comparison.md", "run.json", "job.json", "report.html", "figures", "trajectories"})
-    std::filesystem::remove_all(out / f);
+// What a run writes: with --force these names of the earlier run make way for the new run's,
+// so that no figure or trajectory of the earlier run is left beside the new ones.
+constexpr const char* kRunEntries[] = {
+    "gains.json",    "history.csv", "trials.csv",  "history-random.csv", "comparison.json",
+    "comparison.md", "run.json",    "job.json",    "report.html",        "figures",
+    "trajectories"};
+
+// The move phase: the new run in `staging` takes the place of the earlier one in `out`. The
+// earlier run's entries (when `replace`) are first set aside into .previous-PID, then the new
+// ones move in by rename, gains.json last; only then is the earlier run deleted. A failure on
+// the way undoes every move made, so `out` holds the earlier run as it was; if even that fails,
+// both directories are kept and the error names them (the next run names them too).
+void replace_run(const std::filesystem::path& out, const std::filesystem::path& staging,
+                 const std::vector<std::string>& entries, bool replace) {
+  namespace fs = std::filesystem;
+  fs::path previous;  // made when the first entry is set aside
+  std::vector<std::string> set_aside, moved;
+  try {
+    if (replace && holds_run(out)) {
+      for (const char* f : kRunEntries) {
+        std::error_code ec;
+        if (!fs::exists(fs::symlink_status(out / f, ec))) continue;
+        if (set_aside.empty()) previous = unique_dir(out, kPreviousPrefix);
+        tune::move_into(out, previous, {f});
+        set_aside.push_back(f);
+      }
+    }
+    for (const std::string& e : entries) {
+      tune::move_into(staging, out, {e});
+      moved.push_back(e);
+    }
+  } catch (const std::exception& e) {
+    bool undone = true;
+    for (auto it = moved.rbegin(); it != moved.rend(); ++it)
+      undone &= std::rename((out / *it).c_str(), (staging / *it).c_str()) == 0;
+    for (auto it = set_aside.rbegin(); it != set_aside.rend() && undone; ++it)
+      undone &= std::rename((previous / *it).c_str(), (out / *it).c_str()) == 0;
+    std::error_code ec;
+    if (!undone)
+      throw tune::OutputError(
+          std::string(e.what()) + "; the new run's files are in " + staging.string() +
+          (set_aside.empty() ? std::string()
+                             : " and the earlier run's in " + previous.string()) +
+          ": move them back into " + out.string() + " by hand");
+    if (!previous.empty()) fs::remove(previous, ec);
+    fs::remove_all(staging, ec);
+    tune::sync_directory(out);
+    throw;
+  }
+  std::error_code ec;
+  if (!previous.empty()) fs::remove_all(previous, ec);
+  fs::remove(staging, ec);
+  tune::sync_directory(out);
 }
 
 int run_tuning(const RunCliOptions& o, const Globals& g) {
@@ -187,6 +273,8 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   const tune::Job job = tune::load_job(o.job);
   if (!job.tuning)
     throw InputError(o.job, "/tuning", "is required by ftctune run (what should be tuned?)");
+  // Memory by design: a job whose run would not fit is refused before any work.
+  tune::check_memory_budget(job, tune::memory_budget_bytes(), o.job);
   fs::path out = o.out.empty() ? default_out_dir(job) : fs::path(o.out);
   const std::uint64_t seed = o.seed.value_or(job.tuning->seed);
   const std::string job_sha = tune::canonical_job_sha256(job);
@@ -215,7 +303,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   } else {
     lock = run_directory(out, !o.out.empty(), o.force);
   }
-  remove_stale_staging(out);
+  handle_leftovers(out);
   const std::int64_t total = job.tuning->algorithm->evaluations();
   std::vector<std::string> names;
   for (const tune::ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
@@ -259,7 +347,17 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   spdlog::info("tuning {} of job {}: {} evaluations of {} scenario{}, {} algorithm",
                fmt::join(names, ", "), job.name, total, job.scenario_count(),
                job.scenario_count() == 1 ? "" : "s", job.tuning->algorithm->type());
-  const tune::TuningOutcome r = tune::tune(job, *evaluator, ro);
+  const tune::TuningOutcome r = [&] {
+    try {
+      return tune::tune(job, *evaluator, ro);
+    } catch (const InputError& e) {
+      // A state the optimiser refuses: the file and the field's path in it.
+      if (!resumed || e.source() != "checkpoint") throw;
+      std::vector<FieldError> errors = e.errors();
+      for (FieldError& f : errors) f.path = "/state" + f.path;
+      throw InputError((out / tune::kCheckpointFile).string(), std::move(errors));
+    }
+  }();
   bar.clear();
   const double wall = std::chrono::duration<double>(clock::now() - t0).count();
 
@@ -296,14 +394,13 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   // The files go to a staging directory inside `out` first, each synced: a full disk or a kill
   // on the way leaves `out` as it was, an earlier run included. Only then does the new run take
   // its place, entry by entry by rename (which needs no space) with gains.json last.
-  const fs::path staging = out / (std::string(kStagingPrefix).append(std::to_string(::getpid())));
+  const fs::path staging = unique_dir(out, kStagingPrefix);
   std::vector<std::string> entries;
   const auto add_entry = [&](const std::string& file) {
     const std::string top = fs::path(file).begin()->string();  // trajectories/a/b.csv: the folder
     if (std::find(entries.begin(), entries.end(), top) == entries.end()) entries.push_back(top);
   };
   try {
-    fs::remove_all(staging);
     if (random_baseline) {
       tune::write_file_atomic(staging / "history-random.csv", tune::history_csv(*random_baseline));
       add_entry("history-random.csv");
@@ -319,9 +416,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   // What is in the way goes first: the run --force replaces, or what an earlier start of a
   // resumed run left (rename cannot replace a directory that has files). The checkpoint stays
   // until gains.json is in place.
-  if (o.force || o.resume) clear_previous_run(out);
-  tune::move_into(staging, out, entries);
-  fs::remove(staging);
+  replace_run(out, staging, entries, o.force || o.resume);
   // gains.json is in place: the run is finished, and its checkpoint of no more use.
   fs::remove(out / tune::kCheckpointFile);
 

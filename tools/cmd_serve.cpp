@@ -1,7 +1,11 @@
 // ftctune serve: the tuning service. SIGTERM or SIGINT shut it down gracefully.
 #include <spdlog/spdlog.h>
+#include <netdb.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
@@ -20,6 +24,7 @@ struct ServeOptions {
   std::string token_file;
   std::size_t max_body_kib = 1024;
   std::uint64_t max_stored_mib = 256;
+  std::uint64_t max_job_mib = 1024;
 };
 
 std::string read_token(const std::string& file) {
@@ -39,10 +44,37 @@ std::string read_token(const std::string& file) {
   return t;
 }
 
+// Refuses a port another process listens on before the service opens (and creates) its store:
+// the service's own bind says the same, but only after the store exists. A port 0 (any free
+// one) and names that do not resolve are left to it.
+void refuse_port_in_use(const std::string& bind, int port) {
+  if (port == 0) return;
+  addrinfo hints{};
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
+  addrinfo* found = nullptr;
+  if (::getaddrinfo(bind.c_str(), std::to_string(port).c_str(), &hints, &found) != 0) return;
+  bool in_use = false;
+  for (addrinfo* a = found; a && !in_use; a = a->ai_next) {
+    const int fd = ::socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
+    if (fd < 0) continue;
+    int yes = 1;  // as the service binds: a port in TIME_WAIT is free
+    ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    in_use = ::bind(fd, a->ai_addr, a->ai_addrlen) != 0 && errno == EADDRINUSE;
+    ::close(fd);
+  }
+  ::freeaddrinfo(found);
+  if (in_use)
+    throw InputError("--port", "",
+                     "cannot listen on " + bind + ":" + std::to_string(port) +
+                         ": address in use (is another server listening on that port?)");
+}
+
 int run_serve(ServeOptions o) {
   if (!o.token_file.empty()) o.service.token = read_token(o.token_file);
   o.service.max_body_bytes = o.max_body_kib * 1024;
   o.service.max_stored_bytes = o.max_stored_mib << 20;
+  o.service.max_job_memory_bytes = o.max_job_mib << 20;
 
   // Block the shutdown signals in every thread (the workers inherit the mask); this thread
   // waits for them with sigwait.
@@ -64,10 +96,16 @@ int run_serve(ServeOptions o) {
                  make_evaluator(threads)->concurrency());
     o.service.evaluator = [threads] { return make_evaluator(threads); };
   }
+  refuse_port_in_use(o.service.bind, o.service.port);
   tune::TuningService service(o.service);
   const int port = service.start();  // a bind failure is an InputError: exit 2
+  // An IPv6 address in a URL goes in brackets (RFC 3986): http://[::1]:8080.
+  const std::string host = o.service.bind.find(':') != std::string::npos &&
+                                   o.service.bind.front() != '['
+                               ? "[" + o.service.bind + "]"
+                               : o.service.bind;
   std::printf("ftctune serve: listening on http://%s:%d (store %s, %d concurrent job%s%s)\n",
-              o.service.bind.c_str(), port, o.service.store.c_str(), o.service.concurrent_jobs,
+              host.c_str(), port, o.service.store.c_str(), o.service.concurrent_jobs,
               o.service.concurrent_jobs == 1 ? "" : "s", o.service.token ? ", token required" : "");
   std::fflush(stdout);
 
@@ -105,6 +143,10 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
   sub->add_option("--max-stored-mib", o->max_stored_mib,
                   "Largest result of one job in MiB, trials checkpoints included (default 256)")
       ->check(CLI::Range(1, 900));
+  sub->add_option("--max-job-mib", o->max_job_mib,
+                  "Most memory one job may need, by its estimate, in MiB; larger jobs get 413 "
+                  "(default 1024)")
+      ->check(CLI::Range(64, 1 << 20));
   sub->add_option("--trajectory-rows", o->service.trajectory_rows,
                   "Rows per stored comparison trajectory: longer scenarios are recorded more "
                   "coarsely than every 10 ms (default 20000)")

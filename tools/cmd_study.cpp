@@ -16,6 +16,7 @@
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/pagmo.hpp"
 #include "ftc/tune/report/study.hpp"
+#include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::cli {
@@ -73,15 +74,21 @@ std::vector<std::string> parse_algorithm_list(const std::string& text) {
   return names;
 }
 
-// "1-10", "1,3,5", "1-3,7": the seeds in the order given, each once.
+// At most this many seeds in all, over every range.
+constexpr std::uint64_t kMaxSeeds = 100000;
+
+// "1-10", "1,3,5", "1-3,7": the seeds in the order given, each once. The ranges are checked as
+// ranges (their total against kMaxSeeds, their overlaps after sorting) before any is expanded,
+// so `1-10000000` is refused at once rather than after filling memory.
 std::vector<std::uint64_t> parse_seeds(const std::string& text) {
   const auto number = [&](const std::string& s, std::uint64_t& v) {
     const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
     return !s.empty() && ec == std::errc() && end == s.data() + s.size();
   };
-  std::vector<std::uint64_t> seeds;
   std::vector<FieldError> errs;
   if (text.empty()) throw InputError("--seeds", "", "is empty (e.g. 1-10 or 1,3,5)");
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> ranges;  // [lo, hi], in the order given
+  std::uint64_t total = 0;
   for (const std::string& part : split(text)) {
     const std::size_t dash = part.find('-');
     std::uint64_t lo = 0, hi = 0;
@@ -96,20 +103,29 @@ std::vector<std::uint64_t> parse_seeds(const std::string& text) {
       errs.push_back({"", "range \"" + part + "\" runs backwards"});
       continue;
     }
-    if (hi - lo >= 100000) {
-      errs.push_back({"", "range \"" + part + "\" has more than 100000 seeds"});
-      continue;
+    // hi - lo + 1 without overflow: a range past the cap counts as the cap plus one.
+    total += std::min(hi - lo, kMaxSeeds) + 1;
+    if (total > kMaxSeeds) {
+      errs.push_back({"", "gives more than " + std::to_string(kMaxSeeds) +
+                              " seeds in all (a study runs every algorithm once per seed)"});
+      throw_if_errors("--seeds", std::move(errs));
     }
+    ranges.emplace_back(lo, hi);
+  }
+  throw_if_errors("--seeds", std::move(errs));
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> sorted = ranges;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 1; i < sorted.size(); ++i)
+    if (sorted[i].first <= sorted[i - 1].second)
+      throw InputError("--seeds", "",
+                       "seed " + std::to_string(sorted[i].first) + " is given twice");
+  std::vector<std::uint64_t> seeds;
+  seeds.reserve(static_cast<std::size_t>(total));
+  for (const auto& [lo, hi] : ranges)
     for (std::uint64_t s = lo;; ++s) {
-      if (std::find(seeds.begin(), seeds.end(), s) != seeds.end()) {
-        errs.push_back({"", "seed " + std::to_string(s) + " is given twice"});
-        break;
-      }
       seeds.push_back(s);
       if (s == hi) break;
     }
-  }
-  throw_if_errors("--seeds", std::move(errs));
   return seeds;
 }
 
@@ -197,6 +213,9 @@ int run_study(const StudyCli& o, const Globals& g) {
   std::vector<tune::AlgorithmPtr> algorithms;
   for (const std::string& n : names)
     algorithms.push_back(sized(n, *job.tuning->algorithm, o.budget));
+  // Memory by design: the runs go one at a time, each holding what a run of the budget holds.
+  tune::check_memory_budget(job, static_cast<double>(o.budget), tune::memory_budget_bytes(),
+                            o.job);
   const fs::path out = o.out.empty() ? default_out_dir(job) / "study" : fs::path(o.out);
   const tune::TuningProblem problem(job);
   const tune::SearchSpace& space = problem.space();

@@ -7,6 +7,7 @@
 
 #include "cli.hpp"
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/tune/io/files.hpp"
 
 namespace ftc::cli {
 
@@ -116,6 +117,11 @@ CLI::Validator output_file() {
         const std::filesystem::path p(s);
         std::error_code ec;
         if (std::filesystem::is_directory(p, ec)) return s + " is a directory";
+        try {
+          tune::refuse_non_regular_target(p);  // a link, a device node, a FIFO: never replaced
+        } catch (const std::exception& e) {
+          return e.what();
+        }
         return directory_problem(p.has_parent_path() ? p.parent_path() : ".");
       },
       "FILE");

@@ -4,15 +4,20 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <filesystem>
+#include <iostream>
 #include <map>
+#include <new>
 #include <string>
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/isa.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/version.hpp"
 
 namespace {
@@ -140,13 +145,37 @@ int main(int argc, char** argv) {
   }
 
   try {
-    return action();
+    const int rc = action();
+    // What went to standard output must have arrived: a full disk or a closed pipe behind it
+    // (`ftctune schema job > /dev/full`) is an error, not exit 0 with the output lost.
+    errno = 0;
+    std::cout.flush();
+    if (std::fflush(stdout) != 0 || std::ferror(stdout) || !std::cout) {
+      const int error = errno;
+      std::fprintf(stderr, "ftctune: error: cannot write to standard output%s%s\n",
+                   error ? ": " : " (a full disk or a closed pipe behind it?)",
+                   error ? std::strerror(error) : "");
+      return 2;
+    }
+    return rc;
+  } catch (const std::bad_alloc&) {
+    // An allocation the machine cannot give: a clean error, never an abort. What a job needs
+    // is checked against its budget up front (see docs/reliability.md); this is the backstop.
+    std::fprintf(stderr,
+                 "ftctune: error: out of memory: the job needs more memory than this machine "
+                 "can give; make it smaller (fewer ensemble members or scenarios)\n");
+    return 2;
   } catch (const ftc::InputError& e) {
     std::fprintf(stderr, "ftctune: error: %s\n", e.what());
     return 2;
   } catch (const std::filesystem::filesystem_error& e) {
     // A path the user gave or the machine's state (a file where a directory should be, no
     // permission, a full disk), not a defect of ftctune.
+    std::fprintf(stderr, "ftctune: error: %s\n", e.what());
+    return 2;
+  } catch (const ftc::tune::OutputError& e) {
+    // An output that could not be written whole (a target that is not a regular file, gnuplot's
+    // failure): nothing was put in its place.
     std::fprintf(stderr, "ftctune: error: %s\n", e.what());
     return 2;
   } catch (const std::exception& e) {

@@ -1,6 +1,7 @@
 #include "ftc/tune/io/files.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -54,6 +55,49 @@ bool injected_failure() {
 
 }  // namespace
 
+void refuse_non_regular_target(const std::filesystem::path& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT) return;
+    io_error("cannot inspect", path, errno);
+  }
+  if (S_ISREG(st.st_mode)) return;
+  const char* kind = S_ISLNK(st.st_mode)    ? "a symbolic link"
+                     : S_ISDIR(st.st_mode)  ? "a directory"
+                     : S_ISFIFO(st.st_mode) ? "a FIFO"
+                     : S_ISCHR(st.st_mode)  ? "a character device"
+                     : S_ISBLK(st.st_mode)  ? "a block device"
+                     : S_ISSOCK(st.st_mode) ? "a socket"
+                                            : "not a regular file";
+  throw OutputError(path.string() + " is " + kind +
+                    ": ftctune writes its output only in place of a regular file (give another "
+                    "name)");
+}
+
+void commit_file(const std::filesystem::path& written, const std::filesystem::path& target) {
+  const auto fail = [&](const std::string& step, const std::filesystem::path& p, int error) {
+    ::unlink(written.c_str());
+    io_error(step, p, error);
+  };
+  try {
+    refuse_non_regular_target(target);
+  } catch (...) {
+    ::unlink(written.c_str());
+    throw;
+  }
+  const int fd = ::open(written.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) fail("cannot open", written, errno);
+  if (injected_failure() || ::fsync(fd) != 0) {
+    const int error = errno;
+    ::close(fd);
+    fail("cannot sync", target, error);
+  }
+  ::close(fd);
+  if (injected_failure() || std::rename(written.c_str(), target.c_str()) != 0)
+    fail("cannot rename into place", target, errno);
+  sync_directory(target.has_parent_path() ? target.parent_path() : std::filesystem::path("."));
+}
+
 void inject_io_failure(int after, int error) {
   g_fail_errno = error;
   g_fail_after = after;
@@ -63,8 +107,12 @@ void write_file_atomic(const std::filesystem::path& path,
                        const std::function<void(const ChunkSink&)>& produce) {
   namespace fs = std::filesystem;
   if (path.has_parent_path()) fs::create_directories(path.parent_path());
+  refuse_non_regular_target(path);
   const fs::path tmp = path.string() + ".tmp." + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // A temporary name of its own: one left by a killed process of the same pid goes, and a link
+  // put there is not followed.
+  ::unlink(tmp.c_str());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (fd < 0) io_error("cannot create", tmp, errno);
   const auto fail = [&](const std::string& step, int error) {
     ::close(fd);

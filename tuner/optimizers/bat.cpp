@@ -6,11 +6,11 @@
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/elementary.hpp"
+#include "ftc/tune/optimizers/state_check.hpp"
 
 namespace ftc::tune {
 
 using json_io::json_number;
-using json_io::json_number_or;
 
 namespace {
 
@@ -156,16 +156,28 @@ nlohmann::json BatAlgorithm::state() const {
 }
 
 void BatAlgorithm::restore(const nlohmann::json& s) {
-  restore_common(s, "bat");
-  bats_.clear();
-  for (const nlohmann::json& b : s.at("bats"))
-    bats_.push_back({b.at("x").get<Decision>(), b.at("v").get<Decision>(),
-                     b.at("loudness").get<double>(), b.at("pulse_rate").get<double>(),
-                     json_number_or(b.at("fitness"), std::numeric_limits<double>::infinity())});
-  if (bats_.size() != static_cast<std::size_t>(settings_.population))
-    throw InputError("checkpoint", "/bats",
-                     "holds " + std::to_string(bats_.size()) + " bats, the job has " +
-                         std::to_string(settings_.population));
+  namespace sc = state_check;
+  restore_common(s, "bat", settings_.population, 0, true);
+  // Every bat: a position inside the space (every move is clamped to it), a finite velocity,
+  // a loudness that only decays from A0 and a pulse rate below r0.
+  const nlohmann::json& bats =
+      sc::array(sc::member(s, "", "bats"), "/bats", static_cast<std::size_t>(settings_.population));
+  std::vector<Bat> restored;
+  restored.reserve(bats.size());
+  for (std::size_t i = 0; i < bats.size(); ++i) {
+    const std::string at = "/bats/" + std::to_string(i);
+    const nlohmann::json& b = bats[i];
+    Bat bat;
+    bat.x = sc::decision(sc::member(b, at, "x"), at + "/x", space_, true);
+    bat.v = sc::decision(sc::member(b, at, "v"), at + "/v", space_, false);
+    bat.loudness = sc::number(sc::member(b, at, "loudness"), at + "/loudness", 0.0,
+                              settings_.loudness);
+    bat.pulse_rate = sc::number(sc::member(b, at, "pulse_rate"), at + "/pulse_rate", 0.0,
+                                settings_.pulse_rate);
+    bat.fitness = sc::fitness(sc::member(b, at, "fitness"), at + "/fitness");
+    restored.push_back(std::move(bat));
+  }
+  bats_ = std::move(restored);
 }
 
 void BatAlgorithm::record_iteration() {

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/tune/optimizers/state_check.hpp"
 
 namespace ftc::tune {
 
@@ -25,16 +26,29 @@ json to_json(const HistoryRow& row) {
           {"extras", extras}};
 }
 
-HistoryRow history_row_from_json(const json& j) {
+// One history row of a checkpoint, every field checked: the iteration, the evaluations so far
+// (within [lo, hi]), the best point (inside the space when `bounded`) and the extra figures.
+HistoryRow history_row_from_json(const json& j, const std::string& path, int iteration,
+                                 std::int64_t lo, std::int64_t hi, const SearchSpace& space,
+                                 bool bounded) {
+  namespace sc = state_check;
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   HistoryRow row;
-  row.iteration = j.at("iteration").get<int>();
-  row.best_fitness = json_number_or(j.at("best_fitness"), std::numeric_limits<double>::infinity());
-  row.best = j.at("best").get<std::vector<double>>();
-  row.evaluations = j.at("evaluations").get<std::int64_t>();
+  row.iteration = static_cast<int>(
+      sc::integer(sc::member(j, path, "iteration"), path + "/iteration", iteration, iteration));
+  row.best_fitness = sc::fitness(sc::member(j, path, "best_fitness"), path + "/best_fitness");
+  row.best = sc::decision(sc::member(j, path, "best"), path + "/best", space, bounded);
+  row.evaluations = sc::integer(sc::member(j, path, "evaluations"), path + "/evaluations", lo, hi);
   if (j.contains("extras")) {
-    for (const json& e : j.at("extras"))
-      row.extras.emplace_back(e.at(0).get<std::string>(), json_number_or(e.at(1), nan));
+    const json& extras = j.at("extras");
+    if (!extras.is_array()) sc::fail(path + "/extras", "expected an array");
+    for (std::size_t k = 0; k < extras.size(); ++k) {
+      const std::string at = path + "/extras/" + std::to_string(k);
+      const json& e = sc::array(extras[k], at, 2);
+      if (!e[0].is_string()) sc::fail(at + "/0", "expected a name");
+      if (!e[1].is_null()) sc::number(e[1], at + "/1", -HUGE_VAL, HUGE_VAL);
+      row.extras.emplace_back(e[0].get<std::string>(), json_number_or(e[1], nan));
+    }
   } else {
     // A checkpoint of ftctune 0.1.0 (a service store from before the upgrade): the Bat
     // algorithm's two figures had fields of their own.
@@ -45,6 +59,68 @@ HistoryRow history_row_from_json(const json& j) {
 }
 
 }  // namespace
+
+namespace state_check {
+
+void fail(const std::string& path, const std::string& message) {
+  throw InputError("checkpoint", path, message);
+}
+
+const json& member(const json& j, const std::string& path, const char* key) {
+  if (!j.is_object()) fail(path, "expected an object, got " + json_io::json_type_name(j));
+  const auto it = j.find(key);
+  if (it == j.end()) fail(path + "/" + key, "is missing");
+  return *it;
+}
+
+std::int64_t integer(const json& j, const std::string& path, std::int64_t lo, std::int64_t hi) {
+  long long v = 0;
+  const bool too_big = j.is_number_unsigned() &&
+                       j.get<std::uint64_t>() > std::uint64_t{std::numeric_limits<long long>::max()};
+  if (!j.is_number() || too_big || !json_io::json_to_int(j, v) || v < lo || v > hi)
+    fail(path, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                   "], got " + j.dump());
+  return v;
+}
+
+double number(const json& j, const std::string& path, double lo, double hi) {
+  if (!j.is_number()) fail(path, "expected a number, got " + json_io::json_type_name(j));
+  const double v = j.get<double>();
+  if (!(v >= lo && v <= hi) || !std::isfinite(v))
+    fail(path, "expected a number in [" + json_io::number_text(lo) + ", " +
+                   json_io::number_text(hi) + "], got " + j.dump());
+  return v;
+}
+
+double fitness(const json& j, const std::string& path) {
+  if (j.is_null()) return std::numeric_limits<double>::infinity();
+  return number(j, path, -HUGE_VAL, HUGE_VAL);
+}
+
+bool boolean(const json& j, const std::string& path) {
+  if (!j.is_boolean()) fail(path, "expected true or false, got " + json_io::json_type_name(j));
+  return j.get<bool>();
+}
+
+const json& array(const json& j, const std::string& path, std::size_t size) {
+  if (!j.is_array()) fail(path, "expected an array, got " + json_io::json_type_name(j));
+  if (j.size() != size)
+    fail(path, "holds " + std::to_string(j.size()) + " elements, expected " +
+                   std::to_string(size));
+  return j;
+}
+
+Decision decision(const json& j, const std::string& path, const SearchSpace& space,
+                  bool bounded) {
+  array(j, path, space.dimension());
+  Decision x(space.dimension());
+  for (std::size_t k = 0; k < x.size(); ++k)
+    x[k] = bounded ? number(j[k], path + "/" + std::to_string(k), space.lower[k], space.upper[k])
+                   : number(j[k], path + "/" + std::to_string(k), -HUGE_VAL, HUGE_VAL);
+  return x;
+}
+
+}  // namespace state_check
 
 AlgorithmPtr parse_algorithm(const json& j, const std::string& path,
                              std::vector<FieldError>& errors) {
@@ -84,14 +160,20 @@ const AlgorithmInfo* find_algorithm(std::string_view type) {
 }
 
 OptimizationResult run_optimizer(Optimizer& optimizer, BatchFitness& fitness,
-                                 const IterationObserver& observer, const json* resume) {
+                                 const IterationObserver& observer, const json* resume,
+                                 const std::string& state_path) {
   OptimizationResult r;
   bool go = true;
   if (resume) {
     try {
       optimizer.restore(*resume);
     } catch (const json::exception& e) {
-      throw InputError("checkpoint", "", std::string("damaged optimiser state: ") + e.what());
+      throw InputError("checkpoint", state_path,
+                       std::string("damaged optimiser state: ") + e.what());
+    } catch (const InputError& e) {
+      std::vector<FieldError> errors = e.errors();
+      for (FieldError& f : errors) f.path = state_path + f.path;
+      throw InputError(e.source(), std::move(errors));
     }
   } else {
     fitness.begin_iteration(0);
@@ -138,17 +220,59 @@ json GenerationalOptimizer::common_state(const char* algorithm) const {
           {"history", history}};
 }
 
-void GenerationalOptimizer::restore_common(const json& s, const char* algorithm) {
+void GenerationalOptimizer::restore_common(const json& s, const char* algorithm,
+                                           std::int64_t per_generation,
+                                           std::int64_t max_evaluations, bool bounded) {
+  namespace sc = state_check;
   if (!s.is_object() || s.value("algorithm", "") != algorithm)
     throw InputError("checkpoint", "",
                      std::string("not a state of the ") + algorithm + " optimiser");
-  t_ = s.at("t").get<int>();
-  evaluations_ = s.at("evaluations").get<std::int64_t>();
-  rng_.load(s.at("rng").get<std::string>());
-  best_ = s.at("best").get<Decision>();
-  best_fitness_ = json_number_or(s.at("best_fitness"), std::numeric_limits<double>::infinity());
-  history_.clear();
-  for (const json& h : s.at("history")) history_.push_back(history_row_from_json(h));
+  // Iteration t of this run's T, and the evaluations that t iterations made: per_generation
+  // each (the initial population included), or for an optimiser whose generations differ (or
+  // that stops on its own), at most the run's budget.
+  const auto t = static_cast<int>(sc::integer(sc::member(s, "", "t"), "/t", 0, iterations_));
+  const auto expected = [&](int i) {
+    return per_generation > 0 ? per_generation * (i + 1) : std::int64_t{-1};
+  };
+  const std::int64_t evaluations =
+      expected(t) >= 0 ? sc::integer(sc::member(s, "", "evaluations"), "/evaluations", expected(t),
+                                     expected(t))
+                       : sc::integer(sc::member(s, "", "evaluations"), "/evaluations", 0,
+                                     max_evaluations);
+  const json& rng = sc::member(s, "", "rng");
+  Rng engine(0);
+  if (!rng.is_string() || !engine.load(rng.get<std::string>()))
+    sc::fail("/rng", "is not the state of the random engine (std::mt19937_64's text)");
+  Decision best = sc::decision(sc::member(s, "", "best"), "/best", space_, bounded);
+  const double best_fitness = sc::fitness(sc::member(s, "", "best_fitness"), "/best_fitness");
+  // One row per iteration 0..t, each with the evaluations of its iteration, the last with the
+  // state's own best point.
+  const json& history =
+      sc::array(sc::member(s, "", "history"), "/history", static_cast<std::size_t>(t) + 1);
+  std::vector<HistoryRow> rows;
+  rows.reserve(history.size());
+  std::int64_t previous = 0;
+  for (int i = 0; i <= t; ++i) {
+    const std::int64_t lo = expected(i) >= 0 ? expected(i) : previous;
+    const std::int64_t hi = expected(i) >= 0 ? expected(i) : evaluations;
+    rows.push_back(history_row_from_json(history[static_cast<std::size_t>(i)],
+                                         "/history/" + std::to_string(i), i, lo, hi, space_,
+                                         bounded));
+    previous = rows.back().evaluations;
+  }
+  const HistoryRow& last = rows.back();
+  const std::string at = "/history/" + std::to_string(t);
+  if (last.evaluations != evaluations)
+    sc::fail(at + "/evaluations", "is not the state's evaluations (" +
+                                      std::to_string(evaluations) + ")");
+  if (last.best != best || !(last.best_fitness == best_fitness))
+    sc::fail(at + "/best", "is not the state's best point");
+  t_ = t;
+  rng_ = engine;
+  evaluations_ = evaluations;
+  best_ = std::move(best);
+  best_fitness_ = best_fitness;
+  history_ = std::move(rows);
 }
 
 }  // namespace ftc::tune

@@ -45,6 +45,7 @@
 #include <stdexcept>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/tune/optimizers/state_check.hpp"
 #include "optimizers/pagmo_plugin.hpp"
 
 namespace ftc::tune {
@@ -761,22 +762,33 @@ class PagmoOptimizer final : public GenerationalOptimizer {
   }
 
   void restore(const json& s) override {
-    restore_common(s, "pagmo");
-    const std::string name = s.at("name").get<std::string>();
+    namespace sc = state_check;
+    // pagmo's generations differ in size and a run may stop on its own, so the evaluations are
+    // only bounded here; the replay below ties them to the log. Some algorithms (CMA-ES without
+    // force_bounds) evaluate outside the bounds, so the points are not held to them.
+    restore_common(s, "pagmo", 0, entry_.evaluations_until(sizes_.population, sizes_.generations),
+                   false);
+    const json& name_field = sc::member(s, "", "name");
+    if (!name_field.is_string()) sc::fail("/name", "expected the name of a pagmo algorithm");
+    const std::string name = name_field.get<std::string>();
     if (name != entry_.info().name)
       throw InputError("checkpoint", "/name",
                        "is a state of pagmo's " + name + ", the job runs " + entry_.info().name);
-    finished_ = s.at("finished").get<bool>();
-    algorithm_seed_ = s.at("pagmo_seeds").at(0).get<unsigned>();
-    population_seed_ = s.at("pagmo_seeds").at(1).get<unsigned>();
+    finished_ = sc::boolean(sc::member(s, "", "finished"), "/finished");
+    const json& seeds = sc::array(sc::member(s, "", "pagmo_seeds"), "/pagmo_seeds", 2);
+    algorithm_seed_ =
+        static_cast<unsigned>(sc::integer(seeds[0], "/pagmo_seeds/0", 0, 0xffffffffLL));
+    population_seed_ =
+        static_cast<unsigned>(sc::integer(seeds[1], "/pagmo_seeds/1", 0, 0xffffffffLL));
+    const json& log = sc::array(sc::member(s, "", "fitness_log"), "/fitness_log",
+                                static_cast<std::size_t>(evaluations_));
     log_.clear();
-    for (const json& J : s.at("fitness_log"))
-      log_.push_back(json_io::json_number_or(J, std::numeric_limits<double>::infinity()));
+    for (std::size_t i = 0; i < log.size(); ++i)
+      log_.push_back(sc::fitness(log[i], "/fitness_log/" + std::to_string(i)));
     // Replaying the logged evaluations must lead to the checkpoint's own best point: this is
     // what tells a state of another job, seed or algorithm settings from this run's.
-    bool consistent =
-        static_cast<std::int64_t>(log_.size()) == evaluations_ && t_ >= 0 && t_ <= iterations_;
-    if (consistent) {
+    bool consistent = true;
+    {
       try {
         const Replay r = replay(nullptr, t_);
         consistent = r.evaluations == evaluations_ && r.best == best_ &&

@@ -69,7 +69,9 @@ void RandomSearch::generation(BatchFitness& fitness) {
 
 nlohmann::json RandomSearch::state() const { return common_state("random"); }
 
-void RandomSearch::restore(const nlohmann::json& s) { restore_common(s, "random"); }
+void RandomSearch::restore(const nlohmann::json& s) {
+  restore_common(s, "random", settings_.population, 0, true);
+}
 
 void RandomSearch::initialize(BatchFitness& fitness) {
   t_ = 0;

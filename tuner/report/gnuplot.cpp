@@ -8,9 +8,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
+#include <vector>
 
 #include "ftc/tune/io/files.hpp"
 #include "io/text.hpp"
@@ -131,9 +134,86 @@ std::string styles(int count) {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// The file a line `set output '...'` names (gp()'s quoting undone), or "" for any other line.
+std::string output_of(const std::string& line) {
+  static const std::string head = "set output '";
+  if (line.rfind(head, 0) != 0 || line.size() < head.size() + 1 || line.back() != '\'') return "";
+  std::string name;
+  for (std::size_t i = head.size(); i + 1 < line.size(); ++i) {
+    if (line[i] == '\'') {
+      if (line[i + 1] != '\'') return "";
+      ++i;
+    }
+    name += line[i];
+  }
+  return name;
+}
+
+}  // namespace
+
+bool figure_is_whole(const fs::path& file) {
+  const std::optional<std::string> text = read_file(file);
+  if (!text || text->empty()) return false;
+  const std::string& t = *text;
+  const std::string ext = file.extension().string();
+  if (ext == ".png") {
+    // The last chunk: length 0, "IEND" and its CRC.
+    static const std::string iend("\0\0\0\0IEND\xae\x42\x60\x82", 12);
+    return t.size() >= 8 + iend.size() && t.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0 &&
+           t.compare(t.size() - iend.size(), iend.size(), iend) == 0;
+  }
+  if (ext == ".svg") {
+    const std::size_t last = t.find_last_not_of(" \t\r\n");
+    return last != std::string::npos && last + 1 >= 6 && t.compare(last + 1 - 6, 6, "</svg>") == 0;
+  }
+  if (ext == ".pdf") return t.rfind("%%EOF") != std::string::npos && t.size() - t.rfind("%%EOF") < 64;
+  return true;
+}
+
 void run_gnuplot(const fs::path& dir_in, const std::string& script_name) {
   // Absolute: the file actions below run after the chdir.
   const fs::path dir = fs::absolute(dir_in);
+  const std::string pid = std::to_string(::getpid());
+  // gnuplot writes each figure under a temporary name beside it, and each takes its place only
+  // once gnuplot has succeeded and the figure is whole (gnuplot exits 0 on a full disk): a figure
+  // is the old one or the whole new one, never a truncated one. The script as written stays the
+  // one a user re-runs; gnuplot runs a copy with the temporary names.
+  const std::optional<std::string> script = read_file(dir / script_name);
+  if (!script) throw OutputError("cannot read the gnuplot script " + (dir / script_name).string());
+  std::vector<std::pair<fs::path, fs::path>> outputs;  // temporary, final
+  std::string rewritten;
+  std::size_t from = 0;
+  while (from < script->size()) {
+    std::size_t nl = script->find('\n', from);
+    if (nl == std::string::npos) nl = script->size();
+    const std::string line = script->substr(from, nl - from);
+    const std::string file = output_of(line);
+    if (file.empty()) {
+      rewritten += line;
+    } else {
+      const fs::path target = dir / file;
+      refuse_non_regular_target(target);  // before gnuplot's work
+      // Beside it, with its extension (which tells figure_is_whole the format).
+      const fs::path f(file);
+      const std::string temp =
+          (f.parent_path() / (f.stem().string() + ".partial-" + pid + f.extension().string()))
+              .string();
+      outputs.emplace_back(dir / temp, target);
+      rewritten += "set output " + plot::gp(temp);
+    }
+    rewritten += '\n';
+    from = nl + 1;
+  }
+  const std::string run_script = script_name + ".run-" + pid;
+  const auto discard = [&] {
+    std::error_code ec;
+    for (const auto& [temp, target] : outputs) fs::remove(temp, ec);
+    fs::remove(dir / run_script, ec);
+  };
+  write_file_atomic(dir / run_script, rewritten);
+
   const std::string log = (dir / (script_name + ".log")).string();
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);
@@ -141,21 +221,47 @@ void run_gnuplot(const fs::path& dir_in, const std::string& script_name) {
   posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
                                    0644);
   posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  std::string prog = "gnuplot", script = script_name;
-  char* argv[] = {prog.data(), script.data(), nullptr};
-  pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, "gnuplot", &fa, nullptr, argv, environ);
+  std::string prog = "gnuplot", script_arg = run_script;
+  char* argv[] = {prog.data(), script_arg.data(), nullptr};
+  pid_t child = 0;
+  const int rc = posix_spawnp(&child, "gnuplot", &fa, nullptr, argv, environ);
   posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0)
-    throw std::runtime_error(
-        std::string("cannot run gnuplot: ") + std::strerror(rc) +
-        " (it comes with the Debian package gnuplot-nox, which tools/bootstrap installs)");
+  if (rc != 0) {
+    discard();
+    throw OutputError(std::string("cannot run gnuplot: ") + std::strerror(rc) +
+                      " (it comes with the Debian package gnuplot-nox, which tools/bootstrap "
+                      "installs)");
+  }
   int status = 0;
-  ::waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw std::runtime_error("gnuplot failed on " + (dir / script_name).string() + ": " +
-                             read_file(log).value_or(""));
-  fs::remove(log);
+  while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    discard();
+    std::string why = read_file(log).value_or("");
+    while (!why.empty() && (why.back() == '\n' || why.back() == ' ')) why.pop_back();
+    throw OutputError("gnuplot failed on " + (dir / script_name).string() + " (" +
+                      (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
+                                         : std::string("killed by a signal")) +
+                      "), no figure written" + (why.empty() ? "" : ": " + why));
+  }
+  for (const auto& [temp, target] : outputs)
+    if (!figure_is_whole(temp)) {
+      discard();
+      throw OutputError("gnuplot left " + target.string() +
+                        " incomplete (a full disk?); no figure written");
+    }
+  try {
+    for (std::size_t i = 0; i < outputs.size(); ++i) {
+      commit_file(outputs[i].first, outputs[i].second);
+      outputs[i].first.clear();
+    }
+  } catch (...) {
+    discard();
+    throw;
+  }
+  std::error_code ec;
+  fs::remove(dir / run_script, ec);
+  fs::remove(log, ec);
 }
 
 }  // namespace ftc::tune

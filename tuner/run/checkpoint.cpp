@@ -25,7 +25,7 @@ std::string checkpoint_text(const std::string& job_sha256, std::uint64_t seed, i
 Checkpoint read_checkpoint(const std::filesystem::path& file, const std::string& job_sha256,
                            std::uint64_t seed) {
   const std::string source = file.string();
-  const std::optional<std::string> text = read_file(file);
+  const std::optional<std::string> text = read_file(file, json_io::kMaxCheckpointBytes);
   if (!text) throw InputError(source, "", "cannot read the checkpoint");
   const auto damaged = [&](const std::string& why) {
     return InputError(source, "",

@@ -121,11 +121,25 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
       return options.observer(in_values(h), o, fitness.trials());
     };
   const nlohmann::json* optimizer_state = options.resume;
+  std::string state_path;
   if (options.resume && options.resume->is_object() && options.resume->contains("optimizer")) {
     optimizer_state = &(*options.resume)["optimizer"];
-    fitness.resume_trials(trials_from_json(options.resume->value("trials", nlohmann::json())));
+    state_path = "/optimizer";
+    std::vector<Trial> trials = trials_from_json(options.resume->value("trials", nlohmann::json()));
+    // One trial per evaluation so far (an evaluation count beyond the budget is restore()'s to
+    // refuse, with its own path).
+    const nlohmann::json& ev = optimizer_state->is_object()
+                                   ? optimizer_state->value("evaluations", nlohmann::json())
+                                   : nlohmann::json();
+    if (ev.is_number_unsigned() && ev.get<std::uint64_t>() <= static_cast<std::uint64_t>(
+                                                                 r.algorithm->evaluations()) &&
+        ev.get<std::uint64_t>() != trials.size())
+      throw InputError("checkpoint", "/trials",
+                       "holds " + std::to_string(trials.size()) + " trials, the optimiser's state " +
+                           std::to_string(ev.get<std::uint64_t>()) + " evaluations");
+    fitness.resume_trials(std::move(trials));
   }
-  r.optimization = run_optimizer(optimizer, fitness, observer, optimizer_state);
+  r.optimization = run_optimizer(optimizer, fitness, observer, optimizer_state, state_path);
   r.simulations = fitness.simulations();
   r.trials = fitness.trials();
   r.tuned_controller = problem.controller_for(r.optimization.best);

@@ -9,12 +9,14 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <new>
 #include <nlohmann/json.hpp>
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/version.hpp"
 #include "service/http_server.hpp"
@@ -273,6 +275,17 @@ void Api::submit(const httplib::Request& req, httplib::Response& res) {
                           fmt_g(opt_.max_steps),
                       json{{{"steps", steps}, {"budget", opt_.max_steps}}});
 
+  // Memory by design: what the run would hold, estimated before it is queued.
+  if (const double need = estimated_run_bytes(job);
+      need > static_cast<double>(opt_.max_job_memory_bytes))
+    return send_error(res, 413, "job_too_large",
+                      "the job would need about " + bytes_text(need) + " of memory (" +
+                          std::to_string(job.scenario_count()) +
+                          " scenarios, ensemble members included, and their objectives for "
+                          "every evaluation), above the server's limit of " +
+                          bytes_text(static_cast<double>(opt_.max_job_memory_bytes)) +
+                          " per job: ask for fewer ensemble members or evaluations",
+                      json{{"bytes", need}, {"limit", opt_.max_job_memory_bytes}});
   if (const double bytes = estimated_result_bytes(job, opt_.trajectory_rows);
       bytes > static_cast<double>(opt_.max_stored_bytes))
     return send_error(res, 400, "job_too_large",
@@ -567,6 +580,11 @@ void Api::configure(httplib::Server& http) {
             return send_error(res, 507, "insufficient_storage", e.what());
           }
           what = e.what();
+        } catch (const std::bad_alloc&) {
+          // An allocation the machine could not give: a clean answer, never an abort.
+          spdlog::error("request failed: out of memory");
+          return send_error(res, 500, "out_of_memory",
+                            "the server ran out of memory serving this request");
         } catch (const std::exception& e) {
           what = e.what();
         } catch (...) {

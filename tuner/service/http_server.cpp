@@ -221,8 +221,14 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
       if (!stream.wait_for_request(limits_.idle_timeout)) break;
       stream.start_request();
       bool closed = false;
-      ret = process_request(stream, left == 1, closed,
-                            [&stream](httplib::Request&) { stream.start_body(); });
+      ret = process_request(stream, left == 1, closed, [&stream](httplib::Request& req) {
+        stream.start_body();
+        // RFC 9112 §6.3: a request with neither Content-Length nor Transfer-Encoding has no
+        // body. cpp-httplib would read one until the client closes (and answer a POST /cancel
+        // or a PUT without a body with 400 once the deadline passed): say so explicitly.
+        if (!req.has_header("Content-Length") && !req.has_header("Transfer-Encoding"))
+          req.headers.emplace("Content-Length", "0");
+      });
       if (stream.timed_out()) {
         // The parser gives up without an answer when the request line itself is late.
         if (!stream.wrote())

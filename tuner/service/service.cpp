@@ -90,6 +90,8 @@ std::vector<FieldError> ServiceOptions::validate() const {
   if (max_body_bytes < 1024) errs.push_back({"--max-body-kib", "must be at least 1 KiB"});
   if (max_attempts < 1) errs.push_back({"--max-attempts", "must be at least 1"});
   if (!(max_steps > 0)) errs.push_back({"--max-steps", "must be > 0"});
+  if (max_job_memory_bytes < (std::uint64_t{64} << 20))
+    errs.push_back({"--max-job-mib", "must be at least 64"});
   // SQLite stores no value above 1e9 bytes; every result file of a job is below its limit.
   if (max_stored_bytes < (std::uint64_t{1} << 20) || max_stored_bytes > (std::uint64_t{900} << 20))
     errs.push_back({"--max-stored-mib", "must be in 1..900"});

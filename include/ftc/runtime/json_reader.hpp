@@ -72,8 +72,19 @@ std::optional<std::size_t> invalid_utf8(std::string_view text);
 // `text` with every byte that is not well-formed UTF-8 written as \xHH: safe to quote.
 std::string printable(std::string_view text);
 
+// The most bytes an input file (a job, a scenarios file, gains, a checkpoint) may hold.
+inline constexpr std::uint64_t kMaxInputFileBytes = std::uint64_t{256} << 20;
+// A checkpoint holds an objective per scenario for every trial, so a run the memory budget
+// accepts can write one far larger than a job: it is read with this limit instead.
+inline constexpr std::uint64_t kMaxCheckpointBytes = std::uint64_t{16} << 30;
+
 // The whole file, or nullopt when it cannot be opened (callers word the error for their input).
-std::optional<std::string> read_file(const std::filesystem::path& path);
+// Throws InputError when it is not a regular file (a directory, a FIFO, which is not waited
+// for, a device such as /dev/zero, through a link or not) or holds more than
+// max_bytes (kMaxInputFileBytes unless the caller reads a larger kind of file, such as a
+// checkpoint, whose size the run itself chose).
+std::optional<std::string> read_file(const std::filesystem::path& path,
+                                     std::uint64_t max_bytes = kMaxInputFileBytes);
 
 // Numbers in output JSON: non-finite values (a diverged run's +inf) are written as null, and
 // read back as `if_null`.

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,8 +16,21 @@ namespace ftc::tune {
 
 using json_io::read_file;
 
-// Creates parent directories as needed. The file and then its directory are synced, so after
-// a crash the name holds the old or the whole new content. Throws std::filesystem::
+// An output that could not be written whole: a target that is not a regular file, a figure
+// gnuplot failed on or left incomplete. The CLI reports it on one line and exits 2.
+class OutputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Throws OutputError when `path` exists and is not a regular file (a symbolic link, a device
+// node, a FIFO, a socket, a directory): an output replaces only a file of its own kind, never
+// /dev/full or whatever a link points to.
+void refuse_non_regular_target(const std::filesystem::path& path);
+
+// Creates parent directories as needed. The content goes to a temporary file in the same
+// directory; the file and then its directory are synced, so after a crash the name holds the old
+// or the whole new content. A target that is not a regular file is refused (OutputError). Throws std::filesystem::
 // filesystem_error naming the step, the file and the errno (e.g. "No space left on device").
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 // The same for content produced piece by piece (a large file never held in memory whole):
@@ -24,6 +38,12 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
 using ChunkSink = std::function<void(std::string_view)>;
 void write_file_atomic(const std::filesystem::path& path,
                        const std::function<void(const ChunkSink&)>& produce);
+
+// Puts `written` (a complete file another program wrote, on the same file system) in place of
+// `target` as write_file_atomic would: refuses a target that is not a regular file, syncs the
+// file, renames it and syncs the directory; on failure `written` is removed and the target is
+// as it was. The sync and the rename count as I/O steps for inject_io_failure.
+void commit_file(const std::filesystem::path& written, const std::filesystem::path& target);
 
 // Syncs a directory, so that the entries renamed into it survive a crash.
 void sync_directory(const std::filesystem::path& dir);

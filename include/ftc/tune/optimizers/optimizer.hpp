@@ -221,9 +221,12 @@ using IterationObserver = std::function<bool(const HistoryRow&, const Optimizer&
 
 // Runs to the last iteration or until the observer says stop. With `resume` (a state() saved
 // earlier) it continues from there instead of initialising.
+// A state that restore() refuses is an InputError with source "checkpoint" and the field's
+// path, `state_path` (where the state sits in its document) in front.
 OptimizationResult run_optimizer(Optimizer& optimizer, BatchFitness& fitness,
                                  const IterationObserver& observer = {},
-                                 const nlohmann::json* resume = nullptr);
+                                 const nlohmann::json* resume = nullptr,
+                                 const std::string& state_path = "");
 
 // What the population optimisers here have in common: the search space, random engine,
 // iteration and evaluation counters, the best point and the history, and the checkpoint of all
@@ -245,8 +248,13 @@ class GenerationalOptimizer : public Optimizer {
   void record(std::vector<std::pair<std::string, double>> extras = {});
   // The common part of a checkpoint, tagged with the algorithm's name, and its inverse (which
   // refuses another algorithm's checkpoint).
+  // restore_common checks every field (state_check.hpp): t within 0..T, the evaluations
+  // `per_generation` × (t + 1) (when 0: at most `max_evaluations`), a sound engine state, one
+  // history row per iteration, every point of the space's dimension (inside its bounds when
+  // `bounded`). The state changes only when all of it is sound.
   nlohmann::json common_state(const char* algorithm) const;
-  void restore_common(const nlohmann::json& state, const char* algorithm);
+  void restore_common(const nlohmann::json& state, const char* algorithm,
+                      std::int64_t per_generation, std::int64_t max_evaluations, bool bounded);
 
   int iterations_;
   SearchSpace space_;

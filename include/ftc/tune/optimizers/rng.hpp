@@ -22,9 +22,16 @@ class Rng {
     o << gen_;
     return o.str();
   }
-  void load(const std::string& state) {
+  // False (and the engine unchanged) unless `state` is exactly one engine state, as save() writes.
+  [[nodiscard]] bool load(const std::string& state) {
     std::istringstream in(state);
-    in >> gen_;
+    std::mt19937_64 g;
+    in >> g;
+    if (in.fail()) return false;
+    in >> std::ws;
+    if (!in.eof()) return false;
+    gen_ = g;
+    return true;
   }
 
  private:

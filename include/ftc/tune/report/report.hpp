@@ -32,7 +32,12 @@ struct ReportResult {
 // a complete `ftctune run` output; std::runtime_error when gnuplot is missing or fails.
 ReportResult render_report(const std::filesystem::path& run_dir, const ReportOptions& options = {});
 
-// Runs `gnuplot script` in `dir`; throws std::runtime_error with gnuplot's message on failure.
+// Runs `gnuplot script` in `dir`. Every figure the script names (`set output '...'` lines) is
+// written under a temporary name and moved into place (commit_file) only when gnuplot succeeded
+// and it is whole: a figure is the earlier one or the whole new one. Throws OutputError with
+// gnuplot's message when it fails or leaves a figure incomplete.
 void run_gnuplot(const std::filesystem::path& dir, const std::string& script_name);
+// True when `file` is a whole PNG (ends with its IEND chunk), SVG (ends with </svg>) or PDF.
+bool figure_is_whole(const std::filesystem::path& file);
 
 }  // namespace ftc::tune

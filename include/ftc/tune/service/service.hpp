@@ -35,6 +35,9 @@ struct ServiceOptions {
   int max_attempts = 5;    // starts of a job before a crash recovery gives it up
   // What one job may store: its result files, and its checkpointed trials while it runs.
   std::uint64_t max_stored_bytes = std::uint64_t{256} << 20;
+  // What one job may hold in memory while it runs (run/memory_budget.hpp's estimate): a job
+  // above it is refused when submitted (413).
+  std::uint64_t max_job_memory_bytes = std::uint64_t{1} << 30;
   // Rows per stored comparison trajectory: a scenario longer than this many 10 ms rows is
   // recorded at a coarser interval.
   std::int64_t trajectory_rows = 20000;
