@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -15,6 +16,8 @@
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/version.hpp"
 #include "service/http_server.hpp"
@@ -54,6 +57,8 @@ json job_links(const std::string& id) {
           {"trials", base + "/trials"},
           {"comparison", base + "/comparison"},
           {"report", base + "/report"},
+          {"files", base + "/files"},
+          {"events", base + "/events"},
           {"cancel", base + "/cancel"}};
 }
 
@@ -75,7 +80,42 @@ json job_json_view(const JobRecord& r) {
           {"cancel_requested", r.cancel_requested},
           {"attempts", r.attempts},
           {"error", nullable(r.error)},
+          // Results so far (gains, history, trials) of a job that ran an iteration but did not
+          // finish it all: running, or cancelled.
+          {"partial", r.iteration >= 0 && (r.status == JobStatus::running ||
+                                           r.status == JobStatus::cancelled)},
           {"links", job_links(r.id)}};
+}
+
+// A stored file's media type, from its name.
+const char* media_type(const std::string& name) {
+  const auto ends = [&](const char* ext) {
+    const std::size_t n = std::strlen(ext);
+    return name.size() >= n && name.compare(name.size() - n, n, ext) == 0;
+  };
+  if (ends(".json")) return "application/json";
+  if (ends(".csv")) return "text/csv";
+  if (ends(".md")) return "text/markdown; charset=utf-8";
+  if (ends(".html")) return "text/html; charset=utf-8";
+  return "application/octet-stream";
+}
+
+json history_rows(const TuningOutcome& r) {
+  json rows = json::array();
+  std::vector<std::string> names;
+  for (const ParameterBounds& b : r.job.tuning->parameters) names.push_back(b.name);
+  for (const HistoryRow& h : r.optimization.history) {
+    json best = json::object();
+    for (std::size_t i = 0; i < names.size() && i < h.best.size(); ++i)
+      best[names[i]] = json_io::json_number(h.best[i]);
+    json row = {{"iteration", h.iteration},
+                {"best_fitness", json_io::json_number(h.best_fitness)},
+                {"best", best},
+                {"evaluations", h.evaluations}};
+    for (const auto& [name, value] : h.extras) row[name] = json_io::json_number(value);
+    rows.push_back(std::move(row));
+  }
+  return rows;
 }
 
 std::string fmt_g(double v) {
@@ -198,6 +238,14 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
                         {"unstored_jobs", h.unstored},
                         {"unrecorded_cancels", h.cancels}}}});
   }
+  if (p.size() == 2 && p[0] == "v1" && p[1] == "events") {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    return events(req, res);
+  }
+  if (p.size() == 2 && p[0] == "v1" && p[1] == "validate") {
+    if (m != "POST") return method_not_allowed(res, "POST");
+    return validate(req, res);
+  }
   if (p.size() < 2 || p[0] != "v1" || p[1] != "jobs")
     return send_error(res, 404, "not_found", "no such resource: " + req.path);
   if (p.size() == 2) {
@@ -220,6 +268,7 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
                                 "it has stopped");
         case JobStore::Removal::removed:
           spdlog::info("job {} deleted", id);
+          changed(id);
           return send_json(res, 200, {{"id", id}, {"deleted", true}});
       }
     }
@@ -232,6 +281,12 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
     if (m != "POST") return method_not_allowed(res, "POST");
     return cancel(id, res);
   }
+  if (p.size() >= 4 && p[3] == "files") {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    std::string name;
+    for (std::size_t i = 4; i < p.size(); ++i) name += (name.empty() ? "" : "/") + p[i];
+    return files(id, name, res);
+  }
   if (p.size() == 4 && (p[3] == "gains" || p[3] == "history" || p[3] == "trials" ||
                         p[3] == "comparison" || p[3] == "report")) {
     if (m != "GET") return method_not_allowed(res, "GET");
@@ -240,7 +295,7 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   send_error(res, 404, "not_found", "no such resource: " + req.path);
 }
 
-void Api::submit(const httplib::Request& req, httplib::Response& res) {
+std::optional<Job> Api::check_job(const httplib::Request& req, httplib::Response& res) {
   const auto bad_request = [&](const char* code, const InputError& e) {
     json details = json::array();
     for (const FieldError& fe : e.errors())
@@ -251,37 +306,68 @@ void Api::submit(const httplib::Request& req, httplib::Response& res) {
   try {
     body = json_io::parse_json_text(req.body, "request body");
   } catch (const InputError& e) {
-    return bad_request("invalid_json", e);
+    bad_request("invalid_json", e);
+    return std::nullopt;
   }
   Job job;
   try {
     job = parse_job(body, "request body");
   } catch (const InputError& e) {
-    return bad_request("invalid_job", e);
+    bad_request("invalid_job", e);
+    return std::nullopt;
   }
-  if (!job.tuning)
-    return send_error(res, 400, "invalid_job", "request body: /tuning: is required to tune",
-                      json::array({{{"path", "/tuning"}, {"message", "is required to tune"}}}));
+  if (!job.tuning) {
+    send_error(res, 400, "invalid_job", "request body: /tuning: is required to tune",
+               json::array({{{"path", "/tuning"}, {"message", "is required to tune"}}}));
+    return std::nullopt;
+  }
   const double steps = static_cast<double>(job.tuning->algorithm->evaluations()) *
                        static_cast<double>(job.steps_per_evaluation());
-  if (steps > opt_.max_steps)
-    return send_error(res, 400, "job_too_large",
-                      "the job needs " + fmt_g(steps) +
-                          " simulated steps (evaluations x steps per "
-                          "evaluation), " +
-                          fmt_g(steps / opt_.max_steps) + " times the server's budget of " +
-                          fmt_g(opt_.max_steps),
-                      json{{{"steps", steps}, {"budget", opt_.max_steps}}});
-
+  if (steps > opt_.max_steps) {
+    send_error(res, 400, "job_too_large",
+               "the job needs " + fmt_g(steps) +
+                   " simulated steps (evaluations x steps per "
+                   "evaluation), " +
+                   fmt_g(steps / opt_.max_steps) + " times the server's budget of " +
+                   fmt_g(opt_.max_steps),
+               json{{{"steps", steps}, {"budget", opt_.max_steps}}});
+    return std::nullopt;
+  }
   if (const double bytes = estimated_result_bytes(job, opt_.trajectory_rows);
-      bytes > static_cast<double>(opt_.max_stored_bytes))
-    return send_error(res, 400, "job_too_large",
-                      "the job's results would take at least " + megabytes(bytes) +
-                          " (its comparison trajectories and trials), above the server's limit "
-                          "of " +
-                          megabytes(static_cast<double>(opt_.max_stored_bytes)) +
-                          " per job: ask for fewer evaluations, scenarios or compared controllers",
-                      json{{"bytes", bytes}, {"limit", opt_.max_stored_bytes}});
+      bytes > static_cast<double>(opt_.max_stored_bytes)) {
+    send_error(res, 400, "job_too_large",
+               "the job's results would take at least " + megabytes(bytes) +
+                   " (its comparison trajectories and trials), above the server's limit "
+                   "of " +
+                   megabytes(static_cast<double>(opt_.max_stored_bytes)) +
+                   " per job: ask for fewer evaluations, scenarios or compared controllers",
+               json{{"bytes", bytes}, {"limit", opt_.max_stored_bytes}});
+    return std::nullopt;
+  }
+  return job;
+}
+
+// The checks of a submission, without submitting: 200 with what the job would be, or the
+// same 400 a submission gets.
+void Api::validate(const httplib::Request& req, httplib::Response& res) {
+  const std::optional<Job> job = check_job(req, res);
+  if (!job) return;
+  json parameters = json::array();
+  for (const ParameterBounds& b : job->tuning->parameters) parameters.push_back(b.name);
+  send_json(res, 200,
+            {{"valid", true},
+             {"name", job->name},
+             {"parameters", parameters},
+             {"iterations", job->tuning->algorithm->iterations()},
+             {"total_evaluations", job->tuning->algorithm->evaluations()},
+             {"steps", static_cast<double>(job->tuning->algorithm->evaluations()) *
+                           static_cast<double>(job->steps_per_evaluation())}});
+}
+
+void Api::submit(const httplib::Request& req, httplib::Response& res) {
+  const std::optional<Job> checked = check_job(req, res);
+  if (!checked) return;
+  const Job& job = *checked;
   // A store that owes finished jobs their results takes no new ones until it has written them.
   if (const StoreHealth h = runner_.health(); h.owes())
     return insufficient_storage(res, h.error.value_or("it has refused writes"));
@@ -323,6 +409,7 @@ void Api::submit(const httplib::Request& req, httplib::Response& res) {
         "Idempotency-Key was already used for job " + record.id + " with a different job");
   if (created) {
     spdlog::info("job {} ({}) queued", record.id, record.name);
+    changed(record.id);
     runner_.notify();
   }
   res.set_header("Location", "/v1/jobs/" + record.id);
@@ -381,17 +468,154 @@ void Api::cancel(const std::string& id, httplib::Response& res) {
     after = before;
   }
   spdlog::info("job {}: cancel requested ({})", id, to_string(after->status));
+  changed(id);
   send_json(res, 202, view(*after));
+}
+
+void Api::changed(const std::string& id) noexcept {
+  try {
+    if (const std::optional<JobRecord> r = store_.get(id))
+      hub_.publish("job", id, encode(view(*r)));
+    else
+      hub_.publish("deleted", id, encode(json{{"id", id}}));
+  } catch (const std::exception& e) {
+    spdlog::warn("job {}: no live update sent: {}", id, e.what());
+  }
+}
+
+// Server-sent events: `job` with a job's view each time it changes (queued, started, each
+// iteration, finished, cancelled), `deleted` when it is gone; a comment every 15 s keeps the
+// connection alive. ?job=ID: that job's only. Each stream holds one of the server's connection
+// threads, so at most --max-event-streams are open at once; more are answered 503.
+void Api::events(const httplib::Request& req, httplib::Response& res) {
+  std::optional<EventHub::Stream> stream = hub_.open();
+  if (!stream) {
+    res.set_header("Retry-After", "10");
+    return send_error(res, 503, "too_many_streams",
+                      "the server has " + std::to_string(hub_.max_streams()) +
+                          " event streams open, the most it serves (--max-event-streams, at most "
+                          "half of --max-connections): close a page, or reload it later",
+                      json{{"limit", hub_.max_streams()}});
+  }
+  struct State {
+    EventHub::Stream stream;
+    std::string job;
+    bool started = false;
+  };
+  auto state = std::make_shared<State>(
+      State{std::move(*stream), req.has_param("job") ? req.get_param_value("job") : ""});
+  res.set_header("Cache-Control", "no-store");
+  res.set_chunked_content_provider(
+      "text/event-stream", [state](std::size_t, httplib::DataSink& sink) {
+        std::string out;
+        if (!state->started) {
+          state->started = true;
+          out = "retry: 3000\n: ftctune events\n\n";
+        } else {
+          const std::optional<std::vector<Event>> events = state->stream.next(15000);
+          if (!events) {
+            sink.done();
+            return true;
+          }
+          for (const Event& e : *events)
+            if (state->job.empty() || e.job_id == state->job) out += e.text;
+          if (out.empty()) out = ": keep-alive\n\n";
+        }
+        return sink.write(out.data(), out.size());
+      });
+}
+
+// The partial results of a running job, from its last checkpoint: history and trials as they
+// stand, and gains.json for its best so far (compared as a finished run's best is; computed on
+// request, kept until the next iteration).
+void Api::running_result(const httplib::Request& req, httplib::Response& res,
+                         const std::string& id, const std::string& what) {
+  const std::string format = req.has_param("format") ? req.get_param_value("format") : "";
+  if (what == "comparison" || what == "report")
+    return send_error(res, 409, "not_ready",
+                      "job " + id + " is running; its " + what +
+                          " exists once it has finished (its gains, history and trials so far "
+                          "are served now)");
+  if (what == "history" && !format.empty() && format != "csv" && format != "json")
+    return send_error(res, 400, "invalid_parameter", "format must be csv or json");
+  const std::optional<JobStore::Checkpoint> c = store_.checkpoint_with_trials(id);
+  if (!c)
+    return send_error(res, 409, "not_ready",
+                      "job " + id + " has not finished its first iteration yet");
+  if (what == "gains") {
+    std::lock_guard<std::mutex> lock(partial_mutex_);
+    if (partial_gains_.id != id || partial_gains_.iteration != c->iteration) {
+      TuningOutcome r = outcome_of(id, *c);
+      const std::unique_ptr<BatchEvaluator> evaluator =
+          opt_.evaluator ? opt_.evaluator() : std::make_unique<TbbEvaluator>(opt_.threads);
+      compare_best(r, *evaluator, opt_.trajectory_rows);
+      partial_gains_ = {id, c->iteration, gains_document(r).dump(2) + "\n"};
+    }
+    res.set_header("Ftctune-Partial", "true");
+    return res.set_content(partial_gains_.text, "application/json");
+  }
+  const TuningOutcome r = outcome_of(id, *c);
+  res.set_header("Ftctune-Partial", "true");
+  if (what == "trials") return res.set_content(trials_csv(r), "text/csv");
+  if (format == "json") return send_json(res, 200, history_rows(r));
+  res.set_content(history_csv(r), "text/csv");
+}
+
+TuningOutcome Api::outcome_of(const std::string& id, const JobStore::Checkpoint& c) {
+  const Job job = parse_job_text(store_.job_json(id), "job " + id);
+  json trials = json::array();
+  for (const std::string& rows : c.trials)
+    for (json& t : json::parse(rows)) trials.push_back(std::move(t));
+  return checkpoint_outcome(
+      job, json{{"optimizer", json::parse(c.optimizer)}, {"trials", std::move(trials)}});
+}
+
+// Every stored file of a finished job with results (a listing without `name`), by name: the
+// folder `ftctune run` writes, and report.html once drawn.
+void Api::files(const std::string& id, const std::string& name, httplib::Response& res) {
+  const auto job = store_.get(id);
+  if (!job) return send_error(res, 404, "not_found", "no job " + id);
+  const std::map<std::string, std::uint64_t> sizes = store_.artifact_sizes(id);
+  if (sizes.empty())
+    return send_error(res, 409, "not_ready",
+                      "job " + id + " is " + to_string(job->status) +
+                          "; its files exist once it has succeeded, or been cancelled after an "
+                          "iteration");
+  const bool partial = job->status == JobStatus::cancelled;
+  if (partial) res.set_header("Ftctune-Partial", "true");
+  if (name.empty()) {
+    json list = json::array();
+    for (const auto& [n, bytes] : sizes) list.push_back({{"name", n}, {"bytes", bytes}});
+    return send_json(res, 200, {{"id", id}, {"partial", partial}, {"files", list}});
+  }
+  const std::optional<std::string> content = store_.artifact(id, name);
+  if (!content) return send_error(res, 404, "not_found", "job " + id + " has no file " + name);
+  res.set_content(*content, media_type(name));
 }
 
 void Api::result(const httplib::Request& req, httplib::Response& res, const std::string& id,
                  const std::string& what) {
   const auto job = store_.get(id);
   if (!job) return send_error(res, 404, "not_found", "no job " + id);
-  if (job->status != JobStatus::succeeded)
+  if (job->status == JobStatus::running) {
+    if (runner_.unstored(id))
+      return send_error(res, 409, "not_ready",
+                        "job " + id +
+                            " has finished; its results wait in the server's memory until the "
+                            "store can write them");
+    return running_result(req, res, id, what);
+  }
+  // A cancelled job that ran an iteration keeps its results so far, marked partial.
+  const bool partial = job->status == JobStatus::cancelled && store_.artifact_sizes(id).count("gains.json");
+  if (job->status != JobStatus::succeeded && !partial)
     return send_error(res, 409, "not_ready",
                       "job " + id + " is " + to_string(job->status) +
-                          "; its results exist once it has succeeded");
+                          (job->status == JobStatus::cancelled
+                               ? "; it was cancelled before it finished an iteration, so it has no "
+                                 "results"
+                               : "; its results exist once it has succeeded (a running job's "
+                                 "gains, history and trials so far are served)"));
+  if (partial) res.set_header("Ftctune-Partial", "true");
   const std::string format = req.has_param("format") ? req.get_param_value("format") : "";
   if (what == "gains") {
     res.set_content(store_.artifact(id, "gains.json").value_or(""), "application/json");
@@ -418,7 +642,7 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
   }
 }
 
-// report.html of a succeeded job: drawn from its stored files on first request, then kept.
+// report.html of a succeeded (or cancelled, partial) job: drawn from its stored files on first request, then kept.
 std::string Api::report(const std::string& id) {
   if (auto cached = store_.artifact(id, "report.html")) return *cached;
   namespace fs = std::filesystem;

@@ -463,6 +463,22 @@ std::vector<std::string> JobStore::checkpoint_trials(const std::string& id) {
   return out;
 }
 
+std::optional<JobStore::Checkpoint> JobStore::checkpoint_with_trials(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Checkpoint c;
+  {
+    Statement q(db_, "SELECT checkpoint, iteration FROM jobs WHERE id = ?");
+    q.bind(1, id);
+    if (!q.step() || q.is_null(0)) return std::nullopt;
+    c.optimizer = q.text(0);
+    c.iteration = static_cast<int>(q.integer(1));
+  }
+  Statement t(db_, "SELECT trials FROM checkpoint_trials WHERE job_id = ? ORDER BY iteration");
+  t.bind(1, id);
+  while (t.step()) c.trials.push_back(t.text(0));
+  return c;
+}
+
 std::optional<std::string> JobStore::checkpoint(const std::string& id) {
   std::lock_guard<std::mutex> lock(mutex_);
   Statement q(db_, "SELECT checkpoint FROM jobs WHERE id = ?");
@@ -485,8 +501,12 @@ void JobStore::finish_failed(const std::string& id, const std::string& error,
   transaction([&] { set_finished(id, JobStatus::failed, error, finished_at); });
 }
 
-void JobStore::finish_cancelled(const std::string& id, const std::string& finished_at) {
-  transaction([&] { set_finished(id, JobStatus::cancelled, "", finished_at); });
+void JobStore::finish_cancelled(const std::string& id, const std::string& finished_at,
+                                const std::map<std::string, std::string>& artifacts) {
+  transaction([&] {
+    for (const auto& [name, content] : artifacts) insert_artifact(id, name, content);
+    set_finished(id, JobStatus::cancelled, "", finished_at);
+  });
 }
 
 void JobStore::requeue(const std::string& id) {
@@ -590,6 +610,15 @@ std::map<std::string, std::string> JobStore::artifacts(const std::string& id) {
   q.bind(1, id);
   std::map<std::string, std::string> out;
   while (q.step()) out[q.text(0)] = q.blob(1);
+  return out;
+}
+
+std::map<std::string, std::uint64_t> JobStore::artifact_sizes(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "SELECT name, length(content) FROM artifacts WHERE job_id = ?");
+  q.bind(1, id);
+  std::map<std::string, std::uint64_t> out;
+  while (q.step()) out[q.text(0)] = static_cast<std::uint64_t>(q.integer(1));
   return out;
 }
 
