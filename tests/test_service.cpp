@@ -895,7 +895,7 @@ TEST(Service, EventsStreamEachChangeToEveryOpenPage) {
   // A job runs meanwhile, so that the next one waits in the queue until its stream is open.
   const std::string blocker = s.submit(long_job("blocker"))["id"];
   const std::string id = s.submit(short_table1_job())["id"];
-  auto mine = std::make_unique<EventClient>(s.port, "/v1/events?job=" + id);
+  auto mine = std::make_unique<EventClient>(s.port, "/v1/jobs/" + id + "/events");
   ASSERT_TRUE(mine->wait_for(
       [](EventClient& c) { return c.received().find(": ftctune events") != std::string::npos; },
       10s));
@@ -949,6 +949,51 @@ TEST(Service, EventsStreamEachChangeToEveryOpenPage) {
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
   for (auto& p : pages)
     EXPECT_TRUE(p->wait_for([](EventClient& c) { return c.ended.load(); }, 10s));
+}
+
+// The dashboard's files are served to anyone (the page asks for the token; they hold no data)
+// with a policy that allows only their own scripts; the API needs the token as before, and every
+// answer forbids sniffing and gives no CORS header.
+TEST(Service, DashboardIsServedWithAStrictPolicy) {
+  tune::ServiceOptions o;
+  o.token = "secret-token";
+  Service s(o);
+  auto page = s.client->Get("/");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_EQ(page->get_header_value("Content-Type"), "text/html; charset=utf-8");
+  EXPECT_NE(page->body.find("<script src=\"/ui/app.js\""), std::string::npos);
+  EXPECT_EQ(page->body.find("<script>"), std::string::npos);  // no inline script
+  const std::string policy = page->get_header_value("Content-Security-Policy");
+  EXPECT_NE(policy.find("script-src 'self'"), std::string::npos) << policy;
+  EXPECT_EQ(policy.find("unsafe-inline"), std::string::npos) << policy;
+  EXPECT_EQ(page->get_header_value("X-Content-Type-Options"), "nosniff");
+  for (const char* asset : {"/ui/app.js", "/ui/style.css", "/ui/chart.min.js"}) {
+    auto r = s.client->Get(asset);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << asset;
+    EXPECT_GT(r->body.size(), 1000u) << asset;
+  }
+  auto api = s.client->Get("/v1/jobs");
+  EXPECT_EQ(api->status, 401);
+  EXPECT_EQ(api->get_header_value("X-Content-Type-Options"), "nosniff");
+  EXPECT_FALSE(api->has_header("Access-Control-Allow-Origin"));
+  EXPECT_EQ(s.client->Get("/v1/events")->status, 401);
+  EXPECT_EQ(s.client->Get("/ui/other.js")->status, 401);  // only the dashboard's own files
+
+  // The list filters by name, for a page of a large store.
+  s.client->set_bearer_token_auth("secret-token");
+  s.wait_done(s.submit(tiny_job("alpha"))["id"]);
+  s.wait_done(s.submit(tiny_job("beta"))["id"]);
+  const json found = s.get("/v1/jobs?name=alp");
+  EXPECT_EQ(found["total"], 1);
+  ASSERT_EQ(found["jobs"].size(), 1u);
+  EXPECT_EQ(found["jobs"][0]["name"], "alpha");
+  const json both = s.get("/v1/jobs?name=a&status=succeeded&limit=1");
+  EXPECT_EQ(both["total"], 2);
+  ASSERT_EQ(both["jobs"].size(), 1u);
+  EXPECT_EQ(both["jobs"][0]["name"], "beta");  // newest first
+  EXPECT_EQ(s.get("/v1/jobs?name=a&status=queued")["total"], 0);
 }
 
 // POST /v1/validate checks a job as a submission would, and submits nothing.

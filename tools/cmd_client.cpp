@@ -491,7 +491,9 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
           const json j = json::parse(body);
           std::printf("%-16s  %-20s  %-10s  %-19s  %9s  %s\n", "ID", "NAME", "STATE",
                       "SUBMITTED (UTC)", "DURATION", "PROGRESS");
-          const double now = static_cast<double>(std::time(nullptr));
+          const double now =
+              std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+                  .count();
           for (const json& job : j["jobs"]) {
             const double start = iso_seconds(job["started_at"]);
             const double end = job["finished_at"].is_null() ? now : iso_seconds(job["finished_at"]);

@@ -21,6 +21,7 @@
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/version.hpp"
 #include "service/http_server.hpp"
+#include "service/web_assets.hpp"
 
 namespace ftc::tune::service_detail {
 
@@ -97,6 +98,8 @@ const char* media_type(const std::string& name) {
   if (ends(".csv")) return "text/csv";
   if (ends(".md")) return "text/markdown; charset=utf-8";
   if (ends(".html")) return "text/html; charset=utf-8";
+  if (ends(".png")) return "image/png";
+  if (ends(".svg")) return "image/svg+xml";
   return "application/octet-stream";
 }
 
@@ -178,6 +181,37 @@ std::string seconds_text(double s) {
   return buf;
 }
 
+// The dashboard's file at `path`, if it is one: served to anyone (it holds no data; the page asks
+// for the token), with a policy that lets it run only its own scripts.
+const WebAsset* web_asset(const std::string& path) {
+  for (const WebAsset& a : web_assets())
+    if (path == a.path) return &a;
+  return nullptr;
+}
+
+bool serve_asset(const httplib::Request& req, httplib::Response& res) {
+  if (req.method != "GET" && req.method != "HEAD") return false;
+  const WebAsset* a = web_asset(req.path);
+  if (!a) return false;
+  std::string type = a->type;
+  if (type.rfind("text/", 0) == 0) type += "; charset=utf-8";
+  res.status = 200;
+  res.set_content(reinterpret_cast<const char*>(a->data), a->size, type.c_str());
+  res.set_header("Cache-Control", "no-cache");
+  return true;
+}
+
+// What a page may do: its own scripts, styles and requests only; nothing inline, no frames, no
+// other origin. The dashboard's files get it, and every other answer a stricter one.
+constexpr const char* kPagePolicy =
+    "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; "
+    "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'";
+// report.html is one self-contained page: its own style and inline images, no script at all.
+constexpr const char* kReportPolicy =
+    "default-src 'none'; style-src 'unsafe-inline'; img-src data:; base-uri 'none'; "
+    "form-action 'none'; frame-ancestors 'none'";
+constexpr const char* kDataPolicy = "default-src 'none'; frame-ancestors 'none'";
+
 }  // namespace
 
 json Api::view(const JobRecord& r) {
@@ -221,6 +255,7 @@ void Api::method_not_allowed(httplib::Response& res, const char* allow) {
 }
 
 void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
+  if (serve_asset(req, res)) return;
   const std::vector<std::string> p = split_path(req.path);
   const std::string& m = req.method;
   if (p.size() == 1 && p[0] == "healthz") {
@@ -240,7 +275,7 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   }
   if (p.size() == 2 && p[0] == "v1" && p[1] == "events") {
     if (m != "GET") return method_not_allowed(res, "GET");
-    return events(req, res);
+    return events(req.has_param("job") ? req.get_param_value("job") : "", res);
   }
   if (p.size() == 2 && p[0] == "v1" && p[1] == "validate") {
     if (m != "POST") return method_not_allowed(res, "POST");
@@ -276,6 +311,11 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
     const auto job = store_.get(id);
     if (!job) return send_error(res, 404, "not_found", "no job " + id);
     return send_json(res, 200, view(*job));
+  }
+  if (p.size() == 4 && p[3] == "events") {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    if (!store_.get(id)) return send_error(res, 404, "not_found", "no job " + id);
+    return events(id, res);
   }
   if (p.size() == 4 && p[3] == "cancel") {
     if (m != "POST") return method_not_allowed(res, "POST");
@@ -431,12 +471,18 @@ void Api::list(const httplib::Request& req, httplib::Response& res) {
     return send_error(res, 400, "invalid_parameter", "limit must be an integer in 1..1000");
   if (req.has_param("offset") && !parse_int(req.get_param_value("offset"), 0, 1000000000, offset))
     return send_error(res, 400, "invalid_parameter", "offset must be a non-negative integer");
+  const std::string name = req.has_param("name") ? req.get_param_value("name") : "";
+  if (name.size() > 200)
+    return send_error(res, 400, "invalid_parameter", "name is longer than 200 characters");
   json jobs = json::array();
-  for (const JobRecord& r : store_.list(status, static_cast<int>(limit), static_cast<int>(offset)))
+  for (const JobRecord& r :
+       store_.list(status, static_cast<int>(limit), static_cast<int>(offset), name))
     jobs.push_back(view(r));
-  send_json(
-      res, 200,
-      {{"jobs", jobs}, {"total", store_.count(status)}, {"limit", limit}, {"offset", offset}});
+  send_json(res, 200,
+            {{"jobs", jobs},
+             {"total", store_.count(status, name)},
+             {"limit", limit},
+             {"offset", offset}});
 }
 
 void Api::cancel(const std::string& id, httplib::Response& res) {
@@ -485,9 +531,10 @@ void Api::changed(const std::string& id) noexcept {
 
 // Server-sent events: `job` with a job's view each time it changes (queued, started, each
 // iteration, finished, cancelled), `deleted` when it is gone; a comment every 15 s keeps the
-// connection alive. ?job=ID: that job's only. Each stream holds one of the server's connection
-// threads, so at most --max-event-streams are open at once; more are answered 503.
-void Api::events(const httplib::Request& req, httplib::Response& res) {
+// connection alive. With `job` (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each
+// stream holds one of the server's connection threads, so at most --max-event-streams are open
+// at once; more are answered 503.
+void Api::events(const std::string& job, httplib::Response& res) {
   std::optional<EventHub::Stream> stream = hub_.open();
   if (!stream) {
     res.set_header("Retry-After", "10");
@@ -502,8 +549,7 @@ void Api::events(const httplib::Request& req, httplib::Response& res) {
     std::string job;
     bool started = false;
   };
-  auto state = std::make_shared<State>(
-      State{std::move(*stream), req.has_param("job") ? req.get_param_value("job") : ""});
+  auto state = std::make_shared<State>(State{std::move(*stream), job});
   res.set_header("Cache-Control", "no-store");
   res.set_chunked_content_provider(
       "text/event-stream", [state](std::size_t, httplib::DataSink& sink) {
@@ -734,7 +780,7 @@ void Api::receive(const httplib::Request& req, httplib::Response& res,
 
 void Api::handle(const httplib::Request& req, httplib::Response& res,
                  const httplib::ContentReader* body) {
-  if (!authenticate(req, res)) return;
+  if (!web_asset(req.path) && !authenticate(req, res)) return;
   if (body)
     receive(req, res, *body);
   else
@@ -755,8 +801,19 @@ void Api::configure(httplib::Server& http) {
   http.Delete(".*", with_body);
   http.Options(".*", handler);
   http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-    return authenticate(req, res) ? httplib::Server::HandlerResponse::Unhandled
-                                  : httplib::Server::HandlerResponse::Handled;
+    return web_asset(req.path) || authenticate(req, res)
+               ? httplib::Server::HandlerResponse::Unhandled
+               : httplib::Server::HandlerResponse::Handled;
+  });
+  // Every answer: no type sniffing, no referrer, and a content policy (no CORS header is ever
+  // sent, so other origins' pages cannot read the API).
+  http.set_post_routing_handler([](const httplib::Request& req, httplib::Response& res) {
+    res.set_header("X-Content-Type-Options", "nosniff");
+    res.set_header("Referrer-Policy", "no-referrer");
+    const char* policy = web_asset(req.path) ? kPagePolicy : kDataPolicy;
+    if (res.get_header_value("Content-Type").rfind("text/html", 0) == 0 && !web_asset(req.path))
+      policy = kReportPolicy;
+    res.set_header("Content-Security-Policy", policy);
   });
   // Errors the library produces itself (413 above the body limit, 400 for a malformed
   // request, 404 for an unknown method) get the same JSON body as ours.

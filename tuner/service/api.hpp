@@ -63,7 +63,7 @@ class Api {
                       const std::string& what);
   TuningOutcome outcome_of(const std::string& id, const JobStore::Checkpoint& c);
   void files(const std::string& id, const std::string& name, httplib::Response& res);
-  void events(const httplib::Request& req, httplib::Response& res);
+  void events(const std::string& job, httplib::Response& res);
   void list(const httplib::Request& req, httplib::Response& res);
   void cancel(const std::string& id, httplib::Response& res);
   void result(const httplib::Request& req, httplib::Response& res, const std::string& id,

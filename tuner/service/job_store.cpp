@@ -393,14 +393,27 @@ std::string JobStore::job_json(const std::string& id) {
   return q.step() ? q.text(0) : std::string();
 }
 
-std::vector<JobRecord> JobStore::list(std::optional<JobStatus> status, int limit, int offset) {
+namespace {
+
+// " WHERE …" for a status and a name filter ("" when neither), bound from index 1 by bind_filter.
+std::string filter_sql(std::optional<JobStatus> status, const std::string& name) {
+  std::string w;
+  if (status) w += " WHERE status = ?";
+  if (!name.empty()) w += std::string(status ? " AND" : " WHERE") + " instr(name, ?) > 0";
+  return w;
+}
+
+}  // namespace
+
+std::vector<JobRecord> JobStore::list(std::optional<JobStatus> status, int limit, int offset,
+                                      const std::string& name) {
   std::lock_guard<std::mutex> lock(mutex_);
-  std::string sql = std::string("SELECT ") + kColumns + " FROM jobs";
-  if (status) sql += " WHERE status = ?";
-  sql += " ORDER BY seq DESC LIMIT ? OFFSET ?";
+  const std::string sql = std::string("SELECT ") + kColumns + " FROM jobs" +
+                          filter_sql(status, name) + " ORDER BY seq DESC LIMIT ? OFFSET ?";
   Statement q(db_, sql.c_str());
   int i = 1;
   if (status) q.bind(i++, std::string(to_string(*status)));
+  if (!name.empty()) q.bind(i++, name);
   q.bind(i, std::int64_t{limit});
   q.bind(i + 1, std::int64_t{offset});
   std::vector<JobRecord> out;
@@ -408,11 +421,12 @@ std::vector<JobRecord> JobStore::list(std::optional<JobStatus> status, int limit
   return out;
 }
 
-std::int64_t JobStore::count(std::optional<JobStatus> status) {
+std::int64_t JobStore::count(std::optional<JobStatus> status, const std::string& name) {
   std::lock_guard<std::mutex> lock(mutex_);
-  Statement q(db_,
-              status ? "SELECT COUNT(*) FROM jobs WHERE status = ?" : "SELECT COUNT(*) FROM jobs");
-  if (status) q.bind(1, std::string(to_string(*status)));
+  Statement q(db_, ("SELECT COUNT(*) FROM jobs" + filter_sql(status, name)).c_str());
+  int i = 1;
+  if (status) q.bind(i++, std::string(to_string(*status)));
+  if (!name.empty()) q.bind(i, name);
   q.step();
   return q.integer(0);
 }

@@ -101,9 +101,10 @@ class JobStore {
   Submitted submit(const Submission& s, const QueueQuota& quota = {});
   std::optional<JobRecord> get(const std::string& id);
   std::string job_json(const std::string& id);
-  // Newest first.
-  std::vector<JobRecord> list(std::optional<JobStatus> status, int limit, int offset);
-  std::int64_t count(std::optional<JobStatus> status);
+  // Newest first; with `name`, only the jobs whose name contains it.
+  std::vector<JobRecord> list(std::optional<JobStatus> status, int limit, int offset,
+                              const std::string& name = "");
+  std::int64_t count(std::optional<JobStatus> status, const std::string& name = "");
 
   // Oldest queued job, now running (attempts + 1); none when the queue is empty.
   std::optional<JobRecord> claim_next();
