@@ -938,6 +938,11 @@ TEST(Service, EventsStreamEachChangeToEveryOpenPage) {
   EXPECT_EQ(iterations, (std::vector<int>{0, 1, 2})) << mine->received();
   EXPECT_EQ(mine->events("job").back()["status"], "succeeded");
   EXPECT_TRUE(one->events("job").empty());  // its job changed no more
+  // A page closed frees its stream within seconds (the next keep-alive write fails).
+  EXPECT_EQ(s.get("/healthz")["event_streams"], 4);
+  one.reset();
+  EXPECT_EQ(wait_health(s, [](const json& h) { return h["event_streams"] == 3; })["event_streams"],
+            3);
 
   ASSERT_EQ(s.client->Delete(("/v1/jobs/" + other).c_str())->status, 200);
   ASSERT_TRUE(pages[0]->wait_for([](EventClient& c) { return !c.events("deleted").empty(); }, 10s));

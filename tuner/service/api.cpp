@@ -271,7 +271,8 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
                        {{"writable", writable},
                         {"error", h.error ? json(*h.error) : json(nullptr)},
                         {"unstored_jobs", h.unstored},
-                        {"unrecorded_cancels", h.cancels}}}});
+                        {"unrecorded_cancels", h.cancels}}},
+                      {"event_streams", hub_.open_streams()}});
   }
   if (p.size() == 2 && p[0] == "v1" && p[1] == "events") {
     if (m != "GET") return method_not_allowed(res, "GET");
@@ -530,8 +531,8 @@ void Api::changed(const std::string& id) noexcept {
 }
 
 // Server-sent events: `job` with a job's view each time it changes (queued, started, each
-// iteration, finished, cancelled), `deleted` when it is gone; a comment every 15 s keeps the
-// connection alive. With `job` (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each
+// iteration, finished, cancelled), `deleted` when it is gone; a comment after 2 s without one
+// keeps the connection alive and finds closed ones. With `job` (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each
 // stream holds one of the server's connection threads, so at most --max-event-streams are open
 // at once; more are answered 503.
 void Api::events(const std::string& job, httplib::Response& res) {
@@ -558,14 +559,16 @@ void Api::events(const std::string& job, httplib::Response& res) {
           state->started = true;
           out = "retry: 3000\n: ftctune events\n\n";
         } else {
-          const std::optional<std::vector<Event>> events = state->stream.next(15000);
+          // The comment sent when nothing happened is also how a closed page is noticed (the
+          // write after its connection is gone fails), so its slot frees within seconds.
+          const std::optional<std::vector<Event>> events = state->stream.next(2000);
           if (!events) {
             sink.done();
             return true;
           }
           for (const Event& e : *events)
             if (state->job.empty() || e.job_id == state->job) out += e.text;
-          if (out.empty()) out = ": keep-alive\n\n";
+          if (out.empty()) out = ":\n\n";
         }
         return sink.write(out.data(), out.size());
       });
