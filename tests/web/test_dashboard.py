@@ -42,12 +42,14 @@ def longer(name, iterations):
 
 
 class Server:
-    def __init__(self, binary):
+    def __init__(self, binary, extra=()):
         self.dir = tempfile.mkdtemp(prefix="ftctune-dashboard-")
         self.proc = subprocess.Popen(
             [binary, "serve", "--port", "0", "--store", os.path.join(self.dir, "store"),
-             "--threads", "1"],
-            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+             "--threads", "1", *extra],
+            stdout=subprocess.PIPE, text=True,
+            stderr=open(os.environ["FTCTUNE_SERVER_LOG"], "w")
+            if os.environ.get("FTCTUNE_SERVER_LOG") else subprocess.DEVNULL)
         line = self.proc.stdout.readline()
         m = re.search(r"http://127\.0\.0\.1:(\d+)", line)
         if not m:

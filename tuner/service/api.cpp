@@ -531,8 +531,8 @@ void Api::changed(const std::string& id) noexcept {
 }
 
 // Server-sent events: `job` with a job's view each time it changes (queued, started, each
-// iteration, finished, cancelled), `deleted` when it is gone; a comment after 2 s without one
-// keeps the connection alive and finds closed ones. With `job` (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each
+// iteration, finished, cancelled), `deleted` when it is gone; a comment after 15 s without one
+// keeps the connection alive; a closed page's stream ends within a quarter of a second. With `job` (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each
 // stream holds one of the server's connection threads, so at most --max-event-streams are open
 // at once; more are answered 503.
 void Api::events(const std::string& job, httplib::Response& res) {
@@ -559,15 +559,19 @@ void Api::events(const std::string& job, httplib::Response& res) {
           state->started = true;
           out = "retry: 3000\n: ftctune events\n\n";
         } else {
-          // The comment sent when nothing happened is also how a closed page is noticed (the
-          // write after its connection is gone fails), so its slot frees within seconds.
-          const std::optional<std::vector<Event>> events = state->stream.next(2000);
-          if (!events) {
-            sink.done();
-            return true;
+          // Waits in short slices, so that a page closed meanwhile frees its stream (and its
+          // connection thread) at once; a comment after 15 s without an event keeps proxies
+          // from closing the connection.
+          for (int slice = 0; slice < 60 && out.empty(); ++slice) {
+            const std::optional<std::vector<Event>> events = state->stream.next(250);
+            if (!events) {
+              sink.done();
+              return true;
+            }
+            for (const Event& e : *events)
+              if (state->job.empty() || e.job_id == state->job) out += e.text;
+            if (out.empty() && GuardedServer::peer_closed()) return false;
           }
-          for (const Event& e : *events)
-            if (state->job.empty() || e.job_id == state->job) out += e.text;
           if (out.empty()) out = ":\n\n";
         }
         return sink.write(out.data(), out.size());

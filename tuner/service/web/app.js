@@ -194,19 +194,24 @@ const live = {
     badge.classList.toggle('on', on);
   },
 
+  generation: 0,
+
   start() {
     if (this.running) return;
     this.running = true;
-    this.connect();
+    this.connect(++this.generation);
   },
 
   stop() {
     this.running = false;
+    this.generation++;
     if (this.controller) this.controller.abort();
+    this.indicator(false, 'paused');
   },
 
-  async connect() {
-    while (this.running) {
+  async connect(generation) {
+    const mine = () => this.running && generation === this.generation;
+    while (mine()) {
       this.controller = new AbortController();
       try {
         const res = await fetch('/v1/events', {headers: headers(), signal: this.controller.signal,
@@ -231,8 +236,9 @@ const live = {
           }
         }
       } catch (e) {
-        if (!this.running) return;
+        if (!mine()) return;
       }
+      if (!mine()) return;
       this.indicator(false, 'reconnecting');
       await new Promise((r) => setTimeout(r, this.retry));
       this.retry = Math.min(this.retry * 2, 15000);
@@ -267,6 +273,20 @@ function throttle(fn, ms) {
     if (timer) return;
     timer = setTimeout(() => { timer = null; last = Date.now(); fn(); }, wait);
   };
+}
+
+// Chart.js (Debian's, served from the binary) is loaded by the first job page only: the jobs
+// list does not wait for its 200 kB.
+let chartLib = null;
+function chartJs() {
+  if (!chartLib) {
+    chartLib = new Promise((resolve, reject) => {
+      if (window.Chart) return resolve(window.Chart);
+      document.head.appendChild(el('script', {src: '/ui/chart.min.js',
+        onload: () => resolve(window.Chart), onerror: () => reject(new Error('Chart.js did not load'))}));
+    });
+  }
+  return chartLib;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -450,25 +470,30 @@ function jobView(main, id) {
     figures,
     el('h3', {text: 'Downloads'}), downloads);
 
-  const convChart = new Chart(convergence, {
-    type: 'line',
-    data: {datasets: [{label: 'best J', data: [], borderColor: '#2980b9', backgroundColor: '#2980b9',
-                       pointRadius: 2, tension: 0}]},
-    options: {animation: false, maintainAspectRatio: false, parsing: false,
-              scales: {x: {type: 'linear', title: {display: true, text: 'iteration'}},
-                       y: {title: {display: true, text: 'best fitness J'}}},
-              plugins: {legend: {display: false}}},
-  });
-  charts.push(convChart);
-  const scatterChart = new Chart(scatter, {
-    type: 'scatter',
-    data: {datasets: [{label: 'trials', data: [], pointBackgroundColor: [], pointRadius: 3}]},
-    options: {animation: false, maintainAspectRatio: false,
-              plugins: {legend: {display: false},
-                        tooltip: {callbacks: {label: (c) => 'J = ' + fmt(c.raw.objective)}}},
-              scales: {x: {title: {display: true, text: ''}}, y: {title: {display: true, text: ''}}}},
-  });
-  charts.push(scatterChart);
+  let convChart = null, scatterChart = null;
+  const makeCharts = (Chart) => {
+    convChart = new Chart(convergence, {
+      type: 'line',
+      data: {datasets: [{label: 'best J', data: [], borderColor: '#2980b9', backgroundColor: '#2980b9',
+                         pointRadius: 2, tension: 0}]},
+      options: {animation: false, maintainAspectRatio: false, parsing: false,
+                scales: {x: {type: 'linear', title: {display: true, text: 'iteration'}},
+                         y: {title: {display: true, text: 'best fitness J'}}},
+                plugins: {legend: {display: false}}},
+    });
+    charts.push(convChart);
+    scatterChart = new Chart(scatter, {
+      type: 'scatter',
+      data: {datasets: [{label: 'trials', data: [], pointBackgroundColor: [], pointRadius: 3}]},
+      options: {animation: false, maintainAspectRatio: false,
+                plugins: {legend: {display: false},
+                          tooltip: {callbacks: {label: (c) => 'J = ' + fmt(c.raw.objective)}}},
+                scales: {x: {title: {display: true, text: ''}}, y: {title: {display: true, text: ''}}}},
+    });
+    charts.push(scatterChart);
+    renderConvergence();
+    renderScatter();
+  };
 
   function renderHeader() {
     clear(header);
@@ -524,6 +549,7 @@ function jobView(main, id) {
   }
 
   function renderConvergence() {
+    if (!convChart) return;
     const points = history.filter((h) => h.best_fitness !== null)
       .map((h) => ({x: h.iteration, y: h.best_fitness}));
     convChart.data.datasets[0].data = points;
@@ -532,6 +558,7 @@ function jobView(main, id) {
   }
 
   function renderScatter() {
+    if (!scatterChart) return;
     const xi = trials.columns.indexOf(xSel.value), yi = trials.columns.indexOf(ySel.value);
     const oi = trials.columns.indexOf('objective');
     if (xi < 0 || yi < 0) return;
@@ -685,8 +712,10 @@ function jobView(main, id) {
     lastStatus = job.status;
   });
   loadJob().then(() => { lastStatus = job && job.status; });
+  let gone = false;
+  chartJs().then((Chart) => { if (!gone) makeCharts(Chart); }).catch((e) => showError(message, e));
   const tick = setInterval(() => { if (job && job.status === 'running') renderHeader(); }, 1000);
-  return () => { off(); clearInterval(tick); charts.forEach((c) => c.destroy()); };
+  return () => { gone = true; off(); clearInterval(tick); charts.forEach((c) => c.destroy()); };
 }
 
 function submitView(main) {
@@ -745,5 +774,10 @@ function submitView(main) {
 }
 
 window.addEventListener('hashchange', route);
+// A browser gives a server six connections at most: a hidden or left page gives its stream back
+// (and reads what changed meanwhile when it is shown again).
+document.addEventListener('visibilitychange', () => (document.hidden ? live.stop() : live.start()));
+window.addEventListener('pagehide', () => live.stop());
+window.addEventListener('pageshow', (ev) => { if (ev.persisted) live.start(); });
 live.start();
 route();
