@@ -22,6 +22,7 @@ from selenium import webdriver
 from selenium.common.exceptions import NoAlertPresentException
 from selenium.webdriver.chrome.service import Service
 from selenium.webdriver.common.by import By
+from selenium.webdriver.support import expected_conditions as EC
 from selenium.webdriver.support.ui import WebDriverWait
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -145,6 +146,8 @@ def test_submitting_table1_through_the_page(server, browser):
     assert int(browser.find_element(By.ID, "scatter").get_attribute("data-points")) == evaluations
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table tbody tr"))
     assert "noise" in browser.find_element(By.CSS_SELECTOR, ".noise-floor").text
+    browser.execute_script("window.scrollTo(0, 0)")
+    screenshot(browser, "dashboard-job.png")
     # Sorting by objective puts the lowest first.
     header = [h for h in browser.find_elements(By.CSS_SELECTOR, "#trials-table th")
               if h.text.strip().startswith("objective")][0]
@@ -155,7 +158,6 @@ def test_submitting_table1_through_the_page(server, browser):
                                   "#trials-table tbody tr td:nth-child(%d)" % (column + 1))
     values = [float(c.text) for c in cells[:20]]
     assert values == sorted(values)
-    screenshot(browser, "dashboard-job.png")
 
 
 def test_progress_updates_without_a_reload(server, browser):
@@ -254,3 +256,30 @@ def test_page_headers_forbid_inline_script_and_sniffing(server):
         assert "script-src 'self'" in policy and "unsafe-inline" not in policy
         assert r.headers["X-Content-Type-Options"] == "nosniff"
         assert r.headers.get("Access-Control-Allow-Origin") is None
+
+
+def test_the_token_is_asked_for_and_kept_in_the_tab(request, browser):
+    folder = tempfile.mkdtemp(prefix="ftctune-token-")
+    token_file = os.path.join(folder, "token")
+    with open(token_file, "w") as f:
+        f.write("dashboard-secret\n")
+    os.chmod(token_file, 0o600)
+    server = Server(request.config.getoption("--ftctune"), ["--token-file", token_file])
+    try:
+        browser.get(server.url + "/#/")
+        box = wait(browser, lambda d: d.find_element(By.ID, "token"))
+        box.send_keys("wrong")
+        box.submit()
+        WebDriverWait(browser, 10).until(EC.staleness_of(box))
+        box = wait(browser, lambda d: d.find_element(By.ID, "token"))  # asked again
+        box.send_keys("dashboard-secret")
+        box.submit()
+        wait(browser, lambda d: d.find_element(By.ID, "jobs-count").text == "no jobs")
+        assert browser.execute_script("return sessionStorage.getItem('ftctune-token')") \
+            == "dashboard-secret"
+        assert browser.execute_script("return document.cookie") == ""  # a header, not a cookie
+        wait(browser, lambda d: d.find_element(By.ID, "live").text == "live")
+    finally:
+        browser.execute_script("sessionStorage.clear()")
+        server.stop()
+        shutil.rmtree(folder, ignore_errors=True)
