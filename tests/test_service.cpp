@@ -323,7 +323,8 @@ TEST(Service, CancelsQueuedAndRunningJobs) {
   EXPECT_EQ(q["status"], "cancelled");
   EXPECT_TRUE(q["started_at"].is_null());  // it never started
   EXPECT_EQ(q["attempts"], 0);
-  expect_error(s.client->Get(("/v1/jobs/" + running + "/gains").c_str()), 409, "not_ready");
+  // The cancelled job keeps what it ran (PartialResults below); the queued one ran nothing.
+  expect_error(s.client->Get(("/v1/jobs/" + queued + "/gains").c_str()), 409, "not_ready");
   expect_error(s.client->Post(("/v1/jobs/" + running + "/cancel").c_str(), "", "application/json"),
                409, "conflict");
 }
@@ -788,6 +789,10 @@ TEST(Cli, ClientCommandsTalkToTheService) {
   const std::string id = r.out.substr(0, r.out.find('\n'));
   EXPECT_EQ(id.size(), 16u) << r.out;
   EXPECT_EQ(slurp(dir / "gains.json"), expected_gains(tiny_job()));
+  // The summary `run` prints, and an ETA on the progress lines.
+  EXPECT_NE(r.out.find("tuned PI-FOSMC: "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(job's own controller: "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("simulations on "), std::string::npos) << r.out;
   r = run_cli("status " + id + server, dir);
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("succeeded"), std::string::npos) << r.out;
@@ -817,10 +822,12 @@ TEST(Cli, ClientCommandsTalkToTheService) {
   const std::string all = (dir / "all" / "gains.json").string();
   r = run_cli("fetch " + id.substr(0, 6) + " --all -o '" + all + "'" + server, dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const char* f :
-       {"gains.json", "history.csv", "comparison.json", "comparison.md", "report.html"})
+  for (const char* f : {"gains.json", "history.csv", "trials.csv", "comparison.json",
+                        "comparison.md", "report.html", "job.json", "run.json"})
     EXPECT_TRUE(std::filesystem::exists(dir / "all" / f)) << f;
   EXPECT_EQ(slurp(dir / "all" / "gains.json"), slurp(dir / "gains.json"));
+  r = run_cli("report '" + (dir / "all").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;  // the folder `run` writes
   r = run_cli("fetch " + id.substr(0, 6) + " -o '" + all + "'" + server, dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("exists already; pass --force"), std::string::npos) << r.err;
@@ -840,6 +847,308 @@ TEST(Cli, ClientCommandsTalkToTheService) {
   r = run_cli("delete " + id + server, dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("no job " + id), std::string::npos) << r.err;
+}
+
+// A running job serves its history, trials and best gains so far; a cancelled one keeps them,
+// with the rest of a run's files, all marked partial: the same rows as the uninterrupted run's
+// first iterations, and a gains file that records optimizer.completed false.
+TEST(Service, RunningAndCancelledJobsServeTheirPartialResults) {
+  const json job = long_job("partial");
+  const std::string full_trials = expected_file(job, "trials.csv");
+  const std::string full_history = expected_file(job, "history.csv");
+  Service s;
+  const std::string id = s.submit(job)["id"];
+  wait_running(s, id, 3);
+  const auto lines = [](const std::string& text) {
+    std::vector<std::string> out;
+    std::istringstream in(text);
+    for (std::string l; std::getline(in, l);) out.push_back(l);
+    return out;
+  };
+  // Every row served is the uninterrupted run's row of the same place.
+  const auto expect_prefix = [&](const std::string& part, const std::string& full) {
+    const std::vector<std::string> a = lines(part), b = lines(full);
+    ASSERT_GE(a.size(), 2u) << part;
+    ASSERT_LE(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "line " << i;
+  };
+
+  auto trials = s.client->Get(("/v1/jobs/" + id + "/trials").c_str());
+  ASSERT_TRUE(trials);
+  ASSERT_EQ(trials->status, 200) << trials->body;
+  EXPECT_EQ(trials->get_header_value("Ftctune-Partial"), "true");
+  expect_prefix(trials->body, full_trials);
+  EXPECT_GE(lines(trials->body).size(), 1u + 4 * 8);  // iterations 0..3 of 8 bats, at least
+  auto history = s.client->Get(("/v1/jobs/" + id + "/history").c_str());
+  ASSERT_EQ(history->status, 200) << history->body;
+  expect_prefix(history->body, full_history);
+  const json rows = s.get("/v1/jobs/" + id + "/history?format=json");
+  ASSERT_GE(rows.size(), 4u);
+  EXPECT_EQ(rows[0]["iteration"], 0);
+  EXPECT_TRUE(rows[0]["best"].contains("Kp"));
+  auto gains = s.client->Get(("/v1/jobs/" + id + "/gains").c_str());
+  ASSERT_EQ(gains->status, 200) << gains->body;
+  EXPECT_EQ(json::parse(gains->body)["optimizer"]["completed"], false);
+  expect_error(s.client->Get(("/v1/jobs/" + id + "/comparison").c_str()), 409, "not_ready");
+  EXPECT_EQ(s.get("/v1/jobs/" + id)["partial"], true);
+
+  ASSERT_EQ(s.client->Post(("/v1/jobs/" + id + "/cancel").c_str(), "", "application/json")->status,
+            202);
+  const json done = s.wait_done(id);
+  ASSERT_EQ(done["status"], "cancelled");
+  EXPECT_EQ(done["partial"], true);
+  const int ran = done["progress"]["iteration"];
+  ASSERT_LT(ran, 60);
+  gains = s.client->Get(("/v1/jobs/" + id + "/gains").c_str());
+  ASSERT_EQ(gains->status, 200) << gains->body;
+  EXPECT_EQ(gains->get_header_value("Ftctune-Partial"), "true");
+  const json g = json::parse(gains->body);
+  EXPECT_EQ(g["optimizer"]["completed"], false);
+  EXPECT_EQ(g["history"].size(), static_cast<std::size_t>(ran + 1));
+  EXPECT_EQ(g["history"].back()["best"], done["progress"]["best"]);
+  EXPECT_TRUE(g["baseline"]["objective"].is_number());  // compared as a finished run's best is
+  trials = s.client->Get(("/v1/jobs/" + id + "/trials").c_str());
+  expect_prefix(trials->body, full_trials);
+  EXPECT_EQ(lines(trials->body).size(), 1u + done["progress"]["evaluations"].get<std::size_t>());
+  expect_prefix(s.client->Get(("/v1/jobs/" + id + "/history").c_str())->body, full_history);
+  EXPECT_EQ(s.get("/v1/jobs/" + id + "/comparison")["controllers"].size(), 4u);
+
+  // The folder `ftctune run` writes: fetch --all brings it, and `ftctune report` takes it.
+  const json listing = s.get("/v1/jobs/" + id + "/files");
+  EXPECT_EQ(listing["partial"], true);
+  std::set<std::string> names;
+  for (const json& f : listing["files"]) names.insert(f["name"].get<std::string>());
+  for (const char* f : {"gains.json", "history.csv", "trials.csv", "job.json", "comparison.json",
+                        "comparison.md", "run.json"})
+    EXPECT_TRUE(names.count(f)) << f;
+  expect_error(s.client->Get(("/v1/jobs/" + id + "/files/nothing.csv").c_str()), 404, "not_found");
+  const auto dir = fresh_dir("partial-fetch");
+  const std::string server = " --server http://127.0.0.1:" + std::to_string(s.port);
+  CliResult r =
+      run_cli("fetch " + id + " --all -o '" + (dir / "run" / "gains.json").string() + "'" + server,
+              dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("optimizer.completed false"), std::string::npos) << r.err;
+  for (const std::string& f : names) EXPECT_TRUE(std::filesystem::exists(dir / "run" / f)) << f;
+  EXPECT_EQ(slurp(dir / "run" / "gains.json"), gains->body);
+  r = run_cli("report '" + (dir / "run").string() + "'", dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// A client of GET /v1/events on its own thread, collecting what it receives.
+struct EventClient {
+  EventClient(int port, const std::string& path) {
+    client = std::make_unique<httplib::Client>("127.0.0.1", port);
+    client->set_read_timeout(60, 0);
+    thread = std::thread([this, path] {
+      auto r = client->Get(
+          path.c_str(),
+          [this](const httplib::Response& res) {
+            status = res.status;
+            return res.status == 200;
+          },
+          [this](const char* data, std::size_t n) {
+            std::lock_guard<std::mutex> lock(mutex);
+            text.append(data, n);
+            return !stop;
+          });
+      ended = true;
+    });
+  }
+  ~EventClient() {
+    stop = true;
+    client->stop();  // a stream waiting for its next event
+    thread.join();
+  }
+  std::string received() {
+    std::lock_guard<std::mutex> lock(mutex);
+    return text;
+  }
+  // The data of every event of `type`, parsed.
+  std::vector<json> events(const std::string& type) {
+    std::vector<json> out;
+    const std::string t = received();
+    const std::string marker = "event: " + type + "\ndata: ";
+    for (std::size_t i = t.find(marker); i != std::string::npos; i = t.find(marker, i + 1)) {
+      const std::size_t start = i + marker.size(), end = t.find('\n', start);
+      if (end == std::string::npos) break;
+      out.push_back(json::parse(t.substr(start, end - start)));
+    }
+    return out;
+  }
+  bool wait_for(const std::function<bool(EventClient&)>& holds, std::chrono::seconds deadline) {
+    const auto end = std::chrono::steady_clock::now() + deadline * FTC_TEST_SLOWDOWN;
+    while (std::chrono::steady_clock::now() < end) {
+      if (holds(*this)) return true;
+      std::this_thread::sleep_for(5ms);
+    }
+    return holds(*this);
+  }
+  std::mutex mutex;
+  std::string text;
+  std::atomic<int> status{0};
+  std::atomic<bool> stop{false}, ended{false};
+  std::unique_ptr<httplib::Client> client;
+  std::thread thread;
+};
+
+// Every open stream gets each change of a job as the store commits it (queued, started, each
+// iteration, finished); a stream may follow one job only. Streams are capped (at half the
+// connection threads), the API stays answered with every stream open, and stopping the server
+// ends them.
+TEST(Service, EventsStreamEachChangeToEveryOpenPage) {
+  tune::ServiceOptions o;
+  o.max_connections = 8;  // at most 4 streams
+  o.max_connections_per_client = 7;
+  Service s(o);
+  std::vector<std::unique_ptr<EventClient>> pages;
+  for (int i = 0; i < 2; ++i)
+    pages.push_back(std::make_unique<EventClient>(s.port, "/v1/events"));
+  for (auto& p : pages)
+    ASSERT_TRUE(p->wait_for([](EventClient& c) { return c.received().find(": ftctune events") !=
+                                                        std::string::npos; },
+                            10s));
+  const std::string other = s.submit(tiny_job("other"))["id"];
+  s.wait_done(other);
+  auto one = std::make_unique<EventClient>(s.port, "/v1/events?job=" + other);
+  // A job runs meanwhile, so that the next one waits in the queue until its stream is open.
+  const std::string blocker = s.submit(long_job("blocker"))["id"];
+  const std::string id = s.submit(short_table1_job())["id"];
+  auto mine = std::make_unique<EventClient>(s.port, "/v1/jobs/" + id + "/events");
+  ASSERT_TRUE(mine->wait_for(
+      [](EventClient& c) { return c.received().find(": ftctune events") != std::string::npos; },
+      10s));
+  s.client->Post(("/v1/jobs/" + blocker + "/cancel").c_str(), "", "application/json");
+  // The fifth stream is one too many; the API still answers.
+  EventClient fifth(s.port, "/v1/events");
+  ASSERT_TRUE(fifth.wait_for([](EventClient& c) { return c.ended.load(); }, 10s));
+  EXPECT_EQ(fifth.status, 503);
+  EXPECT_EQ(s.get("/healthz")["status"], "ok");
+  s.wait_done(id);
+
+  const auto of_job = [&](EventClient& c) {
+    std::vector<json> out;
+    for (const json& e : c.events("job"))
+      if (e["id"] == id) out.push_back(e);
+    return out;
+  };
+  for (auto& p : pages) {
+    ASSERT_TRUE(p->wait_for(
+        [&](EventClient& c) {
+          const std::vector<json> ev = of_job(c);
+          return !ev.empty() && ev.back()["status"] == "succeeded";
+        },
+        10s))
+        << p->received();
+    std::vector<int> iterations;
+    for (const json& e : of_job(*p))
+      if (e["status"] == "running" && !e["progress"]["iteration"].is_null())
+        iterations.push_back(e["progress"]["iteration"]);
+    EXPECT_EQ(iterations, (std::vector<int>{0, 1, 2})) << p->received();
+    EXPECT_EQ(of_job(*p).front()["status"], "queued");
+  }
+  // Opened while it was queued: every change from its start on.
+  std::vector<int> iterations;
+  for (const json& e : mine->events("job")) {
+    EXPECT_EQ(e["id"], id);
+    if (e["status"] == "running" && !e["progress"]["iteration"].is_null())
+      iterations.push_back(e["progress"]["iteration"]);
+  }
+  EXPECT_EQ(iterations, (std::vector<int>{0, 1, 2})) << mine->received();
+  EXPECT_EQ(mine->events("job").back()["status"], "succeeded");
+  EXPECT_TRUE(one->events("job").empty());  // its job changed no more
+  // A page closed frees its stream within seconds (the next keep-alive write fails).
+  EXPECT_EQ(s.get("/healthz")["event_streams"], 4);
+  one.reset();
+  EXPECT_EQ(wait_health(s, [](const json& h) { return h["event_streams"] == 3; })["event_streams"],
+            3);
+
+  ASSERT_EQ(s.client->Delete(("/v1/jobs/" + other).c_str())->status, 200);
+  ASSERT_TRUE(pages[0]->wait_for([](EventClient& c) { return !c.events("deleted").empty(); }, 10s));
+  EXPECT_EQ(pages[0]->events("deleted")[0]["id"], other);
+
+  // Stopping the server ends every stream at once.
+  const auto t0 = std::chrono::steady_clock::now();
+  s.service->stop();
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  for (auto& p : pages)
+    EXPECT_TRUE(p->wait_for([](EventClient& c) { return c.ended.load(); }, 10s));
+}
+
+// The dashboard's files are served to anyone (the page asks for the token; they hold no data)
+// with a policy that allows only their own scripts; the API needs the token as before, and every
+// answer forbids sniffing and gives no CORS header.
+TEST(Service, DashboardIsServedWithAStrictPolicy) {
+  tune::ServiceOptions o;
+  o.token = "secret-token";
+  Service s(o);
+  auto page = s.client->Get("/");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_EQ(page->get_header_value("Content-Type"), "text/html; charset=utf-8");
+  EXPECT_NE(page->body.find("<script src=\"/ui/app.js\""), std::string::npos);
+  EXPECT_EQ(page->body.find("<script>"), std::string::npos);  // no inline script
+  const std::string policy = page->get_header_value("Content-Security-Policy");
+  EXPECT_NE(policy.find("script-src 'self'"), std::string::npos) << policy;
+  EXPECT_EQ(policy.find("unsafe-inline"), std::string::npos) << policy;
+  EXPECT_EQ(page->get_header_value("X-Content-Type-Options"), "nosniff");
+  for (const char* asset : {"/ui/app.js", "/ui/style.css", "/ui/chart.min.js"}) {
+    auto r = s.client->Get(asset);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << asset;
+    EXPECT_GT(r->body.size(), 1000u) << asset;
+  }
+  auto api = s.client->Get("/v1/jobs");
+  EXPECT_EQ(api->status, 401);
+  EXPECT_EQ(api->get_header_value("X-Content-Type-Options"), "nosniff");
+  EXPECT_FALSE(api->has_header("Access-Control-Allow-Origin"));
+  EXPECT_EQ(s.client->Get("/v1/events")->status, 401);
+  EXPECT_EQ(s.client->Get("/ui/other.js")->status, 401);  // only the dashboard's own files
+
+  // The list filters by name, for a page of a large store.
+  s.client->set_bearer_token_auth("secret-token");
+  s.wait_done(s.submit(tiny_job("alpha"))["id"]);
+  s.wait_done(s.submit(tiny_job("beta"))["id"]);
+  const json found = s.get("/v1/jobs?name=alp");
+  EXPECT_EQ(found["total"], 1);
+  ASSERT_EQ(found["jobs"].size(), 1u);
+  EXPECT_EQ(found["jobs"][0]["name"], "alpha");
+  const json both = s.get("/v1/jobs?name=a&status=succeeded&limit=1");
+  EXPECT_EQ(both["total"], 2);
+  ASSERT_EQ(both["jobs"].size(), 1u);
+  EXPECT_EQ(both["jobs"][0]["name"], "beta");  // newest first
+  EXPECT_EQ(s.get("/v1/jobs?name=a&status=queued")["total"], 0);
+}
+
+// POST /v1/validate checks a job as a submission would, and submits nothing.
+TEST(Service, ValidateChecksAJobWithoutSubmittingIt) {
+  Service s;
+  auto r = s.client->Post("/v1/validate", short_table1_job().dump(), "application/json");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  const json ok = json::parse(r->body);
+  EXPECT_EQ(ok["valid"], true);
+  EXPECT_EQ(ok["name"], short_table1_job()["name"]);
+  EXPECT_EQ(ok["total_evaluations"], 9);
+  json bad = short_table1_job();
+  bad["scenarios"][0]["duration"] = -1;
+  bad["tuning"]["parameters"]["Kp"] = {"low", 50};
+  r = s.client->Post("/v1/validate", bad.dump(), "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  const json e = json::parse(r->body);
+  EXPECT_EQ(e["error"]["code"], "invalid_job");
+  std::set<std::string> paths;
+  for (const json& d : e["error"]["details"]) paths.insert(d["path"].get<std::string>());
+  EXPECT_TRUE(paths.count("/scenarios/0/duration")) << r->body;
+  EXPECT_TRUE(paths.count("/tuning/parameters/Kp")) << r->body;
+  // The same details as a submission's 400.
+  auto submitted = s.client->Post("/v1/jobs", bad.dump(), "application/json");
+  EXPECT_EQ(submitted->status, 400);
+  EXPECT_EQ(json::parse(submitted->body)["error"]["details"], e["error"]["details"]);
+  expect_error(s.client->Post("/v1/validate", "{", "application/json"), 400, "invalid_json");
+  expect_error(s.client->Get("/v1/validate"), 405, "method_not_allowed");
+  EXPECT_EQ(s.get("/v1/jobs")["total"], 0);  // nothing was submitted
 }
 
 // DELETE removes a finished job with its results; a queued or running one is refused.

@@ -1,6 +1,7 @@
 // Client commands of the tuning service: submit, status, fetch, cancel, jobs.
 // Server from --server, else $FTCTUNE_SERVER, else http://127.0.0.1:8080; token from
 // $FTCTUNE_TOKEN.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -129,9 +130,23 @@ int guarded(const std::function<int()>& body) {
 
 void print_json(const std::string& body) { std::printf("%s\n", json::parse(body).dump(2).c_str()); }
 
+// A gains file of a job that has not finished (running, or cancelled) says so, once.
+void note_partial(const std::string& id, const std::string& gains, bool quiet) {
+  const json g = json::parse(gains, nullptr, false);
+  if (quiet || !g.is_object() || !g.contains("optimizer") ||
+      g["optimizer"].value("completed", true))
+    return;
+  std::fprintf(stderr,
+               "ftctune: note: job %s has not finished all its iterations: its files are its "
+               "results so far (gains.json records optimizer.completed false, which the gains "
+               "loader refuses)\n",
+               id.c_str());
+}
+
 int fetch_gains(Api& api, const std::string& id, const std::string& out, const std::string& name,
                 bool quiet, bool force) {
   const std::string gains = api.get("/v1/jobs/" + id + "/gains");
+  note_partial(id, gains, quiet);
   // By default in a folder of the service job's own, so a local run's gains.json is never
   // replaced by a fetched one; an existing file is only replaced with --force.
   const std::filesystem::path file =
@@ -145,28 +160,45 @@ int fetch_gains(Api& api, const std::string& id, const std::string& out, const s
   return 0;
 }
 
-// Everything a finished job has: the gains, history, comparison and report, beside the gains.
+// Everything a job has, beside the gains file: a finished job's (or a cancelled one's, partial)
+// stored files, the folder `ftctune run` writes, which `ftctune report` takes, and report.html;
+// a running job's gains, history and trials so far.
 int fetch_all(Api& api, const std::string& id, const std::string& out, const std::string& name,
-              bool quiet, bool force) {
-  if (const int rc = fetch_gains(api, id, out, name, quiet, force); rc != 0) return rc;
-  const std::filesystem::path dir =
-      (out.empty() ? default_out_dir_for(name) / ("service-" + id.substr(0, 8)) / "gains.json"
-                   : std::filesystem::path(out))
-          .parent_path();
-  const std::pair<const char*, const char*> files[] = {
-      {"/history?format=csv", "history.csv"},
-      {"/trials", "trials.csv"},
-      {"/comparison?format=json", "comparison.json"},
-      {"/comparison?format=md", "comparison.md"},
-      {"/report", "report.html"}};
-  for (const auto& [path, file] : files) {
-    const std::filesystem::path f = dir / file;
-    if (std::filesystem::exists(f) && !force)
-      throw InputError(f.string(), "", "exists already; pass --force to replace it");
-    tune::write_file_atomic(f, api.get("/v1/jobs/" + id + path));
-    if (!quiet) std::printf("wrote %s\n", f.c_str());
+              const std::string& status, bool quiet, bool force) {
+  const std::filesystem::path gains_file =
+      out.empty() ? default_out_dir_for(name) / ("service-" + id.substr(0, 8)) / "gains.json"
+                  : std::filesystem::path(out);
+  const std::filesystem::path dir = gains_file.parent_path();
+  std::vector<std::pair<std::string, std::string>> sources;  // request path, file
+  if (status == "running") {
+    sources = {{"/history?format=csv", "history.csv"}, {"/trials", "trials.csv"}};
+  } else {
+    const json list = json::parse(api.get("/v1/jobs/" + id + "/files"));
+    for (const json& f : list["files"]) {
+      const std::string file = f["name"];
+      // Stored names are the server's: nothing may land outside the folder.
+      if (file == "gains.json" || file.empty() || file.front() == '/' ||
+          file.find("..") != std::string::npos)
+        continue;
+      sources.emplace_back("/files/" + file, file);
+    }
+    if (std::none_of(sources.begin(), sources.end(),
+                     [](const auto& s) { return s.second == "report.html"; }))
+      sources.emplace_back("/report", "report.html");
   }
-  return 0;
+  // Refuse before writing anything.
+  for (const auto& [path, file] : sources)
+    if (std::filesystem::exists(dir / file) && !force)
+      throw InputError((dir / file).string(), "", "exists already; pass --force to replace it");
+  if (std::filesystem::exists(gains_file) && !force)
+    throw InputError(gains_file.string(), "",
+                     "exists already; pass --force to replace it or -o to write elsewhere");
+  // The gains file last, as `ftctune run` writes it: a folder with one holds the rest.
+  for (const auto& [path, file] : sources) {
+    tune::write_file_atomic(dir / file, api.get("/v1/jobs/" + id + path));
+    if (!quiet) std::printf("wrote %s\n", (dir / file).c_str());
+  }
+  return fetch_gains(api, id, out, name, quiet, force);
 }
 
 // A job id, or a unique prefix of one among the newest 1000 jobs.
@@ -195,6 +227,78 @@ double iso_seconds(const json& v) {
   tm.tm_mon -= 1;
   return static_cast<double>(timegm(&tm)) + ms / 1000.0;
 }
+
+// What `ftctune run` prints at its end, for a job the service ran: its warnings, the tuned
+// values, the objective against the job's own controller's, the noise floor and the cost.
+void print_summary(Api& api, const std::string& id, const json& job_file) {
+  const json gains = json::parse(api.get("/v1/jobs/" + id + "/gains"));
+  const json comparison = json::parse(api.get("/v1/jobs/" + id + "/comparison"));
+  const json run = json::parse(api.get("/v1/jobs/" + id + "/files/run.json"));
+  for (const json& w : gains.value("warnings", json::array()))
+    std::fprintf(stderr, "warning: %s\n", w.get<std::string>().c_str());
+  std::string tuned = "tuned", values;
+  for (const json& c : comparison["controllers"])
+    if (c.value("role", "") == "tuned") tuned = c.value("label", tuned);
+  if (tuned.rfind("optimal ", 0) == 0) tuned = "tuned " + tuned.substr(8);
+  char buf[160];
+  // In the job's order, as `run` prints them.
+  const json parameters = job_file.is_object()
+                              ? job_file.value("/tuning/parameters"_json_pointer, json::array())
+                              : json::array();
+  for (const json& p : parameters) {
+    if (!p.is_object()) continue;
+    const std::string n = p.value("name", "");
+    if (!gains["tuned"].contains(n)) continue;
+    std::snprintf(buf, sizeof buf, "%s%s = %.5g", values.empty() ? "" : ", ", n.c_str(),
+                  gains["tuned"][n].get<double>());
+    values += buf;
+  }
+  std::printf("%s: %s\n", tuned.c_str(), values.c_str());
+  const auto number = [](const json& v) {
+    return v.is_number() ? v.get<double>() : std::numeric_limits<double>::infinity();
+  };
+  const double best = number(gains["objective"]["value"]);
+  const double base = number(gains["baseline"]["objective"]);
+  std::printf("  %s = %.6e (job's own controller: %.6e",
+              gains["objective"].value("metric", "objective").c_str(), best, base);
+  if (std::isfinite(best) && std::isfinite(base) && base > 0)
+    std::printf(", %.3g %% %s", 100 * std::abs(base - best) / base,
+                best <= base ? "lower" : "higher");
+  std::printf("); fitness J = %.6g\n", number(gains["fitness"]));
+  if (gains["objective"].contains("scenarios")) {
+    const json& sc = gains["objective"]["scenarios"];
+    std::printf("  over %lld scenarios: %lld listed, %lld ensemble members; %lld unrecoverable%s\n",
+                sc.value("listed", 0LL) + sc.value("members", 0LL), sc.value("listed", 0LL),
+                sc.value("members", 0LL), sc.value("unrecoverable", 0LL),
+                sc.value("left_out", 0LL) > 0 ? ", left out of the objective" : "");
+  }
+  if (comparison.contains("noise_floor"))
+    std::printf("  %s\n", comparison["noise_floor"].get<std::string>().c_str());
+  const int threads = run.value("threads", 0);
+  std::printf("  %lld simulations on %d thread%s in %.2f s on the server\n",
+              run.value("simulations", 0LL), threads, threads == 1 ? "" : "s",
+              run.value("wall_seconds", 0.0));
+}
+
+// "ETA 12.3 s" from the evaluations done since the client first saw the job's progress.
+struct Eta {
+  std::chrono::steady_clock::time_point t0;
+  long long e0 = -1;
+  std::string text(long long evaluations, long long total) {
+    const auto now = std::chrono::steady_clock::now();
+    if (e0 < 0 || evaluations < e0) {
+      t0 = now;
+      e0 = evaluations;
+    }
+    const double elapsed = std::chrono::duration<double>(now - t0).count();
+    if (evaluations <= e0 || elapsed <= 0) return "ETA -";
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "ETA %.1f s",
+                  elapsed * static_cast<double>(total - evaluations) /
+                      static_cast<double>(evaluations - e0));
+    return buf;
+  }
+};
 
 }  // namespace
 
@@ -242,17 +346,26 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
           std::fflush(stdout);
           if (!*wait) return 0;
           int last_iteration = -2;
+          Eta eta;
           while (true) {
             const json j = json::parse(api.get("/v1/jobs/" + id));
             const std::string status = j["status"];
             const int it =
                 j["progress"]["iteration"].is_null() ? -1 : j["progress"]["iteration"].get<int>();
+            const std::string remaining =
+                eta.text(j["progress"]["evaluations"].get<long long>(),
+                         j["progress"]["total_evaluations"].get<long long>());
             if (it != last_iteration && !g.quiet) {
-              std::fprintf(stderr, "%s\n", describe(j).c_str());
+              std::fprintf(stderr, "%s%s\n", describe(j).c_str(),
+                           status == "running" ? ("  " + remaining).c_str() : "");
               last_iteration = it;
             }
-            if (status == "succeeded")
-              return fetch_gains(api, id, *out, j["name"], g.quiet, *force);
+            if (status == "succeeded") {
+              const int rc = fetch_gains(api, id, *out, j["name"], g.quiet, *force);
+              if (rc == 0 && !g.quiet)
+                print_summary(api, id, json::parse(*text, nullptr, false));
+              return rc;
+            }
             if (status == "failed" || status == "cancelled") {
               std::fprintf(stderr, "ftctune: job %s %s\n", id.c_str(), status.c_str());
               return 1;
@@ -296,12 +409,12 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
       "fetch", "Download a finished job's gains file (with --all, its other results too)",
       [&g, out, force, all](Api& api, const std::string& id) {
         const json j = json::parse(api.get("/v1/jobs/" + id));
-        return *all ? fetch_all(api, id, *out, j["name"], g.quiet, *force)
+        return *all ? fetch_all(api, id, *out, j["name"], j["status"], g.quiet, *force)
                     : fetch_gains(api, id, *out, j["name"], g.quiet, *force);
       });
   fetch->add_flag("--all", *all,
-                  "Also history.csv, trials.csv, comparison.json, comparison.md and report.html, "
-                  "beside the gains file");
+                  "Also every other file of the job (the folder `ftctune run` writes, which "
+                  "`ftctune report` takes) and report.html, beside the gains file");
   fetch
       ->add_option("-o,--output", *out,
                    "Output file (default out/<job name>/service-<id>/gains.json)")
@@ -388,7 +501,9 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
           const json j = json::parse(body);
           std::printf("%-16s  %-20s  %-10s  %-19s  %9s  %s\n", "ID", "NAME", "STATE",
                       "SUBMITTED (UTC)", "DURATION", "PROGRESS");
-          const double now = static_cast<double>(std::time(nullptr));
+          const double now =
+              std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+                  .count();
           for (const json& job : j["jobs"]) {
             const double start = iso_seconds(job["started_at"]);
             const double end = job["finished_at"].is_null() ? now : iso_seconds(job["finished_at"]);

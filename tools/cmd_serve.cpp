@@ -169,6 +169,10 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
   sub->add_option("--max-connections-per-client", o->service.max_connections_per_client,
                   "Connections one address may hold at once; more get 429 (default 16)")
       ->check(CLI::Range(1, 1023));
+  sub->add_option("--max-event-streams", o->service.max_event_streams,
+                  "Live-update streams (the dashboard's pages) open at once, each holding a "
+                  "connection; more get 503 (default 32, at most half of --max-connections)")
+      ->check(CLI::Range(0, 1023));
   sub->callback([&action, o] { action = [o] { return run_serve(*o); }; });
 }
 

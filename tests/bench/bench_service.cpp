@@ -2,15 +2,23 @@
 //   1. overhead: Table 1 job submitted over HTTP until its gains are fetched, versus the same
 //      tuning run in process (what `ftctune run` does), median of 5 each;
 //   2. latency of GET /v1/jobs/{id} while the Table 1 job runs (p50, p99);
-//   3. submissions per second of tiny jobs from 8 client threads.
-// Run: build/tests/ftc_bench_service
+//   3. submissions per second of tiny jobs from 8 client threads;
+//   4. live updates: a job's tuning time (run.json's wall_seconds) with 0 and with 20 event
+//      streams (GET /v1/events, the dashboard's pages) open, interleaved, median of 7 each.
+// Run: build/tests/ftc_bench_service [events]   (events: only the fourth)
+#include <signal.h>
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <memory>
+#include <string>
 #include <thread>
 
 #include "service/httplib.hpp"
@@ -40,7 +48,47 @@ double percentile(std::vector<double> v, double p) {
 
 }  // namespace
 
-int main() {
+// `n` pages following the live updates: `curl -N` processes reading GET /v1/events, so that
+// their reading costs this process (the server's) nothing, as browsers' would not.
+class Pages {
+ public:
+  Pages(int port, int n, httplib::Client& c) : c_(c) {
+    const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/v1/events";
+    for (int i = 0; i < n; ++i) {
+      const pid_t pid = ::fork();
+      if (pid == 0) {
+        ::execlp("curl", "curl", "-sN", "--max-time", "600", "-o", "/dev/null", url.c_str(),
+                 static_cast<char*>(nullptr));
+        ::_exit(127);
+      }
+      pids_.push_back(pid);
+    }
+    // Every stream open before the job starts.
+    while (json::parse(c.Get("/healthz")->body)["event_streams"] != n)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ~Pages() {
+    for (pid_t pid : pids_) ::kill(pid, SIGTERM);
+    for (pid_t pid : pids_) ::waitpid(pid, nullptr, 0);
+    // The server notices closed streams at its next keep-alive write.
+    while (json::parse(c_.Get("/healthz")->body)["event_streams"] != 0)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+
+ private:
+  httplib::Client& c_;
+  std::vector<pid_t> pids_;
+};
+
+double cpu_seconds() {
+  rusage ru{};
+  ::getrusage(RUSAGE_SELF, &ru);
+  return static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+         static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) / 1e6;
+}
+
+int main(int argc, char** argv) {
+  const bool only_events = argc > 1 && std::string(argv[1]) == "events";
   spdlog::set_level(spdlog::level::warn);  // the service logs every job; keep the figures readable
   std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/table1.json");
   const json table1 = json::parse(in);
@@ -51,10 +99,52 @@ int main() {
   o.port = 0;
   o.store = store;
   o.threads = 2;
+  o.max_connections_per_client = 40;  // 20 pages and the benchmark's own requests, all loopback
   ftc::tune::TuningService service(o);
   const int port = service.start();
   httplib::Client c("127.0.0.1", port);
   c.set_read_timeout(60, 0);
+
+  // 4. Live updates: the same job with no page open and with 20, interleaved.
+  const auto live_updates = [&] {
+    json job = table1;
+    job["tuning"]["algorithm"]["iterations"] = 30;  // about 2 s: long enough to time
+    // The job's wall time (run.json) and this process's CPU time while it ran.
+    const auto run_once = [&](int pages, std::vector<double>& wall, std::vector<double>& cpu) {
+      std::unique_ptr<Pages> open = pages > 0 ? std::make_unique<Pages>(port, pages, c) : nullptr;
+      const double cpu0 = cpu_seconds();
+      const std::string id =
+          json::parse(c.Post("/v1/jobs", job.dump(), "application/json")->body)["id"];
+      while (json::parse(c.Get(("/v1/jobs/" + id).c_str())->body)["status"] != "succeeded")
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      cpu.push_back(cpu_seconds() - cpu0);
+      const json run = json::parse(c.Get(("/v1/jobs/" + id + "/files/run.json").c_str())->body);
+      wall.push_back(run["wall_seconds"].get<double>());
+    };
+    constexpr int kRounds = 9;
+    std::vector<double> wall0, wall20, cpu0, cpu20;
+    for (int rep = 0; rep < kRounds; ++rep) {
+      if (rep % 2 == 0) {
+        run_once(0, wall0, cpu0);
+        run_once(20, wall20, cpu20);
+      } else {
+        run_once(20, wall20, cpu20);
+        run_once(0, wall0, cpu0);
+      }
+    }
+    std::printf("table1 (30 iterations), wall:     0 pages median %.3f s, 20 pages %.3f s "
+                "(%+.1f %%), median of %d, interleaved\n",
+                median(wall0), median(wall20), 100 * (median(wall20) / median(wall0) - 1), kRounds);
+    std::printf("                         CPU:      0 pages median %.3f s, 20 pages %.3f s "
+                "(%+.1f %%)\n",
+                median(cpu0), median(cpu20), 100 * (median(cpu20) / median(cpu0) - 1));
+  };
+  if (only_events) {
+    live_updates();
+    service.stop();
+    std::filesystem::remove_all(store);
+    return 0;
+  }
 
   // 1. Overhead.
   std::vector<double> direct, via_service;
@@ -115,6 +205,9 @@ int main() {
   const double took = seconds_since(t0);
   std::printf("tiny submissions, %d threads:      %d accepted in %.3f s = %.0f per second\n",
               kThreads, ok.load(), took, ok.load() / took);
+  while (json::parse(c.Get("/healthz")->body)["queued"] != 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  live_updates();
   service.stop();
   std::filesystem::remove_all(store);
   return 0;

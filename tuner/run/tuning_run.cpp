@@ -83,6 +83,69 @@ nlohmann::json run_checkpoint(const Optimizer& optimizer, const std::vector<Tria
   return {{"optimizer", optimizer.state()}, {"trials", trials_json(trials)}};
 }
 
+namespace {
+
+// What the problem scores, as the outcome records it.
+void describe_problem(const TuningProblem& problem, TuningOutcome& r) {
+  r.scenarios = problem.scenarios();
+  r.listed_scenarios = problem.listed_scenarios();
+  r.unrecoverable = problem.unrecoverable();
+  r.left_out = problem.left_out();
+  r.listed_recoverable.clear();
+  for (std::size_t i = 0; i < problem.listed_scenarios(); ++i)
+    r.listed_recoverable.push_back(problem.recoverable(i));
+}
+
+// The comparison of r's best controller with the job's own and its compare entries, and the
+// noise floor of the best (tune() after a completed run, compare_best() after a stopped one).
+void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator& evaluator,
+                  std::int64_t max_trajectory_rows) {
+  const Job& job = problem.job();
+
+  for (std::size_t j = 0; j < problem.space().names.size(); ++j)
+    r.tuned.emplace_back(problem.space().names[j], r.optimization.best[j]);
+  r.warnings = bound_warnings(job, r.optimization.best);
+
+  std::vector<sim::ControllerConfig> controllers;
+  for (const CompareEntry& c : job.compare) {
+    r.comparison.push_back({c.label, "compare", c.controller, {}, {}});
+    controllers.push_back(c.controller);
+  }
+  const std::string name = display_name(job.controller.type);
+  r.comparison.push_back({name + " (job)", "baseline", job.controller, {}, {}});
+  controllers.push_back(job.controller);
+  r.comparison.push_back({"optimal " + name, "tuned", r.tuned_controller, {}, {}});
+  controllers.push_back(r.tuned_controller);
+
+  std::vector<CandidateOutcome> outcomes = problem.evaluate(
+      controllers, evaluator, comparison_record_every(job, max_trajectory_rows));
+  for (std::size_t i = 0; i < outcomes.size(); ++i) {
+    r.comparison[i].summary = problem.summarize(outcomes[i].evaluation);
+    r.comparison[i].outcome = std::move(outcomes[i]);
+  }
+  r.simulations += static_cast<std::int64_t>(controllers.size() * problem.scenarios());
+  // The noise floor: the winner on R copies of the problem whose initial states are nudged.
+  NoiseFloor nf;
+  nf.objective_min = std::numeric_limits<double>::infinity();
+  nf.objective_max = -std::numeric_limits<double>::infinity();
+  for (int k = 0; k < nf.repeats; ++k) {
+    const TuningProblem p =
+        problem.perturbed(r.seed, kNoiseFloorStream + static_cast<std::uint64_t>(k), nf.perturbation);
+    const double v =
+        p.evaluate(std::span<const sim::ControllerConfig>(&r.tuned_controller, 1), evaluator)[0]
+            .evaluation.objective;
+    nf.objective_min = std::min(nf.objective_min, v);
+    nf.objective_max = std::max(nf.objective_max, v);
+  }
+  r.simulations +=
+      static_cast<std::int64_t>(nf.repeats) * static_cast<std::int64_t>(problem.scenarios());
+  nf.relative_spread =
+      (nf.objective_max - nf.objective_min) / r.best().outcome.evaluation.objective;
+  r.noise_floor = nf;
+}
+
+}  // namespace
+
 TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, AlgorithmPtr algorithm,
                    std::uint64_t seed, BatchEvaluator& evaluator, const RunOptions& options) {
   const Job& job = problem.job();
@@ -101,12 +164,7 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   r.threads_per_rank = evaluator.threads_per_rank();
   r.evaluator = evaluator.name();
 
-  r.scenarios = problem.scenarios();
-  r.listed_scenarios = problem.listed_scenarios();
-  r.unrecoverable = problem.unrecoverable();
-  r.left_out = problem.left_out();
-  for (std::size_t i = 0; i < problem.listed_scenarios(); ++i)
-    r.listed_recoverable.push_back(problem.recoverable(i));
+  describe_problem(problem, r);
 
   // The optimiser works in search coordinates (ln x on a log scale); everything it reports
   // leaves here in parameter values.
@@ -146,47 +204,7 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   r.optimization.best = problem.to_parameters(r.optimization.best);
   for (HistoryRow& h : r.optimization.history) h = in_values(std::move(h));
   if (!r.optimization.completed || !options.compare) return r;
-
-  for (std::size_t j = 0; j < problem.space().names.size(); ++j)
-    r.tuned.emplace_back(problem.space().names[j], r.optimization.best[j]);
-  r.warnings = bound_warnings(job, r.optimization.best);
-
-  std::vector<sim::ControllerConfig> controllers;
-  for (const CompareEntry& c : job.compare) {
-    r.comparison.push_back({c.label, "compare", c.controller, {}, {}});
-    controllers.push_back(c.controller);
-  }
-  const std::string name = display_name(job.controller.type);
-  r.comparison.push_back({name + " (job)", "baseline", job.controller, {}, {}});
-  controllers.push_back(job.controller);
-  r.comparison.push_back({"optimal " + name, "tuned", r.tuned_controller, {}, {}});
-  controllers.push_back(r.tuned_controller);
-
-  std::vector<CandidateOutcome> outcomes = problem.evaluate(
-      controllers, evaluator, comparison_record_every(job, options.max_trajectory_rows));
-  for (std::size_t i = 0; i < outcomes.size(); ++i) {
-    r.comparison[i].summary = problem.summarize(outcomes[i].evaluation);
-    r.comparison[i].outcome = std::move(outcomes[i]);
-  }
-  r.simulations += static_cast<std::int64_t>(controllers.size() * problem.scenarios());
-  // The noise floor: the winner on R copies of the problem whose initial states are nudged.
-  NoiseFloor nf;
-  nf.objective_min = std::numeric_limits<double>::infinity();
-  nf.objective_max = -std::numeric_limits<double>::infinity();
-  for (int k = 0; k < nf.repeats; ++k) {
-    const TuningProblem p =
-        problem.perturbed(seed, kNoiseFloorStream + static_cast<std::uint64_t>(k), nf.perturbation);
-    const double v =
-        p.evaluate(std::span<const sim::ControllerConfig>(&r.tuned_controller, 1), evaluator)[0]
-            .evaluation.objective;
-    nf.objective_min = std::min(nf.objective_min, v);
-    nf.objective_max = std::max(nf.objective_max, v);
-  }
-  r.simulations +=
-      static_cast<std::int64_t>(nf.repeats) * static_cast<std::int64_t>(problem.scenarios());
-  nf.relative_spread =
-      (nf.objective_max - nf.objective_min) / r.best().outcome.evaluation.objective;
-  r.noise_floor = nf;
+  compare_with(problem, r, evaluator, options.max_trajectory_rows);
   return r;
 }
 
@@ -279,6 +297,48 @@ TuningOutcome tune(const Job& job, BatchEvaluator& evaluator, const RunOptions& 
   const AlgorithmPtr& algorithm = job.tuning->algorithm;
   const std::unique_ptr<Optimizer> optimizer = algorithm->make(seed, problem.space());
   return tune(problem, *optimizer, algorithm, seed, evaluator, options);
+}
+
+TuningOutcome checkpoint_outcome(const Job& job, const nlohmann::json& checkpoint,
+                                 std::optional<std::uint64_t> seed) {
+  if (!job.tuning) throw InputError("job " + job.name, "/tuning", "is required to tune");
+  const TuningProblem problem(job);
+  TuningOutcome r;
+  r.job = job;
+  r.job_sha256 = canonical_job_sha256(job);
+  r.seed = seed.value_or(job.tuning->seed);
+  r.algorithm = job.tuning->algorithm;
+  describe_problem(problem, r);
+  const std::unique_ptr<Optimizer> optimizer = r.algorithm->make(r.seed, problem.space());
+  const bool with_trials = checkpoint.is_object() && checkpoint.contains("optimizer");
+  try {
+    optimizer->restore(with_trials ? checkpoint["optimizer"] : checkpoint);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError("checkpoint", "", std::string("damaged optimiser state: ") + e.what());
+  }
+  if (with_trials) r.trials = trials_from_json(checkpoint.value("trials", nlohmann::json()));
+  if (optimizer->history().empty())
+    throw InputError("checkpoint", "/optimizer/history", "has no iteration");
+  const HistoryRow& last = optimizer->history().back();
+  r.tuned_controller = problem.controller_for(last.best);
+  r.optimization.best = problem.to_parameters(last.best);
+  r.optimization.best_fitness = last.best_fitness;
+  r.optimization.evaluations = last.evaluations;
+  r.optimization.completed = optimizer->iteration() == optimizer->iterations();
+  for (HistoryRow h : optimizer->history()) {
+    h.best = problem.to_parameters(h.best);
+    r.optimization.history.push_back(std::move(h));
+  }
+  return r;
+}
+
+void compare_best(TuningOutcome& r, BatchEvaluator& evaluator, std::int64_t max_trajectory_rows) {
+  if (!r.comparison.empty() || r.optimization.history.empty()) return;
+  const TuningProblem problem(r.job);
+  r.threads = evaluator.concurrency();
+  r.threads_per_rank = evaluator.threads_per_rank();
+  r.evaluator = evaluator.name();
+  compare_with(problem, r, evaluator, max_trajectory_rows);
 }
 
 }  // namespace ftc::tune

@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <new>
 #include <nlohmann/json.hpp>
@@ -16,10 +17,13 @@
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/version.hpp"
 #include "service/http_server.hpp"
+#include "service/web_assets.hpp"
 
 namespace ftc::tune::service_detail {
 
@@ -56,6 +60,8 @@ json job_links(const std::string& id) {
           {"trials", base + "/trials"},
           {"comparison", base + "/comparison"},
           {"report", base + "/report"},
+          {"files", base + "/files"},
+          {"events", base + "/events"},
           {"cancel", base + "/cancel"}};
 }
 
@@ -77,7 +83,44 @@ json job_json_view(const JobRecord& r) {
           {"cancel_requested", r.cancel_requested},
           {"attempts", r.attempts},
           {"error", nullable(r.error)},
+          // Results so far (gains, history, trials) of a job that ran an iteration but did not
+          // finish it all: running, or cancelled.
+          {"partial", r.iteration >= 0 && (r.status == JobStatus::running ||
+                                           r.status == JobStatus::cancelled)},
           {"links", job_links(r.id)}};
+}
+
+// A stored file's media type, from its name.
+const char* media_type(const std::string& name) {
+  const auto ends = [&](const char* ext) {
+    const std::size_t n = std::strlen(ext);
+    return name.size() >= n && name.compare(name.size() - n, n, ext) == 0;
+  };
+  if (ends(".json")) return "application/json";
+  if (ends(".csv")) return "text/csv";
+  if (ends(".md")) return "text/markdown; charset=utf-8";
+  if (ends(".html")) return "text/html; charset=utf-8";
+  if (ends(".png")) return "image/png";
+  if (ends(".svg")) return "image/svg+xml";
+  return "application/octet-stream";
+}
+
+json history_rows(const TuningOutcome& r) {
+  json rows = json::array();
+  std::vector<std::string> names;
+  for (const ParameterBounds& b : r.job.tuning->parameters) names.push_back(b.name);
+  for (const HistoryRow& h : r.optimization.history) {
+    json best = json::object();
+    for (std::size_t i = 0; i < names.size() && i < h.best.size(); ++i)
+      best[names[i]] = json_io::json_number(h.best[i]);
+    json row = {{"iteration", h.iteration},
+                {"best_fitness", json_io::json_number(h.best_fitness)},
+                {"best", best},
+                {"evaluations", h.evaluations}};
+    for (const auto& [name, value] : h.extras) row[name] = json_io::json_number(value);
+    rows.push_back(std::move(row));
+  }
+  return rows;
 }
 
 std::string fmt_g(double v) {
@@ -140,6 +183,37 @@ std::string seconds_text(double s) {
   return buf;
 }
 
+// The dashboard's file at `path`, if it is one: served to anyone (it holds no data; the page asks
+// for the token), with a policy that lets it run only its own scripts.
+const WebAsset* web_asset(const std::string& path) {
+  for (const WebAsset& a : web_assets())
+    if (path == a.path) return &a;
+  return nullptr;
+}
+
+bool serve_asset(const httplib::Request& req, httplib::Response& res) {
+  if (req.method != "GET" && req.method != "HEAD") return false;
+  const WebAsset* a = web_asset(req.path);
+  if (!a) return false;
+  std::string type = a->type;
+  if (type.rfind("text/", 0) == 0) type += "; charset=utf-8";
+  res.status = 200;
+  res.set_content(reinterpret_cast<const char*>(a->data), a->size, type.c_str());
+  res.set_header("Cache-Control", "no-cache");
+  return true;
+}
+
+// What a page may do: its own scripts, styles and requests only; nothing inline, no frames, no
+// other origin. The dashboard's files get it, and every other answer a stricter one.
+constexpr const char* kPagePolicy =
+    "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; "
+    "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'";
+// report.html is one self-contained page: its own style and inline images, no script at all.
+constexpr const char* kReportPolicy =
+    "default-src 'none'; style-src 'unsafe-inline'; img-src data:; base-uri 'none'; "
+    "form-action 'none'; frame-ancestors 'none'";
+constexpr const char* kDataPolicy = "default-src 'none'; frame-ancestors 'none'";
+
 }  // namespace
 
 json Api::view(const JobRecord& r) {
@@ -183,6 +257,7 @@ void Api::method_not_allowed(httplib::Response& res, const char* allow) {
 }
 
 void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
+  if (serve_asset(req, res)) return;
   const std::vector<std::string> p = split_path(req.path);
   const std::string& m = req.method;
   if (p.size() == 1 && p[0] == "healthz") {
@@ -198,7 +273,16 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
                        {{"writable", writable},
                         {"error", h.error ? json(*h.error) : json(nullptr)},
                         {"unstored_jobs", h.unstored},
-                        {"unrecorded_cancels", h.cancels}}}});
+                        {"unrecorded_cancels", h.cancels}}},
+                      {"event_streams", hub_.open_streams()}});
+  }
+  if (p.size() == 2 && p[0] == "v1" && p[1] == "events") {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    return events(req.has_param("job") ? req.get_param_value("job") : "", res);
+  }
+  if (p.size() == 2 && p[0] == "v1" && p[1] == "validate") {
+    if (m != "POST") return method_not_allowed(res, "POST");
+    return validate(req, res);
   }
   if (p.size() < 2 || p[0] != "v1" || p[1] != "jobs")
     return send_error(res, 404, "not_found", "no such resource: " + req.path);
@@ -222,6 +306,7 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
                                 "it has stopped");
         case JobStore::Removal::removed:
           spdlog::info("job {} deleted", id);
+          changed(id);
           return send_json(res, 200, {{"id", id}, {"deleted", true}});
       }
     }
@@ -230,9 +315,20 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
     if (!job) return send_error(res, 404, "not_found", "no job " + id);
     return send_json(res, 200, view(*job));
   }
+  if (p.size() == 4 && p[3] == "events") {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    if (!store_.get(id)) return send_error(res, 404, "not_found", "no job " + id);
+    return events(id, res);
+  }
   if (p.size() == 4 && p[3] == "cancel") {
     if (m != "POST") return method_not_allowed(res, "POST");
     return cancel(id, res);
+  }
+  if (p.size() >= 4 && p[3] == "files") {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    std::string name;
+    for (std::size_t i = 4; i < p.size(); ++i) name += (name.empty() ? "" : "/") + p[i];
+    return files(id, name, res);
   }
   if (p.size() == 4 && (p[3] == "gains" || p[3] == "history" || p[3] == "trials" ||
                         p[3] == "comparison" || p[3] == "report")) {
@@ -242,7 +338,7 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   send_error(res, 404, "not_found", "no such resource: " + req.path);
 }
 
-void Api::submit(const httplib::Request& req, httplib::Response& res) {
+std::optional<Job> Api::check_job(const httplib::Request& req, httplib::Response& res) {
   const auto bad_request = [&](const char* code, const InputError& e) {
     json details = json::array();
     for (const FieldError& fe : e.errors())
@@ -253,48 +349,82 @@ void Api::submit(const httplib::Request& req, httplib::Response& res) {
   try {
     body = json_io::parse_json_text(req.body, "request body");
   } catch (const InputError& e) {
-    return bad_request("invalid_json", e);
+    bad_request("invalid_json", e);
+    return std::nullopt;
   }
   Job job;
   try {
     job = parse_job(body, "request body");
   } catch (const InputError& e) {
-    return bad_request("invalid_job", e);
+    bad_request("invalid_job", e);
+    return std::nullopt;
   }
-  if (!job.tuning)
-    return send_error(res, 400, "invalid_job", "request body: /tuning: is required to tune",
-                      json::array({{{"path", "/tuning"}, {"message", "is required to tune"}}}));
+  if (!job.tuning) {
+    send_error(res, 400, "invalid_job", "request body: /tuning: is required to tune",
+               json::array({{{"path", "/tuning"}, {"message", "is required to tune"}}}));
+    return std::nullopt;
+  }
   const double steps = static_cast<double>(job.tuning->algorithm->evaluations()) *
                        static_cast<double>(job.steps_per_evaluation());
-  if (steps > opt_.max_steps)
-    return send_error(res, 400, "job_too_large",
-                      "the job needs " + fmt_g(steps) +
-                          " simulated steps (evaluations x steps per "
-                          "evaluation), " +
-                          fmt_g(steps / opt_.max_steps) + " times the server's budget of " +
-                          fmt_g(opt_.max_steps),
-                      json{{{"steps", steps}, {"budget", opt_.max_steps}}});
+  if (steps > opt_.max_steps) {
+    send_error(res, 400, "job_too_large",
+               "the job needs " + fmt_g(steps) +
+                   " simulated steps (evaluations x steps per "
+                   "evaluation), " +
+                   fmt_g(steps / opt_.max_steps) + " times the server's budget of " +
+                   fmt_g(opt_.max_steps),
+               json{{{"steps", steps}, {"budget", opt_.max_steps}}});
+    return std::nullopt;
+  }
 
   // Memory by design: what the run would hold, estimated before it is queued.
   if (const double need = estimated_run_bytes(job);
-      need > static_cast<double>(opt_.max_job_memory_bytes))
-    return send_error(res, 413, "job_too_large",
-                      "the job would need about " + bytes_text(need) + " of memory (" +
-                          std::to_string(job.scenario_count()) +
-                          " scenarios, ensemble members included, and their objectives for "
-                          "every evaluation), above the server's limit of " +
-                          bytes_text(static_cast<double>(opt_.max_job_memory_bytes)) +
-                          " per job: ask for fewer ensemble members or evaluations",
-                      json{{"bytes", need}, {"limit", opt_.max_job_memory_bytes}});
+      need > static_cast<double>(opt_.max_job_memory_bytes)) {
+    send_error(res, 413, "job_too_large",
+               "the job would need about " + bytes_text(need) + " of memory (" +
+                   std::to_string(job.scenario_count()) +
+                   " scenarios, ensemble members included, and their objectives for "
+                   "every evaluation), above the server's limit of " +
+                   bytes_text(static_cast<double>(opt_.max_job_memory_bytes)) +
+                   " per job: ask for fewer ensemble members or evaluations",
+               json{{"bytes", need}, {"limit", opt_.max_job_memory_bytes}});
+    return std::nullopt;
+  }
   if (const double bytes = estimated_result_bytes(job, opt_.trajectory_rows);
-      bytes > static_cast<double>(opt_.max_stored_bytes))
-    return send_error(res, 400, "job_too_large",
-                      "the job's results would take at least " + megabytes(bytes) +
-                          " (its comparison trajectories and trials), above the server's limit "
-                          "of " +
-                          megabytes(static_cast<double>(opt_.max_stored_bytes)) +
-                          " per job: ask for fewer evaluations, scenarios or compared controllers",
-                      json{{"bytes", bytes}, {"limit", opt_.max_stored_bytes}});
+      bytes > static_cast<double>(opt_.max_stored_bytes)) {
+    send_error(res, 400, "job_too_large",
+               "the job's results would take at least " + megabytes(bytes) +
+                   " (its comparison trajectories and trials), above the server's limit "
+                   "of " +
+                   megabytes(static_cast<double>(opt_.max_stored_bytes)) +
+                   " per job: ask for fewer evaluations, scenarios or compared controllers",
+               json{{"bytes", bytes}, {"limit", opt_.max_stored_bytes}});
+    return std::nullopt;
+  }
+  return job;
+}
+
+// The checks of a submission, without submitting: 200 with what the job would be, or the
+// same 400 a submission gets.
+void Api::validate(const httplib::Request& req, httplib::Response& res) {
+  const std::optional<Job> job = check_job(req, res);
+  if (!job) return;
+  json parameters = json::array();
+  for (const ParameterBounds& b : job->tuning->parameters) parameters.push_back(b.name);
+  send_json(res, 200,
+            {{"valid", true},
+             {"name", job->name},
+             {"parameters", parameters},
+             {"iterations", job->tuning->algorithm->iterations()},
+             {"total_evaluations", job->tuning->algorithm->evaluations()},
+             {"steps", static_cast<double>(job->tuning->algorithm->evaluations()) *
+                           static_cast<double>(job->steps_per_evaluation())}});
+}
+
+void Api::submit(const httplib::Request& req, httplib::Response& res) {
+  const std::optional<Job> checked = check_job(req, res);
+  if (!checked) return;
+  const Job& job = *checked;
   // A store that owes finished jobs their results takes no new ones until it has written them.
   if (const StoreHealth h = runner_.health(); h.owes())
     return insufficient_storage(res, h.error.value_or("it has refused writes"));
@@ -336,6 +466,7 @@ void Api::submit(const httplib::Request& req, httplib::Response& res) {
         "Idempotency-Key was already used for job " + record.id + " with a different job");
   if (created) {
     spdlog::info("job {} ({}) queued", record.id, record.name);
+    changed(record.id);
     runner_.notify();
   }
   res.set_header("Location", "/v1/jobs/" + record.id);
@@ -357,12 +488,18 @@ void Api::list(const httplib::Request& req, httplib::Response& res) {
     return send_error(res, 400, "invalid_parameter", "limit must be an integer in 1..1000");
   if (req.has_param("offset") && !parse_int(req.get_param_value("offset"), 0, 1000000000, offset))
     return send_error(res, 400, "invalid_parameter", "offset must be a non-negative integer");
+  const std::string name = req.has_param("name") ? req.get_param_value("name") : "";
+  if (name.size() > 200)
+    return send_error(res, 400, "invalid_parameter", "name is longer than 200 characters");
   json jobs = json::array();
-  for (const JobRecord& r : store_.list(status, static_cast<int>(limit), static_cast<int>(offset)))
+  for (const JobRecord& r :
+       store_.list(status, static_cast<int>(limit), static_cast<int>(offset), name))
     jobs.push_back(view(r));
-  send_json(
-      res, 200,
-      {{"jobs", jobs}, {"total", store_.count(status)}, {"limit", limit}, {"offset", offset}});
+  send_json(res, 200,
+            {{"jobs", jobs},
+             {"total", store_.count(status, name)},
+             {"limit", limit},
+             {"offset", offset}});
 }
 
 void Api::cancel(const std::string& id, httplib::Response& res) {
@@ -394,17 +531,160 @@ void Api::cancel(const std::string& id, httplib::Response& res) {
     after = before;
   }
   spdlog::info("job {}: cancel requested ({})", id, to_string(after->status));
+  changed(id);
   send_json(res, 202, view(*after));
+}
+
+void Api::changed(const std::string& id) noexcept {
+  try {
+    if (const std::optional<JobRecord> r = store_.get(id))
+      hub_.publish("job", id, encode(view(*r)));
+    else
+      hub_.publish("deleted", id, encode(json{{"id", id}}));
+  } catch (const std::exception& e) {
+    spdlog::warn("job {}: no live update sent: {}", id, e.what());
+  }
+}
+
+// Server-sent events: `job` with a job's view each time it changes (queued, started, each
+// iteration, finished, cancelled), `deleted` when it is gone; a comment after 15 s without one
+// keeps the connection alive; a closed page's stream ends within a quarter of a second. With `job` (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each
+// stream holds one of the server's connection threads, so at most --max-event-streams are open
+// at once; more are answered 503.
+void Api::events(const std::string& job, httplib::Response& res) {
+  std::optional<EventHub::Stream> stream = hub_.open();
+  if (!stream) {
+    res.set_header("Retry-After", "10");
+    return send_error(res, 503, "too_many_streams",
+                      "the server has " + std::to_string(hub_.max_streams()) +
+                          " event streams open, the most it serves (--max-event-streams, at most "
+                          "half of --max-connections): close a page, or reload it later",
+                      json{{"limit", hub_.max_streams()}});
+  }
+  struct State {
+    EventHub::Stream stream;
+    std::string job;
+    bool started = false;
+  };
+  auto state = std::make_shared<State>(State{std::move(*stream), job});
+  res.set_header("Cache-Control", "no-store");
+  res.set_chunked_content_provider(
+      "text/event-stream", [state](std::size_t, httplib::DataSink& sink) {
+        std::string out;
+        if (!state->started) {
+          state->started = true;
+          out = "retry: 3000\n: ftctune events\n\n";
+        } else {
+          // Waits in short slices, so that a page closed meanwhile frees its stream (and its
+          // connection thread) at once; a comment after 15 s without an event keeps proxies
+          // from closing the connection.
+          for (int slice = 0; slice < 60 && out.empty(); ++slice) {
+            const std::optional<std::vector<Event>> events = state->stream.next(250);
+            if (!events) {
+              sink.done();
+              return true;
+            }
+            for (const Event& e : *events)
+              if (state->job.empty() || e.job_id == state->job) out += e.text;
+            if (out.empty() && GuardedServer::peer_closed()) return false;
+          }
+          if (out.empty()) out = ":\n\n";
+        }
+        return sink.write(out.data(), out.size());
+      });
+}
+
+// The partial results of a running job, from its last checkpoint: history and trials as they
+// stand, and gains.json for its best so far (compared as a finished run's best is; computed on
+// request, kept until the next iteration).
+void Api::running_result(const httplib::Request& req, httplib::Response& res,
+                         const std::string& id, const std::string& what) {
+  const std::string format = req.has_param("format") ? req.get_param_value("format") : "";
+  if (what == "comparison" || what == "report")
+    return send_error(res, 409, "not_ready",
+                      "job " + id + " is running; its " + what +
+                          " exists once it has finished (its gains, history and trials so far "
+                          "are served now)");
+  if (what == "history" && !format.empty() && format != "csv" && format != "json")
+    return send_error(res, 400, "invalid_parameter", "format must be csv or json");
+  const std::optional<JobStore::Checkpoint> c = store_.checkpoint_with_trials(id);
+  if (!c)
+    return send_error(res, 409, "not_ready",
+                      "job " + id + " has not finished its first iteration yet");
+  if (what == "gains") {
+    std::lock_guard<std::mutex> lock(partial_mutex_);
+    if (partial_gains_.id != id || partial_gains_.iteration != c->iteration) {
+      TuningOutcome r = outcome_of(id, *c);
+      const std::unique_ptr<BatchEvaluator> evaluator =
+          opt_.evaluator ? opt_.evaluator() : std::make_unique<TbbEvaluator>(opt_.threads);
+      compare_best(r, *evaluator, opt_.trajectory_rows);
+      partial_gains_ = {id, c->iteration, gains_document(r).dump(2) + "\n"};
+    }
+    res.set_header("Ftctune-Partial", "true");
+    return res.set_content(partial_gains_.text, "application/json");
+  }
+  const TuningOutcome r = outcome_of(id, *c);
+  res.set_header("Ftctune-Partial", "true");
+  if (what == "trials") return res.set_content(trials_csv(r), "text/csv");
+  if (format == "json") return send_json(res, 200, history_rows(r));
+  res.set_content(history_csv(r), "text/csv");
+}
+
+TuningOutcome Api::outcome_of(const std::string& id, const JobStore::Checkpoint& c) {
+  const Job job = parse_job_text(store_.job_json(id), "job " + id);
+  json trials = json::array();
+  for (const std::string& rows : c.trials)
+    for (json& t : json::parse(rows)) trials.push_back(std::move(t));
+  return checkpoint_outcome(
+      job, json{{"optimizer", json::parse(c.optimizer)}, {"trials", std::move(trials)}});
+}
+
+// Every stored file of a finished job with results (a listing without `name`), by name: the
+// folder `ftctune run` writes, and report.html once drawn.
+void Api::files(const std::string& id, const std::string& name, httplib::Response& res) {
+  const auto job = store_.get(id);
+  if (!job) return send_error(res, 404, "not_found", "no job " + id);
+  const std::map<std::string, std::uint64_t> sizes = store_.artifact_sizes(id);
+  if (sizes.empty())
+    return send_error(res, 409, "not_ready",
+                      "job " + id + " is " + to_string(job->status) +
+                          "; its files exist once it has succeeded, or been cancelled after an "
+                          "iteration");
+  const bool partial = job->status == JobStatus::cancelled;
+  if (partial) res.set_header("Ftctune-Partial", "true");
+  if (name.empty()) {
+    json list = json::array();
+    for (const auto& [n, bytes] : sizes) list.push_back({{"name", n}, {"bytes", bytes}});
+    return send_json(res, 200, {{"id", id}, {"partial", partial}, {"files", list}});
+  }
+  const std::optional<std::string> content = store_.artifact(id, name);
+  if (!content) return send_error(res, 404, "not_found", "job " + id + " has no file " + name);
+  res.set_content(*content, media_type(name));
 }
 
 void Api::result(const httplib::Request& req, httplib::Response& res, const std::string& id,
                  const std::string& what) {
   const auto job = store_.get(id);
   if (!job) return send_error(res, 404, "not_found", "no job " + id);
-  if (job->status != JobStatus::succeeded)
+  if (job->status == JobStatus::running) {
+    if (runner_.unstored(id))
+      return send_error(res, 409, "not_ready",
+                        "job " + id +
+                            " has finished; its results wait in the server's memory until the "
+                            "store can write them");
+    return running_result(req, res, id, what);
+  }
+  // A cancelled job that ran an iteration keeps its results so far, marked partial.
+  const bool partial = job->status == JobStatus::cancelled && store_.artifact_sizes(id).count("gains.json");
+  if (job->status != JobStatus::succeeded && !partial)
     return send_error(res, 409, "not_ready",
                       "job " + id + " is " + to_string(job->status) +
-                          "; its results exist once it has succeeded");
+                          (job->status == JobStatus::cancelled
+                               ? "; it was cancelled before it finished an iteration, so it has no "
+                                 "results"
+                               : "; its results exist once it has succeeded (a running job's "
+                                 "gains, history and trials so far are served)"));
+  if (partial) res.set_header("Ftctune-Partial", "true");
   const std::string format = req.has_param("format") ? req.get_param_value("format") : "";
   if (what == "gains") {
     res.set_content(store_.artifact(id, "gains.json").value_or(""), "application/json");
@@ -431,7 +711,7 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
   }
 }
 
-// report.html of a succeeded job: drawn from its stored files on first request, then kept.
+// report.html of a succeeded (or cancelled, partial) job: drawn from its stored files on first request, then kept.
 std::string Api::report(const std::string& id) {
   if (auto cached = store_.artifact(id, "report.html")) return *cached;
   namespace fs = std::filesystem;
@@ -523,7 +803,7 @@ void Api::receive(const httplib::Request& req, httplib::Response& res,
 
 void Api::handle(const httplib::Request& req, httplib::Response& res,
                  const httplib::ContentReader* body) {
-  if (!authenticate(req, res)) return;
+  if (!web_asset(req.path) && !authenticate(req, res)) return;
   if (body)
     receive(req, res, *body);
   else
@@ -544,8 +824,19 @@ void Api::configure(httplib::Server& http) {
   http.Delete(".*", with_body);
   http.Options(".*", handler);
   http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-    return authenticate(req, res) ? httplib::Server::HandlerResponse::Unhandled
-                                  : httplib::Server::HandlerResponse::Handled;
+    return web_asset(req.path) || authenticate(req, res)
+               ? httplib::Server::HandlerResponse::Unhandled
+               : httplib::Server::HandlerResponse::Handled;
+  });
+  // Every answer: no type sniffing, no referrer, and a content policy (no CORS header is ever
+  // sent, so other origins' pages cannot read the API).
+  http.set_post_routing_handler([](const httplib::Request& req, httplib::Response& res) {
+    res.set_header("X-Content-Type-Options", "nosniff");
+    res.set_header("Referrer-Policy", "no-referrer");
+    const char* policy = web_asset(req.path) ? kPagePolicy : kDataPolicy;
+    if (res.get_header_value("Content-Type").rfind("text/html", 0) == 0 && !web_asset(req.path))
+      policy = kReportPolicy;
+    res.set_header("Content-Security-Policy", policy);
   });
   // Errors the library produces itself (413 above the body limit, 400 for a malformed
   // request, 404 for an unknown method) get the same JSON body as ours.

@@ -3,12 +3,18 @@
 // submission budget and queue quota. It reads and writes the job store, tells the runner about
 // new jobs, and shows what the runner holds while the store cannot write (then it answers 507).
 // Private to tuner/service.
+#include <algorithm>
 #include <atomic>
+#include <mutex>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/tune/service/job_store.hpp"
 #include "ftc/tune/service/service.hpp"
+#include "service/events.hpp"
 #include "service/httplib.hpp"
 #include "service/job_runner.hpp"
 
@@ -17,7 +23,17 @@ namespace ftc::tune::service_detail {
 class Api {
  public:
   Api(const ServiceOptions& options, JobStore& store, JobRunner& runner)
-      : opt_(options), store_(store), runner_(runner) {}
+      : opt_(options),
+        store_(store),
+        runner_(runner),
+        hub_(static_cast<std::size_t>(
+            std::clamp(options.max_event_streams, 0, options.max_connections / 2))) {}
+
+  // Job `id` changed in the store (or left it): its view goes to every open event stream.
+  // Never throws.
+  void changed(const std::string& id) noexcept;
+  // The server stops: every event stream ends.
+  void close_events() { hub_.close(); }
 
   // Installs the routes and handlers on a server.
   void configure(httplib::Server& http);
@@ -39,7 +55,15 @@ class Api {
                const httplib::ContentReader& read);
   void method_not_allowed(httplib::Response& res, const char* allow);
   void dispatch(const httplib::Request& req, httplib::Response& res);
+  // The checks a submission passes (JSON, job, size budgets); nullopt after answering 400.
+  std::optional<Job> check_job(const httplib::Request& req, httplib::Response& res);
+  void validate(const httplib::Request& req, httplib::Response& res);
   void submit(const httplib::Request& req, httplib::Response& res);
+  void running_result(const httplib::Request& req, httplib::Response& res, const std::string& id,
+                      const std::string& what);
+  TuningOutcome outcome_of(const std::string& id, const JobStore::Checkpoint& c);
+  void files(const std::string& id, const std::string& name, httplib::Response& res);
+  void events(const std::string& job, httplib::Response& res);
   void list(const httplib::Request& req, httplib::Response& res);
   void cancel(const std::string& id, httplib::Response& res);
   void result(const httplib::Request& req, httplib::Response& res, const std::string& id,
@@ -52,7 +76,16 @@ class Api {
   const ServiceOptions& opt_;
   JobStore& store_;
   JobRunner& runner_;
+  EventHub hub_;
   std::atomic<int> report_counter_{0};
+  // The last partial gains file made for a running job, until its next iteration.
+  struct PartialGains {
+    std::string id;
+    int iteration = -1;
+    std::string text;
+  };
+  std::mutex partial_mutex_;
+  PartialGains partial_gains_;
 };
 
 }  // namespace ftc::tune::service_detail

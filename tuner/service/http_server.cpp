@@ -192,6 +192,15 @@ GuardedServer::GuardedServer(const ConnectionLimits& limits) : limits_(limits) {
 
 bool GuardedServer::request_timed_out() { return t_stream && t_stream->timed_out(); }
 
+bool GuardedServer::peer_closed() {
+  if (!t_stream) return false;
+  pollfd p{t_stream->socket(), POLLIN | POLLRDHUP, 0};
+  if (::poll(&p, 1, 0) <= 0) return false;
+  if (p.revents & (POLLRDHUP | POLLHUP | POLLERR)) return true;
+  char c;
+  return ::recv(p.fd, &c, 1, MSG_PEEK | MSG_DONTWAIT) == 0;
+}
+
 bool GuardedServer::process_and_close_socket(socket_t sock) {
   std::string ip;
   int port = 0;

@@ -37,6 +37,9 @@ class GuardedServer : public httplib::Server {
   // Whether the request served on the calling thread ran past its header or body deadline (a
   // read of it failed for that reason).
   static bool request_timed_out();
+  // Whether the client of the request served on the calling thread has closed its connection:
+  // a long answer (an event stream) stops then instead of at its next write.
+  static bool peer_closed();
 
  private:
   bool process_and_close_socket(socket_t sock) override;

@@ -120,7 +120,7 @@ void JobRunner::write(const std::string& id, Held& h) {
         store_.finish_succeeded(id, h.files, h.state.finished_at);
         break;
       case JobStatus::cancelled:
-        store_.finish_cancelled(id, h.state.finished_at);
+        store_.finish_cancelled(id, h.state.finished_at, h.files);
         break;
       default:
         store_.finish_failed(id, h.state.error, h.state.finished_at);
@@ -131,6 +131,13 @@ void JobRunner::write(const std::string& id, Held& h) {
     // The store will never take these files (SQLite refuses them): the job fails with the
     // reason rather than being retried.
     spdlog::error("job {}: cannot store its final state: {}", id, e.what());
+    if (h.state.status == JobStatus::cancelled && !h.files.empty()) {
+      // Cancelled all the same, without its partial results.
+      h.files.clear();
+      h.state.bytes = 0;
+      write(id, h);
+      return;
+    }
     if (h.state.status != JobStatus::succeeded) return;
     h = Held{{JobStatus::failed, std::string("its results could not be stored: ").append(e.what()),
               h.state.finished_at, 0},
@@ -143,28 +150,37 @@ void JobRunner::write(const std::string& id, Held& h) {
 }
 
 bool JobRunner::flush() {
-  std::lock_guard<std::mutex> lock(held_mutex_);
-  if (!store_error_ && held_.empty() && cancels_.empty()) return true;
-  try {
-    const bool owed = !held_.empty() || !cancels_.empty();
-    for (auto it = cancels_.begin(); it != cancels_.end(); it = cancels_.erase(it)) try {
-        store_.request_cancel(*it);
-        spdlog::info("job {}: the cancellation held in memory is recorded", *it);
-      } catch (const StoreError& e) {
-        if (e.transient()) throw;
-        spdlog::error("job {}: cannot record its cancellation: {}", *it, e.what());
+  // Told after the lock is released: the API's view of a job asks for it too.
+  std::vector<std::string> written;
+  const bool ok = [&] {
+    std::lock_guard<std::mutex> lock(held_mutex_);
+    if (!store_error_ && held_.empty() && cancels_.empty()) return true;
+    try {
+      const bool owed = !held_.empty() || !cancels_.empty();
+      for (auto it = cancels_.begin(); it != cancels_.end(); it = cancels_.erase(it)) try {
+          store_.request_cancel(*it);
+          written.push_back(*it);
+          spdlog::info("job {}: the cancellation held in memory is recorded", *it);
+        } catch (const StoreError& e) {
+          if (e.transient()) throw;
+          spdlog::error("job {}: cannot record its cancellation: {}", *it, e.what());
+        }
+      for (auto it = held_.begin(); it != held_.end(); it = held_.erase(it)) {
+        write(it->first, it->second);
+        written.push_back(it->first);
       }
-    for (auto it = held_.begin(); it != held_.end(); it = held_.erase(it))
-      write(it->first, it->second);
-    // Nothing was owed, only a write refused: is there room again?
-    if (!owed) store_.probe();
-  } catch (const StoreError& e) {
-    note_failure(e);
-    return false;
-  }
-  spdlog::info("the job store writes again");
-  store_error_.reset();
-  return true;
+      // Nothing was owed, only a write refused: is there room again?
+      if (!owed) store_.probe();
+    } catch (const StoreError& e) {
+      note_failure(e);
+      return false;
+    }
+    spdlog::info("the job store writes again");
+    store_error_.reset();
+    return true;
+  }();
+  for (const std::string& id : written) changed(id);
+  return ok;
 }
 
 void JobRunner::worker_loop() {
@@ -181,7 +197,10 @@ void JobRunner::worker_loop() {
     std::optional<JobRecord> job;
     if (clear) try {
         job = store_.claim_next();
-        if (job) store_wrote();
+        if (job) {
+          store_wrote();
+          changed(job->id);
+        }
       } catch (const StoreError& e) {
         if (e.transient())
           store_failed(e);
@@ -199,6 +218,34 @@ void JobRunner::worker_loop() {
       continue;
     }
     run(*job);
+  }
+}
+
+std::map<std::string, std::string> JobRunner::partial_files(
+    const std::string& id, TuningOutcome& r, BatchEvaluator& evaluator,
+    std::chrono::steady_clock::time_point t0) {
+  if (r.optimization.history.empty()) return {};
+  try {
+    compare_best(r, evaluator, opt_.trajectory_rows);
+    std::map<std::string, std::string> files = output_files(r);
+    json run = run_metadata(
+        r, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    run["job_id"] = id;
+    run["completed"] = false;
+    files["run.json"] = run.dump(2) + "\n";
+    std::uint64_t bytes = 0;
+    for (const auto& [name, content] : files) bytes += content.size();
+    if (bytes > opt_.max_stored_bytes) {
+      spdlog::warn("job {}: its partial results take {}, above the limit of {}: not kept", id,
+                   megabytes(bytes), megabytes(opt_.max_stored_bytes));
+      return {};
+    }
+    spdlog::info("job {}: the results of its {} iteration(s) are kept, marked partial", id,
+                 r.optimization.history.size());
+    return files;
+  } catch (const std::exception& e) {
+    spdlog::warn("job {}: its partial results could not be made: {}", id, e.what());
+    return {};
   }
 }
 
@@ -253,6 +300,7 @@ void JobRunner::run(const JobRecord& rec) {
         store_.record_progress(id, h.iteration, h.evaluations, h.best_fitness, best, optimizer,
                                rows);
         store_wrote();
+        changed(id);
         stored_trials = trials.size();
         trial_bytes += rows.size();
       } catch (const StoreError& e) {
@@ -264,15 +312,18 @@ void JobRunner::run(const JobRecord& rec) {
       return !stopping_ && !store_.cancel_requested(id) && !cancel_deferred(id);
     };
     const std::unique_ptr<BatchEvaluator> evaluator = make_evaluator_();
-    const TuningOutcome r = tune(job, *evaluator, ro);
+    TuningOutcome r = tune(job, *evaluator, ro);
     if (!too_large.empty()) {
       failed(too_large);
     } else if (store_.cancel_requested(id) || cancel_deferred(id)) {
-      outcome.state = {JobStatus::cancelled, "", JobStore::timestamp(), 0};
+      outcome = Held{{JobStatus::cancelled, "", "", 0}, partial_files(id, r, *evaluator, t0)};
+      for (const auto& [name, content] : outcome.files) outcome.state.bytes += content.size();
+      outcome.state.finished_at = JobStore::timestamp();
     } else if (!r.completed()) {
       try {
         store_.requeue(id);
         spdlog::info("job {} checkpointed and put back in the queue", id);
+        changed(id);
       } catch (const StoreError& e) {
         // Still running in the store: the next start puts it back in the queue anyway.
         spdlog::warn("job {}: cannot put it back in the queue ({}); the next start will", id,
@@ -312,6 +363,7 @@ void JobRunner::run(const JobRecord& rec) {
   try {
     write(id, outcome);
     stored = true;
+    changed(id);
   } catch (const StoreError& e) {
     store_failed(e);
   } catch (const std::exception& e) {

@@ -9,6 +9,7 @@
 // timer and before each new job, and a worker holding one claims no new job meanwhile (so at most
 // one held result per worker). A cancellation the store cannot record is applied in memory.
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "ftc/tune/evaluators/batch_evaluator.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/tune/service/job_store.hpp"
 
 namespace ftc::tune::service_detail {
@@ -57,6 +59,9 @@ class JobRunner {
       : store_(store), opt_(options), make_evaluator_(std::move(make_evaluator)) {}
   ~JobRunner() { stop(); }
 
+  // Called with a job's id after each change the runner commits (started, an iteration, back
+  // in the queue, finished); set before start().
+  void on_change(std::function<void(const std::string&)> f) { changed_ = std::move(f); }
   void start();
   // A job was queued: wake a worker.
   void notify();
@@ -86,6 +91,12 @@ class JobRunner {
   };
   void worker_loop();
   void run(const JobRecord& rec);
+  // The result files of a job cancelled after `r`'s iterations: its best so far compared as a
+  // finished run's best is, gains.json saying optimizer.completed false. Empty when it ran no
+  // iteration, or they would take more than a job may store.
+  std::map<std::string, std::string> partial_files(const std::string& id, TuningOutcome& r,
+                                                   BatchEvaluator& evaluator,
+                                                   std::chrono::steady_clock::time_point t0);
   // Writes a finished job's final state; throws a transient StoreError when the store refused
   // it for now (a job whose files SQLite will never take fails instead). Does not take
   // held_mutex_.
@@ -98,6 +109,10 @@ class JobRunner {
   JobStore& store_;
   RunnerOptions opt_;
   EvaluatorFactory make_evaluator_;
+  std::function<void(const std::string&)> changed_;
+  void changed(const std::string& id) {
+    if (changed_) changed_(id);
+  }
   std::vector<std::thread> threads_;
   std::atomic<bool> stopping_{false};
   std::mutex wake_mutex_;

@@ -393,14 +393,27 @@ std::string JobStore::job_json(const std::string& id) {
   return q.step() ? q.text(0) : std::string();
 }
 
-std::vector<JobRecord> JobStore::list(std::optional<JobStatus> status, int limit, int offset) {
+namespace {
+
+// " WHERE …" for a status and a name filter ("" when neither), bound from index 1 by bind_filter.
+std::string filter_sql(std::optional<JobStatus> status, const std::string& name) {
+  std::string w;
+  if (status) w += " WHERE status = ?";
+  if (!name.empty()) w += std::string(status ? " AND" : " WHERE") + " instr(name, ?) > 0";
+  return w;
+}
+
+}  // namespace
+
+std::vector<JobRecord> JobStore::list(std::optional<JobStatus> status, int limit, int offset,
+                                      const std::string& name) {
   std::lock_guard<std::mutex> lock(mutex_);
-  std::string sql = std::string("SELECT ") + kColumns + " FROM jobs";
-  if (status) sql += " WHERE status = ?";
-  sql += " ORDER BY seq DESC LIMIT ? OFFSET ?";
+  const std::string sql = std::string("SELECT ") + kColumns + " FROM jobs" +
+                          filter_sql(status, name) + " ORDER BY seq DESC LIMIT ? OFFSET ?";
   Statement q(db_, sql.c_str());
   int i = 1;
   if (status) q.bind(i++, std::string(to_string(*status)));
+  if (!name.empty()) q.bind(i++, name);
   q.bind(i, std::int64_t{limit});
   q.bind(i + 1, std::int64_t{offset});
   std::vector<JobRecord> out;
@@ -408,11 +421,12 @@ std::vector<JobRecord> JobStore::list(std::optional<JobStatus> status, int limit
   return out;
 }
 
-std::int64_t JobStore::count(std::optional<JobStatus> status) {
+std::int64_t JobStore::count(std::optional<JobStatus> status, const std::string& name) {
   std::lock_guard<std::mutex> lock(mutex_);
-  Statement q(db_,
-              status ? "SELECT COUNT(*) FROM jobs WHERE status = ?" : "SELECT COUNT(*) FROM jobs");
-  if (status) q.bind(1, std::string(to_string(*status)));
+  Statement q(db_, ("SELECT COUNT(*) FROM jobs" + filter_sql(status, name)).c_str());
+  int i = 1;
+  if (status) q.bind(i++, std::string(to_string(*status)));
+  if (!name.empty()) q.bind(i, name);
   q.step();
   return q.integer(0);
 }
@@ -463,6 +477,22 @@ std::vector<std::string> JobStore::checkpoint_trials(const std::string& id) {
   return out;
 }
 
+std::optional<JobStore::Checkpoint> JobStore::checkpoint_with_trials(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Checkpoint c;
+  {
+    Statement q(db_, "SELECT checkpoint, iteration FROM jobs WHERE id = ?");
+    q.bind(1, id);
+    if (!q.step() || q.is_null(0)) return std::nullopt;
+    c.optimizer = q.text(0);
+    c.iteration = static_cast<int>(q.integer(1));
+  }
+  Statement t(db_, "SELECT trials FROM checkpoint_trials WHERE job_id = ? ORDER BY iteration");
+  t.bind(1, id);
+  while (t.step()) c.trials.push_back(t.text(0));
+  return c;
+}
+
 std::optional<std::string> JobStore::checkpoint(const std::string& id) {
   std::lock_guard<std::mutex> lock(mutex_);
   Statement q(db_, "SELECT checkpoint FROM jobs WHERE id = ?");
@@ -485,8 +515,12 @@ void JobStore::finish_failed(const std::string& id, const std::string& error,
   transaction([&] { set_finished(id, JobStatus::failed, error, finished_at); });
 }
 
-void JobStore::finish_cancelled(const std::string& id, const std::string& finished_at) {
-  transaction([&] { set_finished(id, JobStatus::cancelled, "", finished_at); });
+void JobStore::finish_cancelled(const std::string& id, const std::string& finished_at,
+                                const std::map<std::string, std::string>& artifacts) {
+  transaction([&] {
+    for (const auto& [name, content] : artifacts) insert_artifact(id, name, content);
+    set_finished(id, JobStatus::cancelled, "", finished_at);
+  });
 }
 
 void JobStore::requeue(const std::string& id) {
@@ -590,6 +624,15 @@ std::map<std::string, std::string> JobStore::artifacts(const std::string& id) {
   q.bind(1, id);
   std::map<std::string, std::string> out;
   while (q.step()) out[q.text(0)] = q.blob(1);
+  return out;
+}
+
+std::map<std::string, std::uint64_t> JobStore::artifact_sizes(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "SELECT name, length(content) FROM artifacts WHERE job_id = ?");
+  q.bind(1, id);
+  std::map<std::string, std::uint64_t> out;
+  while (q.step()) out[q.text(0)] = static_cast<std::uint64_t>(q.integer(1));
   return out;
 }
 

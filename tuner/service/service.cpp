@@ -109,6 +109,7 @@ std::vector<FieldError> ServiceOptions::validate() const {
     errs.push_back({"--max-connections-per-client",
                     "must be at least 1 and below --max-connections (so that one client cannot "
                     "take every connection)"});
+  if (max_event_streams < 0) errs.push_back({"--max-event-streams", "must be >= 0"});
   if (!(store_retry_seconds > 0)) errs.push_back({"store_retry_seconds", "must be > 0"});
   return errs;
 }
@@ -150,7 +151,9 @@ struct TuningService::Impl {
                                  return std::make_unique<TbbEvaluator>(t);
                                })),
         api(opt, store, runner),
-        http(connection_limits(opt)) {}
+        http(connection_limits(opt)) {
+    runner.on_change([this](const std::string& id) { api.changed(id); });
+  }
 };
 
 TuningService::TuningService(ServiceOptions options) {
@@ -202,6 +205,7 @@ void TuningService::stop() {
   if (!impl_ || !impl_->started) return;
   Impl& s = *impl_;
   s.started = false;
+  s.api.close_events();  // the streams end, so the server's threads can be joined
   s.http.stop();
   if (s.listener.joinable()) s.listener.join();
   s.runner.stop();

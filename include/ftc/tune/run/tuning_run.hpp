@@ -106,6 +106,17 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
 // that cannot be tuned.
 TuningOutcome tune(const Job& job, BatchEvaluator& evaluator, const RunOptions& options = {});
 
+// The outcome of a run stopped at a checkpoint (run_checkpoint(), or a bare Optimizer::state()):
+// its history, trials and best so far, in parameter values, without a comparison; completed()
+// only when the checkpoint is of the last iteration. Throws InputError for a damaged one.
+TuningOutcome checkpoint_outcome(const Job& job, const nlohmann::json& checkpoint,
+                                 std::optional<std::uint64_t> seed = std::nullopt);
+// Compares the best so far of a run stopped early as tune() compares a completed run's (the job's
+// compare entries, its own controller, the best; the noise floor), so that output_files() gives
+// the files of a partial run: gains.json records optimizer.completed false, which the gains
+// loader refuses. Does nothing to an outcome that has its comparison or no iteration.
+void compare_best(TuningOutcome& r, BatchEvaluator& evaluator, std::int64_t max_trajectory_rows = 0);
+
 // Whether the tuned controller's margin over the job's own is larger than the noise floor, in one
 // sentence for people (empty without a comparison).
 std::string noise_floor_sentence(const TuningOutcome& r);

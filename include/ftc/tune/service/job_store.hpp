@@ -101,9 +101,10 @@ class JobStore {
   Submitted submit(const Submission& s, const QueueQuota& quota = {});
   std::optional<JobRecord> get(const std::string& id);
   std::string job_json(const std::string& id);
-  // Newest first.
-  std::vector<JobRecord> list(std::optional<JobStatus> status, int limit, int offset);
-  std::int64_t count(std::optional<JobStatus> status);
+  // Newest first; with `name`, only the jobs whose name contains it.
+  std::vector<JobRecord> list(std::optional<JobStatus> status, int limit, int offset,
+                              const std::string& name = "");
+  std::int64_t count(std::optional<JobStatus> status, const std::string& name = "");
 
   // Oldest queued job, now running (attempts + 1); none when the queue is empty.
   std::optional<JobRecord> claim_next();
@@ -115,6 +116,14 @@ class JobStore {
   std::optional<std::string> checkpoint(const std::string& id);
   // The trials recorded with the checkpoints so far: one JSON array per iteration, in order.
   std::vector<std::string> checkpoint_trials(const std::string& id);
+  // Both of them read together (one consistent view), for a running job's partial results; the
+  // iteration they are of. nullopt when the job has no checkpoint.
+  struct Checkpoint {
+    int iteration = -1;
+    std::string optimizer;
+    std::vector<std::string> trials;
+  };
+  std::optional<Checkpoint> checkpoint_with_trials(const std::string& id);
 
   // The final state; `finished_at` (UTC ISO 8601) is when the job ended, "" for now (a result
   // the store could not take at once is written later).
@@ -122,7 +131,10 @@ class JobStore {
                         const std::string& finished_at = "");
   void finish_failed(const std::string& id, const std::string& error,
                      const std::string& finished_at = "");
-  void finish_cancelled(const std::string& id, const std::string& finished_at = "");
+  // A cancelled job keeps the partial results of the iterations it ran (`artifacts`, may be
+  // empty), stored with the status in one transaction.
+  void finish_cancelled(const std::string& id, const std::string& finished_at = "",
+                        const std::map<std::string, std::string>& artifacts = {});
   void requeue(const std::string& id);  // back to the queue, checkpoint kept
   // Queued: cancelled at once. Running: flagged, the worker stops after its iteration.
   // Returns the record after the change, or nullopt for an unknown id.
@@ -146,6 +158,8 @@ class JobStore {
   // The current time as the store writes it (UTC ISO 8601, milliseconds).
   static std::string timestamp();
   std::map<std::string, std::string> artifacts(const std::string& id);
+  // The names and sizes of a job's artifacts, without their content.
+  std::map<std::string, std::uint64_t> artifact_sizes(const std::string& id);
   // Adds or replaces one artifact of a finished job (a report rendered later).
   void put_artifact(const std::string& id, const std::string& name, const std::string& content);
 

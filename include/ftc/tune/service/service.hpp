@@ -51,6 +51,10 @@ struct ServiceOptions {
   double body_timeout = 60;
   int max_connections = 64;
   int max_connections_per_client = 16;
+  // Live-update streams (GET /v1/events) open at once: each holds one of the max_connections
+  // threads for as long as its page is open, so at most half of them are streams whatever this
+  // says (the API keeps the other half).
+  int max_event_streams = 32;
   // How often results the store could not take (a full disk) are tried again.
   double store_retry_seconds = 5;
   // How each job's simulations run; default a TbbEvaluator with `threads` workers.

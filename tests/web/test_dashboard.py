@@ -1,0 +1,285 @@
+"""The dashboard at / in a real browser: headless Chromium driven by Selenium (Debian's chromium,
+chromium-driver and python3-selenium, installed by tools/bootstrap) against an `ftctune serve` this
+module starts on an ephemeral loopback port with a store in a temporary directory.
+
+Run by ctest as Dashboard.Browser:
+    /usr/bin/python3 -m pytest -q tests/web --ftctune build/tools/ftctune
+With FTCTUNE_SCREENSHOTS=DIR it also saves the jobs list and a job page as PNG files there (the
+figures of docs/service.md: FTCTUNE_SCREENSHOTS=docs/figures).
+"""
+import copy
+import json
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+import time
+import urllib.request
+
+import pytest
+from selenium import webdriver
+from selenium.common.exceptions import NoAlertPresentException
+from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.common.by import By
+from selenium.webdriver.support import expected_conditions as EC
+from selenium.webdriver.support.ui import WebDriverWait
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+HOSTILE = "<img src=x onerror=alert(1)>"
+
+
+def table1():
+    with open(os.path.join(ROOT, "jobs", "table1.json")) as f:
+        return json.load(f)
+
+
+def longer(name, iterations):
+    """Table 1 with more iterations: long enough to be watched (or cancelled) while it runs."""
+    job = table1()
+    job["name"] = name
+    job["tuning"]["algorithm"]["iterations"] = iterations
+    return job
+
+
+class Server:
+    def __init__(self, binary, extra=()):
+        self.dir = tempfile.mkdtemp(prefix="ftctune-dashboard-")
+        self.proc = subprocess.Popen(
+            [binary, "serve", "--port", "0", "--store", os.path.join(self.dir, "store"),
+             "--threads", "1", *extra],
+            stdout=subprocess.PIPE, text=True,
+            stderr=open(os.environ["FTCTUNE_SERVER_LOG"], "w")
+            if os.environ.get("FTCTUNE_SERVER_LOG") else subprocess.DEVNULL)
+        line = self.proc.stdout.readline()
+        m = re.search(r"http://127\.0\.0\.1:(\d+)", line)
+        if not m:
+            self.stop()
+            raise RuntimeError("ftctune serve did not start: " + line)
+        self.url = "http://127.0.0.1:" + m.group(1)
+
+    def api(self, path, body=None, method=None):
+        data = json.dumps(body).encode() if body is not None else None
+        req = urllib.request.Request(self.url + path, data=data, method=method,
+                                     headers={"Content-Type": "application/json"})
+        with urllib.request.urlopen(req, timeout=30) as r:
+            return json.loads(r.read())
+
+    def wait_done(self, job_id, timeout=60):
+        end = time.time() + timeout
+        while time.time() < end:
+            j = self.api("/v1/jobs/" + job_id)
+            if j["status"] in ("succeeded", "failed", "cancelled"):
+                return j
+            time.sleep(0.05)
+        raise AssertionError("job %s did not finish" % job_id)
+
+    def stop(self):
+        self.proc.terminate()
+        try:
+            self.proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def server(request):
+    s = Server(request.config.getoption("--ftctune"))
+    yield s
+    s.stop()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    options = webdriver.ChromeOptions()
+    options.binary_location = "/usr/bin/chromium"
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                "--window-size=1400,1000", "--no-first-run", "--disable-extensions"):
+        options.add_argument(arg)
+    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+    yield driver
+    driver.quit()
+
+
+def wait(driver, condition, timeout=30):
+    return WebDriverWait(driver, timeout, poll_frequency=0.05).until(lambda d: condition(d))
+
+
+def set_job_text(driver, text):
+    """The job file pasted into the submit form (as a paste does: one input event)."""
+    area = wait(driver, lambda d: d.find_element(By.ID, "job-text"))
+    driver.execute_script(
+        "arguments[0].value = arguments[1];"
+        "arguments[0].dispatchEvent(new Event('input', {bubbles: true}));", area, text)
+
+
+def open_job(driver, server, job_id):
+    driver.get(server.url + "/#/job/" + job_id)
+    wait(driver, lambda d: d.find_element(By.ID, "job-progress"))
+
+
+def screenshot(driver, name):
+    folder = os.environ.get("FTCTUNE_SCREENSHOTS")
+    if folder:
+        os.makedirs(folder, exist_ok=True)
+        driver.save_screenshot(os.path.join(folder, name))
+
+
+def test_submitting_table1_through_the_page(server, browser):
+    browser.get(server.url + "/#/submit")
+    set_job_text(browser, json.dumps(table1(), indent=2))
+    wait(browser, lambda d: d.find_element(By.ID, "valid"))  # checked live by POST /v1/validate
+    browser.find_element(By.ID, "submit-job").click()
+    wait(browser, lambda d: re.search(r"#/job/[0-9a-f]{16}$", d.current_url))
+    job_id = browser.current_url.rsplit("/", 1)[1]
+    done = server.wait_done(job_id)
+    assert done["status"] == "succeeded"
+    assert done["name"] == "table1"
+    # The page follows it to the end without a reload: one row per evaluation, one point per
+    # iteration.
+    evaluations = done["progress"]["evaluations"]
+    wait(browser, lambda d: len(d.find_elements(By.CSS_SELECTOR, "#trials-table tbody tr"))
+         == evaluations)
+    wait(browser, lambda d: d.find_element(By.ID, "convergence").get_attribute("data-points")
+         == str(done["progress"]["iteration"] + 1))
+    assert int(browser.find_element(By.ID, "scatter").get_attribute("data-points")) == evaluations
+    wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table tbody tr"))
+    assert "noise" in browser.find_element(By.CSS_SELECTOR, ".noise-floor").text
+    browser.execute_script("window.scrollTo(0, 0)")
+    screenshot(browser, "dashboard-job.png")
+    # Sorting by objective puts the lowest first.
+    header = [h for h in browser.find_elements(By.CSS_SELECTOR, "#trials-table th")
+              if h.text.strip().startswith("objective")][0]
+    header.click()
+    column = [h.text.strip() for h in
+              browser.find_elements(By.CSS_SELECTOR, "#trials-table th")].index("objective")
+    cells = browser.find_elements(By.CSS_SELECTOR,
+                                  "#trials-table tbody tr td:nth-child(%d)" % (column + 1))
+    values = [float(c.text) for c in cells[:20]]
+    assert values == sorted(values)
+
+
+def test_progress_updates_without_a_reload(server, browser):
+    blocker = server.api("/v1/jobs", longer("blocker", 40))["id"]
+    job_id = server.api("/v1/jobs", longer("watched", 30))["id"]
+    open_job(browser, server, job_id)  # while it waits in the queue
+    browser.execute_script("window.__sameDocument = true;")
+    server.api("/v1/jobs/%s/cancel" % blocker, body={}, method="POST")
+    seen = set()
+    end = time.time() + 60
+    while time.time() < end:
+        # Read in the page, in one step: the header is rebuilt on every update.
+        text, done = browser.execute_script(
+            "const p = document.getElementById('job-progress');"
+            "return [p ? p.textContent : '', !!document.querySelector('h1 .state.succeeded')];")
+        seen.add(text)
+        if done:
+            break
+        time.sleep(0.02)
+    assert browser.find_elements(By.CSS_SELECTOR, "h1 .state.succeeded"), seen
+    assert len(seen) >= 4, seen  # queued, then several iterations, then done
+    assert browser.execute_script("return window.__sameDocument === true;")
+
+
+def test_jobs_list_is_live_and_filterable(server, browser):
+    browser.get(server.url + "/#/")
+    wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#jobs-table tbody tr"))
+    before = len(browser.find_elements(By.CSS_SELECTOR, "#jobs-table tbody tr"))
+    job_id = server.api("/v1/jobs", longer("listed", 2))["id"]
+    row = "#jobs-table tbody tr[data-id='%s']" % job_id
+    wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, row))  # appears without a reload
+    server.wait_done(job_id)
+    wait(browser, lambda d: "succeeded" in d.find_element(By.CSS_SELECTOR, row).text)
+    assert len(browser.find_elements(By.CSS_SELECTOR, "#jobs-table tbody tr")) == before + 1
+    box = browser.find_element(By.ID, "filter-name")
+    box.send_keys("listed")
+    wait(browser, lambda d: len(d.find_elements(By.CSS_SELECTOR, "#jobs-table tbody tr")) == 1)
+    box.clear()
+    box.send_keys(" ")  # an input event with the box emptied again
+    browser.execute_script("arguments[0].value=''; arguments[0].dispatchEvent(new Event('input'));",
+                           box)
+    wait(browser, lambda d: len(d.find_elements(By.CSS_SELECTOR, "#jobs-table tbody tr")) > 1)
+    screenshot(browser, "dashboard-jobs.png")
+
+
+def test_a_bad_job_shows_its_json_path(server, browser):
+    job = table1()
+    job["scenarios"][0]["duration"] = -1
+    browser.get(server.url + "/#/submit")
+    set_job_text(browser, json.dumps(job))
+    wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, ".json-error"))
+    paths = [e.text for e in browser.find_elements(By.CSS_SELECTOR, ".json-error code.path")]
+    assert "/scenarios/0/duration" in paths
+    assert browser.find_element(By.ID, "submit-job").get_attribute("disabled") is not None
+    set_job_text(browser, "{ not json")
+    wait(browser, lambda d: "request body" in d.find_element(By.ID, "validation").text)
+
+
+def test_cancelling_a_job(server, browser):
+    job_id = server.api("/v1/jobs", longer("cancelled", 400))["id"]
+    open_job(browser, server, job_id)
+    wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "h1 .state.running"))
+    browser.find_element(By.ID, "action-cancel").click()
+    assert server.api("/v1/jobs/" + job_id)["status"] == "running"  # not before it is confirmed
+    browser.find_element(By.ID, "confirm-yes").click()
+    wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "h1 .state.cancelled"))
+    done = server.api("/v1/jobs/" + job_id)
+    assert done["status"] == "cancelled" and done["progress"]["iteration"] < 400
+    # Its results so far, marked partial.
+    wait(browser, lambda d: "results of the iterations run so far"
+         in d.find_element(By.ID, "job-notes").text)
+    wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#downloads button[data-file]"))
+
+
+def test_a_hostile_compare_label_stays_text(server, browser):
+    job = table1()
+    job["name"] = "hostile"
+    job["compare"][0]["label"] = HOSTILE
+    job["tuning"]["algorithm"]["iterations"] = 1
+    job["tuning"]["algorithm"]["population"] = 2
+    job_id = server.api("/v1/jobs", job)["id"]
+    assert server.wait_done(job_id)["status"] == "succeeded"
+    open_job(browser, server, job_id)
+    wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table td.label"))
+    labels = [c.text for c in browser.find_elements(By.CSS_SELECTOR, "#comparison-table td.label")]
+    assert HOSTILE in labels
+    assert not [i for i in browser.find_elements(By.TAG_NAME, "img")
+                if (i.get_attribute("src") or "").endswith("/x")]
+    with pytest.raises(NoAlertPresentException):
+        browser.switch_to.alert.text
+
+
+def test_page_headers_forbid_inline_script_and_sniffing(server):
+    with urllib.request.urlopen(server.url + "/", timeout=10) as r:
+        policy = r.headers["Content-Security-Policy"]
+        assert "script-src 'self'" in policy and "unsafe-inline" not in policy
+        assert r.headers["X-Content-Type-Options"] == "nosniff"
+        assert r.headers.get("Access-Control-Allow-Origin") is None
+
+
+def test_the_token_is_asked_for_and_kept_in_the_tab(request, browser):
+    folder = tempfile.mkdtemp(prefix="ftctune-token-")
+    token_file = os.path.join(folder, "token")
+    with open(token_file, "w") as f:
+        f.write("dashboard-secret\n")
+    os.chmod(token_file, 0o600)
+    server = Server(request.config.getoption("--ftctune"), ["--token-file", token_file])
+    try:
+        browser.get(server.url + "/#/")
+        box = wait(browser, lambda d: d.find_element(By.ID, "token"))
+        box.send_keys("wrong")
+        box.submit()
+        WebDriverWait(browser, 10).until(EC.staleness_of(box))
+        box = wait(browser, lambda d: d.find_element(By.ID, "token"))  # asked again
+        box.send_keys("dashboard-secret")
+        box.submit()
+        wait(browser, lambda d: d.find_element(By.ID, "jobs-count").text == "no jobs")
+        assert browser.execute_script("return sessionStorage.getItem('ftctune-token')") \
+            == "dashboard-secret"
+        assert browser.execute_script("return document.cookie") == ""  # a header, not a cookie
+        wait(browser, lambda d: d.find_element(By.ID, "live").text == "live")
+    finally:
+        browser.execute_script("sessionStorage.clear()")
+        server.stop()
+        shutil.rmtree(folder, ignore_errors=True)
