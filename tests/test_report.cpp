@@ -6,8 +6,10 @@
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/report/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/run/evaluate.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
+#include "io/text.hpp"
 #include "report/gnuplot.hpp"
 #include "short_job.hpp"
 
@@ -52,11 +54,47 @@ TEST(Report, RendersEveryFigureAndASelfContainedPage) {
   for (std::size_t p = 0; (p = html.find("data:image/png;base64,", p)) != std::string::npos; ++p)
     ++images;
   EXPECT_EQ(images, 5u);
-  for (const char* text : {"<table", "NFTSMC", "FOSMC", "PI-FOSMC (job)", "optimal PI-FOSMC",
+  for (const char* text : {"<table", "NFTSMC", "FOSMC", "PI-FOSMC (job)", "tuned PI-FOSMC",
                            "Tuned gains", "<td>Kp</td>", "ISE [2, 3.5)", "peak ‖e‖ after fault 2",
                            "&quot;schema&quot;: &quot;ftctune.job/1&quot;"})
     EXPECT_NE(html.find(text), std::string::npos) << text;
   EXPECT_EQ(html.find("src=\"figures/"), std::string::npos);  // nothing outside the page
+}
+
+// report.html holds what comparison.md holds: the objective named by metric, window and
+// aggregate, the noise-floor sentence, the robust table of an ensemble job; and the run's
+// evaluation/ once there is one.
+TEST(Report, PageLabelsTheObjectiveAndHoldsTheRobustTableAndTheEvaluation) {
+  const auto dir = fresh_dir("report-robust");
+  const tune::Job job = tune::parse_job(short_ensemble_job(), "robust");
+  tune::TbbEvaluator evaluator(2);
+  const tune::TuningOutcome outcome = tune::tune(job, evaluator);
+  tune::write_outputs(outcome, dir / "run");
+  const std::string label = "CVaR0.9 of ISE[first fault, +4 s] over 7 scenarios";
+  const std::string md = slurp(dir / "run" / "comparison.md");
+  EXPECT_NE(md.find("Objective: " + label), std::string::npos) << md;
+  std::string html = slurp(tune::render_report(dir / "run").html);
+  EXPECT_NE(html.find("); " + label + " = "), std::string::npos);
+  EXPECT_EQ(html.find("objective ise ="), std::string::npos);
+  EXPECT_NE(html.find("<h2>All 7 scenarios</h2>"), std::string::npos);
+  EXPECT_NE(html.find("<th>" + label + "</th><th>mean</th><th>median</th><th>p90</th>"),
+            std::string::npos);
+  const std::string noise = tune::noise_floor_sentence(outcome);
+  ASSERT_FALSE(noise.empty());
+  EXPECT_NE(html.find("<p class=\"noise-floor\">" + noise + "</p>"), std::string::npos);
+  EXPECT_EQ(html.find("Out-of-sample evaluation"), std::string::npos);
+  // `ftctune evaluate`'s default place is the run's evaluation/.
+  tune::EvaluateOptions eo;
+  eo.count = 3;
+  const tune::EvaluationResult ev = tune::evaluate_out_of_sample(job, eo, evaluator);
+  tune::write_evaluation(ev, dir / "run" / "evaluation");
+  html = slurp(tune::render_report(dir / "run").html);
+  EXPECT_NE(html.find("<h2>Out-of-sample evaluation</h2>"), std::string::npos);
+  EXPECT_NE(html.find("1 listed scenario(s) and 3 held-out ensemble members (seed 8)"),
+            std::string::npos);
+  const std::string row = "<tr><td>" + ev.controllers[0].label + "</td><td>job</td><td>" +
+                          ftc::tune::detail::format_number(ev.controllers[0].aggregates.mean);
+  EXPECT_NE(html.find(row), std::string::npos) << row;
 }
 
 TEST(Report, DataFilesHaveTheExpectedColumnsAndRows) {
@@ -370,7 +408,7 @@ TEST(Report, FiguresReadWellInGreyAndForColourBlindReaders) {
   const std::string fig3 = figure_script(gp, "fig3-attitude");
   for (const char* label : {"|x_1 − x_1^{tuned}|", "|x_2 − x_2^{tuned}|", "|x_3 − x_3^{tuned}|"})
     EXPECT_NE(fig3.find(label), std::string::npos) << label;
-  EXPECT_NE(fig3.find("keyentry with linespoints ls 1 title 'optimal PI-FOSMC'"),
+  EXPECT_NE(fig3.find("keyentry with linespoints ls 1 title 'tuned PI-FOSMC'"),
             std::string::npos);
 }
 

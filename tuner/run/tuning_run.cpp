@@ -145,7 +145,7 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   const std::string name = display_name(job.controller.type);
   r.comparison.push_back({name + " (job)", "baseline", job.controller, {}, {}});
   controllers.push_back(job.controller);
-  r.comparison.push_back({"optimal " + name, "tuned", r.tuned_controller, {}, {}});
+  r.comparison.push_back({"tuned " + name, "tuned", r.tuned_controller, {}, {}});
   controllers.push_back(r.tuned_controller);
 
   std::vector<CandidateOutcome> outcomes = problem.evaluate(
@@ -173,7 +173,54 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   nf.relative_spread =
       (nf.objective_max - nf.objective_min) / r.best().outcome.evaluation.objective;
   r.noise_floor = nf;
+  for (std::string& w : comparison_warnings(r)) r.warnings.push_back(std::move(w));
   return r;
+}
+
+std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
+  std::vector<std::string> out;
+  if (r.comparison.size() < 2) return out;
+  const ComparedController& tuned = r.best();
+  const double best = tuned.outcome.evaluation.objective;
+  const double spread = r.noise_floor ? r.noise_floor->relative_spread : 0.0;
+  const std::string metric = sim::to_string(r.job.objective.metric);
+  char buf[600];
+  // "Tuned" is the best of one controller type within the search bounds, not the best
+  // controller: a compared controller that scores lower says so.
+  for (const ComparedController& c : r.comparison) {
+    if (c.role != "compare") continue;
+    const double v = c.outcome.evaluation.objective;
+    if (!(v < best) || !std::isfinite(best)) continue;
+    const double margin = (best - v) / best;
+    std::snprintf(buf, sizeof buf,
+                  "%s (compared) scores %s = %.4g, %.3g %% below the %s's %.4g (%s the noise "
+                  "floor of %.2g %%): the tuned gains are the best found for %s within the "
+                  "search bounds, not the best controller of the comparison.",
+                  c.label.c_str(), metric.c_str(), v, 100 * margin, tuned.label.c_str(), best,
+                  margin > spread ? "beyond" : "inside", 100 * spread,
+                  display_name(r.job.controller.type).c_str());
+    out.emplace_back(buf);
+  }
+  // Until the objective can price control activity: gains that buy their score with much more
+  // chattering than the job's own are named (on the listed scenarios, summed).
+  const ComparedController& base = r.baseline();
+  double tv_tuned = 0.0, tv_base = 0.0;
+  for (std::size_t i = 0; i < r.listed_scenarios; ++i) {
+    if (i < tuned.outcome.evaluation.scenarios.size())
+      tv_tuned += tuned.outcome.evaluation.scenarios[i].control_tv;
+    if (i < base.outcome.evaluation.scenarios.size())
+      tv_base += base.outcome.evaluation.scenarios[i].control_tv;
+  }
+  if (std::isfinite(tv_base) && tv_base > 0 && tv_tuned > kControlTvWarningRatio * tv_base) {
+    std::snprintf(buf, sizeof buf,
+                  "The tuned gains raise the control TV (sum of |u_k - u_{k-1}|, a measure of "
+                  "chattering) %.3g times over the job's own gains on the listed scenario%s "
+                  "(%.4g against %.4g): the objective does not price control activity, so check "
+                  "actuator wear and bandwidth before using them.",
+                  tv_tuned / tv_base, r.listed_scenarios == 1 ? "" : "s", tv_tuned, tv_base);
+    out.emplace_back(buf);
+  }
+  return out;
 }
 
 std::int64_t comparison_record_every(const Job& job, std::int64_t max_rows) {
