@@ -179,6 +179,48 @@ TEST(Report, LandscapeGridAndHeatmap) {
                InputError);
 }
 
+// Commands that take a job and look for its run take the latest one, the -2, -3 ... that `run`
+// moves on to included, and say which.
+TEST(Cli, LandscapeAndEvaluateUseTheJobsLatestRunAndSayWhich) {
+  const auto dir = fresh_dir("latest-run");
+  tune::write_file_atomic(dir / "job.json", tiny_job("latest").dump(2));
+  const auto in_dir = [&](const std::string& args) {
+    return run_cli("--help >/dev/null && cd '" + dir.string() + "' && '" FTC_CLI "' " + args, dir);
+  };
+  ASSERT_EQ(in_dir("run job.json -q").exit_code, 0);
+  ASSERT_EQ(in_dir("run job.json -q").exit_code, 0);  // into out/latest-2
+  ASSERT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "gains.json"));
+  CliResult r = in_dir("landscape job.json --grid 2x2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("the latest run of job latest is out/latest-2"), std::string::npos)
+      << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "landscape" / "landscape.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "landscape" / "history.csv"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "latest" / "landscape"));
+  r = in_dir("evaluate job.json --no-figure");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(
+      std::filesystem::exists(dir / "out" / "latest-2" / "evaluation" / "evaluation.json"));
+  // --force replaces out/latest: now the newest run.
+  ASSERT_EQ(in_dir("run job.json -q --force").exit_code, 0);
+  r = in_dir("landscape job.json --grid 2x2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("the latest run of job latest is out/latest (newest gains.json of 2 runs)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest" / "landscape" / "landscape.png"));
+  // A job without a run: the landscape goes to out/<name>/landscape, and the log says so.
+  tune::write_file_atomic(dir / "other.json", tiny_job("other").dump(2));
+  r = in_dir("landscape other.json --grid 2x2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("no run of job other in out"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "other" / "landscape" / "landscape.png"));
+  // The help shows --no-figure as a flag, not with a default.
+  r = in_dir("help evaluate");
+  EXPECT_NE(r.out.find("--no-figure"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("{false}"), std::string::npos) << r.out;
+}
+
 TEST(Cli, ReportRejectsMissingOrBrokenRunDirectories) {
   const auto dir = fresh_dir("report-errors");
   CliResult r = run_cli("report '" + (dir / "nope").string() + "'", dir);

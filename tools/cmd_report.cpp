@@ -54,10 +54,15 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
   if (o.format != "png" && o.format != "svg")
     throw InputError("--format", "", "must be png or svg (got \"" + o.format + "\")");
   lo.format = o.format == "png" ? tune::FigureFormat::png : tune::FigureFormat::svg;
-  const fs::path out = o.out.empty() ? default_out_dir(job) / "landscape" : fs::path(o.out);
-  // The run's best-so-far path, when the job has been run into its default directory.
-  lo.history = o.history.empty() && fs::is_regular_file(default_out_dir(job) / "history.csv")
-                   ? default_out_dir(job) / "history.csv"
+  // The job's latest run (out/<name>, or -2, -3, ... where `run` moved on): the landscape goes
+  // into it, with its best-so-far path.
+  std::string why;
+  const fs::path run = latest_run_dir(job, &why);
+  spdlog::info("{}", why);
+  const fs::path out =
+      o.out.empty() ? (run.empty() ? default_out_dir(job) : run) / "landscape" : fs::path(o.out);
+  lo.history = o.history.empty() && !run.empty() && fs::is_regular_file(run / "history.csv")
+                   ? run / "history.csv"
                    : fs::path(o.history);
   const auto t0 = std::chrono::steady_clock::now();
   spdlog::info("evaluating a {} grid over {} ({} simulations per point)", o.grid,
@@ -111,10 +116,12 @@ void add_report_commands(CLI::App& app, const Globals& g, Action& action) {
     sub->add_option("--grid", o->grid, "Grid points, N1xN2 (default 41x41)");
     sub->add_option("--params", o->params,
                     "Two tuned parameters, e.g. Kp,Ki (default: the first two)");
-    sub->add_option("--out", o->out, "Output directory (default out/<job name>/landscape)");
+    sub->add_option("--out", o->out,
+                    "Output directory (default <the job's latest run>/landscape, else "
+                    "out/<job name>/landscape)");
     sub->add_option("--history", o->history,
-                    "history.csv whose best-so-far path is drawn (default out/<job "
-                    "name>/history.csv if present)");
+                    "history.csv whose best-so-far path is drawn (default: the latest run's, "
+                    "out/<job name>[-N]/history.csv, if there is one)");
     sub->add_option("--threads", o->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(0, 4096));
     sub->add_option("--format", o->format, "png (default) or svg");
