@@ -69,8 +69,12 @@ TEST(TuningRun, TunedFitnessIsReproducedByComparison) {
   EXPECT_EQ(r.baseline().controller.Kp, 20.0);
   EXPECT_EQ(r.comparison.size(), 4u);
   EXPECT_EQ(r.comparison[0].label, "NFTSMC");
-  // 9 candidates, 4 compared controllers, the winner 8 times more for the noise floor.
-  EXPECT_EQ(r.simulations, 9 + 4 + 8);
+  // 9 candidates, 4 compared controllers, the winner 8 times more for the noise floor, and once
+  // more per parameter on a bound (1 % of the range inward).
+  int at_bound = 0;
+  for (std::size_t j = 0; j < r.job.tuning->parameters.size(); ++j)
+    at_bound += tune::inward_value(r.job.tuning->parameters[j], r.optimization.best[j]) ? 1 : 0;
+  EXPECT_EQ(r.simulations, 9 + 4 + 8 + at_bound);
   ASSERT_TRUE(r.noise_floor.has_value());
   EXPECT_LE(r.noise_floor->objective_min, r.noise_floor->objective_max);
   EXPECT_GT(r.noise_floor->relative_spread, 0.0);  // chaotic at rounding level after the faults
@@ -256,6 +260,24 @@ TEST(TuningRun, WarnsOfTunedValuesAtABound) {
   ASSERT_EQ(w.size(), 1u);
   EXPECT_NE(w[0].find("switching_gain"), std::string::npos);
   EXPECT_TRUE(tune::bound_warnings(job, {190, 25, 25}).empty());
+  // Told how much the objective changes 1 % of the range inward: within the noise floor the
+  // objective is flat there and widening is not advised; beyond it, the change is given.
+  EXPECT_EQ(tune::inward_value(job.tuning->parameters[2], 50).value(), 49.5);  // Ki in [0, 50]
+  EXPECT_FALSE(tune::inward_value(job.tuning->parameters[2], 25));
+  w = tune::bound_warnings(job, {20, 25, 50}, {std::nullopt, std::nullopt, 1e-6}, 2e-6);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("Ki = 50 ended at its upper bound 50 (within 0.1 % of the range), where the "
+                      "objective is flat within the noise: 1 % of the range inward changes it by "
+                      "0.0001 %, inside the noise floor of 0.0002 %"),
+            std::string::npos)
+      << w[0];
+  EXPECT_EQ(w[0].find("widen tuning"), std::string::npos) << w[0];
+  w = tune::bound_warnings(job, {20, 25, 50}, {std::nullopt, std::nullopt, 3e-6}, 2e-6);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("widen tuning.parameters.Ki and run again. (1 % of the range inward "
+                      "changes the objective by 0.0003 %, beyond the noise floor of 0.0002 %.)"),
+            std::string::npos)
+      << w[0];
   // An open range: alpha2 < 1, so a bound at 0.7 can move, one at the top of the range cannot.
   j["tuning"]["parameters"] = {{"alpha2", {0.3, 0.7}}};
   w = tune::bound_warnings(tune::parse_job(j, "x"), {0.7});
@@ -278,8 +300,13 @@ TEST(Cli, Table1RunWarnsThatKiEndsOnItsBound) {
       << r.err;
   const json g = json::parse(slurp(dir / "t" / "gains.json"));
   ASSERT_EQ(g["warnings"].size(), 2u);
-  EXPECT_NE(g["warnings"][0].get<std::string>().find("widen tuning.parameters.Ki"),
-            std::string::npos);
+  // Ki on its bound, where the objective is flat within the noise: no advice to widen.
+  EXPECT_NE(g["warnings"][0].get<std::string>().find(
+                "where the objective is flat within the noise: 1 % of the range inward changes it "
+                "by "),
+            std::string::npos)
+      << g["warnings"][0];
+  EXPECT_EQ(g["warnings"][0].get<std::string>().find("widen tuning"), std::string::npos);
   EXPECT_NE(g["warnings"][1].get<std::string>().find("below the tuned PI-FOSMC's 1.332"),
             std::string::npos)
       << g["warnings"][1];

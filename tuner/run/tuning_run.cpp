@@ -135,7 +135,6 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
 
   for (std::size_t j = 0; j < problem.space().names.size(); ++j)
     r.tuned.emplace_back(problem.space().names[j], r.optimization.best[j]);
-  r.warnings = bound_warnings(job, r.optimization.best);
 
   std::vector<sim::ControllerConfig> controllers;
   for (const CompareEntry& c : job.compare) {
@@ -173,6 +172,23 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   nf.relative_spread =
       (nf.objective_max - nf.objective_min) / r.best().outcome.evaluation.objective;
   r.noise_floor = nf;
+  // A parameter on its bound: does the objective change there by more than the noise? The tuned
+  // controller with that parameter moved 1 % of its range inward says.
+  std::vector<std::optional<double>> inward(r.optimization.best.size());
+  for (std::size_t j = 0; j < job.tuning->parameters.size() && j < inward.size(); ++j) {
+    const std::optional<double> moved = inward_value(job.tuning->parameters[j], r.optimization.best[j]);
+    const sim::ControllerField* f = sim::find_controller_field(job.tuning->parameters[j].name);
+    if (!moved || !f) continue;
+    sim::ControllerConfig c = r.tuned_controller;
+    c.*(f->member) = *moved;
+    const double v =
+        problem.evaluate(std::span<const sim::ControllerConfig>(&c, 1), evaluator)[0]
+            .evaluation.objective;
+    r.simulations += static_cast<std::int64_t>(problem.scenarios());
+    const double best = r.best().outcome.evaluation.objective;
+    inward[j] = std::abs(v - best) / best;
+  }
+  r.warnings = bound_warnings(job, r.optimization.best, inward, nf.relative_spread);
   for (std::string& w : comparison_warnings(r)) r.warnings.push_back(std::move(w));
   return r;
 }
@@ -233,7 +249,34 @@ std::int64_t comparison_record_every(const Job& job, std::int64_t max_rows) {
   return every;
 }
 
+namespace {
+
+// Within 0.1 % of the search range (in ln x on a log scale) from a bound.
+bool near(const ParameterBounds& b, double x, bool upper) {
+  const bool log = b.scale == Scale::log;
+  const auto c = [&](double v) { return log ? sim::math::log(v) : v; };
+  const double tol = 1e-3 * (c(b.upper) - c(b.lower));
+  return upper ? c(b.upper) - c(x) <= tol : c(x) - c(b.lower) <= tol;
+}
+
+}  // namespace
+
+std::optional<double> inward_value(const ParameterBounds& b, double x) {
+  const bool at_upper = near(b, x, true), at_lower = near(b, x, false);
+  if (at_upper == at_lower) return std::nullopt;  // at neither (or a range too narrow to say)
+  if (b.scale == Scale::log)
+    return x * sim::math::exp((at_upper ? -0.01 : 0.01) *
+                              (sim::math::log(b.upper) - sim::math::log(b.lower)));
+  return x + (at_upper ? -0.01 : 0.01) * (b.upper - b.lower);
+}
+
 std::vector<std::string> bound_warnings(const Job& job, const Decision& x) {
+  return bound_warnings(job, x, {}, 0.0);
+}
+
+std::vector<std::string> bound_warnings(const Job& job, const Decision& x,
+                                        const std::vector<std::optional<double>>& inward_change,
+                                        double noise_floor) {
   std::vector<std::string> out;
   if (!job.tuning) return out;
   const std::vector<ParameterBounds>& ps = job.tuning->parameters;
@@ -258,6 +301,26 @@ std::vector<std::string> bound_warnings(const Job& job, const Decision& x) {
                   can_widen ? "; the optimum may lie beyond it: widen tuning.parameters." : "");
     std::string w = buf;
     w += can_widen ? b.name + " and run again." : ", which is the field's own limit.";
+    if (j < inward_change.size() && inward_change[j]) {
+      const double change = *inward_change[j];
+      const bool flat = change <= noise_floor;
+      std::snprintf(buf, sizeof buf,
+                    "%s = %.6g ended at its %s bound %.6g (within 0.1 %% of the range), where the "
+                    "objective is flat within the noise: 1 %% of the range inward changes it by "
+                    "%.2g %%, inside the noise floor of %.2g %%: the objective cannot tell %s "
+                    "values apart there, so widening the bound is unlikely to help.",
+                    b.name.c_str(), x[j], at_upper ? "upper" : "lower", bound, 100 * change,
+                    100 * noise_floor, b.name.c_str());
+      if (flat && can_widen)
+        w = buf;
+      else if (!flat) {
+        std::snprintf(buf, sizeof buf,
+                      " (1 %% of the range inward changes the objective by %.2g %%, beyond the "
+                      "noise floor of %.2g %%.)",
+                      100 * change, 100 * noise_floor);
+        w += buf;
+      }
+    }
     out.push_back(std::move(w));
   }
   return out;

@@ -114,6 +114,15 @@ std::string noise_floor_sentence(const TuningOutcome& r);
 // The warnings of tuned values at a bound: within 0.1 % of the search range (in ln x for a
 // log-scale parameter) from the lower or upper bound.
 std::vector<std::string> bound_warnings(const Job& job, const Decision& values);
+// The same, told per parameter on a bound how much the objective changes (relative) when that
+// parameter moves 1 % of its range inward (inward_value): within the noise floor the warning
+// says the objective is flat there instead of advising to widen the bound.
+std::vector<std::string> bound_warnings(const Job& job, const Decision& values,
+                                        const std::vector<std::optional<double>>& inward_change,
+                                        double noise_floor);
+// A value 1 % of the search range (in ln x on a log scale) inward from the bound `x` lies on;
+// nullopt when x is on neither bound.
+std::optional<double> inward_value(const ParameterBounds& bounds, double x);
 
 // The warnings of a finished comparison: a compared controller whose objective is lower than the
 // tuned one's, and tuned gains whose control TV on the listed scenarios exceeds
