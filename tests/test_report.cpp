@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
@@ -167,7 +169,7 @@ TEST(Report, LandscapeGridAndHeatmap) {
   EXPECT_NEAR(r.best_objective, lowest, 1e-8 * lowest);
   EXPECT_EQ(slurp(r.figure).substr(0, 4), std::string("\x89PNG", 4));
   const std::string gp = slurp(run / "landscape" / "landscape.gp");
-  EXPECT_NE(gp.find("history.csv"), std::string::npos);
+  EXPECT_NE(gp.find("path.csv"), std::string::npos);
   // viridis, not a rainbow, and coloured by the relative excess over the lowest objective.
   EXPECT_NE(gp.find("set palette defined (0 '#440154'"), std::string::npos) << gp;
   EXPECT_EQ(gp.find("rgb 33,13,10"), std::string::npos);
@@ -219,6 +221,102 @@ TEST(Cli, LandscapeAndEvaluateUseTheJobsLatestRunAndSayWhich) {
   r = in_dir("help evaluate");
   EXPECT_NE(r.out.find("--no-figure"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("{false}"), std::string::npos) << r.out;
+}
+
+// The landscape of a 3-parameter job holds the third at the values it is given (the tuned ones,
+// in the CLI) and says so; colours within the noise floor of the lowest are one; the colour-bar
+// tics are round; the optimiser's path is drawn projected where it does not lie on the map.
+TEST(Report, LandscapeSaysWhatItFixesMarksTheNoiseAndProjectsThePath) {
+  json j = short_table1_job();
+  j["tuning"]["parameters"]["switching_gain"] = {{"bounds", {2, 200}}, {"scale", "log"}};
+  const tune::Job job = tune::parse_job(j, "three");
+  const auto dir = fresh_dir("landscape-three");
+  tune::TbbEvaluator evaluator(2);
+  const tune::TuningOutcome run = tune::tune(job, evaluator);
+  tune::write_outputs(run, dir / "run");
+  tune::LandscapeOptions o;
+  o.n1 = 4;
+  o.n2 = 3;
+  o.params = {"Kp", "Ki"};
+  o.history = dir / "run" / "history.csv";
+  const double tuned_gain = run.tuned_controller.switching_gain;
+  o.fixed = {{"switching_gain", tuned_gain}};
+  o.fixed_source = "the tuned value, run/gains.json";
+  o.noise_floor = 1e-3;
+  tune::LandscapeResult r = tune::compute_landscape(job, dir / "tuned", o, evaluator);
+  ASSERT_EQ(r.fixed.size(), 1u);
+  EXPECT_EQ(r.fixed[0].first, "switching_gain");
+  EXPECT_EQ(r.fixed[0].second, tuned_gain);
+  const std::string gp = slurp(dir / "tuned" / "landscape.gp");
+  EXPECT_NE(gp.find("\\nlowest on the grid "), std::string::npos) << gp;
+  EXPECT_NE(gp.find("ISE[0 s, 5 s] of table1-short over Kp and Ki"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("switching_gain = " + ftc::tune::detail::format_number(tuned_gain, "%.5g") +
+                    " held fixed (the tuned value, run/gains.json)"),
+            std::string::npos)
+      << gp;
+  // Everything within the noise floor of the lowest takes the floor's colour.
+  EXPECT_NE(gp.find(" - 1) : 0.001) with image"), std::string::npos) << gp;
+  const std::size_t tics = gp.find("set cbtics (");
+  ASSERT_NE(tics, std::string::npos);
+  const std::string tic_list = gp.substr(tics, gp.find('\n', tics) - tics);
+  EXPECT_EQ(tic_list.rfind("set cbtics ('≤ noise floor 0.001' 0.001", 0), 0u) << tic_list;
+  // Every other tic is 1, 2, 3 or 5 times a power of ten, labelled as it is.
+  std::istringstream labels(tic_list.substr(tic_list.find(", '") + 3));
+  for (std::string label; std::getline(labels, label, '\'');) {
+    const double v = std::stod(label);
+    const double m = v / std::pow(10.0, std::floor(std::log10(v) + 1e-9));
+    EXPECT_TRUE(std::abs(m - 1) < 1e-9 || std::abs(m - 2) < 1e-9 || std::abs(m - 3) < 1e-9 ||
+                std::abs(m - 5) < 1e-9)
+        << label << " in " << tic_list;
+    std::string rest;
+    std::getline(labels, rest, '\'');  // the value and the separator
+  }
+  // The path: rows whose switching_gain is not the tuned one lie off the map.
+  EXPECT_GT(r.path_points, 0);
+  EXPECT_GE(r.path_on_map, 1);  // the last row is the tuned point
+  if (r.path_on_map < r.path_points)
+    EXPECT_NE(gp.find("optimiser''s best so far, projected"), std::string::npos) << gp;
+  else
+    EXPECT_NE(gp.find("optimiser: best so far, by iteration"), std::string::npos) << gp;
+  EXPECT_EQ(count_lines(slurp(dir / "tuned" / "path.csv")), 1 + r.path_points);
+
+  // Without given values: the job's, and the path is off the map wherever the gain was tuned
+  // away from it.
+  o.fixed.clear();
+  o.fixed_source = "the job's value";
+  r = tune::compute_landscape(job, dir / "job", o, evaluator);
+  ASSERT_EQ(r.fixed.size(), 1u);
+  EXPECT_EQ(r.fixed[0].second, job.controller.switching_gain);
+  EXPECT_NE(slurp(dir / "job" / "landscape.gp").find("held fixed (the job's value)"),
+            std::string::npos);
+  if (tuned_gain != job.controller.switching_gain) {
+    EXPECT_LT(r.path_on_map, r.path_points);
+  }
+}
+
+// The CLI holds the unplotted parameters at the latest run's tuned values, or at the job's with
+// --at-job-values, and prints which.
+TEST(Cli, LandscapeHoldsTheOtherParametersAtTheTunedValues) {
+  const auto dir = fresh_dir("landscape-fixed");
+  json j = tiny_job("three");
+  j["tuning"]["parameters"]["switching_gain"] = {{"bounds", {2, 200}}, {"scale", "log"}};
+  tune::write_file_atomic(dir / "job.json", j.dump(2));
+  const auto in_dir = [&](const std::string& args) {
+    return run_cli("--help >/dev/null && cd '" + dir.string() + "' && '" FTC_CLI "' " + args, dir);
+  };
+  ASSERT_EQ(in_dir("run job.json -q").exit_code, 0);
+  const json gains = json::parse(slurp(dir / "out" / "three" / "gains.json"));
+  char want[160];
+  std::snprintf(want, sizeof want, "  switching_gain held fixed at %.6g (the tuned value, ",
+                gains["tuned"]["switching_gain"].get<double>());
+  CliResult r = in_dir("landscape job.json --grid 2x2 --params Kp,Ki");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find(want), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("lowest on the grid: ISE[0 s, 0.05 s] = "), std::string::npos) << r.out;
+  r = in_dir("landscape job.json --grid 2x2 --params Kp,Ki --at-job-values");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("  switching_gain held fixed at 20 (the job's value)"), std::string::npos)
+      << r.out;
 }
 
 TEST(Cli, ReportRejectsMissingOrBrokenRunDirectories) {

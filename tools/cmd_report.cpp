@@ -7,7 +7,10 @@
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/report/landscape.hpp"
+#include "ftc/runtime/json_reader.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "progress.hpp"
 
 namespace ftc::cli {
@@ -38,6 +41,7 @@ namespace {
 struct LandscapeCli {
   std::string job, grid = "41x41", params, out, history, format = "png";
   int threads = 0;
+  bool at_job_values = false;
 };
 
 int run_landscape(const LandscapeCli& o, const Globals& g) {
@@ -64,6 +68,25 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
   lo.history = o.history.empty() && !run.empty() && fs::is_regular_file(run / "history.csv")
                    ? run / "history.csv"
                    : fs::path(o.history);
+  // The unplotted parameters at the run's tuned values (the map then holds the tuned point),
+  // or at the job's with --at-job-values; the run's noise floor for the colours.
+  if (!run.empty()) {
+    const std::optional<std::string> text = tune::read_file(run / "gains.json");
+    const nlohmann::json gains =
+        text ? nlohmann::json::parse(*text, nullptr, false) : nlohmann::json();
+    if (gains.is_object()) {
+      const double nf = ftc::json_io::json_number_or(
+          gains.value(nlohmann::json::json_pointer("/noise_floor/relative_spread"),
+                      nlohmann::json()),
+          0.0);
+      lo.noise_floor = nf;
+      if (!o.at_job_values && gains.contains("tuned") && gains["tuned"].is_object()) {
+        for (auto it = gains["tuned"].begin(); it != gains["tuned"].end(); ++it)
+          if (it.value().is_number()) lo.fixed.emplace_back(it.key(), it.value().get<double>());
+        lo.fixed_source = "the tuned value, " + (run / "gains.json").string();
+      }
+    }
+  }
   const auto t0 = std::chrono::steady_clock::now();
   spdlog::info("evaluating a {} grid over {} ({} simulations per point)", o.grid,
                o.params.empty() ? "the first two tuned parameters" : o.params,
@@ -87,9 +110,15 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
   bar.clear();
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!g.quiet) {
-    std::printf("%lld simulations in %.2f s; lowest %s = %.6g at %s = %.5g, %s = %.5g\n",
-                static_cast<long long>(r.simulations), s, sim::to_string(job.objective.metric),
+    std::printf("%lld simulations in %.2f s; lowest on the grid: %s = %.6g at %s = %.5g, %s = "
+                "%.5g\n",
+                static_cast<long long>(r.simulations), s, tune::objective_label(job).c_str(),
                 r.best_objective, r.params[0].c_str(), r.best[0], r.params[1].c_str(), r.best[1]);
+    for (const auto& [name, value] : r.fixed)
+      std::printf("  %s held fixed at %.6g (%s)\n", name.c_str(), value, r.fixed_source.c_str());
+    if (r.path_points > r.path_on_map)
+      std::printf("  the optimiser's path is drawn projected: %d of its %d points lie on the map\n",
+                  r.path_on_map, r.path_points);
     std::printf("wrote %s and %s\n", r.csv.c_str(), r.figure.c_str());
   }
   return 0;
@@ -125,6 +154,9 @@ void add_report_commands(CLI::App& app, const Globals& g, Action& action) {
     sub->add_option("--threads", o->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(0, 4096));
     sub->add_option("--format", o->format, "png (default) or svg");
+    sub->add_flag("--at-job-values", o->at_job_values,
+                  "Hold the unplotted tuned parameters at the job's values instead of the latest "
+                  "run's tuned ones");
     sub->callback([&action, &g, o] { action = [&g, o] { return run_landscape(*o, g); }; });
   }
 }

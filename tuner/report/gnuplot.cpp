@@ -11,6 +11,8 @@
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "ftc/tune/io/files.hpp"
 #include "io/text.hpp"
@@ -44,14 +46,38 @@ const char* extension(FigureFormat f) { return f == FigureFormat::png ? ".png" :
 
 // Colour-bar tics for a log scale: gnuplot draws none when the range is under a decade, which
 // is common for objectives that barely change, so place six at even log spacing.
-std::string colour_tics(double lo, double hi) {
+std::string colour_tics(double lo, double hi, const std::string& lo_label) {
   if (!(lo > 0) || !(hi > lo) || !std::isfinite(hi)) return "";
   std::string s = "set cbrange [" + detail::format_number(lo, "%.9g") + ":" +
                   detail::format_number(hi, "%.9g") + "]\nset cbtics (";
-  for (int i = 0; i <= 5; ++i) {
-    const double v = lo * std::pow(hi / lo, i / 5.0);
-    s += (i ? ", " : "") + std::string("'") + detail::format_number(v, "%.5g") + "' " +
+  // Round values inside the range: 1, 2 and 5 per decade, fewer when they would crowd.
+  const int k0 = static_cast<int>(std::floor(std::log10(lo))),
+            k1 = static_cast<int>(std::ceil(std::log10(hi)));
+  const int decades = k1 - k0;
+  std::vector<double> mantissas = decades <= 2 ? std::vector<double>{1, 2, 5}
+                                  : decades <= 4 ? std::vector<double>{1, 3}
+                                                 : std::vector<double>{1};
+  const int every = decades > 8 ? (decades + 7) / 8 : 1;  // at most about 8 decades labelled
+  std::vector<double> tics;
+  for (int k = k0; k <= k1; ++k)
+    if ((k - k0) % every == 0)
+      for (double m : mantissas) {
+        const double v = m * std::pow(10.0, k);
+        // Rounded to its own digit, so that the label is exactly the round value.
+        const double r = std::stod(detail::format_number(v, "%.1g"));
+        // Not crowding the label of lo.
+        const double from = lo_label.empty() ? lo * (1 - 1e-9) : lo * 1.8;
+        if (r >= from && r <= hi * (1 + 1e-9)) tics.push_back(r);
+      }
+  bool first = true;
+  if (!lo_label.empty()) {
+    s += "'" + lo_label + "' " + detail::format_number(lo, "%.9g");
+    first = false;
+  }
+  for (double v : tics) {
+    s += (first ? "" : ", ") + std::string("'") + detail::format_number(v, "%g") + "' " +
          detail::format_number(v, "%.9g");
+    first = false;
   }
   return s + ")\n";
 }

@@ -12,8 +12,9 @@ namespace ftc::tune::plot {
 std::string gp(const std::string& s);
 std::string terminal(FigureFormat f, int width, int height);
 const char* extension(FigureFormat f);
-// Colour-bar tics for a log scale over [lo, hi].
-std::string colour_tics(double lo, double hi);
+// Colour-bar tics for a log scale over [lo, hi], at round values (1, 2, 5 × 10^k, or decades
+// when those would crowd); with `lo_label`, a first tic at lo that says what lo is.
+std::string colour_tics(double lo, double hi, const std::string& lo_label = "");
 
 // viridis at t in [0, 1] as '#rrggbb': perceptually uniform, readable in grey and with the
 // common colour-vision deficiencies. Every figure takes its colours from it.
