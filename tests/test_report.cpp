@@ -517,8 +517,40 @@ TEST(Report, FiguresReadWellInGreyAndForColourBlindReaders) {
     ++lines;
   }
   EXPECT_GE(lines, 4);
-  // Four controllers, four actuators: four distinct (colour, dash, marker) styles.
-  EXPECT_EQ(styles.size(), 4u);
+  // The controller style table: ten distinct (colour, dash, marker) styles, and the actuators'.
+  EXPECT_GE(styles.size(), 10u);
+  // Each controller type keeps its style in every report: the legend entries of fig3 and fig7
+  // name the type's style, whatever the order of the comparison.
+  for (const char* fig : {"fig3-attitude", "fig7-fault-zoom"}) {
+    const std::string script = figure_script(gp, fig);
+    for (const auto& [label, style] :
+         std::vector<std::pair<std::string, int>>{{"NFTSMC", tune::plot::controller_style("nftsmc", false)},
+                                                  {"FOSMC", tune::plot::controller_style("fosmc", false)},
+                                                  {"PI-FOSMC (job)", tune::plot::controller_style("pi_fosmc", false)},
+                                                  {"tuned PI-FOSMC", 1}})
+      EXPECT_NE(script.find("keyentry with linespoints ls " + std::to_string(style) + " title '" +
+                            label + "'"),
+                std::string::npos)
+          << fig << ": " << label;
+  }
+  EXPECT_EQ(tune::plot::controller_style("nftsmc", false), 4);
+  EXPECT_EQ(tune::plot::controller_style("fosmc", false), 3);
+  EXPECT_EQ(tune::plot::controller_style("pi_fosmc", false), 2);
+  EXPECT_EQ(tune::plot::controller_style("pi_fosmc", true), 1);
+  EXPECT_NE(tune::plot::controller_style("fosmc", false, 1), 3);  // a second FOSMC differs
+  // fig7: the tuned controller is drawn first, under the others (it chatters most).
+  const std::string fig7 = figure_script(gp, "fig7-fault-zoom");
+  const std::size_t first_curve = fig7.find("with lines ls ");
+  ASSERT_NE(first_curve, std::string::npos);
+  EXPECT_EQ(fig7.substr(first_curve, 16), "with lines ls 1 ") << fig7.substr(first_curve, 40);
+  // fig6: units, one legend, labelled fault lines.
+  const std::string fig6_script = figure_script(gp, "fig6-inputs");
+  EXPECT_NE(fig6_script.find("actuator output u [N·m]"), std::string::npos);
+  EXPECT_NE(fig6_script.find("set label 'fault 1'"), std::string::npos);
+  int keys_off = 0;
+  for (std::size_t p = 0; (p = fig6_script.find("unset key\n", p)) != std::string::npos; ++p)
+    ++keys_off;
+  EXPECT_EQ(keys_off, 3);  // four panels, one legend
 
   // fig6: one y range for every panel, and it holds every plotted value.
   const std::string fig6 = figure_script(gp, "fig6-inputs");
@@ -538,11 +570,16 @@ TEST(Report, FiguresReadWellInGreyAndForColourBlindReaders) {
       }
   }
 
-  // fig5 in % below the job's own controller.
+  // fig5: the improvement over the job's own controller as a ratio on a log axis, round tics
+  // from 0.001 % to 10 000 times, and the noise floor marked.
   const json gains = json::parse(slurp(run / "gains.json"));
   char ref[64];
-  std::snprintf(ref, sizeof ref, "100*(1 - %.9g/$2)", gains["baseline"]["fitness"].get<double>());
-  EXPECT_NE(figure_script(gp, "fig5-fitness").find(ref), std::string::npos) << ref;
+  std::snprintf(ref, sizeof ref, "(($2/%.9g - 1) > 0 ?", gains["baseline"]["fitness"].get<double>());
+  const std::string fig5 = figure_script(gp, "fig5-fitness");
+  EXPECT_NE(fig5.find(ref), std::string::npos) << ref << "\n" << fig5;
+  for (const char* text : {"set logscale y", "'+0.1 %%' 1e-3", "'1 000×' 999",
+                           "objective / best so far − 1 (log scale)", "noise floor "})
+    EXPECT_NE(fig5.find(text), std::string::npos) << text << "\n" << fig5;
 
   // fig3: beside each angle, the distance of the three others from the tuned controller.
   const std::string fig3 = figure_script(gp, "fig3-attitude");

@@ -148,6 +148,47 @@ std::string line_styles(int count) {
   return s;
 }
 
+int controller_style(const std::string& type, bool tuned, int repeat) {
+  if (tuned) return 1;
+  int base = 2;  // pi_fosmc and anything unknown
+  if (type == "fosmc")
+    base = 3;
+  else if (type == "nftsmc")
+    base = 4;
+  else if (type == "adaptive_neural_pi_fosmc")
+    base = 5;
+  return repeat == 0 ? base : std::min(kControllerStyles, base + 5);
+}
+
+std::string controller_styles() {
+  // Colour (viridis, darkest for the tuned), dash and marker per type; 6..10 repeat 1..5's colour
+  // with another dash and an open marker.
+  static const double kShade[5] = {0.0, 0.25, 0.47, 0.68, 0.85};
+  static const int kDash[5] = {1, 2, 4, 5, 3};
+  static const int kMark[5] = {7, 5, 9, 13, 11};
+  std::string s;
+  for (int i = 0; i < kControllerStyles; ++i) {
+    const int k = i % 5;
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "set style line %d lc rgb '%s' dt %d pt %d lw %s ps 0.9\n",
+                  i + 1, viridis(kShade[k]).c_str(), i < 5 ? kDash[k] : kDash[(k + 2) % 5],
+                  i < 5 ? kMark[k] : kMark[k] - 1, i == 0 ? "1.3" : "1.6");
+    s += buf;
+  }
+  return s;
+}
+
+std::vector<int> controller_style_list(const std::vector<Series>& series) {
+  std::vector<int> out;
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    int repeat = 0;
+    for (std::size_t j = 0; j < i; ++j)
+      repeat += !series[j].tuned && !series[i].tuned && series[j].type == series[i].type;
+    out.push_back(controller_style(series[i].type, series[i].tuned, repeat));
+  }
+  return out;
+}
+
 std::string styles(int count) {
   return "set datafile separator ','\n" + line_styles(count) +
          "set grid lc rgb '#dddddd'\nset key outside right top vertical box opaque\n";
