@@ -367,8 +367,7 @@ TEST(JobLoader, SuggestsTheNearestEnumValueAndSwappedLetters) {
   j["objective"]["metric"] = "ies";
   e = first(j);
   EXPECT_EQ(e.path, "/objective/metric") << to_string(e);
-  EXPECT_NE(e.message.find("(got \"ies\"); did you mean \"ise\"?"), std::string::npos)
-      << e.message;
+  EXPECT_NE(e.message.find("(got \"ies\"); did you mean \"ise\"?"), std::string::npos) << e.message;
   j = table1();
   j["objective"]["aggregate"] = "cavr";
   EXPECT_NE(first(j).message.find("did you mean \"cvar\"?"), std::string::npos);

@@ -1,15 +1,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/report/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
-#include "ftc/tune/run/evaluate.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/evaluate.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "io/text.hpp"
 #include "report/gnuplot.hpp"
@@ -194,15 +193,13 @@ TEST(Cli, LandscapeAndEvaluateUseTheJobsLatestRunAndSayWhich) {
   ASSERT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "gains.json"));
   CliResult r = in_dir("landscape job.json --grid 2x2");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("the latest run of job latest is out/latest-2"), std::string::npos)
-      << r.err;
+  EXPECT_NE(r.err.find("the latest run of job latest is out/latest-2"), std::string::npos) << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "landscape" / "landscape.png"));
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "landscape" / "history.csv"));
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "latest" / "landscape"));
   r = in_dir("evaluate job.json --no-figure");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(
-      std::filesystem::exists(dir / "out" / "latest-2" / "evaluation" / "evaluation.json"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "evaluation" / "evaluation.json"));
   // --force replaces out/latest: now the newest run.
   ASSERT_EQ(in_dir("run job.json -q --force").exit_code, 0);
   r = in_dir("landscape job.json --grid 2x2");
@@ -523,11 +520,11 @@ TEST(Report, FiguresReadWellInGreyAndForColourBlindReaders) {
   // name the type's style, whatever the order of the comparison.
   for (const char* fig : {"fig3-attitude", "fig7-fault-zoom"}) {
     const std::string script = figure_script(gp, fig);
-    for (const auto& [label, style] :
-         std::vector<std::pair<std::string, int>>{{"NFTSMC", tune::plot::controller_style("nftsmc", false)},
-                                                  {"FOSMC", tune::plot::controller_style("fosmc", false)},
-                                                  {"PI-FOSMC (job)", tune::plot::controller_style("pi_fosmc", false)},
-                                                  {"tuned PI-FOSMC", 1}})
+    for (const auto& [label, style] : std::vector<std::pair<std::string, int>>{
+             {"NFTSMC", tune::plot::controller_style("nftsmc", false)},
+             {"FOSMC", tune::plot::controller_style("fosmc", false)},
+             {"PI-FOSMC (job)", tune::plot::controller_style("pi_fosmc", false)},
+             {"tuned PI-FOSMC", 1}})
       EXPECT_NE(script.find("keyentry with linespoints ls " + std::to_string(style) + " title '" +
                             label + "'"),
                 std::string::npos)
@@ -574,7 +571,8 @@ TEST(Report, FiguresReadWellInGreyAndForColourBlindReaders) {
   // from 0.001 % to 10 000 times, and the noise floor marked.
   const json gains = json::parse(slurp(run / "gains.json"));
   char ref[64];
-  std::snprintf(ref, sizeof ref, "(($2/%.9g - 1) > 0 ?", gains["baseline"]["fitness"].get<double>());
+  std::snprintf(ref, sizeof ref, "(($2/%.9g - 1) > 0 ?",
+                gains["baseline"]["fitness"].get<double>());
   const std::string fig5 = figure_script(gp, "fig5-fitness");
   EXPECT_NE(fig5.find(ref), std::string::npos) << ref << "\n" << fig5;
   for (const char* text : {"set logscale y", "'+0.1 %%' 1e-3", "'1 000×' 999",
@@ -585,8 +583,7 @@ TEST(Report, FiguresReadWellInGreyAndForColourBlindReaders) {
   const std::string fig3 = figure_script(gp, "fig3-attitude");
   for (const char* label : {"|x_1 − x_1^{tuned}|", "|x_2 − x_2^{tuned}|", "|x_3 − x_3^{tuned}|"})
     EXPECT_NE(fig3.find(label), std::string::npos) << label;
-  EXPECT_NE(fig3.find("keyentry with linespoints ls 1 title 'tuned PI-FOSMC'"),
-            std::string::npos);
+  EXPECT_NE(fig3.find("keyentry with linespoints ls 1 title 'tuned PI-FOSMC'"), std::string::npos);
 }
 
 TEST(Report, PageShowsSettingsAsATableAndTheLandscape) {

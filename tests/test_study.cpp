@@ -1,9 +1,8 @@
 #include <gtest/gtest.h>
 
-#include <map>
-
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -59,7 +58,8 @@ TEST(Study, WritesOneRowPerRunTheTableAndTheFigure) {
   int rows = 0;
   std::vector<std::pair<int, double>> ranked;  // rank, median in table order
   for (const std::string& l : lines(md))
-    if (l.find(" | bat |") != std::string::npos || l.find(" | pagmo:cmaes |") != std::string::npos) {
+    if (l.find(" | bat |") != std::string::npos ||
+        l.find(" | pagmo:cmaes |") != std::string::npos) {
       ++rows;
       const std::size_t a = l.find(" | ", l.find(" | ") + 3) + 3;  // the median cell
       ranked.emplace_back(std::stoi(l.substr(2)), std::stod(l.substr(a)));

@@ -330,7 +330,8 @@ TEST(TuningRun, ObjectiveLabelNamesTheMetricTheWindowAndTheAggregate) {
   EXPECT_EQ(tune::objective_label(tune::parse_job(e, "x")),
             "quantile0.75 of IAE[first fault + 1 s, +4 s] over 7 scenarios");
   e["objective"] = {{"metric", "ise"}, {"aggregate", "max"}};
-  EXPECT_EQ(tune::objective_label(tune::parse_job(e, "x")), "max of ISE[0 s, end] over 7 scenarios");
+  EXPECT_EQ(tune::objective_label(tune::parse_job(e, "x")),
+            "max of ISE[0 s, end] over 7 scenarios");
 }
 
 TEST(TuningRun, WarnsWhenAComparedControllerScoresLowerOrTheTunedGainsChatter) {

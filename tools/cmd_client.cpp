@@ -185,7 +185,6 @@ std::string resolve_id(Api& api, const std::string& id) {
   throw InputError("id", "", "\"" + id + "\" is a prefix of several jobs: " + list);
 }
 
-
 }  // namespace
 
 std::filesystem::path default_out_dir_for(const std::string& job_name) {

@@ -103,7 +103,8 @@ void add_evaluate_command(CLI::App& app, const Globals& g, Action& action) {
                   "Ensemble seed of the held-out members (default: the job's seed + 1)")
       ->check(seed_value());
   sub->add_option("--count", opts->count, "Ensemble members (default: the job's count)");
-  sub->add_option("--out", opts->out, "Output directory (default <the job's latest run>/evaluation, else "
+  sub->add_option("--out", opts->out,
+                  "Output directory (default <the job's latest run>/evaluation, else "
                   "out/<job name>/evaluation)")
       ->check(output_directory());
   sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")

@@ -5,10 +5,10 @@
 #include <cstdio>
 
 #include "cli.hpp"
-#include "ftc/sim/input_error.hpp"
-#include "ftc/tune/report/landscape.hpp"
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/input_error.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/report/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "progress.hpp"
@@ -110,10 +110,11 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
   bar.clear();
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!g.quiet) {
-    std::printf("%lld simulations in %.2f s; lowest on the grid: %s = %.6g at %s = %.5g, %s = "
-                "%.5g\n",
-                static_cast<long long>(r.simulations), s, tune::objective_label(job).c_str(),
-                r.best_objective, r.params[0].c_str(), r.best[0], r.params[1].c_str(), r.best[1]);
+    std::printf(
+        "%lld simulations in %.2f s; lowest on the grid: %s = %.6g at %s = %.5g, %s = "
+        "%.5g\n",
+        static_cast<long long>(r.simulations), s, tune::objective_label(job).c_str(),
+        r.best_objective, r.params[0].c_str(), r.best[0], r.params[1].c_str(), r.best[1]);
     for (const auto& [name, value] : r.fixed)
       std::printf("  %s held fixed at %.6g (%s)\n", name.c_str(), value, r.fixed_source.c_str());
     if (r.path_points > r.path_on_map)

@@ -13,10 +13,10 @@
 #include <nlohmann/json.hpp>
 
 #include "cli.hpp"
-#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/pagmo.hpp"
 #include "ftc/tune/report/study.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::cli {
@@ -195,8 +195,9 @@ std::string table(const std::vector<Summary>& rows) {
     // "2=" where the entry ties with another inside the noise.
     bool tied = false;
     for (std::size_t j = 0; j < rows.size(); ++j) tied = tied || (j != i && rows[j].rank == s.rank);
-    t += "| " + std::to_string(s.rank) + (tied ? "=" : "") + " | " + s.algorithm + " | " + num(s.median) + " | " + num(s.best) + " | " + num(s.worst) +
-         " | " + std::to_string(s.on_bound) + "/" + std::to_string(s.parameters) + " | " +
+    t += "| " + std::to_string(s.rank) + (tied ? "=" : "") + " | " + s.algorithm + " | " +
+         num(s.median) + " | " + num(s.best) + " | " + num(s.worst) + " | " +
+         std::to_string(s.on_bound) + "/" + std::to_string(s.parameters) + " | " +
          std::to_string(s.evaluations) + " | " + num(s.wall, "%.2f") + " |\n";
   }
   return t;
@@ -298,12 +299,12 @@ int run_study(const StudyCli& o, const Globals& g) {
     tune::NoiseFloor nf;
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (int k = 0; k < nf.repeats; ++k) {
-      const double v = problem
-                           .perturbed(winner->seed,
-                                      tune::kNoiseFloorStream + static_cast<std::uint64_t>(k),
-                                      nf.perturbation)
-                           .evaluate(std::span<const sim::ControllerConfig>(&c, 1), *evaluator)[0]
-                           .evaluation.objective;
+      const double v =
+          problem
+              .perturbed(winner->seed, tune::kNoiseFloorStream + static_cast<std::uint64_t>(k),
+                         nf.perturbation)
+              .evaluate(std::span<const sim::ControllerConfig>(&c, 1), *evaluator)[0]
+              .evaluation.objective;
       lo = std::min(lo, v);
       hi = std::max(hi, v);
     }
@@ -320,12 +321,11 @@ int run_study(const StudyCli& o, const Globals& g) {
   std::string md = "# Study of job " + job.name + "\n\n" + std::to_string(names.size()) +
                    " algorithms × " + std::to_string(seeds.size()) + " seeds (" + o.seeds + "), " +
                    std::to_string(o.budget) + " evaluations each; the objective is the job's " +
-                   metric +
-                   " of the best candidate of a run (lower is better), " + tune::objective_label(job) +
+                   metric + " of the best candidate of a run (lower is better), " +
+                   tune::objective_label(job) +
                    ". Sorted by median. \"On a bound\": tuned parameters that ended within 0.1 % "
-                   "of their range from a bound, over all runs.\n\n" + noise_sentence(noise) +
-                   "\n\n" +
-                   table(rows) + "\n## Settings\n\n";
+                   "of their range from a bound, over all runs.\n\n" +
+                   noise_sentence(noise) + "\n\n" + table(rows) + "\n## Settings\n\n";
   for (std::size_t a = 0; a < names.size(); ++a)
     md += "- " + names[a] + ": `" + algorithms[a]->to_json().dump() + "`\n";
   md += "\nObjectives of every run: study.csv. Command: `ftctune study " + o.job +

@@ -175,10 +175,10 @@ std::filesystem::path latest_run_dir(const tune::Job& job, std::string* why) {
         (!best || f.time > best->time || (f.time == best->time && f.suffix > best->suffix)))
       best = &f;
   if (why)
-    *why = "the latest run of job " + job.name + " is " + best->dir.string() +
-           (any_same ? "" : " (of another version of the job file: its SHA-256 differs)") +
-           (runs.size() > 1 ? " (newest gains.json of " + std::to_string(runs.size()) + " runs)"
-                            : "");
+    *why =
+        "the latest run of job " + job.name + " is " + best->dir.string() +
+        (any_same ? "" : " (of another version of the job file: its SHA-256 differs)") +
+        (runs.size() > 1 ? " (newest gains.json of " + std::to_string(runs.size()) + " runs)" : "");
   return best->dir;
 }
 

@@ -3,7 +3,8 @@
 // Loads a gains file as flight software would and runs the tuned controller's step() loop in
 // closed loop with a plant of its own: the spacecraft's equations integrated here (RK4 over each
 // sample, the command held), under the paper's disturbance and faults. Prints the attitude error
-// at the end, the ISE over the run and after the first fault, and the control TV. Links ftctune::runtime only (Eigen and nlohmann-json underneath).
+// at the end, the ISE over the run and after the first fault, and the control TV. Links
+// ftctune::runtime only (Eigen and nlohmann-json underneath).
 //
 // step(t, X1, X2, a) needs the angular acceleration a = dX2/dt as a measurement. Where it comes
 // from is the flight software's choice, and this program tries the usual ones:
@@ -139,10 +140,11 @@ int main(int argc, char** argv) {
     std::printf("%s from job %s, Ts = %g s: after %.1f s the attitude error is %.6g rad\n",
                 ftc::sim::to_string(gains.controller.type), gains.job_name.c_str(),
                 gains.sample_time, duration, X1.norm());
-    std::printf("ISE over [0, %g) s = %.6g rad^2 s, over [%g, %g) s = %.6g; control TV %.6g "
-                "(acceleration: %s, noise %g rad/s^2, delay %d sample%s)\n",
-                duration, ise, first_fault, duration, ise_after, tv, accel.c_str(), noise, delay,
-                delay == 1 ? "" : "s");
+    std::printf(
+        "ISE over [0, %g) s = %.6g rad^2 s, over [%g, %g) s = %.6g; control TV %.6g "
+        "(acceleration: %s, noise %g rad/s^2, delay %d sample%s)\n",
+        duration, ise, first_fault, duration, ise_after, tv, accel.c_str(), noise, delay,
+        delay == 1 ? "" : "s");
     return 0;
   } catch (const ftc::InputError& e) {
     std::fprintf(stderr, "runtime_example: %s\n", e.what());

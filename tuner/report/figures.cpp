@@ -413,7 +413,8 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
     if (std::isfinite(floor) && floor > 0)
       g << ", \\\n     " << num(floor) << " with lines dt 3 lw 1.5 lc rgb 'gray40' title "
         << gp("noise floor " + detail::format_number(100 * floor, "%.2g") + " %");
-    g << "\nunset logscale y\nset autoscale y\nset ytics autofreq\nset format y '%g'\nunset title\nunset "
+    g << "\nunset logscale y\nset autoscale y\nset ytics autofreq\nset format y '%g'\nunset "
+         "title\nunset "
          "arrow\nunset label\n"
          "set key default\nset key outside right top vertical box opaque\n";
     figures.push_back(

@@ -54,7 +54,7 @@ std::string colour_tics(double lo, double hi, const std::string& lo_label) {
   const int k0 = static_cast<int>(std::floor(std::log10(lo))),
             k1 = static_cast<int>(std::ceil(std::log10(hi)));
   const int decades = k1 - k0;
-  std::vector<double> mantissas = decades <= 2 ? std::vector<double>{1, 2, 5}
+  std::vector<double> mantissas = decades <= 2   ? std::vector<double>{1, 2, 5}
                                   : decades <= 4 ? std::vector<double>{1, 3}
                                                  : std::vector<double>{1};
   const int every = decades > 8 ? (decades + 7) / 8 : 1;  // at most about 8 decades labelled

@@ -101,11 +101,11 @@ void summary_table(const json& comparison, const Job& job, std::ostringstream& h
     << detail::format_number(job.objective.alpha, "%.3g") << "</th><th>diverged</th></tr>\n";
   for (const json& c : comparison["controllers"]) {
     const json& m = c.value("ensemble", json::object());
-    h << "<tr><td>" << html_escape(c.value("label", "?")) << "</td><td>" << num(m.value("objective", json()))
-      << "</td><td>" << num(m.value("mean", json())) << "</td><td>" << num(m.value("median", json()))
-      << "</td><td>" << num(m.value("p90", json())) << "</td><td>" << num(m.value("max", json()))
-      << "</td><td>" << num(m.value("cvar", json())) << "</td><td>" << m.value("diverged", 0)
-      << "</td></tr>\n";
+    h << "<tr><td>" << html_escape(c.value("label", "?")) << "</td><td>"
+      << num(m.value("objective", json())) << "</td><td>" << num(m.value("mean", json()))
+      << "</td><td>" << num(m.value("median", json())) << "</td><td>" << num(m.value("p90", json()))
+      << "</td><td>" << num(m.value("max", json())) << "</td><td>" << num(m.value("cvar", json()))
+      << "</td><td>" << m.value("diverged", 0) << "</td></tr>\n";
   }
   h << "</table>\n";
 }
@@ -141,9 +141,9 @@ void evaluation_section(const fs::path& run_dir, std::ostringstream& h) {
     const json& a = c.value("aggregates", json::object());
     h << "<tr><td>" << html_escape(c.value("label", "?")) << "</td><td>"
       << html_escape(c.value("source", "")) << "</td><td>" << num(a.value("mean", json()))
-      << "</td><td>" << num(a.value("median", json())) << "</td><td>"
-      << num(a.value("p90", json())) << "</td><td>" << num(a.value("max", json())) << "</td><td>"
-      << num(a.value("cvar", json())) << "</td><td>" << a.value("diverged", 0) << "</td></tr>\n";
+      << "</td><td>" << num(a.value("median", json())) << "</td><td>" << num(a.value("p90", json()))
+      << "</td><td>" << num(a.value("max", json())) << "</td><td>" << num(a.value("cvar", json()))
+      << "</td><td>" << a.value("diverged", 0) << "</td></tr>\n";
   }
   h << "</table>\n";
   if (const std::optional<std::string> png = fs::is_regular_file(dir / "evaluation.png", ec)

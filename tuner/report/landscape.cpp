@@ -6,8 +6,8 @@
 #include <limits>
 #include <sstream>
 
-#include "ftc/tune/io/files.hpp"
 #include "ftc/sim/controller_config.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "io/text.hpp"
@@ -166,7 +166,7 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   // colour of the floor. Without a noise floor, the lowest point takes the colour of a tenth of
   // the smallest positive excess.
   const bool have_noise = options.noise_floor > 0 && std::isfinite(options.noise_floor);
-  const double floor_excess = have_noise ? options.noise_floor
+  const double floor_excess = have_noise                    ? options.noise_floor
                               : std::isfinite(least_excess) ? least_excess / 10
                                                             : 1e-12;
   const double most_excess = std::max(worst_objective / r.best_objective - 1, 10 * floor_excess);
@@ -176,8 +176,8 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
                              " - 1) : " + detail::format_number(floor_excess, "%.17g") + ")";
   std::string fixed_text;
   for (const auto& [name, value] : r.fixed)
-    fixed_text += (fixed_text.empty() ? "" : ", ") + name + " = " +
-                  detail::format_number(value, "%.5g");
+    fixed_text +=
+        (fixed_text.empty() ? "" : ", ") + name + " = " + detail::format_number(value, "%.5g");
   const std::string title =
       objective_label(job_in) + " of " + job.name + " over " + params[0] + " and " + params[1] +
       "\nlowest on the grid " + detail::format_number(r.best_objective, "%.7g") + " at " +
@@ -189,10 +189,9 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   g << plot::styles() << plot::terminal(options.format, 1000, 800) << "set output "
     << plot::gp(r.figure.filename().string()) << "\nset title " << double_quoted(title)
     << " font ',13' noenhanced\nset logscale cb\n"
-    << plot::colour_tics(floor_excess, most_excess,
-                         have_noise ? "≤ noise floor " +
-                                          detail::format_number(options.noise_floor, "%.2g")
-                                    : "")
+    << plot::colour_tics(
+           floor_excess, most_excess,
+           have_noise ? "≤ noise floor " + detail::format_number(options.noise_floor, "%.2g") : "")
     << "set cblabel "
     << plot::gp(metric + " / lowest " + metric + " − 1 (log scale; lower is better" +
                 (have_noise ? "; within the noise floor: one colour)" : ")"))
@@ -254,8 +253,9 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
     } else {
       g << ", \\\n     'path.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2")
         << " with linespoints lw 2 dt 2 pt 6 ps 1.3 lc rgb 'black' title "
-        << plot::gp("optimiser's best so far, projected (its other parameters differ from the "
-                    "map's)")
+        << plot::gp(
+               "optimiser's best so far, projected (its other parameters differ from the "
+               "map's)")
         << ", \\\n     'path.csv' skip 1 using " << coord(0, "1") << ":(($3 > 0) ? "
         << (bounds[1].scale == Scale::log ? "log10($2)" : "$2")
         << " : 1/0) with points pt 7 ps 1.5 lc rgb 'black' title 'best so far on the map'";

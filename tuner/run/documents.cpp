@@ -46,8 +46,9 @@ std::string objective_label(const Job& job) {
   const auto seconds = [](double t) { return detail::format_number(t, "%.6g") + " s"; };
   std::string window;
   if (o.window_from == WindowFrom::first_fault)
-    window = (o.window.t0 == 0 ? std::string("first fault") : "first fault + " + seconds(o.window.t0)) +
-             ", " + (std::isfinite(o.window.t1) ? "+" + seconds(o.window.t1) : std::string("end"));
+    window =
+        (o.window.t0 == 0 ? std::string("first fault") : "first fault + " + seconds(o.window.t0)) +
+        ", " + (std::isfinite(o.window.t1) ? "+" + seconds(o.window.t1) : std::string("end"));
   else
     window = seconds(o.window.t0) + ", " +
              (std::isfinite(o.window.t1) ? seconds(o.window.t1) : std::string("end"));
@@ -257,9 +258,9 @@ std::string comparison_markdown(const TuningOutcome& r) {
     << ") s"
     << (job.objective.window_from == WindowFrom::first_fault ? " from each scenario's first fault"
                                                              : " from each scenario's start")
-    << (job.scenario_count() > 1 ? std::string(", ") + to_string(job.objective.aggregate) +
-                                       " over scenarios"
-                                 : std::string())
+    << (job.scenario_count() > 1
+            ? std::string(", ") + to_string(job.objective.aggregate) + " over scenarios"
+            : std::string())
     << ").\n";
   if (const std::string nf = noise_floor_sentence(r); !nf.empty()) o << "\n" << nf << "\n";
   if (job.ensemble) {
@@ -269,9 +270,8 @@ std::string comparison_markdown(const TuningOutcome& r) {
       << r.unrecoverable << " cannot be controlled by any gains once their faults have started"
       << (r.left_out > 0 ? ", and the objective leaves them out" : "") << ". Values are "
       << sim::to_string(job.objective.metric) << " per scenario; quantiles by nearest rank.\n\n"
-      << "| controller | " << objective_label(job)
-      << " | mean | median | p90 | max | CVaR" << detail::format_number(job.objective.alpha, "%.3g")
-      << " | diverged |\n"
+      << "| controller | " << objective_label(job) << " | mean | median | p90 | max | CVaR"
+      << detail::format_number(job.objective.alpha, "%.3g") << " | diverged |\n"
       << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const ComparedController& c : r.comparison) {
       const Summary& m = c.summary;

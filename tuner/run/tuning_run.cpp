@@ -176,14 +176,14 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   // controller with that parameter moved 1 % of its range inward says.
   std::vector<std::optional<double>> inward(r.optimization.best.size());
   for (std::size_t j = 0; j < job.tuning->parameters.size() && j < inward.size(); ++j) {
-    const std::optional<double> moved = inward_value(job.tuning->parameters[j], r.optimization.best[j]);
+    const std::optional<double> moved =
+        inward_value(job.tuning->parameters[j], r.optimization.best[j]);
     const sim::ControllerField* f = sim::find_controller_field(job.tuning->parameters[j].name);
     if (!moved || !f) continue;
     sim::ControllerConfig c = r.tuned_controller;
     c.*(f->member) = *moved;
-    const double v =
-        problem.evaluate(std::span<const sim::ControllerConfig>(&c, 1), evaluator)[0]
-            .evaluation.objective;
+    const double v = problem.evaluate(std::span<const sim::ControllerConfig>(&c, 1), evaluator)[0]
+                         .evaluation.objective;
     r.simulations += static_cast<std::int64_t>(problem.scenarios());
     const double best = r.best().outcome.evaluation.objective;
     inward[j] = std::abs(v - best) / best;

@@ -23,7 +23,7 @@ struct StudySeries {
 std::filesystem::path draw_study(const std::filesystem::path& dir, const std::string& title,
                                  const std::string& objective_label,
                                  const std::vector<StudySeries>& series,
-                                 FigureFormat format = FigureFormat::png,
-                                 double best_median = 0.0, double noise_floor = 0.0);
+                                 FigureFormat format = FigureFormat::png, double best_median = 0.0,
+                                 double noise_floor = 0.0);
 
 }  // namespace ftc::tune
