@@ -208,12 +208,22 @@ TEST(Cli, LandscapeAndEvaluateUseTheJobsLatestRunAndSayWhich) {
             std::string::npos)
       << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest" / "landscape" / "landscape.png"));
+  // report takes the job file too: its latest run.
+  r = in_dir("report job.json --format png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("the latest run of job latest is out/latest "), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest" / "figures" / "fig3-attitude.png"));
   // A job without a run: the landscape goes to out/<name>/landscape, and the log says so.
   tune::write_file_atomic(dir / "other.json", tiny_job("other").dump(2));
   r = in_dir("landscape other.json --grid 2x2");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("no run of job other in out"), std::string::npos) << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "other" / "landscape" / "landscape.png"));
+  r = in_dir("report other.json");  // a job with no run
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("no run of job other in out: run `ftctune run other.json` first"),
+            std::string::npos)
+      << r.err;
   // The help shows --no-figure as a flag, not with a default.
   r = in_dir("help evaluate");
   EXPECT_NE(r.out.find("--no-figure"), std::string::npos) << r.out;

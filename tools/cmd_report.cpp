@@ -132,11 +132,26 @@ void add_report_commands(CLI::App& app, const Globals& g, Action& action) {
     auto dir = std::make_shared<std::string>();
     auto format = std::make_shared<std::string>("html");
     CLI::App* sub = app.add_subcommand("report", "Draw the figures and the HTML report of a run");
-    sub->add_option("run_dir", *dir, "Output directory of `ftctune run`")->required();
+    sub->add_option("run_dir", *dir,
+                    "Output directory of `ftctune run`, or a job file: its latest run")
+        ->required();
     sub->add_option("--format", *format,
                     "html (report.html with the PNG figures inline, default), png or svg");
     sub->callback([&action, &g, dir, format] {
-      action = [&g, dir, format] { return render_run_report(*dir, *format, g.quiet); };
+      action = [&g, dir, format] {
+        // A job file names its latest run (out/<name>, -2, -3, ...), as for landscape.
+        std::error_code ec;
+        if (std::filesystem::is_regular_file(*dir, ec)) {
+          const tune::Job job = tune::load_job(*dir);
+          std::string why;
+          const std::filesystem::path run = latest_run_dir(job, &why);
+          if (run.empty())
+            throw InputError(*dir, "", why + ": run `ftctune run " + *dir + "` first");
+          spdlog::info("{}", why);
+          return render_run_report(run.string(), *format, g.quiet);
+        }
+        return render_run_report(*dir, *format, g.quiet);
+      };
     });
   }
   {
