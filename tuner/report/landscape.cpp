@@ -195,11 +195,11 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
     << "set cblabel "
     << plot::gp(metric + " / lowest " + metric + " − 1 (log scale; lower is better" +
                 (have_noise ? "; within the noise floor: one colour)" : ")"))
-    << " noenhanced\n"
+    << " noenhanced offset -3,0\n"
     << plot::palette() << "set xlabel " << plot::gp(label(0)) << " noenhanced\nset ylabel "
     << plot::gp(label(1)) << " noenhanced\nset xrange [" << range(0, options.n1)
     << "]\nset yrange [" << range(1, options.n2)
-    << "]\nset rmargin 18\nset key outside top center horizontal\n"
+    << "]\nset rmargin 24\nset key outside top center horizontal\n"
     << "plot 'landscape.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2") << ":"
     << excess << " with image notitle";
   if (!options.history.empty()) {
@@ -253,9 +253,7 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
     } else {
       g << ", \\\n     'path.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2")
         << " with linespoints lw 2 dt 2 pt 6 ps 1.3 lc rgb 'black' title "
-        << plot::gp(
-               "optimiser's best so far, projected (its other parameters differ from the "
-               "map's)")
+        << plot::gp("optimiser's best so far, projected (other parameters differ)")
         << ", \\\n     'path.csv' skip 1 using " << coord(0, "1") << ":(($3 > 0) ? "
         << (bounds[1].scale == Scale::log ? "log10($2)" : "$2")
         << " : 1/0) with points pt 7 ps 1.5 lc rgb 'black' title 'best so far on the map'";
