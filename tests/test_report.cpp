@@ -586,6 +586,7 @@ TEST(Report, FiguresReadWellInGreyAndForColourBlindReaders) {
   const std::string fig5 = figure_script(gp, "fig5-fitness");
   EXPECT_NE(fig5.find(ref), std::string::npos) << ref << "\n" << fig5;
   for (const char* text : {"set logscale y", "'+0.1 %%' 1e-3", "'1 000×' 999",
+                           "Improvement per iteration of ISE[0 s, ",
                            "objective / best so far − 1 (log scale)", "noise floor "})
     EXPECT_NE(fig5.find(text), std::string::npos) << text << "\n" << fig5;
 

@@ -9,6 +9,7 @@
 
 #include "ftc/sim/plants.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "io/decimal.hpp"
 #include "io/text.hpp"
 
@@ -389,7 +390,8 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
     const std::string reference = have_baseline ? num(baseline_j) : "J0";
     g << plot::terminal(fmt, 1000, 600) << "set output " << gp(file) << "\n"
       << "unset arrow; unset label\nset title "
-      << gp(std::string("Improvement per iteration") + (paper ? " (paper Fig. 5)" : ""))
+      << gp("Improvement per iteration of " + objective_label(job) +
+            (paper ? " (paper Fig. 5)" : ""))
       << " font ',13'\n"
       << "set xlabel 'iteration'\nset ylabel "
       << gp(std::string(have_baseline ? "job's controller's" : "initial population's best") +
