@@ -30,6 +30,25 @@ case "$out" in
   *"pi_fosmc from job table1, Ts = 0.001 s: after 1.0 s the attitude error is "*) ;;
   *) echo "unexpected output"; exit 1 ;;
 esac
+case "$out" in
+  *"ISE over [0, 1) s = "*"control TV "*"(acceleration: exact, noise 0 rad/s^2, delay 0 samples)"*) ;;
+  *) echo "no ISE line"; exit 1 ;;
+esac
+# The step() loop with the acceleration from differentiated rates, noisy and late: it still runs,
+# and it is not the exact acceleration's loop.
+out2=$("$tmp/example/runtime_example" "$tmp/run/gains.json" --accel rates --noise 0.01 --delay 2)
+echo "$out2"
+case "$out2" in
+  *"(acceleration: rates, noise 0.01 rad/s^2, delay 2 samples)"*) ;;
+  *) echo "unexpected output with --accel rates"; exit 1 ;;
+esac
+[ "$(echo "$out" | tail -1 | cut -d'(' -f1)" != "$(echo "$out2" | tail -1 | cut -d'(' -f1)" ] ||
+  { echo "the noisy, late acceleration changed nothing"; exit 1; }
+set +e
+"$tmp/example/runtime_example" "$tmp/run/gains.json" --accel gyro >/dev/null 2>&1
+status=$?
+set -e
+[ "$status" -eq 2 ] || { echo "exit $status for --accel gyro"; exit 1; }
 # A file of another format is refused with exit 2 and the loader's message.
 sed 's|"ftctune.gains/1"|"ftctune.gains/9"|' "$tmp/run/gains.json" >"$tmp/other.json"
 set +e

@@ -13,6 +13,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "../tools/eta.hpp"
 #include "cli_runner.hpp"
 #include "ftc/sim/isa.hpp"
 #include "ftc/tune/io/files.hpp"
@@ -985,4 +986,25 @@ TEST(Cli, SimulateWithTheGainsReproducesTheTunedObjectiveExactly) {
     EXPECT_EQ(metrics["objective"].get<double>(), gains["objective"]["value"].get<double>()) << job;
     EXPECT_EQ(metrics["fitness"].get<double>(), gains["fitness"].get<double>()) << job;
   }
+}
+
+// `status` shows a running job's ETA from the server's own times, at the rate so far.
+TEST(Cli, StatusShowsTheEtaOfARunningJob) {
+  json j = {{"status", "running"},
+            {"started_at", "2026-11-23T14:00:00.000Z"},
+            {"updated_at", "2026-11-23T14:00:30.500Z"},
+            {"progress", {{"evaluations", 25}, {"total_evaluations", 100}}}};
+  EXPECT_EQ(ftc::cli::eta_text(j), "  ETA 1.5 min");  // 30.5 s for 25: 91.5 s for 75
+  j["progress"]["evaluations"] = 50;
+  EXPECT_EQ(ftc::cli::eta_text(j), "  ETA 30 s");
+  j["started_at"] = "2026-11-23T10:00:00.000Z";
+  EXPECT_EQ(ftc::cli::eta_text(j), "  ETA 4.0 h");
+  j["progress"]["evaluations"] = 0;  // no rate yet
+  EXPECT_EQ(ftc::cli::eta_text(j), "");
+  j["progress"]["evaluations"] = 50;
+  j["status"] = "succeeded";
+  EXPECT_EQ(ftc::cli::eta_text(j), "");
+  j["status"] = "running";
+  j["started_at"] = nullptr;  // queued only
+  EXPECT_EQ(ftc::cli::eta_text(j), "");
 }

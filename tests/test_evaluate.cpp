@@ -178,6 +178,17 @@ TEST(Evaluate, CommandWritesItsFilesAndTheWorstMembersReplay) {
   EXPECT_EQ(doc["controllers"][1]["source"], gains_files().a.string());
   EXPECT_EQ(doc["controllers"][1]["members"].size(), 7u);
   EXPECT_TRUE(std::filesystem::exists(dir / "ev" / "evaluation.png"));
+  // The figure: units on the axes, the unrecoverable members it leaves out said in the title,
+  // each controller in its type's style (the job's PI-FOSMC 2, the first gains file 1).
+  const std::string gp = slurp(dir / "ev" / "evaluation.gp");
+  EXPECT_NE(gp.find("ISE of a member [rad²·s] (log scale)"), std::string::npos) << gp;
+  const int unrecoverable = doc["controllers"][0]["aggregates"]["unrecoverable"].get<int>();
+  EXPECT_EQ(gp.find(std::to_string(unrecoverable) + " unrecoverable members left out") !=
+                std::string::npos,
+            unrecoverable > 0)
+      << gp;
+  EXPECT_NE(gp.find("$cdf0 using 1:2 with steps ls 2 "), std::string::npos) << gp;
+  EXPECT_NE(gp.find("$cdf1 using 1:2 with steps ls 1 "), std::string::npos) << gp;
   // One CSV row per controller × scenario, with the faults in words.
   std::istringstream csv(slurp(dir / "ev" / "evaluation.csv"));
   std::string line;

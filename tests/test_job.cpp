@@ -351,3 +351,36 @@ TEST(JobLoader, LogScaleBoundsMustBePositiveAndInsideTheFieldsRange) {
   EXPECT_EQ(errs[0].path, "/tuning/parameters/alpha2/bounds/1") << to_string(errs[0]);
   EXPECT_NE(errs[0].message.find("outside the valid range of alpha2"), std::string::npos);
 }
+
+// A near miss of an enumeration's value, or a key with two letters swapped, is named.
+TEST(JobLoader, SuggestsTheNearestEnumValueAndSwappedLetters) {
+  const auto first = [](const json& j) {
+    const std::vector<FieldError> errs = errors_of(j);
+    return errs.empty() ? FieldError{} : errs[0];
+  };
+  json j = table1();
+  j["controller"]["type"] = "pi-fosmc";
+  FieldError e = first(j);
+  EXPECT_EQ(e.path, "/controller/type") << to_string(e);
+  EXPECT_NE(e.message.find("did you mean \"pi_fosmc\"?"), std::string::npos) << e.message;
+  j = table1();
+  j["objective"]["metric"] = "ies";
+  e = first(j);
+  EXPECT_EQ(e.path, "/objective/metric") << to_string(e);
+  EXPECT_NE(e.message.find("(got \"ies\"); did you mean \"ise\"?"), std::string::npos) << e.message;
+  j = table1();
+  j["objective"]["aggregate"] = "cavr";
+  EXPECT_NE(first(j).message.find("did you mean \"cvar\"?"), std::string::npos);
+  j = table1();
+  j["scenarios"][0]["faults"][0]["onest"] = j["scenarios"][0]["faults"][0]["onset"];
+  j["scenarios"][0]["faults"][0].erase("onset");
+  bool suggested = false;  // beside "onset is required"
+  for (const FieldError& f : errors_of(j))
+    suggested = suggested || (f.path == "/scenarios/0/faults/0/onest" &&
+                              f.message.find("did you mean \"onset\"?") != std::string::npos);
+  EXPECT_TRUE(suggested);
+  // Far from every value: no guess.
+  j = table1();
+  j["objective"]["metric"] = "energy";
+  EXPECT_EQ(first(j).message.find("did you mean"), std::string::npos) << first(j).message;
+}

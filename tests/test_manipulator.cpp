@@ -402,6 +402,6 @@ TEST(ManipulatorJob, CliRunWritesGainsForTheManipulator) {
   EXPECT_EQ(g["controller"]["type"], "pi_fosmc");
   EXPECT_GT(g["objective"]["value"].get<double>(), 0.0);
   const std::string md = slurp(dir / "out" / "comparison.md");
-  for (const char* label : {"| NFTSMC", "| FOSMC", "| PI-FOSMC (job)", "| optimal PI-FOSMC"})
+  for (const char* label : {"| NFTSMC", "| FOSMC", "| PI-FOSMC (job)", "| tuned PI-FOSMC"})
     EXPECT_NE(md.find(label), std::string::npos) << label;
 }

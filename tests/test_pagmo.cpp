@@ -310,6 +310,13 @@ TEST(PagmoSettings, ErrorsNameTheirJsonPath) {
   EXPECT_NE(problems(j).find("/tuning/algorithm/iterations: unknown key"), std::string::npos);
   EXPECT_EQ(problems({{"type", "pagmo"}, {"name", "cmaes"}, {"population", 3}}),
             "/tuning/algorithm/population: must be at least 5 for cmaes (got 3)\n");
+  // An unknown setting does not hide the population that is too small: both are reported.
+  const std::string both = problems(
+      {{"type", "pagmo"}, {"name", "cmaes"}, {"population", 3}, {"settings", {{"sigma", 0.3}}}});
+  EXPECT_NE(both.find("/tuning/algorithm/settings/sigma: unknown key"), std::string::npos) << both;
+  EXPECT_NE(both.find("/tuning/algorithm/population: must be at least 5 for cmaes (got 3)\n"),
+            std::string::npos)
+      << both;
   EXPECT_EQ(problems({{"type", "pagmo"}, {"name", "gaco"}, {"population", 10}}),
             "/tuning/algorithm/population: must be at least 63 for gaco with ker 63 (got 10)\n");
   EXPECT_EQ(problems({{"type", "pagmo"},

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
@@ -7,7 +8,9 @@
 #include "ftc/tune/report/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/evaluate.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
+#include "io/text.hpp"
 #include "report/gnuplot.hpp"
 #include "short_job.hpp"
 
@@ -52,11 +55,47 @@ TEST(Report, RendersEveryFigureAndASelfContainedPage) {
   for (std::size_t p = 0; (p = html.find("data:image/png;base64,", p)) != std::string::npos; ++p)
     ++images;
   EXPECT_EQ(images, 5u);
-  for (const char* text : {"<table", "NFTSMC", "FOSMC", "PI-FOSMC (job)", "optimal PI-FOSMC",
+  for (const char* text : {"<table", "NFTSMC", "FOSMC", "PI-FOSMC (job)", "tuned PI-FOSMC",
                            "Tuned gains", "<td>Kp</td>", "ISE [2, 3.5)", "peak ‖e‖ after fault 2",
                            "&quot;schema&quot;: &quot;ftctune.job/1&quot;"})
     EXPECT_NE(html.find(text), std::string::npos) << text;
   EXPECT_EQ(html.find("src=\"figures/"), std::string::npos);  // nothing outside the page
+}
+
+// report.html holds what comparison.md holds: the objective named by metric, window and
+// aggregate, the noise-floor sentence, the robust table of an ensemble job; and the run's
+// evaluation/ once there is one.
+TEST(Report, PageLabelsTheObjectiveAndHoldsTheRobustTableAndTheEvaluation) {
+  const auto dir = fresh_dir("report-robust");
+  const tune::Job job = tune::parse_job(short_ensemble_job(), "robust");
+  tune::TbbEvaluator evaluator(2);
+  const tune::TuningOutcome outcome = tune::tune(job, evaluator);
+  tune::write_outputs(outcome, dir / "run");
+  const std::string label = "CVaR0.9 of ISE[first fault, +4 s] over 7 scenarios";
+  const std::string md = slurp(dir / "run" / "comparison.md");
+  EXPECT_NE(md.find("Objective: " + label), std::string::npos) << md;
+  std::string html = slurp(tune::render_report(dir / "run").html);
+  EXPECT_NE(html.find("); " + label + " = "), std::string::npos);
+  EXPECT_EQ(html.find("objective ise ="), std::string::npos);
+  EXPECT_NE(html.find("<h2>All 7 scenarios</h2>"), std::string::npos);
+  EXPECT_NE(html.find("<th>" + label + "</th><th>mean</th><th>median</th><th>p90</th>"),
+            std::string::npos);
+  const std::string noise = tune::noise_floor_sentence(outcome);
+  ASSERT_FALSE(noise.empty());
+  EXPECT_NE(html.find("<p class=\"noise-floor\">" + noise + "</p>"), std::string::npos);
+  EXPECT_EQ(html.find("Out-of-sample evaluation"), std::string::npos);
+  // `ftctune evaluate`'s default place is the run's evaluation/.
+  tune::EvaluateOptions eo;
+  eo.count = 3;
+  const tune::EvaluationResult ev = tune::evaluate_out_of_sample(job, eo, evaluator);
+  tune::write_evaluation(ev, dir / "run" / "evaluation");
+  html = slurp(tune::render_report(dir / "run").html);
+  EXPECT_NE(html.find("<h2>Out-of-sample evaluation</h2>"), std::string::npos);
+  EXPECT_NE(html.find("1 listed scenario(s) and 3 held-out ensemble members (seed 8)"),
+            std::string::npos);
+  const std::string row = "<tr><td>" + ev.controllers[0].label + "</td><td>job</td><td>" +
+                          ftc::tune::detail::format_number(ev.controllers[0].aggregates.mean);
+  EXPECT_NE(html.find(row), std::string::npos) << row;
 }
 
 TEST(Report, DataFilesHaveTheExpectedColumnsAndRows) {
@@ -129,7 +168,7 @@ TEST(Report, LandscapeGridAndHeatmap) {
   EXPECT_NEAR(r.best_objective, lowest, 1e-8 * lowest);
   EXPECT_EQ(slurp(r.figure).substr(0, 4), std::string("\x89PNG", 4));
   const std::string gp = slurp(run / "landscape" / "landscape.gp");
-  EXPECT_NE(gp.find("history.csv"), std::string::npos);
+  EXPECT_NE(gp.find("path.csv"), std::string::npos);
   // viridis, not a rainbow, and coloured by the relative excess over the lowest objective.
   EXPECT_NE(gp.find("set palette defined (0 '#440154'"), std::string::npos) << gp;
   EXPECT_EQ(gp.find("rgb 33,13,10"), std::string::npos);
@@ -139,6 +178,152 @@ TEST(Report, LandscapeGridAndHeatmap) {
   EXPECT_THROW(tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "l2", o,
                                        evaluator),
                InputError);
+}
+
+// Commands that take a job and look for its run take the latest one, the -2, -3 ... that `run`
+// moves on to included, and say which.
+TEST(Cli, LandscapeAndEvaluateUseTheJobsLatestRunAndSayWhich) {
+  const auto dir = fresh_dir("latest-run");
+  tune::write_file_atomic(dir / "job.json", tiny_job("latest").dump(2));
+  const auto in_dir = [&](const std::string& args) {
+    return run_cli("--help >/dev/null && cd '" + dir.string() + "' && '" FTC_CLI "' " + args, dir);
+  };
+  ASSERT_EQ(in_dir("run job.json -q").exit_code, 0);
+  ASSERT_EQ(in_dir("run job.json -q").exit_code, 0);  // into out/latest-2
+  ASSERT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "gains.json"));
+  CliResult r = in_dir("landscape job.json --grid 2x2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("the latest run of job latest is out/latest-2"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "landscape" / "landscape.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "landscape" / "history.csv"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "latest" / "landscape"));
+  r = in_dir("evaluate job.json --no-figure");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest-2" / "evaluation" / "evaluation.json"));
+  // --force replaces out/latest: now the newest run.
+  ASSERT_EQ(in_dir("run job.json -q --force").exit_code, 0);
+  r = in_dir("landscape job.json --grid 2x2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("the latest run of job latest is out/latest (newest gains.json of 2 runs)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest" / "landscape" / "landscape.png"));
+  // report takes the job file too: its latest run.
+  r = in_dir("report job.json --format png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("the latest run of job latest is out/latest "), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "latest" / "figures" / "fig3-attitude.png"));
+  // A job without a run: the landscape goes to out/<name>/landscape, and the log says so.
+  tune::write_file_atomic(dir / "other.json", tiny_job("other").dump(2));
+  r = in_dir("landscape other.json --grid 2x2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("no run of job other in out"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "other" / "landscape" / "landscape.png"));
+  r = in_dir("report other.json");  // a job with no run
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("no run of job other in out: run `ftctune run other.json` first"),
+            std::string::npos)
+      << r.err;
+  // The help shows --no-figure as a flag, not with a default.
+  r = in_dir("help evaluate");
+  EXPECT_NE(r.out.find("--no-figure"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("{false}"), std::string::npos) << r.out;
+}
+
+// The landscape of a 3-parameter job holds the third at the values it is given (the tuned ones,
+// in the CLI) and says so; colours within the noise floor of the lowest are one; the colour-bar
+// tics are round; the optimiser's path is drawn projected where it does not lie on the map.
+TEST(Report, LandscapeSaysWhatItFixesMarksTheNoiseAndProjectsThePath) {
+  json j = short_table1_job();
+  j["tuning"]["parameters"]["switching_gain"] = {{"bounds", {2, 200}}, {"scale", "log"}};
+  const tune::Job job = tune::parse_job(j, "three");
+  const auto dir = fresh_dir("landscape-three");
+  tune::TbbEvaluator evaluator(2);
+  const tune::TuningOutcome run = tune::tune(job, evaluator);
+  tune::write_outputs(run, dir / "run");
+  tune::LandscapeOptions o;
+  o.n1 = 4;
+  o.n2 = 3;
+  o.params = {"Kp", "Ki"};
+  o.history = dir / "run" / "history.csv";
+  const double tuned_gain = run.tuned_controller.switching_gain;
+  o.fixed = {{"switching_gain", tuned_gain}};
+  o.fixed_source = "the tuned value, run/gains.json";
+  o.noise_floor = 1e-3;
+  tune::LandscapeResult r = tune::compute_landscape(job, dir / "tuned", o, evaluator);
+  ASSERT_EQ(r.fixed.size(), 1u);
+  EXPECT_EQ(r.fixed[0].first, "switching_gain");
+  EXPECT_EQ(r.fixed[0].second, tuned_gain);
+  const std::string gp = slurp(dir / "tuned" / "landscape.gp");
+  EXPECT_NE(gp.find("\\nlowest on the grid "), std::string::npos) << gp;
+  EXPECT_NE(gp.find("ISE[0 s, 5 s] of table1-short over Kp and Ki"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("switching_gain = " + ftc::tune::detail::format_number(tuned_gain, "%.5g") +
+                    " held fixed (the tuned value, run/gains.json)"),
+            std::string::npos)
+      << gp;
+  // Everything within the noise floor of the lowest takes the floor's colour.
+  EXPECT_NE(gp.find(" - 1) : 0.001) with image"), std::string::npos) << gp;
+  const std::size_t tics = gp.find("set cbtics (");
+  ASSERT_NE(tics, std::string::npos);
+  const std::string tic_list = gp.substr(tics, gp.find('\n', tics) - tics);
+  EXPECT_EQ(tic_list.rfind("set cbtics ('≤ noise floor 0.001' 0.001", 0), 0u) << tic_list;
+  // Every other tic is 1, 2, 3 or 5 times a power of ten, labelled as it is.
+  std::istringstream labels(tic_list.substr(tic_list.find(", '") + 3));
+  for (std::string label; std::getline(labels, label, '\'');) {
+    const double v = std::stod(label);
+    const double m = v / std::pow(10.0, std::floor(std::log10(v) + 1e-9));
+    EXPECT_TRUE(std::abs(m - 1) < 1e-9 || std::abs(m - 2) < 1e-9 || std::abs(m - 3) < 1e-9 ||
+                std::abs(m - 5) < 1e-9)
+        << label << " in " << tic_list;
+    std::string rest;
+    std::getline(labels, rest, '\'');  // the value and the separator
+  }
+  // The path: rows whose switching_gain is not the tuned one lie off the map.
+  EXPECT_GT(r.path_points, 0);
+  EXPECT_GE(r.path_on_map, 1);  // the last row is the tuned point
+  if (r.path_on_map < r.path_points)
+    EXPECT_NE(gp.find("optimiser''s best so far, projected"), std::string::npos) << gp;
+  else
+    EXPECT_NE(gp.find("optimiser: best so far, by iteration"), std::string::npos) << gp;
+  EXPECT_EQ(count_lines(slurp(dir / "tuned" / "path.csv")), 1 + r.path_points);
+
+  // Without given values: the job's, and the path is off the map wherever the gain was tuned
+  // away from it.
+  o.fixed.clear();
+  o.fixed_source = "the job's value";
+  r = tune::compute_landscape(job, dir / "job", o, evaluator);
+  ASSERT_EQ(r.fixed.size(), 1u);
+  EXPECT_EQ(r.fixed[0].second, job.controller.switching_gain);
+  EXPECT_NE(slurp(dir / "job" / "landscape.gp").find("held fixed (the job's value)"),
+            std::string::npos);
+  if (tuned_gain != job.controller.switching_gain) {
+    EXPECT_LT(r.path_on_map, r.path_points);
+  }
+}
+
+// The CLI holds the unplotted parameters at the latest run's tuned values, or at the job's with
+// --at-job-values, and prints which.
+TEST(Cli, LandscapeHoldsTheOtherParametersAtTheTunedValues) {
+  const auto dir = fresh_dir("landscape-fixed");
+  json j = tiny_job("three");
+  j["tuning"]["parameters"]["switching_gain"] = {{"bounds", {2, 200}}, {"scale", "log"}};
+  tune::write_file_atomic(dir / "job.json", j.dump(2));
+  const auto in_dir = [&](const std::string& args) {
+    return run_cli("--help >/dev/null && cd '" + dir.string() + "' && '" FTC_CLI "' " + args, dir);
+  };
+  ASSERT_EQ(in_dir("run job.json -q").exit_code, 0);
+  const json gains = json::parse(slurp(dir / "out" / "three" / "gains.json"));
+  char want[160];
+  std::snprintf(want, sizeof want, "  switching_gain held fixed at %.6g (the tuned value, ",
+                gains["tuned"]["switching_gain"].get<double>());
+  CliResult r = in_dir("landscape job.json --grid 2x2 --params Kp,Ki");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find(want), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("lowest on the grid: ISE[0 s, 0.05 s] = "), std::string::npos) << r.out;
+  r = in_dir("landscape job.json --grid 2x2 --params Kp,Ki --at-job-values");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("  switching_gain held fixed at 20 (the job's value)"), std::string::npos)
+      << r.out;
 }
 
 TEST(Cli, ReportRejectsMissingOrBrokenRunDirectories) {
@@ -339,8 +524,40 @@ TEST(Report, FiguresReadWellInGreyAndForColourBlindReaders) {
     ++lines;
   }
   EXPECT_GE(lines, 4);
-  // Four controllers, four actuators: four distinct (colour, dash, marker) styles.
-  EXPECT_EQ(styles.size(), 4u);
+  // The controller style table: ten distinct (colour, dash, marker) styles, and the actuators'.
+  EXPECT_GE(styles.size(), 10u);
+  // Each controller type keeps its style in every report: the legend entries of fig3 and fig7
+  // name the type's style, whatever the order of the comparison.
+  for (const char* fig : {"fig3-attitude", "fig7-fault-zoom"}) {
+    const std::string script = figure_script(gp, fig);
+    for (const auto& [label, style] : std::vector<std::pair<std::string, int>>{
+             {"NFTSMC", tune::plot::controller_style("nftsmc", false)},
+             {"FOSMC", tune::plot::controller_style("fosmc", false)},
+             {"PI-FOSMC (job)", tune::plot::controller_style("pi_fosmc", false)},
+             {"tuned PI-FOSMC", 1}})
+      EXPECT_NE(script.find("keyentry with linespoints ls " + std::to_string(style) + " title '" +
+                            label + "'"),
+                std::string::npos)
+          << fig << ": " << label;
+  }
+  EXPECT_EQ(tune::plot::controller_style("nftsmc", false), 4);
+  EXPECT_EQ(tune::plot::controller_style("fosmc", false), 3);
+  EXPECT_EQ(tune::plot::controller_style("pi_fosmc", false), 2);
+  EXPECT_EQ(tune::plot::controller_style("pi_fosmc", true), 1);
+  EXPECT_NE(tune::plot::controller_style("fosmc", false, 1), 3);  // a second FOSMC differs
+  // fig7: the tuned controller is drawn first, under the others (it chatters most).
+  const std::string fig7 = figure_script(gp, "fig7-fault-zoom");
+  const std::size_t first_curve = fig7.find("with lines ls ");
+  ASSERT_NE(first_curve, std::string::npos);
+  EXPECT_EQ(fig7.substr(first_curve, 16), "with lines ls 1 ") << fig7.substr(first_curve, 40);
+  // fig6: units, one legend, labelled fault lines.
+  const std::string fig6_script = figure_script(gp, "fig6-inputs");
+  EXPECT_NE(fig6_script.find("actuator output u [N·m]"), std::string::npos);
+  EXPECT_NE(fig6_script.find("set label 'fault 1'"), std::string::npos);
+  int keys_off = 0;
+  for (std::size_t p = 0; (p = fig6_script.find("unset key\n", p)) != std::string::npos; ++p)
+    ++keys_off;
+  EXPECT_EQ(keys_off, 3);  // four panels, one legend
 
   // fig6: one y range for every panel, and it holds every plotted value.
   const std::string fig6 = figure_script(gp, "fig6-inputs");
@@ -360,18 +577,24 @@ TEST(Report, FiguresReadWellInGreyAndForColourBlindReaders) {
       }
   }
 
-  // fig5 in % below the job's own controller.
+  // fig5: the improvement over the job's own controller as a ratio on a log axis, round tics
+  // from 0.001 % to 10 000 times, and the noise floor marked.
   const json gains = json::parse(slurp(run / "gains.json"));
   char ref[64];
-  std::snprintf(ref, sizeof ref, "100*(1 - %.9g/$2)", gains["baseline"]["fitness"].get<double>());
-  EXPECT_NE(figure_script(gp, "fig5-fitness").find(ref), std::string::npos) << ref;
+  std::snprintf(ref, sizeof ref, "(($2/%.9g - 1) > 0 ?",
+                gains["baseline"]["fitness"].get<double>());
+  const std::string fig5 = figure_script(gp, "fig5-fitness");
+  EXPECT_NE(fig5.find(ref), std::string::npos) << ref << "\n" << fig5;
+  for (const char* text : {"set logscale y", "'+0.1 %%' 1e-3", "'1 000×' 999",
+                           "Improvement per iteration of ISE[0 s, ",
+                           "objective / best so far − 1 (log scale)", "noise floor "})
+    EXPECT_NE(fig5.find(text), std::string::npos) << text << "\n" << fig5;
 
   // fig3: beside each angle, the distance of the three others from the tuned controller.
   const std::string fig3 = figure_script(gp, "fig3-attitude");
   for (const char* label : {"|x_1 − x_1^{tuned}|", "|x_2 − x_2^{tuned}|", "|x_3 − x_3^{tuned}|"})
     EXPECT_NE(fig3.find(label), std::string::npos) << label;
-  EXPECT_NE(fig3.find("keyentry with linespoints ls 1 title 'optimal PI-FOSMC'"),
-            std::string::npos);
+  EXPECT_NE(fig3.find("keyentry with linespoints ls 1 title 'tuned PI-FOSMC'"), std::string::npos);
 }
 
 TEST(Report, PageShowsSettingsAsATableAndTheLandscape) {

@@ -248,7 +248,7 @@ TEST(Service, LifecycleGivesTheSameGainsAsRun) {
   EXPECT_EQ(s.get("/v1/jobs/" + id + "/history?format=json").size(), 3u);
   EXPECT_EQ(s.get("/v1/jobs/" + id + "/comparison")["controllers"].size(), 4u);
   auto md = s.client->Get(("/v1/jobs/" + id + "/comparison?format=md").c_str());
-  EXPECT_NE(md->body.find("| optimal PI-FOSMC"), std::string::npos);
+  EXPECT_NE(md->body.find("| tuned PI-FOSMC"), std::string::npos);
   auto report = s.client->Get(("/v1/jobs/" + id + "/report").c_str());
   ASSERT_TRUE(report);
   EXPECT_EQ(report->status, 200);

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -47,7 +48,7 @@ TEST(Study, WritesOneRowPerRunTheTableAndTheFigure) {
                               dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("[4/4] pagmo:cmaes seed 2: ise = "), std::string::npos) << r.err;
-  EXPECT_NE(r.out.find("| algorithm | median | best | worst |"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("| rank | algorithm | median | best | worst |"), std::string::npos) << r.out;
 
   const std::vector<std::string> csv = lines(slurp(dir / "study" / "study.csv"));
   ASSERT_EQ(csv.size(), 5u);
@@ -59,9 +60,37 @@ TEST(Study, WritesOneRowPerRunTheTableAndTheFigure) {
 
   const std::string md = slurp(dir / "study" / "study.md");
   int rows = 0;
+  std::vector<std::pair<int, double>> ranked;  // rank, median in table order
   for (const std::string& l : lines(md))
-    rows += l.rfind("| bat |", 0) == 0 || l.rfind("| pagmo:cmaes |", 0) == 0;
+    if (l.find(" | bat |") != std::string::npos ||
+        l.find(" | pagmo:cmaes |") != std::string::npos) {
+      ++rows;
+      const std::size_t a = l.find(" | ", l.find(" | ") + 3) + 3;  // the median cell
+      ranked.emplace_back(std::stoi(l.substr(2)), std::stod(l.substr(a)));
+    }
   EXPECT_EQ(rows, 2) << md;
+  // Medians inside the noise floor tie; a rank below another is only ever beyond it.
+  const std::size_t nf = md.find("moves the best run's objective by up to ");
+  ASSERT_NE(nf, std::string::npos) << md;
+  const double noise = std::stod(md.substr(nf + 40)) / 100;
+  ASSERT_EQ(ranked.size(), 2u);
+  // The medians to the last bit, from study.csv (two seeds: their mean).
+  std::map<std::string, double> median;
+  for (std::size_t i = 1; i < csv.size(); ++i) {
+    const std::string name = csv[i].substr(0, csv[i].find(','));
+    const std::size_t at = csv[i].find(',', csv[i].find(',') + 1) + 1;
+    median[name] += 0.5 * std::stod(csv[i].substr(at));
+  }
+  const double m0 = std::min(median["bat"], median["pagmo:cmaes"]),
+               m1 = std::max(median["bat"], median["pagmo:cmaes"]);
+  const bool tie = m1 - m0 <= noise * m0;
+  EXPECT_EQ(ranked[1].first, tie ? 1 : 2) << md;
+  EXPECT_NE(md.find(tie ? "| 1= | " : "| 2 | "), std::string::npos) << md;
+  // The figure: the objective with its unit, and the noise band.
+  const std::string gp = slurp(dir / "study" / "study.gp");
+  EXPECT_NE(gp.find("of the best candidate [rad²·s]"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("set object 1 rect from graph 0, first "), std::string::npos) << gp;
+  EXPECT_NE(gp.find("within the noise floor ("), std::string::npos) << gp;
   EXPECT_NE(md.find("\"name\":\"cmaes\""), std::string::npos) << md;
   const std::string png = slurp(dir / "study" / "study.png");
   ASSERT_GT(png.size(), 8u);

@@ -69,8 +69,12 @@ TEST(TuningRun, TunedFitnessIsReproducedByComparison) {
   EXPECT_EQ(r.baseline().controller.Kp, 20.0);
   EXPECT_EQ(r.comparison.size(), 4u);
   EXPECT_EQ(r.comparison[0].label, "NFTSMC");
-  // 9 candidates, 4 compared controllers, the winner 8 times more for the noise floor.
-  EXPECT_EQ(r.simulations, 9 + 4 + 8);
+  // 9 candidates, 4 compared controllers, the winner 8 times more for the noise floor, and once
+  // more per parameter on a bound (1 % of the range inward).
+  int at_bound = 0;
+  for (std::size_t j = 0; j < r.job.tuning->parameters.size(); ++j)
+    at_bound += tune::inward_value(r.job.tuning->parameters[j], r.optimization.best[j]) ? 1 : 0;
+  EXPECT_EQ(r.simulations, 9 + 4 + 8 + at_bound);
   ASSERT_TRUE(r.noise_floor.has_value());
   EXPECT_LE(r.noise_floor->objective_min, r.noise_floor->objective_max);
   EXPECT_GT(r.noise_floor->relative_spread, 0.0);  // chaotic at rounding level after the faults
@@ -103,7 +107,7 @@ TEST(Cli, RunWritesGainsIdenticalAcrossThreadCounts) {
   std::getline(hist, header);
   EXPECT_EQ(header, "iteration,best_fitness,Kp,Ki,mean_loudness,mean_pulse_rate,evaluations");
   const std::string md = slurp(dir / "t1" / "comparison.md");
-  for (const char* label : {"| NFTSMC", "| FOSMC", "| PI-FOSMC (job)", "| optimal PI-FOSMC"})
+  for (const char* label : {"| NFTSMC", "| FOSMC", "| PI-FOSMC (job)", "| tuned PI-FOSMC"})
     EXPECT_NE(md.find(label), std::string::npos) << label;
 
   // The loaded gains drive `simulate` to the tuned objective.
@@ -256,6 +260,24 @@ TEST(TuningRun, WarnsOfTunedValuesAtABound) {
   ASSERT_EQ(w.size(), 1u);
   EXPECT_NE(w[0].find("switching_gain"), std::string::npos);
   EXPECT_TRUE(tune::bound_warnings(job, {190, 25, 25}).empty());
+  // Told how much the objective changes 1 % of the range inward: within the noise floor the
+  // objective is flat there and widening is not advised; beyond it, the change is given.
+  EXPECT_EQ(tune::inward_value(job.tuning->parameters[2], 50).value(), 49.5);  // Ki in [0, 50]
+  EXPECT_FALSE(tune::inward_value(job.tuning->parameters[2], 25));
+  w = tune::bound_warnings(job, {20, 25, 50}, {std::nullopt, std::nullopt, 1e-6}, 2e-6);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("Ki = 50 ended at its upper bound 50 (within 0.1 % of the range), where the "
+                      "objective is flat within the noise: 1 % of the range inward changes it by "
+                      "0.0001 %, inside the noise floor of 0.0002 %"),
+            std::string::npos)
+      << w[0];
+  EXPECT_EQ(w[0].find("widen tuning"), std::string::npos) << w[0];
+  w = tune::bound_warnings(job, {20, 25, 50}, {std::nullopt, std::nullopt, 3e-6}, 2e-6);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("widen tuning.parameters.Ki and run again. (1 % of the range inward "
+                      "changes the objective by 0.0003 %, beyond the noise floor of 0.0002 %.)"),
+            std::string::npos)
+      << w[0];
   // An open range: alpha2 < 1, so a bound at 0.7 can move, one at the top of the range cannot.
   j["tuning"]["parameters"] = {{"alpha2", {0.3, 0.7}}};
   w = tune::bound_warnings(tune::parse_job(j, "x"), {0.7});
@@ -269,12 +291,81 @@ TEST(Cli, Table1RunWarnsThatKiEndsOnItsBound) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("[warning] Ki = 50 ended at its upper bound 50"), std::string::npos)
       << r.err;
-  EXPECT_NE(r.out.find("ise = 1.33"), std::string::npos) << r.out;  // seven digits, not J alone
+  // Seven digits, not J alone, labelled with the metric and its window.
+  EXPECT_NE(r.out.find("ISE[0 s, 30 s] = 1.33"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("% lower"), std::string::npos) << r.out;
+  // NFTSMC's ISE is lower than the tuned PI-FOSMC's: the run says so rather than call its gains
+  // optimal.
+  EXPECT_NE(r.err.find("[warning] NFTSMC (compared) scores ise = 0.902"), std::string::npos)
+      << r.err;
   const json g = json::parse(slurp(dir / "t" / "gains.json"));
-  ASSERT_EQ(g["warnings"].size(), 1u);
-  EXPECT_NE(g["warnings"][0].get<std::string>().find("widen tuning.parameters.Ki"),
-            std::string::npos);
+  ASSERT_EQ(g["warnings"].size(), 2u);
+  // Ki on its bound, where the objective is flat within the noise: no advice to widen.
+  EXPECT_NE(g["warnings"][0].get<std::string>().find(
+                "where the objective is flat within the noise: 1 % of the range inward changes it "
+                "by "),
+            std::string::npos)
+      << g["warnings"][0];
+  EXPECT_EQ(g["warnings"][0].get<std::string>().find("widen tuning"), std::string::npos);
+  EXPECT_NE(g["warnings"][1].get<std::string>().find("below the tuned PI-FOSMC's 1.332"),
+            std::string::npos)
+      << g["warnings"][1];
+  EXPECT_EQ(slurp(dir / "t" / "comparison.md").find("optimal"), std::string::npos);
+}
+
+TEST(TuningRun, ObjectiveLabelNamesTheMetricTheWindowAndTheAggregate) {
+  json j = short_table1_job();
+  EXPECT_EQ(tune::objective_label(tune::parse_job(j, "x")), "ISE[0 s, 5 s]");
+  j["objective"] = {{"metric", "itae"}, {"window", {1.5, 4}}};
+  EXPECT_EQ(tune::objective_label(tune::parse_job(j, "x")), "ITAE[1.5 s, 4 s]");
+  json e = short_ensemble_job();  // CVaR 0.9 over 8 s after the first fault, 6 members + 1
+  e["objective"]["window"] = {0, 8};
+  EXPECT_EQ(tune::objective_label(tune::parse_job(e, "x")),
+            "CVaR0.9 of ISE[first fault, +8 s] over 7 scenarios");
+  e["objective"] = {{"metric", "iae"},
+                    {"window", {1, 4}},
+                    {"window_from", "first_fault"},
+                    {"aggregate", "quantile"},
+                    {"q", 0.75}};
+  EXPECT_EQ(tune::objective_label(tune::parse_job(e, "x")),
+            "quantile0.75 of IAE[first fault + 1 s, +4 s] over 7 scenarios");
+  e["objective"] = {{"metric", "ise"}, {"aggregate", "max"}};
+  EXPECT_EQ(tune::objective_label(tune::parse_job(e, "x")),
+            "max of ISE[0 s, end] over 7 scenarios");
+}
+
+TEST(TuningRun, WarnsWhenAComparedControllerScoresLowerOrTheTunedGainsChatter) {
+  tune::TuningOutcome r = tuned(short_job(), 2);
+  ASSERT_EQ(r.comparison.size(), 4u);  // NFTSMC, FOSMC, the job's, the tuned
+  const auto set = [&](std::size_t c, double objective, double tv) {
+    r.comparison[c].outcome.evaluation.objective = objective;
+    r.comparison[c].outcome.evaluation.scenarios.at(0).control_tv = tv;
+  };
+  r.noise_floor->relative_spread = 0.01;
+  set(0, 2.0, 100);
+  set(1, 3.0, 100);
+  set(2, 2.5, 100);
+  set(3, 1.0, 299);
+  EXPECT_TRUE(tune::comparison_warnings(r).empty());
+  set(0, 0.995, 100);  // inside the noise floor of 1 %
+  set(3, 1.0, 301);    // 3.01 times the job's own
+  std::vector<std::string> w = tune::comparison_warnings(r);
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_NE(w[0].find("NFTSMC (compared) scores ise = 0.995, 0.5 % below the tuned PI-FOSMC's 1 "
+                      "(inside the noise floor of 1 %)"),
+            std::string::npos)
+      << w[0];
+  EXPECT_NE(w[1].find("raise the control TV (sum of |u_k - u_{k-1}|, a measure of chattering) "
+                      "3.01 times over the job's own gains"),
+            std::string::npos)
+      << w[1];
+  set(1, 0.5, 100);
+  w = tune::comparison_warnings(r);
+  ASSERT_EQ(w.size(), 3u);
+  EXPECT_NE(w[1].find("FOSMC (compared) scores ise = 0.5, 50 % below the tuned PI-FOSMC's 1 "
+                      "(beyond the noise floor"),
+            std::string::npos)
+      << w[1];
 }
 
 TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {

@@ -76,4 +76,10 @@ CLI::Validator output_file();
 std::filesystem::path default_out_dir(const tune::Job& job);
 std::filesystem::path default_out_dir_for(const std::string& job_name);
 
+// The latest finished run of a job: of out/<name>, out/<name>-2, -3, ... (where `run` writes
+// when the earlier ones hold a run), the one whose gains.json is newest among those of this job
+// (the same canonical SHA-256), else the newest of any job of that name. Empty when there is
+// none. `why` says which it chose and why, for the log.
+std::filesystem::path latest_run_dir(const tune::Job& job, std::string* why = nullptr);
+
 }  // namespace ftc::cli

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "cli.hpp"
+#include "eta.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "service/httplib.hpp"
@@ -107,6 +108,7 @@ std::string describe(const json& j) {
       s += buf;
     }
   }
+  s += eta_text(j);  // a running job's: at the rate so far
   if (!j["error"].is_null()) s += "\n  error: " + j["error"].get<std::string>();
   if (j.contains("unstored") && j["unstored"].is_object())
     s += "\n  finished (" + j["unstored"]["status"].get<std::string>() + ") at " +
@@ -213,19 +215,6 @@ std::string resolve_id(Api& api, const std::string& id) {
   std::string list;
   for (const std::string& h : hits) list += (list.empty() ? "" : ", ") + h;
   throw InputError("id", "", "\"" + id + "\" is a prefix of several jobs: " + list);
-}
-
-// "2026-11-23T14:00:00.123Z" as seconds since the epoch; NaN when it is not one.
-double iso_seconds(const json& v) {
-  if (!v.is_string()) return std::numeric_limits<double>::quiet_NaN();
-  std::tm tm{};
-  int ms = 0;
-  if (std::sscanf(v.get<std::string>().c_str(), "%d-%d-%dT%d:%d:%d.%dZ", &tm.tm_year, &tm.tm_mon,
-                  &tm.tm_mday, &tm.tm_hour, &tm.tm_min, &tm.tm_sec, &ms) < 6)
-    return std::numeric_limits<double>::quiet_NaN();
-  tm.tm_year -= 1900;
-  tm.tm_mon -= 1;
-  return static_cast<double>(timegm(&tm)) + ms / 1000.0;
 }
 
 // What `ftctune run` prints at its end, for a job the service ran: its warnings, the tuned
@@ -479,7 +468,7 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
                   json::parse(api.get("/v1/jobs?limit=500&offset=" + std::to_string(offset)));
               for (const json& job : page["jobs"]) {
                 const std::string st = job["status"];
-                const double finished = iso_seconds(job["finished_at"]);
+                const double finished = utc_seconds(job["finished_at"]);
                 if ((st == "succeeded" || st == "failed" || st == "cancelled") &&
                     std::isfinite(finished) && finished <= cutoff)
                   old.push_back(job["id"]);
@@ -505,8 +494,8 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
               std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
                   .count();
           for (const json& job : j["jobs"]) {
-            const double start = iso_seconds(job["started_at"]);
-            const double end = job["finished_at"].is_null() ? now : iso_seconds(job["finished_at"]);
+            const double start = utc_seconds(job["started_at"]);
+            const double end = job["finished_at"].is_null() ? now : utc_seconds(job["finished_at"]);
             char duration[32] = "-";
             if (std::isfinite(start) && std::isfinite(end))
               std::snprintf(duration, sizeof duration, "%.1f s", end - start);

@@ -1,5 +1,7 @@
 // ftctune evaluate JOB --gains FILE...: out-of-sample validation of tuned gains on the job's
 // scenarios and on ensemble members drawn with a seed they were not tuned on.
+#include <spdlog/spdlog.h>
+
 #include <chrono>
 #include <cstdio>
 
@@ -20,7 +22,7 @@ struct EvaluateCliOptions {
   std::optional<std::int64_t> count;
   std::string out;
   int threads = 0;
-  bool figure = true;
+  bool no_figure = false;
 };
 
 int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
@@ -39,7 +41,15 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   }
   options.seed = o.seed;
   options.count = o.count;
-  const fs::path out = o.out.empty() ? default_out_dir(job) / "evaluation" : fs::path(o.out);
+  // Beside the job's latest run (out/<name>, or -2, -3, ... where `run` moved on), whose report
+  // then shows it.
+  fs::path out = o.out;
+  if (o.out.empty()) {
+    std::string why;
+    const fs::path run = latest_run_dir(job, &why);
+    spdlog::info("{}", why);
+    out = (run.empty() ? default_out_dir(job) : run) / "evaluation";
+  }
   if (!g.quiet && job.ensemble)
     std::printf(
         "Evaluating on %s: %zu listed scenario%s + %lld ensemble members, held-out "
@@ -61,7 +71,7 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   bar.clear();
   tune::write_evaluation(r, out);
   fs::path figure;
-  if (o.figure) figure = tune::draw_evaluation(r, out);
+  if (!o.no_figure) figure = tune::draw_evaluation(r, out);
   if (g.quiet) return 0;
   const tune::Summary& s0 = r.controllers.front().aggregates;
   std::printf(
@@ -93,11 +103,14 @@ void add_evaluate_command(CLI::App& app, const Globals& g, Action& action) {
                   "Ensemble seed of the held-out members (default: the job's seed + 1)")
       ->check(seed_value());
   sub->add_option("--count", opts->count, "Ensemble members (default: the job's count)");
-  sub->add_option("--out", opts->out, "Output directory (default out/<job name>/evaluation)")
+  sub->add_option("--out", opts->out,
+                  "Output directory (default <the job's latest run>/evaluation, else "
+                  "out/<job name>/evaluation)")
       ->check(output_directory());
   sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 4096));
-  sub->add_flag("!--no-figure", opts->figure, "Skip the figure (no gnuplot needed)");
+  // A plain flag: CLI11 shows a negated one's default in the help ("--no-figure{false}").
+  sub->add_flag("--no-figure", opts->no_figure, "Skip the figure (no gnuplot needed)");
   sub->footer(
       "\nExamples:\n"
       "  ftctune evaluate jobs/robust-faults.json --gains out/robust-faults/gains.json\n"

@@ -6,9 +6,12 @@
 #include <cstdio>
 
 #include "cli.hpp"
+#include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/tune/report/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "progress.hpp"
 
 namespace ftc::cli {
@@ -40,6 +43,7 @@ struct LandscapeCli {
   std::string job, grid = "41x41", params, out, history, format = "png";
   int threads = 0;
   bool force = false;
+  bool at_job_values = false;
 };
 
 // "N1xN2": two whole numbers and an x, nothing else ("3x3x3", "3x3junk" and "2x3.9" are not).
@@ -65,7 +69,13 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
   if (o.format != "png" && o.format != "svg")
     throw InputError("--format", "", "must be png or svg (got \"" + o.format + "\")");
   lo.format = o.format == "png" ? tune::FigureFormat::png : tune::FigureFormat::svg;
-  const fs::path out = o.out.empty() ? default_out_dir(job) / "landscape" : fs::path(o.out);
+  // The job's latest run (out/<name>, or -2, -3, ... where `run` moved on): the landscape goes
+  // into it, with its best-so-far path.
+  std::string why;
+  const fs::path run = latest_run_dir(job, &why);
+  spdlog::info("{}", why);
+  const fs::path out =
+      o.out.empty() ? (run.empty() ? default_out_dir(job) : run) / "landscape" : fs::path(o.out);
   // Before the work: a directory that can be written, and not one holding a landscape already
   // (like `run`, --force replaces it).
   {
@@ -79,10 +89,28 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
                            " already holds a landscape; choose another directory, or pass "
                            "--force to replace it");
   }
-  // The run's best-so-far path, when the job has been run into its default directory.
-  lo.history = o.history.empty() && fs::is_regular_file(default_out_dir(job) / "history.csv")
-                   ? default_out_dir(job) / "history.csv"
+  lo.history = o.history.empty() && !run.empty() && fs::is_regular_file(run / "history.csv")
+                   ? run / "history.csv"
                    : fs::path(o.history);
+  // The unplotted parameters at the run's tuned values (the map then holds the tuned point),
+  // or at the job's with --at-job-values; the run's noise floor for the colours.
+  if (!run.empty()) {
+    const std::optional<std::string> text = tune::read_file(run / "gains.json");
+    const nlohmann::json gains =
+        text ? nlohmann::json::parse(*text, nullptr, false) : nlohmann::json();
+    if (gains.is_object()) {
+      const double nf = ftc::json_io::json_number_or(
+          gains.value(nlohmann::json::json_pointer("/noise_floor/relative_spread"),
+                      nlohmann::json()),
+          0.0);
+      lo.noise_floor = nf;
+      if (!o.at_job_values && gains.contains("tuned") && gains["tuned"].is_object()) {
+        for (auto it = gains["tuned"].begin(); it != gains["tuned"].end(); ++it)
+          if (it.value().is_number()) lo.fixed.emplace_back(it.key(), it.value().get<double>());
+        lo.fixed_source = "the tuned value, " + (run / "gains.json").string();
+      }
+    }
+  }
   const auto t0 = std::chrono::steady_clock::now();
   spdlog::info("evaluating a {} grid over {} ({} simulations per point)", o.grid,
                o.params.empty() ? "the first two tuned parameters" : o.params,
@@ -106,9 +134,16 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
   bar.clear();
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!g.quiet) {
-    std::printf("%lld simulations in %.2f s; lowest %s = %.6g at %s = %.5g, %s = %.5g\n",
-                static_cast<long long>(r.simulations), s, sim::to_string(job.objective.metric),
-                r.best_objective, r.params[0].c_str(), r.best[0], r.params[1].c_str(), r.best[1]);
+    std::printf(
+        "%lld simulations in %.2f s; lowest on the grid: %s = %.6g at %s = %.5g, %s = "
+        "%.5g\n",
+        static_cast<long long>(r.simulations), s, tune::objective_label(job).c_str(),
+        r.best_objective, r.params[0].c_str(), r.best[0], r.params[1].c_str(), r.best[1]);
+    for (const auto& [name, value] : r.fixed)
+      std::printf("  %s held fixed at %.6g (%s)\n", name.c_str(), value, r.fixed_source.c_str());
+    if (r.path_points > r.path_on_map)
+      std::printf("  the optimiser's path is drawn projected: %d of its %d points lie on the map\n",
+                  r.path_on_map, r.path_points);
     std::printf("wrote %s and %s\n", r.csv.c_str(), r.figure.c_str());
   }
   return 0;
@@ -121,11 +156,26 @@ void add_report_commands(CLI::App& app, const Globals& g, Action& action) {
     auto dir = std::make_shared<std::string>();
     auto format = std::make_shared<std::string>("html");
     CLI::App* sub = app.add_subcommand("report", "Draw the figures and the HTML report of a run");
-    sub->add_option("run_dir", *dir, "Output directory of `ftctune run`")->required();
+    sub->add_option("run_dir", *dir,
+                    "Output directory of `ftctune run`, or a job file: its latest run")
+        ->required();
     sub->add_option("--format", *format,
                     "html (report.html with the PNG figures inline, default), png or svg");
     sub->callback([&action, &g, dir, format] {
-      action = [&g, dir, format] { return render_run_report(*dir, *format, g.quiet); };
+      action = [&g, dir, format] {
+        // A job file names its latest run (out/<name>, -2, -3, ...), as for landscape.
+        std::error_code ec;
+        if (std::filesystem::is_regular_file(*dir, ec)) {
+          const tune::Job job = tune::load_job(*dir);
+          std::string why;
+          const std::filesystem::path run = latest_run_dir(job, &why);
+          if (run.empty())
+            throw InputError(*dir, "", why + ": run `ftctune run " + *dir + "` first");
+          spdlog::info("{}", why);
+          return render_run_report(run.string(), *format, g.quiet);
+        }
+        return render_run_report(*dir, *format, g.quiet);
+      };
     });
   }
   {
@@ -135,14 +185,19 @@ void add_report_commands(CLI::App& app, const Globals& g, Action& action) {
     sub->add_option("--grid", o->grid, "Grid points, N1xN2 (default 41x41)");
     sub->add_option("--params", o->params,
                     "Two tuned parameters, e.g. Kp,Ki (default: the first two)");
-    sub->add_option("--out", o->out, "Output directory (default out/<job name>/landscape)");
+    sub->add_option("--out", o->out,
+                    "Output directory (default <the job's latest run>/landscape, else "
+                    "out/<job name>/landscape)");
     sub->add_option("--history", o->history,
-                    "history.csv whose best-so-far path is drawn (default out/<job "
-                    "name>/history.csv if present)");
+                    "history.csv whose best-so-far path is drawn (default: the latest run's, "
+                    "out/<job name>[-N]/history.csv, if there is one)");
     sub->add_option("--threads", o->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(0, 4096));
     sub->add_option("--format", o->format, "png (default) or svg");
     sub->add_flag("--force", o->force, "Replace the landscape the --out directory holds");
+    sub->add_flag("--at-job-values", o->at_job_values,
+                  "Hold the unplotted tuned parameters at the job's values instead of the latest "
+                  "run's tuned ones");
     sub->callback([&action, &g, o] { action = [&g, o] { return run_landscape(*o, g); }; });
   }
 }

@@ -428,8 +428,8 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
     // while the gains and the objective move.
     const double best = r.best().outcome.evaluation.objective;
     const double base = r.baseline().outcome.evaluation.objective;
-    std::printf("  %s = %.6e (job's own controller: %.6e", sim::to_string(job.objective.metric),
-                best, base);
+    std::printf("  %s = %.6e (job's own controller: %.6e", tune::objective_label(job).c_str(), best,
+                base);
     if (std::isfinite(best) && std::isfinite(base) && base > 0)
       std::printf(", %.3g %% %s", 100 * std::abs(base - best) / base,
                   best <= base ? "lower" : "higher");

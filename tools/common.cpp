@@ -1,5 +1,6 @@
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -8,6 +9,7 @@
 #include "cli.hpp"
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::cli {
 
@@ -129,6 +131,60 @@ CLI::Validator output_file() {
 
 std::filesystem::path default_out_dir(const tune::Job& job) {
   return default_out_dir_for(job.name);
+}
+
+std::filesystem::path latest_run_dir(const tune::Job& job, std::string* why) {
+  namespace fs = std::filesystem;
+  const fs::path base = default_out_dir(job);
+  const std::string prefix = base.filename().string() + "-";
+  struct Found {
+    fs::path dir;
+    fs::file_time_type time;
+    int suffix = 1;
+    bool same_job = false;
+  };
+  std::vector<Found> runs;
+  std::error_code ec;
+  const auto consider = [&](const fs::path& dir, int suffix) {
+    const fs::path gains = dir / "gains.json";
+    std::error_code e;
+    const fs::file_time_type t = fs::last_write_time(gains, e);
+    if (e || !fs::is_regular_file(gains, e)) return;
+    bool same = false;
+    if (const std::optional<std::string> text = tune::read_file(gains)) {
+      const json g = json::parse(*text, nullptr, false);
+      same = g.is_object() && g.contains("job") && g["job"].is_object() &&
+             g["job"].value("sha256", "") == tune::canonical_job_sha256(job);
+    }
+    runs.push_back({dir, t, suffix, same});
+  };
+  consider(base, 1);
+  for (fs::directory_iterator it(base.parent_path(), ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.size() > 6 || digits.find_first_not_of("0123456789") != std::string::npos ||
+        digits[0] == '0')
+      continue;
+    consider(it->path(), std::stoi(digits));
+  }
+  if (runs.empty()) {
+    if (why) *why = "no run of job " + job.name + " in " + base.parent_path().string();
+    return {};
+  }
+  const bool any_same =
+      std::any_of(runs.begin(), runs.end(), [](const Found& f) { return f.same_job; });
+  const Found* best = nullptr;
+  for (const Found& f : runs)
+    if ((f.same_job || !any_same) &&
+        (!best || f.time > best->time || (f.time == best->time && f.suffix > best->suffix)))
+      best = &f;
+  if (why)
+    *why =
+        "the latest run of job " + job.name + " is " + best->dir.string() +
+        (any_same ? "" : " (of another version of the job file: its SHA-256 differs)") +
+        (runs.size() > 1 ? " (newest gains.json of " + std::to_string(runs.size()) + " runs)" : "");
+  return best->dir;
 }
 
 }  // namespace ftc::cli

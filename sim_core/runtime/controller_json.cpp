@@ -64,7 +64,9 @@ std::shared_ptr<const schema::Variant<ControllerConfig>> make_shape() {
       "A sliding-mode controller: its type and parameters (Table 1 values by default)", "",
       [](const std::string& name) {
         return "unknown controller type \"" + name +
-               "\" (known: nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)";
+               "\" (known: nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)" +
+               json_io::did_you_mean(name,
+                                     {"nftsmc", "fosmc", "pi_fosmc", "adaptive_neural_pi_fosmc"});
       });
   for (const ControllerType t : sim::kAllControllerTypes) {
     auto o = std::make_shared<schema::Object<ControllerConfig>>();

@@ -103,19 +103,23 @@ std::string did_you_mean(const std::string& name, const std::vector<std::string>
   int ties = 0;            // a guess between equally near names would mislead
   for (const std::string& cand : candidates) {
     const std::string b = lower(cand);
-    std::vector<std::size_t> row(b.size() + 1);
-    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    // Edits of one character (insert, delete, replace) or a swap of two neighbours ("onest" is
+    // one slip from "onset"): the optimal string alignment distance, three rows kept.
+    std::vector<std::size_t> before(b.size() + 1), prev(b.size() + 1), row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
     for (std::size_t i = 1; i <= a.size(); ++i) {
-      std::size_t diag = row[0];
       row[0] = i;
       for (std::size_t j = 1; j <= b.size(); ++j) {
-        const std::size_t up = row[j];
-        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-        diag = up;
+        row[j] =
+            std::min({prev[j] + 1, row[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+          row[j] = std::min(row[j], before[j - 2] + 1);
       }
+      before.swap(prev);  // before = the row of i - 1
+      prev.swap(row);     // prev = the row of i
     }
     // Short names need a closer match: "c1" is one edit from "c2" and means something else.
-    const std::size_t d = row[b.size()];
+    const std::size_t d = prev[b.size()];
     if (d * 3 > std::max(a.size(), b.size()) || cand == name) continue;
     if (d < best_d) {
       best_d = d;

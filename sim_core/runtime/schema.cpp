@@ -37,7 +37,7 @@ std::string choice_error(const std::vector<std::string>& names, const std::strin
     s = "must be one of ";
     for (std::size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + names[i];
   }
-  return s + " (got \"" + got + "\")";
+  return s + " (got \"" + got + "\")" + json_io::did_you_mean(got, names);
 }
 
 bool read_number(const json& v, const std::string& path, double& out, Errors& errs) {

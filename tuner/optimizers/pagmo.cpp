@@ -954,9 +954,17 @@ AlgorithmPtr parse_pagmo(const json& j, const std::string& path, Errors& errs) {
   }
   json resolved;
   if (e) resolved = e->read(settings, path + "/settings", mine);
-  if (mine.empty()) {
-    sizes_shape()->validate(sizes, path, mine);
-    if (mine.empty()) e->check(resolved, sizes, path, mine);
+  if (e) {
+    // The sizes whatever else is wrong: an unknown setting must not hide a population too small
+    // for the algorithm (checked with the default settings where the given ones cannot be read).
+    Errors sizing;
+    sizes_shape()->validate(sizes, path, sizing);
+    if (sizing.empty()) {
+      Errors unused;
+      e->check(resolved.is_null() ? e->read(nullptr, path + "/settings", unused) : resolved, sizes,
+               path, sizing);
+    }
+    schema::detail::dedupe_append(mine, std::move(sizing));
   }
   if (mine.empty()) {
     // The rules above mirror pagmo's own checks; should pagmo still refuse, say so as bad input.

@@ -1,6 +1,7 @@
 #include "ftc/tune/report/evaluation.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -24,8 +25,21 @@ fs::path draw_evaluation(const EvaluationResult& r, const fs::path& dir, FigureF
   const bool include = r.job.ensemble && r.job.ensemble->unrecoverable == Unrecoverable::include;
   const fs::path figure = dir / (std::string("evaluation") + plot::extension(format));
   std::ostringstream g;
-  g << plot::styles(static_cast<int>(r.controllers.size())) << plot::terminal(format, 1300, 560)
+  // Each controller in its type's style (the report's): the job's and its compare entries by
+  // type, the first gains file as the tuned controller.
+  std::vector<plot::Series> as_series;
+  bool first_file = true;
+  for (const EvaluatedController& c : r.controllers) {
+    const bool file = c.source != "job" && c.source != "compare";
+    as_series.push_back({c.label, "", file && first_file, sim::to_string(c.controller.type)});
+    if (file) first_file = false;
+  }
+  const std::vector<int> style = plot::controller_style_list(as_series);
+  g << plot::styles(0) << plot::controller_styles() << plot::terminal(format, 1300, 560)
     << "set output " << plot::gp(figure.filename().string()) << "\n";
+  std::size_t left_out = 0;  // unrecoverable members the aggregates leave out
+  if (!include && !r.controllers.empty())
+    for (const MemberResult& m : r.controllers.front().members) left_out += !m.recoverable;
   std::vector<std::size_t> finite_counts, diverged_counts, zero_counts;
   for (std::size_t c = 0; c < r.controllers.size(); ++c) {
     std::vector<double> v;
@@ -56,20 +70,29 @@ fs::path draw_evaluation(const EvaluationResult& r, const fs::path& dir, FigureF
     diverged_counts.push_back(diverged);
     zero_counts.push_back(zero);
   }
-  const std::string what = std::string(sim::to_string(r.job.objective.metric)) + " of a member";
+  const sim::Metric metric = r.job.objective.metric;
+  const char* unit = metric == sim::Metric::ise   ? "rad²·s"
+                     : metric == sim::Metric::iae ? "rad·s"
+                                                  : "rad·s²";
+  std::string metric_name = sim::to_string(metric);
+  for (char& ch : metric_name) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+  const std::string what = metric_name + " of a member [" + unit + "] (log scale)";
   g << "set multiplot layout 1,2 title "
     << plot::gp("Out of sample: " + r.job.name + ", " + std::to_string(r.job.scenarios.size()) +
                 (r.job.scenarios.size() == 1 ? " listed scenario + " : " listed scenarios + ") +
-                std::to_string(r.count) + " members (seed " + std::to_string(r.seed) + ")")
+                std::to_string(r.count) + " members (seed " + std::to_string(r.seed) + ")" +
+                (left_out > 0 ? "; " + std::to_string(left_out) +
+                                    " unrecoverable members left out (no gains can control them)"
+                              : std::string()))
     << " font ',13'\n"
     << "set logscale x\nset format x '%.2g'\nset xlabel " << plot::gp(what)
-    << "\nset ylabel 'fraction of members at or below'\nset yrange [0:1.02]\n"
+    << "\nset ylabel 'fraction of members at or below (1 = all)'\nset yrange [0:1.02]\n"
     << "set key bottom right inside opaque box noenhanced\nplot ";
   for (std::size_t c = 0; c < r.controllers.size(); ++c) {
     std::string title = r.controllers[c].label;
     if (diverged_counts[c] > 0) title += " (" + std::to_string(diverged_counts[c]) + " diverged)";
     if (zero_counts[c] > 0) title += " (" + std::to_string(zero_counts[c]) + " at 0, not drawn)";
-    g << (c ? ", \\\n     " : "") << "$cdf" << c << " using 1:2 with steps ls " << c + 1
+    g << (c ? ", \\\n     " : "") << "$cdf" << c << " using 1:2 with steps ls " << style[c]
       << " lw 2 title " << plot::gp(title);
   }
   g << "\nunset logscale x\nset format x '%g'\nset rmargin 10\nunset xlabel\nset ylabel "
@@ -83,7 +106,7 @@ fs::path draw_evaluation(const EvaluationResult& r, const fs::path& dir, FigureF
   bool any = false;
   for (std::size_t c = 0; c < r.controllers.size(); ++c) {
     if (finite_counts[c] == 0) continue;
-    g << (any ? ", \\\n     " : "") << "$box" << c << " using (" << c << "):1 ls " << c + 1
+    g << (any ? ", \\\n     " : "") << "$box" << c << " using (" << c << "):1 ls " << style[c]
       << " ps 0.4";
     any = true;
   }

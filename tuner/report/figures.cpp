@@ -9,6 +9,7 @@
 
 #include "ftc/sim/plants.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "io/decimal.hpp"
 #include "io/text.hpp"
 
@@ -213,16 +214,11 @@ std::string range_text(const Frame& f) {
          "]\n";
 }
 
-// Style 1 is the tuned controller's (darkest, solid); the others follow in their order.
+// Each controller's line style, by its type (plot::controller_style), minus one: the same
+// controller type is drawn alike in every report.
 std::vector<int> style_ranks(const std::vector<Series>& series) {
-  std::vector<int> rank(series.size());
-  const bool any_tuned =
-      std::any_of(series.begin(), series.end(), [](const Series& s) { return s.tuned; });
-  int next = any_tuned ? 1 : 0;
-  for (std::size_t i = 0; i < series.size(); ++i)
-    if (!series[i].tuned) rank[i] = next++;
-  for (std::size_t i = 0; i < series.size(); ++i)
-    if (series[i].tuned) rank[i] = 0;
+  std::vector<int> rank;
+  for (int style : plot::controller_style_list(series)) rank.push_back(style - 1);
   return rank;
 }
 
@@ -260,7 +256,7 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
 
   Script sc;
   std::ostringstream& g = sc.text;
-  g << plot::styles(static_cast<int>(S));
+  g << plot::styles(0) << plot::controller_styles();
   std::vector<Figure> figures;
   const auto key_entries = [&](const std::vector<std::size_t>& which) {
     std::string s;
@@ -274,6 +270,11 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
     everyone[i] = i;
     if (i != tuned) others.push_back(i);
   }
+  // The tuned controller is drawn first, underneath (and thinner): its chattering band then
+  // hides no other curve.
+  std::vector<std::size_t> drawing_order;
+  if (tuned < S) drawing_order.push_back(tuned);
+  for (std::size_t i : others) drawing_order.push_back(i);
 
   // Figures 3 and 4: the states in n panels; beside each, how far every other controller is
   // from the tuned one (log scale), which shows what overlapping curves hide.
@@ -310,8 +311,9 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
       f.width_px = (left_end - 0.07) * width;
       f.height_px = row - 45.0;
       std::string plot_cmd = "plot " + key_entries(everyone);
-      for (std::size_t s = 0; s < S; ++s) {
-        plot_cmd += sc.line_with_markers(data[s][0], *curves[s], f, rank[s] + 1, rank[s], int(S));
+      for (std::size_t s : drawing_order) {
+        plot_cmd += sc.line_with_markers(data[s][0], *curves[s], f, rank[s] + 1, rank[s],
+                                         plot::kControllerStyles);
       }
       g << "set lmargin at screen 0.07\nset rmargin at screen " << num(left_end) << "\n"
         << (i == 0 ? "set key on\n" : "unset key\n") << "unset logscale y\nset format y '%g'\n"
@@ -339,7 +341,8 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
       std::string diff_cmd = "plot ";
       for (std::size_t j = 0; j < others.size(); ++j) {
         const std::size_t s = others[j];
-        diff_cmd += sc.line_with_markers(data[s][0], gaps[j], fd, rank[s] + 1, rank[s], int(S));
+        diff_cmd += sc.line_with_markers(data[s][0], gaps[j], fd, rank[s] + 1, rank[s],
+                                         plot::kControllerStyles);
       }
       g << "set lmargin at screen 0.57\nset rmargin at screen 0.97\nunset key\n"
         << "set logscale y\nset format y '10^{%L}'\n"
@@ -381,38 +384,49 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
     };
     const double baseline_j = number_at("/baseline/fitness");
     const bool have_baseline = std::isfinite(baseline_j) && baseline_j > 0;
-    // Improvement in % = 100 (1 - objective / reference objective) = 100 (1 - J_ref / J).
+    // The improvement as a ratio on a log axis, reference objective / best objective − 1
+    // = J / J_ref − 1, so that 0.1 % and 1 000 times both read: a percent scale squeezes a small
+    // gain into its floor and saturates a large one at 100 %.
     const std::string reference = have_baseline ? num(baseline_j) : "J0";
     g << plot::terminal(fmt, 1000, 600) << "set output " << gp(file) << "\n"
       << "unset arrow; unset label\nset title "
-      << gp(std::string("Improvement per iteration") + (paper ? " (paper Fig. 5)" : ""))
+      << gp("Improvement per iteration of " + objective_label(job) +
+            (paper ? " (paper Fig. 5)" : ""))
       << " font ',13'\n"
       << "set xlabel 'iteration'\nset ylabel "
-      << gp(have_baseline ? "objective below the job's controller's [%]"
-                          : "objective below the initial population's best [%]")
-      << "\nset format y '%.3g'\nset key inside right bottom opaque box\n";
+      << gp(std::string(have_baseline ? "job's controller's" : "initial population's best") +
+            " objective / best so far − 1 (log scale)")
+      << "\nset logscale y\nset ytics ('+0.00001 %%' 1e-7, '+0.0001 %%' 1e-6, '+0.001 %%' 1e-5, "
+         "'+0.01 %%' 1e-4, '+0.1 %%' 1e-3, '+0.2 %%' 2e-3, '+0.5 %%' 5e-3, '+1 %%' 1e-2, "
+         "'+2 %%' 2e-2, '+5 %%' 5e-2, '+10 %%' 0.1, '+20 %%' 0.2, '+50 %%' 0.5, '2×' 1, "
+         "'3×' 2, '5×' 4, '10×' 9, '30×' 29, '100×' 99, '300×' 299, '1 000×' 999, "
+         "'10 000×' 9999)\nset key inside right bottom opaque box\n";
     if (!have_baseline)
       g << "J0 = 0\nstats 'history.csv' skip 1 every ::0::0 using 2 nooutput\nJ0 = STATS_max\n";
     const double floor = number_at("/noise_floor/relative_spread");
-    if (std::isfinite(floor) && floor > 0)
-      g << "set arrow from graph 0, first " << num(100 * floor) << " to graph 1, first "
-        << num(100 * floor) << " nohead dt 3 lw 1.2 lc rgb 'gray40' front\nset label "
-        << gp("noise floor " + detail::format_number(100 * floor, "%.2g") + " %")
-        << " at graph 0.02, first " << num(100 * floor)
-        << " offset 0,0.7 textcolor rgb 'gray30' front\n";
-    g << "plot 'history.csv' skip 1 using 1:(100*(1 - " << reference
-      << "/$2)) with linespoints ls 1 lw 2 title " << gp(algorithm);
+    // Iterations not better than the reference have no logarithm: not drawn.
+    const std::string ratio = "(($2/" + reference + " - 1) > 0 ? ($2/" + reference + " - 1) : 1/0)";
+    g << "plot 'history.csv' skip 1 using 1:" << ratio << " with linespoints ls 1 lw 2 title "
+      << gp(algorithm);
     if (fs::is_regular_file(run_dir / "history-random.csv"))
-      g << ", \\\n     'history-random.csv' skip 1 using 1:(100*(1 - " << reference
-        << "/$2)) with linespoints ls 2 lw 2 title 'random search, same budget'";
-    g << "\nset format y '%g'\nunset title\nunset arrow\nunset label\n"
+      g << ", \\\n     'history-random.csv' skip 1 using 1:" << ratio
+        << " with linespoints ls 4 lw 2 title 'random search, same budget'";
+    // The noise floor as a line that autoscaling keeps in view.
+    if (std::isfinite(floor) && floor > 0)
+      g << ", \\\n     " << num(floor) << " with lines dt 3 lw 1.5 lc rgb 'gray40' title "
+        << gp("noise floor " + detail::format_number(100 * floor, "%.2g") + " %");
+    g << "\nunset logscale y\nset autoscale y\nset ytics autofreq\nset format y '%g'\nunset "
+         "title\nunset "
+         "arrow\nunset label\n"
          "set key default\nset key outside right top vertical box opaque\n";
     figures.push_back(
         {file, "Convergence",
-         std::string("How far the best objective found so far lies below ") +
+         std::string("How much lower the best objective found so far is than ") +
              (have_baseline ? "the job's own controller's" : "the initial population's best") +
-             ", after each iteration (iteration 0 is the initial population). Changes under the "
-             "noise floor (dotted, when measured) are not real."});
+             ", after each iteration (iteration 0 is the initial population), as the ratio "
+             "minus one on a log axis: +0.1 % and 1 000× both read. An iteration not better "
+             "than that reference is not drawn. Changes under the noise floor (dotted, when "
+             "measured) are not real."});
   }
 
   // Figure 6: commanded (and, on faulted actuators, applied) outputs per controller, every
@@ -438,8 +452,8 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
       << "set output " << gp(file) << "\nset multiplot layout " << rows << ",2 title "
       << gp(std::string("Actuator outputs") + (paper ? " (paper Fig. 6)" : "") + scen)
       << " font ',13'\n"
-      << plot::onset_marks(onsets, false) << range_text(f) << "set xlabel 'time [s]'\n"
-      << "set ylabel 'actuator output u'\nset key below horizontal font ',9' maxrows 2 "
+      << plot::onset_marks(onsets, true) << range_text(f) << "set xlabel 'time [s]'\n"
+      << "set ylabel 'actuator output u [N·m]'\nset key below horizontal font ',9' maxrows 2 "
          "enhanced\nset "
          "bmargin 7\n";
     for (std::size_t s = 0; s < S; ++s) {
@@ -455,18 +469,19 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
         cmd += sc.curve(data[s][0], u, f) + " using 1:2 with lines ls " + std::to_string(j) +
                " lw 3 dt (2,3) title 'applied u_" + std::to_string(j) + "', ";
       }
+      // One legend for the figure: the first panel's (every panel uses the same styles).
       g << "set title " << gp(series[s].label) << " noenhanced\n"
-        << cmd.substr(0, cmd.size() - 2) << "\n";
+        << (s == 0 ? "" : "unset key\n") << cmd.substr(0, cmd.size() - 2) << "\n";
     }
     g << "unset multiplot\nunset title\nset autoscale\nunset bmargin\n"
-      << plot::line_styles(int(S))
+      << plot::controller_styles()
       << "set key default\nset key outside right top vertical box opaque\n";
     figures.push_back(
         {file, "Actuator outputs",
          "Commanded outputs u_d of each controller (each actuator its own colour, dash and "
          "marker) and, thick dotted in the same colour, the applied output of each faulted "
-         "actuator (bias added, effectiveness lost). All panels share one scale; fault onsets "
-         "are the grey dashed lines."});
+         "actuator (bias added, effectiveness lost), in N·m. All panels share one scale and "
+         "the legend of the first; the faults are the labelled grey dashed lines."});
   }
 
   // Figure 7: the faulted part, where the controllers differ, on a log scale.
@@ -494,8 +509,9 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
     }
     std::tie(f.y0, f.y1) = span_of(curves, true);
     std::string cmd = "plot " + key_entries(everyone);
-    for (std::size_t s = 0; s < S; ++s) {
-      cmd += sc.line_with_markers(data[s][0], norms[s], f, rank[s] + 1, rank[s], int(S));
+    for (std::size_t s : drawing_order) {
+      cmd += sc.line_with_markers(data[s][0], norms[s], f, rank[s] + 1, rank[s],
+                                  plot::kControllerStyles);
     }
     g << plot::terminal(fmt, 1100, 600) << "set output " << gp(file) << "\n"
       << plot::onset_marks(onsets) << "set title " << gp("Error ‖X_1‖ after the faults" + scen)

@@ -13,6 +13,8 @@
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
+
+#include <string>
 #include <vector>
 
 #include "ftc/tune/io/files.hpp"
@@ -47,14 +49,38 @@ const char* extension(FigureFormat f) { return f == FigureFormat::png ? ".png" :
 
 // Colour-bar tics for a log scale: gnuplot draws none when the range is under a decade, which
 // is common for objectives that barely change, so place six at even log spacing.
-std::string colour_tics(double lo, double hi) {
+std::string colour_tics(double lo, double hi, const std::string& lo_label) {
   if (!(lo > 0) || !(hi > lo) || !std::isfinite(hi)) return "";
   std::string s = "set cbrange [" + detail::format_number(lo, "%.9g") + ":" +
                   detail::format_number(hi, "%.9g") + "]\nset cbtics (";
-  for (int i = 0; i <= 5; ++i) {
-    const double v = lo * std::pow(hi / lo, i / 5.0);
-    s += (i ? ", " : "") + std::string("'") + detail::format_number(v, "%.5g") + "' " +
+  // Round values inside the range: 1, 2 and 5 per decade, fewer when they would crowd.
+  const int k0 = static_cast<int>(std::floor(std::log10(lo))),
+            k1 = static_cast<int>(std::ceil(std::log10(hi)));
+  const int decades = k1 - k0;
+  std::vector<double> mantissas = decades <= 2   ? std::vector<double>{1, 2, 5}
+                                  : decades <= 4 ? std::vector<double>{1, 3}
+                                                 : std::vector<double>{1};
+  const int every = decades > 8 ? (decades + 7) / 8 : 1;  // at most about 8 decades labelled
+  std::vector<double> tics;
+  for (int k = k0; k <= k1; ++k)
+    if ((k - k0) % every == 0)
+      for (double m : mantissas) {
+        const double v = m * std::pow(10.0, k);
+        // Rounded to its own digit, so that the label is exactly the round value.
+        const double r = std::stod(detail::format_number(v, "%.1g"));
+        // Not crowding the label of lo.
+        const double from = lo_label.empty() ? lo * (1 - 1e-9) : lo * 1.8;
+        if (r >= from && r <= hi * (1 + 1e-9)) tics.push_back(r);
+      }
+  bool first = true;
+  if (!lo_label.empty()) {
+    s += "'" + lo_label + "' " + detail::format_number(lo, "%.9g");
+    first = false;
+  }
+  for (double v : tics) {
+    s += (first ? "" : ", ") + std::string("'") + detail::format_number(v, "%g") + "' " +
          detail::format_number(v, "%.9g");
+    first = false;
   }
   return s + ")\n";
 }
@@ -123,6 +149,47 @@ std::string line_styles(int count) {
     s += buf;
   }
   return s;
+}
+
+int controller_style(const std::string& type, bool tuned, int repeat) {
+  if (tuned) return 1;
+  int base = 2;  // pi_fosmc and anything unknown
+  if (type == "fosmc")
+    base = 3;
+  else if (type == "nftsmc")
+    base = 4;
+  else if (type == "adaptive_neural_pi_fosmc")
+    base = 5;
+  return repeat == 0 ? base : std::min(kControllerStyles, base + 5);
+}
+
+std::string controller_styles() {
+  // Colour (viridis, darkest for the tuned), dash and marker per type; 6..10 repeat 1..5's colour
+  // with another dash and an open marker.
+  static const double kShade[5] = {0.0, 0.25, 0.47, 0.68, 0.85};
+  static const int kDash[5] = {1, 2, 4, 5, 3};
+  static const int kMark[5] = {7, 5, 9, 13, 11};
+  std::string s;
+  for (int i = 0; i < kControllerStyles; ++i) {
+    const int k = i % 5;
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "set style line %d lc rgb '%s' dt %d pt %d lw %s ps 0.9\n",
+                  i + 1, viridis(kShade[k]).c_str(), i < 5 ? kDash[k] : kDash[(k + 2) % 5],
+                  i < 5 ? kMark[k] : kMark[k] - 1, i == 0 ? "1.3" : "1.6");
+    s += buf;
+  }
+  return s;
+}
+
+std::vector<int> controller_style_list(const std::vector<Series>& series) {
+  std::vector<int> out;
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    int repeat = 0;
+    for (std::size_t j = 0; j < i; ++j)
+      repeat += !series[j].tuned && !series[i].tuned && series[j].type == series[i].type;
+    out.push_back(controller_style(series[i].type, series[i].tuned, repeat));
+  }
+  return out;
 }
 
 std::string styles(int count) {

@@ -7,6 +7,7 @@
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "io/text.hpp"
 
 namespace ftc::tune::report_detail {
@@ -83,6 +84,75 @@ void settings_rows(const nlohmann::ordered_json& j, const std::string& path,
   }
 }
 
+// The robust table of comparison.md: each controller's aggregates over every scenario.
+void summary_table(const json& comparison, const Job& job, std::ostringstream& h) {
+  const auto num = [](const json& j) { return detail::format_number(json_number_or(j, NAN)); };
+  const json& first = comparison["controllers"][0].value("ensemble", json::object());
+  h << "<h2>All " << first.value("scenarios", 0) << " scenarios</h2>\n<p>"
+    << first.value("unrecoverable", 0)
+    << " cannot be controlled by any gains once their faults have started"
+    << (first.value("counted", 0) < first.value("scenarios", 0)
+            ? ", and the objective leaves them out"
+            : "")
+    << ". Values are " << html_escape(sim::to_string(job.objective.metric))
+    << " per scenario; quantiles by nearest rank.</p>\n<table><tr><th>controller</th><th>"
+    << html_escape(objective_label(job))
+    << "</th><th>mean</th><th>median</th><th>p90</th><th>max</th><th>CVaR"
+    << detail::format_number(job.objective.alpha, "%.3g") << "</th><th>diverged</th></tr>\n";
+  for (const json& c : comparison["controllers"]) {
+    const json& m = c.value("ensemble", json::object());
+    h << "<tr><td>" << html_escape(c.value("label", "?")) << "</td><td>"
+      << num(m.value("objective", json())) << "</td><td>" << num(m.value("mean", json()))
+      << "</td><td>" << num(m.value("median", json())) << "</td><td>" << num(m.value("p90", json()))
+      << "</td><td>" << num(m.value("max", json())) << "</td><td>" << num(m.value("cvar", json()))
+      << "</td><td>" << m.value("diverged", 0) << "</td></tr>\n";
+  }
+  h << "</table>\n";
+}
+
+// The run's evaluation/ (`ftctune evaluate`'s default place), when there is one: its table of
+// aggregates over the held-out members, and its figure.
+void evaluation_section(const fs::path& run_dir, std::ostringstream& h) {
+  const fs::path dir = run_dir / "evaluation";
+  std::error_code ec;
+  if (!fs::is_regular_file(dir / "evaluation.json", ec)) return;
+  const std::optional<std::string> text = read_file(dir / "evaluation.json");
+  if (!text) return;
+  const json e = json::parse(*text, nullptr, false);
+  if (e.is_discarded() || !e.is_object() || !e.contains("controllers") ||
+      !e["controllers"].is_array())
+    return;
+  const auto num = [](const json& j) { return detail::format_number(json_number_or(j, NAN)); };
+  h << "<h2>Out-of-sample evaluation</h2>\n<p>From <code>ftctune evaluate</code> "
+       "(evaluation/evaluation.json): "
+    << e.value("listed", 0) << " listed scenario(s) and " << e.value("count", 0)
+    << " held-out ensemble members (seed " << e.value("seed", 0) << "); "
+    << html_escape(e.value("metric", "")) << " of each scenario over the objective window.";
+  if (!e["controllers"].empty()) {
+    const json& a = e["controllers"][0].value("aggregates", json::object());
+    h << " " << a.value("unrecoverable", 0) << " of " << a.value("scenarios", 0)
+      << " scenarios are unrecoverable"
+      << (a.value("counted", 0) < a.value("scenarios", 0) ? " and left out of the aggregates"
+                                                          : " and counted");
+  }
+  h << ".</p>\n<table><tr><th>controller</th><th>source</th><th>mean</th><th>median</th>"
+       "<th>p90</th><th>max</th><th>CVaR</th><th>diverged</th></tr>\n";
+  for (const json& c : e["controllers"]) {
+    const json& a = c.value("aggregates", json::object());
+    h << "<tr><td>" << html_escape(c.value("label", "?")) << "</td><td>"
+      << html_escape(c.value("source", "")) << "</td><td>" << num(a.value("mean", json()))
+      << "</td><td>" << num(a.value("median", json())) << "</td><td>" << num(a.value("p90", json()))
+      << "</td><td>" << num(a.value("max", json())) << "</td><td>" << num(a.value("cvar", json()))
+      << "</td><td>" << a.value("diverged", 0) << "</td></tr>\n";
+  }
+  h << "</table>\n";
+  if (const std::optional<std::string> png = fs::is_regular_file(dir / "evaluation.png", ec)
+                                                 ? read_file(dir / "evaluation.png")
+                                                 : std::nullopt)
+    h << "<figure><img alt=\"out-of-sample evaluation\" src=\"data:image/png;base64,"
+      << base64(*png) << "\"><figcaption>evaluation/evaluation.png</figcaption></figure>\n";
+}
+
 }  // namespace
 
 std::string report_html(const fs::path& run_dir, const Job& job, const std::string& job_text,
@@ -115,7 +185,7 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
   const auto integral = [](const json& j) { return json_number_or(j, INFINITY); };
   h << "</table>\n<p>Fitness J = " << detail::format_number(num_or(gains["fitness"]), "%.6g")
     << " (job's controller: " << detail::format_number(num_or(gains["baseline"]["fitness"]), "%.6g")
-    << "); objective " << html_escape(gains["objective"].value("metric", "")) << " = "
+    << "); " << html_escape(objective_label(job)) << " = "
     << detail::format_number(num_or(gains["objective"]["value"]), "%.6g") << "; "
     << gains["optimizer"].value("evaluations", 0) << " evaluations, seed "
     << gains["optimizer"].value("seed", 0) << ".</p>\n";
@@ -126,6 +196,12 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
         h << "<li><b>Warning:</b> " << html_escape(w.get<std::string>()) << "</li>\n";
     h << "</ul>\n";
   }
+
+  // comparison.md's noise-floor sentence and, for an ensemble job, its robust table.
+  if (comparison.contains("noise_floor") && comparison["noise_floor"].is_string())
+    h << "<p class=\"noise-floor\">" << html_escape(comparison["noise_floor"].get<std::string>())
+      << "</p>\n";
+  if (job.ensemble) summary_table(comparison, job, h);
 
   for (std::size_t s = 0; s < S; ++s) {
     h << "<h2>Controllers compared"
@@ -185,6 +261,8 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
          "whether the search bounds cut it off.</figcaption></figure>\n";
     break;
   }
+
+  evaluation_section(run_dir, h);
 
   h << "<h2>Run</h2>\n<table>\n";
   for (auto it = run.begin(); it != run.end(); ++it)

@@ -6,14 +6,34 @@
 #include <limits>
 #include <sstream>
 
+#include "ftc/sim/controller_config.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "io/text.hpp"
 #include "report/gnuplot.hpp"
 
 namespace ftc::tune {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// A gnuplot string in double quotes, where "\n" breaks the line (single quotes cannot).
+std::string double_quoted(const std::string& text) {
+  std::string s = "\"";
+  for (char c : text) {
+    if (c == '\n')
+      s += "\\n";
+    else if (c == '"' || c == '\\')
+      s += std::string("\\") + c;
+    else
+      s += c;
+  }
+  return s + "\"";
+}
+
+}  // namespace
 
 LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
                                   const LandscapeOptions& options, BatchEvaluator& evaluator) {
@@ -40,6 +60,20 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
       throw InputError("--params", "", p + " is not under tuning.parameters of the job");
     bounds.push_back(*it);
   }
+  // The unplotted tuned parameters held at the given values (the tuned ones, by default in the
+  // CLI), else at the job's.
+  LandscapeResult r;
+  for (const ParameterBounds& b : job_in.tuning->parameters) {
+    if (b.name == params[0] || b.name == params[1]) continue;
+    const sim::ControllerField* f = sim::find_controller_field(b.name);
+    if (!f) continue;
+    double v = job.controller.*(f->member);
+    for (const auto& [name, value] : options.fixed)
+      if (name == b.name) v = value;
+    job.controller.*(f->member) = v;
+    r.fixed.emplace_back(b.name, v);
+  }
+  r.fixed_source = options.fixed_source;
   job.tuning->parameters = bounds;
   const TuningProblem problem(job);
   const std::size_t i0 = problem.space().names[0] == params[0] ? 0 : 1;  // problem orders by field
@@ -77,7 +111,6 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
                        static_cast<std::int64_t>(controllers.size()));
   }
 
-  LandscapeResult r;
   r.params = params;
   r.simulations = static_cast<std::int64_t>(controllers.size() * problem.scenarios());
   r.best_objective = std::numeric_limits<double>::infinity();
@@ -129,25 +162,44 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
     const double x = o.evaluation.objective / r.best_objective - 1;
     if (std::isfinite(x) && x > 0) least_excess = std::min(least_excess, x);
   }
-  const double floor_excess = std::isfinite(least_excess) ? least_excess / 10 : 1e-12;
+  // Values within the run's noise floor of the lowest are not told apart: they share the
+  // colour of the floor. Without a noise floor, the lowest point takes the colour of a tenth of
+  // the smallest positive excess.
+  const bool have_noise = options.noise_floor > 0 && std::isfinite(options.noise_floor);
+  const double floor_excess = have_noise                    ? options.noise_floor
+                              : std::isfinite(least_excess) ? least_excess / 10
+                                                            : 1e-12;
   const double most_excess = std::max(worst_objective / r.best_objective - 1, 10 * floor_excess);
   const std::string best_text = detail::format_number(r.best_objective, "%.17g");
   const std::string excess = "(($3/" + best_text + " - 1) > " +
                              detail::format_number(floor_excess, "%.17g") + " ? ($3/" + best_text +
                              " - 1) : " + detail::format_number(floor_excess, "%.17g") + ")";
+  std::string fixed_text;
+  for (const auto& [name, value] : r.fixed)
+    fixed_text +=
+        (fixed_text.empty() ? "" : ", ") + name + " = " + detail::format_number(value, "%.5g");
+  const std::string title =
+      objective_label(job_in) + " of " + job.name + " over " + params[0] + " and " + params[1] +
+      "\nlowest on the grid " + detail::format_number(r.best_objective, "%.7g") + " at " +
+      params[0] + " = " + detail::format_number(r.best[0], "%.5g") + ", " + params[1] + " = " +
+      detail::format_number(r.best[1], "%.5g") +
+      (fixed_text.empty() ? std::string()
+                          : "\n" + fixed_text + " held fixed (" + r.fixed_source + ")");
   std::ostringstream g;
   g << plot::styles() << plot::terminal(options.format, 1000, 800) << "set output "
-    << plot::gp(r.figure.filename().string()) << "\nset title "
-    << plot::gp("Objective (" + metric + ") of " + job.name + " over " + params[0] + " and " +
-                params[1] + ": lowest " + detail::format_number(r.best_objective, "%.7g"))
+    << plot::gp(r.figure.filename().string()) << "\nset title " << double_quoted(title)
     << " font ',13' noenhanced\nset logscale cb\n"
-    << plot::colour_tics(floor_excess, most_excess) << "set cblabel "
-    << plot::gp(metric + " / lowest " + metric + " - 1 (log scale; lower is better)")
-    << " noenhanced\n"
+    << plot::colour_tics(
+           floor_excess, most_excess,
+           have_noise ? "≤ noise floor " + detail::format_number(options.noise_floor, "%.2g") : "")
+    << "set cblabel "
+    << plot::gp(metric + " / lowest " + metric + " − 1 (log scale; lower is better" +
+                (have_noise ? "; within the noise floor: one colour)" : ")"))
+    << " noenhanced offset -3,0\n"
     << plot::palette() << "set xlabel " << plot::gp(label(0)) << " noenhanced\nset ylabel "
     << plot::gp(label(1)) << " noenhanced\nset xrange [" << range(0, options.n1)
     << "]\nset yrange [" << range(1, options.n2)
-    << "]\nset rmargin 14\nset key outside top center horizontal\n"
+    << "]\nset rmargin 24\nset key outside top center horizontal\n"
     << "plot 'landscape.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2") << ":"
     << excess << " with image notitle";
   if (!options.history.empty()) {
@@ -169,10 +221,43 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
     const fs::path copy = out_dir / "history.csv";
     if (fs::absolute(options.history) != fs::absolute(copy))
       fs::copy_file(options.history, copy, fs::copy_options::overwrite_existing);
-    g << ", \\\n     'history.csv' skip 1 using " << coord(0, std::to_string(c0)) << ":"
-      << coord(1, std::to_string(c1))
-      << " with linespoints lw 2.5 pt 7 ps 1.3 lc rgb 'black' title 'optimiser: best so far, by "
-         "iteration'";
+    // The path's rows, each marked on the map (its unplotted parameters at the fixed values)
+    // or not: a row elsewhere is drawn projected, and labelled so.
+    std::string path = params[0] + "," + params[1] + ",on_map\n";
+    for (std::string row; std::getline(hist, row);) {
+      if (row.empty()) continue;
+      std::vector<std::string> cells;
+      std::stringstream rs(row);
+      for (std::string c; std::getline(rs, c, ',');) cells.push_back(c);
+      const auto cell = [&](int k) {
+        return k - 1 < static_cast<int>(cells.size()) && !cells[k - 1].empty()
+                   ? std::stod(cells[k - 1])
+                   : NAN;
+      };
+      bool on = true;
+      for (const auto& [name, value] : r.fixed) {
+        const int k = col(name);
+        const double v = k <= static_cast<int>(cols.size()) ? cell(k) : NAN;
+        on = on && std::abs(v - value) <= 1e-9 * std::max(1.0, std::abs(value));
+      }
+      std::snprintf(buf, sizeof buf, "%.17g,%.17g,%d\n", cell(c0), cell(c1), on ? 1 : 0);
+      path += buf;
+      ++r.path_points;
+      r.path_on_map += on ? 1 : 0;
+    }
+    write_file_atomic(out_dir / "path.csv", path);
+    if (r.path_on_map == r.path_points) {
+      g << ", \\\n     'path.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2")
+        << " with linespoints lw 2.5 pt 7 ps 1.3 lc rgb 'black' title 'optimiser: best so far, "
+           "by iteration'";
+    } else {
+      g << ", \\\n     'path.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2")
+        << " with linespoints lw 2 dt 2 pt 6 ps 1.3 lc rgb 'black' title "
+        << plot::gp("optimiser's best so far, projected (other parameters differ)")
+        << ", \\\n     'path.csv' skip 1 using " << coord(0, "1") << ":(($3 > 0) ? "
+        << (bounds[1].scale == Scale::log ? "log10($2)" : "$2")
+        << " : 1/0) with points pt 7 ps 1.5 lc rgb 'black' title 'best so far on the map'";
+    }
   }
   g << ", \\\n     '-' using 1:2 with points pt 6 ps 3 lw 3 lc rgb 'black' title 'best grid "
        "point'\n"

@@ -60,7 +60,8 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
       const std::string file = sc[s]["trajectory"];
       if (!fs::is_regular_file(run_dir / file))
         throw InputError(run_dir.string(), "", "missing " + file);
-      series[s].push_back({c.value("label", "?"), file, c.value("role", "") == "tuned"});
+      series[s].push_back({c.value("label", "?"), file, c.value("role", "") == "tuned",
+                           c.value("controller", json::object()).value("type", "")});
     }
   }
 

@@ -15,7 +15,7 @@ namespace fs = std::filesystem;
 
 fs::path draw_study(const fs::path& dir, const std::string& title,
                     const std::string& objective_label, const std::vector<StudySeries>& series,
-                    FigureFormat format) {
+                    FigureFormat format, double best_median, double noise_floor) {
   double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
   for (const StudySeries& s : series)
     for (double v : s.objectives)
@@ -58,11 +58,23 @@ fs::path draw_study(const fs::path& dir, const std::string& title,
     if (!std::isfinite(m)) continue;
     g << static_cast<double>(i) - 0.35 << "," << detail::format_number(m, "%.17g") << ",0.7,0\n";
   }
-  g << "EOD\nplot $runs using 1:2 with points pt 7 ps 1.1 lc rgb '" << plot::viridis(0.45)
+  // The noise band: from the best median to noise_floor above it.
+  const bool band = best_median > 0 && noise_floor > 0 && std::isfinite(noise_floor);
+  g << "EOD\n";
+  if (band)
+    g << "set object 1 rect from graph 0, first " << detail::format_number(best_median, "%.17g")
+      << " to graph 1, first " << detail::format_number(best_median * (1 + noise_floor), "%.17g")
+      << " behind fillcolor rgb 'gray70' fillstyle solid 0.5 noborder\n";
+  g << "plot $runs using 1:2 with points pt 7 ps 1.1 lc rgb '" << plot::viridis(0.45)
     << "' title 'best "
        "objective of one run (one point per seed)', \\\n"
     << "     $medians using 1:2:3:4 with vectors nohead lw 3 lc rgb '" << plot::viridis(0)
-    << "' title 'median'\n";
+    << "' title 'median'";
+  if (band)
+    g << ", \\\n     NaN with boxes fillcolor rgb 'gray70' fillstyle solid 0.5 title "
+      << plot::gp("within the noise floor (" + detail::format_number(100 * noise_floor, "%.2g") +
+                  " %) of the best median: not told apart");
+  g << "\n";
   write_file_atomic(dir / "study.gp", g.str());
   run_gnuplot(dir, "study.gp");
   return figure;

@@ -39,6 +39,40 @@ json named(const std::vector<std::string>& names, const Decision& x) {
 
 }  // namespace
 
+std::string objective_label(const Job& job) {
+  const ObjectiveConfig& o = job.objective;
+  std::string metric = sim::to_string(o.metric);
+  for (char& c : metric) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  const auto seconds = [](double t) { return detail::format_number(t, "%.6g") + " s"; };
+  std::string window;
+  if (o.window_from == WindowFrom::first_fault)
+    window =
+        (o.window.t0 == 0 ? std::string("first fault") : "first fault + " + seconds(o.window.t0)) +
+        ", " + (std::isfinite(o.window.t1) ? "+" + seconds(o.window.t1) : std::string("end"));
+  else
+    window = seconds(o.window.t0) + ", " +
+             (std::isfinite(o.window.t1) ? seconds(o.window.t1) : std::string("end"));
+  const std::string value = metric + "[" + window + "]";
+  const std::size_t n = job.scenario_count();
+  if (n <= 1) return value;
+  std::string aggregate;
+  switch (o.aggregate) {
+    case Aggregate::mean:
+      aggregate = "mean";
+      break;
+    case Aggregate::max:
+      aggregate = "max";
+      break;
+    case Aggregate::quantile:
+      aggregate = "quantile" + detail::format_number(o.q, "%.3g");
+      break;
+    case Aggregate::cvar:
+      aggregate = "CVaR" + detail::format_number(o.alpha, "%.3g");
+      break;
+  }
+  return aggregate + " of " + value + " over " + std::to_string(n) + " scenarios";
+}
+
 std::string label_slug(const std::string& label) {
   std::string slug;
   for (char c : label) {
@@ -177,6 +211,7 @@ json comparison_document(const TuningOutcome& r) {
   json doc;
   doc["job"] = r.job.name;
   doc["objective"] = to_json(r.job.objective);
+  doc["objective"]["label"] = objective_label(r.job);
   doc["scenarios"] = json::array();
   for (const sim::Scenario& s : r.job.scenarios) doc["scenarios"].push_back(s.name);
   doc["controllers"] = json::array();
@@ -216,20 +251,17 @@ std::string comparison_markdown(const TuningOutcome& r) {
     o << " " << name << " = " << detail::format_number(value, "%.6g");
   o << " (fitness J = " << detail::format_number(r.optimization.best_fitness, "%.6g") << ", "
     << r.optimization.evaluations << " evaluations, seed " << r.seed << ").\n\n";
-  o << "Objective: " << sim::to_string(job.objective.metric) << " over ["
+  o << "Objective: " << objective_label(job) << " (window ["
     << detail::format_number(job.objective.window.t0) << ", "
     << (std::isfinite(job.objective.window.t1) ? detail::format_number(job.objective.window.t1)
                                                : std::string("end"))
     << ") s"
     << (job.objective.window_from == WindowFrom::first_fault ? " from each scenario's first fault"
-                                                             : "")
-    << ", " << to_string(job.objective.aggregate)
-    << (job.objective.aggregate == Aggregate::quantile
-            ? " (q = " + detail::format_number(job.objective.q, "%.3g") + ")"
-        : job.objective.aggregate == Aggregate::cvar
-            ? " (alpha = " + detail::format_number(job.objective.alpha, "%.3g") + ")"
+                                                             : " from each scenario's start")
+    << (job.scenario_count() > 1
+            ? std::string(", ") + to_string(job.objective.aggregate) + " over scenarios"
             : std::string())
-    << " over scenarios.\n";
+    << ").\n";
   if (const std::string nf = noise_floor_sentence(r); !nf.empty()) o << "\n" << nf << "\n";
   if (job.ensemble) {
     o << "\n## All " << r.scenarios << " scenarios (" << r.listed_scenarios << " listed, "
@@ -238,7 +270,8 @@ std::string comparison_markdown(const TuningOutcome& r) {
       << r.unrecoverable << " cannot be controlled by any gains once their faults have started"
       << (r.left_out > 0 ? ", and the objective leaves them out" : "") << ". Values are "
       << sim::to_string(job.objective.metric) << " per scenario; quantiles by nearest rank.\n\n"
-      << "| controller | objective | mean | median | p90 | max | CVaR | diverged |\n"
+      << "| controller | " << objective_label(job) << " | mean | median | p90 | max | CVaR"
+      << detail::format_number(job.objective.alpha, "%.3g") << " | diverged |\n"
       << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const ComparedController& c : r.comparison) {
       const Summary& m = c.summary;

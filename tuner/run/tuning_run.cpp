@@ -104,7 +104,6 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
 
   for (std::size_t j = 0; j < problem.space().names.size(); ++j)
     r.tuned.emplace_back(problem.space().names[j], r.optimization.best[j]);
-  r.warnings = bound_warnings(job, r.optimization.best);
 
   std::vector<sim::ControllerConfig> controllers;
   for (const CompareEntry& c : job.compare) {
@@ -114,7 +113,7 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
   const std::string name = display_name(job.controller.type);
   r.comparison.push_back({name + " (job)", "baseline", job.controller, {}, {}});
   controllers.push_back(job.controller);
-  r.comparison.push_back({"optimal " + name, "tuned", r.tuned_controller, {}, {}});
+  r.comparison.push_back({"tuned " + name, "tuned", r.tuned_controller, {}, {}});
   controllers.push_back(r.tuned_controller);
 
   std::vector<CandidateOutcome> outcomes = problem.evaluate(
@@ -142,6 +141,24 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
   nf.relative_spread =
       (nf.objective_max - nf.objective_min) / r.best().outcome.evaluation.objective;
   r.noise_floor = nf;
+  // A parameter on its bound: does the objective change there by more than the noise? The tuned
+  // controller with that parameter moved 1 % of its range inward says.
+  std::vector<std::optional<double>> inward(r.optimization.best.size());
+  for (std::size_t j = 0; j < job.tuning->parameters.size() && j < inward.size(); ++j) {
+    const std::optional<double> moved =
+        inward_value(job.tuning->parameters[j], r.optimization.best[j]);
+    const sim::ControllerField* f = sim::find_controller_field(job.tuning->parameters[j].name);
+    if (!moved || !f) continue;
+    sim::ControllerConfig c = r.tuned_controller;
+    c.*(f->member) = *moved;
+    const double v = problem.evaluate(std::span<const sim::ControllerConfig>(&c, 1), evaluator)[0]
+                         .evaluation.objective;
+    r.simulations += static_cast<std::int64_t>(problem.scenarios());
+    const double best = r.best().outcome.evaluation.objective;
+    inward[j] = std::abs(v - best) / best;
+  }
+  r.warnings = bound_warnings(job, r.optimization.best, inward, nf.relative_spread);
+  for (std::string& w : comparison_warnings(r)) r.warnings.push_back(std::move(w));
 }
 
 }  // namespace
@@ -208,6 +225,52 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   return r;
 }
 
+std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
+  std::vector<std::string> out;
+  if (r.comparison.size() < 2) return out;
+  const ComparedController& tuned = r.best();
+  const double best = tuned.outcome.evaluation.objective;
+  const double spread = r.noise_floor ? r.noise_floor->relative_spread : 0.0;
+  const std::string metric = sim::to_string(r.job.objective.metric);
+  char buf[600];
+  // "Tuned" is the best of one controller type within the search bounds, not the best
+  // controller: a compared controller that scores lower says so.
+  for (const ComparedController& c : r.comparison) {
+    if (c.role != "compare") continue;
+    const double v = c.outcome.evaluation.objective;
+    if (!(v < best) || !std::isfinite(best)) continue;
+    const double margin = (best - v) / best;
+    std::snprintf(buf, sizeof buf,
+                  "%s (compared) scores %s = %.4g, %.3g %% below the %s's %.4g (%s the noise "
+                  "floor of %.2g %%): the tuned gains are the best found for %s within the "
+                  "search bounds, not the best controller of the comparison.",
+                  c.label.c_str(), metric.c_str(), v, 100 * margin, tuned.label.c_str(), best,
+                  margin > spread ? "beyond" : "inside", 100 * spread,
+                  display_name(r.job.controller.type).c_str());
+    out.emplace_back(buf);
+  }
+  // Until the objective can price control activity: gains that buy their score with much more
+  // chattering than the job's own are named (on the listed scenarios, summed).
+  const ComparedController& base = r.baseline();
+  double tv_tuned = 0.0, tv_base = 0.0;
+  for (std::size_t i = 0; i < r.listed_scenarios; ++i) {
+    if (i < tuned.outcome.evaluation.scenarios.size())
+      tv_tuned += tuned.outcome.evaluation.scenarios[i].control_tv;
+    if (i < base.outcome.evaluation.scenarios.size())
+      tv_base += base.outcome.evaluation.scenarios[i].control_tv;
+  }
+  if (std::isfinite(tv_base) && tv_base > 0 && tv_tuned > kControlTvWarningRatio * tv_base) {
+    std::snprintf(buf, sizeof buf,
+                  "The tuned gains raise the control TV (sum of |u_k - u_{k-1}|, a measure of "
+                  "chattering) %.3g times over the job's own gains on the listed scenario%s "
+                  "(%.4g against %.4g): the objective does not price control activity, so check "
+                  "actuator wear and bandwidth before using them.",
+                  tv_tuned / tv_base, r.listed_scenarios == 1 ? "" : "s", tv_tuned, tv_base);
+    out.emplace_back(buf);
+  }
+  return out;
+}
+
 std::int64_t comparison_record_every(const Job& job, std::int64_t max_rows) {
   std::int64_t every = std::max<std::int64_t>(
       1, std::llround(kComparisonRecordInterval / job.scenarios.front().sample_time));
@@ -218,7 +281,34 @@ std::int64_t comparison_record_every(const Job& job, std::int64_t max_rows) {
   return every;
 }
 
+namespace {
+
+// Within 0.1 % of the search range (in ln x on a log scale) from a bound.
+bool near(const ParameterBounds& b, double x, bool upper) {
+  const bool log = b.scale == Scale::log;
+  const auto c = [&](double v) { return log ? sim::math::log(v) : v; };
+  const double tol = 1e-3 * (c(b.upper) - c(b.lower));
+  return upper ? c(b.upper) - c(x) <= tol : c(x) - c(b.lower) <= tol;
+}
+
+}  // namespace
+
+std::optional<double> inward_value(const ParameterBounds& b, double x) {
+  const bool at_upper = near(b, x, true), at_lower = near(b, x, false);
+  if (at_upper == at_lower) return std::nullopt;  // at neither (or a range too narrow to say)
+  if (b.scale == Scale::log)
+    return x * sim::math::exp((at_upper ? -0.01 : 0.01) *
+                              (sim::math::log(b.upper) - sim::math::log(b.lower)));
+  return x + (at_upper ? -0.01 : 0.01) * (b.upper - b.lower);
+}
+
 std::vector<std::string> bound_warnings(const Job& job, const Decision& x) {
+  return bound_warnings(job, x, {}, 0.0);
+}
+
+std::vector<std::string> bound_warnings(const Job& job, const Decision& x,
+                                        const std::vector<std::optional<double>>& inward_change,
+                                        double noise_floor) {
   std::vector<std::string> out;
   if (!job.tuning) return out;
   const std::vector<ParameterBounds>& ps = job.tuning->parameters;
@@ -243,6 +333,26 @@ std::vector<std::string> bound_warnings(const Job& job, const Decision& x) {
                   can_widen ? "; the optimum may lie beyond it: widen tuning.parameters." : "");
     std::string w = buf;
     w += can_widen ? b.name + " and run again." : ", which is the field's own limit.";
+    if (j < inward_change.size() && inward_change[j]) {
+      const double change = *inward_change[j];
+      const bool flat = change <= noise_floor;
+      std::snprintf(buf, sizeof buf,
+                    "%s = %.6g ended at its %s bound %.6g (within 0.1 %% of the range), where the "
+                    "objective is flat within the noise: 1 %% of the range inward changes it by "
+                    "%.2g %%, inside the noise floor of %.2g %%: the objective cannot tell %s "
+                    "values apart there, so widening the bound is unlikely to help.",
+                    b.name.c_str(), x[j], at_upper ? "upper" : "lower", bound, 100 * change,
+                    100 * noise_floor, b.name.c_str());
+      if (flat && can_widen)
+        w = buf;
+      else if (!flat) {
+        std::snprintf(buf, sizeof buf,
+                      " (1 %% of the range inward changes the objective by %.2g %%, beyond the "
+                      "noise floor of %.2g %%.)",
+                      100 * change, 100 * noise_floor);
+        w += buf;
+      }
+    }
     out.push_back(std::move(w));
   }
   return out;

@@ -15,6 +15,12 @@ namespace ftc::tune {
 
 inline constexpr const char* kGainsSchema = "ftctune.gains/1";
 
+// What the objective's value is, in words: the metric, the window and the aggregate, e.g.
+// "CVaR0.9 of ISE[first fault, +8 s] over 101 scenarios" or "ISE[0 s, 30 s]" (one scenario).
+// Every place that shows the value labels it with this (run's summary, comparison.md,
+// report.html, the figures).
+std::string objective_label(const Job& job);
+
 // The file of a compared controller's trajectory, relative to the run directory.
 std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std::size_t scenario);
 

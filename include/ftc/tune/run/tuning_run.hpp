@@ -81,7 +81,8 @@ struct TuningOutcome {
   std::vector<ComparedController> comparison;  // compare entries, then baseline, then tuned
   std::optional<NoiseFloor> noise_floor;       // with the comparison
   // Things a user should act on, one sentence each: a tuned parameter that ended within 0.1 % of
-  // its search range from a bound (the optimum may lie beyond it).
+  // its search range from a bound (the optimum may lie beyond it); a compared controller that
+  // scores better; a much larger control TV than the job's own gains' (comparison_warnings).
   std::vector<std::string> warnings;
   // What the problem scored: its scenarios (listed, then members) and which it left out.
   std::size_t scenarios = 0, listed_scenarios = 0;
@@ -124,6 +125,21 @@ std::string noise_floor_sentence(const TuningOutcome& r);
 // The warnings of tuned values at a bound: within 0.1 % of the search range (in ln x for a
 // log-scale parameter) from the lower or upper bound.
 std::vector<std::string> bound_warnings(const Job& job, const Decision& values);
+// The same, told per parameter on a bound how much the objective changes (relative) when that
+// parameter moves 1 % of its range inward (inward_value): within the noise floor the warning
+// says the objective is flat there instead of advising to widen the bound.
+std::vector<std::string> bound_warnings(const Job& job, const Decision& values,
+                                        const std::vector<std::optional<double>>& inward_change,
+                                        double noise_floor);
+// A value 1 % of the search range (in ln x on a log scale) inward from the bound `x` lies on;
+// nullopt when x is on neither bound.
+std::optional<double> inward_value(const ParameterBounds& bounds, double x);
+
+// The warnings of a finished comparison: a compared controller whose objective is lower than the
+// tuned one's, and tuned gains whose control TV on the listed scenarios exceeds
+// kControlTvWarningRatio times the job's own gains'.
+inline constexpr double kControlTvWarningRatio = 3.0;
+std::vector<std::string> comparison_warnings(const TuningOutcome& r);
 
 std::string canonical_job_sha256(const Job& job);
 std::string display_name(sim::ControllerType t);  // "PI-FOSMC", ...
