@@ -320,7 +320,7 @@ TEST(Cli, LandscapeHoldsTheOtherParametersAtTheTunedValues) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find(want), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("lowest on the grid: ISE[0 s, 0.05 s] = "), std::string::npos) << r.out;
-  r = in_dir("landscape job.json --grid 2x2 --params Kp,Ki --at-job-values");
+  r = in_dir("landscape job.json --grid 2x2 --params Kp,Ki --at-job-values --force");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("  switching_gain held fixed at 20 (the job's value)"), std::string::npos)
       << r.out;

@@ -19,7 +19,8 @@ import urllib.request
 
 import pytest
 from selenium import webdriver
-from selenium.common.exceptions import NoAlertPresentException
+from selenium.common.exceptions import (NoAlertPresentException, NoSuchElementException,
+                                        StaleElementReferenceException)
 from selenium.webdriver.chrome.service import Service
 from selenium.webdriver.common.by import By
 from selenium.webdriver.support import expected_conditions as EC
@@ -103,7 +104,19 @@ def browser():
 
 
 def wait(driver, condition, timeout=30):
-    return WebDriverWait(driver, timeout, poll_frequency=0.05).until(lambda d: condition(d))
+    # The page rebuilds its tables and header on every live update, so an element found a moment
+    # ago may be gone: such a condition is tried again, not failed.
+    return WebDriverWait(driver, timeout, poll_frequency=0.05,
+                         ignored_exceptions=(StaleElementReferenceException,
+                                             NoSuchElementException)).until(
+                                                 lambda d: condition(d))
+
+
+def texts(driver, css):
+    """The text of every element matching css, read in the page in one step (element handles go
+    stale when a live update rebuilds a table)."""
+    return driver.execute_script(
+        "return Array.from(document.querySelectorAll(arguments[0])).map(e => e.textContent);", css)
 
 
 def set_job_text(driver, text):
@@ -143,20 +156,24 @@ def test_submitting_table1_through_the_page(server, browser):
          == evaluations)
     wait(browser, lambda d: d.find_element(By.ID, "convergence").get_attribute("data-points")
          == str(done["progress"]["iteration"] + 1))
-    assert int(browser.find_element(By.ID, "scatter").get_attribute("data-points")) == evaluations
+    wait(browser, lambda d: d.find_element(By.ID, "scatter").get_attribute("data-points")
+         == str(evaluations))
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table tbody tr"))
-    assert "noise" in browser.find_element(By.CSS_SELECTOR, ".noise-floor").text
+    wait(browser, lambda d: "noise" in d.find_element(By.CSS_SELECTOR, ".noise-floor").text)
     browser.execute_script("window.scrollTo(0, 0)")
     screenshot(browser, "dashboard-job.png")
     # Sorting by objective puts the lowest first.
-    header = [h for h in browser.find_elements(By.CSS_SELECTOR, "#trials-table th")
-              if h.text.strip().startswith("objective")][0]
-    header.click()
-    column = [h.text.strip() for h in
-              browser.find_elements(By.CSS_SELECTOR, "#trials-table th")].index("objective")
-    cells = browser.find_elements(By.CSS_SELECTOR,
-                                  "#trials-table tbody tr td:nth-child(%d)" % (column + 1))
-    values = [float(c.text) for c in cells[:20]]
+    def click_objective(d):
+        for h in d.find_elements(By.CSS_SELECTOR, "#trials-table th"):
+            if h.text.strip().startswith("objective"):
+                h.click()
+                return True
+        return False
+    wait(browser, click_objective)
+    heads = [h.strip() for h in texts(browser, "#trials-table th")]
+    column = [i for i, h in enumerate(heads) if h.startswith("objective")][0]
+    values = [float(c) for c in
+              texts(browser, "#trials-table tbody tr td:nth-child(%d)" % (column + 1))[:20]]
     assert values == sorted(values)
 
 
@@ -209,7 +226,7 @@ def test_a_bad_job_shows_its_json_path(server, browser):
     browser.get(server.url + "/#/submit")
     set_job_text(browser, json.dumps(job))
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, ".json-error"))
-    paths = [e.text for e in browser.find_elements(By.CSS_SELECTOR, ".json-error code.path")]
+    paths = [t.strip() for t in texts(browser, ".json-error code.path")]
     assert "/scenarios/0/duration" in paths
     assert browser.find_element(By.ID, "submit-job").get_attribute("disabled") is not None
     set_job_text(browser, "{ not json")
@@ -242,10 +259,10 @@ def test_a_hostile_compare_label_stays_text(server, browser):
     assert server.wait_done(job_id)["status"] == "succeeded"
     open_job(browser, server, job_id)
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table td.label"))
-    labels = [c.text for c in browser.find_elements(By.CSS_SELECTOR, "#comparison-table td.label")]
+    labels = [t.strip() for t in texts(browser, "#comparison-table td.label")]
     assert HOSTILE in labels
-    assert not [i for i in browser.find_elements(By.TAG_NAME, "img")
-                if (i.get_attribute("src") or "").endswith("/x")]
+    sources = browser.execute_script("return Array.from(document.images).map(i => i.src || '');")
+    assert not [src for src in sources if src.endswith("/x")]
     with pytest.raises(NoAlertPresentException):
         browser.switch_to.alert.text
 
