@@ -1,0 +1,126 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "ftc/sim/metrics.hpp"
+#include "metrics_accumulator.hpp"
+
+namespace {
+
+using ftc::sim::ErrorIntegrals;
+using ftc::sim::Metrics;
+using ftc::sim::MetricsAccumulator;
+using ftc::sim::StateOf;
+using ftc::sim::Vec;
+using ftc::sim::Window;
+
+// A hand-made trajectory of a plant with 2 axes and 2 actuators, Ts = 0.5 s, four samples
+// (t = 0, 0.5, 1, 1.5), every value a small dyadic fraction so that each sum below is exact:
+//   k  t    e = X1         u_d
+//   0  0    ( 1, -2)       ( 3,  4)
+//   1  0.5  ( 0.5, 0.5)    ( 0,  0)
+//   2  1    (-1, 0)        ( 0, -2)
+//   3  1.5  ( 0, 0.25)     (-1, -2)
+struct Sample {
+  double t;
+  double e[2];
+  double u[2];
+};
+const Sample kTrajectory[] = {
+    {0.0, {1.0, -2.0}, {3.0, 4.0}},
+    {0.5, {0.5, 0.5}, {0.0, 0.0}},
+    {1.0, {-1.0, 0.0}, {0.0, -2.0}},
+    {1.5, {0.0, 0.25}, {-1.0, -2.0}},
+};
+
+Metrics accumulate(Window window, std::vector<Window> extra, std::vector<double> onsets) {
+  MetricsAccumulator<2, 2> acc(0.5, window, std::move(extra), std::move(onsets));
+  for (const Sample& s : kTrajectory) {
+    StateOf<2> x;
+    x << s.e[0], s.e[1], 7.0, -7.0;  // X2 takes no part in any metric
+    Vec<2> u;
+    u << s.u[0], s.u[1];
+    acc.sample(s.t, x, u);
+  }
+  return acc.result();
+}
+
+}  // namespace
+
+TEST(Metrics, OneLaneAccumulatorMatchesHandComputedTrajectory) {
+  // ‖e‖² per sample: 5, 0.5, 1, 0.0625; Σ|e_i|: 3, 1, 1, 0.25.
+  // Whole run: ise = 0.5 (5 + 0.5 + 1 + 0.0625) = 3.28125, iae = 0.5 (3 + 1 + 1 + 0.25) = 2.625,
+  //            itae = 0.5 (0·3 + 0.5·1 + 1·1 + 1.5·0.25) = 0.9375.
+  // Window [0.5, 1.5): samples 1, 2: ise = 0.5 (0.5 + 1) = 0.75, iae = 0.5 (1 + 1) = 1,
+  //            itae = 0.5 (0.5 + 1) = 0.75.
+  // max |u_d| = 4; total variation ‖(−3,−4)‖ + ‖(0,−2)‖ + ‖(−1,0)‖ = 5 + 2 + 1 = 8.
+  // Peak ‖e‖ from t = 0.75 on: samples 2, 3: max(1, 0.25) = 1; from t = 2: never (NaN);
+  // from t = 0: sqrt(5).
+  const Metrics m = accumulate(Window{}, {Window{0.5, 1.5}}, {0.75, 2.0, 0.0});
+  EXPECT_EQ(m.errors.ise, 3.28125);
+  EXPECT_EQ(m.errors.iae, 2.625);
+  EXPECT_EQ(m.errors.itae, 0.9375);
+  ASSERT_EQ(m.extra.size(), 1u);
+  EXPECT_EQ(m.extra[0].ise, 0.75);
+  EXPECT_EQ(m.extra[0].iae, 1.0);
+  EXPECT_EQ(m.extra[0].itae, 0.75);
+  EXPECT_EQ(m.max_abs_u, 4.0);
+  EXPECT_EQ(m.control_tv, 8.0);
+  ASSERT_EQ(m.peak_error_after_fault.size(), 3u);
+  EXPECT_EQ(m.peak_error_after_fault[0], 1.0);
+  EXPECT_TRUE(std::isnan(m.peak_error_after_fault[1]));
+  EXPECT_EQ(m.peak_error_after_fault[2], std::sqrt(5.0));
+  EXPECT_EQ(m.objective(ftc::sim::Metric::ise), 3.28125);
+  EXPECT_FALSE(m.diverged);
+}
+
+TEST(Metrics, WindowIsHalfOpen) {
+  // [1, 1.5) holds sample 2 only (t = 1), not sample 3 (t = 1.5): ise = 0.5 · 1, itae = 0.5 · 1.
+  const Metrics m = accumulate(Window{1.0, 1.5}, {}, {});
+  EXPECT_EQ(m.errors.ise, 0.5);
+  EXPECT_EQ(m.errors.iae, 0.5);
+  EXPECT_EQ(m.errors.itae, 0.5);
+  EXPECT_TRUE(m.extra.empty());
+}
+
+TEST(Metrics, DivergedRunHasInfiniteErrorIntegralsInEveryWindow) {
+  MetricsAccumulator<2, 2> acc(0.5, Window{}, {Window{0.0, 1.0}}, {});
+  StateOf<2> x = StateOf<2>::Zero();
+  x[0] = 1.0;
+  acc.sample(0.0, x, Vec<2>::Ones());
+  acc.mark_diverged(0.5);
+  const Metrics& m = acc.result();
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(m.diverged);
+  EXPECT_EQ(m.diverged_at, 0.5);
+  EXPECT_EQ(m.errors.ise, inf);
+  EXPECT_EQ(m.errors.itae, inf);
+  EXPECT_EQ(m.extra[0].iae, inf);
+  EXPECT_EQ(m.max_abs_u, 1.0);  // what was reached before
+}
+
+TEST(Metrics, LaneThatStoppedCountingKeepsItsSums) {
+  // The kernel's accumulators with a false mask (a lane that has diverged) change nothing;
+  // with a true one they add as the one-lane run does.
+  namespace lane = ftc::sim::lane;
+  const double x[2] = {3.0, -4.0}, u[2] = {-6.0, 8.0}, u_prev[2] = {0.0, 0.0};
+  const lane::ErrorNorms<double> e = lane::error_norms<2, double>(x);
+  EXPECT_EQ(e.sq, 25.0);
+  EXPECT_EQ(e.abs, 7.0);
+  const lane::ErrorTerms<double> d = lane::error_terms(0.5, 0.5 * 2.0, e);
+  for (const bool counting : {false, true}) {
+    double ise = 1.0, iae = 2.0, itae = 3.0, max_abs_u = 0.5, tv = 0.25, peak = 1.0;
+    lane::add_error_terms<double>(counting, d, ise, iae, itae);
+    lane::add_max_abs_u<2, double>(counting, u, max_abs_u);
+    lane::add_control_tv<2, double>(counting, u, u_prev, tv);
+    lane::add_peak<double>(counting, std::sqrt(e.sq), peak);
+    EXPECT_EQ(ise, counting ? 13.5 : 1.0);
+    EXPECT_EQ(iae, counting ? 5.5 : 2.0);
+    EXPECT_EQ(itae, counting ? 10.0 : 3.0);
+    EXPECT_EQ(max_abs_u, counting ? 8.0 : 0.5);
+    EXPECT_EQ(tv, counting ? 10.25 : 0.25);
+    EXPECT_EQ(peak, counting ? 5.0 : 1.0);
+  }
+}
