@@ -1,10 +1,15 @@
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <stdexcept>
 #include <vector>
 
 #include "ftc/sim/metrics.hpp"
+#include "ftc/sim/metrics_record.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "metrics_accumulator.hpp"
 
 namespace {
@@ -123,4 +128,111 @@ TEST(Metrics, LaneThatStoppedCountingKeepsItsSums) {
     EXPECT_EQ(tv, counting ? 10.25 : 0.25);
     EXPECT_EQ(peak, counting ? 5.0 : 1.0);
   }
+}
+
+namespace {
+
+// A record with every kind of value: extra windows, faults, an unreached peak (NaN), a window
+// that never ends (+inf).
+Metrics sample_record() {
+  Metrics m = accumulate(Window{0.5}, {Window{0.0, 1.0}, Window{1.0, 2.0}}, {0.75, 2.0});
+  m.diverged = true;
+  m.diverged_at = 1.25;
+  return m;
+}
+
+std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v); }
+
+void expect_same_record(const Metrics& a, const Metrics& b) {
+  using ftc::sim::MetricScope;
+  EXPECT_EQ(bits(a.window.t0), bits(b.window.t0));
+  EXPECT_EQ(bits(a.window.t1), bits(b.window.t1));
+  ASSERT_EQ(a.extra.size(), b.extra.size());
+  ASSERT_EQ(a.extra_windows.size(), b.extra_windows.size());
+  for (std::size_t i = 0; i < a.extra_windows.size(); ++i) {
+    EXPECT_EQ(bits(a.extra_windows[i].t0), bits(b.extra_windows[i].t0));
+    EXPECT_EQ(bits(a.extra_windows[i].t1), bits(b.extra_windows[i].t1));
+  }
+  for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields) {
+    SCOPED_TRACE(std::string(f.name));
+    switch (f.scope) {
+      case MetricScope::window:
+        EXPECT_EQ(bits(a.errors.*f.in_window), bits(b.errors.*f.in_window));
+        for (std::size_t i = 0; i < a.extra.size(); ++i)
+          EXPECT_EQ(bits(a.extra[i].*f.in_window), bits(b.extra[i].*f.in_window));
+        break;
+      case MetricScope::run:
+        EXPECT_EQ(bits(a.*f.per_run), bits(b.*f.per_run));
+        break;
+      case MetricScope::fault:
+        ASSERT_EQ((a.*f.per_fault).size(), (b.*f.per_fault).size());
+        for (std::size_t i = 0; i < (a.*f.per_fault).size(); ++i)
+          EXPECT_EQ(bits((a.*f.per_fault)[i]), bits((b.*f.per_fault)[i]));
+        break;
+    }
+  }
+  EXPECT_EQ(a.diverged, b.diverged);
+  EXPECT_EQ(bits(a.diverged_at), bits(b.diverged_at));
+}
+
+}  // namespace
+
+TEST(Metrics, RecordRoundTripsThroughTheWireFormat) {
+  const Metrics m = sample_record();
+  std::vector<char> bytes = {'x'};  // a record inside a message
+  ftc::sim::append_metrics_wire(bytes, m);
+  const std::size_t end = bytes.size();
+  bytes.push_back('y');
+  std::size_t pos = 1;
+  const Metrics back = ftc::sim::read_metrics_wire(bytes, pos);
+  EXPECT_EQ(pos, end);
+  expect_same_record(m, back);
+  // Every prefix of the record is a malformed message, not a read past its end.
+  for (std::size_t n = 1; n < end; ++n) {
+    const std::vector<char> cut(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n));
+    std::size_t p = 1;
+    EXPECT_THROW(ftc::sim::read_metrics_wire(cut, p), std::runtime_error) << n;
+  }
+}
+
+TEST(Metrics, RecordRoundTripsThroughJson) {
+  // metrics_json writes every field of the record under its name (non-finite values as null),
+  // the extra windows' fields in "segments"; read back by the same description it gives the
+  // record.
+  using ftc::sim::MetricScope;
+  const Metrics m = sample_record();
+  const nlohmann::json j = nlohmann::json::parse(ftc::tune::metrics_json(m).dump());
+  const auto number = [](const nlohmann::json& v) {
+    return v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>();
+  };
+  Metrics back;
+  back.window = {j.at("window")[0].get<double>(), number(j.at("window")[1])};
+  back.extra.resize(j.at("segments").size());
+  for (const nlohmann::json& s : j.at("segments"))
+    back.extra_windows.push_back({s.at("window")[0].get<double>(), number(s.at("window")[1])});
+  for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields) {
+    const std::string name(f.name);
+    switch (f.scope) {
+      case MetricScope::window:
+        back.errors.*f.in_window = number(j.at(name));
+        for (std::size_t i = 0; i < back.extra.size(); ++i)
+          back.extra[i].*f.in_window = number(j.at("segments")[i].at(name));
+        break;
+      case MetricScope::run:
+        back.*f.per_run = number(j.at(name));
+        break;
+      case MetricScope::fault:
+        for (const nlohmann::json& v : j.at(name)) (back.*f.per_fault).push_back(number(v));
+        break;
+    }
+  }
+  back.diverged = j.at("diverged").get<bool>();
+  back.diverged_at = j.at("diverged_at").get<double>();
+  // The window's end +inf is written as null: read back as NaN, compared as +inf.
+  EXPECT_EQ(m.window.t1, std::numeric_limits<double>::infinity());
+  EXPECT_TRUE(j.at("window")[1].is_null());
+  back.window.t1 = m.window.t1;
+  expect_same_record(m, back);
+  EXPECT_EQ(j.at("segments").size(), 2u);
+  EXPECT_EQ(j.at("ise"), m.errors.ise);
 }

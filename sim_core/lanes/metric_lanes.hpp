@@ -6,8 +6,8 @@
 // Both runs call these functions in the same order, so a lane gets the bits of the one-lane run.
 //
 // Adding a metric: its accumulator here, called from MetricsAccumulator::sample and from the
-// kernel's sample step, its member in Metrics and PackFinal, and (the record has no single
-// description yet) its field in each writer: docs/architecture.md lists them.
+// kernel's sample step, its member in Metrics and PackFinal, its entry in the metrics record
+// (ftc/sim/metrics_record.hpp); docs/architecture.md lists the writers still done by hand.
 #include "lanes/lane.hpp"
 
 namespace ftc::sim::lane {

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "ftc/runtime/controller_json.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/version.hpp"
@@ -391,24 +392,33 @@ namespace {
 json window_json(const sim::Window& w) { return json::array({w.t0, json_number(w.t1)}); }
 }  // namespace
 
+// From the record's description (ftc/sim/metrics_record.hpp): each field under its name, the
+// window fields of the extra windows in "segments".
 json metrics_json(const sim::Metrics& m) {
   json j;
   j["window"] = window_json(m.window);
-  j["ise"] = json_number(m.errors.ise);
-  j["iae"] = json_number(m.errors.iae);
-  j["itae"] = json_number(m.errors.itae);
-  j["max_abs_u"] = m.max_abs_u;
-  j["control_tv"] = m.control_tv;
-  j["peak_error_after_fault"] = json::array();
-  for (double v : m.peak_error_after_fault) j["peak_error_after_fault"].push_back(json_number(v));
-  j["diverged"] = m.diverged;
-  if (m.diverged) j["diverged_at"] = m.diverged_at;
   j["segments"] = json::array();
   for (std::size_t i = 0; i < m.extra.size(); ++i)
-    j["segments"].push_back({{"window", window_json(m.extra_windows[i])},
-                             {"ise", json_number(m.extra[i].ise)},
-                             {"iae", json_number(m.extra[i].iae)},
-                             {"itae", json_number(m.extra[i].itae)}});
+    j["segments"].push_back({{"window", window_json(m.extra_windows[i])}});
+  for (const sim::MetricField& f : sim::kMetricFields) {
+    const std::string name(f.name);
+    switch (f.scope) {
+      case sim::MetricScope::window:
+        j[name] = json_number(m.errors.*f.in_window);
+        for (std::size_t i = 0; i < m.extra.size(); ++i)
+          j["segments"][i][name] = json_number(m.extra[i].*f.in_window);
+        break;
+      case sim::MetricScope::run:
+        j[name] = json_number(m.*f.per_run);
+        break;
+      case sim::MetricScope::fault:
+        j[name] = json::array();
+        for (double v : m.*f.per_fault) j[name].push_back(json_number(v));
+        break;
+    }
+  }
+  j["diverged"] = m.diverged;
+  if (m.diverged) j["diverged_at"] = m.diverged_at;
   return j;
 }
 
