@@ -5,11 +5,13 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "ftc/sim/metrics.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "io/text.hpp"
 #include "metrics_accumulator.hpp"
 
 namespace {
@@ -235,4 +237,73 @@ TEST(Metrics, RecordRoundTripsThroughJson) {
   expect_same_record(m, back);
   EXPECT_EQ(j.at("segments").size(), 2u);
   EXPECT_EQ(j.at("ise"), m.errors.ise);
+}
+
+namespace {
+
+// The cells of a Markdown table row, trimmed.
+std::vector<std::string> cells(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cell;
+  for (std::size_t i = 1; i < line.size(); ++i) {
+    if (line[i] == '|' && line[i - 1] != '\\') {
+      const std::size_t a = cell.find_first_not_of(' '), b = cell.find_last_not_of(' ');
+      out.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
+      cell.clear();
+    } else {
+      cell += line[i];
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(Metrics, RecordRoundTripsThroughMarkdown) {
+  // comparison.md's table: read back by column name, each cell is the field's value as
+  // format_number writes it (4 significant digits), every field of the description has its
+  // columns, and a diverged row is marked.
+  using ftc::sim::MetricScope;
+  const Metrics m = sample_record();
+  const std::string table = ftc::tune::metrics_markdown_table({{"tuned", &m}});
+  std::vector<std::string> lines;
+  for (std::size_t a = 0, b; (b = table.find('\n', a)) != std::string::npos; a = b + 1)
+    lines.push_back(table.substr(a, b - a));
+  ASSERT_EQ(lines.size(), 3u);
+  const std::vector<std::string> head = cells(lines[0]), sep = cells(lines[1]),
+                                 row = cells(lines[2]);
+  // controller; ise, iae, itae, max|u|, tv; ISE per extra window (2); peak per fault (2)
+  ASSERT_EQ(head.size(), 10u);
+  ASSERT_EQ(sep.size(), head.size());
+  ASSERT_EQ(row.size(), head.size());
+  EXPECT_EQ(row[0], "tuned (diverged)");
+  const auto column = [&](const std::string& name) -> std::string {
+    for (std::size_t i = 0; i < head.size(); ++i)
+      if (head[i] == name) return row[i];
+    ADD_FAILURE() << "no column " << name;
+    return {};
+  };
+  const auto text = [](double v) { return ftc::tune::detail::format_number(v); };
+  for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields) {
+    const std::string label(f.label);
+    switch (f.scope) {
+      case MetricScope::window:
+        EXPECT_EQ(column(label), text(m.errors.*f.in_window));
+        if (f.column_per_extra_window) {
+          EXPECT_EQ(column(label + " [0, 1)"), text(m.extra[0].*f.in_window));
+          EXPECT_EQ(column(label + " [1, 2)"), text(m.extra[1].*f.in_window));
+        }
+        break;
+      case MetricScope::run:
+        EXPECT_EQ(column(label), text(m.*f.per_run));
+        break;
+      case MetricScope::fault:
+        for (std::size_t k = 0; k < (m.*f.per_fault).size(); ++k)
+          EXPECT_EQ(column(label + " " + std::to_string(k + 1)), text((m.*f.per_fault)[k]));
+        break;
+    }
+  }
+  // Parsed back: the window [0.5, inf) leaves out sample 0: ISE = 0.5 (0.5 + 1 + 0.0625).
+  EXPECT_NEAR(std::stod(column("ISE")), 0.78125, 1e-4);
+  EXPECT_EQ(column("peak ‖e‖ after fault 2"), "–");  // never reached
 }

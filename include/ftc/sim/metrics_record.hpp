@@ -26,7 +26,11 @@ enum class MetricScope {
 struct MetricField {
   std::string_view name;
   std::string_view unit;
+  std::string_view label;  // the column of comparison.md (Markdown: '|' escaped)
   MetricScope scope;
+  // A window field with a column per extra window in comparison.md too (else the objective
+  // window's only).
+  bool column_per_extra_window = false;
   double ErrorIntegrals::*in_window = nullptr;
   double Metrics::*per_run = nullptr;
   std::vector<double> Metrics::*per_fault = nullptr;
@@ -34,13 +38,15 @@ struct MetricField {
 
 // In the order of the wire format and of ErrorIntegrals' members.
 inline constexpr MetricField kMetricFields[] = {
-    {"ise", "rad²·s", MetricScope::window, &ErrorIntegrals::ise},
-    {"iae", "rad·s", MetricScope::window, &ErrorIntegrals::iae},
-    {"itae", "rad·s²", MetricScope::window, &ErrorIntegrals::itae},
-    {"max_abs_u", "the command's unit", MetricScope::run, nullptr, &Metrics::max_abs_u},
-    {"control_tv", "the command's unit", MetricScope::run, nullptr, &Metrics::control_tv},
-    {"peak_error_after_fault", "rad", MetricScope::fault, nullptr, nullptr,
-     &Metrics::peak_error_after_fault},
+    {"ise", "rad²·s", "ISE", MetricScope::window, true, &ErrorIntegrals::ise},
+    {"iae", "rad·s", "IAE", MetricScope::window, false, &ErrorIntegrals::iae},
+    {"itae", "rad·s²", "ITAE", MetricScope::window, false, &ErrorIntegrals::itae},
+    {"max_abs_u", "the command's unit", "max \\|u_d\\|", MetricScope::run, false, nullptr,
+     &Metrics::max_abs_u},
+    {"control_tv", "the command's unit", "control TV", MetricScope::run, false, nullptr,
+     &Metrics::control_tv},
+    {"peak_error_after_fault", "rad", "peak ‖e‖ after fault", MetricScope::fault, false, nullptr,
+     nullptr, &Metrics::peak_error_after_fault},
 };
 
 // The record's wire form (MPI messages: every rank runs the same binary, so doubles travel in
