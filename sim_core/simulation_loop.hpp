@@ -17,6 +17,7 @@
 #include "ftc/sim/faults.hpp"
 #include "ftc/sim/integrator.hpp"
 #include "ftc/sim/simulation.hpp"
+#include "metrics_accumulator.hpp"
 #include "sincos.hpp"
 
 namespace ftc::sim::detail {

@@ -33,6 +33,7 @@
 #include "controllers/laws.hpp"
 #include "lanes/angle_tracker.hpp"
 #include "lanes/elementary.hpp"
+#include "lanes/metric_lanes.hpp"
 #include "lanes/pack.hpp"
 
 namespace ftc::sim::detail {
@@ -162,8 +163,7 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
     fin.diverged[l] = false;
   }
 
-  // The metrics, in the operations and order of MetricsAccumulator::sample (ftc/sim/metrics.hpp),
-  // lanes that have diverged masked out.
+  // The metrics' sums (lanes/metric_lanes.hpp), per window and fault onset.
   const int nw = su.kernel_metrics ? su.windows : 0, no = su.kernel_metrics ? su.onsets : 0;
   T w0[kMaxWindows], w1[kMaxWindows], ise[kMaxWindows], iae[kMaxWindows], itae[kMaxWindows];
   for (int i = 0; i < nw; ++i) {
@@ -215,38 +215,21 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
       for (int r = 0; r < S2; ++r) lane::store(x[r], o.x[r]);
       for (int r = 0; r < M; ++r) lane::store(u[r], o.u[r]);
       if (su.kernel_metrics) {
+        // The accumulators of lanes/metric_lanes.hpp, called as MetricsAccumulator::sample
+        // calls them, lanes that have diverged masked out.
         const double td = static_cast<double>(k) * Ts;
         const T t(td);
-        // In MetricsAccumulator::sample's order: ((e0 + e1) + e2) + ...
-        T e2 = x[0] * x[0], e1 = lane::abs(x[0]);
-        for (int r = 1; r < N; ++r) {
-          e2 = e2 + x[r] * x[r];
-          e1 = e1 + lane::abs(x[r]);
-        }
-        const T ise_k = Tsv * e2, iae_k = Tsv * e1, itae_k = T(Ts * td) * e1;
-        for (int wi = 0; wi < nw; ++wi) {
-          const Mask in = counting & (t >= w0[wi]) & (t < w1[wi]);
-          ise[wi] = lane::select(in, ise[wi] + ise_k, ise[wi]);
-          iae[wi] = lane::select(in, iae[wi] + iae_k, iae[wi]);
-          itae[wi] = lane::select(in, itae[wi] + itae_k, itae[wi]);
-        }
-        T u_max = lane::abs(u[0]);
-        for (int j = 1; j < M; ++j) {
-          const T a_j = lane::abs(u[j]);
-          u_max = lane::select(u_max < a_j, a_j, u_max);
-        }
-        max_abs_u = lane::select(counting & (max_abs_u < u_max), u_max, max_abs_u);
-        if (k > 0) {
-          T d2 = (u[0] - u_prev[0]) * (u[0] - u_prev[0]);
-          for (int j = 1; j < M; ++j) d2 = d2 + (u[j] - u_prev[j]) * (u[j] - u_prev[j]);
-          control_tv = lane::select(counting, control_tv + lane::sqrt(d2), control_tv);
-        }
+        const lane::ErrorNorms<T> en2 = lane::error_norms<N, T>(x);
+        const lane::ErrorTerms<T> terms = lane::error_terms(Tsv, T(Ts * td), en2);
+        for (int wi = 0; wi < nw; ++wi)
+          lane::add_error_terms<T>(counting & lane::in_window(t, w0[wi], w1[wi]), terms, ise[wi],
+                                   iae[wi], itae[wi]);
+        lane::add_max_abs_u<M, T>(counting, u, max_abs_u);
+        if (k > 0) lane::add_control_tv<M, T>(counting, u, u_prev, control_tv);
         if (no > 0) {
-          const T en = lane::sqrt(e2);
-          for (int fi = 0; fi < no; ++fi) {
-            const Mask rising = counting & (t >= onset[fi]) & lane::mask_not(peak[fi] >= en);
-            peak[fi] = lane::select(rising, en, peak[fi]);
-          }
+          const T en = lane::sqrt(en2.sq);
+          for (int fi = 0; fi < no; ++fi)
+            lane::add_peak<T>(counting & (t >= onset[fi]), en, peak[fi]);
         }
       }
 

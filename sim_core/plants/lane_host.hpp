@@ -18,6 +18,7 @@
 #include "ftc/sim/scenario.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "lanes/pack.hpp"
+#include "metrics_accumulator.hpp"
 #include "simulation_loop.hpp"
 
 namespace ftc::sim::detail {
@@ -182,7 +183,7 @@ class Host final : public PackHost<N, M> {
         r.metrics = metrics_[l].result();
         continue;
       }
-      // The kernel's sums, arranged as MetricsAccumulator arranges its own.
+      // The kernel's sums (lanes/metric_lanes.hpp), arranged as MetricsAccumulator arranges its own.
       Metrics m = metrics_[l].result();
       m.errors = {fin.ise[0][l], fin.iae[0][l], fin.itae[0][l]};
       for (std::size_t w = 0; w < m.extra.size(); ++w)

@@ -37,6 +37,7 @@
 #include <thread>
 #include <type_traits>
 
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/problem/problem.hpp"
@@ -88,6 +89,7 @@ class Writer {
     put<std::uint64_t>(s.size());
     bytes_.insert(bytes_.end(), s.begin(), s.end());
   }
+  void put_metrics(const sim::Metrics& m) { sim::append_metrics_wire(bytes_, m); }
   const std::vector<char>& bytes() const { return bytes_; }
 
  private:
@@ -112,6 +114,7 @@ class Reader {
     if (n > 0) std::memcpy(v.data(), take(n * sizeof(T)), n * sizeof(T));
     return v;
   }
+  sim::Metrics get_metrics() { return sim::read_metrics_wire(bytes_, pos_); }
   std::string get_string() {
     const auto n = get<std::uint64_t>();
     if (n > bytes_.size()) throw std::runtime_error("malformed MPI message");
@@ -129,8 +132,10 @@ class Reader {
   std::size_t pos_ = 0;
 };
 
-// Metrics field by field. The mirror below has Metrics' members in order: a member added to
-// Metrics changes its size, and this stops compiling until it is sent too.
+// Metrics in the record's wire form (ftc/sim/metrics_record.hpp: produced from kMetricFields).
+// The mirror below has Metrics' members in order: a member added to Metrics changes its size,
+// and this stops compiling until the member is in the record (a kMetricFields entry) or sent
+// by append_metrics_wire.
 struct MetricsMirror {
   sim::Window window;
   sim::ErrorIntegrals errors;
@@ -143,33 +148,9 @@ struct MetricsMirror {
 };
 static_assert(sizeof(MetricsMirror) == sizeof(sim::Metrics), "send every member of Metrics");
 
-void put_metrics(Writer& w, const sim::Metrics& m) {
-  w.put(m.window);
-  w.put(m.errors);
-  w.put_vector(m.extra_windows);
-  w.put_vector(m.extra);
-  w.put(m.max_abs_u);
-  w.put(m.control_tv);
-  w.put_vector(m.fault_onsets);
-  w.put_vector(m.peak_error_after_fault);
-  w.put(m.diverged);
-  w.put(m.diverged_at);
-}
+void put_metrics(Writer& w, const sim::Metrics& m) { w.put_metrics(m); }
 
-sim::Metrics get_metrics(Reader& r) {
-  sim::Metrics m;
-  m.window = r.get<sim::Window>();
-  m.errors = r.get<sim::ErrorIntegrals>();
-  m.extra_windows = r.get_vector<sim::Window>();
-  m.extra = r.get_vector<sim::ErrorIntegrals>();
-  m.max_abs_u = r.get<double>();
-  m.control_tv = r.get<double>();
-  m.fault_onsets = r.get_vector<double>();
-  m.peak_error_after_fault = r.get_vector<double>();
-  m.diverged = r.get<bool>();
-  m.diverged_at = r.get<double>();
-  return m;
-}
+sim::Metrics get_metrics(Reader& r) { return r.get_metrics(); }
 
 static_assert(std::is_trivially_copyable_v<sim::ControllerConfig>);
 static_assert(std::is_trivially_copyable_v<SimulationTask>);

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "ftc/runtime/controller_json.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/version.hpp"
@@ -284,27 +285,10 @@ std::string comparison_markdown(const TuningOutcome& r) {
   for (std::size_t s = 0; s < job.scenarios.size(); ++s) {
     const sim::Scenario& sc = job.scenarios[s];
     o << "\n## Scenario " << sc.name << "\n\n";
-    const sim::Metrics& first = r.comparison.front().outcome.evaluation.scenarios.at(s);
-    o << "| controller | ISE | IAE | ITAE | max \\|u_d\\| | control TV |";
-    for (const sim::Window& w : first.extra_windows)
-      o << " ISE [" << detail::format_number(w.t0) << ", " << detail::format_number(w.t1) << ") |";
-    for (std::size_t f = 0; f < first.fault_onsets.size(); ++f)
-      o << " peak ‖e‖ after fault " << f + 1 << " |";
-    o << "\n|---|---:|---:|---:|---:|---:|";
-    for (std::size_t k = 0; k < first.extra_windows.size() + first.fault_onsets.size(); ++k)
-      o << "---:|";
-    o << "\n";
-    for (const ComparedController& c : r.comparison) {
-      const sim::Metrics& m = c.outcome.evaluation.scenarios.at(s);
-      o << "| " << c.label << (m.diverged ? " (diverged)" : "") << " | "
-        << detail::format_number(m.errors.ise) << " | " << detail::format_number(m.errors.iae)
-        << " | " << detail::format_number(m.errors.itae) << " | "
-        << detail::format_number(m.max_abs_u) << " | " << detail::format_number(m.control_tv)
-        << " |";
-      for (const sim::ErrorIntegrals& e : m.extra) o << " " << detail::format_number(e.ise) << " |";
-      for (double p : m.peak_error_after_fault) o << " " << detail::format_number(p) << " |";
-      o << "\n";
-    }
+    std::vector<std::pair<std::string, const sim::Metrics*>> rows;
+    for (const ComparedController& c : r.comparison)
+      rows.emplace_back(c.label, &c.outcome.evaluation.scenarios.at(s));
+    o << metrics_markdown_table(rows);
   }
   o << "\nISE in rad²·s, IAE in rad·s, ITAE in rad·s², peak errors in rad; control TV = Σ‖u_k − "
        "u_{k−1}‖ "
@@ -391,24 +375,81 @@ namespace {
 json window_json(const sim::Window& w) { return json::array({w.t0, json_number(w.t1)}); }
 }  // namespace
 
+// The columns of the record's description (ftc/sim/metrics_record.hpp): the objective window's
+// and the run fields, the extra windows' (those of the first row), then one per fault field and
+// onset.
+std::string metrics_markdown_table(
+    const std::vector<std::pair<std::string, const sim::Metrics*>>& rows) {
+  using sim::MetricScope;
+  std::ostringstream o;
+  if (rows.empty()) return {};
+  const sim::Metrics& first = *rows.front().second;
+  std::size_t columns = 0;
+  const auto head = [&](const auto&... parts) {
+    o << " ";
+    (o << ... << parts);
+    o << " |";
+    ++columns;
+  };
+  o << "| controller |";
+  for (const sim::MetricField& f : sim::kMetricFields)
+    if (f.scope != MetricScope::fault) head(f.label);
+  for (const sim::MetricField& f : sim::kMetricFields)
+    if (f.column_per_extra_window)
+      for (const sim::Window& w : first.extra_windows)
+        head(f.label, " [", detail::format_number(w.t0), ", ", detail::format_number(w.t1), ")");
+  for (const sim::MetricField& f : sim::kMetricFields)
+    if (f.scope == MetricScope::fault)
+      for (std::size_t k = 0; k < first.fault_onsets.size(); ++k) head(f.label, " ", k + 1);
+  o << "\n|---|";
+  for (std::size_t k = 0; k < columns; ++k) o << "---:|";
+  o << "\n";
+  for (const auto& [label, metrics] : rows) {
+    const sim::Metrics& m = *metrics;
+    o << "| " << label << (m.diverged ? " (diverged)" : "") << " |";
+    const auto cell = [&](double v) { o << " " << detail::format_number(v) << " |"; };
+    for (const sim::MetricField& f : sim::kMetricFields) {
+      if (f.scope == MetricScope::window) cell(m.errors.*f.in_window);
+      if (f.scope == MetricScope::run) cell(m.*f.per_run);
+    }
+    for (const sim::MetricField& f : sim::kMetricFields)
+      if (f.column_per_extra_window)
+        for (const sim::ErrorIntegrals& e : m.extra) cell(e.*f.in_window);
+    for (const sim::MetricField& f : sim::kMetricFields)
+      if (f.scope == MetricScope::fault)
+        for (double p : m.*f.per_fault) cell(p);
+    o << "\n";
+  }
+  return o.str();
+}
+
+// From the record's description (ftc/sim/metrics_record.hpp): each field under its name, the
+// window fields of the extra windows in "segments".
 json metrics_json(const sim::Metrics& m) {
   json j;
   j["window"] = window_json(m.window);
-  j["ise"] = json_number(m.errors.ise);
-  j["iae"] = json_number(m.errors.iae);
-  j["itae"] = json_number(m.errors.itae);
-  j["max_abs_u"] = m.max_abs_u;
-  j["control_tv"] = m.control_tv;
-  j["peak_error_after_fault"] = json::array();
-  for (double v : m.peak_error_after_fault) j["peak_error_after_fault"].push_back(json_number(v));
-  j["diverged"] = m.diverged;
-  if (m.diverged) j["diverged_at"] = m.diverged_at;
   j["segments"] = json::array();
   for (std::size_t i = 0; i < m.extra.size(); ++i)
-    j["segments"].push_back({{"window", window_json(m.extra_windows[i])},
-                             {"ise", json_number(m.extra[i].ise)},
-                             {"iae", json_number(m.extra[i].iae)},
-                             {"itae", json_number(m.extra[i].itae)}});
+    j["segments"].push_back({{"window", window_json(m.extra_windows[i])}});
+  for (const sim::MetricField& f : sim::kMetricFields) {
+    const std::string name(f.name);
+    switch (f.scope) {
+      case sim::MetricScope::window:
+        j[name] = json_number(m.errors.*f.in_window);
+        for (std::size_t i = 0; i < m.extra.size(); ++i)
+          j["segments"][i][name] = json_number(m.extra[i].*f.in_window);
+        break;
+      case sim::MetricScope::run:
+        j[name] = json_number(m.*f.per_run);
+        break;
+      case sim::MetricScope::fault:
+        j[name] = json::array();
+        for (double v : m.*f.per_fault) j[name].push_back(json_number(v));
+        break;
+    }
+  }
+  j["diverged"] = m.diverged;
+  if (m.diverged) j["diverged_at"] = m.diverged_at;
   return j;
 }
 

@@ -56,64 +56,7 @@ struct Metrics {
   void mark_diverged(double t);
 };
 
-// Accumulates Metrics on the fly for a plant with N axes and M actuators. All storage is sized
-// at construction; sample() never allocates.
-template <int N, int M>
-class MetricsAccumulator {
- public:
-  MetricsAccumulator(double sample_time, Window window, std::vector<Window> extra_windows,
-                     std::vector<double> fault_onsets)
-      : Ts_(sample_time) {
-    m_.window = window;
-    m_.extra.assign(extra_windows.size(), ErrorIntegrals{});
-    m_.extra_windows = std::move(extra_windows);
-    m_.peak_error_after_fault.assign(fault_onsets.size(), std::numeric_limits<double>::quiet_NaN());
-    m_.fault_onsets = std::move(fault_onsets);
-  }
-
-  // The sums run in index order, spelled out: the batch simulator accumulates the same
-  // quantities in SIMD lanes (lanes/closed_loop.hpp) and must get the same bits.
-  void sample(double t, const StateOf<N>& x, const Vec<M>& u_d) {
-    double e2 = x[0] * x[0], e1 = std::abs(x[0]);
-    for (int i = 1; i < N; ++i) {
-      e2 = e2 + x[i] * x[i];
-      e1 = e1 + std::abs(x[i]);
-    }
-    if (m_.window.contains(t)) add(m_.errors, t, e2, e1);
-    for (std::size_t i = 0; i < m_.extra.size(); ++i)
-      if (m_.extra_windows[i].contains(t)) add(m_.extra[i], t, e2, e1);
-
-    double u_max = std::abs(u_d[0]);
-    for (int j = 1; j < M; ++j) u_max = u_max < std::abs(u_d[j]) ? std::abs(u_d[j]) : u_max;
-    m_.max_abs_u = m_.max_abs_u < u_max ? u_max : m_.max_abs_u;
-    if (has_prev_) {
-      double d2 = (u_d[0] - u_prev_[0]) * (u_d[0] - u_prev_[0]);
-      for (int j = 1; j < M; ++j) d2 = d2 + (u_d[j] - u_prev_[j]) * (u_d[j] - u_prev_[j]);
-      m_.control_tv += std::sqrt(d2);
-    }
-    u_prev_ = u_d;
-    has_prev_ = true;
-
-    const double en = std::sqrt(e2);
-    for (std::size_t i = 0; i < m_.fault_onsets.size(); ++i)
-      if (t >= m_.fault_onsets[i] && !(m_.peak_error_after_fault[i] >= en))
-        m_.peak_error_after_fault[i] = en;
-  }
-
-  void mark_diverged(double t) { m_.mark_diverged(t); }
-  const Metrics& result() const { return m_; }
-
- private:
-  void add(ErrorIntegrals& acc, double t, double e2, double e1) const {
-    acc.ise += Ts_ * e2;
-    acc.iae += Ts_ * e1;
-    acc.itae += (Ts_ * t) * e1;
-  }
-
-  double Ts_;
-  Metrics m_;
-  Vec<M> u_prev_ = Vec<M>::Zero();
-  bool has_prev_ = false;
-};
+// MetricsAccumulator (sim_core/metrics_accumulator.hpp) accumulates them sample by sample, with
+// the per-metric accumulators the batch kernel runs in its lanes (sim_core/lanes/metric_lanes.hpp).
 
 }  // namespace ftc::sim

@@ -6,6 +6,8 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "ftc/sim/metrics.hpp"
 #include "ftc/sim/simulation.hpp"
@@ -39,6 +41,10 @@ std::string trajectory_csv(const sim::Trajectory& trajectory);
 // Metrics of one scenario as written to metrics.json and comparison.json; ise/iae/itae in the
 // objective window, infinite values as null.
 nlohmann::json metrics_json(const sim::Metrics& m);
+// comparison.md's table of one scenario: a row per (label, metrics), the columns of the metrics
+// record (ftc/sim/metrics_record.hpp), values as format_number writes them.
+std::string metrics_markdown_table(
+    const std::vector<std::pair<std::string, const sim::Metrics*>>& rows);
 // A controller's summary over many scenarios (SPEC §15's aggregates, with the counts).
 nlohmann::json summary_json(const Summary& s);
 // A label as a file name: lower-case letters and digits, other runs of characters as one '-'.

@@ -1,0 +1,309 @@
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ftc/sim/metrics.hpp"
+#include "ftc/sim/metrics_record.hpp"
+#include "ftc/tune/run/documents.hpp"
+#include "io/text.hpp"
+#include "metrics_accumulator.hpp"
+
+namespace {
+
+using ftc::sim::ErrorIntegrals;
+using ftc::sim::Metrics;
+using ftc::sim::MetricsAccumulator;
+using ftc::sim::StateOf;
+using ftc::sim::Vec;
+using ftc::sim::Window;
+
+// A hand-made trajectory of a plant with 2 axes and 2 actuators, Ts = 0.5 s, four samples
+// (t = 0, 0.5, 1, 1.5), every value a small dyadic fraction so that each sum below is exact:
+//   k  t    e = X1         u_d
+//   0  0    ( 1, -2)       ( 3,  4)
+//   1  0.5  ( 0.5, 0.5)    ( 0,  0)
+//   2  1    (-1, 0)        ( 0, -2)
+//   3  1.5  ( 0, 0.25)     (-1, -2)
+struct Sample {
+  double t;
+  double e[2];
+  double u[2];
+};
+const Sample kTrajectory[] = {
+    {0.0, {1.0, -2.0}, {3.0, 4.0}},
+    {0.5, {0.5, 0.5}, {0.0, 0.0}},
+    {1.0, {-1.0, 0.0}, {0.0, -2.0}},
+    {1.5, {0.0, 0.25}, {-1.0, -2.0}},
+};
+
+Metrics accumulate(Window window, std::vector<Window> extra, std::vector<double> onsets) {
+  MetricsAccumulator<2, 2> acc(0.5, window, std::move(extra), std::move(onsets));
+  for (const Sample& s : kTrajectory) {
+    StateOf<2> x;
+    x << s.e[0], s.e[1], 7.0, -7.0;  // X2 takes no part in any metric
+    Vec<2> u;
+    u << s.u[0], s.u[1];
+    acc.sample(s.t, x, u);
+  }
+  return acc.result();
+}
+
+}  // namespace
+
+TEST(Metrics, OneLaneAccumulatorMatchesHandComputedTrajectory) {
+  // ‖e‖² per sample: 5, 0.5, 1, 0.0625; Σ|e_i|: 3, 1, 1, 0.25.
+  // Whole run: ise = 0.5 (5 + 0.5 + 1 + 0.0625) = 3.28125, iae = 0.5 (3 + 1 + 1 + 0.25) = 2.625,
+  //            itae = 0.5 (0·3 + 0.5·1 + 1·1 + 1.5·0.25) = 0.9375.
+  // Window [0.5, 1.5): samples 1, 2: ise = 0.5 (0.5 + 1) = 0.75, iae = 0.5 (1 + 1) = 1,
+  //            itae = 0.5 (0.5 + 1) = 0.75.
+  // max |u_d| = 4; total variation ‖(−3,−4)‖ + ‖(0,−2)‖ + ‖(−1,0)‖ = 5 + 2 + 1 = 8.
+  // Peak ‖e‖ from t = 0.75 on: samples 2, 3: max(1, 0.25) = 1; from t = 2: never (NaN);
+  // from t = 0: sqrt(5).
+  const Metrics m = accumulate(Window{}, {Window{0.5, 1.5}}, {0.75, 2.0, 0.0});
+  EXPECT_EQ(m.errors.ise, 3.28125);
+  EXPECT_EQ(m.errors.iae, 2.625);
+  EXPECT_EQ(m.errors.itae, 0.9375);
+  ASSERT_EQ(m.extra.size(), 1u);
+  EXPECT_EQ(m.extra[0].ise, 0.75);
+  EXPECT_EQ(m.extra[0].iae, 1.0);
+  EXPECT_EQ(m.extra[0].itae, 0.75);
+  EXPECT_EQ(m.max_abs_u, 4.0);
+  EXPECT_EQ(m.control_tv, 8.0);
+  ASSERT_EQ(m.peak_error_after_fault.size(), 3u);
+  EXPECT_EQ(m.peak_error_after_fault[0], 1.0);
+  EXPECT_TRUE(std::isnan(m.peak_error_after_fault[1]));
+  EXPECT_EQ(m.peak_error_after_fault[2], std::sqrt(5.0));
+  EXPECT_EQ(m.objective(ftc::sim::Metric::ise), 3.28125);
+  EXPECT_FALSE(m.diverged);
+}
+
+TEST(Metrics, WindowIsHalfOpen) {
+  // [1, 1.5) holds sample 2 only (t = 1), not sample 3 (t = 1.5): ise = 0.5 · 1, itae = 0.5 · 1.
+  const Metrics m = accumulate(Window{1.0, 1.5}, {}, {});
+  EXPECT_EQ(m.errors.ise, 0.5);
+  EXPECT_EQ(m.errors.iae, 0.5);
+  EXPECT_EQ(m.errors.itae, 0.5);
+  EXPECT_TRUE(m.extra.empty());
+}
+
+TEST(Metrics, DivergedRunHasInfiniteErrorIntegralsInEveryWindow) {
+  MetricsAccumulator<2, 2> acc(0.5, Window{}, {Window{0.0, 1.0}}, {});
+  StateOf<2> x = StateOf<2>::Zero();
+  x[0] = 1.0;
+  acc.sample(0.0, x, Vec<2>::Ones());
+  acc.mark_diverged(0.5);
+  const Metrics& m = acc.result();
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(m.diverged);
+  EXPECT_EQ(m.diverged_at, 0.5);
+  EXPECT_EQ(m.errors.ise, inf);
+  EXPECT_EQ(m.errors.itae, inf);
+  EXPECT_EQ(m.extra[0].iae, inf);
+  EXPECT_EQ(m.max_abs_u, 1.0);  // what was reached before
+}
+
+TEST(Metrics, LaneThatStoppedCountingKeepsItsSums) {
+  // The kernel's accumulators with a false mask (a lane that has diverged) change nothing;
+  // with a true one they add as the one-lane run does.
+  namespace lane = ftc::sim::lane;
+  const double x[2] = {3.0, -4.0}, u[2] = {-6.0, 8.0}, u_prev[2] = {0.0, 0.0};
+  const lane::ErrorNorms<double> e = lane::error_norms<2, double>(x);
+  EXPECT_EQ(e.sq, 25.0);
+  EXPECT_EQ(e.abs, 7.0);
+  const lane::ErrorTerms<double> d = lane::error_terms(0.5, 0.5 * 2.0, e);
+  for (const bool counting : {false, true}) {
+    double ise = 1.0, iae = 2.0, itae = 3.0, max_abs_u = 0.5, tv = 0.25, peak = 1.0;
+    lane::add_error_terms<double>(counting, d, ise, iae, itae);
+    lane::add_max_abs_u<2, double>(counting, u, max_abs_u);
+    lane::add_control_tv<2, double>(counting, u, u_prev, tv);
+    lane::add_peak<double>(counting, std::sqrt(e.sq), peak);
+    EXPECT_EQ(ise, counting ? 13.5 : 1.0);
+    EXPECT_EQ(iae, counting ? 5.5 : 2.0);
+    EXPECT_EQ(itae, counting ? 10.0 : 3.0);
+    EXPECT_EQ(max_abs_u, counting ? 8.0 : 0.5);
+    EXPECT_EQ(tv, counting ? 10.25 : 0.25);
+    EXPECT_EQ(peak, counting ? 5.0 : 1.0);
+  }
+}
+
+namespace {
+
+// A record with every kind of value: extra windows, faults, an unreached peak (NaN), a window
+// that never ends (+inf).
+Metrics sample_record() {
+  Metrics m = accumulate(Window{0.5}, {Window{0.0, 1.0}, Window{1.0, 2.0}}, {0.75, 2.0});
+  m.diverged = true;
+  m.diverged_at = 1.25;
+  return m;
+}
+
+std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v); }
+
+void expect_same_record(const Metrics& a, const Metrics& b) {
+  using ftc::sim::MetricScope;
+  EXPECT_EQ(bits(a.window.t0), bits(b.window.t0));
+  EXPECT_EQ(bits(a.window.t1), bits(b.window.t1));
+  ASSERT_EQ(a.extra.size(), b.extra.size());
+  ASSERT_EQ(a.extra_windows.size(), b.extra_windows.size());
+  for (std::size_t i = 0; i < a.extra_windows.size(); ++i) {
+    EXPECT_EQ(bits(a.extra_windows[i].t0), bits(b.extra_windows[i].t0));
+    EXPECT_EQ(bits(a.extra_windows[i].t1), bits(b.extra_windows[i].t1));
+  }
+  for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields) {
+    SCOPED_TRACE(std::string(f.name));
+    switch (f.scope) {
+      case MetricScope::window:
+        EXPECT_EQ(bits(a.errors.*f.in_window), bits(b.errors.*f.in_window));
+        for (std::size_t i = 0; i < a.extra.size(); ++i)
+          EXPECT_EQ(bits(a.extra[i].*f.in_window), bits(b.extra[i].*f.in_window));
+        break;
+      case MetricScope::run:
+        EXPECT_EQ(bits(a.*f.per_run), bits(b.*f.per_run));
+        break;
+      case MetricScope::fault:
+        ASSERT_EQ((a.*f.per_fault).size(), (b.*f.per_fault).size());
+        for (std::size_t i = 0; i < (a.*f.per_fault).size(); ++i)
+          EXPECT_EQ(bits((a.*f.per_fault)[i]), bits((b.*f.per_fault)[i]));
+        break;
+    }
+  }
+  EXPECT_EQ(a.diverged, b.diverged);
+  EXPECT_EQ(bits(a.diverged_at), bits(b.diverged_at));
+}
+
+}  // namespace
+
+TEST(Metrics, RecordRoundTripsThroughTheWireFormat) {
+  const Metrics m = sample_record();
+  std::vector<char> bytes = {'x'};  // a record inside a message
+  ftc::sim::append_metrics_wire(bytes, m);
+  const std::size_t end = bytes.size();
+  bytes.push_back('y');
+  std::size_t pos = 1;
+  const Metrics back = ftc::sim::read_metrics_wire(bytes, pos);
+  EXPECT_EQ(pos, end);
+  expect_same_record(m, back);
+  // Every prefix of the record is a malformed message, not a read past its end.
+  for (std::size_t n = 1; n < end; ++n) {
+    const std::vector<char> cut(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n));
+    std::size_t p = 1;
+    EXPECT_THROW(ftc::sim::read_metrics_wire(cut, p), std::runtime_error) << n;
+  }
+}
+
+TEST(Metrics, RecordRoundTripsThroughJson) {
+  // metrics_json writes every field of the record under its name (non-finite values as null),
+  // the extra windows' fields in "segments"; read back by the same description it gives the
+  // record.
+  using ftc::sim::MetricScope;
+  const Metrics m = sample_record();
+  const nlohmann::json j = nlohmann::json::parse(ftc::tune::metrics_json(m).dump());
+  const auto number = [](const nlohmann::json& v) {
+    return v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>();
+  };
+  Metrics back;
+  back.window = {j.at("window")[0].get<double>(), number(j.at("window")[1])};
+  back.extra.resize(j.at("segments").size());
+  for (const nlohmann::json& s : j.at("segments"))
+    back.extra_windows.push_back({s.at("window")[0].get<double>(), number(s.at("window")[1])});
+  for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields) {
+    const std::string name(f.name);
+    switch (f.scope) {
+      case MetricScope::window:
+        back.errors.*f.in_window = number(j.at(name));
+        for (std::size_t i = 0; i < back.extra.size(); ++i)
+          back.extra[i].*f.in_window = number(j.at("segments")[i].at(name));
+        break;
+      case MetricScope::run:
+        back.*f.per_run = number(j.at(name));
+        break;
+      case MetricScope::fault:
+        for (const nlohmann::json& v : j.at(name)) (back.*f.per_fault).push_back(number(v));
+        break;
+    }
+  }
+  back.diverged = j.at("diverged").get<bool>();
+  back.diverged_at = j.at("diverged_at").get<double>();
+  // The window's end +inf is written as null: read back as NaN, compared as +inf.
+  EXPECT_EQ(m.window.t1, std::numeric_limits<double>::infinity());
+  EXPECT_TRUE(j.at("window")[1].is_null());
+  back.window.t1 = m.window.t1;
+  expect_same_record(m, back);
+  EXPECT_EQ(j.at("segments").size(), 2u);
+  EXPECT_EQ(j.at("ise"), m.errors.ise);
+}
+
+namespace {
+
+// The cells of a Markdown table row, trimmed.
+std::vector<std::string> cells(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cell;
+  for (std::size_t i = 1; i < line.size(); ++i) {
+    if (line[i] == '|' && line[i - 1] != '\\') {
+      const std::size_t a = cell.find_first_not_of(' '), b = cell.find_last_not_of(' ');
+      out.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
+      cell.clear();
+    } else {
+      cell += line[i];
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(Metrics, RecordRoundTripsThroughMarkdown) {
+  // comparison.md's table: read back by column name, each cell is the field's value as
+  // format_number writes it (4 significant digits), every field of the description has its
+  // columns, and a diverged row is marked.
+  using ftc::sim::MetricScope;
+  const Metrics m = sample_record();
+  const std::string table = ftc::tune::metrics_markdown_table({{"tuned", &m}});
+  std::vector<std::string> lines;
+  for (std::size_t a = 0, b; (b = table.find('\n', a)) != std::string::npos; a = b + 1)
+    lines.push_back(table.substr(a, b - a));
+  ASSERT_EQ(lines.size(), 3u);
+  const std::vector<std::string> head = cells(lines[0]), sep = cells(lines[1]),
+                                 row = cells(lines[2]);
+  // controller; ise, iae, itae, max|u|, tv; ISE per extra window (2); peak per fault (2)
+  ASSERT_EQ(head.size(), 10u);
+  ASSERT_EQ(sep.size(), head.size());
+  ASSERT_EQ(row.size(), head.size());
+  EXPECT_EQ(row[0], "tuned (diverged)");
+  const auto column = [&](const std::string& name) -> std::string {
+    for (std::size_t i = 0; i < head.size(); ++i)
+      if (head[i] == name) return row[i];
+    ADD_FAILURE() << "no column " << name;
+    return {};
+  };
+  const auto text = [](double v) { return ftc::tune::detail::format_number(v); };
+  for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields) {
+    const std::string label(f.label);
+    switch (f.scope) {
+      case MetricScope::window:
+        EXPECT_EQ(column(label), text(m.errors.*f.in_window));
+        if (f.column_per_extra_window) {
+          EXPECT_EQ(column(label + " [0, 1)"), text(m.extra[0].*f.in_window));
+          EXPECT_EQ(column(label + " [1, 2)"), text(m.extra[1].*f.in_window));
+        }
+        break;
+      case MetricScope::run:
+        EXPECT_EQ(column(label), text(m.*f.per_run));
+        break;
+      case MetricScope::fault:
+        for (std::size_t k = 0; k < (m.*f.per_fault).size(); ++k)
+          EXPECT_EQ(column(label + " " + std::to_string(k + 1)), text((m.*f.per_fault)[k]));
+        break;
+    }
+  }
+  // Parsed back: the window [0.5, inf) leaves out sample 0: ISE = 0.5 (0.5 + 1 + 0.0625).
+  EXPECT_NEAR(std::stod(column("ISE")), 0.78125, 1e-4);
+  EXPECT_EQ(column("peak ‖e‖ after fault 2"), "–");  // never reached
+}
