@@ -1102,6 +1102,7 @@ TEST(Service, DashboardIsServedWithAStrictPolicy) {
   EXPECT_EQ(api->status, 401);
   EXPECT_EQ(api->get_header_value("X-Content-Type-Options"), "nosniff");
   EXPECT_FALSE(api->has_header("Access-Control-Allow-Origin"));
+  EXPECT_EQ(api->get_header_value("Cache-Control"), "no-store");  // job data is never cached
   EXPECT_EQ(s.client->Get("/v1/events")->status, 401);
   EXPECT_EQ(s.client->Get("/ui/other.js")->status, 401);  // only the dashboard's own files
 
@@ -1556,6 +1557,8 @@ TEST(Service, SlowClientsAreCutOffAndHealthStaysAnswered) {
   for (const Trickler& t : tricklers) {
     ASSERT_GE(t.fd, 0);
     EXPECT_TRUE(t.closed) << t.reply;
+    // Written straight to the socket, yet with the headers of every other answer.
+    EXPECT_NE(t.reply.find("X-Content-Type-Options: nosniff\r\n"), std::string::npos) << t.reply;
     if (status_of(t.reply) == 429) {
       ++refused;
       EXPECT_NE(t.reply.find("too_many_connections"), std::string::npos) << t.reply;

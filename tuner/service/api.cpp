@@ -833,6 +833,8 @@ void Api::configure(httplib::Server& http) {
   http.set_post_routing_handler([](const httplib::Request& req, httplib::Response& res) {
     res.set_header("X-Content-Type-Options", "nosniff");
     res.set_header("Referrer-Policy", "no-referrer");
+    // Job data stays out of the browser's and any proxy's cache.
+    if (req.path.rfind("/v1/", 0) == 0) res.set_header("Cache-Control", "no-store");
     const char* policy = web_asset(req.path) ? kPagePolicy : kDataPolicy;
     if (res.get_header_value("Content-Type").rfind("text/html", 0) == 0 && !web_asset(req.path))
       policy = kReportPolicy;

@@ -154,7 +154,10 @@ void send_error(int sock, int status, const char* reason, const char* code,
                       .append(reason)
                       .append("\r\nContent-Type: application/json\r\nContent-Length: ")
                       .append(std::to_string(body.size()))
-                      .append("\r\nConnection: close\r\n");
+                      .append("\r\nConnection: close\r\n")
+                      // The headers every other answer carries (api.cpp's post-routing handler).
+                      .append("X-Content-Type-Options: nosniff\r\n")
+                      .append("Content-Security-Policy: default-src 'none'; frame-ancestors 'none'\r\n");
   if (retry_after) r.append("Retry-After: ").append(retry_after).append("\r\n");
   r.append("\r\n").append(body);
   // A fresh socket's send buffer takes this whole; a client that does not read is not waited for.

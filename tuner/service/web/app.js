@@ -678,7 +678,9 @@ function jobView(main, id) {
       const images = list.files.filter((f) => /\.(png|svg)$/.test(f.name));
       if (images.length) figures.appendChild(el('h3', {text: 'Figures'}));
       for (const f of images) {
-        const res = await request('/v1/jobs/' + id + '/files/' + f.name);
+        // Each path segment encoded: a stored name is data, never a path of the API.
+        const res = await request('/v1/jobs/' + id + '/files/' +
+                                  f.name.split('/').map(encodeURIComponent).join('/'));
         if (!res.ok) continue;
         const url = URL.createObjectURL(await res.blob());
         figures.appendChild(el('figure', null, el('img', {src: url, alt: f.name}),
