@@ -159,17 +159,7 @@ class Host final : public PackHost<N, M> {
   Vec<M> applied(std::size_t l, const FaultEffect<M>& e, const Vec<M>& u_d) const {
     const FaultSet& faults = groups_[group_of_[l]].faults;
     if (!trimmed_) return faults.apply(e, u_d);
-    const LaneTask& lane = *lanes_[l];
-    const double m = faults.saturation().value_or(std::numeric_limits<double>::infinity());
-    Vec<M> u;
-    for (int j = 0; j < M; ++j) {
-      double v = (e.gain[j] * (lane.u0[j] + u_d[j]) + e.offset[j]) - lane.u0[j];
-      v = v < -m ? -m : v;
-      v = v > m ? m : v;
-      v = v < lane.lo[j] ? lane.lo[j] : v;
-      u[j] = v > lane.hi[j] ? lane.hi[j] : v;
-    }
-    return u;
+    return apply_trimmed<M>(*lanes_[l], faults, e, u_d);  // the Controller loop's operations
   }
   bool trimmed_ = false;
 

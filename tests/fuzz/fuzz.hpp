@@ -5,12 +5,33 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <string>
 #include <typeinfo>
+
+#include <unistd.h>
 
 #include "ftc/sim/input_error.hpp"
 
 namespace ftc::fuzz {
+
+// A directory of this process's own for a target that writes the files a job names (a scenarios
+// file), made on first use as ftctune-fuzz-<target>-<pid> and removed at exit.
+inline const std::filesystem::path& scratch_dir(const char* target) {
+  static const struct Dir {
+    std::filesystem::path path;
+    explicit Dir(const char* t)
+        : path(std::filesystem::temp_directory_path() /
+               ("ftctune-fuzz-" + std::string(t) + "-" + std::to_string(::getpid()))) {
+      std::filesystem::create_directories(path);
+    }
+    ~Dir() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+    }
+  } dir(target);
+  return dir.path;
+}
 
 [[noreturn]] inline void finding(const std::string& what) {
   std::fprintf(stderr, "FINDING: %s\n", what.c_str());

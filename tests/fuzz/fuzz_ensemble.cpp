@@ -30,19 +30,7 @@ namespace {
 
 constexpr std::int64_t kMembers = 8;
 
-// Where the members file is written; removed at exit.
-const fs::path& scratch() {
-  static const struct Dir {
-    fs::path path =
-        fs::temp_directory_path() / ("ftctune-fuzz-ensemble-" + std::to_string(getpid()));
-    Dir() { fs::create_directories(path); }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  } dir;
-  return dir.path;
-}
+const fs::path& scratch() { return fuzz::scratch_dir("ensemble"); }
 
 }  // namespace
 

@@ -34,19 +34,7 @@ const json& naming_job() {
   return j;
 }
 
-// Where the scenarios file is written; removed at exit.
-const fs::path& scratch() {
-  static const struct Dir {
-    fs::path path =
-        fs::temp_directory_path() / ("ftctune-fuzz-scenarios-" + std::to_string(getpid()));
-    Dir() { fs::create_directories(path); }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  } dir;
-  return dir.path;
-}
+const fs::path& scratch() { return fuzz::scratch_dir("scenarios"); }
 
 }  // namespace
 
