@@ -792,6 +792,9 @@ TEST(Cli, ClientCommandsTalkToTheService) {
   // The summary `run` prints, and an ETA on the progress lines.
   EXPECT_NE(r.out.find("tuned PI-FOSMC: "), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("(job's own controller: "), std::string::npos) << r.out;
+  // The objective named as run names it: metric, window and aggregate, not the bare metric.
+  const std::string label = tune::objective_label(tune::parse_job(tiny_job(), "tiny job"));
+  EXPECT_NE(r.out.find("  " + label + " = "), std::string::npos) << label << "\n" << r.out;
   EXPECT_NE(r.out.find("simulations on "), std::string::npos) << r.out;
   r = run_cli("status " + id + server, dir);
   EXPECT_EQ(r.exit_code, 0);

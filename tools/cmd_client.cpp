@@ -249,7 +249,11 @@ void print_summary(Api& api, const std::string& id, const json& job_file) {
   const double best = number(gains["objective"]["value"]);
   const double base = number(gains["baseline"]["objective"]);
   std::printf("  %s = %.6e (job's own controller: %.6e",
-              gains["objective"].value("metric", "objective").c_str(), best, base);
+              // The label run prints (metric, window, aggregate: "CVaR0.9 of ISE[...] over N
+              // scenarios"), which comparison.json carries; the bare metric for an older store.
+              comparison["objective"].value("label", gains["objective"].value("metric", "objective"))
+                  .c_str(),
+              best, base);
   if (std::isfinite(best) && std::isfinite(base) && base > 0)
     std::printf(", %.3g %% %s", 100 * std::abs(base - best) / base,
                 best <= base ? "lower" : "higher");
