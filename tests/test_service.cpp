@@ -1013,6 +1013,17 @@ TEST(Service, EventsStreamEachChangeToEveryOpenPage) {
                             10s));
   const std::string other = s.submit(tiny_job("other"))["id"];
   s.wait_done(other);
+  // The store commits a job's end before the hub tells it: wait until the pages were told, or
+  // a stream opened in between would rightly get that last change.
+  for (auto& p : pages)
+    ASSERT_TRUE(p->wait_for(
+        [&](EventClient& c) {
+          for (const json& e : c.events("job"))
+            if (e["id"] == other && e["status"] == "succeeded") return true;
+          return false;
+        },
+        10s))
+        << p->received();
   auto one = std::make_unique<EventClient>(s.port, "/v1/events?job=" + other);
   // A job runs meanwhile, so that the next one waits in the queue until its stream is open.
   const std::string blocker = s.submit(long_job("blocker"))["id"];
