@@ -285,15 +285,20 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
     }
     if (su.want_samples) host.samples(k - n, n, out);
   }
+  // Each sum to its field's slot of the metrics record (ftc/sim/metrics_record.hpp).
+  constexpr std::size_t kIse = metric_slot("ise"), kIae = metric_slot("iae"),
+                        kItae = metric_slot("itae"), kMaxAbsU = metric_slot("max_abs_u"),
+                        kControlTv = metric_slot("control_tv"),
+                        kPeak = metric_slot("peak_error_after_fault");
   for (int l = 0; l < W; ++l) {
     for (int wi = 0; wi < nw; ++wi) {
-      fin.ise[wi][l] = lane::lane_of(ise[wi], l);
-      fin.iae[wi][l] = lane::lane_of(iae[wi], l);
-      fin.itae[wi][l] = lane::lane_of(itae[wi], l);
+      fin.window_field[kIse][wi][l] = lane::lane_of(ise[wi], l);
+      fin.window_field[kIae][wi][l] = lane::lane_of(iae[wi], l);
+      fin.window_field[kItae][wi][l] = lane::lane_of(itae[wi], l);
     }
-    for (int fi = 0; fi < no; ++fi) fin.peak[fi][l] = lane::lane_of(peak[fi], l);
-    fin.max_abs_u[l] = lane::lane_of(max_abs_u, l);
-    fin.control_tv[l] = lane::lane_of(control_tv, l);
+    for (int fi = 0; fi < no; ++fi) fin.fault_field[kPeak][fi][l] = lane::lane_of(peak[fi], l);
+    fin.run_field[kMaxAbsU][l] = lane::lane_of(max_abs_u, l);
+    fin.run_field[kControlTv][l] = lane::lane_of(control_tv, l);
   }
   for (int l = 0; l < W; ++l)
     if (live[l] || l >= su.lanes)

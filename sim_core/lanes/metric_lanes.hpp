@@ -6,8 +6,8 @@
 // Both runs call these functions in the same order, so a lane gets the bits of the one-lane run.
 //
 // Adding a metric: its accumulator here, called from MetricsAccumulator::sample and from the
-// kernel's sample step, its member in Metrics and PackFinal, its entry in the metrics record
-// (ftc/sim/metrics_record.hpp); docs/architecture.md lists the writers still done by hand.
+// kernel's sample step (stored at its slot of PackFinal), its member in Metrics, its entry in the
+// metrics record (ftc/sim/metrics_record.hpp), from which every writer is produced.
 #include "lanes/lane.hpp"
 
 namespace ftc::sim::lane {

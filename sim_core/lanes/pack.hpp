@@ -14,6 +14,7 @@
 #include <cstdint>
 
 #include "ftc/sim/controller_config.hpp"
+#include "ftc/sim/metrics_record.hpp"
 
 namespace ftc::sim::detail {
 
@@ -109,10 +110,15 @@ struct PackFinal {
   std::int64_t samples[kMaxLanes];  // samples simulated per lane
   bool diverged[kMaxLanes];
   double diverged_at[kMaxLanes];  // s
-  // With kernel_metrics: as in Metrics, per window and lane.
-  double ise[kMaxWindows][kMaxLanes], iae[kMaxWindows][kMaxLanes], itae[kMaxWindows][kMaxLanes];
-  double max_abs_u[kMaxLanes], control_tv[kMaxLanes];
-  double peak[kMaxOnsets][kMaxLanes];
+  // With kernel_metrics: the record's fields (ftc/sim/metrics_record.hpp) by scope, each at its
+  // slot (metric_slot("ise") and so on): per window (the objective window first), per lane, or
+  // per fault onset. The host reads them back by the same table.
+  static constexpr std::size_t kWindowFields = metric_count(MetricScope::window);
+  static constexpr std::size_t kRunFields = metric_count(MetricScope::run);
+  static constexpr std::size_t kFaultFields = metric_count(MetricScope::fault);
+  double window_field[kWindowFields][kMaxWindows][kMaxLanes];
+  double run_field[kRunFields][kMaxLanes];
+  double fault_field[kFaultFields][kMaxOnsets][kMaxLanes];
 };
 
 template <int N, int M>

@@ -173,15 +173,27 @@ class Host final : public PackHost<N, M> {
         r.metrics = metrics_[l].result();
         continue;
       }
-      // The kernel's sums (lanes/metric_lanes.hpp), arranged as MetricsAccumulator arranges its own.
+      // The kernel's sums (lanes/metric_lanes.hpp), arranged as MetricsAccumulator arranges its
+      // own: each field of the record from its slot (ftc/sim/metrics_record.hpp).
       Metrics m = metrics_[l].result();
-      m.errors = {fin.ise[0][l], fin.iae[0][l], fin.itae[0][l]};
-      for (std::size_t w = 0; w < m.extra.size(); ++w)
-        m.extra[w] = {fin.ise[w + 1][l], fin.iae[w + 1][l], fin.itae[w + 1][l]};
-      m.max_abs_u = fin.max_abs_u[l];
-      m.control_tv = fin.control_tv[l];
-      for (std::size_t f = 0; f < m.peak_error_after_fault.size(); ++f)
-        m.peak_error_after_fault[f] = fin.peak[f][l];
+      std::size_t slot[3] = {0, 0, 0};
+      for (const MetricField& f : kMetricFields) {
+        const std::size_t s = slot[static_cast<std::size_t>(f.scope)]++;
+        switch (f.scope) {
+          case MetricScope::window:
+            m.errors.*f.in_window = fin.window_field[s][0][l];
+            for (std::size_t w = 0; w < m.extra.size(); ++w)
+              m.extra[w].*f.in_window = fin.window_field[s][w + 1][l];
+            break;
+          case MetricScope::run:
+            m.*f.per_run = fin.run_field[s][l];
+            break;
+          case MetricScope::fault:
+            for (std::size_t i = 0; i < (m.*f.per_fault).size(); ++i)
+              (m.*f.per_fault)[i] = fin.fault_field[s][i][l];
+            break;
+        }
+      }
       if (fin.diverged[l]) m.mark_diverged(fin.diverged_at[l]);
       r.metrics = std::move(m);
     }

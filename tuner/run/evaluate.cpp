@@ -61,10 +61,7 @@ MemberResult member_result(const TuningProblem& p, std::size_t i, const sim::Met
   r.scenario = p.scenario(i).name;
   r.recoverable = p.recoverable(i);
   r.objective = m.objective(p.job().objective.metric);
-  r.ise = m.errors.ise;
-  r.iae = m.errors.iae;
-  r.max_abs_u = m.max_abs_u;
-  r.control_tv = m.control_tv;
+  r.metrics = sim::MetricValues::of(m);
   r.diverged = m.diverged;
   return r;
 }
@@ -85,6 +82,11 @@ std::string faults_summary(const sim::Scenario& s) {
         .append(" s");
   }
   return out.empty() ? "none" : out;
+}
+
+// A number of evaluation.csv: every digit; a value never reached (NaN) as "nan".
+std::string csv_number(double v) {
+  return std::isnan(v) ? std::string("nan") : detail::format_number(v, "%.17g");
 }
 
 std::string csv_field(const std::string& s) {
@@ -239,14 +241,22 @@ void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
     out << (c ? ",\n    " : "\n    ") << m << ", \"members\": [";
     for (std::size_t i = 0; i < ec.members.size(); ++i) {
       const MemberResult& x = ec.members[i];
-      const json row = {{"scenario", x.scenario},
-                        {"recoverable", x.recoverable},
-                        {"objective", json_number(x.objective)},
-                        {"ise", json_number(x.ise)},
-                        {"iae", json_number(x.iae)},
-                        {"max_abs_u", json_number(x.max_abs_u)},
-                        {"control_tv", json_number(x.control_tv)},
-                        {"diverged", x.diverged}};
+      json row = {{"scenario", x.scenario},
+                  {"recoverable", x.recoverable},
+                  {"objective", json_number(x.objective)},
+                  {"diverged", x.diverged}};
+      // Every field of the record under its name (metrics_json's form): a fault field as an
+      // array, one value per fault onset.
+      for (std::size_t f = 0; f < sim::kMetricFieldCount; ++f) {
+        const std::span<const double> v = x.metrics.field(f);
+        const std::string name(sim::kMetricFields[f].name);
+        if (sim::kMetricFields[f].scope != sim::MetricScope::fault) {
+          row[name] = json_number(v[0]);
+          continue;
+        }
+        row[name] = json::array();
+        for (double p : v) row[name].push_back(json_number(p));
+      }
       out << (i ? ",\n      " : "\n      ") << row.dump();
     }
     out << "\n    ]}";
@@ -257,7 +267,11 @@ void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
 
 void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
   Buffered out(sink);
-  out << "controller,scenario,faults,recoverable,objective,ise,iae,max_abs_u,control_tv,diverged\n";
+  // The record's fields in table order; a fault field's cell holds one value per fault onset,
+  // separated by ';' (empty without faults).
+  out << "controller,scenario,faults,recoverable,objective";
+  for (const sim::MetricField& f : sim::kMetricFields) out << "," << f.name;
+  out << ",diverged\n";
   for (const EvaluatedController& c : r.controllers) {
     const std::string label = csv_field(c.label);
     for (std::size_t i = 0; i < c.members.size(); ++i) {
@@ -266,10 +280,13 @@ void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
       const std::string faults =
           csv_field(faults_summary(scenario_at(r.job, r.seed, static_cast<std::int64_t>(i))));
       out << label << "," << csv_field(m.scenario) << "," << faults << ","
-          << (m.recoverable ? "1," : "0,") << detail::format_number(m.objective, "%.17g") << ","
-          << detail::format_number(m.ise, "%.17g") << "," << detail::format_number(m.iae, "%.17g")
-          << "," << detail::format_number(m.max_abs_u, "%.17g") << ","
-          << detail::format_number(m.control_tv, "%.17g") << "," << (m.diverged ? "1\n" : "0\n");
+          << (m.recoverable ? "1," : "0,") << csv_number(m.objective);
+      for (std::size_t f = 0; f < sim::kMetricFieldCount; ++f) {
+        const std::span<const double> v = m.metrics.field(f);
+        out << ",";
+        for (std::size_t k = 0; k < v.size(); ++k) out << (k ? ";" : "") << csv_number(v[k]);
+      }
+      out << (m.diverged ? ",1\n" : ",0\n");
     }
   }
   out.flush();
