@@ -328,3 +328,43 @@ TEST(BatchKernel, InstructionSetsAreNamedAndOrdered) {
   EXPECT_STREQ(to_string(Isa::avx512), "avx512");
   EXPECT_EQ(lane_width(Isa::avx2), 4);
 }
+
+// The window metrics of issue 26 in lanes: lanes with a settling threshold and a steady-state
+// tail among lanes without, saturated lanes and a diverging one; every lane on every instruction
+// set gives the bits of the Controller loop (sim::simulate, its MetricsAccumulator).
+TEST(BatchKernel, WindowMetricsInLanesAreTheControllerLoops) {
+  const Spacecraft sc;
+  std::vector<Task> tasks = varied(ControllerType::pi_fosmc, 9);
+  for (std::size_t l = 0; l < tasks.size(); ++l) {
+    if (l % 2 == 0) tasks[l].options.metrics.settling_threshold = 0.02;
+    if (l % 3 != 1) tasks[l].options.metrics.steady_state_tail = 3.0;
+    if (l % 2 == 1 && l != 1) tasks[l].scenario.saturation = 4.0;  // lane 1 diverges
+  }
+  std::vector<SimulationResult> want;
+  for (const Task& t : tasks) {
+    auto c = make_controller(t.config, sc, t.scenario.sample_time);
+    want.push_back(simulate(sc, *c, t.scenario, t.options));
+  }
+  // The test means something: settled, unsettled and saturated lanes, tails, a diverged lane.
+  int settled = 0, saturated = 0, tails = 0;
+  for (const SimulationResult& r : want) {
+    const ErrorIntegrals& e = r.metrics.extra.back();  // [5, 12): after the second fault
+    settled += std::isfinite(e.settling_time) && e.settling_time > 0 ? 1 : 0;
+    saturated += e.saturation_fraction > 0 && e.saturation_fraction < 1 ? 1 : 0;
+    tails += std::isfinite(e.steady_state_error) ? 1 : 0;
+    EXPECT_GT(e.control_energy, 0.0);
+    EXPECT_GT(e.peak_command, 0.0);
+  }
+  EXPECT_GE(settled, 2);
+  EXPECT_GE(saturated, 2);
+  EXPECT_GE(tails, 4);
+  EXPECT_TRUE(want[1].metrics.diverged);
+  EXPECT_EQ(want[1].metrics.errors.settling_time, std::numeric_limits<double>::infinity());
+  EXPECT_TRUE(std::isnan(want[3].metrics.errors.settling_time));  // no threshold
+  EXPECT_TRUE(std::isnan(want[4].metrics.errors.steady_state_error));  // no tail
+  for (Isa isa : supported_isas()) {
+    const std::vector<SimulationResult> got = run(tasks, isa);
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+      expect_same(got[i], want[i], std::string(to_string(isa)) + ", lane " + std::to_string(i));
+  }
+}

@@ -203,7 +203,8 @@ TEST(Evaluate, CommandWritesItsFilesAndTheWorstMembersReplay) {
   EXPECT_EQ(
       line,
       "controller,scenario,faults,recoverable,objective,ise,iae,itae,max_abs_u,control_tv,"
-      "peak_error_after_fault,diverged");
+      "peak_error_after_fault,control_energy,peak_command,saturation_fraction,settling_time,"
+      "steady_state_error,diverged");
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 2 * 7);

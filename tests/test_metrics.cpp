@@ -425,13 +425,93 @@ TEST(Metrics, RecordSaysHowEachFieldCombinesOverScenarios) {
   EXPECT_TRUE(std::isnan(
       over_scenarios(metric_field("peak_error_after_fault"), std::vector<double>{nan})));
   EXPECT_THROW(metric_field("no_such_metric"), std::logic_error);
-  // Every field is in the note under the tables with its unit, the control TV with its
-  // definition.
+  // Every field of the tables is in the note under them with its unit, the control TV with its
+  // definition; the others are not.
   const std::string note = ftc::sim::units_note(false);
   for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields)
-    EXPECT_NE(note.find(ftc::sim::plain_label(f) + " in " + std::string(f.unit)),
-              std::string::npos)
-        << note;
+    EXPECT_EQ(note.find(ftc::sim::plain_label(f) + " in " + std::string(f.unit)) !=
+                  std::string::npos,
+              f.in_tables)
+        << f.name << ": " << note;
+  EXPECT_EQ(over_scenarios(metric_field("saturation_fraction"), v), 2.75 / 3.0);  // the mean
   EXPECT_NE(note.find("control TV = Σ‖u_k − u_{k−1}‖ (chattering)"), std::string::npos) << note;
   EXPECT_NE(ftc::sim::units_note(true).find("max \\|u_d\\| in"), std::string::npos);
+}
+
+TEST(Metrics, WindowMetricsMatchHandComputedTrajectory) {
+  // The trajectory above with command limits [-3, 3] and [-2, 2] (at a limit: samples 0, 2 and
+  // 3), a run of 2 s, the faults at 0.75 s and 2 s:
+  //   k  t    ‖e‖²     ‖u‖²   max|u_j|
+  //   0  0    5        25     4
+  //   1  0.5  0.5      0      0
+  //   2  1    1        4      2
+  //   3  1.5  0.0625   5      2
+  const auto run = [](Window w, double threshold, double tail, std::vector<double> onsets) {
+    ftc::sim::MetricContext<2> c;
+    c.duration = 2.0;
+    c.lo << -3.0, -2.0;
+    c.hi << 3.0, 2.0;
+    c.settings.settling_threshold = threshold;
+    c.settings.steady_state_tail = tail;
+    MetricsAccumulator<2, 2> acc(0.5, w, {Window{0.0, 1.0}}, std::move(onsets), c);
+    for (const Sample& s : kTrajectory) {
+      StateOf<2> x;
+      x << s.e[0], s.e[1], 7.0, -7.0;
+      Vec<2> u;
+      u << s.u[0], s.u[1];
+      acc.sample(s.t, x, u);
+    }
+    return acc.result();
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN(),
+               inf = std::numeric_limits<double>::infinity();
+  const Metrics m = run(Window{}, 0.8, 1.0, {2.0, 0.75});
+  // Whole run: energy 0.5 (25 + 0 + 4 + 5), peak 4, 3 of 4 samples at a limit.
+  EXPECT_EQ(m.errors.control_energy, 17.0);
+  EXPECT_EQ(m.errors.peak_command, 4.0);
+  EXPECT_EQ(m.errors.saturation_fraction, 0.75);
+  // From the first fault (0.75 s, the earliest onset, not the first listed): ‖e‖ = 1 ≥ 0.8 at
+  // 1 s, 0.25 < 0.8 from 1.5 s on: settled 0.75 s after the fault.
+  EXPECT_EQ(m.errors.settling_time, 0.75);
+  // The tail [min(inf, 2) - 1, inf) = [1, inf): samples 2 and 3, mean ‖e‖ = (1 + 0.25) / 2.
+  EXPECT_EQ(m.errors.steady_state_error, 0.625);
+  // The extra window [0, 1): samples 0 and 1; no sample after the fault (NaN settling time);
+  // its tail [0, 1): both samples.
+  const ErrorIntegrals& x = m.extra[0];
+  EXPECT_EQ(x.control_energy, 12.5);
+  EXPECT_EQ(x.peak_command, 4.0);
+  EXPECT_EQ(x.saturation_fraction, 0.5);
+  EXPECT_TRUE(std::isnan(x.settling_time));
+  EXPECT_EQ(x.steady_state_error, (std::sqrt(5.0) + std::sqrt(0.5)) / 2.0);
+  // A window from 0.5 s: energy 0.5 · 9, peak 2, 2 of 3 samples at a limit.
+  const Metrics late = run(Window{0.5}, 2.0, 0.5, {0.75});
+  EXPECT_EQ(late.errors.control_energy, 4.5);
+  EXPECT_EQ(late.errors.peak_command, 2.0);
+  EXPECT_EQ(late.errors.saturation_fraction, 2.0 / 3.0);
+  EXPECT_EQ(late.errors.settling_time, 0.25);  // below 2 from the first sample after the fault
+  EXPECT_EQ(late.errors.steady_state_error, 0.25);  // the tail [1.5, inf): sample 3
+  // Not below 0.2 by the window's end: +inf; no threshold, tail or fault: NaN.
+  EXPECT_EQ(run(Window{}, 0.2, nan, {0.75}).errors.settling_time, inf);
+  const Metrics none = run(Window{}, nan, nan, {0.75});
+  EXPECT_TRUE(std::isnan(none.errors.settling_time));
+  EXPECT_TRUE(std::isnan(none.errors.steady_state_error));
+  EXPECT_TRUE(std::isnan(run(Window{}, 0.8, nan, {}).errors.settling_time));
+  // Without limits no sample is at one.
+  MetricsAccumulator<2, 2> unlimited(0.5, Window{}, {}, {});
+  for (const Sample& s : kTrajectory) {
+    StateOf<2> xs;
+    xs << s.e[0], s.e[1], 0.0, 0.0;
+    Vec<2> u;
+    u << s.u[0], s.u[1];
+    unlimited.sample(s.t, xs, u);
+  }
+  EXPECT_EQ(unlimited.result().errors.saturation_fraction, 0.0);
+  // A diverged run: every window metric +inf.
+  MetricsAccumulator<2, 2> d(0.5, Window{}, {Window{0.0, 1.0}}, {0.75});
+  d.mark_diverged(0.5);
+  for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields)
+    if (f.scope == ftc::sim::MetricScope::window) {
+      EXPECT_EQ(d.result().errors.*f.in_window, inf) << f.name;
+      EXPECT_EQ(d.result().extra[0].*f.in_window, inf) << f.name;
+    }
 }

@@ -88,6 +88,17 @@ struct PackSetup {
   double window[kMaxWindows][2][kMaxLanes] = {};  // unused: [inf, inf)
   int onsets = 0;
   double onset[kMaxOnsets][kMaxLanes] = {};  // unused: inf
+  // The window metrics' setup (ftc/sim/metrics.hpp, sim_core/metrics_accumulator.hpp): the
+  // command limits of saturation_fraction per actuator and lane, the earliest fault onset
+  // (+inf: none), the settling threshold squared (NaN: no settling time) and each window's
+  // steady-state tail start (NaN: no tail), per lane; whether any lane has a threshold or a tail.
+  double limit_lo[M][kMaxLanes] = {};
+  double limit_hi[M][kMaxLanes] = {};
+  double first_onset[kMaxLanes] = {};
+  double threshold_sq[kMaxLanes] = {};
+  double tail_start[kMaxWindows][kMaxLanes] = {};
+  bool any_settling = false;
+  bool any_tail = false;
 };
 
 // The host side, called twice per block of samples (never per sample).

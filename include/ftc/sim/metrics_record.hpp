@@ -57,8 +57,7 @@ struct MetricField {
   std::vector<double> Metrics::*per_fault = nullptr;
 };
 
-// In the order of the wire format and of ErrorIntegrals' members. ftc/sim/metrics.hpp defines
-// each.
+// In the order of the wire format. ftc/sim/metrics.hpp defines each.
 inline constexpr MetricField kMetricFields[] = {
     {.name = "ise",
      .unit = "rad²·s",
@@ -98,6 +97,46 @@ inline constexpr MetricField kMetricFields[] = {
      .scope = MetricScope::fault,
      .over_scenarios = OverScenarios::max,
      .per_fault = &Metrics::peak_error_after_fault},
+    {.name = "control_energy",
+     .unit = "the command's unit²·s",
+     .label = "control energy",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::sum,
+     .definition = "Σ Ts ‖u_d‖²",
+     .in_tables = false,
+     .in_window = &ErrorIntegrals::control_energy},
+    {.name = "peak_command",
+     .unit = "the command's unit",
+     .label = "peak command",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::max,
+     .definition = "max |u_d,j| in the window",
+     .in_tables = false,
+     .in_window = &ErrorIntegrals::peak_command},
+    {.name = "saturation_fraction",
+     .unit = "1",
+     .label = "saturation fraction",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::mean,
+     .definition = "the share of samples with a command at or beyond its limit",
+     .in_tables = false,
+     .in_window = &ErrorIntegrals::saturation_fraction},
+    {.name = "settling_time",
+     .unit = "s",
+     .label = "settling time",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::max,
+     .definition = "from the first fault until ‖e‖ stays below the job's threshold",
+     .in_tables = false,
+     .in_window = &ErrorIntegrals::settling_time},
+    {.name = "steady_state_error",
+     .unit = "rad",
+     .label = "steady-state error",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::mean,
+     .definition = "the mean ‖e‖ over the window's last tail seconds",
+     .in_tables = false,
+     .in_window = &ErrorIntegrals::steady_state_error},
 };
 inline constexpr std::size_t kMetricFieldCount = std::size(kMetricFields);
 
