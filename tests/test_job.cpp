@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -427,4 +428,151 @@ TEST(JobLoader, MetricsBlockGivesTheSettlingThresholdAndTailAtTheirPaths) {
     }
     EXPECT_TRUE(found) << c.what << ": expected " << c.path << " ~ " << c.message << ", got" << all;
   }
+}
+
+namespace {
+
+// table1 with its objective replaced by these goals.
+json with_goals(json goals) {
+  json j = table1();
+  j.erase("objective");
+  j["goals"] = std::move(goals);
+  return j;
+}
+
+json soft_ise() { return {{"metric", "ise"}, {"window", {10, 30}}, {"minimize", true}}; }
+
+}  // namespace
+
+TEST(JobGoals, ParseWriteBackCanonicallyAndGiveTheObjective) {
+  const json goals = json::array(
+      {soft_ise(),
+       {{"metric", "control_tv"}, {"aggregate", "cvar"}, {"alpha", 0.8}, {"at_most", 4000}},
+       {{"metric", "peak_command"}, {"aggregate", "max"}, {"at_most", 17.9}},
+       {{"metric", "settling_time"}, {"window_from", "first_fault"}, {"window", {0, 10}},
+        {"threshold", 0.05}, {"at_most", 5}}});
+  const tune::Job job = tune::parse_job(with_goals(goals), "t");
+  ASSERT_EQ(job.goals.size(), 4u);
+  EXPECT_TRUE(job.goals[0].soft());
+  EXPECT_EQ(job.goals[1].metric, tune::GoalMetric::control_tv);
+  EXPECT_EQ(job.goals[1].aggregate, tune::Aggregate::cvar);
+  EXPECT_EQ(job.goals[1].alpha, 0.8);
+  EXPECT_EQ(job.goals[2].at_most, 17.9);
+  EXPECT_EQ(job.goals[3].window_from, tune::WindowFrom::first_fault);
+  // The soft goal on ise is the objective the runs score by.
+  EXPECT_EQ(job.objective.metric, sim::Metric::ise);
+  EXPECT_EQ(job.objective.window.t0, 10.0);
+  EXPECT_EQ(job.objective.window.t1, 30.0);
+  // Written back with every default filled in, without an objective, and stable.
+  const json once = tune::to_json(job);
+  EXPECT_FALSE(once.contains("objective"));
+  EXPECT_EQ(once["goals"][0], json({{"aggregate", "mean"}, {"metric", "ise"},
+                                    {"minimize", true}, {"window", {10, 30}}}));
+  EXPECT_EQ(once["goals"][1], json({{"aggregate", "cvar"}, {"alpha", 0.8}, {"at_most", 4000},
+                                    {"metric", "control_tv"}, {"window", {0, nullptr}}}));
+  EXPECT_EQ(once.dump(), tune::to_json(tune::parse_job(once, "resolved")).dump());
+  // A job without goals writes none.
+  EXPECT_FALSE(tune::to_json(tune::parse_job(table1(), "t")).contains("goals"));
+  // The normalised violation of a hard goal.
+  EXPECT_EQ(job.goals[2].violation(17.9), 0.0);
+  EXPECT_EQ(job.goals[2].violation(10.0), 0.0);
+  EXPECT_DOUBLE_EQ(job.goals[2].violation(2 * 17.9), 1.0);
+  EXPECT_EQ(job.goals[2].violation(std::numeric_limits<double>::infinity()),
+            std::numeric_limits<double>::infinity());
+  EXPECT_EQ(job.goals[0].violation(1e9), 0.0);  // soft: never violated
+}
+
+TEST(JobGoals, BadGoalsAreRejectedAtTheirPaths) {
+  const auto goals = [](json extra) {
+    return [extra](json& j) {
+      j.erase("objective");
+      j["goals"] = json::array({soft_ise()});
+      for (const json& g : extra) j["goals"].push_back(g);
+    };
+  };
+  const std::vector<BadCase> cases = {
+      {"unknown metric", goals({{{"metric", "chatter"}, {"at_most", 1}}}), "/goals/1/metric",
+       "control_tv"},
+      {"limit 0", goals({{{"metric", "peak_command"}, {"at_most", 0}}}), "/goals/1/at_most",
+       "> 0"},
+      {"negative limit", goals({{{"metric", "ise"}, {"at_most", -2}}}), "/goals/1/at_most", "> 0"},
+      {"window after the run", goals({{{"metric", "iae"}, {"window", {0, 40}}, {"at_most", 1}}}),
+       "/goals/1/window/1", "after the end of scenario"},
+      {"window backwards", goals({{{"metric", "iae"}, {"window", {5, 2}}, {"at_most", 1}}}),
+       "/goals/1/window", "must be after start"},
+      {"window on a whole-run metric",
+       goals({{{"metric", "control_tv"}, {"window", {10, 30}}, {"at_most", 1}}}),
+       "/goals/1/window", "whole run"},
+      {"duplicate", goals({soft_ise()}), "/goals/1", "same goal as /goals/0"},
+      {"settling without threshold", goals({{{"metric", "settling_time"}, {"at_most", 3}}}),
+       "/goals/1/threshold", "needs a threshold"},
+      {"steady state without tail", goals({{{"metric", "steady_state_error"}, {"at_most", 3}}}),
+       "/goals/1/tail", "needs a tail"},
+      {"threshold on another metric",
+       goals({{{"metric", "ise"}, {"threshold", 0.1}, {"at_most", 3}}}), "/goals/1/threshold",
+       "only with metric \"settling_time\""},
+      {"neither minimize nor at_most", goals({{{"metric", "iae"}}}), "/goals/1", "at_most"},
+      {"both", goals({{{"metric", "iae"}, {"minimize", true}, {"at_most", 2}}}),
+       "/goals/1/at_most", "not both"},
+      {"minimize false", goals({{{"metric", "iae"}, {"minimize", false}}}), "/goals/1/minimize",
+       "must be true"},
+      {"alpha without cvar", goals({{{"metric", "iae"}, {"alpha", 0.5}, {"at_most", 2}}}),
+       "/goals/1/alpha", "only with aggregate"},
+      {"unknown aggregate", goals({{{"metric", "iae"}, {"aggregate", "median"}, {"at_most", 2}}}),
+       "/goals/1/aggregate", "mean"},
+      {"objective and goals",
+       [](json& j) { j["goals"] = json::array({soft_ise()}); }, "/goals", "not both"},
+      {"empty goals", [](json& j) { j.erase("objective"); j["goals"] = json::array(); }, "/goals",
+       "at least one goal"},
+      {"no soft goal",
+       [](json& j) {
+         j.erase("objective");
+         j["goals"] = json::array({{{"metric", "ise"}, {"at_most", 2}}});
+       },
+       "/goals", "minimize"},
+  };
+  for (const BadCase& c : cases) {
+    json k = table1();
+    c.mutate(k);
+    std::string all;
+    bool found = false;
+    for (const FieldError& e : errors_of(k)) {
+      found = found || (e.path == c.path && e.message.find(c.message) != std::string::npos);
+      all += "\n  " + to_string(e);
+    }
+    EXPECT_TRUE(found) << c.what << ": expected " << c.path << " ~ " << c.message << ", got" << all;
+  }
+  // The job's metrics block gives the threshold too; one given in both places must agree.
+  json j = with_goals(json::array({soft_ise(), {{"metric", "settling_time"}, {"at_most", 3}}}));
+  j["metrics"] = {{"settling_threshold", 0.05}};
+  EXPECT_TRUE(errors_of(j).empty());
+  j["goals"][1]["threshold"] = 0.1;
+  const std::vector<FieldError> errs = errors_of(j);
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_EQ(errs[0].path, "/goals/1/threshold");
+}
+
+TEST(JobGoals, RunsRefuseTwoSoftGoalsAndASoftGoalThatIsNoErrorIntegral) {
+  const auto refusal = [](const json& j) -> std::string {
+    try {
+      tune::TuningProblem problem(tune::parse_job(j, "t"));
+    } catch (const InputError& e) {
+      return e.errors().at(0).path + " " + e.errors().at(0).message;
+    }
+    return "";
+  };
+  // One soft goal on an error integral is the objective: the problem is the objective's.
+  EXPECT_EQ(refusal(with_goals(json::array({soft_ise()}))), "");
+  const std::string pareto = refusal(with_goals(
+      json::array({soft_ise(), {{"metric", "control_tv"}, {"minimize", true}}})));
+  EXPECT_NE(pareto.find("/goals 2 soft goals"), std::string::npos) << pareto;
+  EXPECT_NE(pareto.find("Pareto search"), std::string::npos) << pareto;
+  // Hard goals on any metric make a constrained search (TuningRun.HardGoalIsMetByTheWinner...).
+  EXPECT_EQ(refusal(with_goals(
+                json::array({soft_ise(), {{"metric", "peak_command"}, {"at_most", 17.9}}}))),
+            "");
+  // The soft goal is the objective, so it is an error integral.
+  EXPECT_NE(refusal(with_goals(json::array({{{"metric", "control_energy"}, {"minimize", true}}})))
+                .find("/goals/0/metric"),
+            std::string::npos);
 }

@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <utility>
+#include <vector>
 #include <nlohmann/json.hpp>
 
 #include "ftc/tune/optimizers/optimizer.hpp"
@@ -136,4 +139,23 @@ TEST(Optimizer, ForgedStatesAreRefusedWithTheFieldsPath) {
       refused(forged, "/optimizer/bats");
     }
   }
+}
+
+TEST(Optimizer, ConstrainedFitnessOrdersCandidatesByTheConstraintRule) {
+  // Hand-made candidates (objective, total violation), listed best first by the rule: feasible
+  // ones by objective (a diverged feasible one last among them), then infeasible ones by
+  // violation (+inf last).
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  const std::vector<std::pair<double, double>> ranked = {
+      {0.5, 0.0}, {2.0, 0.0}, {1e9, 0.0}, {inf, 0.0}, {0.1, 1e-6}, {0.01, 0.3},
+      {5.0, 0.3000001}, {0.001, 2.0}, {0.5, 1e6}, {0.5, inf}};
+  std::vector<double> J;
+  for (const auto& [objective, violation] : ranked)
+    J.push_back(ftc::tune::constrained_fitness(objective > 0 && objective < inf ? 1.0 / objective : 0.0,
+                                          violation));
+  for (std::size_t i = 0; i + 1 < J.size(); ++i)
+    EXPECT_GT(J[i], J[i + 1]) << "candidate " << i << " must beat candidate " << i + 1;
+  for (double v : J) EXPECT_TRUE(std::isfinite(v));  // checkpoints and pagmo keep them exactly
+  EXPECT_EQ(ftc::tune::constrained_fitness(0.25, 0.0), 0.25);  // feasible: J unchanged
+  EXPECT_EQ(ftc::tune::constrained_fitness(0.25, inf), -1.0);
 }

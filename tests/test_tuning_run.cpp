@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -444,5 +445,61 @@ TEST(TuningRun, ShippedJobsTuneToTheBitsOfBeforeTheOneKernel) {
     EXPECT_EQ(doc["objective"]["value"].get<double>(), e.objective) << e.job;
     EXPECT_EQ(doc["controller"]["Kp"].get<double>(), e.Kp) << e.job;
     EXPECT_EQ(doc["controller"]["Ki"].get<double>(), e.Ki) << e.job;
+  }
+}
+
+TEST(TuningRun, HardGoalIsMetByTheWinnerOfEveryOptimiser) {
+  // The short Table 1 job with a soft ISE goal and a hard goal on the control TV. The limit is
+  // the median TV of the initial population (the same for any limit: the seed draws it), so
+  // that it is met by some candidates and not by others.
+  json j = short_table1_job();
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"window", {0, 5}}, {"minimize", true}},
+                {{"metric", "control_tv"}, {"aggregate", "max"}, {"at_most", 1e300}}};
+  const tune::TuningOutcome loose = tuned(tune::parse_job(j, "loose"), 2);
+  std::vector<double> tv;
+  for (const tune::Trial& t : loose.trials) {
+    ASSERT_EQ(t.goals.size(), 2u);
+    EXPECT_EQ(t.goals[0], t.objective);
+    EXPECT_EQ(t.violation, 0.0);
+    if (t.iteration == 0) tv.push_back(t.goals[1]);
+  }
+  std::sort(tv.begin(), tv.end());
+  const double limit = tv[tv.size() / 2];
+  j["goals"][1]["at_most"] = limit;
+  const json algorithms[] = {
+      j["tuning"]["algorithm"],
+      {{"type", "random"}, {"population", 3}, {"iterations", 2}},
+      {{"type", "pagmo"}, {"name", "pso_gen"}, {"population", 4}, {"generations", 2}}};
+  for (const json& algorithm : algorithms) {
+    j["tuning"]["algorithm"] = algorithm;
+    const tune::TuningOutcome r = tuned(tune::parse_job(j, "capped"), 2);
+    const std::string name = algorithm["type"].get<std::string>();
+    const tune::Evaluation& won = r.best().outcome.evaluation;
+    ASSERT_EQ(won.goals.size(), 2u) << name;
+    EXPECT_LE(won.goals[1], limit) << name;
+    EXPECT_TRUE(won.feasible()) << name;
+    EXPECT_GE(r.optimization.best_fitness, 0.0) << name;
+    // Every trial is scored by the rule, and some of each kind were seen.
+    int feasible = 0, infeasible = 0;
+    for (const tune::Trial& t : r.trials) {
+      EXPECT_EQ(t.violation, std::max(0.0, t.goals[1] / limit - 1.0)) << name;
+      if (t.violation > 0) {
+        ++infeasible;
+        EXPECT_LT(t.fitness, 0.0) << name;
+      } else {
+        ++feasible;
+        EXPECT_GE(t.fitness, 0.0) << name;
+        EXPECT_GE(r.optimization.best_fitness, t.fitness) << name;  // the best feasible won
+      }
+    }
+    EXPECT_GT(feasible, 0) << name;
+    EXPECT_GT(infeasible, 0) << name;
+    // trials.csv carries the goals, the violation and feasibility; gains.json the goals.
+    const std::string csv = tune::trials_csv(r);
+    EXPECT_NE(csv.find(",goal0_ise,goal1_control_tv,violation,feasible\n"), std::string::npos);
+    const json gains = tune::gains_document(r);
+    EXPECT_EQ(gains["goals"]["feasible"], true);
+    EXPECT_EQ(gains["goals"]["goals"][1]["at_most"], limit);
   }
 }

@@ -451,6 +451,14 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   // Gains that diverge on what the objective counts must not reach a spacecraft: the files stay
   // for diagnosis (and the gains loader refuses them), and the exit status says so, --quiet or
   // not, with a code of its own (3) that scripts can tell from an internal error (1).
+  if (r.optimization.best_fitness < 0.0) {
+    std::fprintf(stderr,
+                 "ftctune: error: no candidate met the job's hard goals (total violation %.6g, "
+                 "see trials.csv): %s/gains.json must not be deployed; relax an at_most or "
+                 "widen tuning.parameters\n",
+                 r.best().outcome.evaluation.violation, out.c_str());
+    return 3;
+  }
   if (!(r.optimization.best_fitness > 0.0)) {
     std::fprintf(stderr,
                  "ftctune: error: every candidate diverged (fitness 0): %s/gains.json holds a "

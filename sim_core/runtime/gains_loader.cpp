@@ -88,6 +88,10 @@ std::shared_ptr<const schema::Object<Gains>> make_gains_shape() {
             "the sample time Ts the gains were tuned for (s)", kRequired);
   o->object("plant", &Gains::plant, plant_shape(), "the plant as simulated", kRequired);
   o->field(informational("objective", "object", "metric, window, aggregate and the value reached"));
+  o->field(informational("goals", "object",
+                         "a job with goals: each goal with the value reached, the total "
+                         "violation of the hard goals, feasible, and the rule that chose",
+                         false));
   o->field({"fitness", true,
             [](const json& v, const std::string& path, Gains& g, Errors& e) {
               if (v.is_number())
@@ -103,16 +107,17 @@ std::shared_ptr<const schema::Object<Gains>> make_gains_shape() {
                              "must not be deployed"});
               else if (!(*g.fitness > 0) || !std::isfinite(*g.fitness))
                 e.push_back({path, "is " + json_io::number_text(*g.fitness) +
-                                       ": every candidate diverged in tuning (a usable "
-                                       "controller has a fitness > 0), so these gains must "
-                                       "not be deployed"});
+                                       ": every candidate diverged in tuning, or none met "
+                                       "the job's hard goals (a usable controller has a "
+                                       "fitness > 0), so these gains must not be deployed"});
             },
             [](const Gains&, json&) {},
             [] {
               return json{{"type", json::array({"number", "null"})},
                           {"description",
                            "J = 1/objective of the tuned controller; 0 or null when every "
-                           "candidate diverged, which the loader refuses"}};
+                           "candidate diverged, in [-1, 0) when none met the job's hard goals "
+                           "(-V/(1 + V), V the total violation); the loader refuses both"}};
             }});
   o->field(informational("baseline", "object", "the job's own controller and its score"));
   // The optimiser's record, read for one flag: gains of a run stopped before its last

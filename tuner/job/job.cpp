@@ -173,47 +173,48 @@ Ptr<sim::Scenario> scenario_shape() {
 
 // --- objective and tuning ---------------------------------------------------------------------
 
-Ptr<ObjectiveConfig> make_objective_shape() {
-  using O = ObjectiveConfig;
-  auto o = std::make_shared<Obj<O>>("What a candidate is scored by");
-  o->choice("metric", &O::metric,
-            {{"ise", sim::Metric::ise}, {"iae", sim::Metric::iae}, {"itae", sim::Metric::itae}},
-            "ise = ∫‖e‖² dt, iae = ∫Σ|e_i| dt, itae = ∫t Σ|e_i| dt over the window");
+// The window, aggregate, q, alpha and window_from fields that an objective and a goal share.
+template <class O>
+void add_window_field(Obj<O>& o) {
   // [t0, t1] in s; t1 may be null, meaning "to the end of each scenario".
-  o->field({"window", false,
-            [](const json& w, const std::string& path, O& out, Errors& e) {
-              if (!w.is_array() || w.size() != 2 || !w[0].is_number() ||
-                  !(w[1].is_number() || w[1].is_null()))
-                e.push_back(
-                    {path, "expected [start, end] in seconds, got " + json_io::json_type_name(w)});
-              else
-                out.window = {w[0].get<double>(), w[1].is_null()
-                                                      ? std::numeric_limits<double>::infinity()
-                                                      : w[1].get<double>()};
-            },
-            [](const O&, const std::string&, Errors&) {},  // against the scenarios: job rule
-            [](const O& obj, json& out) {
-              out["window"] = json::array({obj.window.t0, json_io::json_number(obj.window.t1)});
-            },
-            [] {
-              return json{
-                  {"type", "array"},
-                  {"prefixItems", json::array({{{"type", "number"}, {"minimum", 0}},
-                                               {{"type", json::array({"number", "null"})}}})},
-                  {"minItems", 2},
-                  {"maxItems", 2},
-                  {"description", "[start, end) in s; end null = the end of the run"}};
-            }});
-  o->choice("aggregate", &O::aggregate,
-            {{"mean", Aggregate::mean},
-             {"max", Aggregate::max},
-             {"quantile", Aggregate::quantile},
-             {"cvar", Aggregate::cvar}},
-            "how the scenarios' values combine; quantile and cvar are the robust ones");
+  o.field({"window", false,
+           [](const json& w, const std::string& path, O& out, Errors& e) {
+             if (!w.is_array() || w.size() != 2 || !w[0].is_number() ||
+                 !(w[1].is_number() || w[1].is_null()))
+               e.push_back(
+                   {path, "expected [start, end] in seconds, got " + json_io::json_type_name(w)});
+             else
+               out.window = {w[0].get<double>(), w[1].is_null()
+                                                     ? std::numeric_limits<double>::infinity()
+                                                     : w[1].get<double>()};
+           },
+           [](const O&, const std::string&, Errors&) {},  // against the scenarios: job rule
+           [](const O& obj, json& out) {
+             out["window"] = json::array({obj.window.t0, json_io::json_number(obj.window.t1)});
+           },
+           [] {
+             return json{
+                 {"type", "array"},
+                 {"prefixItems", json::array({{{"type", "number"}, {"minimum", 0}},
+                                              {{"type", json::array({"number", "null"})}}})},
+                 {"minItems", 2},
+                 {"maxItems", 2},
+                 {"description", "[start, end) in s; end null = the end of the run"}};
+           }});
+}
+
+template <class O>
+void add_aggregate_fields(Obj<O>& o) {
+  o.choice("aggregate", &O::aggregate,
+           {{"mean", Aggregate::mean},
+            {"max", Aggregate::max},
+            {"quantile", Aggregate::quantile},
+            {"cvar", Aggregate::cvar}},
+           "how the scenarios' values combine; quantile and cvar are the robust ones");
   // q, alpha and window_from appear in the resolved job only where they matter, so that jobs
   // without them keep their canonical form (and their hash) from before these keys existed.
   const auto conditional = [](const char* key, double O::*m, schema::Range r, Aggregate when,
-                              const char* doc) -> Obj<O>::Field {
+                              const char* doc) -> typename Obj<O>::Field {
     return {key,
             false,
             [m](const json& v, const std::string& path, O& obj, Errors& e) {
@@ -231,41 +232,132 @@ Ptr<ObjectiveConfig> make_objective_shape() {
               return s;
             }};
   };
-  o->field(conditional("q", &O::q, schema::Range::half_open_unit(), Aggregate::quantile,
-                       "the quantile q in (0, 1] of aggregate quantile"));
-  o->field(conditional("alpha", &O::alpha, {0.0, false, 1.0, true}, Aggregate::cvar,
-                       "alpha in [0, 1) of aggregate cvar: the mean of the worst 1 - alpha"));
-  o->field({"window_from", false,
-            [](const json& v, const std::string& path, O& obj, Errors& e) {
-              if (!v.is_string())
-                e.push_back({path, "expected a string, got " + json_io::json_type_name(v)});
-              else if (v == "start")
-                obj.window_from = WindowFrom::start;
-              else if (v == "first_fault")
-                obj.window_from = WindowFrom::first_fault;
-              else
-                e.push_back({path, schema::detail::choice_error({"start", "first_fault"},
-                                                                v.get<std::string>())});
-            },
-            [](const O&, const std::string&, Errors&) {},
-            [](const O& obj, json& out) {
-              if (obj.window_from == WindowFrom::first_fault) out["window_from"] = "first_fault";
-            },
-            [] {
-              return json{{"type", "string"},
-                          {"enum", {"start", "first_fault"}},
-                          {"default", "start"},
-                          {"description",
-                           "measure the window from each run's start or from each scenario's "
-                           "earliest fault onset"}};
-            }});
+  o.field(conditional("q", &O::q, schema::Range::half_open_unit(), Aggregate::quantile,
+                      "the quantile q in (0, 1] of aggregate quantile"));
+  o.field(conditional("alpha", &O::alpha, {0.0, false, 1.0, true}, Aggregate::cvar,
+                      "alpha in [0, 1) of aggregate cvar: the mean of the worst 1 - alpha"));
+  o.field({"window_from", false,
+           [](const json& v, const std::string& path, O& obj, Errors& e) {
+             if (!v.is_string())
+               e.push_back({path, "expected a string, got " + json_io::json_type_name(v)});
+             else if (v == "start")
+               obj.window_from = WindowFrom::start;
+             else if (v == "first_fault")
+               obj.window_from = WindowFrom::first_fault;
+             else
+               e.push_back({path, schema::detail::choice_error({"start", "first_fault"},
+                                                               v.get<std::string>())});
+           },
+           [](const O&, const std::string&, Errors&) {},
+           [](const O& obj, json& out) {
+             if (obj.window_from == WindowFrom::first_fault) out["window_from"] = "first_fault";
+           },
+           [] {
+             return json{{"type", "string"},
+                         {"enum", {"start", "first_fault"}},
+                         {"default", "start"},
+                         {"description",
+                          "measure the window from each run's start or from each scenario's "
+                          "earliest fault onset"}};
+           }});
+}
+
+template <class O>
+void check_aggregate_keys(const O& obj, const std::string& path, Errors& e) {
+  if (obj.aggregate != Aggregate::quantile && obj.q != 0.9)
+    e.push_back({path + "/q", "is used only with aggregate \"quantile\""});
+  if (obj.aggregate != Aggregate::cvar && obj.alpha != 0.9)
+    e.push_back({path + "/alpha", "is used only with aggregate \"cvar\""});
+}
+
+Ptr<ObjectiveConfig> make_objective_shape() {
+  using O = ObjectiveConfig;
+  auto o = std::make_shared<Obj<O>>("What a candidate is scored by");
+  o->choice("metric", &O::metric,
+            {{"ise", sim::Metric::ise}, {"iae", sim::Metric::iae}, {"itae", sim::Metric::itae}},
+            "ise = ∫‖e‖² dt, iae = ∫Σ|e_i| dt, itae = ∫t Σ|e_i| dt over the window");
+  add_window_field(*o);
+  add_aggregate_fields(*o);
   o->rule([](const O& obj, const std::string& path, Errors& e) {
-    if (obj.aggregate != Aggregate::quantile && obj.q != 0.9)
-      e.push_back({path + "/q", "is used only with aggregate \"quantile\""});
-    if (obj.aggregate != Aggregate::cvar && obj.alpha != 0.9)
-      e.push_back({path + "/alpha", "is used only with aggregate \"cvar\""});
+    check_aggregate_keys(obj, path, e);
   });
   return o;
+}
+
+constexpr GoalMetric kGoalMetrics[] = {
+    GoalMetric::ise,
+    GoalMetric::iae,
+    GoalMetric::itae,
+    GoalMetric::control_tv,
+    GoalMetric::control_energy,
+    GoalMetric::peak_command,
+    GoalMetric::saturation_fraction,
+    GoalMetric::peak_error_after_fault,
+    GoalMetric::settling_time,
+    GoalMetric::steady_state_error};
+
+Ptr<GoalConfig> make_goal_shape() {
+  using G = GoalConfig;
+  auto o = std::make_shared<Obj<G>>(
+      "A goal: a metric in a window aggregated over the scenarios, minimised (\"minimize\": "
+      "true, a soft goal) or kept at most a limit (\"at_most\", a hard goal)");
+  std::vector<std::pair<std::string, GoalMetric>> names;
+  for (GoalMetric m : kGoalMetrics) names.emplace_back(to_string(m), m);
+  o->choice("metric", &G::metric, std::move(names),
+            "ise, iae, itae, control_energy, peak_command, saturation_fraction, settling_time, "
+            "steady_state_error in the window; control_tv and peak_error_after_fault over the "
+            "whole run",
+            kRequired);
+  add_window_field(*o);
+  add_aggregate_fields(*o);
+  o->field({"minimize", false,
+            [](const json& v, const std::string& path, G& g, Errors& e) {
+              if (!v.is_boolean())
+                e.push_back({path, "expected true, got " + json_io::json_type_name(v)});
+              else if (!v.get<bool>())
+                e.push_back({path, "must be true when given (a limit is \"at_most\")"});
+              else
+                g.minimize = true;
+            },
+            [](const G&, const std::string&, Errors&) {},
+            [](const G& g, json& out) {
+              if (g.minimize) out["minimize"] = true;
+            },
+            [] {
+              return json{{"const", true},
+                          {"description", "a soft goal: the search minimises it"}};
+            }});
+  o->optional_number("at_most", &G::at_most, schema::Range::positive(),
+                     "a hard goal: the limit the aggregate must not exceed (> 0)");
+  o->optional_number("threshold", &G::threshold, schema::Range::positive(),
+                     "settling_time only: rad, ‖e‖ below it counts as settled (default: the "
+                     "job's metrics.settling_threshold)");
+  o->optional_number("tail", &G::tail, schema::Range::positive(),
+                     "steady_state_error only: s, the tail of the window it averages (default: "
+                     "the job's metrics.steady_state_tail)");
+  o->rule([](const G& g, const std::string& path, Errors& e) {
+    check_aggregate_keys(g, path, e);
+    if (!g.minimize && !g.at_most)
+      e.push_back({path, "needs \"minimize\": true (a soft goal) or \"at_most\": a limit (a "
+                         "hard goal)"});
+    else if (g.minimize && g.at_most)
+      e.push_back({path + "/at_most", "a goal is minimised or limited, not both; give the limit "
+                                      "as a second goal"});
+    if (g.threshold && g.metric != GoalMetric::settling_time)
+      e.push_back({path + "/threshold", "is used only with metric \"settling_time\""});
+    if (g.tail && g.metric != GoalMetric::steady_state_error)
+      e.push_back({path + "/tail", "is used only with metric \"steady_state_error\""});
+    if (!windowed(g.metric) &&
+        (g.window.t0 != 0.0 || std::isfinite(g.window.t1) || g.window_from != WindowFrom::start))
+      e.push_back({path + "/window", std::string(to_string(g.metric)) +
+                                         " is measured over the whole run; it takes no window"});
+  });
+  return o;
+}
+
+Ptr<GoalConfig> goal_shape() {
+  static const Ptr<GoalConfig> shape = make_goal_shape();
+  return shape;
 }
 
 Ptr<ObjectiveConfig> objective_shape() {
@@ -574,6 +666,69 @@ std::vector<FieldError> member_name_errors(const Job& job, std::int64_t count) {
 
 namespace {
 
+// A window against the job's scenarios: its start >= 0, its end after its start and, measured
+// from each run's start, not after any scenario's end.
+void check_window(const Job& job, const sim::Window& w, WindowFrom from, const std::string& path,
+                  Errors& errs) {
+    if (!std::isfinite(w.t0) || w.t0 < 0)
+    errs.push_back(
+        {path + "/0", "must be >= 0 (got " + json_io::number_text(w.t0) + ")"});
+  else if (!(w.t1 > w.t0))
+    errs.push_back({path, "end " + json_io::number_text(w.t1) +
+                                             " must be after start " + json_io::number_text(w.t0)});
+  else if (std::isfinite(w.t1) && from == WindowFrom::start)
+    for (const sim::Scenario& s : job.scenarios)
+      if (std::isfinite(s.duration) && w.t1 > s.duration + 1e-12) {
+        errs.push_back({path + "/1",
+                        "end " + json_io::number_text(w.t1) + " is after the end of scenario \"" +
+                            s.name + "\" (" + json_io::number_text(s.duration) + " s)"});
+        break;
+      }
+
+}
+
+// The goals against the job: a soft goal among them (two or more are the runs' to refuse),
+// windows inside the scenarios, the settling threshold and tail their metrics need, no goal twice.
+void validate_goals(const Job& job, Errors& errs) {
+  if (job.goals.empty()) return;
+  bool soft = false;
+  std::vector<json> seen;
+  for (std::size_t i = 0; i < job.goals.size(); ++i) {
+    const GoalConfig& g = job.goals[i];
+    const std::string p = "/goals/" + std::to_string(i);
+    soft = soft || g.soft();
+    if (windowed(g.metric)) check_window(job, g.window, g.window_from, p + "/window", errs);
+    const auto settings = [&](const std::optional<double>& own, GoalMetric m, const char* key,
+                              const char* job_key, std::optional<double> MetricsConfig::*member) {
+      if (g.metric != m) return;
+      const std::optional<double> from_job =
+          job.metrics ? (*job.metrics).*member : std::optional<double>{};
+      if (!own && !from_job)
+        errs.push_back({p + "/" + key, std::string(to_string(m)) + " needs a " + key +
+                                           ": give it here or as /metrics/" + job_key});
+      else if (own && from_job && *own != *from_job)
+        errs.push_back({p + "/" + key,
+                        json_io::number_text(*own) + " differs from /metrics/" + job_key + " " +
+                            json_io::number_text(*from_job) +
+                            " (a run measures one; give it in one place)"});
+    };
+    settings(g.threshold, GoalMetric::settling_time, "threshold", "settling_threshold",
+             &MetricsConfig::settling_threshold);
+    settings(g.tail, GoalMetric::steady_state_error, "tail", "steady_state_tail",
+             &MetricsConfig::steady_state_tail);
+    json canonical = goal_shape()->write(g);
+    for (std::size_t k = 0; k < seen.size(); ++k)
+      if (seen[k] == canonical) {
+        errs.push_back({p, "is the same goal as /goals/" + std::to_string(k)});
+        break;
+      }
+    seen.push_back(std::move(canonical));
+  }
+  if (!soft)
+    errs.push_back({"/goals", "needs one goal with \"minimize\": true (the search's objective); "
+                              "every goal here is a limit"});
+}
+
 // The checks that span the job's parts: names, the scenarios against the plant's shape, the
 // objective window against the scenarios, the tuned parameters against the controller.
 void validate_job(const Job& job, Errors& errs) {
@@ -598,21 +753,9 @@ void validate_job(const Job& job, Errors& errs) {
       errs.push_back({p + "/name", "duplicate scenario name \"" + s.name + "\""});
   }
 
-  const sim::Window& w = job.objective.window;
-  if (!std::isfinite(w.t0) || w.t0 < 0)
-    errs.push_back(
-        {"/objective/window/0", "must be >= 0 (got " + json_io::number_text(w.t0) + ")"});
-  else if (!(w.t1 > w.t0))
-    errs.push_back({"/objective/window", "end " + json_io::number_text(w.t1) +
-                                             " must be after start " + json_io::number_text(w.t0)});
-  else if (std::isfinite(w.t1) && job.objective.window_from == WindowFrom::start)
-    for (const sim::Scenario& s : job.scenarios)
-      if (std::isfinite(s.duration) && w.t1 > s.duration + 1e-12) {
-        errs.push_back({"/objective/window/1",
-                        "end " + json_io::number_text(w.t1) + " is after the end of scenario \"" +
-                            s.name + "\" (" + json_io::number_text(s.duration) + " s)"});
-        break;
-      }
+  if (job.goals.empty()) check_window(job, job.objective.window, job.objective.window_from,
+                                      "/objective/window", errs);
+  validate_goals(job, errs);
 
   // A scenario's true inertia replaces the plant's "inertia" parameter.
   for (std::size_t i = 0; kind && i < job.scenarios.size(); ++i) {
@@ -708,7 +851,27 @@ std::shared_ptr<const Obj<Job>> make_job_shape() {
             "the controller to tune, with its starting (baseline) values", kRequired);
   o->array("compare", &Job::compare, Ptr<CompareEntry>(std::make_shared<CompareShape>()),
            "controllers shown beside the job's own in comparisons", schema::kOptional, false);
-  o->object("objective", &Job::objective, objective_shape(), "");
+  o->field({"objective", false,
+            [](const json& v, const std::string& path, Job& job, Errors& e) {
+              objective_shape()->read(v, path, job.objective, e);
+            },
+            [](const Job& job, const std::string& path, Errors& e) {
+              if (job.goals.empty()) objective_shape()->validate(job.objective, path, e);
+            },
+            [](const Job& job, json& out) {  // a job with goals is scored by them
+              if (job.goals.empty()) out["objective"] = objective_shape()->write(job.objective);
+            },
+            [] {
+              json s = objective_shape()->json_schema();
+              s["description"] =
+                  "What a candidate is scored by (default: ise over the whole run, mean); a job "
+                  "gives objective or goals, not both";
+              return s;
+            }});
+  o->array("goals", &Job::goals, goal_shape(),
+           "soft goals (minimize) and hard goals (at_most) in place of the objective: one soft "
+           "goal and any hard ones make a constrained search",
+           schema::kOptional, false);
   o->optional_object("metrics", &Job::metrics, metrics_shape(), "");
   o->optional_object("tuning", &Job::tuning, tuning_shape(), "");
   o->field({"ensemble", false,
@@ -750,6 +913,52 @@ const char* to_string(Aggregate a) {
       return "cvar";
   }
   return "?";
+}
+
+const char* to_string(GoalMetric m) {
+  switch (m) {
+    case GoalMetric::ise:
+      return "ise";
+    case GoalMetric::iae:
+      return "iae";
+    case GoalMetric::itae:
+      return "itae";
+    case GoalMetric::control_tv:
+      return "control_tv";
+    case GoalMetric::control_energy:
+      return "control_energy";
+    case GoalMetric::peak_command:
+      return "peak_command";
+    case GoalMetric::saturation_fraction:
+      return "saturation_fraction";
+    case GoalMetric::peak_error_after_fault:
+      return "peak_error_after_fault";
+    case GoalMetric::settling_time:
+      return "settling_time";
+    case GoalMetric::steady_state_error:
+      return "steady_state_error";
+  }
+  return "?";
+}
+
+bool windowed(GoalMetric m) {
+  return m != GoalMetric::control_tv && m != GoalMetric::peak_error_after_fault;
+}
+
+ObjectiveConfig GoalConfig::measure() const {
+  ObjectiveConfig o;
+  o.window = window;
+  o.window_from = window_from;
+  o.aggregate = aggregate;
+  o.q = q;
+  o.alpha = alpha;
+  return o;
+}
+
+double GoalConfig::violation(double value) const {
+  if (!at_most) return 0.0;
+  if (!(value <= std::numeric_limits<double>::max())) return std::numeric_limits<double>::infinity();
+  return std::max(0.0, value / *at_most - 1.0);
 }
 
 sim::Window ObjectiveConfig::window_of(const sim::Scenario& s) const {
@@ -874,8 +1083,24 @@ Job parse_job(const json& j_in, const std::string& source,
     }
     file_failed = !errs.empty();
   }
+  // A job gives objective or goals; with goals its objective is the soft goal's measure (when
+  // that is an error integral), which is what the runs score by.
+  const bool has_goals = j.is_object() && j.contains("goals");
+  if (has_goals && j.contains("objective"))
+    errs.push_back({"/goals", "a job gives \"objective\" or \"goals\", not both (the objective "
+                              "is a single soft goal)"});
+  if (has_goals && j["goals"].is_array() && j["goals"].empty())
+    errs.push_back({"/goals", "must hold at least one goal"});
   Job job;
   job_shape().read(j, "", job, errs);
+  for (const GoalConfig& g : job.goals)
+    if (g.soft() && g.metric <= GoalMetric::itae) {
+      job.objective = g.measure();
+      job.objective.metric = g.metric == GoalMetric::ise   ? sim::Metric::ise
+                             : g.metric == GoalMetric::iae ? sim::Metric::iae
+                                                           : sim::Metric::itae;
+      break;
+    }
   // Every default filled in: the plant's parameters, and a scenario without an initial state
   // starts from its plant's default one.
   if (const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model)) {
@@ -939,6 +1164,7 @@ json job_json_schema() {
 json to_json(const Job& job) { return job_shape().write(job); }
 json to_json(const PlantConfig& p) { return runtime::plant_shape()->write(p); }
 json to_json(const ObjectiveConfig& o) { return objective_shape()->write(o); }
+json to_json(const GoalConfig& g) { return goal_shape()->write(g); }
 json to_json(const sim::Scenario& s) { return scenario_shape()->write(s); }
 
 }  // namespace ftc::tune

@@ -93,7 +93,12 @@ struct Link {
     cursor += n;
     std::vector<double> f(J.size());
     for (std::size_t i = 0; i < J.size(); ++i) {
-      f[i] = J[i] > 0 ? 1.0 / J[i] : kDivergedObjective;  // 1/inf = 0 for a zero objective
+      // 1/inf = 0 for a zero objective; an infeasible candidate's J in [-1, 0)
+      // (constrained_fitness) goes above every other, decreasing in J, so pagmo's minimisation
+      // orders candidates as the constraint rule does.
+      f[i] = J[i] > 0    ? 1.0 / J[i]
+             : J[i] == 0 ? kDivergedObjective
+                         : kDivergedObjective * (2.0 - J[i]);
       if (!has_best || J[i] > best_fitness) {
         best = batch[i];
         best_fitness = J[i];

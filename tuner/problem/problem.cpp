@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <utility>
 
 #include "ftc/runtime/json_reader.hpp"
@@ -17,6 +18,37 @@ std::uint64_t next_identity() {
   static std::atomic<std::uint64_t> counter{0};
   return ++counter;
 }
+
+// What the runs make of a job's goals today: the soft goal is the objective, so it must be an
+// error integral; two or more soft goals would need a Pareto search. Anything else is refused
+// (exit 2) rather than scored by something the job did not ask for.
+std::vector<FieldError> unsupported_goals(const Job& job) {
+  std::vector<FieldError> errs;
+  std::size_t soft = 0;
+  for (const GoalConfig& g : job.goals) soft += g.soft() ? 1 : 0;
+  if (soft >= 2) {
+    errs.push_back({"/goals", std::to_string(soft) +
+                                  " soft goals (\"minimize\": true) ask for a Pareto search, "
+                                  "which ftctune does not offer yet; keep one soft goal and make "
+                                  "the others limits (\"at_most\")"});
+    return errs;
+  }
+  for (std::size_t i = 0; i < job.goals.size(); ++i) {
+    const GoalConfig& g = job.goals[i];
+    if (g.soft() && g.metric > GoalMetric::itae)
+      errs.push_back({"/goals/" + std::to_string(i) + "/metric",
+                      "the soft goal is the search's objective: ise, iae or itae for now (got " +
+                          std::string(to_string(g.metric)) + "; make it a limit with at_most)"});
+  }
+  return errs;
+}
+
+bool has_limits(const Job& job) {
+  return std::any_of(job.goals.begin(), job.goals.end(),
+                     [](const GoalConfig& g) { return g.at_most.has_value(); });
+}
+
+bool same_window(const sim::Window& a, const sim::Window& b) { return a.t0 == b.t0 && a.t1 == b.t1; }
 
 }  // namespace
 
@@ -41,6 +73,7 @@ TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std:
       listed_(listed),
       identity_(next_identity()) {
   throw_if_errors("job " + job_->name, job_->validate());
+  throw_if_errors("job " + job_->name, unsupported_goals(*job_));
   plant_ = sim::make_plant(job_->plant);
   scenarios_ = std::make_shared<const std::vector<sim::Scenario>>(std::move(scenarios));
   const bool include = job_->ensemble && job_->ensemble->unrecoverable == Unrecoverable::include;
@@ -103,6 +136,10 @@ sim::SimulationOptions TuningProblem::simulation_options(std::size_t scenario,
     o.metrics.settling_threshold = job_->metrics->settling_threshold.value_or(nan);
     o.metrics.steady_state_tail = job_->metrics->steady_state_tail.value_or(nan);
   }
+  for (const GoalConfig& g : job_->goals) {  // validate() made sure no two disagree
+    if (g.threshold) o.metrics.settling_threshold = *g.threshold;
+    if (g.tail) o.metrics.steady_state_tail = *g.tail;
+  }
   std::vector<double> cuts;
   for (const sim::Fault& f : s.faults)
     if (f.onset > 0 && f.onset < s.duration) cuts.push_back(f.onset);
@@ -114,6 +151,16 @@ sim::SimulationOptions TuningProblem::simulation_options(std::size_t scenario,
     start = c;
   }
   o.extra_windows.push_back({start, s.duration});
+  // Each goal's window, after the segments, unless it is one of them.
+  for (const GoalConfig& g : job_->goals) {
+    if (!windowed(g.metric)) continue;
+    const sim::Window w = g.measure().window_of(s);
+    if (same_window(w, o.window) ||
+        std::any_of(o.extra_windows.begin(), o.extra_windows.end(),
+                    [&](const sim::Window& x) { return same_window(x, w); }))
+      continue;
+    o.extra_windows.push_back(w);
+  }
   return o;
 }
 
@@ -146,7 +193,56 @@ Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
   }
   e.objective = job_->objective.aggregate_of(std::move(values));
   e.fitness = fitness_of(e.objective);
+  for (const GoalConfig& g : job_->goals) {
+    std::vector<double> v;  // a scenario where the metric is undefined (NaN) is left out
+    for (std::size_t i = 0; i < e.scenarios.size(); ++i)
+      if (counted_[i])
+        if (const double x = goal_value(g, e.scenarios[i], i); !std::isnan(x)) v.push_back(x);
+    const double value = g.measure().aggregate_of(std::move(v));
+    e.goals.push_back(value);
+    e.violation += g.violation(value);
+  }
+  e.fitness = constrained_fitness(e.fitness, e.violation);
   return e;
+}
+
+double TuningProblem::goal_value(const GoalConfig& g, const sim::Metrics& m,
+                                 std::size_t scenario) const {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  if (g.metric == GoalMetric::control_tv) return m.diverged ? inf : m.control_tv;
+  if (g.metric == GoalMetric::peak_error_after_fault) {
+    if (m.diverged) return inf;
+    double peak = std::numeric_limits<double>::quiet_NaN();
+    for (double p : m.peak_error_after_fault)
+      if (!std::isnan(p)) peak = std::isnan(peak) ? p : std::max(peak, p);
+    return peak;
+  }
+  const sim::Window w = g.measure().window_of(scenarios_->at(scenario));
+  const sim::ErrorIntegrals* in = same_window(w, m.window) ? &m.errors : nullptr;
+  for (std::size_t k = 0; !in && k < m.extra_windows.size(); ++k)
+    if (same_window(w, m.extra_windows[k])) in = &m.extra[k];
+  if (!in) throw std::logic_error("a goal's window was not simulated");
+  switch (g.metric) {
+    case GoalMetric::ise:
+      return in->ise;
+    case GoalMetric::iae:
+      return in->iae;
+    case GoalMetric::itae:
+      return in->itae;
+    case GoalMetric::control_energy:
+      return in->control_energy;
+    case GoalMetric::peak_command:
+      return in->peak_command;
+    case GoalMetric::saturation_fraction:
+      return in->saturation_fraction;
+    case GoalMetric::settling_time:
+      return in->settling_time;
+    case GoalMetric::steady_state_error:
+      return in->steady_state_error;
+    default:
+      break;
+  }
+  throw std::logic_error("a goal metric without a value");
 }
 
 Summary summarize_values(const ObjectiveConfig& objective, std::vector<double> v) {
@@ -214,7 +310,8 @@ std::vector<CandidateOutcome> TuningProblem::evaluate(
     out[i].evaluation = score(std::move(per));
     if (!out[i].error.empty()) {
       out[i].evaluation.objective = std::numeric_limits<double>::infinity();
-      out[i].evaluation.fitness = 0.0;
+      // Below every candidate that ran: 0, or the worst infeasible one's -1 under limits.
+      out[i].evaluation.fitness = has_limits(*job_) ? -1.0 : 0.0;
     }
   }
   return out;
@@ -270,6 +367,8 @@ std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batc
     if (per_scenario)
       for (const sim::Metrics& m : e.scenarios)
         t.scenario_objectives.push_back(m.objective(problem_.job().objective.metric));
+    t.goals = e.goals;
+    t.violation = e.violation;
     t.accepted = e.fitness > best_;
     best_ = std::max(best_, e.fitness);
     trials_.push_back(std::move(t));

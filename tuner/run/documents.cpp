@@ -126,6 +126,23 @@ json gains_document(const TuningOutcome& r) {
                               {"left_out", r.left_out}};
   g["objective"] = objective;
   g["fitness"] = json_number(r.optimization.best_fitness);
+  if (!job.goals.empty()) {  // the winner's goals, and the rule that chose it
+    const Evaluation& e = r.best().outcome.evaluation;
+    json list = json::array();
+    for (std::size_t k = 0; k < job.goals.size(); ++k) {
+      json goal = to_json(job.goals[k]);
+      const double v = k < e.goals.size() ? e.goals[k] : std::numeric_limits<double>::quiet_NaN();
+      goal["value"] = json_number(v);
+      if (job.goals[k].at_most) goal["violation"] = json_number(job.goals[k].violation(v));
+      list.push_back(std::move(goal));
+    }
+    g["goals"] = {{"goals", std::move(list)},
+                  {"total_violation", json_number(e.violation)},
+                  {"feasible", e.feasible()},
+                  {"rule",
+                   "feasible beats infeasible; between feasible candidates the soft goal "
+                   "decides, between infeasible ones the lesser total violation"}};
+  }
   const ComparedController& base = r.baseline();
   g["baseline"] = {{"controller", to_json(base.controller)},
                    {"objective", json_number(base.outcome.evaluation.objective)},
@@ -168,6 +185,9 @@ std::string trials_csv(const TuningOutcome& r) {
   s += ",objective,fitness,diverged,accepted";
   if (!r.job.ensemble)
     for (const sim::Scenario& sc : r.job.scenarios) s.append(",objective_").append(sc.name);
+  for (std::size_t k = 0; k < r.job.goals.size(); ++k)
+    s.append(",goal").append(std::to_string(k)).append("_").append(to_string(r.job.goals[k].metric));
+  if (!r.job.goals.empty()) s += ",violation,feasible";
   s += '\n';
   const auto num = [&](double v) { s.append(",").append(detail::format_number(v, "%.17g")); };
   for (const Trial& t : r.trials) {
@@ -177,6 +197,11 @@ std::string trials_csv(const TuningOutcome& r) {
     num(t.fitness);
     s.append(",").append(std::to_string(t.diverged)).append(t.accepted ? ",1" : ",0");
     for (double v : t.scenario_objectives) num(v);
+    if (!r.job.goals.empty()) {
+      for (double v : t.goals) num(v);
+      num(t.violation);
+      s.append(t.violation > 0 ? ",0" : ",1");
+    }
     s += '\n';
   }
   return s;

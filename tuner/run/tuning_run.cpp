@@ -37,9 +37,16 @@ namespace {
 nlohmann::json trial_json(const Trial& t) {
   nlohmann::json scen = nlohmann::json::array();
   for (double v : t.scenario_objectives) scen.push_back(json_io::json_number(v));
-  return nlohmann::json::array({t.iteration, t.index, t.parameters,
-                                json_io::json_number(t.objective), t.fitness, t.diverged, scen,
-                                t.accepted});
+  nlohmann::json row = nlohmann::json::array({t.iteration, t.index, t.parameters,
+                                              json_io::json_number(t.objective), t.fitness,
+                                              t.diverged, scen, t.accepted});
+  if (!t.goals.empty()) {  // a job with goals: [goal values], total violation
+    nlohmann::json goals = nlohmann::json::array();
+    for (double v : t.goals) goals.push_back(json_io::json_number(v));
+    row.push_back(std::move(goals));
+    row.push_back(json_io::json_number(t.violation));
+  }
+  return row;
 }
 
 std::vector<Trial> trials_from_json(const nlohmann::json& rows) {
@@ -49,7 +56,7 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows) {
   if (!rows.is_array()) throw bad();
   std::vector<Trial> out;
   for (const nlohmann::json& r : rows) {
-    if (!r.is_array() || r.size() != 8 || !r[0].is_number_integer() || !r[1].is_number_integer() ||
+    if (!r.is_array() || (r.size() != 8 && r.size() != 10) || !r[0].is_number_integer() || !r[1].is_number_integer() ||
         !r[2].is_array() || !r[4].is_number() || !r[5].is_number_integer() || !r[6].is_array() ||
         !r[7].is_boolean())
       throw bad();
@@ -67,6 +74,15 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows) {
       t.scenario_objectives.push_back(
           json_io::json_number_or(v, std::numeric_limits<double>::infinity()));
     t.accepted = r[7].get<bool>();
+    if (r.size() == 10) {
+      if (!r[8].is_array() || !(r[9].is_number() || r[9].is_null())) throw bad();
+      for (const nlohmann::json& v : r[8]) {
+        if (!v.is_number() && !v.is_null()) throw bad();
+        // null: NaN (no scenario defines the metric) or +inf; the value decides nothing later
+        t.goals.push_back(json_io::json_number_or(v, std::numeric_limits<double>::quiet_NaN()));
+      }
+      t.violation = json_io::json_number_or(r[9], std::numeric_limits<double>::infinity());
+    }
     out.push_back(std::move(t));
   }
   return out;

@@ -63,6 +63,45 @@ struct MetricsConfig {
   std::optional<double> steady_state_tail;   // s: the steady-state error's tail of each window
 };
 
+// A goal of the job (issue 26): a metric in a window, aggregated over the scenarios as the
+// objective's are, either minimised (a soft goal) or kept at most a limit (a hard goal, its
+// normalised violation max(0, value/at_most - 1)). A job gives "objective" or "goals".
+enum class GoalMetric {
+  ise,
+  iae,
+  itae,
+  control_tv,
+  control_energy,
+  peak_command,
+  saturation_fraction,
+  peak_error_after_fault,
+  settling_time,
+  steady_state_error
+};
+const char* to_string(GoalMetric m);
+// Whether the metric is measured in a window (the others over the whole run).
+bool windowed(GoalMetric m);
+
+struct GoalConfig {
+  GoalMetric metric = GoalMetric::ise;
+  sim::Window window;  // default: the whole run
+  WindowFrom window_from = WindowFrom::start;
+  Aggregate aggregate = Aggregate::mean;
+  double q = 0.9;
+  double alpha = 0.9;
+  bool minimize = false;          // a soft goal
+  std::optional<double> at_most;  // a hard goal's limit, > 0
+  std::optional<double> threshold;  // settling_time: rad (else the job's metrics block's)
+  std::optional<double> tail;       // steady_state_error: s (else the job's metrics block's)
+
+  bool soft() const { return minimize; }
+  // The goal's window and aggregate as an objective's (its metric field is left at ise).
+  ObjectiveConfig measure() const;
+  // The normalised violation max(0, value/at_most - 1) of a hard goal (0 for a soft one); a
+  // NaN or +inf value violates by +inf.
+  double violation(double value) const;
+};
+
 enum class Scale { linear, log };
 
 struct ParameterBounds {
@@ -95,7 +134,8 @@ struct Job {
   std::shared_ptr<const EnsembleConfig> ensemble;
   sim::ControllerConfig controller;
   std::vector<CompareEntry> compare;
-  ObjectiveConfig objective;
+  ObjectiveConfig objective;  // with goals: the soft goal's measure when it is ise, iae or itae
+  std::vector<GoalConfig> goals;  // empty: the job is scored by its objective
   std::optional<MetricsConfig> metrics;
   std::optional<TuningConfig> tuning;
 
@@ -128,6 +168,7 @@ using json_io::json_number_or;
 nlohmann::json to_json(const Job& job);
 nlohmann::json to_json(const PlantConfig& p);
 nlohmann::json to_json(const ObjectiveConfig& o);
+nlohmann::json to_json(const GoalConfig& g);
 nlohmann::json to_json(const sim::Scenario& s);
 
 }  // namespace ftc::tune

@@ -54,6 +54,18 @@ class FunctionFitness final : public BatchFitness {
   std::function<double(const Decision&)> f_;
 };
 
+// The constraint rule of a job with hard goals (issue 26), as the one fitness every optimiser
+// compares: a feasible candidate (total normalised violation V = 0) keeps its J = 1/objective
+// >= 0; an infeasible one gets -V/(1 + V) in [-1, 0) (-1 for V = +inf). So any feasible
+// candidate beats any infeasible one, and between infeasible ones less V wins, strictly while
+// the violations differ by more than rounding (up to V ~ 1e7), for every optimiser that
+// maximises J. Finite, so that checkpoints and pagmo keep it exactly.
+inline double constrained_fitness(double fitness, double violation) {
+  if (!(violation > 0)) return fitness;
+  if (!(violation <= std::numeric_limits<double>::max())) return -1.0;
+  return -(violation / (1.0 + violation));
+}
+
 struct HistoryRow {
   int iteration = 0;             // 0 = the initial population
   double best_fitness = 0.0;     // J(x*) after this iteration

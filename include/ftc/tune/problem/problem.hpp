@@ -36,6 +36,11 @@ struct Evaluation {
   double fitness = 0.0;                 // 1/objective; 0 when the objective is +inf
   bool diverged = false;                // some scenario diverged
   int diverged_count = 0;               // how many (counted or not)
+  // A job with goals: each goal's aggregate, in the job's order, and the total normalised
+  // violation of its hard goals (fitness is then constrained_fitness(1/objective, violation)).
+  std::vector<double> goals;
+  double violation = 0.0;
+  bool feasible() const { return !(violation > 0); }
 };
 
 // A candidate over many scenarios at a glance (SPEC §15's aggregates): the job's metric over the
@@ -114,6 +119,9 @@ class TuningProblem {
   // The tasks of n candidates: every (candidate, scenario) pair, candidate-major; with
   // `record_listed` the listed scenarios' trajectories are kept (never the members').
   std::vector<SimulationTask> tasks(std::size_t candidates, bool record_listed = false) const;
+  // A goal's value on one scenario's metrics: the metric in the goal's window (which
+  // simulation_options() asks for) or over the whole run; NaN where it is undefined (no fault).
+  double goal_value(const GoalConfig& goal, const sim::Metrics& m, std::size_t scenario) const;
   // A candidate's score from its metrics on every scenario.
   Evaluation score(std::vector<sim::Metrics> per_scenario) const;
   Summary summarize(const Evaluation& e) const;
@@ -154,6 +162,8 @@ struct Trial {
   int diverged = 0;                         // scenarios that diverged
   std::vector<double> scenario_objectives;  // per listed scenario (empty with an ensemble)
   bool accepted = false;                    // became the run's best so far when evaluated
+  std::vector<double> goals;                // a job with goals: each goal's value
+  double violation = 0;                     // and the hard goals' total normalised violation
 };
 
 // The problem as an optimiser sees it: the fitness of a batch of decision vectors, simulated
@@ -178,7 +188,7 @@ class ProblemFitness final : public BatchFitness {
   BatchEvaluator& evaluator_;
   std::int64_t simulations_ = 0;
   int iteration_ = 0, index_ = 0;
-  double best_ = -1.0;  // best fitness so far; J ≥ 0, so the first trial is accepted
+  double best_ = -2.0;  // best fitness so far; J ≥ -1, so the first trial is accepted
   std::vector<Trial> trials_;
 };
 
