@@ -503,3 +503,60 @@ TEST(TuningRun, HardGoalIsMetByTheWinnerOfEveryOptimiser) {
     EXPECT_EQ(gains["goals"]["goals"][1]["at_most"], limit);
   }
 }
+
+namespace {
+
+// The short Table 1 job scored by a soft ISE goal under a limit on the control TV.
+json capped_short_job(double limit) {
+  json j = short_table1_job();
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"window", {0, 5}}, {"minimize", true}},
+                {{"metric", "control_tv"}, {"at_most", limit}}};
+  return j;
+}
+
+}  // namespace
+
+TEST(TuningRun, ResumedConstrainedRunKeepsTheGoalsOfEveryTrial) {
+  // A limit (100) under every candidate's TV on this job (about 250): every trial is
+  // infeasible, so the resumed run must carry each trial's violation across the checkpoint.
+  const tune::Job job = tune::parse_job(capped_short_job(100), "capped");
+  const tune::TuningOutcome whole = tuned(job, 2);
+  for (const tune::Trial& t : whole.trials) ASSERT_GT(t.violation, 0.0);
+  std::string checkpoint;
+  tune::RunOptions stop;
+  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
+                      const std::vector<tune::Trial>& trials) {
+    checkpoint = tune::run_checkpoint(o, trials).dump();
+    return h.iteration < 1;
+  };
+  tuned(job, 1, std::nullopt, stop);
+  const json state = json::parse(checkpoint);
+  tune::RunOptions resume;
+  resume.resume = &state;
+  const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
+  EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
+  EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+  EXPECT_EQ(tune::gains_document(whole)["goals"]["feasible"], false);
+}
+
+TEST(Cli, RunExitsTwoForTwoSoftGoalsAndThreeWhenNoCandidateMeetsTheLimits) {
+  const auto dir = fresh_dir("goals");
+  const auto run = [&](const json& j) {
+    {
+      std::ofstream f(dir / "job.json");
+      f << j.dump();
+    }
+    return run_cli("run --force --no-checkpoint --threads 1 '" + (dir / "job.json").string() +
+                       "' --out '" + (dir / "out").string() + "'",
+                   dir);
+  };
+  json pareto = capped_short_job(100);
+  pareto["goals"][1] = {{"metric", "control_tv"}, {"minimize", true}};
+  const CliResult two = run(pareto);
+  EXPECT_EQ(two.exit_code, 2);
+  EXPECT_NE(two.err.find("Pareto search"), std::string::npos) << two.err;
+  const CliResult none = run(capped_short_job(100));
+  EXPECT_EQ(none.exit_code, 3);
+  EXPECT_NE(none.err.find("no candidate met the job's hard goals"), std::string::npos) << none.err;
+}
