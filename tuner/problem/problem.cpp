@@ -48,7 +48,9 @@ bool has_limits(const Job& job) {
                      [](const GoalConfig& g) { return g.at_most.has_value(); });
 }
 
-bool same_window(const sim::Window& a, const sim::Window& b) { return a.t0 == b.t0 && a.t1 == b.t1; }
+bool same_window(const sim::Window& a, const sim::Window& b) {
+  return a.t0 == b.t0 && a.t1 == b.t1;
+}
 
 }  // namespace
 

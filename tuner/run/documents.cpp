@@ -186,7 +186,7 @@ std::string trials_csv(const TuningOutcome& r) {
   if (!r.job.ensemble)
     for (const sim::Scenario& sc : r.job.scenarios) s.append(",objective_").append(sc.name);
   for (std::size_t k = 0; k < r.job.goals.size(); ++k)
-    s.append(",goal").append(std::to_string(k)).append("_").append(to_string(r.job.goals[k].metric));
+    s.append(",goal" + std::to_string(k) + "_" + to_string(r.job.goals[k].metric));
   if (!r.job.goals.empty()) s += ",violation,feasible";
   s += '\n';
   const auto num = [&](double v) { s.append(",").append(detail::format_number(v, "%.17g")); };

@@ -37,9 +37,9 @@ namespace {
 nlohmann::json trial_json(const Trial& t) {
   nlohmann::json scen = nlohmann::json::array();
   for (double v : t.scenario_objectives) scen.push_back(json_io::json_number(v));
-  nlohmann::json row = nlohmann::json::array({t.iteration, t.index, t.parameters,
-                                              json_io::json_number(t.objective), t.fitness,
-                                              t.diverged, scen, t.accepted});
+  nlohmann::json row =
+      nlohmann::json::array({t.iteration, t.index, t.parameters, json_io::json_number(t.objective),
+                             t.fitness, t.diverged, scen, t.accepted});
   if (!t.goals.empty()) {  // a job with goals: [goal values], total violation
     nlohmann::json goals = nlohmann::json::array();
     for (double v : t.goals) goals.push_back(json_io::json_number(v));
@@ -49,16 +49,17 @@ nlohmann::json trial_json(const Trial& t) {
   return row;
 }
 
-std::vector<Trial> trials_from_json(const nlohmann::json& rows) {
+// A job with n goals has rows of 10 with n goal values, one without goals rows of 8.
+std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goals) {
   const auto bad = [] {
     return InputError("checkpoint", "/trials", "is not a list of trials written by ftctune");
   };
   if (!rows.is_array()) throw bad();
   std::vector<Trial> out;
   for (const nlohmann::json& r : rows) {
-    if (!r.is_array() || (r.size() != 8 && r.size() != 10) || !r[0].is_number_integer() || !r[1].is_number_integer() ||
-        !r[2].is_array() || !r[4].is_number() || !r[5].is_number_integer() || !r[6].is_array() ||
-        !r[7].is_boolean())
+    if (!r.is_array() || r.size() != (goals ? 10u : 8u) || !r[0].is_number_integer() ||
+        !r[1].is_number_integer() || !r[2].is_array() || !r[4].is_number() ||
+        !r[5].is_number_integer() || !r[6].is_array() || !r[7].is_boolean())
       throw bad();
     Trial t;
     t.iteration = r[0].get<int>();
@@ -75,7 +76,8 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows) {
           json_io::json_number_or(v, std::numeric_limits<double>::infinity()));
     t.accepted = r[7].get<bool>();
     if (r.size() == 10) {
-      if (!r[8].is_array() || !(r[9].is_number() || r[9].is_null())) throw bad();
+      if (!r[8].is_array() || r[8].size() != goals || !(r[9].is_number() || r[9].is_null()))
+        throw bad();
       for (const nlohmann::json& v : r[8]) {
         if (!v.is_number() && !v.is_null()) throw bad();
         // null: NaN (no scenario defines the metric) or +inf; the value decides nothing later
@@ -217,7 +219,8 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   if (options.resume && options.resume->is_object() && options.resume->contains("optimizer")) {
     optimizer_state = &(*options.resume)["optimizer"];
     state_path = "/optimizer";
-    std::vector<Trial> trials = trials_from_json(options.resume->value("trials", nlohmann::json()));
+    std::vector<Trial> trials =
+        trials_from_json(options.resume->value("trials", nlohmann::json()), job.goals.size());
     // One trial per evaluation so far (an evaluation count beyond the budget is restore()'s to
     // refuse, with its own path).
     const nlohmann::json& ev = optimizer_state->is_object()
@@ -446,7 +449,8 @@ TuningOutcome checkpoint_outcome(const Job& job, const nlohmann::json& checkpoin
   } catch (const nlohmann::json::exception& e) {
     throw InputError("checkpoint", "", std::string("damaged optimiser state: ") + e.what());
   }
-  if (with_trials) r.trials = trials_from_json(checkpoint.value("trials", nlohmann::json()));
+  if (with_trials)
+    r.trials = trials_from_json(checkpoint.value("trials", nlohmann::json()), job.goals.size());
   if (optimizer->history().empty())
     throw InputError("checkpoint", "/optimizer/history", "has no iteration");
   const HistoryRow& last = optimizer->history().back();

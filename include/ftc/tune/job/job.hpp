@@ -89,8 +89,8 @@ struct GoalConfig {
   Aggregate aggregate = Aggregate::mean;
   double q = 0.9;
   double alpha = 0.9;
-  bool minimize = false;          // a soft goal
-  std::optional<double> at_most;  // a hard goal's limit, > 0
+  bool minimize = false;            // a soft goal
+  std::optional<double> at_most;    // a hard goal's limit, > 0
   std::optional<double> threshold;  // settling_time: rad (else the job's metrics block's)
   std::optional<double> tail;       // steady_state_error: s (else the job's metrics block's)
 
@@ -134,7 +134,8 @@ struct Job {
   std::shared_ptr<const EnsembleConfig> ensemble;
   sim::ControllerConfig controller;
   std::vector<CompareEntry> compare;
-  ObjectiveConfig objective;  // with goals: the soft goal's measure when it is ise, iae or itae
+  // With goals: the soft goal's measure (when it is ise, iae or itae).
+  ObjectiveConfig objective;
   std::vector<GoalConfig> goals;  // empty: the job is scored by its objective
   std::optional<MetricsConfig> metrics;
   std::optional<TuningConfig> tuning;
