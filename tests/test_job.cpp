@@ -1,11 +1,13 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <sstream>
 
 #include "cli_runner.hpp"
@@ -575,4 +577,46 @@ TEST(JobGoals, RunsRefuseTwoSoftGoalsAndASoftGoalThatIsNoErrorIntegral) {
   EXPECT_NE(refusal(with_goals(json::array({{{"metric", "control_energy"}, {"minimize", true}}})))
                 .find("/goals/0/metric"),
             std::string::npos);
+}
+
+TEST(JobGoals, GoalValuesAreTheMetricsInTheirOwnWindows) {
+  // Table 1 (faults at 10 s and 20 s) with goals in windows of their own: each goal's window is
+  // simulated, and its value is what a simulation with that window as its main one measures.
+  json j = with_goals(json::array(
+      {soft_ise(),
+       {{"metric", "peak_command"}, {"window", {2, 8}}, {"at_most", 1e9}},
+       {{"metric", "steady_state_error"}, {"window_from", "first_fault"}, {"window", {0, 5}},
+        {"tail", 2}, {"at_most", 1e9}},
+       {{"metric", "peak_error_after_fault"}, {"aggregate", "max"}, {"at_most", 1e-9}}}));
+  const tune::TuningProblem problem(tune::parse_job(j, "t"));
+  const sim::SimulationOptions o = problem.simulation_options(0);
+  const auto has = [&](double t0, double t1) {
+    for (const sim::Window& w : o.extra_windows)
+      if (w.t0 == t0 && w.t1 == t1) return true;
+    return false;
+  };
+  EXPECT_TRUE(has(2, 8));
+  EXPECT_TRUE(has(10, 15));  // from the first fault at 10 s
+  EXPECT_EQ(o.metrics.steady_state_tail, 2.0);
+  const sim::ControllerConfig c = problem.job().controller;
+  tune::SerialEvaluator serial;
+  const tune::Evaluation e =
+      problem.evaluate(std::span<const sim::ControllerConfig>(&c, 1), serial)[0].evaluation;
+  ASSERT_EQ(e.goals.size(), 4u);
+  EXPECT_EQ(e.goals[0], e.objective);
+  const auto measured = [&](double t0, double t1) {
+    sim::SimulationOptions alone;
+    alone.window = {t0, t1};
+    alone.metrics.steady_state_tail = 2;
+    return problem.plant().simulate(c, problem.scenario(0), alone).metrics;
+  };
+  EXPECT_EQ(e.goals[1], measured(2, 8).errors.peak_command);
+  EXPECT_EQ(e.goals[2], measured(10, 15).errors.steady_state_error);
+  const sim::Metrics whole = measured(0, 30);
+  EXPECT_EQ(e.goals[3], std::max(whole.peak_error_after_fault[0], whole.peak_error_after_fault[1]));
+  // Only the last goal is violated, by its value / limit - 1.
+  EXPECT_DOUBLE_EQ(e.violation, e.goals[3] / 1e-9 - 1);
+  EXPECT_FALSE(e.feasible());
+  EXPECT_EQ(e.fitness, tune::constrained_fitness(tune::fitness_of(e.objective), e.violation));
+  EXPECT_LT(e.fitness, 0.0);
 }
