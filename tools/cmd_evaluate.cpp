@@ -9,6 +9,7 @@
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/report/evaluation.hpp"
+#include "ftc/tune/run/api.hpp"
 #include "ftc/tune/run/evaluate.hpp"
 #include "progress.hpp"
 
@@ -28,7 +29,7 @@ struct EvaluateCliOptions {
 int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   namespace fs = std::filesystem;
   const tune::Job job = tune::load_job(o.job);
-  tune::EvaluateOptions options;
+  tune::EvaluateJobOptions options;
   // LABEL=FILE names the controller in tables and figures; a bare FILE is labelled by its path.
   for (const std::string& p : o.gains) {
     const std::size_t eq = p.find('=');
@@ -41,15 +42,11 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   }
   options.seed = o.seed;
   options.count = o.count;
+  options.figure = !o.no_figure;
+  options.log = spdlog_log();
   // Beside the job's latest run (out/<name>, or -2, -3, ... where `run` moved on), whose report
   // then shows it.
-  fs::path out = o.out;
-  if (o.out.empty()) {
-    std::string why;
-    const fs::path run = latest_run_dir(job, &why);
-    spdlog::info("{}", why);
-    out = (run.empty() ? default_out_dir(job) : run) / "evaluation";
-  }
+  options.out = o.out.empty() ? tune::evaluation_dir(job, options.log) : fs::path(o.out);
   if (!g.quiet && job.ensemble)
     std::printf(
         "Evaluating on %s: %zu listed scenario%s + %lld ensemble members, held-out "
@@ -66,12 +63,11 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   options.progress = [&](std::int64_t done, std::int64_t total) {
     bar.draw(done, total, elapsed());
   };
-  const std::unique_ptr<tune::BatchEvaluator> evaluator = make_evaluator(o.threads);
-  const tune::EvaluationResult r = tune::evaluate_out_of_sample(job, options, *evaluator);
+  const tune::EvaluateJobResult result = tune::evaluate_job(job, options);
   bar.clear();
-  tune::write_evaluation(r, out);
-  fs::path figure;
-  if (!o.no_figure) figure = tune::draw_evaluation(r, out);
+  const tune::EvaluationResult& r = result.evaluation;
+  const fs::path& out = result.out;
+  const fs::path& figure = result.figure;
   if (g.quiet) return 0;
   const tune::Summary& s0 = r.controllers.front().aggregates;
   std::printf(
@@ -80,8 +76,8 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
       s0.unrecoverable, s0.counted < s0.scenarios ? " (left out)" : "");
   std::fputs(tune::evaluation_table(r).c_str(), stdout);
   std::printf("  %lld simulations on %d thread%s in %.2f s\n",
-              static_cast<long long>(r.simulations), evaluator->concurrency(),
-              evaluator->concurrency() == 1 ? "" : "s", elapsed());
+              static_cast<long long>(r.simulations), result.threads,
+              result.threads == 1 ? "" : "s", elapsed());
   std::printf("  wrote %s/{evaluation.json, evaluation.csv%s, worst/}\n", out.c_str(),
               figure.empty() ? "" : (", " + figure.filename().string()).c_str());
   return 0;
