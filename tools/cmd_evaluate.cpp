@@ -5,7 +5,10 @@
 #include <chrono>
 #include <cstdio>
 
+#include <nlohmann/json.hpp>
+
 #include "cli.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/report/evaluation.hpp"
@@ -24,6 +27,7 @@ struct EvaluateCliOptions {
   std::string out;
   int threads = 0;
   bool no_figure = false;
+  bool json_output = false;  // --json: one JSON document of what was evaluated on stdout
 };
 
 int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
@@ -47,7 +51,9 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   // Beside the job's latest run (out/<name>, or -2, -3, ... where `run` moved on), whose report
   // then shows it.
   options.out = o.out.empty() ? tune::evaluation_dir(job, options.log) : fs::path(o.out);
-  if (!g.quiet && job.ensemble)
+  // Under --json standard output carries the document only (logs go to standard error).
+  const bool quiet = g.quiet || o.json_output;
+  if (!quiet && job.ensemble)
     std::printf(
         "Evaluating on %s: %zu listed scenario%s + %lld ensemble members, held-out "
         "seed %llu%s\n",
@@ -68,6 +74,32 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   const tune::EvaluationResult& r = result.evaluation;
   const fs::path& out = result.out;
   const fs::path& figure = result.figure;
+  if (o.json_output) {
+    using nlohmann::json;
+    json files = {"evaluation.json", "evaluation.csv"};
+    if (!figure.empty()) files.push_back(figure.filename().string());
+    files.push_back("worst");
+    json controllers = json::array();
+    for (const tune::EvaluatedController& c : r.controllers)
+      controllers.push_back({{"label", c.label},
+                             {"source", c.source},
+                             {"aggregates", tune::summary_json(c.aggregates)}});
+    const json doc = {{"command", "evaluate"},
+                      {"job", job.name},
+                      {"out", out.string()},
+                      {"files", files},
+                      {"evaluation", (out / "evaluation.json").string()},
+                      {"seed", r.seed},
+                      {"count", r.count},
+                      {"listed_scenarios", job.scenarios.size()},
+                      {"objective_label", tune::objective_label(job)},
+                      {"controllers", controllers},
+                      {"simulations", r.simulations},
+                      {"threads", result.threads},
+                      {"wall_seconds", elapsed()}};
+    std::printf("%s\n", doc.dump(2).c_str());
+    return 0;
+  }
   if (g.quiet) return 0;
   const tune::Summary& s0 = r.controllers.front().aggregates;
   std::printf(
@@ -107,6 +139,9 @@ void add_evaluate_command(CLI::App& app, const Globals& g, Action& action) {
       ->check(CLI::Range(0, 4096));
   // A plain flag: CLI11 shows a negated one's default in the help ("--no-figure{false}").
   sub->add_flag("--no-figure", opts->no_figure, "Skip the figure (no gnuplot needed)");
+  sub->add_flag("--json", opts->json_output,
+                "Print what was evaluated as one JSON document on standard output (files, "
+                "each controller's aggregates); logs stay on standard error");
   sub->footer(
       "\nExamples:\n"
       "  ftctune evaluate jobs/robust-faults.json --gains out/robust-faults/gains.json\n"

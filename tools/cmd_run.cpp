@@ -6,7 +6,10 @@
 #include <cmath>
 #include <cstdio>
 
+#include <nlohmann/json.hpp>
+
 #include "cli.hpp"
+#include "ftc/runtime/json_reader.hpp"
 #include "ftc/tune/run/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "progress.hpp"
@@ -25,7 +28,42 @@ struct RunCliOptions {
   bool checkpoint = false;     // after every iteration, from the first
   bool no_checkpoint = false;  // never (else: once the run looks like taking over a minute)
   bool resume = false;
+  bool json_output = false;  // --json: one JSON document of what the run did on stdout
 };
+
+// What `run --json` prints: where the files went and what the run found.
+nlohmann::json run_document(const tune::Job& job, const tune::RunJobResult& result,
+                            const std::vector<std::string>& names, const std::string& report) {
+  using nlohmann::json;
+  const tune::TuningOutcome& r = result.outcome;
+  json tuned = json::object();
+  for (std::size_t i = 0; i < names.size() && i < r.optimization.best.size(); ++i)
+    tuned[names[i]] = r.optimization.best[i];
+  json doc;
+  doc["command"] = "run";
+  doc["job"] = job.name;
+  doc["out"] = result.out.string();
+  doc["gains"] = (result.out / "gains.json").string();
+  doc["files"] = result.files;
+  if (!report.empty()) doc["report"] = report;
+  doc["controller"] = sim::to_string(job.controller.type);
+  doc["tuned"] = tuned;
+  doc["objective_label"] = tune::objective_label(job);
+  doc["objective"] = json_io::json_number(r.best().outcome.evaluation.objective);
+  doc["baseline_objective"] = json_io::json_number(r.baseline().outcome.evaluation.objective);
+  doc["fitness"] = r.optimization.best_fitness;
+  doc["diverged"] = result.diverged();
+  doc["scenarios"] = r.scenarios;
+  doc["listed_scenarios"] = r.listed_scenarios;
+  doc["unrecoverable"] = r.unrecoverable;
+  doc["noise_floor"] =
+      r.noise_floor ? json_io::json_number(r.noise_floor->relative_spread) : json(nullptr);
+  doc["warnings"] = r.warnings;
+  doc["simulations"] = r.simulations;
+  doc["threads"] = r.threads;
+  doc["wall_seconds"] = result.wall_seconds;
+  return doc;
+}
 
 int run_tuning(const RunCliOptions& o, const Globals& g) {
   const tune::Job job = tune::load_job(o.job);
@@ -43,6 +81,8 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   ro.checkpoint = o.no_checkpoint ? tune::CheckpointPolicy::never
                   : o.checkpoint  ? tune::CheckpointPolicy::every_iteration
                                   : tune::CheckpointPolicy::automatic;
+  // Under --json standard output carries the document only (logs go to standard error).
+  const bool quiet = g.quiet || o.json_output;
   ProgressBar bar(!g.quiet);
   const tune::RunLog log = spdlog_log();
   ro.log = [&](tune::LogLevel level, const std::string& message) {
@@ -64,7 +104,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   const tune::TuningOutcome& r = result.outcome;
   const std::filesystem::path& out = result.out;
   const double wall = result.wall_seconds;
-  if (!g.quiet) {
+  if (!quiet) {
     std::printf("tuned %s: %s\n", tune::display_name(job.controller.type).c_str(),
                 tune::parameters_text(names, r.optimization.best).c_str());
     // The objective with seven digits and the change in %: J to six digits can read the same
@@ -90,7 +130,12 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
         "job.json, run.json%s} and trajectories/\n",
         out.c_str(), o.baseline ? ", history-random.csv" : "");
   }
-  const int report_status = o.report ? render_run_report(out.string(), "html", g.quiet) : 0;
+  const int report_status = o.report ? render_run_report(out.string(), "html", quiet) : 0;
+  if (o.json_output)
+    std::printf("%s\n", run_document(job, result, names,
+                                     o.report ? (out / "report.html").string() : std::string())
+                             .dump(2)
+                             .c_str());
   // Gains that diverge on what the objective counts must not reach a spacecraft: the files stay
   // for diagnosis (and the gains loader refuses them), and the exit status says so, --quiet or
   // not, with a code of its own (3) that scripts can tell from an internal error (1).
@@ -132,6 +177,9 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
                 "Continue the interrupted run in --out (or out/<job name>) from its checkpoint; "
                 "without one, start from the first iteration")
       ->excludes("--force");
+  sub->add_flag("--json", opts->json_output,
+                "Print what the run did as one JSON document on standard output (files, tuned "
+                "values, objective, warnings); logs stay on standard error");
   sub->callback([&action, &g, opts] { action = [&g, opts] { return run_tuning(*opts, g); }; });
 }
 
