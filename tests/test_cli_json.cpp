@@ -151,4 +151,6 @@ TEST(CliJson, EvaluatePrintsEachControllersAggregates) {
     EXPECT_EQ(j["controllers"][c]["aggregates"], doc["controllers"][c]["aggregates"]);
   }
   EXPECT_GT(j["simulations"].get<std::int64_t>(), 0);
+  for (const json& f : j["files"])
+    EXPECT_TRUE(std::filesystem::exists(out / f.get<std::string>())) << f;
 }

@@ -77,7 +77,10 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   if (o.json_output) {
     using nlohmann::json;
     json files = {"evaluation.json", "evaluation.csv"};
-    if (!figure.empty()) files.push_back(figure.filename().string());
+    if (!figure.empty()) {
+      files.push_back("evaluation.gp");  // the figure's gnuplot script, beside it
+      files.push_back(figure.filename().string());
+    }
     files.push_back("worst");
     json controllers = json::array();
     for (const tune::EvaluatedController& c : r.controllers)
