@@ -76,6 +76,44 @@ TEST(RunApi, RunJobWritesTheBytesOfTheCommandLine) {
   EXPECT_EQ(json(listed), ra["files"]);
 }
 
+TEST(RunApi, ARunComputedWithoutADirectoryIsWrittenLaterWithTheSameBytes) {
+  const std::filesystem::path dir = fresh_dir("run-api-later");
+  const tune::Job job = tune::parse_job(tiny_job(), "tiny");
+  tune::SerialEvaluator serial;
+  tune::RunJobOptions o;
+  o.out = dir / "now";
+  o.evaluator = &serial;
+  o.baseline = true;
+  const tune::RunJobResult now = tune::run_job(job, o);
+  o.out = dir / "never";
+  o.write = false;
+  const tune::RunJobResult later = tune::run_job(job, o);
+  EXPECT_TRUE(later.out.empty());
+  EXPECT_FALSE(std::filesystem::exists(dir / "never"));  // no lock, checkpoint or file
+  EXPECT_EQ(tune::write_run(later, dir / "later"), dir / "later");
+  const auto a = files_under(dir / "now"), b = files_under(dir / "later");
+  ASSERT_EQ(a.size(), b.size());
+  for (const auto& [name, content] : a)
+    if (name != "run.json") EXPECT_EQ(b.at(name), content) << name;
+  EXPECT_EQ(b.at("run.json"), later.run_json);
+  // Like run_job, it never writes over a run unless forced.
+  try {
+    tune::write_run(later, dir / "now");
+    ADD_FAILURE() << "write_run wrote over a run";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.source(), "--out");
+  }
+  EXPECT_EQ(slurp(dir / "now" / "run.json"), now.run_json);
+  tune::write_run(later, dir / "now", true);
+  EXPECT_EQ(slurp(dir / "now" / "run.json"), later.run_json);
+  // A run stopped early has no files to write; nor may a run without a directory resume.
+  tune::RunJobOptions stop = o;
+  stop.on_iteration = [](const tune::IterationReport&) { return false; };
+  EXPECT_THROW(tune::write_run(tune::run_job(job, stop), dir / "stopped"), InputError);
+  EXPECT_FALSE(std::filesystem::exists(dir / "stopped"));
+  EXPECT_THROW(tune::resume_job(job, o), InputError);
+}
+
 TEST(RunApi, AGivenDirectoryHoldingARunIsRefusedUnlessForced) {
   const std::filesystem::path dir = fresh_dir("run-api-refuse");
   const tune::Job job = tune::parse_job(tiny_job(), "tiny");

@@ -67,6 +67,38 @@ struct EvaluatorFor {
   }
 };
 
+// The files of a finished run into `out` (locked by the caller): first into a staging directory
+// inside it, each synced, so that a full disk or a kill on the way leaves `out` as it was, an
+// earlier run included; only then does the new run take its place, entry by entry by rename
+// (which needs no space) with gains.json last. `replace`: what is in the way goes first (the run
+// `force` replaces, or what an earlier start of a resumed run left: rename cannot replace a
+// directory that has files). Then the checkpoint, of no more use, goes.
+void put_in_place(const RunJobResult& result, const std::map<std::string, std::string>& outputs,
+                  const fs::path& out, bool replace) {
+  const fs::path staging = unique_dir(out, kStagingPrefix);
+  std::vector<std::string> entries;
+  const auto add_entry = [&](const std::string& file) {
+    const std::string top = fs::path(file).begin()->string();  // trajectories/a/b.csv: the folder
+    if (std::find(entries.begin(), entries.end(), top) == entries.end()) entries.push_back(top);
+  };
+  try {
+    if (result.random_baseline) {
+      write_file_atomic(staging / "history-random.csv", history_csv(*result.random_baseline));
+      add_entry("history-random.csv");
+    }
+    write_file_atomic(staging / "run.json", result.run_json);
+    add_entry("run.json");
+    for (const std::string& f : write_output_files(outputs, staging)) add_entry(f);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(staging, ec);
+    throw;
+  }
+  replace_run(out, staging, entries, replace);
+  // gains.json is in place: the run is finished, and its checkpoint of no more use.
+  fs::remove(out / kCheckpointFile);
+}
+
 }  // namespace
 
 std::string parameters_text(const std::vector<std::string>& names, const Decision& x) {
@@ -85,6 +117,8 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
     throw InputError(o.job_file, "/tuning", "is required by ftctune run (what should be tuned?)");
   if (o.resume && o.force)
     throw InputError("--resume", "", "cannot be combined with --force");
+  if (o.resume && !o.write)
+    throw InputError("--resume", "", "needs the run's output directory (write = false)");
   // Memory by design: a job whose run would not fit is refused before any work.
   check_memory_budget(job, memory_budget_bytes(), o.job_file);
   fs::path out = o.out.empty() ? default_out_dir(job.name) : o.out;
@@ -114,16 +148,16 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
       say(log, LogLevel::info,
           "no checkpoint in " + out.string() + ": starting from the first iteration");
     }
-  } else {
+  } else if (o.write) {
     lock = claim_run_directory(out, !o.out.empty(), o.force, log);
   }
-  handle_leftovers(out, log);
+  if (o.write) handle_leftovers(out, log);
   const std::int64_t total = job.tuning->algorithm->evaluations();
   std::vector<std::string> names;
   for (const ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
 
   RunJobResult result;
-  result.out = out;
+  if (o.write) result.out = out;
   const std::string started = utc_now();
   const auto t0 = clock_type::now();
   EvaluatorFor evaluator(o.evaluator, o.threads);
@@ -131,7 +165,7 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
   ro.seed = o.seed;
   if (resumed) ro.resume = &resumed->state;
   // Checkpoints: asked for, continuing one, or once the run looks like taking over a minute.
-  const bool never = o.checkpoint == CheckpointPolicy::never;
+  const bool never = o.checkpoint == CheckpointPolicy::never || !o.write;
   bool checkpointing = !never && (o.checkpoint == CheckpointPolicy::every_iteration || resumed);
   // Evaluations done before this process started (one trial each), for the ETA.
   const auto evaluations_before =
@@ -214,36 +248,20 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
   for (const json& f : files) result.files.push_back(f.get<std::string>());
   result.run_json = run.dump(2) + "\n";
 
-  // The files go to a staging directory inside `out` first, each synced: a full disk or a kill
-  // on the way leaves `out` as it was, an earlier run included. Only then does the new run take
-  // its place, entry by entry by rename (which needs no space) with gains.json last.
-  const fs::path staging = unique_dir(out, kStagingPrefix);
-  std::vector<std::string> entries;
-  const auto add_entry = [&](const std::string& file) {
-    const std::string top = fs::path(file).begin()->string();  // trajectories/a/b.csv: the folder
-    if (std::find(entries.begin(), entries.end(), top) == entries.end()) entries.push_back(top);
-  };
-  try {
-    if (result.random_baseline) {
-      write_file_atomic(staging / "history-random.csv", history_csv(*result.random_baseline));
-      add_entry("history-random.csv");
-    }
-    write_file_atomic(staging / "run.json", result.run_json);
-    add_entry("run.json");
-    for (const std::string& f : write_output_files(outputs, staging)) add_entry(f);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove_all(staging, ec);
-    throw;
-  }
-  // What is in the way goes first: the run `force` replaces, or what an earlier start of a
-  // resumed run left (rename cannot replace a directory that has files). The checkpoint stays
-  // until gains.json is in place.
-  replace_run(out, staging, entries, o.force || o.resume);
-  // gains.json is in place: the run is finished, and its checkpoint of no more use.
-  fs::remove(out / kCheckpointFile);
+  if (o.write) put_in_place(result, outputs, out, o.force || o.resume);
   for (const std::string& w : r.warnings) say(log, LogLevel::warn, w);
   return result;
+}
+
+fs::path write_run(const RunJobResult& result, const fs::path& out, bool force,
+                   const RunLog& log) {
+  if (result.stopped || !result.outcome.completed() || result.outcome.comparison.empty())
+    throw InputError("run", "", "was stopped before it finished: it has no files to write");
+  fs::path dir = out;
+  const std::unique_ptr<DirectoryLock> lock = claim_run_directory(dir, true, force, log);
+  handle_leftovers(dir, log);
+  put_in_place(result, output_files(result.outcome), dir, force);
+  return dir;
 }
 
 RunJobResult resume_job(const Job& job, RunJobOptions options) {

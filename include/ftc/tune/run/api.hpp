@@ -81,6 +81,9 @@ struct RunJobOptions {
   bool baseline = false;               // also random search with the same budget
   bool force = false;                  // replace the run `out` holds
   bool resume = false;                 // continue the run in `out` from its checkpoint
+  // false: no output directory at all (no lock, checkpoint or file); write_run() writes the
+  // result's files later.
+  bool write = true;
   CheckpointPolicy checkpoint = CheckpointPolicy::automatic;
   double checkpoint_after_seconds = 60.0;  // for CheckpointPolicy::automatic
   BatchEvaluator* evaluator = nullptr;     // null: make_evaluator(threads)
@@ -93,7 +96,7 @@ struct RunJobOptions {
 struct RunJobResult {
   TuningOutcome outcome;
   std::optional<TuningOutcome> random_baseline;  // with RunJobOptions::baseline
-  std::filesystem::path out;                     // where the files went
+  std::filesystem::path out;                     // where the files went (empty: not written)
   std::vector<std::string> files;                // as run.json lists them
   std::string run_json;                          // run.json's text
   double wall_seconds = 0.0;
@@ -109,6 +112,12 @@ struct RunJobResult {
 // without a tuning section, one over the memory budget, or an output directory that holds a run
 // (without force) or that another run is writing.
 RunJobResult run_job(const Job& job, const RunJobOptions& options = {});
+// The files of a finished run_job() result into `out`, as run_job writes them (the same bytes;
+// run.json as the result holds it): `out` is locked, refused when it holds a run unless `force`
+// (InputError "--out"), and the files go through a staging directory, gains.json last. For a
+// run computed with `write = false`. Returns the directory. Throws InputError for a stopped run.
+std::filesystem::path write_run(const RunJobResult& result, const std::filesystem::path& out,
+                                bool force = false, const RunLog& log = {});
 // `ftctune run --resume`: run_job with options.resume; continues from `out`'s checkpoint, or
 // starts from the first iteration when there is none. Refuses a directory holding a finished run,
 // a checkpoint of another job or seed, and force.
