@@ -87,9 +87,9 @@ TEST(CliJson, RunPrintsItsFilesAndFindingsAsOneDocument) {
   const std::filesystem::path dir = fresh_dir("cli-json-run");
   tune::write_file_atomic(dir / "job.json", tiny_job().dump(2));
   const std::filesystem::path out = dir / "run";
-  const CliResult r = run_cli("run --json --threads 2 '" + (dir / "job.json").string() +
-                                  "' --out '" + out.string() + "'",
-                              dir);
+  const CliResult r = run_cli(
+      "run --json --threads 2 '" + (dir / "job.json").string() + "' --out '" + out.string() + "'",
+      dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("[info] iteration 1/1"), std::string::npos) << r.err;  // logs: stderr
   const json j = document(r);

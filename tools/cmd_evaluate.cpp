@@ -4,15 +4,14 @@
 
 #include <chrono>
 #include <cstdio>
-
 #include <nlohmann/json.hpp>
 
 #include "cli.hpp"
-#include "ftc/tune/run/documents.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/report/evaluation.hpp"
 #include "ftc/tune/run/api.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
 #include "progress.hpp"
 
@@ -111,8 +110,8 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
       s0.unrecoverable, s0.counted < s0.scenarios ? " (left out)" : "");
   std::fputs(tune::evaluation_table(r).c_str(), stdout);
   std::printf("  %lld simulations on %d thread%s in %.2f s\n",
-              static_cast<long long>(r.simulations), result.threads,
-              result.threads == 1 ? "" : "s", elapsed());
+              static_cast<long long>(r.simulations), result.threads, result.threads == 1 ? "" : "s",
+              elapsed());
   std::printf("  wrote %s/{evaluation.json, evaluation.csv%s, worst/}\n", out.c_str(),
               figure.empty() ? "" : (", " + figure.filename().string()).c_str());
   return 0;

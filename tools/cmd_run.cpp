@@ -5,7 +5,6 @@
 
 #include <cmath>
 #include <cstdio>
-
 #include <nlohmann/json.hpp>
 
 #include "cli.hpp"
@@ -134,8 +133,8 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   if (o.json_output)
     std::printf("%s\n", run_document(job, result, names,
                                      o.report ? (out / "report.html").string() : std::string())
-                             .dump(2)
-                             .c_str());
+                            .dump(2)
+                            .c_str());
   // Gains that diverge on what the objective counts must not reach a spacecraft: the files stay
   // for diagnosis (and the gains loader refuses them), and the exit status says so, --quiet or
   // not, with a code of its own (3) that scripts can tell from an internal error (1).

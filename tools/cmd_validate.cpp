@@ -25,7 +25,8 @@ struct ValidateCli {
 tune::Job read_job(const std::string& file) {
   if (file != "-") return tune::load_job(file);
   // A scenarios file the job names is read relative to the working directory.
-  const std::string text{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
+  const std::string text{std::istreambuf_iterator<char>(std::cin),
+                         std::istreambuf_iterator<char>()};
   if (std::cin.bad()) throw InputError(kStdinSource, "", "cannot read standard input");
   return tune::parse_job_text(text, kStdinSource, std::filesystem::current_path());
 }
@@ -42,18 +43,17 @@ int run_validate(const ValidateCli& o, const Globals& g) {
                                           std::to_string(job.ensemble->count) + " ensemble members)"
                                     : "";
     if (o.json_output) {
-      const json doc = {
-          {"command", "validate"},
-          {"file", name},
-          {"valid", true},
-          {"job", job.name},
-          {"tuning", static_cast<bool>(job.tuning)},
-          {"evaluations", evals},
-          {"scenarios", job.scenario_count()},
-          {"listed_scenarios", job.scenarios.size()},
-          {"ensemble_members", job.ensemble ? job.ensemble->count : 0},
-          {"steps_per_evaluation", steps},
-          {"steps", static_cast<double>(evals) * static_cast<double>(steps)}};
+      const json doc = {{"command", "validate"},
+                        {"file", name},
+                        {"valid", true},
+                        {"job", job.name},
+                        {"tuning", static_cast<bool>(job.tuning)},
+                        {"evaluations", evals},
+                        {"scenarios", job.scenario_count()},
+                        {"listed_scenarios", job.scenarios.size()},
+                        {"ensemble_members", job.ensemble ? job.ensemble->count : 0},
+                        {"steps_per_evaluation", steps},
+                        {"steps", static_cast<double>(evals) * static_cast<double>(steps)}};
       std::printf("%s\n", doc.dump(2).c_str());
     } else if (!g.quiet) {
       std::printf(
@@ -73,8 +73,11 @@ int run_validate(const ValidateCli& o, const Globals& g) {
       json errors = json::array();
       for (const FieldError& fe : e.errors())
         errors.push_back({{"path", fe.path}, {"message", fe.message}});
-      const json doc = {{"command", "validate"}, {"file", name},     {"valid", false},
-                        {"source", e.source()},  {"errors", errors}};
+      const json doc = {{"command", "validate"},
+                        {"file", name},
+                        {"valid", false},
+                        {"source", e.source()},
+                        {"errors", errors}};
       std::printf("%s\n", doc.dump(2).c_str());
     }
     return 2;

@@ -115,8 +115,7 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
   const RunLog& log = o.log;
   if (!job.tuning)
     throw InputError(o.job_file, "/tuning", "is required by ftctune run (what should be tuned?)");
-  if (o.resume && o.force)
-    throw InputError("--resume", "", "cannot be combined with --force");
+  if (o.resume && o.force) throw InputError("--resume", "", "cannot be combined with --force");
   if (o.resume && !o.write)
     throw InputError("--resume", "", "needs the run's output directory (write = false)");
   // Memory by design: a job whose run would not fit is refused before any work.
@@ -182,12 +181,11 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
               " after every iteration (ftctune run --resume continues from it)");
     }
     if (checkpointing)
-      write_file_atomic(out / kCheckpointFile,
-                        checkpoint_text(job_sha, seed, h.iteration,
-                                        run_checkpoint(optimizer, trials)));
+      write_file_atomic(out / kCheckpointFile, checkpoint_text(job_sha, seed, h.iteration,
+                                                               run_checkpoint(optimizer, trials)));
     if (!o.on_iteration) return true;
-    const bool go_on = o.on_iteration(IterationReport{
-        h, total, job.tuning->algorithm->iterations(), elapsed, eta});
+    const bool go_on = o.on_iteration(
+        IterationReport{h, total, job.tuning->algorithm->iterations(), elapsed, eta});
     result.stopped = !go_on;
     return go_on;
   };
@@ -253,8 +251,7 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
   return result;
 }
 
-fs::path write_run(const RunJobResult& result, const fs::path& out, bool force,
-                   const RunLog& log) {
+fs::path write_run(const RunJobResult& result, const fs::path& out, bool force, const RunLog& log) {
   if (result.stopped || !result.outcome.completed() || result.outcome.comparison.empty())
     throw InputError("run", "", "was stopped before it finished: it has no files to write");
   fs::path dir = out;
@@ -307,7 +304,8 @@ LandscapeJobResult landscape_job(const Job& job, const LandscapeJobOptions& o) {
   const fs::path run = latest_run_dir(job, &why);
   say(o.log, LogLevel::info, why);
   LandscapeJobResult result;
-  result.out = o.out.empty() ? (run.empty() ? default_out_dir(job.name) : run) / "landscape" : o.out;
+  result.out =
+      o.out.empty() ? (run.empty() ? default_out_dir(job.name) : run) / "landscape" : o.out;
   const fs::path& out = result.out;
   // Before the work: a directory that can be written, and not one holding a landscape already
   // (like `run`, force replaces it).

@@ -240,7 +240,7 @@ void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
     out << (c ? ",\n    " : "\n    ") << m << ", \"members\": [";
     for (std::size_t i = 0; i < ec.members.size(); ++i) {
       const MemberResult& x = ec.members[i];
-      json row = {{"scenario", x.scenario},
+      const json row = {{"scenario", x.scenario},
                         {"recoverable", x.recoverable},
                         {"objective", json_number(x.objective)},
                         {"ise", json_number(x.ise)},
@@ -248,9 +248,11 @@ void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
                         {"max_abs_u", json_number(x.max_abs_u)},
                         {"control_tv", json_number(x.control_tv)},
                         {"diverged", x.diverged}};
-      // Members are drawn again rather than kept: memory stays flat in the member count.
-      row["faults"] = fault_fields(scenario_at(r.job, r.seed, static_cast<std::int64_t>(i)).faults);
-      out << (i ? ",\n      " : "\n      ") << row.dump();
+      // With the member's faults as fields (drawn again rather than kept: flat memory).
+      json member = row;
+      member["faults"] =
+          fault_fields(scenario_at(r.job, r.seed, static_cast<std::int64_t>(i)).faults);
+      out << (i ? ",\n      " : "\n      ") << member.dump();
     }
     out << "\n    ]}";
   }
@@ -262,8 +264,8 @@ void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
   Buffered out(sink);
   // The faults in words, then as fields (fault<k>_actuator, _kind, ...: fault_fields.hpp).
   const std::size_t faults_n = max_faults(r.job);
-  out << "controller,scenario,faults,recoverable,objective,ise,iae,max_abs_u,control_tv,diverged"
-      << fault_columns_header(faults_n) << "\n";
+  out << "controller,scenario,faults" << fault_columns_header(faults_n)
+      << ",recoverable,objective,ise,iae,max_abs_u,control_tv,diverged\n";
   for (const EvaluatedController& c : r.controllers) {
     const std::string label = csv_field(c.label);
     for (std::size_t i = 0; i < c.members.size(); ++i) {
@@ -271,12 +273,12 @@ void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
       // Members are drawn again rather than kept: memory stays flat in the member count.
       const sim::Scenario scenario = scenario_at(r.job, r.seed, static_cast<std::int64_t>(i));
       const std::string faults = csv_field(faults_summary(scenario));
-      out << label << "," << csv_field(m.scenario) << "," << faults << ","
-          << (m.recoverable ? "1," : "0,") << detail::format_number(m.objective, "%.17g") << ","
+      out << label << "," << csv_field(m.scenario) << "," << faults
+          << fault_columns(scenario.faults, faults_n) << "," << (m.recoverable ? "1," : "0,")
+          << detail::format_number(m.objective, "%.17g") << ","
           << detail::format_number(m.ise, "%.17g") << "," << detail::format_number(m.iae, "%.17g")
           << "," << detail::format_number(m.max_abs_u, "%.17g") << ","
-          << detail::format_number(m.control_tv, "%.17g") << "," << (m.diverged ? "1" : "0")
-          << fault_columns(scenario.faults, faults_n) << "\n";
+          << detail::format_number(m.control_tv, "%.17g") << "," << (m.diverged ? "1\n" : "0\n");
     }
   }
   out.flush();

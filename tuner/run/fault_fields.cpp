@@ -15,20 +15,36 @@ using nlohmann::json;
 namespace {
 
 // The numeric fields after actuator, kind and profile, in column order.
-constexpr std::array<const char*, 8> kNumberFields = {
-    "rate", "time", "offset", "amplitude", "frequency", "phase", "fraction", "value"};
+constexpr std::array<const char*, 8> kNumberFields = {"rate",      "time",  "offset",   "amplitude",
+                                                      "frequency", "phase", "fraction", "value"};
 
 // Whether a field applies to the fault, and its value.
 bool number_field(const sim::Fault& f, std::size_t i, double& v) {
   switch (i) {
-    case 0: v = f.profile.rate; return f.profile.type == sim::FaultProfileType::incipient;
-    case 1: v = f.onset; return true;
-    case 2: v = f.offset; return f.type == sim::FaultType::bias;
-    case 3: v = f.amplitude; return f.type == sim::FaultType::bias;
-    case 4: v = f.frequency; return f.type == sim::FaultType::bias;
-    case 5: v = f.phase; return f.type == sim::FaultType::bias;
-    case 6: v = f.fraction; return f.type == sim::FaultType::loss_of_effectiveness;
-    default: v = f.value; return f.type == sim::FaultType::stuck;
+    case 0:
+      v = f.profile.rate;
+      return f.profile.type == sim::FaultProfileType::incipient;
+    case 1:
+      v = f.onset;
+      return true;
+    case 2:
+      v = f.offset;
+      return f.type == sim::FaultType::bias;
+    case 3:
+      v = f.amplitude;
+      return f.type == sim::FaultType::bias;
+    case 4:
+      v = f.frequency;
+      return f.type == sim::FaultType::bias;
+    case 5:
+      v = f.phase;
+      return f.type == sim::FaultType::bias;
+    case 6:
+      v = f.fraction;
+      return f.type == sim::FaultType::loss_of_effectiveness;
+    default:
+      v = f.value;
+      return f.type == sim::FaultType::stuck;
   }
 }
 

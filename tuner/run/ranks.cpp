@@ -1,6 +1,7 @@
 // MPI ranks of a process (`mpirun -np N ftctune COMMAND ...`): rank 0 runs the command, every
-// other rank simulates for it until it finishes; and the evaluator the run API uses. A process not started by an MPI launcher
-// never touches MPI (initialising it costs time and, outside a launcher, may fail).
+// other rank simulates for it until it finishes; and the evaluator the run API uses. A process not
+// started by an MPI launcher never touches MPI (initialising it costs time and, outside a launcher,
+// may fail).
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -8,8 +9,8 @@
 #include <string>
 
 #include "ftc/sim/input_error.hpp"
-#include "ftc/tune/run/api.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/run/api.hpp"
 #if FTC_WITH_MPI
 #include "ftc/tune/evaluators/mpi_evaluator.hpp"
 #endif

@@ -237,11 +237,10 @@ void replace_run(const fs::path& out, const fs::path& staging,
       undone &= std::rename((previous / *it).c_str(), (out / *it).c_str()) == 0;
     std::error_code ec;
     if (!undone)
-      throw OutputError(std::string(e.what()) + "; the new run's files are in " +
-                        staging.string() +
-                        (set_aside.empty() ? std::string()
-                                           : " and the earlier run's in " + previous.string()) +
-                        ": move them back into " + out.string() + " by hand");
+      throw OutputError(
+          std::string(e.what()) + "; the new run's files are in " + staging.string() +
+          (set_aside.empty() ? std::string() : " and the earlier run's in " + previous.string()) +
+          ": move them back into " + out.string() + " by hand");
     if (!previous.empty()) fs::remove(previous, ec);
     fs::remove_all(staging, ec);
     sync_directory(out);

@@ -2,6 +2,8 @@
 // budget of evaluations, so that algorithms are compared at equal cost. Writes study.csv (one row
 // per run), study.md (per algorithm: median, best and worst objective, parameters ended on a
 // bound, median wall time) and study.png.
+#include "ftc/tune/report/study.hpp"
+
 #include <algorithm>
 #include <charconv>
 #include <chrono>
@@ -13,7 +15,6 @@
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/pagmo.hpp"
-#include "ftc/tune/report/study.hpp"
 #include "ftc/tune/run/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
@@ -55,7 +56,7 @@ constexpr std::uint64_t kMaxSeeds = 100000;
 // same algorithm, else the defaults with the job's population (or the smallest the algorithm
 // takes).
 AlgorithmPtr sized(const std::string& name, const AlgorithmSettings& job_algorithm,
-                         std::int64_t budget) {
+                   std::int64_t budget) {
   const int population = job_algorithm.population();
   const json own = job_algorithm.to_json();
   json settings;
@@ -196,7 +197,6 @@ std::string study_table(const std::vector<StudyRow>& rows) {
   return t;
 }
 
-
 namespace {
 
 // The lists as the study takes them: not empty, each entry once, each algorithm known.
@@ -219,8 +219,7 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
   namespace fs = std::filesystem;
   using clock = std::chrono::steady_clock;
   if (!job.tuning)
-    throw InputError(o.job_file, "/tuning",
-                     "is required by ftctune study (what should be tuned?)");
+    throw InputError(o.job_file, "/tuning", "is required by ftctune study (what should be tuned?)");
   const std::vector<std::string>& names = o.algorithms;
   const std::vector<std::uint64_t>& seeds = o.seeds;
   check_lists(names, seeds);
@@ -243,10 +242,9 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
     owned = make_evaluator(o.threads);
     evaluator = owned.get();
   }
-  say(o.log, "study of job " + job.name + ": " + std::to_string(names.size()) +
-                 " algorithm(s) x " + std::to_string(seeds.size()) + " seed(s), " +
-                 std::to_string(o.budget) + " evaluations each, " +
-                 std::to_string(evaluator->concurrency()) + " thread(s)");
+  say(o.log, "study of job " + job.name + ": " + std::to_string(names.size()) + " algorithm(s) x " +
+                 std::to_string(seeds.size()) + " seed(s), " + std::to_string(o.budget) +
+                 " evaluations each, " + std::to_string(evaluator->concurrency()) + " thread(s)");
   std::vector<StudyRun>& runs = result.runs;
   const std::size_t total = names.size() * seeds.size();
   for (std::size_t a = 0; a < names.size(); ++a)
@@ -256,8 +254,7 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
       ro.compare = false;
       const auto t0 = clock::now();
       const std::unique_ptr<Optimizer> optimizer = algorithms[a]->make(seed, space);
-      const TuningOutcome r =
-          tune(problem, *optimizer, algorithms[a], seed, *evaluator, ro);
+      const TuningOutcome r = tune(problem, *optimizer, algorithms[a], seed, *evaluator, ro);
       StudyRun run;
       run.algorithm = names[a];
       run.seed = seed;
@@ -353,10 +350,10 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
                                " --seeds " + seeds_text + " --budget " + std::to_string(o.budget);
   const std::string metric = sim::to_string(job.objective.metric);
   std::string md = "# Study of job " + job.name + "\n\n" + std::to_string(names.size()) +
-                   " algorithms × " + std::to_string(seeds.size()) + " seeds (" + seeds_text + "), " +
-                   std::to_string(o.budget) + " evaluations each; the objective is the job's " +
-                   metric + " of the best candidate of a run (lower is better), " +
-                   objective_label(job) +
+                   " algorithms × " + std::to_string(seeds.size()) + " seeds (" + seeds_text +
+                   "), " + std::to_string(o.budget) +
+                   " evaluations each; the objective is the job's " + metric +
+                   " of the best candidate of a run (lower is better), " + objective_label(job) +
                    ". Sorted by median. \"On a bound\": tuned parameters that ended within 0.1 % "
                    "of their range from a bound, over all runs.\n\n" +
                    noise_sentence(noise) + "\n\n" + study_table(rows) + "\n## Settings\n\n";
@@ -381,8 +378,8 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
   result.figure = draw_study(
       out,
       "Best objective per seed: " + job.name + ", " + std::to_string(o.budget) + " evaluations",
-      objective_label(job) + " of the best candidate [" + unit + "] (lower is better)",
-      series, FigureFormat::png, rows.empty() ? 0.0 : rows.front().median, noise);
+      objective_label(job) + " of the best candidate [" + unit + "] (lower is better)", series,
+      FigureFormat::png, rows.empty() ? 0.0 : rows.front().median, noise);
   return result;
 }
 

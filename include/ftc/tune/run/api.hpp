@@ -76,11 +76,11 @@ struct RunJobOptions {
   // Empty: out/<job name>, or out/<job name>-2, -3, ... when that holds a run (with a warning).
   // A directory given here that holds a run is refused unless `force`.
   std::filesystem::path out;
-  int threads = 0;                     // <= 0: every core (per rank under mpirun)
-  std::optional<std::uint64_t> seed;   // instead of the job's tuning.seed
-  bool baseline = false;               // also random search with the same budget
-  bool force = false;                  // replace the run `out` holds
-  bool resume = false;                 // continue the run in `out` from its checkpoint
+  int threads = 0;                    // <= 0: every core (per rank under mpirun)
+  std::optional<std::uint64_t> seed;  // instead of the job's tuning.seed
+  bool baseline = false;              // also random search with the same budget
+  bool force = false;                 // replace the run `out` holds
+  bool resume = false;                // continue the run in `out` from its checkpoint
   // false: no output directory at all (no lock, checkpoint or file); write_run() writes the
   // result's files later.
   bool write = true;

@@ -38,9 +38,9 @@ inline constexpr const char* kPreviousPrefix = ".previous-";
 // What a run writes: with --force these names of the earlier run make way for the new run's,
 // so that no figure or trajectory of the earlier run is left beside the new ones.
 inline constexpr const char* kRunEntries[] = {
-    "gains.json",    "history.csv", "trials.csv",  "history-random.csv", "comparison.json",
-    "comparison.md", "run.json",    "job.json",    "report.html",        "figures",
-    "trajectories"};
+    "gains.json",      "history.csv",   "trials.csv",  "history-random.csv",
+    "comparison.json", "comparison.md", "run.json",    "job.json",
+    "report.html",     "figures",       "trajectories"};
 
 // A new directory out/PREFIX<pid>, or out/PREFIX<pid>-K when that name is taken: a directory
 // kept from an earlier run (which the next run names for recovery) is never reused, even when
