@@ -77,7 +77,7 @@ void check_signals() {
   if (PyErr_CheckSignals() != 0) throw PythonErrorPending{};
 }
 
-// TBB, a slice of the batch at a time (about a quarter of a second each), with a look for
+// TBB, a slice of the batch at a time (about 0.4 s each), with a look for
 // Ctrl-C between slices. Each task's result does not depend on which slice or pack it ran in
 // (batch_evaluator.hpp), so the values are those of `ftctune run`'s evaluator to the bit.
 class PythonEvaluator final : public tune::BatchEvaluator {
@@ -87,7 +87,7 @@ class PythonEvaluator final : public tune::BatchEvaluator {
                                     const tune::SimulationBatch& batch) override {
     std::vector<tune::TaskResult> out;
     out.reserve(batch.tasks.size());
-    const std::size_t min_slice = 16 * static_cast<std::size_t>(std::max(1, concurrency()));
+    const std::size_t min_slice = 64 * static_cast<std::size_t>(std::max(1, concurrency()));
     for (std::size_t k = 0; k < batch.tasks.size();) {
       check_signals();
       const std::size_t n = std::min(std::max(slice_, min_slice), batch.tasks.size() - k);
@@ -109,7 +109,7 @@ class PythonEvaluator final : public tune::BatchEvaluator {
   std::string name() const override { return inner_.name(); }
 
  private:
-  static constexpr double kSliceSeconds = 0.25;
+  static constexpr double kSliceSeconds = 0.4;
   tune::TbbEvaluator inner_;
   std::size_t slice_ = 0;  // grows to the tasks of kSliceSeconds after the first slice
 };
@@ -197,7 +197,9 @@ Rows rows_of(const py::array_t<double, py::array::c_style | py::array::forcecast
       message.append(" = ").append(ftc::json_io::number_text(v, 17));
       message.append(" is outside its bounds [").append(ftc::json_io::number_text(params[j].lower));
       message.append(", ").append(ftc::json_io::number_text(params[j].upper)).append("]");
-      errs.push_back({"/" + std::to_string(i) + "/" + std::to_string(j), std::move(message)});
+      std::string path = "/";
+      path.append(std::to_string(i)).append("/").append(std::to_string(j));
+      errs.push_back({std::move(path), std::move(message)});
       if (errs.size() >= 20) break;
     }
   ftc::throw_if_errors("X", std::move(errs));
