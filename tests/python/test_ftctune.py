@@ -113,9 +113,11 @@ def test_problem_metrics_has_a_row_per_candidate_and_scenario(robust_dict):
 
 # --- tune, Result ----------------------------------------------------------------------------
 
-def test_tune_writes_the_bytes_of_ftctune_run(cli, table1_path, tmp_path):
-    run_cli(cli, "run", table1_path, "--out", str(tmp_path / "cli"))
-    result = ftctune.tune(table1_path)
+@pytest.mark.parametrize("job", ["table1", "manipulator"])
+def test_tune_writes_the_bytes_of_ftctune_run(cli, root, job, tmp_path):
+    job_path = str(root / "jobs" / f"{job}.json")
+    run_cli(cli, "run", job_path, "--out", str(tmp_path / "cli"))
+    result = ftctune.tune(job_path)
     assert result.completed
     written = result.write(tmp_path / "py")
     assert written[0] == "run.json" and written[-1] == "gains.json"
@@ -201,9 +203,10 @@ def test_tune_releases_the_gil(table1_path):
     finally:
         running = False
         t.join()
-    # Held, the GIL would let the thread count at most once or twice (at the call's ends).
+    # Held, the GIL would let the thread count at most once or twice (at the call's ends); let
+    # go, it counts every millisecond or so (a loaded machine may make that several).
     assert elapsed > 0.1
-    assert during >= 0.25 * elapsed / 0.0011 and during > 20, (during, elapsed)
+    assert during >= 0.05 * elapsed / 0.001 and during > 20, (during, elapsed)
 
 
 CTRL_C_SCRIPT = """
