@@ -344,3 +344,27 @@ def test_a_pagmo_job_runs_from_python(table1_path):
     assert result.gains["optimizer"]["type"] == "pagmo"
     assert result.gains["optimizer"]["name"] == "sade"
     assert len(result.trials) == 7 * 3
+
+
+INSTALLED_SCRIPT = """
+import sys, ftctune
+job = ftctune.load_job(sys.argv[1]).to_dict()
+job["tuning"]["algorithm"] = {"type": "pagmo", "name": "sade", "population": 7, "generations": 1}
+print(ftctune.__file__, ftctune.tune(job).completed)
+"""
+
+
+def test_cmake_install_installs_a_module_that_finds_its_pagmo_adapter(cli, table1_path, tmp_path):
+    build = pathlib.Path(cli).resolve().parents[1]
+    prefix = tmp_path / "prefix"
+    p = subprocess.run(["cmake", "--install", str(build), "--prefix", str(prefix)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stdout + p.stderr
+    site = next(prefix.glob("lib/python3*/dist-packages"))
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "FTCTUNE_PLUGIN_DIR")}
+    env["PYTHONPATH"] = str(site)
+    p = subprocess.run([sys.executable, "-c", INSTALLED_SCRIPT, table1_path], capture_output=True,
+                       text=True, env=env, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    module_file, completed = p.stdout.split()
+    assert module_file == str(site / "ftctune" / "__init__.py") and completed == "True"
