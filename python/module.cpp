@@ -20,6 +20,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -212,12 +213,17 @@ struct Problem {
       : problem((require_tuning(j, "Problem"), j.job)), evaluator(threads_of(threads)) {}
   tune::TuningProblem problem;
   PythonEvaluator evaluator;
+  // One batch at a time through the evaluator: Python threads may share a Problem.
+  std::mutex busy;
 
   std::vector<tune::CandidateOutcome> outcomes(const Rows& r) {
     std::vector<sim::ControllerConfig> controllers;
     controllers.reserve(r.rows.size());
     for (const auto& x : r.rows) controllers.push_back(problem.controller_with(x));
-    return without_gil([&] { return problem.evaluate(controllers, evaluator); });
+    return without_gil([&] {
+      const std::lock_guard<std::mutex> lock(busy);
+      return problem.evaluate(controllers, evaluator);
+    });
   }
 
   py::object objective(const py::array_t<double, py::array::c_style | py::array::forcecast>& x) {

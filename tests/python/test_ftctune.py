@@ -71,6 +71,24 @@ def test_problem_objective_is_what_run_saw_for_every_trial(table1_path):
     assert isinstance(problem.objective(X[3]), float)
 
 
+def test_python_threads_may_share_a_problem(table1_path):
+    problem = ftctune.Problem(table1_path)
+    X = np.column_stack([np.linspace(1, 50, 40), np.linspace(0, 50, 40)])
+    expected = problem.objective(X)
+    results = [None] * 4
+
+    def work(k):
+        results[k] = problem.objective(X)
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for r in results:
+        assert np.array_equal(r, expected)
+
+
 def test_problem_objective_refuses_bad_candidates_with_their_paths(table1_path):
     problem = ftctune.Problem(table1_path, threads=1)
     with pytest.raises(ftctune.InputError, match=r"/1/0: Kp = 60 is outside its bounds \[1, 50\]"):
