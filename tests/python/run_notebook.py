@@ -2,6 +2,7 @@
 """Executes a notebook headless with nbclient, in its own directory, on the interpreter's own
 kernel; any cell that raises fails (exit 1). tests/CMakeLists.txt runs it on
 examples/notebooks/tuning.ipynb with the build's ftctune package on PYTHONPATH."""
+import os
 import pathlib
 import sys
 import time
@@ -9,6 +10,8 @@ import time
 import nbclient
 import nbformat
 
+# The kernel's debugger warns on stderr about frozen modules otherwise.
+os.environ.setdefault("PYDEVD_DISABLE_FILE_VALIDATION", "1")
 path = pathlib.Path(sys.argv[1]).resolve()
 nb = nbformat.read(path, as_version=4)
 start = time.monotonic()
