@@ -10,12 +10,10 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -40,7 +38,9 @@
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
+#include "ftc/tune/run/api.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
+#include "ftc/tune/run/run_directory.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
 namespace py = pybind11;
@@ -308,50 +308,30 @@ struct Problem {
   }
 };
 
-std::string utc_now() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
-std::string hostname() {
-  char buf[256] = {};
-  if (::gethostname(buf, sizeof buf - 1) != 0) return "unknown";
-  return buf;
-}
-
-// A tuning run's outcome and what run.json says of it.
+// A tuning run through the run API (`ftctune run`'s own code), computed without an output
+// directory: run.json and the files are the run API's, written by write_run.
 struct Result {
-  tune::TuningOutcome r;
-  double wall = 0;
-  std::string started, job_file;
+  tune::RunJobResult run;
+  const tune::TuningOutcome& r() const { return run.outcome; }
 
-  std::string gains() const { return tune::gains_document(r).dump(2) + "\n"; }
+  std::string gains() const { return tune::gains_document(r()).dump(2) + "\n"; }
 
-  // The files of `ftctune run` (run.json's time, host and peak memory are this call's), into
-  // `dir`, each whole (written beside and renamed), run.json first and gains.json last, as the
-  // CLI writes them. A directory that holds a run is refused unless `replace`.
+  // The files of `ftctune run` into `dir` (locked, through a staging directory, gains.json
+  // last), exactly as the CLI writes them. A directory that holds a run is refused unless
+  // `replace`; a run the callback stopped has no files (as `ftctune run` stopped keeps only
+  // its checkpoint).
   std::vector<std::string> write(const std::string& dir, bool replace) const {
     const fs::path out(dir);
-    std::error_code ec;
-    if (!replace && (fs::exists(out / "gains.json", ec) || fs::exists(out / "run.json", ec)))
+    if (!replace && tune::holds_run(out))
       throw InputError("dir", "", dir + " already holds a run; pass replace=True to write over it");
-    const std::map<std::string, std::string> outputs = tune::output_files(r);
-    json run = tune::run_metadata(r, wall);
-    json files = json::array();
-    for (const auto& [name, content] : outputs) files.push_back(name);
-    files.push_back("run.json");
-    run["files"] = files;
-    run["started_at"] = started;
-    run["host"] = hostname();
-    run["job_file"] = job_file;
-    fs::create_directories(out);
-    tune::write_file_atomic(out / "run.json", run.dump(2) + "\n");
+    if (run.stopped)
+      throw InputError("dir", "", "the callback stopped this run before it finished: it has no "
+                                  "files to write (its gains are in .gains)");
+    tune::write_run(run, out, replace);
     std::vector<std::string> written{"run.json"};
-    for (const std::string& f : tune::write_output_files(outputs, out)) written.push_back(f);
+    for (const std::string& f : run.files)
+      if (f != "run.json" && f != "gains.json") written.push_back(f);
+    written.push_back("gains.json");
     return written;
   }
 };
@@ -359,14 +339,15 @@ struct Result {
 Result tune_job(const Job& j, std::optional<int> threads, std::optional<std::uint64_t> seed,
                 const py::object& callback) {
   require_tuning(j, "tune");
-  // As `ftctune run`: a job whose run would not fit in memory is refused before any work.
-  tune::check_memory_budget(j.job, tune::memory_budget_bytes(), j.source);
   PythonEvaluator evaluator(threads_of(threads));
-  tune::RunOptions ro;
-  ro.seed = seed;
+  tune::RunJobOptions o;
+  o.job_file = j.source;
+  o.seed = seed;
+  o.write = false;
+  o.evaluator = &evaluator;
   const auto& params = j.job.tuning->parameters;
-  ro.observer = [&](const tune::HistoryRow& h, const tune::Optimizer&,
-                    const std::vector<tune::Trial>&) {
+  o.on_iteration = [&](const tune::IterationReport& report) {
+    const tune::HistoryRow& h = report.row;
     py::gil_scoped_acquire gil;
     if (PyErr_CheckSignals() != 0) throw PythonErrorPending{};
     if (callback.is_none()) return true;
@@ -387,17 +368,13 @@ Result tune_job(const Job& j, std::optional<int> threads, std::optional<std::uin
     }
   };
   Result res;
-  res.started = utc_now();
-  res.job_file = j.source;
-  const auto t0 = std::chrono::steady_clock::now();
-  res.r = without_gil([&] {
-    tune::TuningOutcome r = tune::tune(j.job, evaluator, ro);
+  res.run = without_gil([&] {
+    tune::RunJobResult r = tune::run_job(j.job, o);
     // Stopped by the callback: the best so far is compared as the service compares a
-    // cancelled run's, and its gains file says it did not complete.
-    tune::compare_best(r, evaluator);
+    // cancelled run's, and its gains say it did not complete.
+    if (r.stopped) tune::compare_best(r.outcome, evaluator);
     return r;
   });
-  res.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }
 
@@ -644,19 +621,19 @@ PYBIND11_MODULE(_core, m) {
       .def("metrics", &Problem::metrics, py::arg("X"));
 
   py::class_<Result>(m, "Result")
-      .def_property_readonly("completed", [](const Result& r) { return r.r.completed(); })
+      .def_property_readonly("completed", [](const Result& r) { return r.r().completed(); })
       .def_property_readonly("gains_text", &Result::gains)
-      .def_property_readonly("trials_csv", [](const Result& r) { return tune::trials_csv(r.r); })
-      .def_property_readonly("history_csv", [](const Result& r) { return tune::history_csv(r.r); })
+      .def_property_readonly("trials_csv", [](const Result& r) { return tune::trials_csv(r.r()); })
+      .def_property_readonly("history_csv", [](const Result& r) { return tune::history_csv(r.r()); })
       .def_property_readonly("comparison_text",
-                             [](const Result& r) { return tune::comparison_document(r.r).dump(); })
-      .def_property_readonly("warnings", [](const Result& r) { return r.r.warnings; })
+                             [](const Result& r) { return tune::comparison_document(r.r()).dump(); })
+      .def_property_readonly("warnings", [](const Result& r) { return r.r().warnings; })
       .def_property_readonly("noise_floor",
-                             [](const Result& r) { return tune::noise_floor_sentence(r.r); })
-      .def_property_readonly("seed", [](const Result& r) { return r.r.seed; })
-      .def_property_readonly("simulations", [](const Result& r) { return r.r.simulations; })
-      .def_property_readonly("threads", [](const Result& r) { return r.r.threads; })
-      .def_property_readonly("wall_seconds", [](const Result& r) { return r.wall; })
+                             [](const Result& r) { return tune::noise_floor_sentence(r.r()); })
+      .def_property_readonly("seed", [](const Result& r) { return r.r().seed; })
+      .def_property_readonly("simulations", [](const Result& r) { return r.r().simulations; })
+      .def_property_readonly("threads", [](const Result& r) { return r.r().threads; })
+      .def_property_readonly("wall_seconds", [](const Result& r) { return r.run.wall_seconds; })
       .def("write", &Result::write, py::arg("dir"), py::arg("replace") = false);
   m.def("tune", &tune_job, py::arg("job"), py::arg("threads") = py::none(),
         py::arg("seed") = py::none(), py::arg("callback") = py::none());

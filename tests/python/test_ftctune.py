@@ -171,7 +171,7 @@ def test_tune_of_an_ensemble_job_writes_the_bytes_of_ftctune_run(cli, robust_dic
             assert py_files[name] == cli_files[name], name
 
 
-def test_tune_calls_back_each_iteration_and_stops_when_told(table1_path):
+def test_tune_calls_back_each_iteration_and_stops_when_told(table1_path, tmp_path):
     seen = []
 
     def callback(row):
@@ -185,6 +185,9 @@ def test_tune_calls_back_each_iteration_and_stops_when_told(table1_path):
     assert result.gains["optimizer"]["completed"] is False
     assert result.history["iteration"].max() == 3
     assert len(result.trials) == seen[-1]["evaluations"]
+    with pytest.raises(ftctune.InputError, match="no files to write"):
+        result.write(tmp_path / "stopped")
+    assert not (tmp_path / "stopped").exists()
 
 
 def test_a_callback_that_raises_stops_the_run_with_its_exception(table1_path):
