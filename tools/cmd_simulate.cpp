@@ -9,6 +9,7 @@
 #include "cli.hpp"
 #include "ftc/runtime/controller_json.hpp"
 #include "ftc/runtime/gains.hpp"
+#include "ftc/sim/controllers.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/problem/problem.hpp"
@@ -136,8 +137,8 @@ void add_simulate_command(CLI::App& app, const Globals& g, Action& action) {
       app.add_subcommand("simulate", "Simulate a controller on every scenario of a job");
   sub->add_option("job", opts->job, "Job file (ftctune.job/1)")->required();
   sub->add_option("--controller", opts->controller,
-                  "Controller type with its Table 1 defaults instead of the job's controller "
-                  "(nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)");
+                  "Controller type with its Table 1 defaults instead of the job's controller (" +
+                      std::string(sim::controller_type_list()) + ")");
   // One value per --set, so the job path may come after them.
   sub->add_option("--set", opts->sets, "Override a controller parameter, KEY=VALUE (repeatable)")
       ->allow_extra_args(false);

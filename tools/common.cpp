@@ -23,9 +23,8 @@ sim::ControllerConfig select_controller(const tune::Job& job, const std::string&
     const auto t = sim::controller_type_from_string(type);
     if (!t)
       throw InputError("--controller", "",
-                       "unknown controller type \"" + type +
-                           "\" (known: nftsmc, fosmc, pi_fosmc, "
-                           "adaptive_neural_pi_fosmc)");
+                       "unknown controller type \"" + type + "\" (known: " +
+                           std::string(sim::controller_type_list()) + ")");
     base = sim::ControllerConfig::table1(*t);
   }
   if (sets.empty()) return base;

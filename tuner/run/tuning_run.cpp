@@ -13,19 +13,7 @@
 
 namespace ftc::tune {
 
-std::string display_name(sim::ControllerType t) {
-  switch (t) {
-    case sim::ControllerType::nftsmc:
-      return "NFTSMC";
-    case sim::ControllerType::fosmc:
-      return "FOSMC";
-    case sim::ControllerType::pi_fosmc:
-      return "PI-FOSMC";
-    case sim::ControllerType::adaptive_neural_pi_fosmc:
-      return "adaptive neural PI-FOSMC";
-  }
-  return "?";
-}
+std::string display_name(sim::ControllerType t) { return sim::controller_info(t).display_name; }
 
 std::string canonical_job_sha256(const Job& job) { return sha256_hex(to_json(job).dump()); }
 
