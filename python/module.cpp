@@ -84,8 +84,7 @@ void check_signals() {
 class PythonEvaluator final : public tune::BatchEvaluator {
  public:
   explicit PythonEvaluator(int threads) : inner_(threads) {}
-  std::vector<tune::TaskResult> run(const tune::TuningProblem& problem,
-                                    const tune::SimulationBatch& batch) override {
+  std::vector<tune::TaskResult> run(const tune::SimulationBatch& batch) override {
     std::vector<tune::TaskResult> out;
     out.reserve(batch.tasks.size());
     const std::size_t min_slice = 64 * static_cast<std::size_t>(std::max(1, concurrency()));
@@ -94,7 +93,7 @@ class PythonEvaluator final : public tune::BatchEvaluator {
       const std::size_t n = std::min(std::max(slice_, min_slice), batch.tasks.size() - k);
       const auto t0 = std::chrono::steady_clock::now();
       std::vector<tune::TaskResult> part =
-          inner_.run(problem, {batch.candidates, batch.tasks.subspan(k, n), batch.record_every});
+          inner_.run({batch.set, batch.candidates, batch.tasks.subspan(k, n), batch.record_every});
       const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       for (tune::TaskResult& r : part) out.push_back(std::move(r));
       k += n;

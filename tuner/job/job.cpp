@@ -935,4 +935,12 @@ json to_json(const PlantConfig& p) { return runtime::plant_shape()->write(p); }
 json to_json(const ObjectiveConfig& o) { return objective_shape()->write(o); }
 json to_json(const sim::Scenario& s) { return scenario_shape()->write(s); }
 
+sim::Scenario scenario_from_json(const json& j, const std::string& source) {
+  sim::Scenario s;
+  Errors errs;
+  schema::read(*scenario_shape(), j, "", s, errs);
+  throw_if_errors(source, std::move(errs));
+  return s;
+}
+
 }  // namespace ftc::tune

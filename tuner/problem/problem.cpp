@@ -1,9 +1,10 @@
 #include "ftc/tune/problem/problem.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "ftc/runtime/json_reader.hpp"
@@ -13,9 +14,31 @@
 namespace ftc::tune {
 namespace {
 
-std::uint64_t next_identity() {
-  static std::atomic<std::uint64_t> counter{0};
-  return ++counter;
+// The simulation options of a scenario: the objective window and the fault segments (before
+// the first onset, between onsets, after the last) as extra windows.
+sim::SimulationOptions options_of(const ObjectiveConfig& objective, const sim::Scenario& s) {
+  sim::SimulationOptions o;
+  o.window = objective.window_of(s);
+  std::vector<double> cuts;
+  for (const sim::Fault& f : s.faults)
+    if (f.onset > 0 && f.onset < s.duration) cuts.push_back(f.onset);
+  std::sort(cuts.begin(), cuts.end());
+  cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+  double start = 0.0;
+  for (double c : cuts) {
+    o.extra_windows.push_back({start, c});
+    start = c;
+  }
+  o.extra_windows.push_back({start, s.duration});
+  return o;
+}
+
+std::vector<sim::SimulationOptions> options_of(const ObjectiveConfig& objective,
+                                               const std::vector<sim::Scenario>& scenarios) {
+  std::vector<sim::SimulationOptions> o;
+  o.reserve(scenarios.size());
+  for (const sim::Scenario& s : scenarios) o.push_back(options_of(objective, s));
+  return o;
 }
 
 }  // namespace
@@ -37,16 +60,17 @@ TuningProblem::TuningProblem(Job job)
           job.scenarios.size()) {}
 
 TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed)
-    : job_(std::make_shared<const Job>(std::move(job))),
-      listed_(listed),
-      identity_(next_identity()) {
+    : job_(std::make_shared<const Job>(std::move(job))), listed_(listed) {
   throw_if_errors("job " + job_->name, job_->validate());
-  plant_ = sim::make_plant(job_->plant);
-  scenarios_ = std::make_shared<const std::vector<sim::Scenario>>(std::move(scenarios));
+  std::vector<sim::SimulationOptions> options = options_of(job_->objective, scenarios);
+  set_ =
+      std::make_shared<const SimulationSet>(job_->plant, std::move(scenarios), std::move(options));
+  const sim::AnyPlant& plant = set_->plant();
   const bool include = job_->ensemble && job_->ensemble->unrecoverable == Unrecoverable::include;
-  for (const sim::Scenario& sc : *scenarios_) {
-    throw_if_errors("scenario " + sc.name, sc.validate("", plant_->axes(), plant_->actuators()));
-    recoverable_.push_back(plant_->recoverable(sc));
+  for (std::size_t i = 0; i < set_->size(); ++i) {
+    const sim::Scenario& sc = set_->scenario(i);
+    throw_if_errors("scenario " + sc.name, sc.validate("", plant.axes(), plant.actuators()));
+    recoverable_.push_back(plant.recoverable(sc));
     counted_.push_back(recoverable_.back() || include);
   }
   if (!job_->tuning) return;
@@ -94,29 +118,19 @@ sim::ControllerConfig TuningProblem::controller_with(std::span<const double> x) 
 
 sim::SimulationOptions TuningProblem::simulation_options(std::size_t scenario,
                                                          std::int64_t record_every) const {
-  const sim::Scenario& s = scenarios_->at(scenario);
-  sim::SimulationOptions o;
-  o.window = job_->objective.window_of(s);
+  if (scenario >= set_->size())
+    throw std::out_of_range("scenario " + std::to_string(scenario) + " of " +
+                            std::to_string(set_->size()));
+  sim::SimulationOptions o = set_->options(scenario);
   o.record_every = record_every;
-  std::vector<double> cuts;
-  for (const sim::Fault& f : s.faults)
-    if (f.onset > 0 && f.onset < s.duration) cuts.push_back(f.onset);
-  std::sort(cuts.begin(), cuts.end());
-  cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
-  double start = 0.0;
-  for (double c : cuts) {
-    o.extra_windows.push_back({start, c});
-    start = c;
-  }
-  o.extra_windows.push_back({start, s.duration});
   return o;
 }
 
 sim::SimulationResult TuningProblem::simulate(const sim::ControllerConfig& controller,
                                               std::size_t scenario,
                                               std::int64_t record_every) const {
-  return plant_->simulate(controller, scenarios_->at(scenario),
-                          simulation_options(scenario, record_every));
+  const sim::SimulationOptions options = simulation_options(scenario, record_every);
+  return plant().simulate(controller, set_->scenario(scenario), options);
 }
 
 std::vector<SimulationTask> TuningProblem::tasks(std::size_t candidates, bool record_listed) const {
@@ -181,12 +195,18 @@ Summary TuningProblem::summarize(const Evaluation& e) const {
 
 TuningProblem TuningProblem::perturbed(std::uint64_t seed, std::uint64_t k, double eps) const {
   TuningProblem p = *this;
-  auto scenarios = std::make_shared<std::vector<sim::Scenario>>(*scenarios_);
+  std::vector<sim::Scenario> scenarios;
+  std::vector<sim::SimulationOptions> options;
+  scenarios.reserve(set_->size());
+  options.reserve(set_->size());
   SplitMix64 r = SplitMix64::member(seed, k);
-  for (sim::Scenario& s : *scenarios)
-    for (double& x : s.initial_state) x *= 1.0 + eps * (2.0 * r.uniform() - 1.0);
-  p.scenarios_ = std::move(scenarios);
-  p.identity_ = next_identity();
+  for (std::size_t i = 0; i < set_->size(); ++i) {
+    scenarios.push_back(set_->scenario(i));
+    options.push_back(set_->options(i));  // the initial state moves no window
+    for (double& x : scenarios.back().initial_state) x *= 1.0 + eps * (2.0 * r.uniform() - 1.0);
+  }
+  p.set_ = std::make_shared<const SimulationSet>(
+      set_->with_scenarios(std::move(scenarios), std::move(options)));
   return p;
 }
 
@@ -194,7 +214,7 @@ std::vector<CandidateOutcome> TuningProblem::evaluate(
     std::span<const sim::ControllerConfig> controllers, BatchEvaluator& evaluator,
     std::int64_t record_every) const {
   const std::vector<SimulationTask> t = tasks(controllers.size(), record_every > 0);
-  std::vector<TaskResult> results = evaluator.run(*this, {controllers, t, record_every});
+  std::vector<TaskResult> results = evaluator.run({*set_, controllers, t, record_every});
   const std::size_t S = scenarios();
   std::vector<CandidateOutcome> out(controllers.size());
   for (std::size_t i = 0; i < controllers.size(); ++i) {
