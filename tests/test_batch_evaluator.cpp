@@ -94,8 +94,9 @@ TEST(BatchEvaluator, RunsTasksWithoutAProblemToTheBitsOfSimulate) {
       const std::vector<double>& b = want.trajectory.values;
       ASSERT_EQ(a.size(), b.size()) << what;
       EXPECT_EQ(a.empty(), !t.record) << what;
-      if (!a.empty())
+      if (!a.empty()) {
         EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0) << what;
+      }
     }
   }
 }
