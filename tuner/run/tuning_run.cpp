@@ -10,6 +10,7 @@
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/elementary.hpp"
 #include "ftc/tune/io/sha256.hpp"
+#include "ftc/tune/run/documents.hpp"
 
 namespace ftc::tune {
 
@@ -219,7 +220,7 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   const ComparedController& tuned = r.best();
   const double best = tuned.outcome.evaluation.objective;
   const double spread = r.noise_floor ? r.noise_floor->relative_spread : 0.0;
-  const std::string metric = sim::to_string(r.job.objective.metric);
+  const std::string label = objective_label(r.job);  // metric, window and aggregate
   char buf[600];
   // "Tuned" is the best of one controller type within the search bounds, not the best
   // controller: a compared controller that scores lower says so.
@@ -232,7 +233,7 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
                   "%s (compared) scores %s = %.4g, %.3g %% below the %s's %.4g (%s the noise "
                   "floor of %.2g %%): the tuned gains are the best found for %s within the "
                   "search bounds, not the best controller of the comparison.",
-                  c.label.c_str(), metric.c_str(), v, 100 * margin, tuned.label.c_str(), best,
+                  c.label.c_str(), label.c_str(), v, 100 * margin, tuned.label.c_str(), best,
                   margin > spread ? "beyond" : "inside", 100 * spread,
                   display_name(r.job.controller.type).c_str());
     out.emplace_back(buf);
