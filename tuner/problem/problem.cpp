@@ -98,6 +98,11 @@ sim::SimulationOptions TuningProblem::simulation_options(std::size_t scenario,
   sim::SimulationOptions o;
   o.window = job_->objective.window_of(s);
   o.record_every = record_every;
+  if (job_->metrics) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    o.metrics.settling_threshold = job_->metrics->settling_threshold.value_or(nan);
+    o.metrics.steady_state_tail = job_->metrics->steady_state_tail.value_or(nan);
+  }
   std::vector<double> cuts;
   for (const sim::Fault& f : s.faults)
     if (f.onset > 0 && f.onset < s.duration) cuts.push_back(f.onset);

@@ -9,6 +9,7 @@
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/elementary.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/sha256.hpp"
 #include "ftc/tune/run/documents.hpp"
 
@@ -240,14 +241,17 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   }
   // Until the objective can price control activity: gains that buy their score with much more
   // chattering than the job's own are named (on the listed scenarios, summed).
+  // (Over scenarios as the metrics record says the control TV combines: summed.)
   const ComparedController& base = r.baseline();
-  double tv_tuned = 0.0, tv_base = 0.0;
-  for (std::size_t i = 0; i < r.listed_scenarios; ++i) {
-    if (i < tuned.outcome.evaluation.scenarios.size())
-      tv_tuned += tuned.outcome.evaluation.scenarios[i].control_tv;
-    if (i < base.outcome.evaluation.scenarios.size())
-      tv_base += base.outcome.evaluation.scenarios[i].control_tv;
-  }
+  const sim::MetricField& tv = sim::metric_field("control_tv");
+  const auto listed_tv = [&](const ComparedController& c) {
+    std::vector<double> v;
+    const std::vector<sim::Metrics>& per = c.outcome.evaluation.scenarios;
+    for (std::size_t i = 0; i < r.listed_scenarios && i < per.size(); ++i)
+      v.push_back(per[i].*tv.per_run);
+    return sim::over_scenarios(tv, v);
+  };
+  const double tv_tuned = listed_tv(tuned), tv_base = listed_tv(base);
   if (std::isfinite(tv_base) && tv_base > 0 && tv_tuned > kControlTvWarningRatio * tv_base) {
     std::snprintf(buf, sizeof buf,
                   "The tuned gains raise the control TV (sum of |u_k - u_{k-1}|, a measure of "
