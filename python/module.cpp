@@ -497,7 +497,20 @@ py::dict evaluate(const Job& j, const std::vector<std::pair<std::string, std::st
   std::vector<std::string> label, source, scenario;
   std::vector<std::int64_t> index;
   std::vector<bool> recoverable, diverged;
-  std::vector<double> objective, ise, iae, max_abs_u, control_tv;
+  std::vector<double> objective;
+  // Every field of the metrics record, in its order: a window or run field as one column, a
+  // fault field as one column per fault onset (<name>_fault<k>, as Problem.metrics names it;
+  // NaN where a member has fewer).
+  std::size_t onsets = 0;
+  for (const tune::EvaluatedController& c : r.controllers)
+    for (const tune::MemberResult& m : c.members) onsets = std::max(onsets, m.metrics.onsets);
+  std::vector<std::string> columns;
+  for (const sim::MetricField& f : sim::kMetricFields)
+    if (f.scope != sim::MetricScope::fault)
+      columns.emplace_back(f.name);
+    else
+      for (std::size_t k = 1; k <= onsets; ++k) columns.push_back(std::string(f.name) + "_fault" + std::to_string(k));
+  std::vector<std::vector<double>> values(columns.size());
   json summaries = json::array();
   for (const tune::EvaluatedController& c : r.controllers) {
     summaries.push_back({{"label", c.label},
@@ -513,10 +526,16 @@ py::dict evaluate(const Job& j, const std::vector<std::pair<std::string, std::st
       recoverable.push_back(m.recoverable);
       diverged.push_back(m.diverged);
       objective.push_back(m.objective);
-      ise.push_back(m.ise);
-      iae.push_back(m.iae);
-      max_abs_u.push_back(m.max_abs_u);
-      control_tv.push_back(m.control_tv);
+      std::size_t col = 0;
+      for (std::size_t f = 0; f < sim::kMetricFieldCount; ++f) {
+        const std::span<const double> v = m.metrics.field(f);
+        if (sim::kMetricFields[f].scope != sim::MetricScope::fault) {
+          values[col++].push_back(v[0]);
+          continue;
+        }
+        for (std::size_t k = 0; k < onsets; ++k)
+          values[col++].push_back(k < v.size() ? v[k] : std::numeric_limits<double>::quiet_NaN());
+      }
     }
   }
   // Each scenario's faults: the listed ones', then member k's of the held-out seed.
@@ -536,10 +555,8 @@ py::dict evaluate(const Job& j, const std::vector<std::pair<std::string, std::st
   d["scenario_index"] = index;
   d["recoverable"] = recoverable;
   d["objective"] = objective;
-  d["ise"] = ise;
-  d["iae"] = iae;
-  d["max_abs_u"] = max_abs_u;
-  d["control_tv"] = control_tv;
+  d["metric_columns"] = columns;
+  for (std::size_t c = 0; c < columns.size(); ++c) d[py::str(columns[c])] = values[c];
   d["diverged"] = diverged;
   d["faults"] = faults.dump();
   d["summaries"] = summaries.dump();

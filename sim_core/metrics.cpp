@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "ftc/sim/metrics_record.hpp"
+
 namespace ftc::sim {
 
 const char* to_string(Metric m) {
@@ -38,8 +40,11 @@ void Metrics::mark_diverged(double t) {
   constexpr double inf = std::numeric_limits<double>::infinity();
   diverged = true;
   diverged_at = t;
-  errors = {inf, inf, inf};
-  for (ErrorIntegrals& e : extra) e = {inf, inf, inf};
+  for (const MetricField& f : kMetricFields) {
+    if (f.scope != MetricScope::window) continue;
+    errors.*f.in_window = inf;
+    for (ErrorIntegrals& e : extra) e.*f.in_window = inf;
+  }
 }
 
 }  // namespace ftc::sim

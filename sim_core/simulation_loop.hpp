@@ -207,8 +207,22 @@ SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
   std::vector<double> onsets;
   onsets.reserve(scenario.faults.size());
   for (const Fault& f : scenario.faults) onsets.push_back(f.onset);
+  MetricContext<M> context;
+  context.duration = scenario.duration;
+  context.settings = options.metrics;
+  {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    const double u_max = scenario.saturation.value_or(inf);
+    for (int j = 0; j < M; ++j) {
+      CommandLimits c = command_limits(u_max, -inf, inf);
+      if constexpr (TrimmedPlant<P>)
+        c = command_limits(u_max, plant.actuator_trim().lo[j], plant.actuator_trim().hi[j]);
+      context.lo[j] = c.lo;
+      context.hi[j] = c.hi;
+    }
+  }
   MetricsAccumulator<N, M> metrics(scenario.sample_time, options.window, options.extra_windows,
-                                   std::move(onsets));
+                                   std::move(onsets), context);
 
   const double Ts = scenario.sample_time;
   const double h = Ts / scenario.substeps;

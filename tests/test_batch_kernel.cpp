@@ -12,6 +12,7 @@
 
 #include "checks.hpp"
 #include "ftc/sim/isa.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/spacecraft.hpp"
@@ -70,20 +71,27 @@ void expect_same(const SimulationResult& a, const SimulationResult& b, const std
   for (std::size_t i = 0; i < a.final_state.size(); ++i)
     eq(a.final_state[i], b.final_state[i], "final_state");
   const Metrics &m = a.metrics, &n = b.metrics;
-  eq(m.errors.ise, n.errors.ise, "ise");
-  eq(m.errors.iae, n.errors.iae, "iae");
-  eq(m.errors.itae, n.errors.itae, "itae");
+  // Every field of the metrics record (ftc/sim/metrics_record.hpp), so a field added to it is
+  // compared too: the kernel's copy-out into PackFinal's slots and the host's read-back.
   ASSERT_EQ(m.extra.size(), n.extra.size()) << what;
-  for (std::size_t i = 0; i < m.extra.size(); ++i) {
-    eq(m.extra[i].ise, n.extra[i].ise, "extra ise");
-    eq(m.extra[i].iae, n.extra[i].iae, "extra iae");
-    eq(m.extra[i].itae, n.extra[i].itae, "extra itae");
+  for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields) {
+    const std::string name(f.name);
+    switch (f.scope) {
+      case ftc::sim::MetricScope::window:
+        eq(m.errors.*f.in_window, n.errors.*f.in_window, name.c_str());
+        for (std::size_t i = 0; i < m.extra.size(); ++i)
+          eq(m.extra[i].*f.in_window, n.extra[i].*f.in_window, ("extra " + name).c_str());
+        break;
+      case ftc::sim::MetricScope::run:
+        eq(m.*f.per_run, n.*f.per_run, name.c_str());
+        break;
+      case ftc::sim::MetricScope::fault:
+        ASSERT_EQ((m.*f.per_fault).size(), (n.*f.per_fault).size()) << what << " " << name;
+        for (std::size_t i = 0; i < (m.*f.per_fault).size(); ++i)
+          eq((m.*f.per_fault)[i], (n.*f.per_fault)[i], name.c_str());
+        break;
+    }
   }
-  eq(m.max_abs_u, n.max_abs_u, "max_abs_u");
-  eq(m.control_tv, n.control_tv, "control_tv");
-  ASSERT_EQ(m.peak_error_after_fault.size(), n.peak_error_after_fault.size()) << what;
-  for (std::size_t i = 0; i < m.peak_error_after_fault.size(); ++i)
-    eq(m.peak_error_after_fault[i], n.peak_error_after_fault[i], "peak error");
   EXPECT_EQ(m.diverged, n.diverged) << what;
   eq(m.diverged_at, n.diverged_at, "diverged_at");
   ASSERT_EQ(a.trajectory.values.size(), b.trajectory.values.size()) << what;
@@ -320,4 +328,44 @@ TEST(BatchKernel, InstructionSetsAreNamedAndOrdered) {
     EXPECT_EQ(lane_width(isas[i]), 2 * lane_width(isas[i - 1]));
   EXPECT_STREQ(to_string(Isa::avx512), "avx512");
   EXPECT_EQ(lane_width(Isa::avx2), 4);
+}
+
+// The window metrics of issue 26 in lanes: lanes with a settling threshold and a steady-state
+// tail among lanes without, saturated lanes and a diverging one; every lane on every instruction
+// set gives the bits of the Controller loop (sim::simulate, its MetricsAccumulator).
+TEST(BatchKernel, WindowMetricsInLanesAreTheControllerLoops) {
+  const Spacecraft sc;
+  std::vector<Task> tasks = varied(ControllerType::pi_fosmc, 9);
+  for (std::size_t l = 0; l < tasks.size(); ++l) {
+    if (l % 2 == 0) tasks[l].options.metrics.settling_threshold = 0.02;
+    if (l % 3 != 1) tasks[l].options.metrics.steady_state_tail = 3.0;
+    if (l % 2 == 1 && l != 1) tasks[l].scenario.saturation = 4.0;  // lane 1 diverges
+  }
+  std::vector<SimulationResult> want;
+  for (const Task& t : tasks) {
+    auto c = make_controller(t.config, sc, t.scenario.sample_time);
+    want.push_back(simulate(sc, *c, t.scenario, t.options));
+  }
+  // The test means something: settled, unsettled and saturated lanes, tails, a diverged lane.
+  int settled = 0, saturated = 0, tails = 0;
+  for (const SimulationResult& r : want) {
+    const ErrorIntegrals& e = r.metrics.extra.back();  // [5, 12): after the second fault
+    settled += std::isfinite(e.settling_time) && e.settling_time > 0 ? 1 : 0;
+    saturated += e.saturation_fraction > 0 && e.saturation_fraction < 1 ? 1 : 0;
+    tails += std::isfinite(e.steady_state_error) ? 1 : 0;
+    EXPECT_GT(e.control_energy, 0.0);
+    EXPECT_GT(e.peak_command, 0.0);
+  }
+  EXPECT_GE(settled, 2);
+  EXPECT_GE(saturated, 2);
+  EXPECT_GE(tails, 4);
+  EXPECT_TRUE(want[1].metrics.diverged);
+  EXPECT_EQ(want[1].metrics.errors.settling_time, std::numeric_limits<double>::infinity());
+  EXPECT_TRUE(std::isnan(want[3].metrics.errors.settling_time));  // no threshold
+  EXPECT_TRUE(std::isnan(want[4].metrics.errors.steady_state_error));  // no tail
+  for (Isa isa : supported_isas()) {
+    const std::vector<SimulationResult> got = run(tasks, isa);
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+      expect_same(got[i], want[i], std::string(to_string(isa)) + ", lane " + std::to_string(i));
+  }
 }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -98,8 +99,14 @@ TEST(Evaluate, GivesTheNumbersOfSimulatingEachMemberAlone) {
       const sim::SimulationResult s = alone.simulate(c.controller, 0);
       EXPECT_EQ(c.members[i].scenario, one.scenarios[0].name);
       EXPECT_EQ(c.members[i].objective, s.metrics.errors.ise) << c.label << " " << i;
-      EXPECT_EQ(c.members[i].iae, s.metrics.errors.iae);
-      EXPECT_EQ(c.members[i].control_tv, s.metrics.control_tv);
+      EXPECT_EQ(c.members[i].metrics.get("iae"), s.metrics.errors.iae);
+      EXPECT_EQ(c.members[i].metrics.get("control_tv"), s.metrics.control_tv);
+      // Every field of the record, to the bit (NaN for a fault onset never reached).
+      const std::vector<double> want = sim::MetricValues::of(s.metrics).values;
+      ASSERT_EQ(c.members[i].metrics.values.size(), want.size());
+      EXPECT_EQ(std::memcmp(c.members[i].metrics.values.data(), want.data(),
+                            want.size() * sizeof(double)),
+                0);
       EXPECT_EQ(c.members[i].recoverable, alone.recoverable(0));
       if (c.members[i].recoverable) counted.push_back(c.members[i].objective);
     }
@@ -197,7 +204,9 @@ TEST(Evaluate, CommandWritesItsFilesAndTheWorstMembersReplay) {
   std::string line;
   std::getline(csv, line);
   EXPECT_EQ(line, "controller,scenario,faults" + tune::fault_columns_header(2) +
-                      ",recoverable,objective,ise,iae,max_abs_u,control_tv,diverged");
+                      ",recoverable,objective,ise,iae,itae,max_abs_u,control_tv,"
+                      "peak_error_after_fault,control_energy,peak_command,saturation_fraction,"
+                      "settling_time,steady_state_error,diverged");
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 2 * 7);

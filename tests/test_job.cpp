@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -8,6 +9,7 @@
 
 #include "cli_runner.hpp"
 #include "ftc/tune/job/job.hpp"
+#include "ftc/tune/problem/problem.hpp"
 
 using nlohmann::json;
 using namespace ftc;
@@ -431,4 +433,46 @@ TEST(JobLoader, UncertainParametersAndActuatorsAreThePlantsOwn) {
   hex["ensemble"] = {{"count", 4}, {"seed", 1}, {"inertia_scale", {{"uniform", {0.8, 1.2}}}}};
   const ftc::testing::CliResult ok = validate(hex);
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
+TEST(JobLoader, MetricsBlockGivesTheSettlingThresholdAndTailAtTheirPaths) {
+  // Without the block the resolved job has no "metrics" (a job keeps its canonical form and
+  // hash) and the simulations no threshold or tail.
+  json j = table1();
+  const tune::Job plain = tune::parse_job(j, "t");
+  EXPECT_FALSE(tune::to_json(plain).contains("metrics"));
+  const sim::SimulationOptions none = tune::TuningProblem(plain).simulation_options(0, 0);
+  EXPECT_TRUE(std::isnan(none.metrics.settling_threshold));
+  EXPECT_TRUE(std::isnan(none.metrics.steady_state_tail));
+  // With it, both reach every simulation's options, and the block round-trips.
+  j["metrics"] = {{"settling_threshold", 0.01}, {"steady_state_tail", 5}};
+  const tune::Job job = tune::parse_job(j, "t");
+  EXPECT_EQ(tune::to_json(job)["metrics"], j["metrics"]);
+  const sim::SimulationOptions o = tune::TuningProblem(job).simulation_options(0, 0);
+  EXPECT_EQ(o.metrics.settling_threshold, 0.01);
+  EXPECT_EQ(o.metrics.steady_state_tail, 5.0);
+  j["metrics"] = {{"steady_state_tail", 2}};  // one without the other
+  EXPECT_TRUE(std::isnan(
+      tune::TuningProblem(tune::parse_job(j, "t")).simulation_options(0, 0).metrics.settling_threshold));
+  const std::vector<BadCase> cases = {
+      {"threshold 0", [](json& k) { k["metrics"] = {{"settling_threshold", 0}}; },
+       "/metrics/settling_threshold", "> 0"},
+      {"negative tail", [](json& k) { k["metrics"] = {{"steady_state_tail", -1}}; },
+       "/metrics/steady_state_tail", "> 0"},
+      {"unknown key", [](json& k) { k["metrics"] = {{"threshold", 0.1}}; }, "/metrics/threshold",
+       "unknown key"},
+      {"not a number", [](json& k) { k["metrics"] = {{"steady_state_tail", "5"}}; },
+       "/metrics/steady_state_tail", "expected a number"},
+  };
+  for (const BadCase& c : cases) {
+    json k = table1();
+    c.mutate(k);
+    std::string all;
+    bool found = false;
+    for (const FieldError& e : errors_of(k)) {
+      found = found || (e.path == c.path && e.message.find(c.message) != std::string::npos);
+      all += "\n  " + to_string(e);
+    }
+    EXPECT_TRUE(found) << c.what << ": expected " << c.path << " ~ " << c.message << ", got" << all;
+  }
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -11,8 +12,10 @@
 #include "ftc/sim/metrics.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/evaluate.hpp"
 #include "io/text.hpp"
 #include "metrics_accumulator.hpp"
+#include "short_job.hpp"
 
 namespace {
 
@@ -272,7 +275,8 @@ TEST(Metrics, RecordRoundTripsThroughMarkdown) {
   ASSERT_EQ(lines.size(), 3u);
   const std::vector<std::string> head = cells(lines[0]), sep = cells(lines[1]),
                                  row = cells(lines[2]);
-  // controller; ise, iae, itae, max|u|, tv; ISE per extra window (2); peak per fault (2)
+  // controller; ise, iae, itae, max|u|, tv; ISE per extra window (2); peak per fault (2): the
+  // fields of the tables
   ASSERT_EQ(head.size(), 10u);
   ASSERT_EQ(sep.size(), head.size());
   ASSERT_EQ(row.size(), head.size());
@@ -286,6 +290,10 @@ TEST(Metrics, RecordRoundTripsThroughMarkdown) {
   const auto text = [](double v) { return ftc::tune::detail::format_number(v); };
   for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields) {
     const std::string label(f.label);
+    if (!f.in_tables) {  // in the JSON documents and evaluate's files only
+      for (const std::string& h : head) EXPECT_EQ(h.find(label), std::string::npos) << h;
+      continue;
+    }
     switch (f.scope) {
       case MetricScope::window:
         EXPECT_EQ(column(label), text(m.errors.*f.in_window));
@@ -306,4 +314,204 @@ TEST(Metrics, RecordRoundTripsThroughMarkdown) {
   // Parsed back: the window [0.5, inf) leaves out sample 0: ISE = 0.5 (0.5 + 1 + 0.0625).
   EXPECT_NEAR(std::stod(column("ISE")), 0.78125, 1e-4);
   EXPECT_EQ(column("peak ‖e‖ after fault 2"), "–");  // never reached
+}
+
+namespace {
+
+// The lines of a text, each split at `sep` (no quoting: the test's fields have none).
+std::vector<std::vector<std::string>> split_rows(const std::string& text, char sep) {
+  std::vector<std::vector<std::string>> rows;
+  for (std::size_t a = 0, b; (b = text.find('\n', a)) != std::string::npos; a = b + 1) {
+    std::vector<std::string> row;
+    const std::string line = text.substr(a, b - a);
+    for (std::size_t c = 0, d;; c = d + 1) {
+      d = line.find(sep, c);
+      row.push_back(line.substr(c, d == std::string::npos ? std::string::npos : d - c));
+      if (d == std::string::npos) break;
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// An evaluation of table1-short's one scenario by two controllers: a finite record and a
+// diverged one (its integrals +inf), each with two fault onsets, the second never reached (NaN).
+ftc::tune::EvaluationResult sample_evaluation() {
+  ftc::tune::EvaluationResult r;
+  r.job = ftc::tune::parse_job(ftc::testing::short_table1_job(), "table1-short");
+  int k = 0;
+  for (const Metrics& m : {accumulate(Window{0.5}, {}, {0.75, 2.0}), sample_record()}) {
+    ftc::tune::EvaluatedController c;
+    c.label = "c" + std::to_string(++k);
+    c.source = "job";
+    c.controller = r.job.controller;
+    ftc::tune::MemberResult x;
+    x.scenario = r.job.scenarios[0].name;
+    x.objective = m.errors.ise;
+    x.metrics = ftc::sim::MetricValues::of(m);
+    x.diverged = m.diverged;
+    c.members.push_back(x);
+    r.controllers.push_back(c);
+  }
+  return r;
+}
+
+}  // namespace
+
+TEST(Metrics, RecordRoundTripsThroughEvaluationCsvAndJson) {
+  // evaluation.csv and evaluation.json write every field of the record in the objective's
+  // window by the description: read back by column or key name, each member gives the values it
+  // was written from, to the bit (non-finite values: "inf" / "nan" in the CSV, null in JSON).
+  using ftc::sim::MetricScope;
+  const ftc::tune::EvaluationResult r = sample_evaluation();
+  std::string csv, js;
+  ftc::tune::write_evaluation_csv(r, [&](std::string_view s) { csv.append(s); });
+  ftc::tune::write_evaluation_json(r, [&](std::string_view s) { js.append(s); });
+  const auto rows = split_rows(csv, ',');
+  ASSERT_EQ(rows.size(), 3u);
+  const std::vector<std::string>& head = rows[0];
+  const nlohmann::json doc = nlohmann::json::parse(js);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const ftc::sim::MetricValues& want = r.controllers[k].members[0].metrics;
+    ASSERT_EQ(rows[k + 1].size(), head.size());
+    const nlohmann::json& member = doc.at("controllers")[k].at("members")[0];
+    std::size_t checked = 0;
+    for (std::size_t f = 0; f < ftc::sim::kMetricFieldCount; ++f) {
+      const ftc::sim::MetricField& field = ftc::sim::kMetricFields[f];
+      SCOPED_TRACE(std::string(field.name) + " of member " + std::to_string(k));
+      const std::span<const double> v = want.field(f);
+      ASSERT_EQ(v.size(), field.scope == MetricScope::fault ? 2u : 1u);
+      // CSV: the column under the field's name; a fault field's values split at ';'.
+      std::size_t col = 0;
+      while (col < head.size() && head[col] != field.name) ++col;
+      ASSERT_LT(col, head.size());
+      const std::vector<std::string> cell = split_rows(rows[k + 1][col] + "\n", ';')[0];
+      ASSERT_EQ(cell.size(), v.size());
+      // JSON: the value under the name, an array for a fault field.
+      const nlohmann::json j = member.at(std::string(field.name));
+      ASSERT_EQ(j.is_array(), field.scope == MetricScope::fault);
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        EXPECT_EQ(bits(std::stod(cell[i])), bits(v[i])) << cell[i];
+        const nlohmann::json& ji = j.is_array() ? j[i] : j;
+        if (std::isfinite(v[i]))
+          EXPECT_EQ(bits(ji.get<double>()), bits(v[i]));
+        else
+          EXPECT_TRUE(ji.is_null()) << ji;
+        ++checked;
+      }
+    }
+    EXPECT_EQ(checked, want.values.size());
+    EXPECT_EQ(member.at("diverged").get<bool>(), k == 1);
+  }
+  // The values themselves: the finite member's ISE over [0.5, inf) and its first peak (from
+  // t = 0.75 on: ‖e‖ = 1 at t = 1, 0.25 at t = 1.5).
+  EXPECT_EQ(r.controllers[0].members[0].metrics.get("ise"), 0.78125);
+  EXPECT_EQ(r.controllers[0].members[0].metrics.field(5)[0], 1.0);
+  EXPECT_TRUE(std::isnan(r.controllers[0].members[0].metrics.field(5)[1]));
+  EXPECT_EQ(rows[1].back(), "0");
+  EXPECT_EQ(rows[2].back(), "1");
+}
+
+TEST(Metrics, RecordSaysHowEachFieldCombinesOverScenarios) {
+  using ftc::sim::metric_field;
+  using ftc::sim::over_scenarios;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double> v = {0.5, nan, 2.0, 0.25};
+  // Integrals and the control TV add up; peaks take the largest value reached.
+  EXPECT_EQ(over_scenarios(metric_field("ise"), std::vector<double>{0.5, 2.0, 0.25}), 2.75);
+  EXPECT_EQ(over_scenarios(metric_field("control_tv"), std::vector<double>{1.0, 2.0}), 3.0);
+  EXPECT_EQ(over_scenarios(metric_field("max_abs_u"), v), 2.0);
+  EXPECT_EQ(over_scenarios(metric_field("peak_error_after_fault"), v), 2.0);
+  EXPECT_TRUE(std::isnan(
+      over_scenarios(metric_field("peak_error_after_fault"), std::vector<double>{nan})));
+  EXPECT_THROW(metric_field("no_such_metric"), std::logic_error);
+  // Every field of the tables is in the note under them with its unit, the control TV with its
+  // definition; the others are not.
+  const std::string note = ftc::sim::units_note(false);
+  for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields)
+    EXPECT_EQ(note.find(ftc::sim::plain_label(f) + " in " + std::string(f.unit)) !=
+                  std::string::npos,
+              f.in_tables)
+        << f.name << ": " << note;
+  EXPECT_EQ(over_scenarios(metric_field("saturation_fraction"), v), 2.75 / 3.0);  // the mean
+  EXPECT_NE(note.find("control TV = Σ‖u_k − u_{k−1}‖ (chattering)"), std::string::npos) << note;
+  EXPECT_NE(ftc::sim::units_note(true).find("max \\|u_d\\| in"), std::string::npos);
+}
+
+TEST(Metrics, WindowMetricsMatchHandComputedTrajectory) {
+  // The trajectory above with command limits [-3, 3] and [-2, 2] (at a limit: samples 0, 2 and
+  // 3), a run of 2 s, the faults at 0.75 s and 2 s:
+  //   k  t    ‖e‖²     ‖u‖²   max|u_j|
+  //   0  0    5        25     4
+  //   1  0.5  0.5      0      0
+  //   2  1    1        4      2
+  //   3  1.5  0.0625   5      2
+  const auto run = [](Window w, double threshold, double tail, std::vector<double> onsets) {
+    ftc::sim::MetricContext<2> c;
+    c.duration = 2.0;
+    c.lo << -3.0, -2.0;
+    c.hi << 3.0, 2.0;
+    c.settings.settling_threshold = threshold;
+    c.settings.steady_state_tail = tail;
+    MetricsAccumulator<2, 2> acc(0.5, w, {Window{0.0, 1.0}}, std::move(onsets), c);
+    for (const Sample& s : kTrajectory) {
+      StateOf<2> x;
+      x << s.e[0], s.e[1], 7.0, -7.0;
+      Vec<2> u;
+      u << s.u[0], s.u[1];
+      acc.sample(s.t, x, u);
+    }
+    return acc.result();
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN(),
+               inf = std::numeric_limits<double>::infinity();
+  const Metrics m = run(Window{}, 0.8, 1.0, {2.0, 0.75});
+  // Whole run: energy 0.5 (25 + 0 + 4 + 5), peak 4, 3 of 4 samples at a limit.
+  EXPECT_EQ(m.errors.control_energy, 17.0);
+  EXPECT_EQ(m.errors.peak_command, 4.0);
+  EXPECT_EQ(m.errors.saturation_fraction, 0.75);
+  // From the first fault (0.75 s, the earliest onset, not the first listed): ‖e‖ = 1 ≥ 0.8 at
+  // 1 s, 0.25 < 0.8 from 1.5 s on: settled 0.75 s after the fault.
+  EXPECT_EQ(m.errors.settling_time, 0.75);
+  // The tail [min(inf, 2) - 1, inf) = [1, inf): samples 2 and 3, mean ‖e‖ = (1 + 0.25) / 2.
+  EXPECT_EQ(m.errors.steady_state_error, 0.625);
+  // The extra window [0, 1): samples 0 and 1; no sample after the fault (NaN settling time);
+  // its tail [0, 1): both samples.
+  const ErrorIntegrals& x = m.extra[0];
+  EXPECT_EQ(x.control_energy, 12.5);
+  EXPECT_EQ(x.peak_command, 4.0);
+  EXPECT_EQ(x.saturation_fraction, 0.5);
+  EXPECT_TRUE(std::isnan(x.settling_time));
+  EXPECT_EQ(x.steady_state_error, (std::sqrt(5.0) + std::sqrt(0.5)) / 2.0);
+  // A window from 0.5 s: energy 0.5 · 9, peak 2, 2 of 3 samples at a limit.
+  const Metrics late = run(Window{0.5}, 2.0, 0.5, {0.75});
+  EXPECT_EQ(late.errors.control_energy, 4.5);
+  EXPECT_EQ(late.errors.peak_command, 2.0);
+  EXPECT_EQ(late.errors.saturation_fraction, 2.0 / 3.0);
+  EXPECT_EQ(late.errors.settling_time, 0.25);  // below 2 from the first sample after the fault
+  EXPECT_EQ(late.errors.steady_state_error, 0.25);  // the tail [1.5, inf): sample 3
+  // Not below 0.2 by the window's end: +inf; no threshold, tail or fault: NaN.
+  EXPECT_EQ(run(Window{}, 0.2, nan, {0.75}).errors.settling_time, inf);
+  const Metrics none = run(Window{}, nan, nan, {0.75});
+  EXPECT_TRUE(std::isnan(none.errors.settling_time));
+  EXPECT_TRUE(std::isnan(none.errors.steady_state_error));
+  EXPECT_TRUE(std::isnan(run(Window{}, 0.8, nan, {}).errors.settling_time));
+  // Without limits no sample is at one.
+  MetricsAccumulator<2, 2> unlimited(0.5, Window{}, {}, {});
+  for (const Sample& s : kTrajectory) {
+    StateOf<2> xs;
+    xs << s.e[0], s.e[1], 0.0, 0.0;
+    Vec<2> u;
+    u << s.u[0], s.u[1];
+    unlimited.sample(s.t, xs, u);
+  }
+  EXPECT_EQ(unlimited.result().errors.saturation_fraction, 0.0);
+  // A diverged run: every window metric +inf.
+  MetricsAccumulator<2, 2> d(0.5, Window{}, {Window{0.0, 1.0}}, {0.75});
+  d.mark_diverged(0.5);
+  for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields)
+    if (f.scope == ftc::sim::MetricScope::window) {
+      EXPECT_EQ(d.result().errors.*f.in_window, inf) << f.name;
+      EXPECT_EQ(d.result().extra[0].*f.in_window, inf) << f.name;
+    }
 }

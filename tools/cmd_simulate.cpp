@@ -11,6 +11,7 @@
 #include "ftc/runtime/gains.hpp"
 #include "ftc/sim/controllers.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
@@ -114,13 +115,20 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
         std::isfinite(job.objective.window.t1) ? fmt(job.objective.window.t1).c_str() : "end",
         tune::to_string(job.objective.aggregate), e.scenarios.size(),
         e.scenarios.size() == 1 ? "" : "s");
-    std::printf("  %-16s %12s %12s %12s %10s %12s  %s\n", "scenario", "ise", "iae", "itae",
-                "max|u_d|", "control_tv", "diverged");
+    // The window and run fields of the metrics record (ftc/sim/metrics_record.hpp) in its
+    // order (those of its tables); metrics.json has every field.
+    std::printf("  %-16s", "scenario");
+    for (const sim::MetricField& f : sim::kMetricFields)
+      if (f.in_tables && f.scope != sim::MetricScope::fault)
+        std::printf(" %12s", std::string(f.name).c_str());
+    std::printf("  diverged\n");
     for (std::size_t i = 0; i < e.scenarios.size(); ++i) {
-      const sim::Metrics& m = e.scenarios[i];
-      std::printf("  %-16s %12s %12s %12s %10s %12s  %s\n", job.scenarios[i].name.c_str(),
-                  fmt(m.errors.ise).c_str(), fmt(m.errors.iae).c_str(), fmt(m.errors.itae).c_str(),
-                  fmt(m.max_abs_u).c_str(), fmt(m.control_tv).c_str(), m.diverged ? "yes" : "no");
+      const sim::MetricValues m = sim::MetricValues::of(e.scenarios[i]);
+      std::printf("  %-16s", job.scenarios[i].name.c_str());
+      for (std::size_t f = 0; f < sim::kMetricFieldCount; ++f)
+        if (sim::kMetricFields[f].in_tables && sim::kMetricFields[f].scope != sim::MetricScope::fault)
+          std::printf(" %12s", fmt(m.field(f)[0]).c_str());
+      std::printf("  %s\n", e.scenarios[i].diverged ? "yes" : "no");
     }
     std::printf("  objective %s, fitness J = %s\n", fmt(objective, "%.6g").c_str(),
                 fmt(fitness, "%.6g").c_str());

@@ -281,7 +281,9 @@ def evaluate(job, gains=(), seed=None, count=None, threads=None):
 
     gains: a list of paths, Results or gains dicts (labelled by path, or "gains<k>"), or a dict
     {label: one of those}. Returns a DataFrame, one row per (controller, scenario), with the
-    scenario's faults as columns (faults, fault<k>_type, fault<k>_onset, ...); its .attrs hold
+    member's metrics in the objective's window (every field of the metrics record, a per-fault
+    field as <name>_fault<k>) and the scenario's faults as columns (faults, fault<k>_type,
+    fault<k>_onset, ...); its .attrs hold
     the held-out seed, the member count and each controller's aggregates.
     """
     items = list(gains.items()) if isinstance(gains, dict) else [
@@ -293,9 +295,9 @@ def evaluate(job, gains=(), seed=None, count=None, threads=None):
     faults = json.loads(out["faults"])
     index = out["scenario_index"]
     per_scenario = _fault_columns(faults)
-    frame = pd.DataFrame({k: out[k] for k in ("controller", "source", "scenario", "recoverable",
-                                              "objective", "ise", "iae", "max_abs_u",
-                                              "control_tv", "diverged")})
+    columns = ["controller", "source", "scenario", "recoverable", "objective",
+               *out["metric_columns"], "diverged"]
+    frame = pd.DataFrame({k: out[k] for k in columns})
     for name, values in per_scenario.items():
         frame[name] = [values[i] for i in index]
     frame.attrs["seed"] = out["seed"]

@@ -177,6 +177,21 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
     peak[i] = T(std::numeric_limits<double>::quiet_NaN());
   }
   T max_abs_u(0.0), control_tv(0.0);
+  // The command, settling and steady-state sums per window (the steady-state tail's start per
+  // window and lane, NaN for a lane without a tail; the settling threshold² per lane, NaN
+  // without one).
+  lane::WindowSums<T> sums[kMaxWindows];
+  T tail0[kMaxWindows];
+  for (int i = 0; i < nw; ++i) tail0[i] = row(su.tail_start[i]);
+  std::array<T, M> limit_lo, limit_hi;
+  for (int j = 0; j < M; ++j) {
+    limit_lo[j] = row(su.limit_lo[j]);
+    limit_hi[j] = row(su.limit_hi[j]);
+  }
+  const T first_fault = row(su.first_onset), threshold_sq = row(su.threshold_sq);
+  const Mask settling_lane = threshold_sq == threshold_sq;  // not NaN
+  const bool settling = su.kernel_metrics && su.any_settling;
+  const bool need_en = no > 0 || (su.kernel_metrics && su.any_tail);
   Mask counting = T(0.0) == T(0.0);
   {
     double c[W];
@@ -221,16 +236,26 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
         const T t(td);
         const lane::ErrorNorms<T> en2 = lane::error_norms<N, T>(x);
         const lane::ErrorTerms<T> terms = lane::error_terms(Tsv, T(Ts * td), en2);
-        for (int wi = 0; wi < nw; ++wi)
-          lane::add_error_terms<T>(counting & lane::in_window(t, w0[wi], w1[wi]), terms, ise[wi],
-                                   iae[wi], itae[wi]);
-        lane::add_max_abs_u<M, T>(counting, u, max_abs_u);
-        if (k > 0) lane::add_control_tv<M, T>(counting, u, u_prev, control_tv);
-        if (no > 0) {
-          const T en = lane::sqrt(en2.sq);
-          for (int fi = 0; fi < no; ++fi)
-            lane::add_peak<T>(counting & (t >= onset[fi]), en, peak[fi]);
+        const lane::CommandNorms<T> cn = lane::command_norms<M, T>(u);
+        const T energy_term = Tsv * cn.sq;
+        const Mask saturated = lane::at_limit<M, T>(u, limit_lo, limit_hi);
+        const T en = need_en ? lane::sqrt(en2.sq) : T(0.0);
+        Mask above = settling_lane, after_fault = settling_lane;
+        if (settling) {
+          above = en2.sq >= threshold_sq;
+          after_fault = settling_lane & (t >= first_fault);
         }
+        for (int wi = 0; wi < nw; ++wi) {
+          const Mask in = counting & lane::in_window(t, w0[wi], w1[wi]);
+          lane::add_error_terms<T>(in, terms, ise[wi], iae[wi], itae[wi]);
+          lane::add_command<T>(in, energy_term, cn.max_abs, saturated, sums[wi]);
+          if (settling) lane::add_settling<T>(in & after_fault, above, t, sums[wi].settled_from);
+          if (su.any_tail) lane::add_tail<T>(in & (t >= tail0[wi]), en, sums[wi]);
+        }
+        lane::add_max<T>(counting, cn.max_abs, max_abs_u);
+        if (k > 0) lane::add_control_tv<M, T>(counting, u, u_prev, control_tv);
+        for (int fi = 0; fi < no; ++fi)
+          lane::add_peak<T>(counting & (t >= onset[fi]), en, peak[fi]);
       }
 
       // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
@@ -285,15 +310,40 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
     }
     if (su.want_samples) host.samples(k - n, n, out);
   }
+  // Each sum to its field's slot of the metrics record (ftc/sim/metrics_record.hpp).
+  constexpr std::size_t kIse = metric_slot("ise"), kIae = metric_slot("iae"),
+                        kItae = metric_slot("itae"), kMaxAbsU = metric_slot("max_abs_u"),
+                        kControlTv = metric_slot("control_tv"),
+                        kPeak = metric_slot("peak_error_after_fault"),
+                        kEnergy = metric_slot("control_energy"),
+                        kPeakCommand = metric_slot("peak_command"),
+                        kSaturation = metric_slot("saturation_fraction"),
+                        kSettling = metric_slot("settling_time"),
+                        kSteady = metric_slot("steady_state_error");
   for (int l = 0; l < W; ++l) {
     for (int wi = 0; wi < nw; ++wi) {
-      fin.ise[wi][l] = lane::lane_of(ise[wi], l);
-      fin.iae[wi][l] = lane::lane_of(iae[wi], l);
-      fin.itae[wi][l] = lane::lane_of(itae[wi], l);
+      fin.window_field[kIse][wi][l] = lane::lane_of(ise[wi], l);
+      fin.window_field[kIae][wi][l] = lane::lane_of(iae[wi], l);
+      fin.window_field[kItae][wi][l] = lane::lane_of(itae[wi], l);
+      const lane::WindowSums<T>& s = sums[wi];
+      lane::WindowSums<double> one;
+      one.energy = lane::lane_of(s.energy, l);
+      one.peak = lane::lane_of(s.peak, l);
+      one.saturated = lane::lane_of(s.saturated, l);
+      one.samples = lane::lane_of(s.samples, l);
+      one.settled_from = lane::lane_of(s.settled_from, l);
+      one.tail_sum = lane::lane_of(s.tail_sum, l);
+      one.tail_samples = lane::lane_of(s.tail_samples, l);
+      const lane::WindowMetrics w = lane::finish_window(one, su.first_onset[l]);
+      fin.window_field[kEnergy][wi][l] = w.control_energy;
+      fin.window_field[kPeakCommand][wi][l] = w.peak_command;
+      fin.window_field[kSaturation][wi][l] = w.saturation_fraction;
+      fin.window_field[kSettling][wi][l] = w.settling_time;
+      fin.window_field[kSteady][wi][l] = w.steady_state_error;
     }
-    for (int fi = 0; fi < no; ++fi) fin.peak[fi][l] = lane::lane_of(peak[fi], l);
-    fin.max_abs_u[l] = lane::lane_of(max_abs_u, l);
-    fin.control_tv[l] = lane::lane_of(control_tv, l);
+    for (int fi = 0; fi < no; ++fi) fin.fault_field[kPeak][fi][l] = lane::lane_of(peak[fi], l);
+    fin.run_field[kMaxAbsU][l] = lane::lane_of(max_abs_u, l);
+    fin.run_field[kControlTv][l] = lane::lane_of(control_tv, l);
   }
   for (int l = 0; l < W; ++l)
     if (live[l] || l >= su.lanes)

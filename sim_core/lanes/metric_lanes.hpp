@@ -6,8 +6,10 @@
 // Both runs call these functions in the same order, so a lane gets the bits of the one-lane run.
 //
 // Adding a metric: its accumulator here, called from MetricsAccumulator::sample and from the
-// kernel's sample step, its member in Metrics and PackFinal, its entry in the metrics record
-// (ftc/sim/metrics_record.hpp); docs/architecture.md lists the writers still done by hand.
+// kernel's sample step (stored at its slot of PackFinal), its member in Metrics, its entry in the
+// metrics record (ftc/sim/metrics_record.hpp), from which every writer is produced.
+#include <limits>
+
 #include "lanes/lane.hpp"
 
 namespace ftc::sim::lane {
@@ -55,15 +57,95 @@ FTC_HOT_INLINE void add_error_terms(Mask<T> in, const ErrorTerms<T>& d, T& ise, 
   itae = lane::select(in, itae + d.itae, itae);
 }
 
-// max_j,k |u_d,j(t_k)|.
+// ‖u‖² (summed in index order) and max_j |u_j| of one sample's command, computed once and used
+// by every metric of the command.
+template <class T>
+struct CommandNorms {
+  T sq;
+  T max_abs;
+};
 template <int M, class T, class U>
-FTC_HOT_INLINE void add_max_abs_u(Mask<T> counting, const U& u, T& max_abs_u) {
+FTC_HOT_INLINE CommandNorms<T> command_norms(const U& u) {
+  T sq = T(u[0]) * T(u[0]);
   T u_max = lane::abs(T(u[0]));
   for (int j = 1; j < M; ++j) {
+    sq = sq + T(u[j]) * T(u[j]);
     const T a_j = lane::abs(T(u[j]));
     u_max = lane::select(u_max < a_j, a_j, u_max);
   }
-  max_abs_u = lane::select(counting & (max_abs_u < u_max), u_max, max_abs_u);
+  return {sq, u_max};
+}
+
+// A running maximum over the samples that count.
+template <class T>
+FTC_HOT_INLINE void add_max(Mask<T> counting, T v, T& max) {
+  max = lane::select(counting & (max < v), v, max);
+}
+
+// max_j,k |u_d,j(t_k)|.
+template <int M, class T, class U>
+FTC_HOT_INLINE void add_max_abs_u(Mask<T> counting, const U& u, T& max_abs_u) {
+  add_max<T>(counting, command_norms<M, T>(u).max_abs, max_abs_u);
+}
+
+// Whether some u_j is at or beyond its limit: u_j ≤ lo_j or u_j ≥ hi_j.
+template <int M, class T, class U, class L>
+FTC_HOT_INLINE Mask<T> at_limit(const U& u, const L& lo, const L& hi) {
+  Mask<T> m = (T(u[0]) <= lo[0]) | (T(u[0]) >= hi[0]);
+  for (int j = 1; j < M; ++j) m = m | (T(u[j]) <= lo[j]) | (T(u[j]) >= hi[j]);
+  return m;
+}
+
+// The sums behind a window's command, settling and steady-state metrics (ftc/sim/metrics.hpp),
+// per window.
+template <class T>
+struct WindowSums {
+  T energy = T(0.0);     // Σ Ts ‖u‖²
+  T peak = T(0.0);       // max_j |u_j|
+  T saturated = T(0.0);  // samples at a limit
+  T samples = T(0.0);    // samples in the window
+  T settled_from = T(std::numeric_limits<double>::quiet_NaN());  // see add_settling
+  T tail_sum = T(0.0);      // Σ ‖e‖ over the tail
+  T tail_samples = T(0.0);  // samples in the tail
+};
+
+// One sample in the window (`in`): its energy term Ts ‖u‖², its peak, whether it is at a limit.
+template <class T>
+FTC_HOT_INLINE void add_command(Mask<T> in, T energy_term, T u_max, Mask<T> saturated,
+                                WindowSums<T>& w) {
+  w.energy = lane::select(in, w.energy + energy_term, w.energy);
+  add_max<T>(in, u_max, w.peak);
+  w.saturated = lane::select(in & saturated, w.saturated + T(1.0), w.saturated);
+  w.samples = lane::select(in, w.samples + T(1.0), w.samples);
+}
+
+// Settling: for a sample in the window at or after the first fault (`in`), settled_from becomes
+// +inf while ‖e‖ is at or above the threshold (`above`) and the sample's time t at the first
+// sample below it after that (NaN: no such sample yet).
+template <class T>
+FTC_HOT_INLINE void add_settling(Mask<T> in, Mask<T> above, T t, T& settled_from) {
+  const T inf(std::numeric_limits<double>::infinity());
+  const T below = lane::select(settled_from < inf, settled_from, t);  // false for NaN too
+  settled_from = lane::select(in, lane::select(above, inf, below), settled_from);
+}
+
+// A sample in the window's tail (`in`): its ‖e‖.
+template <class T>
+FTC_HOT_INLINE void add_tail(Mask<T> in, T en, WindowSums<T>& w) {
+  w.tail_sum = lane::select(in, w.tail_sum + en, w.tail_sum);
+  w.tail_samples = lane::select(in, w.tail_samples + T(1.0), w.tail_samples);
+}
+
+// A window's metrics from one lane's sums: the ratios, and the settling time from the first
+// fault onset; NaN (the one quiet NaN, whatever the CPU makes of 0/0) where there is no sample.
+struct WindowMetrics {
+  double control_energy, peak_command, saturation_fraction, settling_time, steady_state_error;
+};
+inline WindowMetrics finish_window(const WindowSums<double>& w, double first_onset) {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  return {w.energy, w.peak, w.samples > 0.0 ? w.saturated / w.samples : nan,
+          w.settled_from == w.settled_from ? w.settled_from - first_onset : nan,
+          w.tail_samples > 0.0 ? w.tail_sum / w.tail_samples : nan};
 }
 
 // The control total variation: ‖u_k - u_{k-1}‖₂ added for k ≥ 1 (the caller skips k = 0).

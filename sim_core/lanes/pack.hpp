@@ -14,6 +14,7 @@
 #include <cstdint>
 
 #include "ftc/sim/controller_config.hpp"
+#include "ftc/sim/metrics_record.hpp"
 
 namespace ftc::sim::detail {
 
@@ -87,6 +88,17 @@ struct PackSetup {
   double window[kMaxWindows][2][kMaxLanes] = {};  // unused: [inf, inf)
   int onsets = 0;
   double onset[kMaxOnsets][kMaxLanes] = {};  // unused: inf
+  // The window metrics' setup (ftc/sim/metrics.hpp, sim_core/metrics_accumulator.hpp): the
+  // command limits of saturation_fraction per actuator and lane, the earliest fault onset
+  // (+inf: none), the settling threshold squared (NaN: no settling time) and each window's
+  // steady-state tail start (NaN: no tail), per lane; whether any lane has a threshold or a tail.
+  double limit_lo[M][kMaxLanes] = {};
+  double limit_hi[M][kMaxLanes] = {};
+  double first_onset[kMaxLanes] = {};
+  double threshold_sq[kMaxLanes] = {};
+  double tail_start[kMaxWindows][kMaxLanes] = {};
+  bool any_settling = false;
+  bool any_tail = false;
 };
 
 // The host side, called twice per block of samples (never per sample).
@@ -109,10 +121,15 @@ struct PackFinal {
   std::int64_t samples[kMaxLanes];  // samples simulated per lane
   bool diverged[kMaxLanes];
   double diverged_at[kMaxLanes];  // s
-  // With kernel_metrics: as in Metrics, per window and lane.
-  double ise[kMaxWindows][kMaxLanes], iae[kMaxWindows][kMaxLanes], itae[kMaxWindows][kMaxLanes];
-  double max_abs_u[kMaxLanes], control_tv[kMaxLanes];
-  double peak[kMaxOnsets][kMaxLanes];
+  // With kernel_metrics: the record's fields (ftc/sim/metrics_record.hpp) by scope, each at its
+  // slot (metric_slot("ise") and so on): per window (the objective window first), per lane, or
+  // per fault onset. The host reads them back by the same table.
+  static constexpr std::size_t kWindowFields = metric_count(MetricScope::window);
+  static constexpr std::size_t kRunFields = metric_count(MetricScope::run);
+  static constexpr std::size_t kFaultFields = metric_count(MetricScope::fault);
+  double window_field[kWindowFields][kMaxWindows][kMaxLanes];
+  double run_field[kRunFields][kMaxLanes];
+  double fault_field[kFaultFields][kMaxOnsets][kMaxLanes];
 };
 
 template <int N, int M>

@@ -3,6 +3,7 @@
 // grouping into packs, and the host side of a pack (exogenous inputs, metrics, trajectories),
 // in plain C++ compiled once, for plant class P. Private to sim_core (plants/plant_adapter.hpp).
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <span>
 #include <deque>
@@ -73,7 +74,14 @@ class Host final : public PackHost<N, M> {
       std::vector<double> onsets;
       for (const Fault& f : s.faults) onsets.push_back(f.onset);
       const SimulationOptions& o = *lanes_[l]->options;
-      metrics_.emplace_back(s.sample_time, o.window, o.extra_windows, std::move(onsets));
+      MetricContext<M> context;
+      context.duration = s.duration;
+      for (int j = 0; j < M; ++j) {
+        context.lo[j] = setup.limit_lo[j][l];
+        context.hi[j] = setup.limit_hi[j][l];
+      }
+      context.settings = o.metrics;
+      metrics_.emplace_back(s.sample_time, o.window, o.extra_windows, std::move(onsets), context);
       SimulationResult& r = *lanes_[l]->result;
       r = SimulationResult{};
       r.trajectory.axes = N;
@@ -173,15 +181,27 @@ class Host final : public PackHost<N, M> {
         r.metrics = metrics_[l].result();
         continue;
       }
-      // The kernel's sums (lanes/metric_lanes.hpp), arranged as MetricsAccumulator arranges its own.
+      // The kernel's sums (lanes/metric_lanes.hpp), arranged as MetricsAccumulator arranges its
+      // own: each field of the record from its slot (ftc/sim/metrics_record.hpp).
       Metrics m = metrics_[l].result();
-      m.errors = {fin.ise[0][l], fin.iae[0][l], fin.itae[0][l]};
-      for (std::size_t w = 0; w < m.extra.size(); ++w)
-        m.extra[w] = {fin.ise[w + 1][l], fin.iae[w + 1][l], fin.itae[w + 1][l]};
-      m.max_abs_u = fin.max_abs_u[l];
-      m.control_tv = fin.control_tv[l];
-      for (std::size_t f = 0; f < m.peak_error_after_fault.size(); ++f)
-        m.peak_error_after_fault[f] = fin.peak[f][l];
+      std::size_t slot[3] = {0, 0, 0};
+      for (const MetricField& f : kMetricFields) {
+        const std::size_t s = slot[static_cast<std::size_t>(f.scope)]++;
+        switch (f.scope) {
+          case MetricScope::window:
+            m.errors.*f.in_window = fin.window_field[s][0][l];
+            for (std::size_t w = 0; w < m.extra.size(); ++w)
+              m.extra[w].*f.in_window = fin.window_field[s][w + 1][l];
+            break;
+          case MetricScope::run:
+            m.*f.per_run = fin.run_field[s][l];
+            break;
+          case MetricScope::fault:
+            for (std::size_t i = 0; i < (m.*f.per_fault).size(); ++i)
+              (m.*f.per_fault)[i] = fin.fault_field[s][i][l];
+            break;
+        }
+      }
       if (fin.diverged[l]) m.mark_diverged(fin.diverged_at[l]);
       r.metrics = std::move(m);
     }
@@ -244,6 +264,21 @@ void run_pack(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M,
       su.hi[j][l] = lane.hi[j];
     }
     su.saturation[l] = lane.scenario->saturation.value_or(std::numeric_limits<double>::infinity());
+    // What saturation_fraction measures the command against (the host's accumulators read them
+    // too), and the settling threshold.
+    for (int j = 0; j < M; ++j) {
+      constexpr double inf = std::numeric_limits<double>::infinity();
+      const CommandLimits c = trimmed ? command_limits(su.saturation[l], lane.lo[j], lane.hi[j])
+                                      : command_limits(su.saturation[l], -inf, inf);
+      su.limit_lo[j][l] = c.lo;
+      su.limit_hi[j][l] = c.hi;
+    }
+    const double threshold = lane.options->metrics.settling_threshold;
+    su.threshold_sq[l] = threshold * threshold;
+    su.any_settling = su.any_settling || !std::isnan(threshold);
+    su.first_onset[l] = std::numeric_limits<double>::infinity();  // metrics_accumulator.hpp's
+    for (const Fault& f : lane.scenario->faults)
+      su.first_onset[l] = f.onset < su.first_onset[l] ? f.onset : su.first_onset[l];
   }
   // The metrics in the kernel, unless a lane has more windows or faults than it keeps.
   su.kernel_metrics = true;
@@ -268,6 +303,9 @@ void run_pack(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M,
                                                          : Window{inf, inf};
         su.window[w][0][l] = win.t0;
         su.window[w][1][l] = win.t1;
+        const double tail = o.metrics.steady_state_tail;
+        su.tail_start[w][l] = tail_start(win, lane.scenario->duration, tail);
+        su.any_tail = su.any_tail || !std::isnan(tail);
       }
       for (int f = 0; f < su.onsets; ++f) {
         const std::size_t e = static_cast<std::size_t>(f);

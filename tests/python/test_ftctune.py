@@ -329,6 +329,14 @@ def test_evaluate_rows_match_ftctune_evaluate_with_faults_as_columns(cli, robust
     assert len(frame) == len(labels) * 5  # the listed scenario and 4 members
     cli_rows = pd.read_csv(tmp_path / "evaluation" / "evaluation.csv", float_precision="round_trip")
     assert list(frame["objective"]) == list(cli_rows["objective"])
+    # Every metric of the record, as evaluation.csv has it (a per-fault field split by onset).
+    for column in ("ise", "iae", "itae", "max_abs_u", "control_tv", "control_energy",
+                   "peak_command", "saturation_fraction", "steady_state_error"):
+        assert np.array_equal(frame[column].to_numpy(float), cli_rows[column].to_numpy(float),
+                              equal_nan=True), column
+    first_peaks = [float(str(v).split(";")[0]) for v in cli_rows["peak_error_after_fault"]]
+    assert np.array_equal(frame["peak_error_after_fault_fault1"].to_numpy(float),
+                          np.array(first_peaks), equal_nan=True)
     members = ftctune.ensemble(robust_dict, seed=8, count=4)
     tuned = frame[frame.controller == "tuned"].reset_index(drop=True)
     for k, m in enumerate(members):

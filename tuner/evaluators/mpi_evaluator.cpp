@@ -162,7 +162,9 @@ struct OptionsMirror {
   sim::Window window;
   std::vector<sim::Window> extra_windows;
   std::int64_t record_every;
+  sim::MetricSettings metrics;
 };
+static_assert(std::is_trivially_copyable_v<sim::MetricSettings>);
 static_assert(sizeof(OptionsMirror) == sizeof(sim::SimulationOptions), "send every option");
 
 void send(int to, int tag, const std::vector<char>& bytes) {
@@ -274,6 +276,7 @@ std::vector<char> set_message(const SimulationSet& set) {
     w.put(o.window);
     w.put_vector(o.extra_windows);
     w.put(o.record_every);
+    w.put(o.metrics);
   }
   return w.bytes();
 }
@@ -291,6 +294,7 @@ SimulationSet set_from_message(const std::vector<char>& bytes) {
     options[i].window = r.get<sim::Window>();
     options[i].extra_windows = r.get_vector<sim::Window>();
     options[i].record_every = r.get<std::int64_t>();
+    options[i].metrics = r.get<sim::MetricSettings>();
   }
   return SimulationSet(std::move(plant), std::move(scenarios), std::move(options));
 }

@@ -288,6 +288,24 @@ Ptr<ObjectiveConfig> objective_shape() {
   return shape;
 }
 
+Ptr<MetricsConfig> make_metrics_shape() {
+  using M = MetricsConfig;
+  auto o = std::make_shared<Obj<M>>(
+      "What the settling time and the steady-state error are measured against (without them "
+      "both are null)");
+  o->optional_number("settling_threshold", &M::settling_threshold, schema::Range::positive(),
+                     "rad: the run has settled once ‖e‖ stays below it, from the first fault on");
+  o->optional_number("steady_state_tail", &M::steady_state_tail, schema::Range::positive(),
+                     "s: the steady-state error is the mean ‖e‖ over each window's last "
+                     "steady_state_tail seconds (the whole window if it is shorter)");
+  return o;
+}
+
+Ptr<MetricsConfig> metrics_shape() {
+  static const Ptr<MetricsConfig> shape = make_metrics_shape();
+  return shape;
+}
+
 // Rank of a parameter in the controller field table: the decision vector's order.
 std::size_t field_rank(const std::string& name) {
   const auto fields = sim::controller_fields();
@@ -704,6 +722,7 @@ std::shared_ptr<const Obj<Job>> make_job_shape() {
   o->array("compare", &Job::compare, Ptr<CompareEntry>(std::make_shared<CompareShape>()),
            "controllers shown beside the job's own in comparisons", schema::kOptional, false);
   o->object("objective", &Job::objective, objective_shape(), "");
+  o->optional_object("metrics", &Job::metrics, metrics_shape(), "");
   o->optional_object("tuning", &Job::tuning, tuning_shape(), "");
   o->field({"ensemble", false,
             [](const json& v, const std::string& path, Job& job, Errors& e) {

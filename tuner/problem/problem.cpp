@@ -14,11 +14,16 @@
 namespace ftc::tune {
 namespace {
 
-// The simulation options of a scenario: the objective window and the fault segments (before
-// the first onset, between onsets, after the last) as extra windows.
-sim::SimulationOptions options_of(const ObjectiveConfig& objective, const sim::Scenario& s) {
+// The simulation options of a scenario: the objective window, the fault segments (before the
+// first onset, between onsets, after the last) as extra windows, and the job's metric settings.
+sim::SimulationOptions options_of(const Job& job, const sim::Scenario& s) {
   sim::SimulationOptions o;
-  o.window = objective.window_of(s);
+  o.window = job.objective.window_of(s);
+  if (job.metrics) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    o.metrics.settling_threshold = job.metrics->settling_threshold.value_or(nan);
+    o.metrics.steady_state_tail = job.metrics->steady_state_tail.value_or(nan);
+  }
   std::vector<double> cuts;
   for (const sim::Fault& f : s.faults)
     if (f.onset > 0 && f.onset < s.duration) cuts.push_back(f.onset);
@@ -33,11 +38,11 @@ sim::SimulationOptions options_of(const ObjectiveConfig& objective, const sim::S
   return o;
 }
 
-std::vector<sim::SimulationOptions> options_of(const ObjectiveConfig& objective,
+std::vector<sim::SimulationOptions> options_of(const Job& job,
                                                const std::vector<sim::Scenario>& scenarios) {
   std::vector<sim::SimulationOptions> o;
   o.reserve(scenarios.size());
-  for (const sim::Scenario& s : scenarios) o.push_back(options_of(objective, s));
+  for (const sim::Scenario& s : scenarios) o.push_back(options_of(job, s));
   return o;
 }
 
@@ -62,7 +67,7 @@ TuningProblem::TuningProblem(Job job)
 TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed)
     : job_(std::make_shared<const Job>(std::move(job))), listed_(listed) {
   throw_if_errors("job " + job_->name, job_->validate());
-  std::vector<sim::SimulationOptions> options = options_of(job_->objective, scenarios);
+  std::vector<sim::SimulationOptions> options = options_of(*job_, scenarios);
   set_ =
       std::make_shared<const SimulationSet>(job_->plant, std::move(scenarios), std::move(options));
   const sim::AnyPlant& plant = set_->plant();

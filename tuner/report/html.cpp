@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "io/text.hpp"
@@ -206,34 +207,50 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
   for (std::size_t s = 0; s < S; ++s) {
     h << "<h2>Controllers compared"
       << (S > 1 ? ", scenario " + html_escape(job.scenarios[s].name) : "")
-      << "</h2>\n<table><tr><th>controller</th><th>ISE</th><th>IAE</th><th>ITAE</th><th>max "
-         "|u_d|</th>"
-         "<th>control TV</th>";
+      << "</h2>\n<table><tr><th>controller</th>";
+    // The columns of comparison.md's table (metrics_markdown_table), from the metrics record's
+    // description (ftc/sim/metrics_record.hpp), read back out of comparison.json.
+    using sim::MetricScope;
+    const auto field = [](const json& o, const sim::MetricField& f) {
+      return o.is_object() ? o.value(std::string(f.name), json()) : json();
+    };
+    // A window field's null is a diverged run (+inf), another's a value never reached.
+    const auto cell = [&](const sim::MetricField& f, const json& v) {
+      h << "<td>"
+        << detail::format_number(f.scope == MetricScope::window ? integral(v) : num_or(v))
+        << "</td>";
+    };
+    for (const sim::MetricField& f : sim::kMetricFields)
+      if (f.in_tables && f.scope != MetricScope::fault)
+        h << "<th>" << html_escape(sim::plain_label(f)) << "</th>";
     const json& first = comparison["controllers"][0]["scenarios"][s];
-    for (const json& seg : first.value("segments", json::array()))
-      h << "<th>ISE [" << detail::format_number(num_or(seg["window"][0])) << ", "
-        << detail::format_number(num_or(seg["window"][1])) << ")</th>";
-    for (std::size_t f = 0; f < first.value("peak_error_after_fault", json::array()).size(); ++f)
-      h << "<th>peak ‖e‖ after fault " << f + 1 << "</th>";
+    for (const sim::MetricField& f : sim::kMetricFields)
+      if (f.column_per_extra_window)
+        for (const json& seg : first.value("segments", json::array()))
+          h << "<th>" << html_escape(sim::plain_label(f)) << " ["
+            << detail::format_number(num_or(seg["window"][0])) << ", "
+            << detail::format_number(num_or(seg["window"][1])) << ")</th>";
+    for (const sim::MetricField& f : sim::kMetricFields)
+      if (f.in_tables && f.scope == MetricScope::fault)
+        for (std::size_t k = 0; k < first.value(std::string(f.name), json::array()).size(); ++k)
+          h << "<th>" << html_escape(sim::plain_label(f)) << " " << k + 1 << "</th>";
     h << "</tr>\n";
     for (const json& c : comparison["controllers"]) {
       const json& m = c["scenarios"][s];
       h << "<tr><td>" << html_escape(c.value("label", "?"))
-        << (m.value("diverged", false) ? " (diverged)" : "") << "</td><td>"
-        << detail::format_number(integral(m["ise"])) << "</td><td>"
-        << detail::format_number(integral(m["iae"])) << "</td><td>"
-        << detail::format_number(integral(m["itae"])) << "</td><td>"
-        << detail::format_number(num_or(m["max_abs_u"])) << "</td><td>"
-        << detail::format_number(num_or(m["control_tv"])) << "</td>";
-      for (const json& seg : m.value("segments", json::array()))
-        h << "<td>" << detail::format_number(integral(seg["ise"])) << "</td>";
-      for (const json& p : m.value("peak_error_after_fault", json::array()))
-        h << "<td>" << detail::format_number(num_or(p)) << "</td>";
+        << (m.value("diverged", false) ? " (diverged)" : "") << "</td>";
+      for (const sim::MetricField& f : sim::kMetricFields)
+        if (f.in_tables && f.scope != MetricScope::fault) cell(f, field(m, f));
+      for (const sim::MetricField& f : sim::kMetricFields)
+        if (f.column_per_extra_window)
+          for (const json& seg : m.value("segments", json::array())) cell(f, field(seg, f));
+      for (const sim::MetricField& f : sim::kMetricFields)
+        if (f.in_tables && f.scope == MetricScope::fault)
+          for (const json& p : m.value(std::string(f.name), json::array())) cell(f, p);
       h << "</tr>\n";
     }
-    h << "</table>\n<p>ISE, IAE, ITAE over the objective window; ISE in rad²·s, peak errors in "
-         "rad; control "
-         "TV = Σ‖u_k − u_{k−1}‖ measures chattering.</p>\n";
+    h << "</table>\n<p>Over the objective window; " << html_escape(sim::units_note(false))
+      << "</p>\n";
   }
 
   h << "<h2>Figures</h2>\n";

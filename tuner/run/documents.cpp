@@ -290,9 +290,7 @@ std::string comparison_markdown(const TuningOutcome& r) {
       rows.emplace_back(c.label, &c.outcome.evaluation.scenarios.at(s));
     o << metrics_markdown_table(rows);
   }
-  o << "\nISE in rad²·s, IAE in rad·s, ITAE in rad·s², peak errors in rad; control TV = Σ‖u_k − "
-       "u_{k−1}‖ "
-       "(chattering).\n";
+  o << "\n" << sim::units_note(true) << "\n";
   return o.str();
 }
 
@@ -393,13 +391,13 @@ std::string metrics_markdown_table(
   };
   o << "| controller |";
   for (const sim::MetricField& f : sim::kMetricFields)
-    if (f.scope != MetricScope::fault) head(f.label);
+    if (f.in_tables && f.scope != MetricScope::fault) head(f.label);
   for (const sim::MetricField& f : sim::kMetricFields)
     if (f.column_per_extra_window)
       for (const sim::Window& w : first.extra_windows)
         head(f.label, " [", detail::format_number(w.t0), ", ", detail::format_number(w.t1), ")");
   for (const sim::MetricField& f : sim::kMetricFields)
-    if (f.scope == MetricScope::fault)
+    if (f.in_tables && f.scope == MetricScope::fault)
       for (std::size_t k = 0; k < first.fault_onsets.size(); ++k) head(f.label, " ", k + 1);
   o << "\n|---|";
   for (std::size_t k = 0; k < columns; ++k) o << "---:|";
@@ -409,6 +407,7 @@ std::string metrics_markdown_table(
     o << "| " << label << (m.diverged ? " (diverged)" : "") << " |";
     const auto cell = [&](double v) { o << " " << detail::format_number(v) << " |"; };
     for (const sim::MetricField& f : sim::kMetricFields) {
+      if (!f.in_tables) continue;
       if (f.scope == MetricScope::window) cell(m.errors.*f.in_window);
       if (f.scope == MetricScope::run) cell(m.*f.per_run);
     }
@@ -416,7 +415,7 @@ std::string metrics_markdown_table(
       if (f.column_per_extra_window)
         for (const sim::ErrorIntegrals& e : m.extra) cell(e.*f.in_window);
     for (const sim::MetricField& f : sim::kMetricFields)
-      if (f.scope == MetricScope::fault)
+      if (f.in_tables && f.scope == MetricScope::fault)
         for (double p : m.*f.per_fault) cell(p);
     o << "\n";
   }

@@ -62,10 +62,7 @@ MemberResult member_result(const TuningProblem& p, std::size_t i, const sim::Met
   r.scenario = p.scenario(i).name;
   r.recoverable = p.recoverable(i);
   r.objective = m.objective(p.job().objective.metric);
-  r.ise = m.errors.ise;
-  r.iae = m.errors.iae;
-  r.max_abs_u = m.max_abs_u;
-  r.control_tv = m.control_tv;
+  r.metrics = sim::MetricValues::of(m);
   r.diverged = m.diverged;
   return r;
 }
@@ -86,6 +83,11 @@ std::string faults_summary(const sim::Scenario& s) {
         .append(" s");
   }
   return out.empty() ? "none" : out;
+}
+
+// A number of evaluation.csv: every digit; a value never reached (NaN) as "nan".
+std::string csv_number(double v) {
+  return std::isnan(v) ? std::string("nan") : detail::format_number(v, "%.17g");
 }
 
 std::string csv_field(const std::string& s) {
@@ -240,19 +242,25 @@ void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
     out << (c ? ",\n    " : "\n    ") << m << ", \"members\": [";
     for (std::size_t i = 0; i < ec.members.size(); ++i) {
       const MemberResult& x = ec.members[i];
-      const json row = {{"scenario", x.scenario},
-                        {"recoverable", x.recoverable},
-                        {"objective", json_number(x.objective)},
-                        {"ise", json_number(x.ise)},
-                        {"iae", json_number(x.iae)},
-                        {"max_abs_u", json_number(x.max_abs_u)},
-                        {"control_tv", json_number(x.control_tv)},
-                        {"diverged", x.diverged}};
+      json row = {{"scenario", x.scenario},
+                  {"recoverable", x.recoverable},
+                  {"objective", json_number(x.objective)},
+                  {"diverged", x.diverged}};
+      // Every field of the record under its name (metrics_json's form): a fault field as an
+      // array, one value per fault onset.
+      for (std::size_t f = 0; f < sim::kMetricFieldCount; ++f) {
+        const std::span<const double> v = x.metrics.field(f);
+        const std::string name(sim::kMetricFields[f].name);
+        if (sim::kMetricFields[f].scope != sim::MetricScope::fault) {
+          row[name] = json_number(v[0]);
+          continue;
+        }
+        row[name] = json::array();
+        for (double p : v) row[name].push_back(json_number(p));
+      }
       // With the member's faults as fields (drawn again rather than kept: flat memory).
-      json member = row;
-      member["faults"] =
-          fault_fields(scenario_at(r.job, r.seed, static_cast<std::int64_t>(i)).faults);
-      out << (i ? ",\n      " : "\n      ") << member.dump();
+      row["faults"] = fault_fields(scenario_at(r.job, r.seed, static_cast<std::int64_t>(i)).faults);
+      out << (i ? ",\n      " : "\n      ") << row.dump();
     }
     out << "\n    ]}";
   }
@@ -262,10 +270,13 @@ void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
 
 void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
   Buffered out(sink);
-  // The faults in words, then as fields (fault<k>_actuator, _kind, ...: fault_fields.hpp).
+  // The faults in words, then as fields (fault<k>_actuator, _kind, ...: fault_fields.hpp), then
+  // the record's fields in table order; a fault field's cell holds one value per fault onset,
+  // separated by ';' (empty without faults).
   const std::size_t faults_n = max_faults(r.job);
-  out << "controller,scenario,faults" << fault_columns_header(faults_n)
-      << ",recoverable,objective,ise,iae,max_abs_u,control_tv,diverged\n";
+  out << "controller,scenario,faults" << fault_columns_header(faults_n) << ",recoverable,objective";
+  for (const sim::MetricField& f : sim::kMetricFields) out << "," << f.name;
+  out << ",diverged\n";
   for (const EvaluatedController& c : r.controllers) {
     const std::string label = csv_field(c.label);
     for (std::size_t i = 0; i < c.members.size(); ++i) {
@@ -275,10 +286,13 @@ void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
       const std::string faults = csv_field(faults_summary(scenario));
       out << label << "," << csv_field(m.scenario) << "," << faults
           << fault_columns(scenario.faults, faults_n) << "," << (m.recoverable ? "1," : "0,")
-          << detail::format_number(m.objective, "%.17g") << ","
-          << detail::format_number(m.ise, "%.17g") << "," << detail::format_number(m.iae, "%.17g")
-          << "," << detail::format_number(m.max_abs_u, "%.17g") << ","
-          << detail::format_number(m.control_tv, "%.17g") << "," << (m.diverged ? "1\n" : "0\n");
+          << csv_number(m.objective);
+      for (std::size_t f = 0; f < sim::kMetricFieldCount; ++f) {
+        const std::span<const double> v = m.metrics.field(f);
+        out << ",";
+        for (std::size_t k = 0; k < v.size(); ++k) out << (k ? ";" : "") << csv_number(v[k]);
+      }
+      out << (m.diverged ? ",1\n" : ",0\n");
     }
   }
   out.flush();

@@ -9,7 +9,9 @@
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/elementary.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/sha256.hpp"
+#include "ftc/tune/run/documents.hpp"
 
 namespace ftc::tune {
 
@@ -219,7 +221,7 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   const ComparedController& tuned = r.best();
   const double best = tuned.outcome.evaluation.objective;
   const double spread = r.noise_floor ? r.noise_floor->relative_spread : 0.0;
-  const std::string metric = sim::to_string(r.job.objective.metric);
+  const std::string label = objective_label(r.job);  // metric, window and aggregate
   char buf[600];
   // "Tuned" is the best of one controller type within the search bounds, not the best
   // controller: a compared controller that scores lower says so.
@@ -232,21 +234,24 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
                   "%s (compared) scores %s = %.4g, %.3g %% below the %s's %.4g (%s the noise "
                   "floor of %.2g %%): the tuned gains are the best found for %s within the "
                   "search bounds, not the best controller of the comparison.",
-                  c.label.c_str(), metric.c_str(), v, 100 * margin, tuned.label.c_str(), best,
+                  c.label.c_str(), label.c_str(), v, 100 * margin, tuned.label.c_str(), best,
                   margin > spread ? "beyond" : "inside", 100 * spread,
                   display_name(r.job.controller.type).c_str());
     out.emplace_back(buf);
   }
   // Until the objective can price control activity: gains that buy their score with much more
   // chattering than the job's own are named (on the listed scenarios, summed).
+  // (Over scenarios as the metrics record says the control TV combines: summed.)
   const ComparedController& base = r.baseline();
-  double tv_tuned = 0.0, tv_base = 0.0;
-  for (std::size_t i = 0; i < r.listed_scenarios; ++i) {
-    if (i < tuned.outcome.evaluation.scenarios.size())
-      tv_tuned += tuned.outcome.evaluation.scenarios[i].control_tv;
-    if (i < base.outcome.evaluation.scenarios.size())
-      tv_base += base.outcome.evaluation.scenarios[i].control_tv;
-  }
+  const sim::MetricField& tv = sim::metric_field("control_tv");
+  const auto listed_tv = [&](const ComparedController& c) {
+    std::vector<double> v;
+    const std::vector<sim::Metrics>& per = c.outcome.evaluation.scenarios;
+    for (std::size_t i = 0; i < r.listed_scenarios && i < per.size(); ++i)
+      v.push_back(per[i].*tv.per_run);
+    return sim::over_scenarios(tv, v);
+  };
+  const double tv_tuned = listed_tv(tuned), tv_base = listed_tv(base);
   if (std::isfinite(tv_base) && tv_base > 0 && tv_tuned > kControlTvWarningRatio * tv_base) {
     std::snprintf(buf, sizeof buf,
                   "The tuned gains raise the control TV (sum of |u_k - u_{k-1}|, a measure of "

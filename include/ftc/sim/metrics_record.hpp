@@ -1,13 +1,23 @@
 #pragma once
 // The metrics record (Metrics, ftc/sim/metrics.hpp) described once: one entry per metric with
-// its name (the JSON key), its unit, and where it lives in the record (once per window, once per
-// run, or once per fault onset). The MPI wire format below and metrics_json
-// (tuner/run/documents.cpp) are produced from this table, so a metric added to it (with its
-// member in Metrics and its accumulator in sim_core/lanes/metric_lanes.hpp) travels between
-// ranks and lands in the JSON documents without further code.
+// its name (the JSON key), its unit, its column label, how it combines over scenarios and where
+// it lives in the record (once per window, once per run, or once per fault onset). Every writer
+// of the record is produced from this table: the MPI wire format below, the pack's copy-out
+// (PackFinal's slots, sim_core/lanes/pack.hpp, read back by plants/lane_host.hpp),
+// metrics_json, comparison.md's tables and footnote (tuner/run/documents.cpp), evaluation.json
+// and evaluation.csv (tuner/run/evaluate.cpp), report.html's tables (tuner/report/html.cpp) and
+// `simulate`'s printed table. A metric added to it (with its member in Metrics and its
+// accumulator in sim_core/lanes/metric_lanes.hpp) travels between ranks and lands in every file
+// without further code.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <iterator>
 #include <stdexcept>
+#include <span>
+#include <string>
 #include <string_view>
 #include <type_traits>
 #include <vector>
@@ -23,11 +33,22 @@ enum class MetricScope {
   fault,   // one value per fault onset, NaN before it is reached (Metrics' member `per_fault`)
 };
 
+// How a metric's values over several scenarios (or fault onsets) make one number: the total of
+// an integral (ISE over two scenarios is their sum), the largest of a peak or a time, the mean of
+// a fraction or an average.
+enum class OverScenarios { sum, max, mean };
+
 struct MetricField {
   std::string_view name;
   std::string_view unit;
   std::string_view label;  // the column of comparison.md (Markdown: '|' escaped)
   MetricScope scope;
+  OverScenarios over_scenarios;
+  // What the metric is, when its label does not say (comparison.md's and report.html's note).
+  std::string_view definition = "";
+  // A column of comparison.md's and report.html's tables and `simulate`'s printed table (every
+  // field is in the JSON documents and evaluate's files).
+  bool in_tables = true;
   // A window field with a column per extra window in comparison.md too (else the objective
   // window's only).
   bool column_per_extra_window = false;
@@ -36,18 +57,202 @@ struct MetricField {
   std::vector<double> Metrics::*per_fault = nullptr;
 };
 
-// In the order of the wire format and of ErrorIntegrals' members.
+// In the order of the wire format. ftc/sim/metrics.hpp defines each.
 inline constexpr MetricField kMetricFields[] = {
-    {"ise", "rad²·s", "ISE", MetricScope::window, true, &ErrorIntegrals::ise},
-    {"iae", "rad·s", "IAE", MetricScope::window, false, &ErrorIntegrals::iae},
-    {"itae", "rad·s²", "ITAE", MetricScope::window, false, &ErrorIntegrals::itae},
-    {"max_abs_u", "the command's unit", "max \\|u_d\\|", MetricScope::run, false, nullptr,
-     &Metrics::max_abs_u},
-    {"control_tv", "the command's unit", "control TV", MetricScope::run, false, nullptr,
-     &Metrics::control_tv},
-    {"peak_error_after_fault", "rad", "peak ‖e‖ after fault", MetricScope::fault, false, nullptr,
-     nullptr, &Metrics::peak_error_after_fault},
+    {.name = "ise",
+     .unit = "rad²·s",
+     .label = "ISE",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::sum,
+     .column_per_extra_window = true,
+     .in_window = &ErrorIntegrals::ise},
+    {.name = "iae",
+     .unit = "rad·s",
+     .label = "IAE",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::sum,
+     .in_window = &ErrorIntegrals::iae},
+    {.name = "itae",
+     .unit = "rad·s²",
+     .label = "ITAE",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::sum,
+     .in_window = &ErrorIntegrals::itae},
+    {.name = "max_abs_u",
+     .unit = "the command's unit",
+     .label = "max \\|u_d\\|",
+     .scope = MetricScope::run,
+     .over_scenarios = OverScenarios::max,
+     .per_run = &Metrics::max_abs_u},
+    {.name = "control_tv",
+     .unit = "the command's unit",
+     .label = "control TV",
+     .scope = MetricScope::run,
+     .over_scenarios = OverScenarios::sum,
+     .definition = "Σ‖u_k − u_{k−1}‖ (chattering)",
+     .per_run = &Metrics::control_tv},
+    {.name = "peak_error_after_fault",
+     .unit = "rad",
+     .label = "peak ‖e‖ after fault",
+     .scope = MetricScope::fault,
+     .over_scenarios = OverScenarios::max,
+     .per_fault = &Metrics::peak_error_after_fault},
+    {.name = "control_energy",
+     .unit = "the command's unit²·s",
+     .label = "control energy",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::sum,
+     .definition = "Σ Ts ‖u_d‖²",
+     .in_tables = false,
+     .in_window = &ErrorIntegrals::control_energy},
+    {.name = "peak_command",
+     .unit = "the command's unit",
+     .label = "peak command",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::max,
+     .definition = "max |u_d,j| in the window",
+     .in_tables = false,
+     .in_window = &ErrorIntegrals::peak_command},
+    {.name = "saturation_fraction",
+     .unit = "1",
+     .label = "saturation fraction",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::mean,
+     .definition = "the share of samples with a command at or beyond its limit",
+     .in_tables = false,
+     .in_window = &ErrorIntegrals::saturation_fraction},
+    {.name = "settling_time",
+     .unit = "s",
+     .label = "settling time",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::max,
+     .definition = "from the first fault until ‖e‖ stays below the job's threshold",
+     .in_tables = false,
+     .in_window = &ErrorIntegrals::settling_time},
+    {.name = "steady_state_error",
+     .unit = "rad",
+     .label = "steady-state error",
+     .scope = MetricScope::window,
+     .over_scenarios = OverScenarios::mean,
+     .definition = "the mean ‖e‖ over the window's last tail seconds",
+     .in_tables = false,
+     .in_window = &ErrorIntegrals::steady_state_error},
 };
+inline constexpr std::size_t kMetricFieldCount = std::size(kMetricFields);
+
+// The fields of one scope, and a field's slot among them (its index in PackFinal's arrays of
+// that scope): compile-time only, so that a kernel compiled per instruction set emits no code of
+// its own for them.
+consteval std::size_t metric_count(MetricScope scope) {
+  std::size_t n = 0;
+  for (const MetricField& f : kMetricFields) n += f.scope == scope ? 1 : 0;
+  return n;
+}
+consteval std::size_t metric_slot(std::string_view name) {
+  for (std::size_t i = 0, slot[3] = {0, 0, 0}; i < kMetricFieldCount; ++i) {
+    const auto s = static_cast<std::size_t>(kMetricFields[i].scope);
+    if (kMetricFields[i].name == name) return slot[s];
+    ++slot[s];
+  }
+  throw std::logic_error("no such metric");  // not a constant expression: a compile error
+}
+
+// The field named `name`; throws std::logic_error for a name the table does not have.
+inline const MetricField& metric_field(std::string_view name) {
+  for (const MetricField& f : kMetricFields)
+    if (f.name == name) return f;
+  throw std::logic_error("no metric " + std::string(name));
+}
+
+// The label without Markdown's escapes (report.html, the terminal).
+inline std::string plain_label(const MetricField& f) {
+  std::string out;
+  for (char c : f.label)
+    if (c != '\\') out += c;
+  return out;
+}
+
+// The note under a table of the record: each tabled field's unit, then the definitions
+// ("ISE in rad²·s, …, peak ‖e‖ after fault in rad; control TV = Σ‖u_k − u_{k−1}‖ (chattering).").
+// `markdown`: the labels as comparison.md writes them, else plain.
+inline std::string units_note(bool markdown) {
+  std::string out;
+  const auto label = [&](const MetricField& f) {
+    return markdown ? std::string(f.label) : plain_label(f);
+  };
+  for (const MetricField& f : kMetricFields)
+    if (f.in_tables)
+      out.append(out.empty() ? "" : ", ").append(label(f)).append(" in ").append(f.unit);
+  for (const MetricField& f : kMetricFields)
+    if (f.in_tables && !f.definition.empty())
+      out.append("; ").append(label(f)).append(" = ").append(f.definition);
+  return out + ".";
+}
+
+// One record's values in its main (objective) window, flat: each field in table order, one value
+// for a window or run field, one per fault onset for a fault field. What `evaluate` keeps per
+// member, and what its files and `simulate`'s table write.
+struct MetricValues {
+  std::vector<double> values;
+  std::size_t onsets = 0;
+
+  static MetricValues of(const Metrics& m) {
+    MetricValues v;
+    v.onsets = m.fault_onsets.size();
+    for (const MetricField& f : kMetricFields) switch (f.scope) {
+        case MetricScope::window:
+          v.values.push_back(m.errors.*f.in_window);
+          break;
+        case MetricScope::run:
+          v.values.push_back(m.*f.per_run);
+          break;
+        case MetricScope::fault:
+          for (std::size_t i = 0; i < v.onsets; ++i)
+            v.values.push_back(i < (m.*f.per_fault).size() ? (m.*f.per_fault)[i] : NAN);
+          break;
+      }
+    return v;
+  }
+  // The values of kMetricFields[index]: one, or one per fault onset.
+  std::span<const double> field(std::size_t index) const {
+    std::size_t at = 0;
+    for (std::size_t i = 0; i < index; ++i)
+      at += kMetricFields[i].scope == MetricScope::fault ? onsets : 1;
+    const std::size_t n = kMetricFields[index].scope == MetricScope::fault ? onsets : 1;
+    return std::span<const double>(values).subspan(at, n);
+  }
+  // The value of the window or run field `name`; throws std::logic_error for another name.
+  double get(std::string_view name) const {
+    for (std::size_t i = 0; i < kMetricFieldCount; ++i)
+      if (kMetricFields[i].name == name && kMetricFields[i].scope != MetricScope::fault)
+        return field(i)[0];
+    throw std::logic_error("no window or run metric " + std::string(name));
+  }
+};
+
+// The field's values over scenarios (and, for a fault field, their onsets) as one number, in
+// order: the sum, the mean or the largest (for the largest and the mean, values that do not
+// exist, NaN, are left out; NaN if none is left).
+inline double over_scenarios(const MetricField& f, std::span<const double> values) {
+  if (f.over_scenarios == OverScenarios::sum) {
+    double s = 0.0;
+    for (double v : values) s += v;
+    return s;
+  }
+  if (f.over_scenarios == OverScenarios::mean) {
+    double s = 0.0, n = 0.0;
+    for (double v : values)
+      if (!std::isnan(v)) {
+        s += v;
+        n += 1.0;
+      }
+    return n > 0.0 ? s / n : NAN;
+  }
+  double m = NAN;
+  for (double v : values)
+    if (!std::isnan(v) && !(m >= v)) m = v;
+  return m;
+}
 
 // The record's wire form (MPI messages: every rank runs the same binary, so doubles travel in
 // their memory form): the objective window, its window fields, the extra windows (a count, then

@@ -28,6 +28,7 @@ struct SimulationOptions {
   Window window;                      // objective window; default the whole run
   std::vector<Window> extra_windows;  // further windows for ise/iae/itae
   std::int64_t record_every = 0;      // record every k-th sample; 0 = no trajectory
+  MetricSettings metrics;             // settling threshold and steady-state tail
 };
 
 // Recorded samples, one row each: t, X (2n values), the commanded u_d (m) and the applied u

@@ -56,6 +56,13 @@ struct ObjectiveConfig {
   double aggregate_of(std::vector<double> values) const;
 };
 
+// What two of the window metrics are measured against (ftc/sim/metrics.hpp): a job without
+// them has no settling time and no steady-state error (NaN in its documents).
+struct MetricsConfig {
+  std::optional<double> settling_threshold;  // rad: ‖e‖ below it counts as settled
+  std::optional<double> steady_state_tail;   // s: the steady-state error's tail of each window
+};
+
 enum class Scale { linear, log };
 
 struct ParameterBounds {
@@ -89,6 +96,7 @@ struct Job {
   sim::ControllerConfig controller;
   std::vector<CompareEntry> compare;
   ObjectiveConfig objective;
+  std::optional<MetricsConfig> metrics;
   std::optional<TuningConfig> tuning;
 
   // Range and consistency checks of the whole job (types were checked while parsing).

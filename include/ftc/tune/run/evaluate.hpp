@@ -14,6 +14,7 @@
 
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/faults.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/evaluators/batch_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/job.hpp"
@@ -38,7 +39,10 @@ struct EvaluateOptions {
 struct MemberResult {
   std::string scenario;
   bool recoverable = true;
-  double objective = 0, ise = 0, iae = 0, max_abs_u = 0, control_tv = 0;
+  double objective = 0;
+  // Every field of the metrics record in the objective's window (ftc/sim/metrics_record.hpp):
+  // what evaluation.json and evaluation.csv write.
+  sim::MetricValues metrics;
   bool diverged = false;
 };
 
