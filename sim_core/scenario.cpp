@@ -61,6 +61,21 @@ std::vector<FieldError> Scenario::validate(const std::string& path, int axes, in
   return errs;
 }
 
+const std::vector<double>* Scenario::true_value(std::string_view parameter) const {
+  for (const TrueValue& t : true_values)
+    if (t.parameter == parameter) return &t.values;
+  return nullptr;
+}
+
+void Scenario::set_true_value(const std::string& parameter, std::vector<double> values) {
+  for (TrueValue& t : true_values)
+    if (t.parameter == parameter) {
+      t.values = std::move(values);
+      return;
+    }
+  true_values.push_back({parameter, std::move(values)});
+}
+
 Scenario Scenario::paper() {
   Scenario s;
   s.initial_state = {-0.7, -0.07, 1.5, 0.3, 1.3, -0.2};

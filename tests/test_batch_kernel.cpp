@@ -181,7 +181,8 @@ TEST(BatchKernel, LanesOfDifferentScenariosGiveTheScalarBits) {
     for (DisturbanceTerm& d : s.disturbance) d.amplitude *= 1.0 + 0.1 * l;
     s.initial_state[0] += 0.01 * l;
     if (l % 4 == 2) s.saturation = 12.0;
-    if (l % 3 == 0) s.inertia = {20.0 * (1.0 + 0.02 * l), 17.0, 15.0 * (1.0 - 0.02 * l)};
+    if (l % 3 == 0)
+      s.set_true_value("inertia", {20.0 * (1.0 + 0.02 * l), 17.0, 15.0 * (1.0 - 0.02 * l)});
     SimulationOptions o;
     o.window = {s.faults[0].onset, s.duration};
     tasks.push_back({ControllerConfig::table1(ControllerType::pi_fosmc), s, o});

@@ -62,10 +62,13 @@ TEST(Ensemble, MembersMatchAReferenceExpansionOfTheSpec) {
   // Member 3 of seed 7: one abrupt bias fault (slot 2 drawn and discarded).
   const sim::Scenario m3 = tune::ensemble_member(job, 7, 3);
   EXPECT_EQ(m3.name, "paper-3");
-  ASSERT_EQ(m3.inertia.size(), 3u);
-  EXPECT_EQ(m3.inertia[0], 20.625084207978077);
-  EXPECT_EQ(m3.inertia[1], 16.777898040398846);
-  EXPECT_EQ(m3.inertia[2], 13.54051055855346);
+  ASSERT_EQ(m3.true_values.size(), 1u);
+  ASSERT_NE(m3.true_value("inertia"), nullptr);
+  const std::vector<double>& i3 = *m3.true_value("inertia");
+  ASSERT_EQ(i3.size(), 3u);
+  EXPECT_EQ(i3[0], 20.625084207978077);
+  EXPECT_EQ(i3[1], 16.777898040398846);
+  EXPECT_EQ(i3[2], 13.54051055855346);
   ASSERT_EQ(m3.faults.size(), 1u);
   const sim::Fault& b = m3.faults[0];
   EXPECT_EQ(b.actuator, 1);
@@ -79,9 +82,12 @@ TEST(Ensemble, MembersMatchAReferenceExpansionOfTheSpec) {
   // Member 12: an incipient loss of effectiveness, then a stuck actuator drawn from the three
   // left (1 was taken, so floor(u·3) indexes [2, 3, 4]).
   const sim::Scenario m12 = tune::ensemble_member(job, 7, 12);
-  EXPECT_EQ(m12.inertia[0], 19.23771134634238);
-  EXPECT_EQ(m12.inertia[1], 18.078988098774534);
-  EXPECT_EQ(m12.inertia[2], 15.298535397997906);
+  ASSERT_NE(m12.true_value("inertia"), nullptr);
+  const std::vector<double>& i12 = *m12.true_value("inertia");
+  ASSERT_EQ(i12.size(), 3u);
+  EXPECT_EQ(i12[0], 19.23771134634238);
+  EXPECT_EQ(i12[1], 18.078988098774534);
+  EXPECT_EQ(i12[2], 15.298535397997906);
   ASSERT_EQ(m12.faults.size(), 2u);
   EXPECT_EQ(m12.faults[0].actuator, 1);
   EXPECT_EQ(m12.faults[0].type, sim::FaultType::loss_of_effectiveness);
@@ -471,4 +477,46 @@ TEST(Ensemble, StreamedScenariosFileIsTheWholeDocumentsDump) {
               0);
     EXPECT_EQ(ftc::testing::slurp(file), r.out) << count;
   }
+}
+
+// Each plant declares its uncertain parameters; a member carries the true values of each (the
+// base's or the plant's, by its factors), and a plant that declares none gets none.
+TEST(Ensemble, MembersScaleThePlantsDeclaredUncertainParameters) {
+  for (const sim::PlantKind& kind : sim::plant_kinds())
+    for (const sim::UncertainParameter& u : kind.uncertain) {
+      SCOPED_TRACE(kind.model + " " + u.parameter);
+      ASSERT_NE(kind.offset(u.parameter), std::string_view::npos) << "not a parameter";
+      EXPECT_LE(kind.parameter_values(kind.defaults(), u.parameter).size(),
+                tune::kParameterFactors)
+          << "more values than an ensemble draws factors";
+    }
+  EXPECT_EQ(sim::find_plant_kind("manipulator")->uncertain_names(), "none");
+  EXPECT_EQ(sim::find_plant_kind("spacecraft")->uncertain_names(), "inertia");
+
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/hexarotor.json");
+  json j = json::parse(in);
+  j["ensemble"] = {{"count", 3}, {"seed", 5}, {"inertia_scale", {{"uniform", {0.5, 1.5}}}}};
+  const tune::Job hex = parse(j);
+  const sim::PlantKind& kind = *sim::find_plant_kind("hexarotor");
+  const std::vector<double> nominal = kind.parameter_values(hex.plant.values, "inertia");
+  const sim::Scenario m = tune::ensemble_member(hex, 5, 1);
+  ASSERT_EQ(m.true_values.size(), 1u);
+  ASSERT_NE(m.true_value("inertia"), nullptr);
+  // The first 3 draws of member 1's stream, through the scale's distribution, axis by axis.
+  SplitMix64 r = SplitMix64::member(5, 1);
+  for (std::size_t i = 0; i < 3; ++i)
+    EXPECT_EQ((*m.true_value("inertia"))[i], nominal[i] * (0.5 + r.uniform()));
+  // Unscaled, a member still writes the plant's true inertia (SPEC §12).
+  j["ensemble"].erase("inertia_scale");
+  EXPECT_EQ(*tune::ensemble_member(parse(j), 5, 1).true_value("inertia"), nominal);
+
+  std::ifstream arm_in(std::string(FTC_SOURCE_DIR) + "/jobs/manipulator.json");
+  json arm = json::parse(arm_in);
+  arm["ensemble"] = {{"count", 3}, {"seed", 5}};
+  EXPECT_TRUE(tune::ensemble_member(parse(arm), 5, 1).true_values.empty());
+
+  // The elementwise rule: value i times factor i.
+  std::vector<double> v{2, 3, 4};
+  sim::PlantKind::scale(kind.uncertain[0], v, std::array<double, 3>{0.5, 2, 1});
+  EXPECT_EQ(v, (std::vector<double>{1, 6, 4}));
 }

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "cli_runner.hpp"
@@ -18,6 +19,7 @@
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
+#include "ftc/tune/run/fault_fields.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "short_job.hpp"
 
@@ -196,15 +198,15 @@ TEST(Evaluate, CommandWritesItsFilesAndTheWorstMembersReplay) {
       << gp;
   EXPECT_NE(gp.find("$cdf0 using 1:2 with steps ls 2 "), std::string::npos) << gp;
   EXPECT_NE(gp.find("$cdf1 using 1:2 with steps ls 1 "), std::string::npos) << gp;
-  // One CSV row per controller × scenario, with the faults in words.
+  // One CSV row per controller × scenario, with the faults in words and as fields (two faults
+  // at most: the listed scenario's, and each member's one or two).
   std::istringstream csv(slurp(dir / "ev" / "evaluation.csv"));
   std::string line;
   std::getline(csv, line);
-  EXPECT_EQ(
-      line,
-      "controller,scenario,faults,recoverable,objective,ise,iae,itae,max_abs_u,control_tv,"
-      "peak_error_after_fault,control_energy,peak_command,saturation_fraction,settling_time,"
-      "steady_state_error,diverged");
+  EXPECT_EQ(line, "controller,scenario,faults" + tune::fault_columns_header(2) +
+                      ",recoverable,objective,ise,iae,itae,max_abs_u,control_tv,"
+                      "peak_error_after_fault,control_energy,peak_command,saturation_fraction,"
+                      "settling_time,steady_state_error,diverged");
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 2 * 7);
@@ -278,4 +280,78 @@ TEST(Evaluate, CountThatWouldRenameAListedScenarioIsRefused) {
     EXPECT_NE(e.errors().at(0).message.find("also the name of ensemble member 10"),
               std::string::npos);
   }
+}
+
+TEST(Evaluate, MembersCarryTheirFaultsAsFields) {
+  const tune::Job job = ensemble_job();
+  tune::TbbEvaluator evaluator(2);
+  tune::EvaluateOptions o;
+  o.seed = 21;
+  o.count = 5;
+  const tune::EvaluationResult r = tune::evaluate_out_of_sample(job, o, evaluator);
+  const std::filesystem::path dir = fresh_dir("evaluate-fault-fields");
+  tune::write_evaluation(r, dir);
+  // The scenarios evaluated: the listed one, then the members of seed 21.
+  std::vector<sim::Scenario> scenarios = job.scenarios;
+  for (const sim::Scenario& m : tune::expand_ensemble(job, 21, 5)) scenarios.push_back(m);
+  const json doc = json::parse(slurp(dir / "evaluation.json"));
+  const std::size_t n = tune::max_faults(job);
+  ASSERT_EQ(n, 2u);
+
+  std::istringstream csv(slurp(dir / "evaluation.csv"));
+  std::string line;
+  std::getline(csv, line);
+  const auto split = [](const std::string& text) {
+    std::vector<std::string> cells;
+    std::size_t i = 0;
+    for (std::size_t j; (j = text.find(',', i)) != std::string::npos; i = j + 1)
+      cells.push_back(text.substr(i, j - i));
+    cells.push_back(text.substr(i));
+    return cells;
+  };
+  const std::vector<std::string> header = split(line);
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(it, header.end()) << name;
+    return static_cast<std::size_t>(it - header.begin());
+  };
+  std::set<std::string> kinds;
+  for (std::size_t i = 0; i < scenarios.size(); ++i) {
+    const json& member = doc["controllers"][0]["members"][i];
+    EXPECT_EQ(member["scenario"], scenarios[i].name);
+    const std::vector<sim::Fault>& faults = scenarios[i].faults;
+    ASSERT_EQ(member["faults"].size(), faults.size()) << member.dump();
+    std::getline(csv, line);
+    // No quoted cells before the fault columns here (the faults in words have no comma).
+    const std::vector<std::string> cells = split(line);
+    ASSERT_EQ(cells.size(), header.size()) << line;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::string p = "fault" + std::to_string(k + 1) + "_";
+      if (k >= faults.size()) {
+        for (const char* f : {"actuator", "kind", "time", "fraction"})
+          EXPECT_EQ(cells[column(p + f)], "") << line;
+        continue;
+      }
+      const sim::Fault& f = faults[k];
+      const json& j = member["faults"][k];
+      EXPECT_EQ(j["actuator"], f.actuator);
+      EXPECT_EQ(j["kind"], sim::to_string(f.type));
+      EXPECT_EQ(j["profile"], sim::to_string(f.profile.type));
+      EXPECT_EQ(j["time"].get<double>(), f.onset);
+      EXPECT_EQ(j.contains("rate"), f.profile.type == sim::FaultProfileType::incipient);
+      EXPECT_EQ(j.contains("fraction"), f.type == sim::FaultType::loss_of_effectiveness);
+      EXPECT_EQ(j.contains("offset"), f.type == sim::FaultType::bias);
+      EXPECT_EQ(j.contains("value"), f.type == sim::FaultType::stuck);
+      if (f.type == sim::FaultType::loss_of_effectiveness) {
+        EXPECT_EQ(j["fraction"].get<double>(), f.fraction);
+        EXPECT_EQ(std::stod(cells[column(p + "fraction")]), f.fraction);
+        EXPECT_EQ(cells[column(p + "offset")], "");
+      }
+      EXPECT_EQ(cells[column(p + "actuator")], std::to_string(f.actuator));
+      EXPECT_EQ(cells[column(p + "kind")], sim::to_string(f.type));
+      EXPECT_EQ(std::stod(cells[column(p + "time")]), f.onset);  // %.17g: the same double
+      kinds.insert(j["kind"].get<std::string>());
+    }
+  }
+  EXPECT_GE(kinds.size(), 2u);  // the check saw more than one kind of fault
 }

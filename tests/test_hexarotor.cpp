@@ -144,7 +144,8 @@ TEST(Hexarotor, EveryLaneGivesTheScalarBits) {
         configs[l].switching_gain *= 1.0 + 0.1 * l;
         configs[l].Kp = 1.0 + 4.0 * l;
         scenarios[l].faults = {rotor_loss(1 + l % 6, 0.2 + 0.1 * l, 1.0 + 0.2 * l)};
-        if (l % 2 == 1) scenarios[l].inertia = {0.011 * (1.0 + 0.05 * l), 0.015, 0.021};
+        if (l % 2 == 1)
+          scenarios[l].set_true_value("inertia", {0.011 * (1.0 + 0.05 * l), 0.015, 0.021});
         if (l % 3 == 2) scenarios[l].saturation = 2.0;
         options[l].record_every = l == 0 ? 0 : 20;
         tasks.push_back({&configs[l], &scenarios[l], &options[l]});
@@ -276,10 +277,11 @@ TEST(HexarotorJob, RejectsWhatOnlyAnotherPlantAccepts) {
 
   nlohmann::json arm = read("manipulator.json");
   arm["scenarios"][0]["inertia"] = {0.1, 0.1};
-  EXPECT_TRUE(has(errors_of(arm), "/scenarios/0/inertia", "no inertia parameter"));
+  EXPECT_TRUE(has(errors_of(arm), "/scenarios/0/inertia",
+                  "does not declare inertia uncertain (its uncertain parameters: none)"));
   arm = read("manipulator.json");
   arm["ensemble"] = {{"count", 4}, {"seed", 1}, {"inertia_scale", {{"uniform", {0.8, 1.2}}}}};
-  EXPECT_TRUE(has(errors_of(arm), "/ensemble/inertia_scale", "no inertia"));
+  EXPECT_TRUE(has(errors_of(arm), "/ensemble/inertia_scale", "declares no uncertain parameters"));
   // The same keys are fine for the hexarotor, which has one.
   hex = read("hexarotor.json");
   hex["scenarios"][0]["inertia"] = {0.012, 0.015, 0.021};

@@ -390,6 +390,54 @@ TEST(JobLoader, SuggestsTheNearestEnumValueAndSwappedLetters) {
   EXPECT_EQ(first(j).message.find("did you mean"), std::string::npos) << first(j).message;
 }
 
+// Model mismatch and ensemble scales address the parameters a plant declares uncertain, and a
+// fault the actuators it has: a job that is fine for one plant is exit 2 for another, naming the
+// JSON path (through the CLI, as a user meets it).
+TEST(JobLoader, UncertainParametersAndActuatorsAreThePlantsOwn) {
+  const auto dir = ftc::testing::fresh_dir("uncertain");
+  const auto read = [](const std::string& name) {
+    std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/" + name);
+    return json::parse(in);
+  };
+  const auto validate = [&](const json& j) {
+    const auto file = dir / "job.json";
+    std::ofstream(file) << j.dump(2);
+    return ftc::testing::run_cli("validate '" + file.string() + "'", dir);
+  };
+  const auto expect_error = [&](const json& j, const std::string& path, const std::string& what) {
+    const ftc::testing::CliResult r = validate(j);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find(path + ": "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(what), std::string::npos) << r.err;
+  };
+
+  // The arm declares no uncertain parameters: neither a true inertia nor a scale of one.
+  json arm = read("manipulator.json");
+  arm["scenarios"][0]["inertia"] = {0.1, 0.1};
+  expect_error(arm, "/scenarios/0/inertia",
+               "the manipulator plant does not declare inertia uncertain (its uncertain "
+               "parameters: none)");
+  EXPECT_EQ(errors_of(arm).size(), 1u);
+  arm = read("manipulator.json");
+  arm["ensemble"] = {{"count", 4}, {"seed", 1}, {"inertia_scale", {{"uniform", {0.8, 1.2}}}}};
+  expect_error(arm, "/ensemble/inertia_scale",
+               "the manipulator plant declares no uncertain parameters to scale");
+
+  // The hexarotor has 6 rotors, and declares its inertia uncertain.
+  json hex = read("hexarotor.json");
+  hex["scenarios"][0]["faults"][0]["actuator"] = 7;
+  expect_error(hex, "/scenarios/0/faults/0/actuator", "1..6");
+  hex = read("hexarotor.json");
+  hex["scenarios"][0]["inertia"] = {0.012, 0.015};
+  expect_error(hex, "/scenarios/0/inertia", "expected 3 numbers (the hexarotor's inertia), got 2");
+  hex["scenarios"][0]["inertia"] = {0.012, -0.015, 0.021};
+  expect_error(hex, "/scenarios/0/inertia/1", "must be > 0");
+  hex["scenarios"][0]["inertia"] = {0.012, 0.015, 0.021};
+  hex["ensemble"] = {{"count", 4}, {"seed", 1}, {"inertia_scale", {{"uniform", {0.8, 1.2}}}}};
+  const ftc::testing::CliResult ok = validate(hex);
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
 TEST(JobLoader, MetricsBlockGivesTheSettlingThresholdAndTailAtTheirPaths) {
   // Without the block the resolved job has no "metrics" (a job keeps its canonical form and
   // hash) and the simulations no threshold or tail.

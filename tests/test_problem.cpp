@@ -129,7 +129,8 @@ TEST(TuningProblem, LogScaleParametersAreSearchedInLogSpaceWithinBounds) {
 TEST(TuningProblem, ModelMismatchSimulatesTheTruthAndControlsWithTheModel) {
   const tune::Job job = short_job();
   tune::Job mismatched = job;
-  mismatched.scenarios[0].inertia = {22, 15.3, 16.5};  // the true plant; the model keeps 20, 17, 15
+  // The true plant; the model keeps 20, 17, 15.
+  mismatched.scenarios[0].set_true_value("inertia", {22, 15.3, 16.5});
   tune::Job known = job;  // the same true plant, known to the controller
   known.plant.values = {22, 15.3, 16.5, 1.1e-3};
   const tune::TuningProblem nominal(job), off(mismatched), exact(known);
@@ -143,13 +144,13 @@ TEST(TuningProblem, ModelMismatchSimulatesTheTruthAndControlsWithTheModel) {
   const sim::Spacecraft truth(truth_params), model(model_params);
   auto controller = sim::make_controller(job.controller, model, job.scenarios[0].sample_time);
   sim::Scenario plain = mismatched.scenarios[0];
-  plain.inertia.clear();
+  plain.true_values.clear();
   const sim::SimulationResult by_hand =
       sim::simulate(truth, *controller, plain, off.simulation_options(0));
   EXPECT_NEAR(by_hand.metrics.errors.ise, ise, 1e-9 * ise);
   // Naming the plant's own inertia changes nothing.
   tune::Job same = job;
-  same.scenarios[0].inertia = {20, 17, 15};
+  same.scenarios[0].set_true_value("inertia", {20, 17, 15});
   EXPECT_EQ(tune::TuningProblem(same).simulate(job.controller, 0).metrics.errors.ise,
             nominal.simulate(job.controller, 0).metrics.errors.ise);
 }

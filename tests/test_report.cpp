@@ -173,6 +173,10 @@ TEST(Report, LandscapeGridAndHeatmap) {
   EXPECT_NE(gp.find("set palette defined (0 '#440154'"), std::string::npos) << gp;
   EXPECT_EQ(gp.find("rgb 33,13,10"), std::string::npos);
   EXPECT_NE(gp.find("($3/" + detail_number(r.best_objective) + " - 1)"), std::string::npos) << gp;
+  // Units on both axes and on the lowest value (the controllers' headers give them).
+  EXPECT_NE(gp.find("set xlabel 'Kp (dimensionless)'"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("set ylabel 'Ki [1/s]'"), std::string::npos) << gp;
+  EXPECT_NE(gp.find(" rad²·s at Kp = "), std::string::npos) << gp;
 
   o.params = {"Kp", "c1"};
   EXPECT_THROW(tune::compute_landscape(tune::parse_job(short_table1_job(), "short"), run / "l2", o,

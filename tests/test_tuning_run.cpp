@@ -297,7 +297,7 @@ TEST(Cli, Table1RunWarnsThatKiEndsOnItsBound) {
   EXPECT_NE(r.out.find("% lower"), std::string::npos) << r.out;
   // NFTSMC's ISE is lower than the tuned PI-FOSMC's: the run says so rather than call its gains
   // optimal.
-  EXPECT_NE(r.err.find("[warning] NFTSMC (compared) scores ise = 0.902"), std::string::npos)
+  EXPECT_NE(r.err.find("[warning] NFTSMC (compared) scores ISE[0 s, 30 s] = 0.902"), std::string::npos)
       << r.err;
   const json g = json::parse(slurp(dir / "t" / "gains.json"));
   ASSERT_EQ(g["warnings"].size(), 2u);
@@ -352,7 +352,7 @@ TEST(TuningRun, WarnsWhenAComparedControllerScoresLowerOrTheTunedGainsChatter) {
   set(3, 1.0, 301);    // 3.01 times the job's own
   std::vector<std::string> w = tune::comparison_warnings(r);
   ASSERT_EQ(w.size(), 2u);
-  EXPECT_NE(w[0].find("NFTSMC (compared) scores ise = 0.995, 0.5 % below the tuned PI-FOSMC's 1 "
+  EXPECT_NE(w[0].find("NFTSMC (compared) scores ISE[0 s, 5 s] = 0.995, 0.5 % below the tuned PI-FOSMC's 1 "
                       "(inside the noise floor of 1 %)"),
             std::string::npos)
       << w[0];
@@ -363,7 +363,7 @@ TEST(TuningRun, WarnsWhenAComparedControllerScoresLowerOrTheTunedGainsChatter) {
   set(1, 0.5, 100);
   w = tune::comparison_warnings(r);
   ASSERT_EQ(w.size(), 3u);
-  EXPECT_NE(w[1].find("FOSMC (compared) scores ise = 0.5, 50 % below the tuned PI-FOSMC's 1 "
+  EXPECT_NE(w[1].find("FOSMC (compared) scores ISE[0 s, 5 s] = 0.5, 50 % below the tuned PI-FOSMC's 1 "
                       "(beyond the noise floor"),
             std::string::npos)
       << w[1];

@@ -11,6 +11,7 @@
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/tune/evaluators/batch_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
+#include "ftc/tune/run/api.hpp"
 
 namespace ftc::cli {
 
@@ -32,30 +33,13 @@ void add_study_command(CLI::App& app, const Globals& g, Action& action);
 void add_ensemble_command(CLI::App& app, const Globals& g, Action& action);
 void add_evaluate_command(CLI::App& app, const Globals& g, Action& action);
 
-// The MPI job this process is a rank of (`mpirun -np N ftctune ...`), from MPI_Init to
-// MPI_Finalize; nothing at all for a process not started by an MPI launcher. Rank 0 runs the
-// command; the other ranks serve() it until it finishes.
-class Ranks {
- public:
-  Ranks(int& argc, char**& argv);
-  ~Ranks();
-  Ranks(const Ranks&) = delete;
-  Ranks& operator=(const Ranks&) = delete;
-  bool leader() const { return rank_ == 0; }
-  // Started by mpirun, but built without MPI (the message is printed): exit 2.
-  bool failed() const { return failed_; }
-  int serve();  // a worker rank's whole life; its exit code
+// The MPI ranks and the evaluator of a command's simulations: the run API's (run/api.hpp).
+using tune::make_evaluator;
+using tune::mpi_ranks;
+using tune::Ranks;
 
- private:
-  int rank_ = 0, size_ = 1;
-  bool failed_ = false;
-};
-// Processes taking part in the simulations: the MPI job's ranks, or 1.
-int mpi_ranks();
-// The evaluator of a command's simulations: all ranks' threads under mpirun (`threads` per
-// rank), else this machine's `threads` (<= 0: every core). Throws InputError for a bad
-// FTCTUNE_RANK_TIMEOUT (seconds a rank holding work may stay silent; default 10).
-std::unique_ptr<tune::BatchEvaluator> make_evaluator(int threads);
+// The run API's messages, logged (info and warnings) through spdlog.
+tune::RunLog spdlog_log();
 
 // Renders the report of a run directory; format html, png or svg.
 int render_run_report(const std::string& dir, const std::string& format, bool quiet);
@@ -76,10 +60,7 @@ CLI::Validator output_file();
 std::filesystem::path default_out_dir(const tune::Job& job);
 std::filesystem::path default_out_dir_for(const std::string& job_name);
 
-// The latest finished run of a job: of out/<name>, out/<name>-2, -3, ... (where `run` writes
-// when the earlier ones hold a run), the one whose gains.json is newest among those of this job
-// (the same canonical SHA-256), else the newest of any job of that name. Empty when there is
-// none. `why` says which it chose and why, for the log.
-std::filesystem::path latest_run_dir(const tune::Job& job, std::string* why = nullptr);
+// The latest finished run of a job (run/run_directory.hpp).
+using tune::latest_run_dir;
 
 }  // namespace ftc::cli

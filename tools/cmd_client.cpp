@@ -295,10 +295,6 @@ struct Eta {
 
 }  // namespace
 
-std::filesystem::path default_out_dir_for(const std::string& job_name) {
-  return std::filesystem::path("out") / job_name;
-}
-
 void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
   auto o = std::make_shared<ClientOptions>();
   const auto common = [o](CLI::App* sub) {

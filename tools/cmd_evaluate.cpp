@@ -4,11 +4,14 @@
 
 #include <chrono>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/report/evaluation.hpp"
+#include "ftc/tune/run/api.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
 #include "progress.hpp"
 
@@ -23,12 +26,13 @@ struct EvaluateCliOptions {
   std::string out;
   int threads = 0;
   bool no_figure = false;
+  bool json_output = false;  // --json: one JSON document of what was evaluated on stdout
 };
 
 int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   namespace fs = std::filesystem;
   const tune::Job job = tune::load_job(o.job);
-  tune::EvaluateOptions options;
+  tune::EvaluateJobOptions options;
   // LABEL=FILE names the controller in tables and figures; a bare FILE is labelled by its path.
   for (const std::string& p : o.gains) {
     const std::size_t eq = p.find('=');
@@ -41,16 +45,14 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   }
   options.seed = o.seed;
   options.count = o.count;
+  options.figure = !o.no_figure;
+  options.log = spdlog_log();
   // Beside the job's latest run (out/<name>, or -2, -3, ... where `run` moved on), whose report
   // then shows it.
-  fs::path out = o.out;
-  if (o.out.empty()) {
-    std::string why;
-    const fs::path run = latest_run_dir(job, &why);
-    spdlog::info("{}", why);
-    out = (run.empty() ? default_out_dir(job) : run) / "evaluation";
-  }
-  if (!g.quiet && job.ensemble)
+  options.out = o.out.empty() ? tune::evaluation_dir(job, options.log) : fs::path(o.out);
+  // Under --json standard output carries the document only (logs go to standard error).
+  const bool quiet = g.quiet || o.json_output;
+  if (!quiet && job.ensemble)
     std::printf(
         "Evaluating on %s: %zu listed scenario%s + %lld ensemble members, held-out "
         "seed %llu%s\n",
@@ -66,12 +68,40 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   options.progress = [&](std::int64_t done, std::int64_t total) {
     bar.draw(done, total, elapsed());
   };
-  const std::unique_ptr<tune::BatchEvaluator> evaluator = make_evaluator(o.threads);
-  const tune::EvaluationResult r = tune::evaluate_out_of_sample(job, options, *evaluator);
+  const tune::EvaluateJobResult result = tune::evaluate_job(job, options);
   bar.clear();
-  tune::write_evaluation(r, out);
-  fs::path figure;
-  if (!o.no_figure) figure = tune::draw_evaluation(r, out);
+  const tune::EvaluationResult& r = result.evaluation;
+  const fs::path& out = result.out;
+  const fs::path& figure = result.figure;
+  if (o.json_output) {
+    using nlohmann::json;
+    json files = {"evaluation.json", "evaluation.csv"};
+    if (!figure.empty()) {
+      files.push_back("evaluation.gp");  // the figure's gnuplot script, beside it
+      files.push_back(figure.filename().string());
+    }
+    files.push_back("worst");
+    json controllers = json::array();
+    for (const tune::EvaluatedController& c : r.controllers)
+      controllers.push_back({{"label", c.label},
+                             {"source", c.source},
+                             {"aggregates", tune::summary_json(c.aggregates)}});
+    const json doc = {{"command", "evaluate"},
+                      {"job", job.name},
+                      {"out", out.string()},
+                      {"files", files},
+                      {"evaluation", (out / "evaluation.json").string()},
+                      {"seed", r.seed},
+                      {"count", r.count},
+                      {"listed_scenarios", job.scenarios.size()},
+                      {"objective_label", tune::objective_label(job)},
+                      {"controllers", controllers},
+                      {"simulations", r.simulations},
+                      {"threads", result.threads},
+                      {"wall_seconds", elapsed()}};
+    std::printf("%s\n", doc.dump(2).c_str());
+    return 0;
+  }
   if (g.quiet) return 0;
   const tune::Summary& s0 = r.controllers.front().aggregates;
   std::printf(
@@ -80,8 +110,8 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
       s0.unrecoverable, s0.counted < s0.scenarios ? " (left out)" : "");
   std::fputs(tune::evaluation_table(r).c_str(), stdout);
   std::printf("  %lld simulations on %d thread%s in %.2f s\n",
-              static_cast<long long>(r.simulations), evaluator->concurrency(),
-              evaluator->concurrency() == 1 ? "" : "s", elapsed());
+              static_cast<long long>(r.simulations), result.threads, result.threads == 1 ? "" : "s",
+              elapsed());
   std::printf("  wrote %s/{evaluation.json, evaluation.csv%s, worst/}\n", out.c_str(),
               figure.empty() ? "" : (", " + figure.filename().string()).c_str());
   return 0;
@@ -111,6 +141,9 @@ void add_evaluate_command(CLI::App& app, const Globals& g, Action& action) {
       ->check(CLI::Range(0, 4096));
   // A plain flag: CLI11 shows a negated one's default in the help ("--no-figure{false}").
   sub->add_flag("--no-figure", opts->no_figure, "Skip the figure (no gnuplot needed)");
+  sub->add_flag("--json", opts->json_output,
+                "Print what was evaluated as one JSON document on standard output (files, "
+                "each controller's aggregates); logs stay on standard error");
   sub->footer(
       "\nExamples:\n"
       "  ftctune evaluate jobs/robust-faults.json --gains out/robust-faults/gains.json\n"

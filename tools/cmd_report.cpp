@@ -11,6 +11,7 @@
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/report/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/run/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "progress.hpp"
 
@@ -58,7 +59,7 @@ bool parse_grid(const std::string& text, int& n1, int& n2) {
 int run_landscape(const LandscapeCli& o, const Globals& g) {
   namespace fs = std::filesystem;
   const tune::Job job = tune::load_job(o.job);
-  tune::LandscapeOptions lo;
+  tune::LandscapeJobOptions lo;
   if (!parse_grid(o.grid, lo.n1, lo.n2))
     throw InputError("--grid", "", "expected N1xN2, e.g. 41x41 (got \"" + o.grid + "\")");
   for (std::size_t i = 0; i < o.params.size();) {
@@ -69,53 +70,13 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
   if (o.format != "png" && o.format != "svg")
     throw InputError("--format", "", "must be png or svg (got \"" + o.format + "\")");
   lo.format = o.format == "png" ? tune::FigureFormat::png : tune::FigureFormat::svg;
-  // The job's latest run (out/<name>, or -2, -3, ... where `run` moved on): the landscape goes
-  // into it, with its best-so-far path.
-  std::string why;
-  const fs::path run = latest_run_dir(job, &why);
-  spdlog::info("{}", why);
-  const fs::path out =
-      o.out.empty() ? (run.empty() ? default_out_dir(job) : run) / "landscape" : fs::path(o.out);
-  // Before the work: a directory that can be written, and not one holding a landscape already
-  // (like `run`, --force replaces it).
-  {
-    std::string dir = out.string();
-    if (const std::string problem = output_directory()(dir); !problem.empty())
-      throw InputError("--out", "", problem);
-    std::error_code ec;
-    if (!o.force && (fs::exists(out / "landscape.csv", ec) || fs::exists(out / "landscape.gp", ec)))
-      throw InputError("--out", "",
-                       out.string() +
-                           " already holds a landscape; choose another directory, or pass "
-                           "--force to replace it");
-  }
-  lo.history = o.history.empty() && !run.empty() && fs::is_regular_file(run / "history.csv")
-                   ? run / "history.csv"
-                   : fs::path(o.history);
-  // The unplotted parameters at the run's tuned values (the map then holds the tuned point),
-  // or at the job's with --at-job-values; the run's noise floor for the colours.
-  if (!run.empty()) {
-    const std::optional<std::string> text = tune::read_file(run / "gains.json");
-    const nlohmann::json gains =
-        text ? nlohmann::json::parse(*text, nullptr, false) : nlohmann::json();
-    if (gains.is_object()) {
-      const double nf = ftc::json_io::json_number_or(
-          gains.value(nlohmann::json::json_pointer("/noise_floor/relative_spread"),
-                      nlohmann::json()),
-          0.0);
-      lo.noise_floor = nf;
-      if (!o.at_job_values && gains.contains("tuned") && gains["tuned"].is_object()) {
-        for (auto it = gains["tuned"].begin(); it != gains["tuned"].end(); ++it)
-          if (it.value().is_number()) lo.fixed.emplace_back(it.key(), it.value().get<double>());
-        lo.fixed_source = "the tuned value, " + (run / "gains.json").string();
-      }
-    }
-  }
+  lo.out = o.out;
+  lo.history = o.history;
+  lo.threads = o.threads;
+  lo.force = o.force;
+  lo.at_job_values = o.at_job_values;
+  lo.log = spdlog_log();
   const auto t0 = std::chrono::steady_clock::now();
-  spdlog::info("evaluating a {} grid over {} ({} simulations per point)", o.grid,
-               o.params.empty() ? "the first two tuned parameters" : o.params,
-               job.scenarios.size());
-  const std::unique_ptr<tune::BatchEvaluator> evaluator = make_evaluator(o.threads);
   ProgressBar bar(!g.quiet);
   int last_tenth = 0;
   lo.progress = [&](std::int64_t done, std::int64_t total) {
@@ -130,7 +91,7 @@ int run_landscape(const LandscapeCli& o, const Globals& g) {
     }
     bar.draw(done, total, elapsed);
   };
-  const tune::LandscapeResult r = tune::compute_landscape(job, out, lo, *evaluator);
+  const tune::LandscapeResult r = tune::landscape_job(job, lo).landscape;
   bar.clear();
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!g.quiet) {

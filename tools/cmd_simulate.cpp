@@ -9,6 +9,7 @@
 #include "cli.hpp"
 #include "ftc/runtime/controller_json.hpp"
 #include "ftc/runtime/gains.hpp"
+#include "ftc/sim/controllers.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/files.hpp"
@@ -29,6 +30,7 @@ struct SimulateOptions {
   std::string gains;
   std::string out;
   double record_interval = 0.01;
+  bool json_output = false;  // --json: one JSON document of what was simulated on stdout
 };
 
 std::string fmt(double v, const char* f = "%.4g") {
@@ -64,6 +66,7 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
   const fs::path out = o.out.empty() ? default_out_dir(job) / "simulate" : fs::path(o.out);
 
   json scenarios = json::array();
+  json files = json::array();
   std::vector<sim::Metrics> metrics;
   for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
     const sim::Scenario& s = job.scenarios[i];
@@ -75,6 +78,7 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
     metrics.push_back(r.metrics);
     const std::string file = i == 0 ? "trajectory.csv" : "trajectory-" + s.name + ".csv";
     tune::write_file_atomic(out / file, tune::trajectory_csv(r.trajectory));
+    files.push_back(file);
     if (r.metrics.diverged)
       spdlog::warn("scenario {} diverged at t = {:.3f} s", s.name, r.metrics.diverged_at);
   }
@@ -91,6 +95,17 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
   doc["fitness"] = fitness;
   doc["scenarios"] = scenarios;
   tune::write_file_atomic(out / "metrics.json", doc.dump(2) + "\n");
+  if (o.json_output) {
+    // metrics.json's content, with where it and the trajectories went.
+    json printed = doc;
+    printed["command"] = "simulate";
+    printed["out"] = out.string();
+    files.push_back("metrics.json");
+    printed["files"] = files;
+    printed["objective_label"] = tune::objective_label(job);
+    std::printf("%s\n", printed.dump(2).c_str());
+    return 0;
+  }
 
   if (!g.quiet) {
     std::printf(
@@ -130,8 +145,8 @@ void add_simulate_command(CLI::App& app, const Globals& g, Action& action) {
       app.add_subcommand("simulate", "Simulate a controller on every scenario of a job");
   sub->add_option("job", opts->job, "Job file (ftctune.job/1)")->required();
   sub->add_option("--controller", opts->controller,
-                  "Controller type with its Table 1 defaults instead of the job's controller "
-                  "(nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)");
+                  "Controller type with its Table 1 defaults instead of the job's controller (" +
+                      std::string(sim::controller_type_list()) + ")");
   // One value per --set, so the job path may come after them.
   sub->add_option("--set", opts->sets, "Override a controller parameter, KEY=VALUE (repeatable)")
       ->allow_extra_args(false);
@@ -141,6 +156,9 @@ void add_simulate_command(CLI::App& app, const Globals& g, Action& action) {
       ->check(output_directory());
   sub->add_option("--record-every", opts->record_interval,
                   "Trajectory sampling interval in seconds (default 0.01)");
+  sub->add_flag("--json", opts->json_output,
+                "Print what was simulated as one JSON document on standard output (metrics.json's "
+                "content, the output directory and its files)");
   sub->callback([&action, &g, opts] { action = [&g, opts] { return run_simulate(*opts, g); }; });
 }
 

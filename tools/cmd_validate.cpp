@@ -1,5 +1,9 @@
-// ftctune validate JOB: check a job file and say what running it would cost.
+// ftctune validate JOB: check a job file and say what running it would cost. `-` reads the job
+// from standard input; --json prints what was found as one JSON document.
 #include <cstdio>
+#include <iostream>
+#include <iterator>
+#include <nlohmann/json.hpp>
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
@@ -8,28 +12,74 @@
 namespace ftc::cli {
 namespace {
 
-int run_validate(const std::string& file, const Globals& g) {
+using nlohmann::json;
+
+// How errors name a job read from standard input.
+constexpr const char* kStdinSource = "(stdin)";
+
+struct ValidateCli {
+  std::string file;
+  bool json_output = false;
+};
+
+tune::Job read_job(const std::string& file) {
+  if (file != "-") return tune::load_job(file);
+  // A scenarios file the job names is read relative to the working directory.
+  const std::string text{std::istreambuf_iterator<char>(std::cin),
+                         std::istreambuf_iterator<char>()};
+  if (std::cin.bad()) throw InputError(kStdinSource, "", "cannot read standard input");
+  return tune::parse_job_text(text, kStdinSource, std::filesystem::current_path());
+}
+
+int run_validate(const ValidateCli& o, const Globals& g) {
+  const std::string& file = o.file;
+  const std::string name = file == "-" ? kStdinSource : file;
   try {
-    const tune::Job job = tune::load_job(file);
+    const tune::Job job = read_job(file);
     const std::int64_t evals = job.tuning ? job.tuning->algorithm->evaluations() : 1;
     const std::int64_t steps = job.steps_per_evaluation();
     const std::string members = job.ensemble
                                     ? " (" + std::to_string(job.scenarios.size()) + " listed + " +
                                           std::to_string(job.ensemble->count) + " ensemble members)"
                                     : "";
-    if (!g.quiet)
+    if (o.json_output) {
+      const json doc = {{"command", "validate"},
+                        {"file", name},
+                        {"valid", true},
+                        {"job", job.name},
+                        {"tuning", static_cast<bool>(job.tuning)},
+                        {"evaluations", evals},
+                        {"scenarios", job.scenario_count()},
+                        {"listed_scenarios", job.scenarios.size()},
+                        {"ensemble_members", job.ensemble ? job.ensemble->count : 0},
+                        {"steps_per_evaluation", steps},
+                        {"steps", static_cast<double>(evals) * static_cast<double>(steps)}};
+      std::printf("%s\n", doc.dump(2).c_str());
+    } else if (!g.quiet) {
       std::printf(
           "%s: valid job \"%s\": %lld evaluation%s x %zu scenario%s%s, %lld simulated steps "
           "per evaluation, %.3g in all%s\n",
-          file.c_str(), job.name.c_str(), static_cast<long long>(evals), evals == 1 ? "" : "s",
+          name.c_str(), job.name.c_str(), static_cast<long long>(evals), evals == 1 ? "" : "s",
           job.scenario_count(), job.scenario_count() == 1 ? "" : "s", members.c_str(),
           static_cast<long long>(steps), static_cast<double>(evals) * static_cast<double>(steps),
           job.tuning ? "" : " (no tuning section: simulate only)");
+    }
     return 0;
   } catch (const InputError& e) {
     std::fprintf(stderr, "ftctune: error: %s: %zu problem%s\n", e.source().c_str(),
                  e.errors().size(), e.errors().size() == 1 ? "" : "s");
     for (const FieldError& fe : e.errors()) std::fprintf(stderr, "  %s\n", to_string(fe).c_str());
+    if (o.json_output) {
+      json errors = json::array();
+      for (const FieldError& fe : e.errors())
+        errors.push_back({{"path", fe.path}, {"message", fe.message}});
+      const json doc = {{"command", "validate"},
+                        {"file", name},
+                        {"valid", false},
+                        {"source", e.source()},
+                        {"errors", errors}};
+      std::printf("%s\n", doc.dump(2).c_str());
+    }
     return 2;
   }
 }
@@ -37,10 +87,14 @@ int run_validate(const std::string& file, const Globals& g) {
 }  // namespace
 
 void add_validate_command(CLI::App& app, const Globals& g, Action& action) {
-  auto file = std::make_shared<std::string>();
+  auto o = std::make_shared<ValidateCli>();
   CLI::App* sub = app.add_subcommand("validate", "Check a job file and list every problem");
-  sub->add_option("job", *file, "Job file (ftctune.job/1)")->required();
-  sub->callback([&action, &g, file] { action = [&g, file] { return run_validate(*file, g); }; });
+  sub->add_option("job", o->file, "Job file (ftctune.job/1), or - to read it from standard input")
+      ->required();
+  sub->add_flag("--json", o->json_output,
+                "Print the result as one JSON document on standard output (also when the job is "
+                "invalid: valid false and its errors)");
+  sub->callback([&action, &g, o] { action = [&g, o] { return run_validate(*o, g); }; });
 }
 
 }  // namespace ftc::cli

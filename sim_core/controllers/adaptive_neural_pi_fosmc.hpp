@@ -38,4 +38,12 @@ class AdaptiveNeuralPiFosmc final
   }
 };
 
+namespace detail {
+template <>
+struct ControllerClass<ControllerType::adaptive_neural_pi_fosmc> {
+  template <int N, int M>
+  using type = AdaptiveNeuralPiFosmc<N, M>;
+};
+}  // namespace detail
+
 }  // namespace ftc::sim

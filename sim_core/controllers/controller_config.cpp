@@ -80,26 +80,6 @@ std::string check_value(const ControllerConfig& cfg, const ControllerField& f, d
 
 }  // namespace
 
-const char* to_string(ControllerType t) {
-  switch (t) {
-    case ControllerType::nftsmc:
-      return "nftsmc";
-    case ControllerType::fosmc:
-      return "fosmc";
-    case ControllerType::pi_fosmc:
-      return "pi_fosmc";
-    case ControllerType::adaptive_neural_pi_fosmc:
-      return "adaptive_neural_pi_fosmc";
-  }
-  return "?";
-}
-
-std::optional<ControllerType> controller_type_from_string(std::string_view s) {
-  for (ControllerType t : kAllControllerTypes)
-    if (s == to_string(t)) return t;
-  return std::nullopt;
-}
-
 double ControllerConfig::resolved_alpha1() const {
   return std::isnan(alpha1) ? alpha2 / (2.0 - alpha2) : alpha1;
 }
@@ -122,7 +102,7 @@ std::vector<FieldError> ControllerConfig::validate(const std::string& path) cons
     std::string msg = check_value(*this, f, v);
     if (!msg.empty()) errs.push_back({path + "/" + f.name, std::move(msg)});
   }
-  if (type == ControllerType::adaptive_neural_pi_fosmc) {
+  if (controller_info(type).adaptive) {
     const std::string cp = path + "/centre_range";
     if (!std::isfinite(centre_range[0]) || !std::isfinite(centre_range[1]))
       errs.push_back({cp, "must hold two finite numbers"});
@@ -151,7 +131,7 @@ std::vector<std::string> controller_field_names(ControllerType t) {
   std::vector<std::string> names;
   for (const ControllerField& f : kFields)
     if (f.applies_to(t)) names.emplace_back(f.name);
-  if (t == ControllerType::adaptive_neural_pi_fosmc) names.emplace_back("centre_range");
+  if (controller_info(t).adaptive) names.emplace_back("centre_range");
   return names;
 }
 

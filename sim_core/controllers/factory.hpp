@@ -14,17 +14,11 @@ namespace ftc::sim {
 template <int N, int M>
 std::unique_ptr<Controller<N, M>> make_controller(const ControllerConfig& config,
                                                   const Plant<N, M>& plant, double sample_time) {
-  switch (config.type) {
-    case ControllerType::nftsmc:
-      return std::make_unique<Nftsmc<N, M>>(config, plant, sample_time);
-    case ControllerType::fosmc:
-      return std::make_unique<Fosmc<N, M>>(config, plant, sample_time);
-    case ControllerType::pi_fosmc:
-      return std::make_unique<PiFosmc<N, M>>(config, plant, sample_time);
-    case ControllerType::adaptive_neural_pi_fosmc:
-      return std::make_unique<AdaptiveNeuralPiFosmc<N, M>>(config, plant, sample_time);
-  }
-  throw InputError("controller", "type", "unknown controller type");
+  return visit_controller_type(config.type, [&](auto t) -> std::unique_ptr<Controller<N, M>> {
+    using C = typename detail::ControllerClass<decltype(t)::value>::template type<N, M>;
+    static_assert(C::kModelBased == controller_info(decltype(t)::value).model_based);
+    return std::make_unique<C>(config, plant, sample_time);
+  });
 }
 
 }  // namespace ftc::sim

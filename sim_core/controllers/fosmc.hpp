@@ -19,4 +19,12 @@ class Fosmc final : public detail::LawController<N, M, law::Fosmc, true> {
   using detail::LawController<N, M, law::Fosmc, true>::LawController;
 };
 
+namespace detail {
+template <>
+struct ControllerClass<ControllerType::fosmc> {
+  template <int N, int M>
+  using type = Fosmc<N, M>;
+};
+}  // namespace detail
+
 }  // namespace ftc::sim

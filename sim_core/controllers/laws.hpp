@@ -327,6 +327,31 @@ class AdaptiveNeuralPiFosmc {
   std::array<V<T, N>, kMaxNodes> W_{};  // the weights θ̂, row j for node j
 };
 
+// The law of each controller type (include/ftc/sim/controllers.hpp), for
+// visit_controller_type(): LawOf<t>::type<T, N, M>.
+template <ControllerType>
+struct LawOf;
+template <>
+struct LawOf<ControllerType::nftsmc> {
+  template <class T, int N, int M>
+  using type = Nftsmc<T, N, M>;
+};
+template <>
+struct LawOf<ControllerType::fosmc> {
+  template <class T, int N, int M>
+  using type = Fosmc<T, N, M>;
+};
+template <>
+struct LawOf<ControllerType::pi_fosmc> {
+  template <class T, int N, int M>
+  using type = PiFosmc<T, N, M>;
+};
+template <>
+struct LawOf<ControllerType::adaptive_neural_pi_fosmc> {
+  template <class T, int N, int M>
+  using type = AdaptiveNeuralPiFosmc<T, N, M>;
+};
+
 }  // namespace law
 }  // namespace FTC_ISA_NS
 }  // namespace ftc::sim

@@ -20,4 +20,12 @@ class Nftsmc final : public detail::LawController<N, M, law::Nftsmc, true> {
   using detail::LawController<N, M, law::Nftsmc, true>::LawController;
 };
 
+namespace detail {
+template <>
+struct ControllerClass<ControllerType::nftsmc> {
+  template <int N, int M>
+  using type = Nftsmc<N, M>;
+};
+}  // namespace detail
+
 }  // namespace ftc::sim

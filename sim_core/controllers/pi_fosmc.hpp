@@ -22,4 +22,12 @@ class PiFosmc final : public detail::LawController<N, M, law::PiFosmc, true> {
   using detail::LawController<N, M, law::PiFosmc, true>::LawController;
 };
 
+namespace detail {
+template <>
+struct ControllerClass<ControllerType::pi_fosmc> {
+  template <int N, int M>
+  using type = PiFosmc<N, M>;
+};
+}  // namespace detail
+
 }  // namespace ftc::sim

@@ -41,10 +41,17 @@ class PlantModel {
   std::array<double, M * N> G_pinv_{};
 };
 
+// The controller class of each type (include/ftc/sim/controllers.hpp), specialised in each
+// class's header, for visit_controller_type(): ControllerClass<t>::type<N, M>.
+template <ControllerType>
+struct ControllerClass;
+
 // A control law of controllers/laws.hpp as a Controller: the runtime's scalar controller.
 template <int N, int M, template <class, int, int> class Law, bool ModelBased>
 class LawController : public Controller<N, M> {
  public:
+  static constexpr bool kModelBased = ModelBased;  // controllers.hpp's model_based
+
   LawController(const ControllerConfig& config, const Plant<N, M>& plant, double sample_time)
       : config_(checked_config(config, sample_time)),
         config_ptr_(&config_),

@@ -361,16 +361,9 @@ void run_law(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& f
 
 template <class T, class P, int N, int M>
 void run_pack(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin) {
-  switch (su.configs[0]->type) {
-    case ControllerType::nftsmc:
-      return run_law<T, P, law::Nftsmc>(su, host, fin);
-    case ControllerType::fosmc:
-      return run_law<T, P, law::Fosmc>(su, host, fin);
-    case ControllerType::pi_fosmc:
-      return run_law<T, P, law::PiFosmc>(su, host, fin);
-    case ControllerType::adaptive_neural_pi_fosmc:
-      return run_law<T, P, law::AdaptiveNeuralPiFosmc>(su, host, fin);
-  }
+  visit_controller_type(su.configs[0]->type, [&](auto t) {
+    run_law<T, P, law::LawOf<decltype(t)::value>::template type>(su, host, fin);
+  });
 }
 
 // The lane type of the instruction set this file is compiled for (FTC_LANE_ARCH, set by

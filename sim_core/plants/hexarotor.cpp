@@ -177,6 +177,7 @@ PlantKind hexarotor_kind() {
       {"moment_constant", {d.moment_constant}, positive, "m",
        "yaw (drag) torque per newton of a rotor's thrust"},
       {"gravity", {d.gravity}, positive, "m/s²", "gravitational acceleration g"}};
+  k.uncertain = {{"inertia", "each axis's principal moment of inertia", Scaling::elementwise}};
   k.default_initial_state = {0.2, -0.15, 0.1, 0.0, 0.0, 0.0};
   k.positions = "attitude angles";
   k.rates = "angular rates";

@@ -347,7 +347,7 @@ void run_lanes(std::span<LaneTask> lanes, const Mat<P::kAxes, P::kActuators>* G,
   // samples, control law (and network size). Packs are formed in task order.
   using Key = std::tuple<double, int, std::int64_t, ControllerType, double>;
   const auto key = [](const LaneTask& l) {
-    const bool adaptive = l.config.type == ControllerType::adaptive_neural_pi_fosmc;
+    const bool adaptive = controller_info(l.config.type).adaptive;
     return Key{l.scenario->sample_time, l.scenario->substeps, l.scenario->samples(), l.config.type,
                adaptive ? l.config.nodes : 0.0};
   };

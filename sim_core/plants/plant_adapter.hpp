@@ -96,9 +96,10 @@ class PlantAdapter final : public AnyPlant {
   }
 
  private:
-  // The simulated plant of a scenario that names a true inertia (model mismatch).
+  // The simulated plant of a scenario that gives true values of uncertain parameters (model
+  // mismatch).
   P truth(const Scenario& scenario) const {
-    const std::vector<double> v = kind().with_inertia(values_, scenario.inertia, "/inertia");
+    const std::vector<double> v = kind().with_true_values(values_, scenario.true_values, "");
     throw_if_errors("scenario " + scenario.name, kind().validate(v, ""));
     return build_(v);
   }
@@ -115,7 +116,7 @@ class PlantAdapter final : public AnyPlant {
     static_assert(model.size() <= kMaxPlantConstants);
     std::copy(model.begin(), model.end(), lane.model.begin());
     lane.truth = lane.model;
-    if (!scenario.inertia.empty()) {
+    if (!scenario.true_values.empty()) {
       const P simulated = truth(scenario);
       const auto truth_constants = simulated.f_constants();
       std::copy(truth_constants.begin(), truth_constants.end(), lane.truth.begin());

@@ -2,6 +2,7 @@
 // dynamics and lane code: docs/architecture.md, "Plant seam") plus the lines marked below: the
 // list of kinds, the list of classes for the runtime's simulate() with a Controller object,
 // and, for a new shape (n, m), the two instantiations.
+#include <stdexcept>
 #include <tuple>
 
 #include "ftc/sim/hexarotor.hpp"
@@ -120,21 +121,78 @@ std::size_t PlantKind::offset(std::string_view parameter) const {
   return std::string_view::npos;
 }
 
-std::vector<double> PlantKind::with_inertia(std::vector<double> values,
-                                            const std::vector<double>& inertia,
-                                            const std::string& path) const {
-  const std::size_t at = offset("inertia");
-  if (at == std::string_view::npos)
-    throw InputError("plant", path, "the " + model + " plant has no inertia parameter");
+const UncertainParameter* PlantKind::find_uncertain(std::string_view parameter) const {
+  for (const UncertainParameter& u : uncertain)
+    if (u.parameter == parameter) return &u;
+  return nullptr;
+}
+
+std::string PlantKind::uncertain_names() const {
+  std::string s;
+  for (const UncertainParameter& u : uncertain) s += (s.empty() ? "" : ", ") + u.parameter;
+  return s.empty() ? "none" : s;
+}
+
+std::vector<double> PlantKind::parameter_values(const std::vector<double>& values,
+                                                std::string_view parameter) const {
+  const std::size_t at = offset(parameter);
   for (const PlantParameter& p : parameters)
-    if (p.name == "inertia") {
-      if (inertia.size() != p.size())
-        throw InputError("plant", path,
-                         "expected " + std::to_string(p.size()) + " numbers (the " + model +
-                             "'s inertia), got " + std::to_string(inertia.size()));
-      std::copy(inertia.begin(), inertia.end(), values.begin() + static_cast<long>(at));
-    }
+    if (p.name == parameter)
+      return {values.begin() + static_cast<long>(at),
+              values.begin() + static_cast<long>(at + p.size())};
+  throw std::logic_error("no plant parameter " + std::string(parameter));
+}
+
+std::vector<double> PlantKind::with_true_values(std::vector<double> values,
+                                                const std::vector<TrueValue>& truth,
+                                                const std::string& path) const {
+  for (const TrueValue& t : truth) {
+    const std::string where = path + "/" + t.parameter;
+    if (!find_uncertain(t.parameter))
+      throw InputError("plant", where,
+                       "the " + model + " plant does not declare " + t.parameter +
+                           " uncertain (its uncertain parameters: " + uncertain_names() + ")");
+    const std::size_t at = offset(t.parameter);
+    for (const PlantParameter& p : parameters)
+      if (p.name == t.parameter) {
+        if (t.values.size() != p.size())
+          throw InputError("plant", where,
+                           "expected " + std::to_string(p.size()) + " numbers (the " + model +
+                               "'s " + p.name + "), got " + std::to_string(t.values.size()));
+        std::copy(t.values.begin(), t.values.end(), values.begin() + static_cast<long>(at));
+      }
+  }
   return values;
+}
+
+std::vector<FieldError> PlantKind::check_true_values(const std::vector<double>& values,
+                                                     const std::vector<TrueValue>& truth,
+                                                     const std::string& path) const {
+  std::vector<FieldError> errs;
+  try {
+    // Only the given values' own errors: the job's plant values have theirs.
+    for (FieldError& e : validate(with_true_values(values, truth, path), path))
+      for (const TrueValue& t : truth) {
+        const std::string p = path + "/" + t.parameter;
+        if (e.path == p || e.path.rfind(p + "/", 0) == 0) {
+          errs.push_back(std::move(e));
+          break;
+        }
+      }
+  } catch (const InputError& e) {
+    errs = e.errors();
+  }
+  return errs;
+}
+
+void PlantKind::scale(const UncertainParameter& u, std::vector<double>& values,
+                      std::span<const double> factors) {
+  switch (u.scaling) {
+    case Scaling::elementwise:
+      for (std::size_t i = 0; i < values.size() && i < factors.size(); ++i)
+        values[i] *= factors[i];
+      return;
+  }
 }
 
 std::vector<FieldError> PlantKind::validate(const std::vector<double>& values,

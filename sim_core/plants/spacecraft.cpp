@@ -81,6 +81,8 @@ PlantKind spacecraft_kind() {
        "kg·m²",
        "principal moments of inertia Ix, Iy, Iz"},
       {"orbital_rate", {d.orbital_rate}, Range::non_negative(), "rad/s", "orbital rate ω0"}};
+  // A scenario may give the true inertia (SPEC §12); an ensemble scales each axis's moment.
+  k.uncertain = {{"inertia", "each axis's principal moment of inertia", Scaling::elementwise}};
   k.default_initial_state = {-0.7, -0.07, 1.5, 0.3, 1.3, -0.2};
   k.positions = "attitude angles";
   k.rates = "angular rates";

@@ -54,6 +54,15 @@ schema::Object<ControllerConfig>::Field table_field(const ControllerField& f) {
           }};
 }
 
+// A controller's line of the table (controllers.hpp) in words, for its case of the schema.
+std::string case_description(const sim::ControllerInfo& c) {
+  std::string d = std::string(c.display_name) + ": " + c.description;
+  d += c.model_based ? "; uses the plant model f(X)" : "; learns f(X)";
+  if (c.integral) d += "; integral state";
+  if (c.adaptive) d += "; adaptive switching gain";
+  return d;
+}
+
 std::shared_ptr<const schema::Variant<ControllerConfig>> make_shape() {
   auto v = std::make_shared<schema::Variant<ControllerConfig>>(
       "type", [](const ControllerConfig& c) { return std::string(sim::to_string(c.type)); },
@@ -63,16 +72,18 @@ std::shared_ptr<const schema::Variant<ControllerConfig>> make_shape() {
       },
       "A sliding-mode controller: its type and parameters (Table 1 values by default)", "",
       [](const std::string& name) {
-        return "unknown controller type \"" + name +
-               "\" (known: nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)" +
-               json_io::did_you_mean(name,
-                                     {"nftsmc", "fosmc", "pi_fosmc", "adaptive_neural_pi_fosmc"});
+        std::vector<std::string> names;
+        for (const sim::ControllerInfo& c : sim::kControllers) names.emplace_back(c.name);
+        return "unknown controller type \"" + name + "\" (known: " +
+               std::string(sim::controller_type_list()) + ")" +
+               json_io::did_you_mean(name, names);
       });
-  for (const ControllerType t : sim::kAllControllerTypes) {
-    auto o = std::make_shared<schema::Object<ControllerConfig>>();
+  for (const sim::ControllerInfo& info : sim::kControllers) {
+    const ControllerType t = info.type;
+    auto o = std::make_shared<schema::Object<ControllerConfig>>(case_description(info));
     for (const ControllerField& f : sim::controller_fields())
       if (f.applies_to(t)) o->field(table_field(f));
-    if (t == ControllerType::adaptive_neural_pi_fosmc)
+    if (info.adaptive)
       o->numbers("centre_range", &ControllerConfig::centre_range, 2, schema::Range::any(),
                  "[lower, upper] of the node centres on the diagonal");
     const std::string name = sim::to_string(t);

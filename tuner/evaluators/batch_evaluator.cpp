@@ -1,19 +1,58 @@
 #include "ftc/tune/evaluators/batch_evaluator.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <exception>
+#include <stdexcept>
 #include <tuple>
 
-#include "ftc/tune/problem/problem.hpp"
-
 namespace ftc::tune {
+namespace {
 
-TaskResult run_task(const TuningProblem& problem, const SimulationBatch& batch, std::size_t k) {
+std::uint64_t next_identity() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
+
+}  // namespace
+
+SimulationSet::SimulationSet(sim::PlantSpec plant, std::vector<sim::Scenario> scenarios,
+                             std::vector<sim::SimulationOptions> options)
+    : SimulationSet(plant, sim::make_plant(plant), std::move(scenarios), std::move(options)) {}
+
+SimulationSet::SimulationSet(sim::PlantSpec spec, std::shared_ptr<const sim::AnyPlant> plant,
+                             std::vector<sim::Scenario> scenarios,
+                             std::vector<sim::SimulationOptions> options)
+    : spec_(std::move(spec)),
+      plant_(std::move(plant)),
+      scenarios_(std::move(scenarios)),
+      options_(std::move(options)),
+      identity_(next_identity()) {
+  if (options_.size() != scenarios_.size())
+    throw std::invalid_argument("a simulation set needs one options per scenario (" +
+                                std::to_string(scenarios_.size()) + " scenarios, " +
+                                std::to_string(options_.size()) + " options)");
+}
+
+SimulationSet SimulationSet::with_scenarios(std::vector<sim::Scenario> scenarios,
+                                            std::vector<sim::SimulationOptions> options) const {
+  return SimulationSet(spec_, plant_, std::move(scenarios), std::move(options));
+}
+
+sim::SimulationOptions task_options(const SimulationBatch& batch, std::size_t k) {
+  const SimulationTask& task = batch.tasks[k];
+  sim::SimulationOptions o = batch.set.options(task.scenario);
+  o.record_every = task.record ? batch.record_every : 0;
+  return o;
+}
+
+TaskResult run_task(const SimulationBatch& batch, std::size_t k) {
   TaskResult r;
   const SimulationTask& task = batch.tasks[k];
   try {
-    sim::SimulationResult s = problem.simulate(batch.candidates[task.candidate], task.scenario,
-                                               task.record ? batch.record_every : 0);
+    sim::SimulationResult s =
+        batch.set.plant().simulate(batch.candidates[task.candidate],
+                                   batch.set.scenario(task.scenario), task_options(batch, k));
     r.metrics = std::move(s.metrics);
     r.trajectory = std::move(s.trajectory);
   } catch (const std::exception& e) {
@@ -24,20 +63,20 @@ TaskResult run_task(const TuningProblem& problem, const SimulationBatch& batch, 
   return r;
 }
 
-void run_pack(const TuningProblem& problem, const SimulationBatch& batch,
-              std::span<const std::size_t> pack, std::span<TaskResult> results) {
+void run_pack(const SimulationBatch& batch, std::span<const std::size_t> pack,
+              std::span<TaskResult> results) {
   const std::size_t n = pack.size();
   try {
     std::vector<sim::SimulationOptions> options(n);
     std::vector<sim::PackTask> tasks(n);
     for (std::size_t i = 0; i < n; ++i) {
       const SimulationTask& t = batch.tasks[pack[i]];
-      options[i] = problem.simulation_options(t.scenario, t.record ? batch.record_every : 0);
-      tasks[i] = {&batch.candidates[t.candidate], &problem.scenario(t.scenario), &options[i]};
+      options[i] = task_options(batch, pack[i]);
+      tasks[i] = {&batch.candidates[t.candidate], &batch.set.scenario(t.scenario), &options[i]};
     }
     std::vector<sim::SimulationResult> out(n);
     std::vector<std::string> errors(n);
-    problem.plant().simulate_pack(tasks, out, errors);
+    batch.set.plant().simulate_pack(tasks, out, errors);
     for (std::size_t i = 0; i < n; ++i) {
       TaskResult& r = results[pack[i]];
       r.error = std::move(errors[i]);
@@ -52,15 +91,14 @@ void run_pack(const TuningProblem& problem, const SimulationBatch& batch,
   }
 }
 
-std::vector<std::vector<std::size_t>> plan_packs(const TuningProblem& problem,
-                                                 const SimulationBatch& batch, int workers) {
-  const std::size_t width = static_cast<std::size_t>(std::max(1, problem.plant().pack_width()));
+std::vector<std::vector<std::size_t>> plan_packs(const SimulationBatch& batch, int workers) {
+  const std::size_t width = static_cast<std::size_t>(std::max(1, batch.set.plant().pack_width()));
   // Groups of tasks whose loops have the same shape, in order of first appearance.
   using Key = std::tuple<double, int, std::int64_t>;
   std::vector<Key> keys;
   std::vector<std::vector<std::size_t>> groups;
   for (std::size_t k = 0; k < batch.tasks.size(); ++k) {
-    const sim::Scenario& s = problem.scenario(batch.tasks[k].scenario);
+    const sim::Scenario& s = batch.set.scenario(batch.tasks[k].scenario);
     const Key key{s.sample_time, s.substeps, s.samples()};
     const auto it = std::find(keys.begin(), keys.end(), key);
     if (it == keys.end()) {
@@ -94,11 +132,9 @@ std::vector<std::vector<std::size_t>> plan_packs(const TuningProblem& problem,
   return packs;
 }
 
-std::vector<TaskResult> SerialEvaluator::run(const TuningProblem& problem,
-                                             const SimulationBatch& batch) {
+std::vector<TaskResult> SerialEvaluator::run(const SimulationBatch& batch) {
   std::vector<TaskResult> results(batch.tasks.size());
-  for (const std::vector<std::size_t>& pack : plan_packs(problem, batch, 1))
-    run_pack(problem, batch, pack, results);
+  for (const std::vector<std::size_t>& pack : plan_packs(batch, 1)) run_pack(batch, pack, results);
   return results;
 }
 

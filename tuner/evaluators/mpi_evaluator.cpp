@@ -2,7 +2,8 @@
 //
 // Protocol (all on MPI_COMM_WORLD, point to point with rank 0):
 //   0 -> w  kHello     threads wanted          w -> 0  kHello    threads, host name
-//   0 -> w  kProblem   job + scenarios (JSON), when the problem changed
+//   0 -> w  kSet       the simulation set: plant spec, scenarios (JSON), their options; when
+//                      the batch's set is not the one the workers hold
 //   0 -> w  kBatch     candidates, record_every; the worker answers with a kRequest
 //   w -> 0  kRequest   capacity                0 -> w  kPack     tasks | kDone (batch over)
 //   w -> 0  kResult    capacity + results of the pack (also asks for the next pack)
@@ -40,7 +41,6 @@
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
-#include "ftc/tune/problem/problem.hpp"
 
 namespace ftc::tune::mpi {
 namespace {
@@ -50,7 +50,7 @@ using nlohmann::json;
 
 enum Tag : int {
   kHello = 1,
-  kProblem,
+  kSet,
   kBatch,
   kPack,
   kDone,
@@ -154,6 +154,18 @@ sim::Metrics get_metrics(Reader& r) { return r.get_metrics(); }
 
 static_assert(std::is_trivially_copyable_v<sim::ControllerConfig>);
 static_assert(std::is_trivially_copyable_v<SimulationTask>);
+static_assert(std::is_trivially_copyable_v<sim::Window>);
+
+// The mirror of SimulationOptions, as for Metrics: a member added to it stops this compiling
+// until set_message sends it.
+struct OptionsMirror {
+  sim::Window window;
+  std::vector<sim::Window> extra_windows;
+  std::int64_t record_every;
+  sim::MetricSettings metrics;
+};
+static_assert(std::is_trivially_copyable_v<sim::MetricSettings>);
+static_assert(sizeof(OptionsMirror) == sizeof(sim::SimulationOptions), "send every option");
 
 void send(int to, int tag, const std::vector<char>& bytes) {
   MPI_Send(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, to, tag, MPI_COMM_WORLD);
@@ -250,26 +262,41 @@ std::string host_name() {
   return buf;
 }
 
-// The problem as a worker rebuilds it: the job, and every scenario in place of its listed ones
-// and its ensemble (members are sent, not drawn again, so a slice or a perturbed copy travels
-// as it is).
-std::string problem_message(const TuningProblem& p) {
+// A simulation set as a worker rebuilds it: the plant's spec, every scenario as JSON (resolved,
+// so a slice, an ensemble member or a perturbed copy travels as it is) and each one's options.
+std::vector<char> set_message(const SimulationSet& set) {
+  Writer w;
+  w.put_string(set.plant_spec().model);
+  w.put_vector(set.plant_spec().values);
   json scenarios = json::array();
-  for (std::size_t i = 0; i < p.scenarios(); ++i) scenarios.push_back(to_json(p.scenario(i)));
-  return json{{"job", to_json(p.job())},
-              {"scenarios", std::move(scenarios)},
-              {"listed", p.listed_scenarios()}}
-      .dump();
+  for (std::size_t i = 0; i < set.size(); ++i) scenarios.push_back(to_json(set.scenario(i)));
+  w.put_string(scenarios.dump());
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    const sim::SimulationOptions& o = set.options(i);
+    w.put(o.window);
+    w.put_vector(o.extra_windows);
+    w.put(o.record_every);
+    w.put(o.metrics);
+  }
+  return w.bytes();
 }
 
-TuningProblem problem_from_message(const std::vector<char>& bytes) {
-  const json m = json::parse(bytes.begin(), bytes.end());
-  json all = m.at("job");
-  all["scenarios"] = m.at("scenarios");
-  all.erase("ensemble");
-  Job scenarios = parse_job(all, "problem from rank 0");
-  return TuningProblem(parse_job(m.at("job"), "problem from rank 0"),
-                       std::move(scenarios.scenarios), m.at("listed").get<std::size_t>());
+SimulationSet set_from_message(const std::vector<char>& bytes) {
+  Reader r(bytes);
+  sim::PlantSpec plant;
+  plant.model = r.get_string();
+  plant.values = r.get_vector<double>();
+  const json list = json::parse(r.get_string());
+  std::vector<sim::Scenario> scenarios;
+  std::vector<sim::SimulationOptions> options(list.size());
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    scenarios.push_back(scenario_from_json(list[i], "scenario from rank 0"));
+    options[i].window = r.get<sim::Window>();
+    options[i].extra_windows = r.get_vector<sim::Window>();
+    options[i].record_every = r.get<std::int64_t>();
+    options[i].metrics = r.get<sim::MetricSettings>();
+  }
+  return SimulationSet(std::move(plant), std::move(scenarios), std::move(options));
 }
 
 std::vector<char> results_message(int capacity, std::span<const TaskResult> results) {
@@ -307,7 +334,7 @@ Session::~Session() {
 
 int Session::serve() {
   std::unique_ptr<TbbEvaluator> evaluator;
-  std::optional<TuningProblem> problem;
+  std::optional<SimulationSet> set;
   for (;;) {
     Message m = receive_from(0);
     try {
@@ -323,19 +350,18 @@ int Session::serve() {
           send(0, kHello, w);
           break;
         }
-        case kProblem:
-          problem.emplace(problem_from_message(m.bytes));
-          spdlog::debug("rank {}: problem with {} scenarios", rank_, problem->scenarios());
+        case kSet:
+          set.emplace(set_from_message(m.bytes));
+          spdlog::debug("rank {}: simulation set with {} scenarios", rank_, set->size());
           break;
         case kBatch: {
-          if (!evaluator || !problem) abort_job("rank 0 sent a batch before its problem");
+          if (!evaluator || !set) abort_job("rank 0 sent a batch before its simulation set");
           Reader r(m.bytes);
           const auto record_every = r.get<std::int64_t>();
           const std::vector<sim::ControllerConfig> candidates =
               r.get_vector<sim::ControllerConfig>();
           // Enough tasks to fill the SIMD lanes of every thread.
-          const int capacity =
-              evaluator->concurrency() * std::max(1, problem->plant().pack_width());
+          const int capacity = evaluator->concurrency() * std::max(1, set->plant().pack_width());
           Writer req;
           req.put<std::int32_t>(capacity);
           send(0, kRequest, req);
@@ -355,7 +381,7 @@ int Session::serve() {
               std::vector<TaskResult> out;
               std::string error;
               try {
-                out = evaluator->run(*problem, {candidates, tasks, record_every});
+                out = evaluator->run({*set, candidates, tasks, record_every});
               } catch (const std::exception& e) {
                 error = e.what();
               }
@@ -397,7 +423,7 @@ struct MpiEvaluator::Impl {
   tbb::task_arena arena;
   std::vector<int> threads;        // per rank
   std::vector<std::string> host;   // per rank
-  std::uint64_t problem_sent = 0;  // identity of the problem the workers hold
+  std::uint64_t set_sent = 0;      // identity of the simulation set the workers hold
 
   Impl(const Session& s, MpiOptions o)
       : options(o),
@@ -449,8 +475,7 @@ int MpiEvaluator::concurrency() const {
 
 std::vector<int> MpiEvaluator::threads_per_rank() const { return impl_->threads; }
 
-std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
-                                          const SimulationBatch& batch) {
+std::vector<TaskResult> MpiEvaluator::run(const SimulationBatch& batch) {
   Impl& s = *impl_;
   const std::size_t n = batch.tasks.size();
   std::vector<TaskResult> results(n);
@@ -477,12 +502,11 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
   std::vector<int> ranks;
   for (int w = 1; w <= workers; ++w) ranks.push_back(w);
   if (workers > 0) {
-    if (problem.identity() != s.problem_sent) {
-      const std::string text = problem_message(problem);
-      const std::vector<char> bytes(text.begin(), text.end());
-      send_to_ranks(ranks, kProblem, bytes, s.options.rank_timeout, &s.host);
+    if (batch.set.identity() != s.set_sent) {
+      const std::vector<char> bytes = set_message(batch.set);
+      send_to_ranks(ranks, kSet, bytes, s.options.rank_timeout, &s.host);
       bytes_out += bytes.size() * static_cast<std::size_t>(workers);
-      s.problem_sent = problem.identity();
+      s.set_sent = batch.set.identity();
     }
     Writer b;
     b.put<std::int64_t>(batch.record_every);
@@ -493,7 +517,7 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
   }
 
   // Rank 0's own threads take its recorded tasks one at a time, then shared ones a pack at a time.
-  const auto width = static_cast<std::size_t>(std::max(1, problem.plant().pack_width()));
+  const auto width = static_cast<std::size_t>(std::max(1, batch.set.plant().pack_width()));
   std::atomic<bool> local_done{false};
   std::string local_error;  // what escaped rank 0's own simulations (out of memory)
   std::thread compute([&] {
@@ -503,12 +527,12 @@ std::vector<TaskResult> MpiEvaluator::run(const TuningProblem& problem,
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots, 1),
                           [&](const tbb::blocked_range<std::size_t>&) {
                             for (std::size_t i; (i = next_local++) < local.size();)
-                              results[local[i]] = run_task(problem, batch, local[i]);
+                              results[local[i]] = run_task(batch, local[i]);
                             // Shared tasks a SIMD pack at a time.
                             for (;;) {
                               const auto [first, count] = take(width);
                               if (count == 0) break;
-                              run_pack(problem, batch,
+                              run_pack(batch,
                                        std::span<const std::size_t>(shared).subspan(first, count),
                                        results);
                             }

@@ -17,16 +17,15 @@ TbbEvaluator::~TbbEvaluator() = default;
 
 int TbbEvaluator::concurrency() const { return arena_->arena.max_concurrency(); }
 
-std::vector<TaskResult> TbbEvaluator::run(const TuningProblem& problem,
-                                          const SimulationBatch& batch) {
+std::vector<TaskResult> TbbEvaluator::run(const SimulationBatch& batch) {
   std::vector<TaskResult> results(batch.tasks.size());
-  const std::vector<std::vector<std::size_t>> packs = plan_packs(problem, batch, concurrency());
+  const std::vector<std::vector<std::size_t>> packs = plan_packs(batch, concurrency());
   // Grain 1: one pack is up to W whole simulations in SIMD lanes.
   arena_->arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, packs.size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                         for (std::size_t p = r.begin(); p != r.end(); ++p)
-                          run_pack(problem, batch, packs[p], results);
+                          run_pack(batch, packs[p], results);
                       });
   });
   return results;

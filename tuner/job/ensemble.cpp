@@ -83,23 +83,19 @@ const sim::Scenario& ensemble_base(const Job& job) {
   throw InputError("job " + job.name, "/ensemble/base", "no scenario is named \"" + base + "\"");
 }
 
-sim::Scenario scaled_base(const Job& job, const std::array<double, 3>& inertia_factor,
+sim::Scenario scaled_base(const Job& job, const ParameterFactors& parameter_factors,
                           const std::vector<double>& state_factor, double disturbance_factor) {
   const sim::Scenario& base = ensemble_base(job);
   const sim::PlantKind& kind = *sim::find_plant_kind(job.plant.model);
   sim::Scenario s = base;
-  // 3 inertia factors (axes 1-3), onto the base's true inertia or the plant's.
-  if (const std::size_t at = kind.offset("inertia"); at != std::string_view::npos) {
-    std::vector<double> inertia = base.inertia;
-    if (inertia.empty())
-      for (std::size_t i = 0; i < kind.parameters.size(); ++i)
-        if (kind.parameters[i].name == "inertia")
-          inertia.assign(
-              job.plant.values.begin() + static_cast<long>(at),
-              job.plant.values.begin() + static_cast<long>(at + kind.parameters[i].size()));
-    for (std::size_t i = 0; i < inertia.size() && i < inertia_factor.size(); ++i)
-      inertia[i] *= inertia_factor[i];
-    s.inertia = std::move(inertia);
+  // Every uncertain parameter's true values, the base's or the plant's, by its factors.
+  for (const sim::UncertainParameter& u : kind.uncertain) {
+    const std::vector<double>* given = base.true_value(u.parameter);
+    std::vector<double> values =
+        given ? *given : kind.parameter_values(job.plant.values, u.parameter);
+    for (const auto& [parameter, factors] : parameter_factors)
+      if (parameter == u.parameter) sim::PlantKind::scale(u, values, factors);
+    s.set_true_value(u.parameter, std::move(values));
   }
   for (std::size_t i = 0; i < s.initial_state.size() && i < state_factor.size(); ++i)
     s.initial_state[i] *= state_factor[i];
@@ -117,15 +113,23 @@ sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k
     return d ? d->draw(u) : 1.0;
   };
 
-  // The draws in the order SPEC §12 fixes: 3 inertia factors, then six initial-state factors
-  // whatever the plant (a plant with fewer than six components uses the first 2n, one with more
-  // would draw one per component), then one factor on every disturbance amplitude.
-  std::array<double, 3> inertia_factor{};
-  for (double& f : inertia_factor) f = factor(e.inertia_scale);
+  // The draws in the order SPEC §12 fixes: 3 factors on the plant's uncertain parameters (its
+  // inertia's axes), which each scaled parameter maps through its own distribution, then six
+  // initial-state factors whatever the plant (a plant with fewer than six components uses the
+  // first 2n, one with more would draw one per component), then one factor on every disturbance
+  // amplitude.
+  std::array<double, kParameterFactors> parameter_u{};
+  for (double& u : parameter_u) u = r.uniform();  // consumed whether or not a scale is given
+  ParameterFactors parameter_factors;
+  for (const ParameterScale& p : e.parameter_scales) {
+    std::array<double, kParameterFactors> f{};
+    for (std::size_t i = 0; i < f.size(); ++i) f[i] = p.distribution.draw(parameter_u[i]);
+    parameter_factors.emplace_back(p.parameter, f);
+  }
   std::vector<double> state_factor(std::max<std::size_t>(6, base.initial_state.size()));
   for (double& f : state_factor) f = factor(e.initial_state_scale);
   const double d = factor(e.disturbance_scale);
-  sim::Scenario s = scaled_base(job, inertia_factor, state_factor, d);
+  sim::Scenario s = scaled_base(job, parameter_factors, state_factor, d);
   s.name = base.name + "-" + std::to_string(k);
 
   if (!e.faults) return s;
@@ -192,8 +196,9 @@ const char* kind_name(Distribution::Kind k) {
 // A number (constant), {"uniform": [a, b]} or {"log_uniform": [a, b]}.
 class DistributionShape final : public schema::Shape<Distribution> {
  public:
-  explicit DistributionShape(std::string doc, bool positive = false)
-      : doc_(std::move(doc)), positive_(positive) {}
+  // `positive`: what the distribution scales when it must be > 0 ("" = any sign).
+  explicit DistributionShape(std::string doc, std::string positive = "")
+      : doc_(std::move(doc)), positive_(std::move(positive)) {}
 
   void read(const json& j, const std::string& path, Distribution& out,
             Errors& errs) const override {
@@ -222,7 +227,7 @@ class DistributionShape final : public schema::Shape<Distribution> {
     if (d.kind == Distribution::Kind::constant) {
       if (!std::isfinite(d.a))
         errs.push_back({path, "must be a finite number"});
-      else if (positive_ && !(d.a > 0))
+      else if (!positive_.empty() && !(d.a > 0))
         errs.push_back({path, "must be > 0 (got " + json_io::number_text(d.a) + ")"});
       return;
     }
@@ -236,12 +241,12 @@ class DistributionShape final : public schema::Shape<Distribution> {
                              json_io::number_text(d.b)});
     else if (!std::isfinite(d.b - d.a))  // a draw is a + (b - a) u (SPEC §12)
       errs.push_back({p, "is too wide: b - a is beyond the range of a double"});
-    else if ((d.kind == Distribution::Kind::log_uniform || positive_) && !(d.a > 0))
-      errs.push_back(
-          {p + "/0", std::string("must be > 0 for ") +
-                         (d.kind == Distribution::Kind::log_uniform ? "a log-uniform distribution"
-                                                                    : "a scale of the inertia") +
-                         " (got " + json_io::number_text(d.a) + ")"});
+    else if ((d.kind == Distribution::Kind::log_uniform || !positive_.empty()) && !(d.a > 0))
+      errs.push_back({p + "/0", "must be > 0 for " +
+                                    (d.kind == Distribution::Kind::log_uniform
+                                         ? std::string("a log-uniform distribution")
+                                         : "a scale of " + positive_) +
+                                    " (got " + json_io::number_text(d.a) + ")"});
   }
   json write(const Distribution& d) const override {
     if (d.kind == Distribution::Kind::constant) return d.a;
@@ -264,7 +269,7 @@ class DistributionShape final : public schema::Shape<Distribution> {
 
  private:
   std::string doc_;
-  bool positive_;
+  std::string positive_;
 };
 
 // name → weight over a canonical list of names.
@@ -456,16 +461,41 @@ std::shared_ptr<const Obj<EnsembleConfig>> make_ensemble_shape() {
             }});
   o->uint64("seed", &E::seed, "seed of the members' random streams");
   o->string("base", &E::base, "the scenario members copy (default the first)");
-  for (const auto& [name, member, positive, doc] :
-       {std::tuple{"inertia_scale", &E::inertia_scale, true,
-                   "factor on each axis's true inertia (3 draws)"},
-        std::tuple{"initial_state_scale", &E::initial_state_scale, false,
+  // One scale per uncertain parameter of the registered plants (the job's plant must declare it,
+  // job.cpp's validate_ensemble), on the first 3 draws of a member's stream.
+  for (const job_detail::UncertainKey& k : job_detail::uncertain_keys()) {
+    const std::string key = k.parameter + "_scale";
+    const std::string parameter = k.parameter;
+    auto shape = std::make_shared<const DistributionShape>(
+        "factor on " + k.meaning + ", of the true " + k.parameter + " (" + k.models +
+            "; 3 draws)",
+        k.parameter);
+    o->field({key, false,
+              [parameter, shape](const json& v, const std::string& path, E& e, Errors& errs) {
+                Distribution d{};
+                shape->read(v, path, d, errs);
+                std::erase_if(e.parameter_scales,
+                              [&](const ParameterScale& p) { return p.parameter == parameter; });
+                e.parameter_scales.push_back({parameter, d});
+              },
+              [parameter, shape](const E& e, const std::string& path, Errors& errs) {
+                if (const Distribution* d = e.parameter_scale(parameter))
+                  shape->validate(*d, path, errs);
+              },
+              [parameter, key, shape](const E& e, json& obj) {
+                if (const Distribution* d = e.parameter_scale(parameter))
+                  obj[key] = shape->write(*d);
+              },
+              [shape] { return shape->json_schema(); }});
+  }
+  for (const auto& [name, member, doc] :
+       {std::tuple{"initial_state_scale", &E::initial_state_scale,
                    "factor on each initial-state component (2n draws)"},
-        std::tuple{"disturbance_scale", &E::disturbance_scale, false,
+        std::tuple{"disturbance_scale", &E::disturbance_scale,
                    "factor on every disturbance amplitude (1 draw)"}})
     o->optional_object(name, member,
                        std::shared_ptr<const schema::Shape<Distribution>>(
-                           std::make_shared<DistributionShape>(doc, positive)),
+                           std::make_shared<DistributionShape>(doc)),
                        "");
   o->optional_object("faults", &E::faults,
                      std::shared_ptr<const schema::Shape<FaultDistribution>>(make_faults_shape()),
@@ -478,7 +508,35 @@ std::shared_ptr<const Obj<EnsembleConfig>> make_ensemble_shape() {
 
 }  // namespace
 
+const Distribution* EnsembleConfig::parameter_scale(std::string_view parameter) const {
+  for (const ParameterScale& p : parameter_scales)
+    if (p.parameter == parameter) return &p.distribution;
+  return nullptr;
+}
+
 namespace job_detail {
+
+const std::vector<UncertainKey>& uncertain_keys() {
+  static const std::vector<UncertainKey> keys = [] {
+    std::vector<UncertainKey> out;
+    for (const sim::PlantKind& kind : sim::plant_kinds())
+      for (const sim::UncertainParameter& u : kind.uncertain) {
+        const auto known = std::find_if(out.begin(), out.end(), [&](const UncertainKey& k) {
+          return k.parameter == u.parameter;
+        });
+        if (known != out.end()) {
+          known->models += ", " + kind.model;
+          continue;
+        }
+        const sim::PlantParameter* declared = nullptr;
+        for (const sim::PlantParameter& p : kind.parameters)
+          if (p.name == u.parameter) declared = &p;
+        out.push_back({u.parameter, kind.model, u.meaning, declared});
+      }
+    return out;
+  }();
+  return keys;
+}
 
 std::shared_ptr<const schema::Shape<EnsembleConfig>> ensemble_shape() {
   static const std::shared_ptr<const Obj<EnsembleConfig>> shape = make_ensemble_shape();

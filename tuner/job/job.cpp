@@ -5,6 +5,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <tuple>
 
 #include "ftc/runtime/controller_json.hpp"
 #include "ftc/runtime/json_reader.hpp"
@@ -140,29 +141,43 @@ Ptr<sim::Scenario> make_scenario_shape() {
   o->array("faults", &S::faults, fault_shape(), "actuator faults; they add up");
   o->optional_number("saturation", &S::saturation, S::kSaturationRange,
                      "|u_j| <= saturation after the faults; absent: none", false);
-  o->field(
-      {"inertia", false,
-       [](const json& v, const std::string& path, S& s, Errors& e) {
-         if (!v.is_array()) {
-           e.push_back({path, "expected an array of numbers, got " + json_io::json_type_name(v)});
-           return;
-         }
-         std::vector<double> x(v.size());
-         for (std::size_t i = 0; i < v.size(); ++i)
-           if (!schema::detail::read_number(v[i], path + "/" + std::to_string(i), x[i], e)) return;
-         s.inertia = std::move(x);
-       },
-       [](const S&, const std::string&, Errors&) {},  // against the plant: job rule
-       [](const S& s, json& obj) {
-         if (!s.inertia.empty()) obj["inertia"] = s.inertia;
-       },
-       [] {
-         return json{{"type", "array"},
-                     {"items", {{"type", "number"}, {"exclusiveMinimum", 0}}},
-                     {"description",
-                      "the true inertia of the simulated plant (kg·m²); the controller keeps "
-                      "the job's plant as its model. Absent: the plant's"}};
-       }});
+  // Model mismatch: the true values of each parameter a registered plant declares uncertain,
+  // under the parameter's name (the job's plant must declare it: validate_job).
+  for (const job_detail::UncertainKey& k : job_detail::uncertain_keys()) {
+    const std::string key = k.parameter;
+    o->field(
+        {key, false,
+         [key](const json& v, const std::string& path, S& s, Errors& e) {
+           if (!v.is_array()) {
+             e.push_back({path, "expected an array of numbers, got " + json_io::json_type_name(v)});
+             return;
+           }
+           std::vector<double> x(v.size());
+           for (std::size_t i = 0; i < v.size(); ++i)
+             if (!schema::detail::read_number(v[i], path + "/" + std::to_string(i), x[i], e))
+               return;
+           s.set_true_value(key, std::move(x));
+         },
+         [](const S&, const std::string&, Errors&) {},  // against the plant: job rule
+         [key](const S& s, json& obj) {
+           if (const std::vector<double>* v = s.true_value(key)) obj[key] = *v;
+         },
+         [k] {
+           json item = {{"type", "number"}};
+           std::string unit;
+           if (k.declared) {
+             schema::annotate(k.declared->range, item);
+             if (!k.declared->unit.empty()) unit = " (" + k.declared->unit + ")";
+           }
+           return json{{"type", "array"},
+                       {"items", item},
+                       {"description", "the true " + k.parameter + " of the simulated plant" +
+                                           unit + ", for a plant that declares it uncertain (" +
+                                           k.models +
+                                           "); the controller keeps the job's plant as its "
+                                           "model. Absent: the plant's"}};
+         }});
+  }
   return o;
 }
 
@@ -563,29 +578,25 @@ void validate_scale_ends(const Job& job, const sim::PlantKind& kind, Errors& err
   if (base == job.scenarios.end() || !base->validate("", kind.axes, kind.actuators).empty())
     return;  // its own errors say what is wrong
   const std::vector<double> ones(std::max<std::size_t>(6, base->initial_state.size()), 1.0);
-  const std::pair<const char*, const std::optional<Distribution>*> scales[] = {
-      {"inertia_scale", &e.inertia_scale},
-      {"initial_state_scale", &e.initial_state_scale},
-      {"disturbance_scale", &e.disturbance_scale}};
-  for (const auto& [name, scale] : scales) {
-    if (!*scale) continue;
-    for (const double f : {(*scale)->a, (*scale)->b}) {
-      std::array<double, 3> inertia{1.0, 1.0, 1.0};
+  // Each scale: a parameter's (empty for the others), its key and its distribution.
+  std::vector<std::tuple<std::string, std::string, const Distribution*>> scales;
+  for (const ParameterScale& p : e.parameter_scales)
+    if (kind.find_uncertain(p.parameter))  // else validate_ensemble's error
+      scales.emplace_back(p.parameter, p.parameter + "_scale", &p.distribution);
+  if (e.initial_state_scale)
+    scales.emplace_back("", "initial_state_scale", &*e.initial_state_scale);
+  if (e.disturbance_scale) scales.emplace_back("", "disturbance_scale", &*e.disturbance_scale);
+  for (const auto& [parameter, name, scale] : scales) {
+    for (const double f : {scale->a, scale->b}) {
+      ParameterFactors parameter_factors;
       std::vector<double> state = ones;
       double disturbance = 1.0;
-      if (scale == &e.inertia_scale) inertia.fill(f);
-      if (scale == &e.initial_state_scale) state.assign(state.size(), f);
-      if (scale == &e.disturbance_scale) disturbance = f;
-      const sim::Scenario m = scaled_base(job, inertia, state, disturbance);
+      if (!parameter.empty()) parameter_factors.push_back({parameter, {f, f, f}});
+      if (name == "initial_state_scale") state.assign(state.size(), f);
+      if (name == "disturbance_scale") disturbance = f;
+      const sim::Scenario m = scaled_base(job, parameter_factors, state, disturbance);
       Errors wrong = m.validate("", kind.axes, kind.actuators);
-      if (!m.inertia.empty()) {
-        try {
-          append(wrong,
-                 kind.validate(kind.with_inertia(job.plant.values, m.inertia, "/inertia"), ""));
-        } catch (const InputError& ie) {
-          append(wrong, ie.errors());
-        }
-      }
+      append(wrong, kind.check_true_values(job.plant.values, m.true_values, ""));
       if (!wrong.empty()) {
         errs.push_back({"/ensemble/" + std::string(name),
                         "a member scaled by " + json_io::number_text(f) + " would have " +
@@ -607,8 +618,14 @@ void validate_ensemble(const Job& job, const sim::PlantKind& kind, Errors& errs)
                         n += (n.empty() ? "" : ", ") + s.name;
                       return n;
                     }() + ")"});
-  if (e.inertia_scale && kind.offset("inertia") == std::string_view::npos)
-    errs.push_back({"/ensemble/inertia_scale", "the " + kind.model + " plant has no inertia"});
+  for (const ParameterScale& p : e.parameter_scales)
+    if (!kind.find_uncertain(p.parameter))
+      errs.push_back({"/ensemble/" + p.parameter + "_scale",
+                      kind.uncertain.empty()
+                          ? "the " + kind.model + " plant declares no uncertain parameters to scale"
+                          : "the " + kind.model + " plant does not declare " + p.parameter +
+                                " uncertain (its uncertain parameters: " + kind.uncertain_names() +
+                                ")"});
   if (e.faults) {
     const FaultDistribution& f = *e.faults;
     std::set<int> seen;
@@ -757,16 +774,12 @@ void validate_job(const Job& job, Errors& errs) {
                                       "/objective/window", errs);
   validate_goals(job, errs);
 
-  // A scenario's true inertia replaces the plant's "inertia" parameter.
+  // A scenario's true values replace the plant's values of the uncertain parameters they name.
   for (std::size_t i = 0; kind && i < job.scenarios.size(); ++i) {
     const sim::Scenario& s = job.scenarios[i];
-    if (s.inertia.empty()) continue;
-    const std::string p = "/scenarios/" + std::to_string(i) + "/inertia";
-    try {
-      append(errs, kind->validate(kind->with_inertia(job.plant.values, s.inertia, p), ""));
-    } catch (const InputError& e) {
-      append(errs, e.errors());
-    }
+    if (s.true_values.empty()) continue;
+    append(errs, kind->check_true_values(job.plant.values, s.true_values,
+                                         "/scenarios/" + std::to_string(i)));
   }
   if (job.ensemble && kind) validate_ensemble(job, *kind, errs);
 
@@ -1166,5 +1179,13 @@ json to_json(const PlantConfig& p) { return runtime::plant_shape()->write(p); }
 json to_json(const ObjectiveConfig& o) { return objective_shape()->write(o); }
 json to_json(const GoalConfig& g) { return goal_shape()->write(g); }
 json to_json(const sim::Scenario& s) { return scenario_shape()->write(s); }
+
+sim::Scenario scenario_from_json(const json& j, const std::string& source) {
+  sim::Scenario s;
+  Errors errs;
+  schema::read(*scenario_shape(), j, "", s, errs);
+  throw_if_errors(source, std::move(errs));
+  return s;
+}
 
 }  // namespace ftc::tune

@@ -21,19 +21,37 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The file this code was linked into: the ftctune executable, or the Python module (where
+// /proc/self/exe would be the interpreter).
+fs::path this_image() {
+  Dl_info info{};
+  if (::dladdr(reinterpret_cast<const void*>(&this_image), &info) == 0 || !info.dli_fname)
+    return {};
+  std::error_code ec;
+  fs::path p = fs::canonical(info.dli_fname, ec);
+  if (ec) {
+    // dladdr names the main program by argv[0], which may be relative to a changed directory.
+    p = fs::read_symlink("/proc/self/exe", ec);
+    if (ec) return {};
+  }
+  return p;
+}
+
 // Where the module may be: $FTCTUNE_PLUGIN_DIR, beside an installed binary
-// (<prefix>/<bindir>/../<libdir>/ftctune), and, for a binary inside the build tree, that tree.
-std::vector<fs::path> candidates() {
+// (<prefix>/<bindir>/../<libdir>/ftctune) or an installed Python module
+// (<prefix>/<python dir>/ftctune/../../ftctune), and, for a binary inside the build tree, that
+// tree.
+std::vector<fs::path> candidates(const fs::path& image) {
   std::vector<fs::path> dirs;
   if (const char* env = std::getenv("FTCTUNE_PLUGIN_DIR"); env && *env) dirs.emplace_back(env);
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    dirs.push_back(exe.parent_path() / FTC_PLUGIN_DIR_FROM_BIN);
+  if (!image.empty()) {
+    dirs.push_back(image.parent_path() / FTC_PLUGIN_DIR_FROM_BIN);
+    if (const std::string py = FTC_PLUGIN_DIR_FROM_PYTHON; !py.empty())
+      dirs.push_back(image.parent_path() / py);
     // The build tree only for a binary that lives in it: an installed copy must not pick up a
     // module of whatever the build tree holds today.
     const std::string tree = FTC_BUILD_TREE;
-    if (exe.string().rfind(tree + "/", 0) == 0) dirs.emplace_back(FTC_PLUGIN_BUILD_DIR);
+    if (image.string().rfind(tree + "/", 0) == 0) dirs.emplace_back(FTC_PLUGIN_BUILD_DIR);
   }
   std::vector<fs::path> files;
   for (const fs::path& d : dirs) files.push_back(d / pagmo_plugin::kModuleName);
@@ -46,7 +64,15 @@ const pagmo_plugin::Api& api() {
   static std::once_flag once;
   std::call_once(once, [] {
     std::string tried;
-    for (const fs::path& f : candidates()) {
+    const fs::path image = this_image();
+    // The module takes the tuner's symbols from the global scope: an executable exports them
+    // (--export-dynamic), but a shared object opened with RTLD_LOCAL, as Python opens its
+    // extension modules, keeps them to itself until it is made global (never closed: the module
+    // stays as long as the process).
+    std::error_code exe_error;
+    if (!image.empty() && image != fs::read_symlink("/proc/self/exe", exe_error))
+      ::dlopen(image.c_str(), RTLD_NOW | RTLD_NOLOAD | RTLD_GLOBAL);
+    for (const fs::path& f : candidates(image)) {
       std::error_code ec;
       if (!fs::exists(f, ec)) {
         tried += (tried.empty() ? "" : ", ") + f.string();

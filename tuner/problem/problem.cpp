@@ -1,10 +1,10 @@
 #include "ftc/tune/problem/problem.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "ftc/runtime/json_reader.hpp"
@@ -14,9 +14,55 @@
 namespace ftc::tune {
 namespace {
 
-std::uint64_t next_identity() {
-  static std::atomic<std::uint64_t> counter{0};
-  return ++counter;
+bool same_window(const sim::Window& a, const sim::Window& b) {
+  return a.t0 == b.t0 && a.t1 == b.t1;
+}
+
+// The simulation options of a scenario: the objective window, the fault segments (before the
+// first onset, between onsets, after the last) and each goal's own window as extra windows, and
+// the job's metric settings (its metrics block, or a goal's threshold and tail).
+sim::SimulationOptions options_of(const Job& job, const sim::Scenario& s) {
+  sim::SimulationOptions o;
+  o.window = job.objective.window_of(s);
+  if (job.metrics) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    o.metrics.settling_threshold = job.metrics->settling_threshold.value_or(nan);
+    o.metrics.steady_state_tail = job.metrics->steady_state_tail.value_or(nan);
+  }
+  for (const GoalConfig& g : job.goals) {  // validate() made sure no two disagree
+    if (g.threshold) o.metrics.settling_threshold = *g.threshold;
+    if (g.tail) o.metrics.steady_state_tail = *g.tail;
+  }
+  std::vector<double> cuts;
+  for (const sim::Fault& f : s.faults)
+    if (f.onset > 0 && f.onset < s.duration) cuts.push_back(f.onset);
+  std::sort(cuts.begin(), cuts.end());
+  cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+  double start = 0.0;
+  for (double c : cuts) {
+    o.extra_windows.push_back({start, c});
+    start = c;
+  }
+  o.extra_windows.push_back({start, s.duration});
+  // Each goal's window, after the segments, unless it is one of them.
+  for (const GoalConfig& g : job.goals) {
+    if (!windowed(g.metric)) continue;
+    const sim::Window w = g.measure().window_of(s);
+    if (same_window(w, o.window) ||
+        std::any_of(o.extra_windows.begin(), o.extra_windows.end(),
+                    [&](const sim::Window& x) { return same_window(x, w); }))
+      continue;
+    o.extra_windows.push_back(w);
+  }
+  return o;
+}
+
+std::vector<sim::SimulationOptions> options_of(const Job& job,
+                                               const std::vector<sim::Scenario>& scenarios) {
+  std::vector<sim::SimulationOptions> o;
+  o.reserve(scenarios.size());
+  for (const sim::Scenario& s : scenarios) o.push_back(options_of(job, s));
+  return o;
 }
 
 // What the runs make of a job's goals today: the soft goal is the objective, so it must be an
@@ -48,10 +94,6 @@ bool has_limits(const Job& job) {
                      [](const GoalConfig& g) { return g.at_most.has_value(); });
 }
 
-bool same_window(const sim::Window& a, const sim::Window& b) {
-  return a.t0 == b.t0 && a.t1 == b.t1;
-}
-
 }  // namespace
 
 double fitness_of(double objective) {
@@ -71,17 +113,18 @@ TuningProblem::TuningProblem(Job job)
           job.scenarios.size()) {}
 
 TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed)
-    : job_(std::make_shared<const Job>(std::move(job))),
-      listed_(listed),
-      identity_(next_identity()) {
+    : job_(std::make_shared<const Job>(std::move(job))), listed_(listed) {
   throw_if_errors("job " + job_->name, job_->validate());
   throw_if_errors("job " + job_->name, unsupported_goals(*job_));
-  plant_ = sim::make_plant(job_->plant);
-  scenarios_ = std::make_shared<const std::vector<sim::Scenario>>(std::move(scenarios));
+  std::vector<sim::SimulationOptions> options = options_of(*job_, scenarios);
+  set_ =
+      std::make_shared<const SimulationSet>(job_->plant, std::move(scenarios), std::move(options));
+  const sim::AnyPlant& plant = set_->plant();
   const bool include = job_->ensemble && job_->ensemble->unrecoverable == Unrecoverable::include;
-  for (const sim::Scenario& sc : *scenarios_) {
-    throw_if_errors("scenario " + sc.name, sc.validate("", plant_->axes(), plant_->actuators()));
-    recoverable_.push_back(plant_->recoverable(sc));
+  for (std::size_t i = 0; i < set_->size(); ++i) {
+    const sim::Scenario& sc = set_->scenario(i);
+    throw_if_errors("scenario " + sc.name, sc.validate("", plant.axes(), plant.actuators()));
+    recoverable_.push_back(plant.recoverable(sc));
     counted_.push_back(recoverable_.back() || include);
   }
   if (!job_->tuning) return;
@@ -129,48 +172,19 @@ sim::ControllerConfig TuningProblem::controller_with(std::span<const double> x) 
 
 sim::SimulationOptions TuningProblem::simulation_options(std::size_t scenario,
                                                          std::int64_t record_every) const {
-  const sim::Scenario& s = scenarios_->at(scenario);
-  sim::SimulationOptions o;
-  o.window = job_->objective.window_of(s);
+  if (scenario >= set_->size())
+    throw std::out_of_range("scenario " + std::to_string(scenario) + " of " +
+                            std::to_string(set_->size()));
+  sim::SimulationOptions o = set_->options(scenario);
   o.record_every = record_every;
-  if (job_->metrics) {
-    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-    o.metrics.settling_threshold = job_->metrics->settling_threshold.value_or(nan);
-    o.metrics.steady_state_tail = job_->metrics->steady_state_tail.value_or(nan);
-  }
-  for (const GoalConfig& g : job_->goals) {  // validate() made sure no two disagree
-    if (g.threshold) o.metrics.settling_threshold = *g.threshold;
-    if (g.tail) o.metrics.steady_state_tail = *g.tail;
-  }
-  std::vector<double> cuts;
-  for (const sim::Fault& f : s.faults)
-    if (f.onset > 0 && f.onset < s.duration) cuts.push_back(f.onset);
-  std::sort(cuts.begin(), cuts.end());
-  cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
-  double start = 0.0;
-  for (double c : cuts) {
-    o.extra_windows.push_back({start, c});
-    start = c;
-  }
-  o.extra_windows.push_back({start, s.duration});
-  // Each goal's window, after the segments, unless it is one of them.
-  for (const GoalConfig& g : job_->goals) {
-    if (!windowed(g.metric)) continue;
-    const sim::Window w = g.measure().window_of(s);
-    if (same_window(w, o.window) ||
-        std::any_of(o.extra_windows.begin(), o.extra_windows.end(),
-                    [&](const sim::Window& x) { return same_window(x, w); }))
-      continue;
-    o.extra_windows.push_back(w);
-  }
   return o;
 }
 
 sim::SimulationResult TuningProblem::simulate(const sim::ControllerConfig& controller,
                                               std::size_t scenario,
                                               std::int64_t record_every) const {
-  return plant_->simulate(controller, scenarios_->at(scenario),
-                          simulation_options(scenario, record_every));
+  const sim::SimulationOptions options = simulation_options(scenario, record_every);
+  return plant().simulate(controller, set_->scenario(scenario), options);
 }
 
 std::vector<SimulationTask> TuningProblem::tasks(std::size_t candidates, bool record_listed) const {
@@ -284,12 +298,18 @@ Summary TuningProblem::summarize(const Evaluation& e) const {
 
 TuningProblem TuningProblem::perturbed(std::uint64_t seed, std::uint64_t k, double eps) const {
   TuningProblem p = *this;
-  auto scenarios = std::make_shared<std::vector<sim::Scenario>>(*scenarios_);
+  std::vector<sim::Scenario> scenarios;
+  std::vector<sim::SimulationOptions> options;
+  scenarios.reserve(set_->size());
+  options.reserve(set_->size());
   SplitMix64 r = SplitMix64::member(seed, k);
-  for (sim::Scenario& s : *scenarios)
-    for (double& x : s.initial_state) x *= 1.0 + eps * (2.0 * r.uniform() - 1.0);
-  p.scenarios_ = std::move(scenarios);
-  p.identity_ = next_identity();
+  for (std::size_t i = 0; i < set_->size(); ++i) {
+    scenarios.push_back(set_->scenario(i));
+    options.push_back(set_->options(i));  // the initial state moves no window
+    for (double& x : scenarios.back().initial_state) x *= 1.0 + eps * (2.0 * r.uniform() - 1.0);
+  }
+  p.set_ = std::make_shared<const SimulationSet>(
+      set_->with_scenarios(std::move(scenarios), std::move(options)));
   return p;
 }
 
@@ -297,7 +317,7 @@ std::vector<CandidateOutcome> TuningProblem::evaluate(
     std::span<const sim::ControllerConfig> controllers, BatchEvaluator& evaluator,
     std::int64_t record_every) const {
   const std::vector<SimulationTask> t = tasks(controllers.size(), record_every > 0);
-  std::vector<TaskResult> results = evaluator.run(*this, {controllers, t, record_every});
+  std::vector<TaskResult> results = evaluator.run({*set_, controllers, t, record_every});
   const std::size_t S = scenarios();
   std::vector<CandidateOutcome> out(controllers.size());
   for (std::size_t i = 0; i < controllers.size(); ++i) {

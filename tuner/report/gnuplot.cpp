@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "ftc/sim/controllers.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "io/text.hpp"
 
@@ -153,13 +154,8 @@ std::string line_styles(int count) {
 
 int controller_style(const std::string& type, bool tuned, int repeat) {
   if (tuned) return 1;
-  int base = 2;  // pi_fosmc and anything unknown
-  if (type == "fosmc")
-    base = 3;
-  else if (type == "nftsmc")
-    base = 4;
-  else if (type == "adaptive_neural_pi_fosmc")
-    base = 5;
+  const sim::ControllerInfo* c = sim::find_controller(type);
+  const int base = c ? c->plot_style : 2;  // anything unknown as PI-FOSMC
   return repeat == 0 ? base : std::min(kControllerStyles, base + 5);
 }
 

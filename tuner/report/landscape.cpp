@@ -33,6 +33,33 @@ std::string double_quoted(const std::string& text) {
   return s + "\"";
 }
 
+// The unit of a tunable controller field, as the controllers' headers give them (laws.hpp):
+// X1 in rad, X2 in rad/s, the surfaces sF and sPI in rad/s² (NFTSMC's s in rad), K in rad/s³.
+// The plants' states are angles in rad for the spacecraft, the arm and the hexarotor alike.
+// Gains that multiply a fractional power carry its exponent.
+std::string parameter_unit(const std::string& name, sim::ControllerType type) {
+  if (name == "Kp" || name == "alpha" || name == "alpha1" || name == "alpha2")
+    return "dimensionless";
+  if (name == "Ki") return "1/s";
+  if (name == "switching_gain")
+    return type == sim::ControllerType::nftsmc ? "rad/s²" : "rad/s³";
+  if (name == "zeta" || name == "ka0") return "rad/s³";
+  if (name == "theta") return type == sim::ControllerType::nftsmc ? "1/rad" : "s²/rad";
+  if (name == "c1") return "rad^(1−α1)/s²";
+  if (name == "c2") return "rad^(1−α2)·s^(α2−2)";
+  if (name == "sigma1") return "rad^(1−α)";
+  if (name == "sigma2") return "rad^(1−p/q)·s^(p/q)";
+  if (name == "lambda") return "s²";
+  if (name == "weight_rate") return "1/s²";
+  if (name == "width") return "rad and rad/s, as the state";
+  return "";
+}
+
+// The unit of a metric's value over a window (metrics.hpp).
+const char* metric_unit(sim::Metric m) {
+  return m == sim::Metric::ise ? "rad²·s" : m == sim::Metric::iae ? "rad·s" : "rad·s²";
+}
+
 }  // namespace
 
 LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
@@ -150,8 +177,14 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
     const double pad = (hi - lo) / (2.0 * (n - 1));
     return detail::format_number(lo - pad, "%.9g") + ":" + detail::format_number(hi + pad, "%.9g");
   };
+  // Each axis names its unit (a log-scale parameter: the unit of the value under the log).
   const auto label = [&](int k) {
-    return bounds[k].scale == Scale::log ? "log10(" + params[k] + ")" : params[k];
+    const std::string unit = parameter_unit(params[k], job.controller.type);
+    const std::string with_unit =
+        unit.empty() ? params[k]
+        : unit == "dimensionless" ? params[k] + " (dimensionless)"
+                                  : params[k] + " [" + unit + "]";
+    return bounds[k].scale == Scale::log ? "log10 of " + with_unit : with_unit;
   };
   // Coloured by the relative excess over the best point, objective/min − 1, on a log scale: a
   // landscape whose objective spans 0.2 % is then as readable as one that spans decades. The
@@ -180,7 +213,8 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
         (fixed_text.empty() ? "" : ", ") + name + " = " + detail::format_number(value, "%.5g");
   const std::string title =
       objective_label(job_in) + " of " + job.name + " over " + params[0] + " and " + params[1] +
-      "\nlowest on the grid " + detail::format_number(r.best_objective, "%.7g") + " at " +
+      "\nlowest on the grid " + detail::format_number(r.best_objective, "%.7g") + " " +
+      metric_unit(job.objective.metric) + " at " +
       params[0] + " = " + detail::format_number(r.best[0], "%.5g") + ", " + params[1] + " = " +
       detail::format_number(r.best[1], "%.5g") +
       (fixed_text.empty() ? std::string()
@@ -193,7 +227,7 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
            floor_excess, most_excess,
            have_noise ? "≤ noise floor " + detail::format_number(options.noise_floor, "%.2g") : "")
     << "set cblabel "
-    << plot::gp(metric + " / lowest " + metric + " − 1 (log scale; lower is better" +
+    << plot::gp(metric + " / lowest " + metric + " − 1, dimensionless (log scale; lower is better" +
                 (have_noise ? "; within the noise floor: one colour)" : ")"))
     << " noenhanced offset -3,0\n"
     << plot::palette() << "set xlabel " << plot::gp(label(0)) << " noenhanced\nset ylabel "

@@ -13,6 +13,7 @@
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/fault_fields.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "io/text.hpp"
 
@@ -257,6 +258,8 @@ void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
         row[name] = json::array();
         for (double p : v) row[name].push_back(json_number(p));
       }
+      // With the member's faults as fields (drawn again rather than kept: flat memory).
+      row["faults"] = fault_fields(scenario_at(r.job, r.seed, static_cast<std::int64_t>(i)).faults);
       out << (i ? ",\n      " : "\n      ") << row.dump();
     }
     out << "\n    ]}";
@@ -267,9 +270,11 @@ void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
 
 void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
   Buffered out(sink);
-  // The record's fields in table order; a fault field's cell holds one value per fault onset,
+  // The faults in words, then as fields (fault<k>_actuator, _kind, ...: fault_fields.hpp), then
+  // the record's fields in table order; a fault field's cell holds one value per fault onset,
   // separated by ';' (empty without faults).
-  out << "controller,scenario,faults,recoverable,objective";
+  const std::size_t faults_n = max_faults(r.job);
+  out << "controller,scenario,faults" << fault_columns_header(faults_n) << ",recoverable,objective";
   for (const sim::MetricField& f : sim::kMetricFields) out << "," << f.name;
   out << ",diverged\n";
   for (const EvaluatedController& c : r.controllers) {
@@ -277,10 +282,11 @@ void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
     for (std::size_t i = 0; i < c.members.size(); ++i) {
       const MemberResult& m = c.members[i];
       // Members are drawn again rather than kept: memory stays flat in the member count.
-      const std::string faults =
-          csv_field(faults_summary(scenario_at(r.job, r.seed, static_cast<std::int64_t>(i))));
-      out << label << "," << csv_field(m.scenario) << "," << faults << ","
-          << (m.recoverable ? "1," : "0,") << csv_number(m.objective);
+      const sim::Scenario scenario = scenario_at(r.job, r.seed, static_cast<std::int64_t>(i));
+      const std::string faults = csv_field(faults_summary(scenario));
+      out << label << "," << csv_field(m.scenario) << "," << faults
+          << fault_columns(scenario.faults, faults_n) << "," << (m.recoverable ? "1," : "0,")
+          << csv_number(m.objective);
       for (std::size_t f = 0; f < sim::kMetricFieldCount; ++f) {
         const std::span<const double> v = m.metrics.field(f);
         out << ",";

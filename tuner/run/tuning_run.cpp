@@ -11,22 +11,11 @@
 #include "ftc/sim/elementary.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/sha256.hpp"
+#include "ftc/tune/run/documents.hpp"
 
 namespace ftc::tune {
 
-std::string display_name(sim::ControllerType t) {
-  switch (t) {
-    case sim::ControllerType::nftsmc:
-      return "NFTSMC";
-    case sim::ControllerType::fosmc:
-      return "FOSMC";
-    case sim::ControllerType::pi_fosmc:
-      return "PI-FOSMC";
-    case sim::ControllerType::adaptive_neural_pi_fosmc:
-      return "adaptive neural PI-FOSMC";
-  }
-  return "?";
-}
+std::string display_name(sim::ControllerType t) { return sim::controller_info(t).display_name; }
 
 std::string canonical_job_sha256(const Job& job) { return sha256_hex(to_json(job).dump()); }
 
@@ -251,7 +240,7 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   const ComparedController& tuned = r.best();
   const double best = tuned.outcome.evaluation.objective;
   const double spread = r.noise_floor ? r.noise_floor->relative_spread : 0.0;
-  const std::string metric = sim::to_string(r.job.objective.metric);
+  const std::string label = objective_label(r.job);  // metric, window and aggregate
   char buf[600];
   // "Tuned" is the best of one controller type within the search bounds, not the best
   // controller: a compared controller that scores lower says so.
@@ -264,7 +253,7 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
                   "%s (compared) scores %s = %.4g, %.3g %% below the %s's %.4g (%s the noise "
                   "floor of %.2g %%): the tuned gains are the best found for %s within the "
                   "search bounds, not the best controller of the comparison.",
-                  c.label.c_str(), metric.c_str(), v, 100 * margin, tuned.label.c_str(), best,
+                  c.label.c_str(), label.c_str(), v, 100 * margin, tuned.label.c_str(), best,
                   margin > spread ? "beyond" : "inside", 100 * spread,
                   display_name(r.job.controller.type).c_str());
     out.emplace_back(buf);

@@ -1,6 +1,6 @@
 #pragma once
-// Parameters of the four sliding-mode controllers in one plain struct, with the Table 1 values
-// of the paper as defaults. Which fields a controller type uses, their valid ranges and whether
+// Parameters of the sliding-mode controllers (the table of controllers.hpp) in one plain struct,
+// with the Table 1 values of the paper as defaults. Which fields a controller type uses, their valid ranges and whether
 // they can be tuned is described by a field table (controller_fields()), which the job loader,
 // the tuner and the error messages all share, so a field is defined exactly once.
 #include <array>
@@ -12,18 +12,11 @@
 #include <string_view>
 #include <vector>
 
+#include "ftc/sim/controllers.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/range.hpp"
 
 namespace ftc::sim {
-
-enum class ControllerType : std::uint8_t { nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc };
-
-const char* to_string(ControllerType t);
-std::optional<ControllerType> controller_type_from_string(std::string_view s);
-inline constexpr std::array<ControllerType, 4> kAllControllerTypes{
-    ControllerType::nftsmc, ControllerType::fosmc, ControllerType::pi_fosmc,
-    ControllerType::adaptive_neural_pi_fosmc};
 
 struct ControllerConfig {
   ControllerType type = ControllerType::pi_fosmc;

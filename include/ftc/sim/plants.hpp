@@ -35,6 +35,23 @@ struct PlantParameter {
   std::size_t size() const { return defaults.size(); }
 };
 
+// How an ensemble's factors act on an uncertain parameter's values.
+enum class Scaling : std::uint8_t {
+  elementwise,  // value i times factor i (a diagonal inertia: one factor per axis)
+};
+
+// A parameter a plant declares uncertain, in its own PlantKind. A scenario may give the
+// simulated plant's true values of it under the parameter's name (model mismatch: the controller
+// keeps the job's values as its model), and an ensemble scales it member by member under the
+// key `<parameter>_scale`. No other parameter can be given either way.
+struct UncertainParameter {
+  std::string parameter;  // the name of one of the kind's PlantParameters
+  std::string meaning;    // what the scale acts on, in words ("each axis's principal moment")
+  Scaling scaling = Scaling::elementwise;
+  // At most this many values: the ensemble draws that many factors (SPEC §12's 3).
+  static constexpr std::size_t kMaxFactors = 3;
+};
+
 // A plant as a file gives it: its model name and the values of its parameters, flattened in
 // the order of its PlantKind's parameters.
 struct PlantSpec {
@@ -57,6 +74,7 @@ struct PlantKind {
   int axes = 0;       // n
   int actuators = 0;  // m
   std::vector<PlantParameter> parameters;
+  std::vector<UncertainParameter> uncertain;  // of `parameters`; none: no mismatch, no scaling
   std::vector<double> default_initial_state;  // 2n values, for scenarios that give none
   // For figures and tables: what X1 and X2 are, per axis, and their units.
   std::string positions = "positions";  // "attitude angles"
@@ -74,10 +92,27 @@ struct PlantKind {
   // Every value out of its parameter's range, named `path`/<parameter>[/<index>].
   std::vector<FieldError> validate(const std::vector<double>& values,
                                    const std::string& path) const;
-  // The values with a scenario's true inertia put in place of the "inertia" parameter; checks
-  // that the plant has one of that size, naming `path` (the scenario's inertia) otherwise.
-  std::vector<double> with_inertia(std::vector<double> values, const std::vector<double>& inertia,
-                                   const std::string& path) const;
+  // The declaration of an uncertain parameter; null when `parameter` is not one.
+  const UncertainParameter* find_uncertain(std::string_view parameter) const;
+  // The names of the uncertain parameters, comma-separated, or "none".
+  std::string uncertain_names() const;
+  // The values of one parameter (which must exist).
+  std::vector<double> parameter_values(const std::vector<double>& values,
+                                       std::string_view parameter) const;
+  // The values with a scenario's true values put in place of the parameters they name; checks
+  // that each is an uncertain parameter of this plant with the right number of values, naming
+  // `path`/<parameter> otherwise.
+  std::vector<double> with_true_values(std::vector<double> values,
+                                       const std::vector<TrueValue>& truth,
+                                       const std::string& path) const;
+  // Every error of a scenario's true values against this plant (with_true_values' and the
+  // ranges of the values it gives), named `path`/<parameter>[/<index>].
+  std::vector<FieldError> check_true_values(const std::vector<double>& values,
+                                            const std::vector<TrueValue>& truth,
+                                            const std::string& path) const;
+  // `values` (a parameter's) scaled by `factors` by the parameter's rule.
+  static void scale(const UncertainParameter& u, std::vector<double>& values,
+                    std::span<const double> factors);
 };
 
 // A plant of any shape with the simulator and controllers compiled for it. Immutable and

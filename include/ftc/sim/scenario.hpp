@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ftc/sim/disturbance.hpp"
@@ -12,6 +13,12 @@
 #include "ftc/sim/input_error.hpp"
 
 namespace ftc::sim {
+
+// A scenario's true values of one uncertain plant parameter (model mismatch).
+struct TrueValue {
+  std::string parameter;  // the name of a parameter its plant declares uncertain
+  std::vector<double> values;
+};
 
 struct Scenario {
   std::string name = "paper";
@@ -24,9 +31,15 @@ struct Scenario {
   std::vector<DisturbanceTerm> disturbance;
   std::vector<Fault> faults;
   std::optional<double> saturation;  // |u_j| ≤ u_max after the faults; absent = none
-  // The true inertia of the simulated plant, when it differs from the model the controller is
-  // given (model mismatch); empty = the plant's own. Overrides the plant parameter "inertia".
-  std::vector<double> inertia;
+  // The true values of plant parameters the plant declares uncertain (PlantKind::uncertain),
+  // when the simulated plant differs from the model the controller is given (model mismatch);
+  // empty = the plant's own. Each overrides the plant parameter it names.
+  std::vector<TrueValue> true_values;
+
+  // The true values of one parameter; null when the scenario gives none.
+  const std::vector<double>* true_value(std::string_view parameter) const;
+  // Sets (or replaces) the true values of one parameter.
+  void set_true_value(const std::string& parameter, std::vector<double> values);
 
   // N = round(T / Ts).
   std::int64_t samples() const { return std::llround(duration / sample_time); }

@@ -1,11 +1,11 @@
 #pragma once
 // Batch evaluation on every rank of an MPI job (`mpirun -np N ftctune run JOB`). Rank 0 runs the
 // command and its optimiser; every rank, rank 0 included, simulates on its own threads. The
-// problem (job, scenarios, ensemble members) goes to each rank once; per batch only the
-// candidates go out, and per pack of tasks only their metrics come back. Packs are handed out
-// on request, smaller towards the end of a batch, so a rank whose simulations diverge early
-// simply asks for more. Results are placed by task index: the answer is the same bits for any
-// number of ranks and threads.
+// batch's simulation set (the plant's spec, the scenarios with their options) goes to each rank
+// once; per batch only the candidates go out, and per pack of tasks only their metrics come
+// back. Packs are handed out on request, smaller towards the end of a batch, so a rank whose
+// simulations diverge early simply asks for more. Results are placed by task index: the answer is
+// the same bits for any number of ranks and threads.
 //
 // A worker rank that stops answering (hung, stopped, its node gone) for `rank_timeout` seconds
 // while it holds work ends the whole MPI job with exit status 1 and a message naming the rank;
@@ -54,7 +54,7 @@ class MpiEvaluator final : public BatchEvaluator {
   MpiEvaluator(Session& session, MpiOptions options);
   ~MpiEvaluator() override;
 
-  std::vector<TaskResult> run(const TuningProblem& problem, const SimulationBatch& batch) override;
+  std::vector<TaskResult> run(const SimulationBatch& batch) override;
   int concurrency() const override;  // threads over all ranks
   std::vector<int> threads_per_rank() const override;
   std::string name() const override { return "mpi"; }

@@ -15,7 +15,7 @@ class TbbEvaluator final : public BatchEvaluator {
   explicit TbbEvaluator(int threads = 0);
   ~TbbEvaluator() override;
 
-  std::vector<TaskResult> run(const TuningProblem& problem, const SimulationBatch& batch) override;
+  std::vector<TaskResult> run(const SimulationBatch& batch) override;
   int concurrency() const override;
   std::string name() const override { return "tbb"; }
 

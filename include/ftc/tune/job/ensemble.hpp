@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "ftc/sim/scenario.hpp"
@@ -69,22 +71,39 @@ struct FaultDistribution {
 
 enum class Unrecoverable { exclude, include };
 
+// A scale on a parameter the plant declares uncertain (sim::PlantKind::uncertain), under the
+// ensemble key `<parameter>_scale` ("inertia_scale").
+struct ParameterScale {
+  std::string parameter;
+  Distribution distribution;
+};
+
 struct EnsembleConfig {
   std::int64_t count = 1;
   std::uint64_t seed = 0;
   std::string base;  // the scenario members copy; "" = the first
-  // Absent: factor 1 (the draws are consumed all the same).
-  std::optional<Distribution> inertia_scale, initial_state_scale, disturbance_scale;
+  // Absent: factor 1 (the draws are consumed all the same). At most one scale per parameter.
+  std::vector<ParameterScale> parameter_scales;
+  std::optional<Distribution> initial_state_scale, disturbance_scale;
+  // The scale of one parameter; null when there is none.
+  const Distribution* parameter_scale(std::string_view parameter) const;
   std::optional<FaultDistribution> faults;  // absent: members keep the base's faults
   Unrecoverable unrecoverable = Unrecoverable::exclude;
 };
 
 inline constexpr std::int64_t kMaxEnsembleCount = 1000000;
 
-// The ensemble's base scenario with factors applied as the scales apply them: one per inertia
-// axis, one per initial-state component, one on every disturbance amplitude. A member is this
-// with its drawn factors, then its drawn faults.
-sim::Scenario scaled_base(const Job& job, const std::array<double, 3>& inertia_factor,
+// The factors on the uncertain parameters a member scales, by parameter: value i of the
+// parameter takes factor i by its rule (sim::Scaling). SPEC §12 draws 3 (the first 3 draws of a
+// member's stream), which every scaled parameter maps through its own distribution.
+inline constexpr std::size_t kParameterFactors = 3;
+using ParameterFactors = std::vector<std::pair<std::string, std::array<double, kParameterFactors>>>;
+
+// The ensemble's base scenario with factors applied as the scales apply them: the true values of
+// every uncertain parameter of the plant (the base's, else the plant's), each scaled by its
+// factors when it has any; one factor per initial-state component, one on every disturbance
+// amplitude. A member is this with its drawn factors, then its drawn faults.
+sim::Scenario scaled_base(const Job& job, const ParameterFactors& parameter_factors,
                           const std::vector<double>& state_factor, double disturbance_factor);
 
 // Member k (0-based) of the job's ensemble with the given seed, named `<base>-<k>`. The job must

@@ -171,5 +171,8 @@ nlohmann::json to_json(const PlantConfig& p);
 nlohmann::json to_json(const ObjectiveConfig& o);
 nlohmann::json to_json(const GoalConfig& g);
 nlohmann::json to_json(const sim::Scenario& s);
+// A scenario from its JSON form (strict, as in a job; not checked against a plant): throws
+// InputError(source, every error).
+sim::Scenario scenario_from_json(const nlohmann::json& j, const std::string& source);
 
 }  // namespace ftc::tune

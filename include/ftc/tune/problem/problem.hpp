@@ -3,7 +3,9 @@
 // listed under tuning.parameters; a candidate is simulated on every scenario of the job and
 // scored by the job's objective, the metric in the window aggregated over the scenarios;
 // fitness J = 1/objective, and J = 0 when a scenario diverged. The problem owns all of that:
-// evaluators only run the simulations it describes as tasks, optimisers only see fitness.
+// it holds its plant and scenarios, with their simulation options, as a SimulationSet, builds
+// the tasks over it and scores their results; evaluators only run the tasks, optimisers only
+// see fitness.
 //
 // Copyable (copies share the immutable plant) and immutable after construction, so any number
 // of threads may simulate and score at once.
@@ -82,17 +84,18 @@ class TuningProblem {
 
   const Job& job() const { return *job_; }
   // Tells problems apart without comparing them: copies share it, every other problem (a
-  // perturbed() one included) has its own. An evaluator that ships the problem to other
-  // processes sends it again only when this changes.
-  std::uint64_t identity() const { return identity_; }
-  const sim::AnyPlant& plant() const { return *plant_; }
+  // perturbed() one included) has its own. It is the identity of the problem's SimulationSet.
+  std::uint64_t identity() const { return set_->identity(); }
+  const sim::AnyPlant& plant() const { return set_->plant(); }
+  // The plant and the scenarios with their simulation options, which the tasks index into.
+  const SimulationSet& simulations() const { return *set_; }
   // The search space in search coordinates: ln x for a parameter on a log scale, x otherwise.
   const SearchSpace& space() const { return space_; }
 
   // The scenarios: the job's listed ones, then its ensemble's members.
-  std::size_t scenarios() const { return scenarios_->size(); }
+  std::size_t scenarios() const { return set_->size(); }
   std::size_t listed_scenarios() const { return listed_; }
-  const sim::Scenario& scenario(std::size_t i) const { return (*scenarios_)[i]; }
+  const sim::Scenario& scenario(std::size_t i) const { return set_->scenario(i); }
   // Whether gains can control the scenario once its faults have started (SPEC §12), and
   // whether it counts in the objective (unrecoverable ones are left out unless the ensemble
   // says include).
@@ -142,11 +145,9 @@ class TuningProblem {
 
  private:
   std::shared_ptr<const Job> job_;
-  std::shared_ptr<const sim::AnyPlant> plant_;
-  std::shared_ptr<const std::vector<sim::Scenario>> scenarios_;
+  std::shared_ptr<const SimulationSet> set_;
   std::vector<bool> recoverable_, counted_;
   std::size_t listed_ = 0;
-  std::uint64_t identity_ = 0;
   SearchSpace space_;
   std::vector<Scale> scales_;                            // one per coordinate
   std::vector<double sim::ControllerConfig::*> fields_;  // one per coordinate

@@ -1,22 +1,21 @@
-// MPI ranks of the command line (`mpirun -np N ftctune COMMAND ...`): rank 0 runs the command,
-// every other rank simulates for it until it finishes. A process not started by an MPI launcher
-// never touches MPI (initialising it costs time and, outside a launcher, may fail).
-#include <spdlog/spdlog.h>
-
+// MPI ranks of a process (`mpirun -np N ftctune COMMAND ...`): rank 0 runs the command, every
+// other rank simulates for it until it finishes; and the evaluator the run API uses. A process not
+// started by an MPI launcher never touches MPI (initialising it costs time and, outside a launcher,
+// may fail).
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <string>
 
-#include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/run/api.hpp"
 #if FTC_WITH_MPI
 #include "ftc/tune/evaluators/mpi_evaluator.hpp"
 #endif
 
-namespace ftc::cli {
+namespace ftc::tune {
 namespace {
 
 // The size of the MPI job this process belongs to, from the launcher's environment (Open MPI's
@@ -36,7 +35,7 @@ bool launched_as_rank_zero() {
 #endif
 
 #if FTC_WITH_MPI
-std::unique_ptr<tune::mpi::Session> g_session;
+std::unique_ptr<mpi::Session> g_session;
 #endif
 
 double rank_timeout() {
@@ -56,7 +55,7 @@ double rank_timeout() {
 Ranks::Ranks(int& argc, char**& argv) {
   if (launched_size() <= 1) return;
 #if FTC_WITH_MPI
-  g_session = std::make_unique<tune::mpi::Session>(argc, argv);
+  g_session = std::make_unique<mpi::Session>(argc, argv);
   rank_ = g_session->rank();
   size_ = g_session->size();
 #else
@@ -98,13 +97,13 @@ int mpi_ranks() {
 #endif
 }
 
-std::unique_ptr<tune::BatchEvaluator> make_evaluator(int threads) {
+std::unique_ptr<BatchEvaluator> make_evaluator(int threads) {
 #if FTC_WITH_MPI
   if (g_session && g_session->size() > 1)
-    return std::make_unique<tune::mpi::MpiEvaluator>(
-        *g_session, tune::mpi::MpiOptions{.threads = threads, .rank_timeout = rank_timeout()});
+    return std::make_unique<mpi::MpiEvaluator>(
+        *g_session, mpi::MpiOptions{.threads = threads, .rank_timeout = rank_timeout()});
 #endif
-  return std::make_unique<tune::TbbEvaluator>(threads);
+  return std::make_unique<TbbEvaluator>(threads);
 }
 
-}  // namespace ftc::cli
+}  // namespace ftc::tune

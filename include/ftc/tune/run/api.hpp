@@ -1,0 +1,235 @@
+#pragma once
+// The run API: what `ftctune run`, `study`, `evaluate` and `landscape` do, as library calls that
+// the command line, the service and the Python module share. Each takes a loaded job and an
+// options struct whose defaults are those of the command line; each chooses the evaluator (all
+// ranks' threads under mpirun, else this machine's threads) unless given one, handles its output
+// directory and writes the same files, byte for byte, as the command. Messages for people go to
+// the options' `log` (nothing when it is empty); what the command prints on standard output is
+// the caller's, from the result. Bad input throws InputError (with its JSON path or option).
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ftc/tune/evaluators/batch_evaluator.hpp"
+#include "ftc/tune/job/job.hpp"
+#include "ftc/tune/report/landscape.hpp"
+#include "ftc/tune/report/report.hpp"
+#include "ftc/tune/run/evaluate.hpp"
+#include "ftc/tune/run/run_directory.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
+
+namespace ftc::tune {
+
+// ---- The evaluator ---------------------------------------------------------------------------
+
+// The MPI job this process is a rank of (`mpirun -np N ftctune ...`), from MPI_Init to
+// MPI_Finalize; nothing at all for a process not started by an MPI launcher. Rank 0 runs the
+// command; the other ranks serve() it until it finishes. At most one per process.
+class Ranks {
+ public:
+  Ranks(int& argc, char**& argv);
+  ~Ranks();
+  Ranks(const Ranks&) = delete;
+  Ranks& operator=(const Ranks&) = delete;
+  bool leader() const { return rank_ == 0; }
+  // Started by mpirun, but built without MPI (the message is printed): exit 2.
+  bool failed() const { return failed_; }
+  int serve();  // a worker rank's whole life; its exit code
+
+ private:
+  int rank_ = 0, size_ = 1;
+  bool failed_ = false;
+};
+// Processes taking part in the simulations: the MPI job's ranks, or 1.
+int mpi_ranks();
+// The evaluator of a command's simulations: all ranks' threads under mpirun (`threads` per
+// rank), else this machine's `threads` (<= 0: every core). Throws InputError for a bad
+// FTCTUNE_RANK_TIMEOUT (seconds a rank holding work may stay silent; default 10).
+std::unique_ptr<BatchEvaluator> make_evaluator(int threads);
+
+// "Kp = 12, Ki = 3": tuned values by name, five digits, as the command line prints them.
+std::string parameters_text(const std::vector<std::string>& names, const Decision& x);
+
+// ---- run and resume --------------------------------------------------------------------------
+
+enum class CheckpointPolicy {
+  automatic,        // after every iteration once the run looks like taking over a minute
+  every_iteration,  // after every iteration, from the first (--checkpoint)
+  never             // --no-checkpoint
+};
+
+// What the run API tells after every iteration of a run.
+struct IterationReport {
+  const HistoryRow& row;
+  std::int64_t total_evaluations = 0;  // of the whole run
+  int iterations = 0;                  // of the whole run
+  double elapsed = 0.0, eta = 0.0;     // seconds, of this process
+};
+
+struct RunJobOptions {
+  // The job's file, as run.json records it (job_file) and errors name it.
+  std::string job_file;
+  // Empty: out/<job name>, or out/<job name>-2, -3, ... when that holds a run (with a warning).
+  // A directory given here that holds a run is refused unless `force`.
+  std::filesystem::path out;
+  int threads = 0;                    // <= 0: every core (per rank under mpirun)
+  std::optional<std::uint64_t> seed;  // instead of the job's tuning.seed
+  bool baseline = false;              // also random search with the same budget
+  bool force = false;                 // replace the run `out` holds
+  bool resume = false;                // continue the run in `out` from its checkpoint
+  // false: no output directory at all (no lock, checkpoint or file); write_run() writes the
+  // result's files later.
+  bool write = true;
+  CheckpointPolicy checkpoint = CheckpointPolicy::automatic;
+  double checkpoint_after_seconds = 60.0;  // for CheckpointPolicy::automatic
+  BatchEvaluator* evaluator = nullptr;     // null: make_evaluator(threads)
+  // Called after every iteration (after the checkpoint is written); false stops the run, which
+  // then writes no files (its checkpoint, if it wrote one, stays for a resume).
+  std::function<bool(const IterationReport&)> on_iteration;
+  RunLog log;
+};
+
+struct RunJobResult {
+  TuningOutcome outcome;
+  std::optional<TuningOutcome> random_baseline;  // with RunJobOptions::baseline
+  std::filesystem::path out;                     // where the files went (empty: not written)
+  std::vector<std::string> files;                // as run.json lists them
+  std::string run_json;                          // run.json's text
+  double wall_seconds = 0.0;
+  bool stopped = false;  // on_iteration stopped it: nothing was written
+  // No candidate met the job's hard goals (fitness < 0, the constraint rule's): gains.json holds
+  // the least violating one (the command line exits 3).
+  bool infeasible() const { return outcome.optimization.best_fitness < 0.0; }
+  // Every candidate diverged (fitness 0), or none is feasible: gains.json holds gains that must
+  // not be deployed (the command line exits 3).
+  bool diverged() const { return !(outcome.optimization.best_fitness > 0.0); }
+};
+
+// `ftctune run`: tunes the job, then writes its files into the output directory, locked for the
+// run: first into a staging directory inside it, then moved into place with gains.json last (a
+// run stopped on the way leaves the earlier files as they were). Throws InputError for a job
+// without a tuning section, one over the memory budget, or an output directory that holds a run
+// (without force) or that another run is writing.
+RunJobResult run_job(const Job& job, const RunJobOptions& options = {});
+// The files of a finished run_job() result into `out`, as run_job writes them (the same bytes;
+// run.json as the result holds it): `out` is locked, refused when it holds a run unless `force`
+// (InputError "--out"), and the files go through a staging directory, gains.json last. For a
+// run computed with `write = false`. Returns the directory. Throws InputError for a stopped run.
+std::filesystem::path write_run(const RunJobResult& result, const std::filesystem::path& out,
+                                bool force = false, const RunLog& log = {});
+// `ftctune run --resume`: run_job with options.resume; continues from `out`'s checkpoint, or
+// starts from the first iteration when there is none. Refuses a directory holding a finished run,
+// a checkpoint of another job or seed, and force.
+RunJobResult resume_job(const Job& job, RunJobOptions options = {});
+
+// ---- study -----------------------------------------------------------------------------------
+
+struct StudyOptions {
+  std::string job_file;                 // errors name it, and study.md's command
+  std::vector<std::string> algorithms;  // bat, random, pagmo:<name>; each once
+  std::vector<std::uint64_t> seeds;     // each once
+  std::int64_t budget = 0;              // evaluations per run, the initial population included
+  int threads = 0;
+  std::filesystem::path out;  // empty: out/<job name>/study
+  // How study.md names the seeds and the command; empty: the lists joined by commas.
+  std::string seeds_text, command;
+  BatchEvaluator* evaluator = nullptr;
+  RunLog log;
+};
+
+struct StudyRun {
+  std::string algorithm;
+  std::uint64_t seed = 0;
+  double objective = 0.0;  // of the best candidate, 1/J; +inf when every candidate diverged
+  Decision best;
+  int on_bound = 0;
+  std::int64_t evaluations = 0;
+  double wall = 0.0;
+};
+
+struct StudyRow {
+  std::string algorithm;
+  int rank = 1;  // entries whose medians lie within the noise floor of each other share one
+  double median = 0, best = 0, worst = 0, wall = 0;
+  int on_bound = 0, parameters = 0;
+  std::int64_t evaluations = 0;  // the most any run spent
+};
+
+struct StudyResult {
+  std::vector<StudyRun> runs;  // algorithm by algorithm, seed by seed
+  std::vector<StudyRow> rows;  // sorted by median
+  double noise = 0.0;          // the best run's relative noise floor
+  std::filesystem::path out, csv, markdown, figure;
+};
+
+// "bat,random,pagmo:cmaes": the names, each known and given once (InputError "--algorithms").
+std::vector<std::string> parse_algorithm_list(const std::string& text);
+// "1-10", "1,3,5", "1-3,7": the seeds in the order given, each once (InputError "--seeds").
+std::vector<std::uint64_t> parse_seed_list(const std::string& text);
+// `ftctune study`: the job's tuning with each algorithm and seed at one budget; writes
+// study.csv, study.md and study.png into the output directory.
+StudyResult run_study(const Job& job, const StudyOptions& options);
+// The table of study.md (and of the command's output).
+std::string study_table(const std::vector<StudyRow>& rows);
+
+// ---- evaluate --------------------------------------------------------------------------------
+
+struct EvaluateJobOptions {
+  std::vector<EvaluateOptions::GainsFile> gains;
+  std::optional<std::uint64_t> seed;  // the ensemble's; default its own + 1
+  std::optional<std::int64_t> count;  // members; default the ensemble's count
+  // Empty: <the job's latest run>/evaluation, else out/<job name>/evaluation.
+  std::filesystem::path out;
+  int threads = 0;
+  bool figure = true;  // draw the figure (gnuplot)
+  BatchEvaluator* evaluator = nullptr;
+  std::function<void(std::int64_t, std::int64_t)> progress;  // members done, total
+  RunLog log;
+};
+
+struct EvaluateJobResult {
+  EvaluationResult evaluation;
+  std::filesystem::path out, figure;  // figure: empty without one
+  int threads = 0;                    // the evaluator's concurrency
+};
+
+// The directory `ftctune evaluate` writes into when none is given (logs which run it chose).
+std::filesystem::path evaluation_dir(const Job& job, const RunLog& log = {});
+// `ftctune evaluate`: evaluate_out_of_sample, then evaluation.json, evaluation.csv, worst/ and
+// the figure.
+EvaluateJobResult evaluate_job(const Job& job, const EvaluateJobOptions& options);
+
+// ---- landscape -------------------------------------------------------------------------------
+
+struct LandscapeJobOptions {
+  int n1 = 41, n2 = 41;             // grid points per parameter
+  std::vector<std::string> params;  // two tuned parameters; default: the first two
+  // Empty: <the job's latest run>/landscape, else out/<job name>/landscape. One that holds a
+  // landscape is refused unless `force`.
+  std::filesystem::path out;
+  std::filesystem::path history;  // empty: the latest run's history.csv, if any
+  FigureFormat format = FigureFormat::png;
+  int threads = 0;
+  bool force = false;
+  // Hold the unplotted tuned parameters at the job's values instead of the latest run's tuned
+  // ones.
+  bool at_job_values = false;
+  BatchEvaluator* evaluator = nullptr;
+  std::function<void(std::int64_t, std::int64_t)> progress;  // grid points done, total
+  RunLog log;
+};
+
+struct LandscapeJobResult {
+  LandscapeResult landscape;
+  std::filesystem::path out;
+};
+
+// `ftctune landscape`: the objective on a grid over two tuned parameters, beside the job's
+// latest run (its tuned values and noise floor, its best-so-far path drawn on top).
+LandscapeJobResult landscape_job(const Job& job, const LandscapeJobOptions& options = {});
+
+}  // namespace ftc::tune

@@ -1,0 +1,399 @@
+# The ftctune Python module against the CLI of the same build: every function, its errors, the
+# GIL release and Ctrl-C. Short jobs only (Table 1 tunes in about half a second).
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import ftctune
+
+
+def run_cli(cli, *args, cwd=None):
+    p = subprocess.run([cli, "--quiet", *args], capture_output=True, text=True, cwd=cwd)
+    assert p.returncode == 0, p.stderr
+    return p
+
+
+def files_under(d):
+    d = pathlib.Path(d)
+    return {str(p.relative_to(d)): p.read_bytes() for p in sorted(d.rglob("*")) if p.is_file()}
+
+
+# --- load_job, Job ---------------------------------------------------------------------------
+
+def test_load_job_reads_a_file_and_a_dict_to_the_same_resolved_job(table1_path):
+    job = ftctune.load_job(table1_path)
+    assert job.name == "table1" and job.source == table1_path
+    d = job.to_dict()
+    assert sorted(d["tuning"]["parameters"]) == ["Ki", "Kp"]
+    again = ftctune.load_job(d)
+    assert again.source == "<dict>"
+    assert again.to_dict() == d
+    assert ftctune.load_job(pathlib.Path(table1_path)).to_dict() == d
+
+
+def test_load_job_names_the_json_path_of_each_error(robust_dict):
+    robust_dict["controller"]["Kp"] = "twenty"
+    robust_dict["ensemble"]["count"] = 0
+    with pytest.raises(ftctune.InputError) as e:
+        ftctune.load_job(robust_dict)
+    assert "/controller/Kp" in str(e.value) and "/ensemble/count" in str(e.value)
+    assert e.value.source == "<dict>"
+    assert [path for path, _ in e.value.errors] == ["/controller/Kp", "/ensemble/count"]
+    assert isinstance(e.value, ValueError)
+    with pytest.raises(ftctune.InputError, match="no-such-job.json"):
+        ftctune.load_job("no-such-job.json")
+
+
+# --- Problem ---------------------------------------------------------------------------------
+
+def test_problem_objective_is_what_run_saw_for_every_trial(table1_path):
+    job = ftctune.load_job(table1_path)
+    problem = ftctune.Problem(job)
+    assert problem.names == ["Kp", "Ki"]
+    assert problem.bounds == [(1.0, 50.0), (0.0, 50.0)]
+    assert problem.scenarios == ["paper"]
+    trials = ftctune.tune(job).trials
+    X = trials[problem.names].to_numpy()
+    values = problem.objective(X)
+    assert values.shape == (len(trials),)
+    # To the bit: the same simulations in lanes on the same threads as `run`.
+    assert np.array_equal(values, trials["objective"].to_numpy())
+    assert problem.objective(X[3]) == values[3]
+    assert isinstance(problem.objective(X[3]), float)
+
+
+def test_python_threads_may_share_a_problem(table1_path):
+    problem = ftctune.Problem(table1_path)
+    X = np.column_stack([np.linspace(1, 50, 40), np.linspace(0, 50, 40)])
+    expected = problem.objective(X)
+    results = [None] * 4
+
+    def work(k):
+        results[k] = problem.objective(X)
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for r in results:
+        assert np.array_equal(r, expected)
+
+
+def test_problem_objective_refuses_bad_candidates_with_their_paths(table1_path):
+    problem = ftctune.Problem(table1_path, threads=1)
+    with pytest.raises(ftctune.InputError, match=r"/1/0: Kp = 60 is outside its bounds \[1, 50\]"):
+        problem.objective([[20, 5], [60, 5]])
+    with pytest.raises(ftctune.InputError, match="has 3 columns"):
+        problem.objective(np.zeros((2, 3)))
+    with pytest.raises(ftctune.InputError, match="outside its bounds"):
+        problem.objective([np.nan, 5])
+    notune = ftctune.load_job(table1_path).to_dict()
+    del notune["tuning"]
+    with pytest.raises(ftctune.InputError, match="/tuning"):
+        ftctune.Problem(notune)
+
+
+def test_problem_metrics_has_a_row_per_candidate_and_scenario(robust_dict):
+    problem = ftctune.Problem(robust_dict)
+    assert sorted(problem.names) == ["Ki", "Kp", "switching_gain"]
+    scales = dict(zip(problem.names, problem.scales))
+    assert scales == {"Kp": "linear", "Ki": "linear", "switching_gain": "log"}
+    candidates = [{"Kp": 20.0, "Ki": 5.0, "switching_gain": 20.0},
+                  {"Kp": 30.0, "Ki": 10.0, "switching_gain": 50.0}]
+    X = np.array([[c[n] for n in problem.names] for c in candidates])
+    m = problem.metrics(X)
+    assert isinstance(m, pd.DataFrame)
+    assert len(m) == 2 * len(problem.scenarios) == 2 * 7
+    assert list(m["scenario"][:7]) == problem.scenarios
+    for column in ("candidate", "Kp", "Ki", "switching_gain", "objective", "ise", "iae", "itae",
+                   "max_abs_u", "control_tv", "peak_error_after_fault_fault1", "diverged",
+                   "counted"):
+        assert column in m.columns
+    assert (m[m.candidate == 1]["Kp"] == 30.0).all()
+    # The objective is the job's CVaR of the counted scenarios' values.
+    values = problem.objective(X)
+    for i in range(2):
+        rows = m[(m.candidate == i) & m.counted]
+        v = np.sort(rows["objective"].to_numpy())
+        tail = v[-int(np.ceil(0.1 * len(v))):]
+        assert values[i] == pytest.approx(tail.mean(), rel=1e-12)
+
+
+# --- tune, Result ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("job", ["table1", "manipulator"])
+def test_tune_writes_the_bytes_of_ftctune_run(cli, root, job, tmp_path):
+    job_path = str(root / "jobs" / f"{job}.json")
+    run_cli(cli, "run", job_path, "--out", str(tmp_path / "cli"))
+    result = ftctune.tune(job_path)
+    assert result.completed
+    written = result.write(tmp_path / "py")
+    assert written[0] == "run.json" and written[-1] == "gains.json"
+    cli_files, py_files = files_under(tmp_path / "cli"), files_under(tmp_path / "py")
+    assert sorted(cli_files) == sorted(py_files)
+    for name in cli_files:
+        if name != "run.json":
+            assert py_files[name] == cli_files[name], name
+    a = json.loads(cli_files["run.json"])
+    b = json.loads(py_files["run.json"])
+    for key in ("started_at", "wall_seconds", "max_rss_kib"):
+        a.pop(key), b.pop(key)
+    assert a == b
+    assert result.gains == json.loads(cli_files["gains.json"])
+    assert result.history.equals(pd.read_csv(tmp_path / "cli" / "history.csv",
+                                             float_precision="round_trip"))
+    assert result.comparison == json.loads(cli_files["comparison.json"])
+    with pytest.raises(ftctune.InputError, match="already holds a run"):
+        result.write(tmp_path / "py")
+    assert result.write(tmp_path / "py", replace=True)[-1] == "gains.json"
+
+
+def test_tune_of_an_ensemble_job_writes_the_bytes_of_ftctune_run(cli, robust_dict, tmp_path):
+    job_file = tmp_path / "robust-small.json"
+    job_file.write_text(json.dumps(robust_dict))
+    run_cli(cli, "run", str(job_file), "--out", str(tmp_path / "cli"), "--seed", "3",
+            "--threads", "1")
+    ftctune.tune(str(job_file), seed=3, threads=2).write(tmp_path / "py")
+    cli_files, py_files = files_under(tmp_path / "cli"), files_under(tmp_path / "py")
+    assert sorted(cli_files) == sorted(py_files)
+    for name in cli_files:
+        if name != "run.json":
+            assert py_files[name] == cli_files[name], name
+
+
+def test_tune_calls_back_each_iteration_and_stops_when_told(table1_path, tmp_path):
+    seen = []
+
+    def callback(row):
+        seen.append(row)
+        return row["iteration"] < 3
+
+    result = ftctune.tune(table1_path, threads=1, seed=5, callback=callback)
+    assert [r["iteration"] for r in seen] == [0, 1, 2, 3]
+    assert set(seen[-1]["best"]) == {"Kp", "Ki"}
+    assert not result.completed
+    assert result.gains["optimizer"]["completed"] is False
+    assert result.history["iteration"].max() == 3
+    assert len(result.trials) == seen[-1]["evaluations"]
+    with pytest.raises(ftctune.InputError, match="no files to write"):
+        result.write(tmp_path / "stopped")
+    assert not (tmp_path / "stopped").exists()
+
+
+def test_a_callback_that_raises_stops_the_run_with_its_exception(table1_path):
+    def callback(row):
+        raise RuntimeError("enough")
+
+    with pytest.raises(RuntimeError, match="enough"):
+        ftctune.tune(table1_path, callback=callback)
+
+
+def test_tune_refuses_bad_arguments(table1_path):
+    with pytest.raises(ftctune.InputError, match="threads"):
+        ftctune.tune(table1_path, threads=-1)
+
+
+def test_tune_releases_the_gil(table1_path):
+    count = 0
+    running = True
+
+    def counter():
+        nonlocal count
+        while running:
+            count += 1
+            time.sleep(0.001)
+
+    t = threading.Thread(target=counter)
+    t.start()
+    try:
+        start = time.monotonic()
+        before = count
+        ftctune.tune(table1_path)
+        elapsed = time.monotonic() - start
+        during = count - before
+    finally:
+        running = False
+        t.join()
+    # Held, the GIL would let the thread count at most once or twice (at the call's ends); let
+    # go, it counts every millisecond or so (a loaded machine may make that several).
+    assert elapsed > 0.1
+    assert during >= 0.05 * elapsed / 0.001 and during > 20, (during, elapsed)
+
+
+CTRL_C_SCRIPT = """
+import json, sys, time, ftctune
+job = ftctune.load_job(sys.argv[1]).to_dict()
+job["tuning"]["algorithm"]["iterations"] = 100000
+job["tuning"]["algorithm"]["population"] = 200
+print("tuning", flush=True)
+try:
+    ftctune.tune(job, callback=None)
+except KeyboardInterrupt:
+    print("interrupted", time.monotonic(), flush=True)
+    sys.exit(42)
+"""
+
+
+def test_ctrl_c_stops_a_tuning_run_within_a_second(table1_path):
+    p = subprocess.Popen([sys.executable, "-c", CTRL_C_SCRIPT, table1_path],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().strip() == "tuning"
+        time.sleep(0.5)  # well inside the first iterations' simulations
+        sent = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=10)
+        stopped = time.monotonic()
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 42, err
+    assert out.startswith("interrupted")
+    assert float(out.split()[1]) - sent < 1.0
+    assert stopped - sent < 2.0
+
+
+# --- simulate, ensemble, evaluate, load_gains ------------------------------------------------
+
+def test_simulate_gives_the_metrics_and_trajectories_of_ftctune_simulate(cli, table1_path,
+                                                                         tmp_path):
+    run_cli(cli, "simulate", table1_path, "--set", "Kp=30", "--record-every", "0.05", "--out",
+            str(tmp_path))
+    s = ftctune.simulate(table1_path, set={"Kp": 30}, record_every=0.05)
+    doc = json.loads((tmp_path / "metrics.json").read_text())
+    assert s["scenarios"] == doc["scenarios"]
+    assert s["objective"] == doc["objective"] and s["fitness"] == doc["fitness"]
+    assert s["controller"] == doc["controller"]
+    cli_trajectory = pd.read_csv(tmp_path / "trajectory.csv", float_precision="round_trip")
+    assert s["trajectories"]["paper"].equals(cli_trajectory)
+    assert list(s["metrics"]["scenario"]) == ["paper"]
+    assert s["metrics"]["ise"][0] == doc["scenarios"][0]["ise"]
+    fosmc = ftctune.simulate(table1_path, controller="fosmc")
+    assert fosmc["controller"]["type"] == "fosmc"
+    with pytest.raises(ftctune.InputError, match="/Kq"):
+        ftctune.simulate(table1_path, set={"Kq": 1})
+    with pytest.raises(ftctune.InputError, match="unknown controller type"):
+        ftctune.simulate(table1_path, controller="pid")
+
+
+def test_simulate_takes_tuned_gains(table1_path, tmp_path):
+    result = ftctune.tune(table1_path)
+    s = ftctune.simulate(table1_path, gains=result)
+    best = result.comparison["controllers"][-1]
+    assert s["controller"] == result.gains["controller"]
+    assert s["objective"] == pytest.approx(ftctune.Problem(table1_path).objective(
+        [result.gains["tuned"]["Kp"], result.gains["tuned"]["Ki"]]), rel=0)
+    assert best["role"] == "tuned"
+
+
+def test_ensemble_lists_the_members_of_ftctune_ensemble(cli, robust_dict, tmp_path):
+    job_file = tmp_path / "job.json"
+    job_file.write_text(json.dumps(robust_dict))
+    out = run_cli(cli, "ensemble", str(job_file), "--seed", "9", "--count", "5").stdout
+    members = ftctune.ensemble(robust_dict, seed=9, count=5)
+    assert members == json.loads(out)["scenarios"]
+    assert members[0]["name"] == "paper-0"
+    assert {"type", "onset", "actuator"} <= set(members[0]["faults"][0])
+    assert len(ftctune.ensemble(robust_dict)) == 6
+    with pytest.raises(ftctune.InputError, match="--count"):
+        ftctune.ensemble(robust_dict, count=0)
+    no_ensemble = dict(robust_dict)
+    del no_ensemble["ensemble"]
+    with pytest.raises(ftctune.InputError, match="/ensemble"):
+        ftctune.ensemble(no_ensemble)
+
+
+def test_evaluate_rows_match_ftctune_evaluate_with_faults_as_columns(cli, robust_dict, tmp_path):
+    job_file = tmp_path / "job.json"
+    job_file.write_text(json.dumps(robust_dict))
+    result = ftctune.tune(robust_dict)
+    gains_file = tmp_path / "tuned.json"
+    gains_file.write_text(json.dumps(result.gains, indent=2))
+    run_cli(cli, "evaluate", str(job_file), "--gains", f"tuned={gains_file}", "--count", "4",
+            "--no-figure", "--out", str(tmp_path / "evaluation"))
+    frame = ftctune.evaluate(robust_dict, gains={"tuned": gains_file}, count=4)
+    assert frame.attrs["seed"] == 8 and frame.attrs["count"] == 4
+    doc = json.loads((tmp_path / "evaluation" / "evaluation.json").read_text())
+    labels = [c["label"] for c in doc["controllers"]]
+    assert list(dict.fromkeys(frame["controller"])) == labels
+    assert len(frame) == len(labels) * 5  # the listed scenario and 4 members
+    cli_rows = pd.read_csv(tmp_path / "evaluation" / "evaluation.csv", float_precision="round_trip")
+    assert list(frame["objective"]) == list(cli_rows["objective"])
+    # Every metric of the record, as evaluation.csv has it (a per-fault field split by onset).
+    for column in ("ise", "iae", "itae", "max_abs_u", "control_tv", "control_energy",
+                   "peak_command", "saturation_fraction", "steady_state_error"):
+        assert np.array_equal(frame[column].to_numpy(float), cli_rows[column].to_numpy(float),
+                              equal_nan=True), column
+    first_peaks = [float(str(v).split(";")[0]) for v in cli_rows["peak_error_after_fault"]]
+    assert np.array_equal(frame["peak_error_after_fault_fault1"].to_numpy(float),
+                          np.array(first_peaks), equal_nan=True)
+    members = ftctune.ensemble(robust_dict, seed=8, count=4)
+    tuned = frame[frame.controller == "tuned"].reset_index(drop=True)
+    for k, m in enumerate(members):
+        row = tuned.iloc[k + 1]
+        assert row["scenario"] == m["name"]
+        assert row["faults"] == len(m["faults"])
+        assert row["fault1_type"] == m["faults"][0]["type"]
+        assert row["fault1_onset"] == m["faults"][0]["onset"]
+    # Gains given as a Result or a dict are the same gains.
+    again = ftctune.evaluate(robust_dict, gains=[result, result.gains], count=4)
+    assert list(again[again.controller == "gains1"]["objective"]) == list(tuned["objective"])
+    assert list(again[again.controller == "gains2"]["objective"]) == list(tuned["objective"])
+    with pytest.raises(ftctune.InputError):
+        ftctune.evaluate(robust_dict, gains=[tmp_path / "missing.json"])
+
+
+def test_load_gains_reads_a_checked_gains_file(table1_path, tmp_path):
+    result = ftctune.tune(table1_path)
+    result.write(tmp_path)
+    assert ftctune.load_gains(tmp_path / "gains.json") == result.gains
+    bad = dict(result.gains)
+    bad["schema"] = "ftctune.gains/9"
+    (tmp_path / "bad.json").write_text(json.dumps(bad))
+    with pytest.raises(ftctune.InputError, match="/schema"):
+        ftctune.load_gains(tmp_path / "bad.json")
+
+
+def test_a_pagmo_job_runs_from_python(table1_path):
+    job = ftctune.load_job(table1_path).to_dict()
+    job["tuning"]["algorithm"] = {"type": "pagmo", "name": "sade", "population": 7,
+                                  "generations": 2}
+    result = ftctune.tune(job)
+    assert result.completed
+    assert result.gains["optimizer"]["type"] == "pagmo"
+    assert result.gains["optimizer"]["name"] == "sade"
+    assert len(result.trials) == 7 * 3
+
+
+INSTALLED_SCRIPT = """
+import sys, ftctune
+job = ftctune.load_job(sys.argv[1]).to_dict()
+job["tuning"]["algorithm"] = {"type": "pagmo", "name": "sade", "population": 7, "generations": 1}
+print(ftctune.__file__, ftctune.tune(job).completed)
+"""
+
+
+def test_cmake_install_installs_a_module_that_finds_its_pagmo_adapter(cli, table1_path, tmp_path):
+    build = pathlib.Path(cli).resolve().parents[1]
+    prefix = tmp_path / "prefix"
+    p = subprocess.run(["cmake", "--install", str(build), "--prefix", str(prefix)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stdout + p.stderr
+    site = next(prefix.glob("lib/python3*/dist-packages"))
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "FTCTUNE_PLUGIN_DIR")}
+    env["PYTHONPATH"] = str(site)
+    p = subprocess.run([sys.executable, "-c", INSTALLED_SCRIPT, table1_path], capture_output=True,
+                       text=True, env=env, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    module_file, completed = p.stdout.split()
+    assert module_file == str(site / "ftctune" / "__init__.py") and completed == "True"

@@ -1,0 +1,354 @@
+// The run API (run/api.hpp): run, resume, evaluate and landscape, as the command line runs them.
+#include "ftc/tune/run/api.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/optimizers/random_search.hpp"
+#include "ftc/tune/report/evaluation.hpp"
+#include "ftc/tune/run/checkpoint.hpp"
+#include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/memory_budget.hpp"
+
+namespace ftc::tune {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+using clock_type = std::chrono::steady_clock;
+
+void say(const RunLog& log, LogLevel level, const std::string& message) {
+  if (log) log(level, message);
+}
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string hostname() {
+  char buf[256] = {};
+  if (::gethostname(buf, sizeof buf - 1) != 0) return "unknown";
+  return buf;
+}
+
+std::string g6(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+// The evaluator a call runs on: the caller's, or one made for it.
+struct EvaluatorFor {
+  std::unique_ptr<BatchEvaluator> owned;
+  BatchEvaluator* use = nullptr;
+  EvaluatorFor(BatchEvaluator* given, int threads) {
+    if (given) {
+      use = given;
+    } else {
+      owned = make_evaluator(threads);
+      use = owned.get();
+    }
+  }
+};
+
+// The files of a finished run into `out` (locked by the caller): first into a staging directory
+// inside it, each synced, so that a full disk or a kill on the way leaves `out` as it was, an
+// earlier run included; only then does the new run take its place, entry by entry by rename
+// (which needs no space) with gains.json last. `replace`: what is in the way goes first (the run
+// `force` replaces, or what an earlier start of a resumed run left: rename cannot replace a
+// directory that has files). Then the checkpoint, of no more use, goes.
+void put_in_place(const RunJobResult& result, const std::map<std::string, std::string>& outputs,
+                  const fs::path& out, bool replace) {
+  const fs::path staging = unique_dir(out, kStagingPrefix);
+  std::vector<std::string> entries;
+  const auto add_entry = [&](const std::string& file) {
+    const std::string top = fs::path(file).begin()->string();  // trajectories/a/b.csv: the folder
+    if (std::find(entries.begin(), entries.end(), top) == entries.end()) entries.push_back(top);
+  };
+  try {
+    if (result.random_baseline) {
+      write_file_atomic(staging / "history-random.csv", history_csv(*result.random_baseline));
+      add_entry("history-random.csv");
+    }
+    write_file_atomic(staging / "run.json", result.run_json);
+    add_entry("run.json");
+    for (const std::string& f : write_output_files(outputs, staging)) add_entry(f);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(staging, ec);
+    throw;
+  }
+  replace_run(out, staging, entries, replace);
+  // gains.json is in place: the run is finished, and its checkpoint of no more use.
+  fs::remove(out / kCheckpointFile);
+}
+
+}  // namespace
+
+std::string parameters_text(const std::vector<std::string>& names, const Decision& x) {
+  std::string s;
+  char buf[64];
+  for (std::size_t i = 0; i < names.size() && i < x.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%s%s = %.5g", i ? ", " : "", names[i].c_str(), x[i]);
+    s += buf;
+  }
+  return s;
+}
+
+RunJobResult run_job(const Job& job, const RunJobOptions& o) {
+  const RunLog& log = o.log;
+  if (!job.tuning)
+    throw InputError(o.job_file, "/tuning", "is required by ftctune run (what should be tuned?)");
+  if (o.resume && o.force) throw InputError("--resume", "", "cannot be combined with --force");
+  if (o.resume && !o.write)
+    throw InputError("--resume", "", "needs the run's output directory (write = false)");
+  // Memory by design: a job whose run would not fit is refused before any work.
+  check_memory_budget(job, memory_budget_bytes(), o.job_file);
+  fs::path out = o.out.empty() ? default_out_dir(job.name) : o.out;
+  const std::uint64_t seed = o.seed.value_or(job.tuning->seed);
+  const std::string job_sha = canonical_job_sha256(job);
+  std::unique_ptr<DirectoryLock> lock;
+  std::optional<Checkpoint> resumed;
+  if (o.resume) {
+    // The same directory whatever it holds: the interrupted run is there.
+    lock = std::make_unique<DirectoryLock>(out, log);
+    if (!lock->held())
+      throw InputError("--out", "",
+                       out.string() + " is being written by another ftctune run; wait for it");
+    if (fs::exists(out / kCheckpointFile)) {
+      resumed = read_checkpoint(out / kCheckpointFile, job_sha, seed);
+      say(log, LogLevel::info,
+          "resuming from " + (out / kCheckpointFile).string() + " after iteration " +
+              std::to_string(resumed->iteration));
+    } else if (fs::exists(out / "gains.json")) {
+      throw InputError(
+          "--resume", "",
+          out.string() +
+              " holds a finished run (gains.json): nothing to resume (a run written elsewhere is "
+              "resumed with --out DIR)");
+    } else {
+      // A batch script can always pass --resume: its first start has nothing to resume.
+      say(log, LogLevel::info,
+          "no checkpoint in " + out.string() + ": starting from the first iteration");
+    }
+  } else if (o.write) {
+    lock = claim_run_directory(out, !o.out.empty(), o.force, log);
+  }
+  if (o.write) handle_leftovers(out, log);
+  const std::int64_t total = job.tuning->algorithm->evaluations();
+  std::vector<std::string> names;
+  for (const ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
+
+  RunJobResult result;
+  if (o.write) result.out = out;
+  const std::string started = utc_now();
+  const auto t0 = clock_type::now();
+  EvaluatorFor evaluator(o.evaluator, o.threads);
+  RunOptions ro;
+  ro.seed = o.seed;
+  if (resumed) ro.resume = &resumed->state;
+  // Checkpoints: asked for, continuing one, or once the run looks like taking over a minute.
+  const bool never = o.checkpoint == CheckpointPolicy::never || !o.write;
+  bool checkpointing = !never && (o.checkpoint == CheckpointPolicy::every_iteration || resumed);
+  // Evaluations done before this process started (one trial each), for the ETA.
+  const auto evaluations_before =
+      static_cast<std::int64_t>(resumed ? resumed->state.value("trials", json::array()).size() : 0);
+  ro.observer = [&](const HistoryRow& h, const Optimizer& optimizer,
+                    const std::vector<Trial>& trials) {
+    const double elapsed = std::chrono::duration<double>(clock_type::now() - t0).count();
+    const double done = static_cast<double>(h.evaluations - evaluations_before);
+    const double eta = done > 0 ? elapsed * static_cast<double>(total - h.evaluations) / done : 0.0;
+    if (!checkpointing && !never && elapsed + eta > o.checkpoint_after_seconds) {
+      checkpointing = true;
+      say(log, LogLevel::info,
+          "this run will take over a minute: it writes " + (out / kCheckpointFile).string() +
+              " after every iteration (ftctune run --resume continues from it)");
+    }
+    if (checkpointing)
+      write_file_atomic(out / kCheckpointFile, checkpoint_text(job_sha, seed, h.iteration,
+                                                               run_checkpoint(optimizer, trials)));
+    if (!o.on_iteration) return true;
+    const bool go_on = o.on_iteration(
+        IterationReport{h, total, job.tuning->algorithm->iterations(), elapsed, eta});
+    result.stopped = !go_on;
+    return go_on;
+  };
+  {
+    std::string tuned;
+    for (const std::string& n : names) tuned += (tuned.empty() ? "" : ", ") + n;
+    say(log, LogLevel::info,
+        "tuning " + tuned + " of job " + job.name + ": " + std::to_string(total) +
+            " evaluations of " + std::to_string(job.scenario_count()) + " scenario" +
+            (job.scenario_count() == 1 ? "" : "s") + ", " + job.tuning->algorithm->type() +
+            " algorithm");
+  }
+  result.outcome = [&] {
+    try {
+      return tune(job, *evaluator.use, ro);
+    } catch (const InputError& e) {
+      // A state the optimiser refuses: the file and the field's path in it.
+      if (!resumed || e.source() != "checkpoint") throw;
+      std::vector<FieldError> errors = e.errors();
+      for (FieldError& f : errors) f.path = "/state" + f.path;
+      throw InputError((out / kCheckpointFile).string(), std::move(errors));
+    }
+  }();
+  result.wall_seconds = std::chrono::duration<double>(clock_type::now() - t0).count();
+  if (result.stopped) return result;
+  const TuningOutcome& r = result.outcome;
+
+  // All computing first, then the files, gains.json last: a run stopped on the way (a full
+  // disk, a kill) leaves no gains.json, so nothing takes its files for a finished run.
+  if (o.baseline) {
+    // Random search with the same budget and seed: what the algorithm buys (Fig. 5).
+    Job random = job;
+    random.tuning->algorithm = random_search_like(*job.tuning->algorithm);
+    RunOptions rr;
+    rr.seed = o.seed;
+    rr.compare = false;
+    result.random_baseline = tune(random, *evaluator.use, rr);
+    say(log, LogLevel::info,
+        "random search with the same budget: best J = " +
+            g6(result.random_baseline->optimization.best_fitness) + " (" +
+            parameters_text(names, result.random_baseline->optimization.best) + ")");
+  }
+  json run = run_metadata(r, result.wall_seconds);
+  // Every file of the run, and every simulation, the random-search baseline's included.
+  const std::map<std::string, std::string> outputs = output_files(r);
+  json files = json::array();
+  for (const auto& [name, content] : outputs) files.push_back(name);
+  if (result.random_baseline) {
+    files.push_back("history-random.csv");
+    run["simulations"] =
+        run["simulations"].get<std::int64_t>() + result.random_baseline->simulations;
+  }
+  files.push_back("run.json");
+  run["files"] = files;
+  run["started_at"] = started;
+  run["host"] = hostname();
+  run["job_file"] = o.job_file;
+  for (const json& f : files) result.files.push_back(f.get<std::string>());
+  result.run_json = run.dump(2) + "\n";
+
+  if (o.write) put_in_place(result, outputs, out, o.force || o.resume);
+  for (const std::string& w : r.warnings) say(log, LogLevel::warn, w);
+  return result;
+}
+
+fs::path write_run(const RunJobResult& result, const fs::path& out, bool force, const RunLog& log) {
+  if (result.stopped || !result.outcome.completed() || result.outcome.comparison.empty())
+    throw InputError("run", "", "was stopped before it finished: it has no files to write");
+  fs::path dir = out;
+  const std::unique_ptr<DirectoryLock> lock = claim_run_directory(dir, true, force, log);
+  handle_leftovers(dir, log);
+  put_in_place(result, output_files(result.outcome), dir, force);
+  return dir;
+}
+
+RunJobResult resume_job(const Job& job, RunJobOptions options) {
+  options.resume = true;
+  return run_job(job, options);
+}
+
+fs::path evaluation_dir(const Job& job, const RunLog& log) {
+  // Beside the job's latest run (out/<name>, or -2, -3, ... where `run` moved on), whose report
+  // then shows it.
+  std::string why;
+  const fs::path run = latest_run_dir(job, &why);
+  say(log, LogLevel::info, why);
+  return (run.empty() ? default_out_dir(job.name) : run) / "evaluation";
+}
+
+EvaluateJobResult evaluate_job(const Job& job, const EvaluateJobOptions& o) {
+  EvaluateJobResult result;
+  result.out = o.out.empty() ? evaluation_dir(job, o.log) : o.out;
+  EvaluateOptions options;
+  options.gains = o.gains;
+  options.seed = o.seed;
+  options.count = o.count;
+  options.progress = o.progress;
+  EvaluatorFor evaluator(o.evaluator, o.threads);
+  result.threads = evaluator.use->concurrency();
+  result.evaluation = evaluate_out_of_sample(job, options, *evaluator.use);
+  write_evaluation(result.evaluation, result.out);
+  if (o.figure) result.figure = draw_evaluation(result.evaluation, result.out);
+  return result;
+}
+
+LandscapeJobResult landscape_job(const Job& job, const LandscapeJobOptions& o) {
+  LandscapeOptions lo;
+  lo.n1 = o.n1;
+  lo.n2 = o.n2;
+  lo.params = o.params;
+  lo.format = o.format;
+  lo.progress = o.progress;
+  // The job's latest run (out/<name>, or -2, -3, ... where `run` moved on): the landscape goes
+  // into it, with its best-so-far path.
+  std::string why;
+  const fs::path run = latest_run_dir(job, &why);
+  say(o.log, LogLevel::info, why);
+  LandscapeJobResult result;
+  result.out =
+      o.out.empty() ? (run.empty() ? default_out_dir(job.name) : run) / "landscape" : o.out;
+  const fs::path& out = result.out;
+  // Before the work: a directory that can be written, and not one holding a landscape already
+  // (like `run`, force replaces it).
+  {
+    if (const std::string problem = directory_problem(out); !problem.empty())
+      throw InputError("--out", "", problem);
+    std::error_code ec;
+    if (!o.force && (fs::exists(out / "landscape.csv", ec) || fs::exists(out / "landscape.gp", ec)))
+      throw InputError("--out", "",
+                       out.string() +
+                           " already holds a landscape; choose another directory, or pass "
+                           "--force to replace it");
+  }
+  lo.history = o.history.empty() && !run.empty() && fs::is_regular_file(run / "history.csv")
+                   ? run / "history.csv"
+                   : o.history;
+  // The unplotted parameters at the run's tuned values (the map then holds the tuned point),
+  // or at the job's with at_job_values; the run's noise floor for the colours.
+  if (!run.empty()) {
+    const std::optional<std::string> text = read_file(run / "gains.json");
+    const json gains = text ? json::parse(*text, nullptr, false) : json();
+    if (gains.is_object()) {
+      const double nf = json_io::json_number_or(
+          gains.value(json::json_pointer("/noise_floor/relative_spread"), json()), 0.0);
+      lo.noise_floor = nf;
+      if (!o.at_job_values && gains.contains("tuned") && gains["tuned"].is_object()) {
+        for (auto it = gains["tuned"].begin(); it != gains["tuned"].end(); ++it)
+          if (it.value().is_number()) lo.fixed.emplace_back(it.key(), it.value().get<double>());
+        lo.fixed_source = "the tuned value, " + (run / "gains.json").string();
+      }
+    }
+  }
+  {
+    std::string params;
+    for (const std::string& p : o.params) params += (params.empty() ? "" : ",") + p;
+    say(o.log, LogLevel::info,
+        "evaluating a " + std::to_string(o.n1) + "x" + std::to_string(o.n2) + " grid over " +
+            (o.params.empty() ? std::string("the first two tuned parameters") : params) + " (" +
+            std::to_string(job.scenarios.size()) + " simulations per point)");
+  }
+  EvaluatorFor evaluator(o.evaluator, o.threads);
+  result.landscape = compute_landscape(job, out, lo, *evaluator.use);
+  return result;
+}
+
+}  // namespace ftc::tune
