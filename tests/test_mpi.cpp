@@ -105,7 +105,11 @@ TEST(Mpi, GainsAreByteIdenticalForOneProcessOneRankAndThreeRanks) {
 TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {
   REQUIRE_MPI();
   const fs::path dir = fresh_dir("mpi-ensemble");
-  const fs::path job = write_job(dir, ftc::testing::short_ensemble_job());
+  // With the job's metric settings, which the ranks get in each scenario's options: the
+  // settling times and steady-state errors in comparison.json and evaluation.csv must agree.
+  json j = ftc::testing::short_ensemble_job();
+  j["metrics"] = {{"settling_threshold", 0.01}, {"steady_state_tail", 1.0}};
+  const fs::path job = write_job(dir, j);
   const auto plain =
       run_cli("run '" + job.string() + "' -q --out '" + (dir / "plain").string() + "'", dir);
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
@@ -125,8 +129,19 @@ TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {
                                       "' --no-figure --out '" + (dir / "eval-three").string() + "'",
                                   dir);
   ASSERT_EQ(e_three.exit_code, 0) << e_three.err;
-  EXPECT_EQ(slurp(dir / "eval-plain" / "evaluation.csv"),
-            slurp(dir / "eval-three" / "evaluation.csv"));
+  const std::string csv = slurp(dir / "eval-plain" / "evaluation.csv");
+  EXPECT_EQ(csv, slurp(dir / "eval-three" / "evaluation.csv"));
+  // The settings took effect on the ranks: members have settling times and steady-state errors
+  // (without them both are NaN, written as null).
+  const json ev = json::parse(slurp(dir / "eval-three" / "evaluation.json"));
+  int settled = 0, tails = 0;
+  for (const json& c : ev["controllers"])
+    for (const json& m : c["members"]) {
+      settled += m["settling_time"].is_number() ? 1 : 0;
+      tails += m["steady_state_error"].is_number() ? 1 : 0;
+    }
+  EXPECT_GT(settled, 0);
+  EXPECT_GT(tails, 0);
 }
 
 // mpirun with a long run in the background; finds the process of a given rank by its
