@@ -31,6 +31,7 @@
 #include <type_traits>
 
 #include "controllers/laws.hpp"
+#include "ftc/sim/rk4.hpp"
 #include "lanes/angle_tracker.hpp"
 #include "lanes/elementary.hpp"
 #include "lanes/metric_lanes.hpp"
@@ -268,20 +269,11 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
       for (int j = 0; j < S; ++j) {
         const double* ej = e + j * 3 * kInstant;
         if (j > 0) k1 = deriv(x, forcing(ej, u));
-        VS xs;
-        for (int r = 0; r < S2; ++r) xs[r] = x[r] + h2 * k1[r];
         const Forcing mid = forcing(ej + kInstant, u);
-        const VS k2 = deriv(xs, mid);
-        for (int r = 0; r < S2; ++r) xs[r] = x[r] + h2 * k2[r];
-        const VS k3 = deriv(xs, mid);
-        for (int r = 0; r < S2; ++r) xs[r] = x[r] + hv * k3[r];
-        const VS k4 = deriv(xs, forcing(ej + 2 * kInstant, u));
-        for (int r = 0; r < S2; ++r) {
-          T sum = k1[r] + T(2.0) * k2[r];
-          sum = sum + T(2.0) * k3[r];
-          sum = sum + k4[r];
-          x[r] = x[r] + h6 * sum;
-        }
+        const Forcing end = forcing(ej + 2 * kInstant, u);
+        sim::rk4_advance(
+            x, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
+            [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
       }
       u_prev = u;
 

@@ -233,7 +233,7 @@ double TuningProblem::goal_value(const GoalConfig& g, const sim::Metrics& m,
       if (!std::isnan(p)) peak = std::isnan(peak) ? p : std::max(peak, p);
     return peak;
   }
-  const sim::Window w = g.measure().window_of(scenarios_->at(scenario));
+  const sim::Window w = g.measure().window_of(set_->scenario(scenario));
   const sim::ErrorIntegrals* in = same_window(w, m.window) ? &m.errors : nullptr;
   for (std::size_t k = 0; !in && k < m.extra_windows.size(); ++k)
     if (same_window(w, m.extra_windows[k])) in = &m.extra[k];
