@@ -553,7 +553,7 @@ TEST(JobGoals, BadGoalsAreRejectedAtTheirPaths) {
       {"window on a whole-run metric",
        goals({{{"metric", "control_tv"}, {"window", {10, 30}}, {"at_most", 1}}}),
        "/goals/1/window", "whole run"},
-      {"duplicate", goals({soft_ise()}), "/goals/1", "same goal as /goals/0"},
+      {"duplicate", goals(json::array({soft_ise()})), "/goals/1", "same goal as /goals/0"},
       {"settling without threshold", goals({{{"metric", "settling_time"}, {"at_most", 3}}}),
        "/goals/1/threshold", "needs a threshold"},
       {"steady state without tail", goals({{{"metric", "steady_state_error"}, {"at_most", 3}}}),
@@ -667,4 +667,55 @@ TEST(JobGoals, GoalValuesAreTheMetricsInTheirOwnWindows) {
   EXPECT_FALSE(e.feasible());
   EXPECT_EQ(e.fitness, tune::constrained_fitness(tune::fitness_of(e.objective), e.violation));
   EXPECT_LT(e.fitness, 0.0);
+}
+
+// A candidate whose simulations cannot run (an invalid controller) meets no goal and ranks below
+// every candidate that ran; a goal that no counted scenario defines (a settling time on a run
+// without faults) is NaN, which no limit accepts, not the aggregate of nothing.
+TEST(JobGoals, FailedCandidatesAndUndefinedGoalsMeetNoLimit) {
+  json j = with_goals(json::array(
+      {soft_ise(), {{"metric", "peak_command"}, {"window", {2, 8}}, {"at_most", 1e9}}}));
+  const tune::TuningProblem problem(tune::parse_job(j, "t"));
+  sim::ControllerConfig bad = problem.job().controller;
+  bad.Kp = std::numeric_limits<double>::quiet_NaN();
+  tune::SerialEvaluator serial;
+  const tune::CandidateOutcome failed =
+      problem.evaluate(std::span<const sim::ControllerConfig>(&bad, 1), serial)[0];
+  EXPECT_FALSE(failed.error.empty());
+  ASSERT_EQ(failed.evaluation.goals.size(), 2u);
+  EXPECT_EQ(failed.evaluation.goals[1], std::numeric_limits<double>::infinity());
+  EXPECT_FALSE(failed.evaluation.feasible());
+  EXPECT_EQ(failed.evaluation.fitness, -1.0);
+
+  json calm = with_goals(json::array(
+      {soft_ise(),
+       {{"metric", "settling_time"}, {"threshold", 0.01}, {"at_most", 5}}}));
+  for (json& s : calm["scenarios"]) s["faults"] = json::array();
+  const tune::TuningProblem quiet(tune::parse_job(calm, "t"));
+  const sim::ControllerConfig c = quiet.job().controller;
+  const tune::Evaluation e =
+      quiet.evaluate(std::span<const sim::ControllerConfig>(&c, 1), serial)[0].evaluation;
+  ASSERT_EQ(e.goals.size(), 2u);
+  EXPECT_TRUE(std::isnan(e.goals[1]));
+  EXPECT_EQ(e.violation, std::numeric_limits<double>::infinity());
+  EXPECT_FALSE(e.feasible());
+}
+
+// A run measures one settling threshold and one steady-state tail: two goals asking for
+// different ones are refused at the second one's path.
+TEST(JobGoals, TwoGoalsMayNotAskForDifferentThresholdsOrTails) {
+  json j = with_goals(json::array(
+      {soft_ise(),
+       {{"metric", "settling_time"}, {"threshold", 0.01}, {"at_most", 5}},
+       {{"metric", "settling_time"}, {"threshold", 0.1}, {"aggregate", "max"}, {"at_most", 5}},
+       {{"metric", "steady_state_error"}, {"tail", 2}, {"at_most", 1}},
+       {{"metric", "steady_state_error"}, {"tail", 3}, {"aggregate", "max"}, {"at_most", 1}}}));
+  const std::vector<FieldError> errs = errors_of(j);
+  const auto has = [&](const std::string& path, const std::string& text) {
+    for (const FieldError& e : errs)
+      if (e.path == path && e.message.find(text) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("/goals/2/threshold", "differs from /goals/1/threshold 0.01")) << errs.size();
+  EXPECT_TRUE(has("/goals/4/tail", "differs from /goals/3/tail 2")) << errs.size();
 }

@@ -733,6 +733,21 @@ void validate_goals(const Job& job, Errors& errs) {
              &MetricsConfig::settling_threshold);
     settings(g.tail, GoalMetric::steady_state_error, "tail", "steady_state_tail",
              &MetricsConfig::steady_state_tail);
+    // A run measures one threshold and one tail: two goals may not ask for different ones.
+    const auto agrees = [&](const std::optional<double>& own, const char* key,
+                            std::optional<double> GoalConfig::*member) {
+      if (!own) return;
+      for (std::size_t k = 0; k < i; ++k)
+        if (const std::optional<double>& other = job.goals[k].*member; other && *other != *own) {
+          errs.push_back({p + "/" + key, json_io::number_text(*own) + " differs from /goals/" +
+                                             std::to_string(k) + "/" + key + " " +
+                                             json_io::number_text(*other) +
+                                             " (a run measures one; give it in one place)"});
+          return;
+        }
+    };
+    agrees(g.threshold, "threshold", &GoalConfig::threshold);
+    agrees(g.tail, "tail", &GoalConfig::tail);
     json canonical = goal_shape()->write(g);
     for (std::size_t k = 0; k < seen.size(); ++k)
       if (seen[k] == canonical) {

@@ -197,6 +197,10 @@ std::vector<SimulationTask> TuningProblem::tasks(std::size_t candidates, bool re
 }
 
 Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
+  return score(std::move(per_scenario), false);
+}
+
+Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario, bool failed) const {
   Evaluation e;
   e.scenarios = std::move(per_scenario);
   std::vector<double> values;
@@ -210,11 +214,20 @@ Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
   e.objective = job_->objective.aggregate_of(std::move(values));
   e.fitness = fitness_of(e.objective);
   for (const GoalConfig& g : job_->goals) {
+    // A candidate that could not run meets no goal (its records hold no windows to read).
+    if (failed) {
+      e.goals.push_back(std::numeric_limits<double>::infinity());
+      e.violation += g.violation(e.goals.back());
+      continue;
+    }
     std::vector<double> v;  // a scenario where the metric is undefined (NaN) is left out
     for (std::size_t i = 0; i < e.scenarios.size(); ++i)
       if (counted_[i])
         if (const double x = goal_value(g, e.scenarios[i], i); !std::isnan(x)) v.push_back(x);
-    const double value = g.measure().aggregate_of(std::move(v));
+    // Undefined on every counted scenario (a settling time without faults): NaN, which no limit
+    // accepts, rather than the aggregate of nothing.
+    const double value = v.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                   : g.measure().aggregate_of(std::move(v));
     e.goals.push_back(value);
     e.violation += g.violation(value);
   }
@@ -329,7 +342,7 @@ std::vector<CandidateOutcome> TuningProblem::evaluate(
       if (t[i * S + s].record) out[i].trajectories.push_back(std::move(r.trajectory));
       if (out[i].error.empty() && !r.error.empty()) out[i].error = r.error;
     }
-    out[i].evaluation = score(std::move(per));
+    out[i].evaluation = score(std::move(per), !out[i].error.empty());
     if (!out[i].error.empty()) {
       out[i].evaluation.objective = std::numeric_limits<double>::infinity();
       // Below every candidate that ran: 0, or the worst infeasible one's -1 under limits.

@@ -23,7 +23,7 @@ template <class State, class Real, class Mid, class End>
 inline void rk4_advance(State& x, const State& k1, Real h2, Real h, Real h6, Mid&& mid,
                         End&& end) {
   const int n = static_cast<int>(x.size());
-  State xs;
+  State xs = x;  // sized like x (a dynamic Eigen vector too)
   for (int r = 0; r < n; ++r) xs[r] = x[r] + h2 * k1[r];
   const State k2 = mid(xs);
   for (int r = 0; r < n; ++r) xs[r] = x[r] + h2 * k2[r];

@@ -144,6 +144,10 @@ class TuningProblem {
   TuningProblem perturbed(std::uint64_t seed, std::uint64_t k, double eps) const;
 
  private:
+  // score(), for a candidate whose tasks failed (`failed`): its goals get +inf, as no record
+  // holds the windows they read.
+  Evaluation score(std::vector<sim::Metrics> per_scenario, bool failed) const;
+
   std::shared_ptr<const Job> job_;
   std::shared_ptr<const SimulationSet> set_;
   std::vector<bool> recoverable_, counted_;
