@@ -41,6 +41,21 @@ std::vector<FieldError> errors_of(const json& j) {
   return {};
 }
 
+// Each case, applied to Table 1, gives an error at its path whose message holds its text.
+void expect_each_case_refused(const std::vector<BadCase>& cases) {
+  for (const BadCase& c : cases) {
+    json k = table1();
+    c.mutate(k);
+    std::string all;
+    bool found = false;
+    for (const FieldError& e : errors_of(k)) {
+      found = found || (e.path == c.path && e.message.find(c.message) != std::string::npos);
+      all += "\n  " + to_string(e);
+    }
+    EXPECT_TRUE(found) << c.what << ": expected " << c.path << " ~ " << c.message << ", got" << all;
+  }
+}
+
 }  // namespace
 
 TEST(JobLoader, LoadsTable1WithPaperDefaults) {
@@ -467,17 +482,7 @@ TEST(JobLoader, MetricsBlockGivesTheSettlingThresholdAndTailAtTheirPaths) {
       {"not a number", [](json& k) { k["metrics"] = {{"steady_state_tail", "5"}}; },
        "/metrics/steady_state_tail", "expected a number"},
   };
-  for (const BadCase& c : cases) {
-    json k = table1();
-    c.mutate(k);
-    std::string all;
-    bool found = false;
-    for (const FieldError& e : errors_of(k)) {
-      found = found || (e.path == c.path && e.message.find(c.message) != std::string::npos);
-      all += "\n  " + to_string(e);
-    }
-    EXPECT_TRUE(found) << c.what << ": expected " << c.path << " ~ " << c.message << ", got" << all;
-  }
+  expect_each_case_refused(cases);
 }
 
 namespace {
@@ -581,17 +586,7 @@ TEST(JobGoals, BadGoalsAreRejectedAtTheirPaths) {
        },
        "/goals", "minimize"},
   };
-  for (const BadCase& c : cases) {
-    json k = table1();
-    c.mutate(k);
-    std::string all;
-    bool found = false;
-    for (const FieldError& e : errors_of(k)) {
-      found = found || (e.path == c.path && e.message.find(c.message) != std::string::npos);
-      all += "\n  " + to_string(e);
-    }
-    EXPECT_TRUE(found) << c.what << ": expected " << c.path << " ~ " << c.message << ", got" << all;
-  }
+  expect_each_case_refused(cases);
   // The job's metrics block gives the threshold too; one given in both places must agree.
   json j = with_goals(json::array({soft_ise(), {{"metric", "settling_time"}, {"at_most", 3}}}));
   j["metrics"] = {{"settling_threshold", 0.05}};
