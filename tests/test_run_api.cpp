@@ -168,6 +168,99 @@ TEST(RunApi, AStoppedRunWritesNothingButItsCheckpoint) {
   EXPECT_EQ(slurp(dir / "out" / "trials.csv"), slurp(dir / "whole" / "trials.csv"));
 }
 
+namespace {
+
+// A run's storage in memory: what the seam hands a storage other than the output directory (the
+// service's job store is one).
+struct MemoryStorage final : tune::RunStorage {
+  std::string checkpoint_name() const override { return "memory"; }
+  std::optional<tune::Checkpoint> load_checkpoint(const std::string& sha,
+                                                  std::uint64_t seed) override {
+    if (state.is_null()) return std::nullopt;
+    EXPECT_EQ(sha, job_sha);
+    EXPECT_EQ(seed, job_seed);
+    return tune::Checkpoint{iteration, state};
+  }
+  bool save_checkpoint(const std::string& sha, std::uint64_t seed, const tune::HistoryRow& h,
+                       const tune::Optimizer& optimizer,
+                       const std::vector<tune::Trial>& trials) override {
+    job_sha = sha;
+    job_seed = seed;
+    iteration = h.iteration;
+    state = tune::run_checkpoint(optimizer, trials);
+    ++saved;
+    return h.iteration < stop_after;
+  }
+  void describe(json& run) const override { run["where"] = "memory"; }
+  void put(const tune::RunJobResult&, const std::map<std::string, std::string>& f) override {
+    files = f;
+  }
+  std::string job_sha;
+  std::uint64_t job_seed = 0;
+  int iteration = -1, saved = 0, stop_after = 1 << 30;
+  json state;
+  std::map<std::string, std::string> files;
+};
+
+}  // namespace
+
+// The storage seam: given a storage, run_job checkpoints into it after every iteration, resumes
+// from what it holds, keeps a stopped run's files partial when asked, and hands it the files it
+// would write into a directory, byte for byte; no directory is made.
+TEST(RunApi, AStorageTakesTheCheckpointsAndFilesADirectoryWouldHold) {
+  const std::filesystem::path dir = fresh_dir("run-api-storage");
+  const tune::Job job = tune::parse_job(short_table1_job(), "short");
+  tune::SerialEvaluator serial;
+  MemoryStorage memory;
+  memory.stop_after = 0;  // the storage itself stops the run after the first iteration
+  tune::RunJobOptions o;
+  o.out = dir / "unused";
+  o.evaluator = &serial;
+  o.storage = &memory;
+  o.checkpoint = tune::CheckpointPolicy::every_iteration;
+  bool asked = false;
+  o.keep_partial = [&] { return asked = true; };
+  const tune::RunJobResult stopped = tune::run_job(job, o);
+  EXPECT_TRUE(asked);
+  EXPECT_TRUE(stopped.stopped);
+  EXPECT_TRUE(stopped.partial);
+  EXPECT_EQ(memory.saved, 1);
+  EXPECT_EQ(memory.iteration, 0);
+  ASSERT_TRUE(memory.files.count("gains.json"));
+  EXPECT_EQ(json::parse(memory.files.at("gains.json"))["optimizer"]["completed"], false);
+  const json partial_run = json::parse(memory.files.at("run.json"));
+  EXPECT_EQ(partial_run["completed"], false);
+  EXPECT_EQ(partial_run["where"], "memory");
+  EXPECT_EQ(memory.files.at("run.json"), stopped.run_json);
+
+  // Resumed from the storage's checkpoint, it ends with the bytes of a run never stopped.
+  memory.stop_after = 1 << 30;
+  memory.files.clear();
+  o.keep_partial = nullptr;
+  const tune::RunJobResult resumed = tune::run_job(job, o);
+  EXPECT_FALSE(resumed.stopped);
+  EXPECT_FALSE(resumed.partial);
+  EXPECT_EQ(memory.saved, 3);  // iterations 1 and 2 after the resume
+  EXPECT_FALSE(std::filesystem::exists(dir / "unused"));
+  tune::RunJobOptions whole;
+  whole.out = dir / "whole";
+  whole.evaluator = &serial;
+  tune::run_job(job, whole);
+  const auto w = files_under(dir / "whole");
+  ASSERT_EQ(memory.files.size(), w.size());
+  for (const auto& [name, content] : w) {
+    ASSERT_TRUE(memory.files.count(name)) << name;
+    if (name != "run.json") {
+      EXPECT_EQ(memory.files.at(name), content) << name;
+    }
+  }
+  const json rm = json::parse(memory.files.at("run.json")), rw = json::parse(w.at("run.json"));
+  EXPECT_EQ(rm["files"], rw["files"]);
+  EXPECT_EQ(rm["where"], "memory");
+  EXPECT_FALSE(rm.contains("completed"));
+  EXPECT_EQ(json::parse(resumed.run_json), rm);
+}
+
 TEST(RunApi, StudyRefusesListsItCannotRun) {
   const tune::Job job = tune::parse_job(tiny_job(), "tiny");
   EXPECT_EQ(tune::parse_seed_list("1-3,7"), (std::vector<std::uint64_t>{1, 2, 3, 7}));

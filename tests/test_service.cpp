@@ -11,10 +11,13 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <random>
 #include <set>
@@ -24,6 +27,7 @@
 #include "cli_runner.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/run/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/tune/service/job_store.hpp"
@@ -265,6 +269,45 @@ TEST(Service, LifecycleGivesTheSameGainsAsRun) {
   EXPECT_EQ(s.get("/v1/jobs?status=succeeded&limit=1&offset=1")["jobs"][0]["id"], id);
   EXPECT_EQ(s.get("/v1/jobs?status=queued")["total"], 0);
   EXPECT_EQ(s.get("/healthz")["status"], "ok");
+}
+
+// The service's job runner goes through the run API (run_job with the job store as its storage):
+// every file it stores is the one run_job gives, byte for byte, and run.json is run_job's too:
+// it now lists the run's files and its host, as only `ftctune run`'s did, with the job's id and
+// attempts in place of a job file.
+TEST(Service, StoresTheFilesOfTheRunApiByteForByte) {
+  Service s;
+  const json job = tiny_job("through-the-api");
+  const std::string id = s.submit(job)["id"];
+  ASSERT_EQ(s.wait_done(id)["status"], "succeeded");
+  tune::TbbEvaluator evaluator(2);
+  tune::RunJobOptions o;
+  o.write = false;
+  o.evaluator = &evaluator;
+  const tune::RunJobResult api = tune::run_job(tune::parse_job(job, "job"), o);
+  const std::map<std::string, std::string> expected = tune::run_files(api);
+  std::set<std::string> stored;
+  const json listing = s.get("/v1/jobs/" + id + "/files");
+  for (const json& f : listing["files"]) stored.insert(f["name"].get<std::string>());
+  std::set<std::string> names;
+  for (const auto& [name, content] : expected) names.insert(name);
+  EXPECT_EQ(stored, names);
+  for (const auto& [name, content] : expected) {
+    if (name == "run.json") continue;
+    auto r = s.client->Get(("/v1/jobs/" + id + "/files/" + name).c_str());
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << name;
+    EXPECT_EQ(r->body, content) << name;
+  }
+  const json ours = s.get("/v1/jobs/" + id + "/files/run.json"),
+             theirs = json::parse(expected.at("run.json"));
+  for (const char* key : {"files", "host", "seed", "generator", "threads", "ranks",
+                          "threads_per_rank", "evaluator", "simulations"})
+    EXPECT_EQ(ours[key], theirs[key]) << key;
+  EXPECT_EQ(ours["job_id"], id);
+  EXPECT_EQ(ours["attempts"], 1);
+  EXPECT_FALSE(ours.contains("job_file"));
+  EXPECT_FALSE(ours.contains("completed"));
 }
 
 // RFC 9112 §6.3: a request without Content-Length (nor Transfer-Encoding) has an empty body.

@@ -73,8 +73,8 @@ struct EvaluatorFor {
 // (which needs no space) with gains.json last. `replace`: what is in the way goes first (the run
 // `force` replaces, or what an earlier start of a resumed run left: rename cannot replace a
 // directory that has files). Then the checkpoint, of no more use, goes.
-void put_in_place(const RunJobResult& result, const std::map<std::string, std::string>& outputs,
-                  const fs::path& out, bool replace) {
+void put_in_place(const std::map<std::string, std::string>& files, const fs::path& out,
+                  bool replace) {
   const fs::path staging = unique_dir(out, kStagingPrefix);
   std::vector<std::string> entries;
   const auto add_entry = [&](const std::string& file) {
@@ -82,13 +82,7 @@ void put_in_place(const RunJobResult& result, const std::map<std::string, std::s
     if (std::find(entries.begin(), entries.end(), top) == entries.end()) entries.push_back(top);
   };
   try {
-    if (result.random_baseline) {
-      write_file_atomic(staging / "history-random.csv", history_csv(*result.random_baseline));
-      add_entry("history-random.csv");
-    }
-    write_file_atomic(staging / "run.json", result.run_json);
-    add_entry("run.json");
-    for (const std::string& f : write_output_files(outputs, staging)) add_entry(f);
+    for (const std::string& f : write_output_files(files, staging)) add_entry(f);
   } catch (...) {
     std::error_code ec;
     fs::remove_all(staging, ec);
@@ -98,6 +92,69 @@ void put_in_place(const RunJobResult& result, const std::map<std::string, std::s
   // gains.json is in place: the run is finished, and its checkpoint of no more use.
   fs::remove(out / kCheckpointFile);
 }
+
+// The run directory as a run's storage (`ftctune run`, Python's tune): locked for the run,
+// checkpoint.json after each iteration, the files staged and moved into place (put_in_place).
+class DirectoryStorage final : public RunStorage {
+ public:
+  DirectoryStorage(const RunJobOptions& o, const RunLog& log) : o_(o), log_(log) {}
+  // Claims the directory (the job's default one when none was given).
+  void open(const Job& job) {
+    out_ = o_.out.empty() ? default_out_dir(job.name) : o_.out;
+    if (o_.resume) {
+      // The same directory whatever it holds: the interrupted run is there.
+      lock_ = std::make_unique<DirectoryLock>(out_, log_);
+      if (!lock_->held())
+        throw InputError("--out", "",
+                         out_.string() + " is being written by another ftctune run; wait for it");
+    } else if (o_.write) {
+      lock_ = claim_run_directory(out_, !o_.out.empty(), o_.force, log_);
+    }
+  }
+  // What runs stopped before they finished left behind (after the checkpoint is read).
+  void clear_leftovers() {
+    if (o_.write) handle_leftovers(out_, log_);
+  }
+  const fs::path& out() const { return out_; }
+  std::string checkpoint_name() const override { return (out_ / kCheckpointFile).string(); }
+  std::optional<Checkpoint> load_checkpoint(const std::string& job_sha256,
+                                            std::uint64_t seed) override {
+    if (!o_.resume) return std::nullopt;
+    if (fs::exists(out_ / kCheckpointFile)) {
+      Checkpoint c = read_checkpoint(out_ / kCheckpointFile, job_sha256, seed);
+      say(log_, LogLevel::info,
+          "resuming from " + checkpoint_name() + " after iteration " +
+              std::to_string(c.iteration));
+      return c;
+    }
+    if (fs::exists(out_ / "gains.json"))
+      throw InputError(
+          "--resume", "",
+          out_.string() +
+              " holds a finished run (gains.json): nothing to resume (a run written elsewhere is "
+              "resumed with --out DIR)");
+    // A batch script can always pass --resume: its first start has nothing to resume.
+    say(log_, LogLevel::info,
+        "no checkpoint in " + out_.string() + ": starting from the first iteration");
+    return std::nullopt;
+  }
+  bool save_checkpoint(const std::string& job_sha256, std::uint64_t seed, const HistoryRow& h,
+                       const Optimizer& optimizer, const std::vector<Trial>& trials) override {
+    write_file_atomic(out_ / kCheckpointFile,
+                      checkpoint_text(job_sha256, seed, h.iteration,
+                                      run_checkpoint(optimizer, trials)));
+    return true;
+  }
+  void put(const RunJobResult&, const std::map<std::string, std::string>& files) override {
+    put_in_place(files, out_, o_.force || o_.resume);
+  }
+
+ private:
+  const RunJobOptions& o_;
+  const RunLog& log_;
+  fs::path out_;
+  std::unique_ptr<DirectoryLock> lock_;
+};
 
 }  // namespace
 
@@ -111,60 +168,48 @@ std::string parameters_text(const std::vector<std::string>& names, const Decisio
   return s;
 }
 
+std::map<std::string, std::string> run_files(const RunJobResult& result) {
+  std::map<std::string, std::string> files = output_files(result.outcome);
+  if (result.random_baseline)
+    files["history-random.csv"] = history_csv(*result.random_baseline);
+  files["run.json"] = result.run_json;
+  return files;
+}
+
 RunJobResult run_job(const Job& job, const RunJobOptions& o) {
   const RunLog& log = o.log;
   if (!job.tuning)
     throw InputError(o.job_file, "/tuning", "is required by ftctune run (what should be tuned?)");
-  if (o.resume && o.force) throw InputError("--resume", "", "cannot be combined with --force");
-  if (o.resume && !o.write)
+  if (!o.storage && o.resume && o.force)
+    throw InputError("--resume", "", "cannot be combined with --force");
+  if (!o.storage && o.resume && !o.write)
     throw InputError("--resume", "", "needs the run's output directory (write = false)");
   // Memory by design: a job whose run would not fit is refused before any work.
   check_memory_budget(job, memory_budget_bytes(), o.job_file);
-  fs::path out = o.out.empty() ? default_out_dir(job.name) : o.out;
   const std::uint64_t seed = o.seed.value_or(job.tuning->seed);
   const std::string job_sha = canonical_job_sha256(job);
-  std::unique_ptr<DirectoryLock> lock;
-  std::optional<Checkpoint> resumed;
-  if (o.resume) {
-    // The same directory whatever it holds: the interrupted run is there.
-    lock = std::make_unique<DirectoryLock>(out, log);
-    if (!lock->held())
-      throw InputError("--out", "",
-                       out.string() + " is being written by another ftctune run; wait for it");
-    if (fs::exists(out / kCheckpointFile)) {
-      resumed = read_checkpoint(out / kCheckpointFile, job_sha, seed);
-      say(log, LogLevel::info,
-          "resuming from " + (out / kCheckpointFile).string() + " after iteration " +
-              std::to_string(resumed->iteration));
-    } else if (fs::exists(out / "gains.json")) {
-      throw InputError(
-          "--resume", "",
-          out.string() +
-              " holds a finished run (gains.json): nothing to resume (a run written elsewhere is "
-              "resumed with --out DIR)");
-    } else {
-      // A batch script can always pass --resume: its first start has nothing to resume.
-      say(log, LogLevel::info,
-          "no checkpoint in " + out.string() + ": starting from the first iteration");
-    }
-  } else if (o.write) {
-    lock = claim_run_directory(out, !o.out.empty(), o.force, log);
-  }
-  if (o.write) handle_leftovers(out, log);
+  // Where the checkpoints and files go: the caller's storage, or the output directory.
+  std::optional<DirectoryStorage> directory;
+  if (!o.storage) directory.emplace(o, log).open(job);
+  RunStorage& storage = o.storage ? *o.storage : *directory;
+  const bool writes = o.storage || o.write;
+  const std::optional<Checkpoint> resumed = storage.load_checkpoint(job_sha, seed);
+  if (directory) directory->clear_leftovers();
   const std::int64_t total = job.tuning->algorithm->evaluations();
   std::vector<std::string> names;
   for (const ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
 
   RunJobResult result;
-  if (o.write) result.out = out;
+  if (directory && o.write) result.out = directory->out();
   const std::string started = utc_now();
   const auto t0 = clock_type::now();
   EvaluatorFor evaluator(o.evaluator, o.threads);
   RunOptions ro;
   ro.seed = o.seed;
+  ro.max_trajectory_rows = o.max_trajectory_rows;
   if (resumed) ro.resume = &resumed->state;
   // Checkpoints: asked for, continuing one, or once the run looks like taking over a minute.
-  const bool never = o.checkpoint == CheckpointPolicy::never || !o.write;
+  const bool never = o.checkpoint == CheckpointPolicy::never || !writes;
   bool checkpointing = !never && (o.checkpoint == CheckpointPolicy::every_iteration || resumed);
   // Evaluations done before this process started (one trial each), for the ETA.
   const auto evaluations_before =
@@ -177,12 +222,13 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
     if (!checkpointing && !never && elapsed + eta > o.checkpoint_after_seconds) {
       checkpointing = true;
       say(log, LogLevel::info,
-          "this run will take over a minute: it writes " + (out / kCheckpointFile).string() +
+          "this run will take over a minute: it writes " + storage.checkpoint_name() +
               " after every iteration (ftctune run --resume continues from it)");
     }
-    if (checkpointing)
-      write_file_atomic(out / kCheckpointFile, checkpoint_text(job_sha, seed, h.iteration,
-                                                               run_checkpoint(optimizer, trials)));
+    if (checkpointing && !storage.save_checkpoint(job_sha, seed, h, optimizer, trials)) {
+      result.stopped = true;
+      return false;
+    }
     if (!o.on_iteration) return true;
     const bool go_on = o.on_iteration(
         IterationReport{h, total, job.tuning->algorithm->iterations(), elapsed, eta});
@@ -206,11 +252,50 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
       if (!resumed || e.source() != "checkpoint") throw;
       std::vector<FieldError> errors = e.errors();
       for (FieldError& f : errors) f.path = "/state" + f.path;
-      throw InputError((out / kCheckpointFile).string(), std::move(errors));
+      throw InputError(storage.checkpoint_name(), std::move(errors));
     }
   }();
   result.wall_seconds = std::chrono::duration<double>(clock_type::now() - t0).count();
-  if (result.stopped) return result;
+  // run.json: what run_metadata() says, and where, when and from what (the storage's own fields
+  // last).
+  const auto describe = [&](const std::map<std::string, std::string>& outputs) {
+    json run = run_metadata(result.outcome, result.wall_seconds);
+    json files = json::array();
+    for (const auto& [name, content] : outputs) files.push_back(name);
+    if (result.random_baseline) {
+      files.push_back("history-random.csv");
+      run["simulations"] =
+          run["simulations"].get<std::int64_t>() + result.random_baseline->simulations;
+    }
+    files.push_back("run.json");
+    run["files"] = files;
+    run["started_at"] = started;
+    run["host"] = hostname();
+    run["job_file"] = o.job_file;
+    if (result.stopped) run["completed"] = false;
+    storage.describe(run);
+    result.files.clear();
+    for (const json& f : files) result.files.push_back(f.get<std::string>());
+    result.run_json = run.dump(2) + "\n";
+  };
+  if (result.stopped) {
+    // Its best so far, compared as a finished run's best is, when the caller keeps it.
+    if (!writes || !o.keep_partial || result.outcome.optimization.history.empty() ||
+        !o.keep_partial())
+      return result;
+    try {
+      compare_best(result.outcome, *evaluator.use, o.max_trajectory_rows);
+      std::map<std::string, std::string> files = output_files(result.outcome);
+      describe(files);
+      files["run.json"] = result.run_json;
+      storage.put(result, files);
+      result.partial = true;
+    } catch (const std::exception& e) {
+      say(log, LogLevel::warn,
+          std::string("the results of the stopped run could not be made: ") + e.what());
+    }
+    return result;
+  }
   const TuningOutcome& r = result.outcome;
 
   // All computing first, then the files, gains.json last: a run stopped on the way (a full
@@ -228,25 +313,12 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
             g6(result.random_baseline->optimization.best_fitness) + " (" +
             parameters_text(names, result.random_baseline->optimization.best) + ")");
   }
-  json run = run_metadata(r, result.wall_seconds);
   // Every file of the run, and every simulation, the random-search baseline's included.
-  const std::map<std::string, std::string> outputs = output_files(r);
-  json files = json::array();
-  for (const auto& [name, content] : outputs) files.push_back(name);
-  if (result.random_baseline) {
-    files.push_back("history-random.csv");
-    run["simulations"] =
-        run["simulations"].get<std::int64_t>() + result.random_baseline->simulations;
-  }
-  files.push_back("run.json");
-  run["files"] = files;
-  run["started_at"] = started;
-  run["host"] = hostname();
-  run["job_file"] = o.job_file;
-  for (const json& f : files) result.files.push_back(f.get<std::string>());
-  result.run_json = run.dump(2) + "\n";
-
-  if (o.write) put_in_place(result, outputs, out, o.force || o.resume);
+  std::map<std::string, std::string> files = output_files(r);
+  describe(files);
+  if (result.random_baseline) files["history-random.csv"] = history_csv(*result.random_baseline);
+  files["run.json"] = result.run_json;
+  if (writes) storage.put(result, files);
   for (const std::string& w : r.warnings) say(log, LogLevel::warn, w);
   return result;
 }
@@ -257,7 +329,7 @@ fs::path write_run(const RunJobResult& result, const fs::path& out, bool force, 
   fs::path dir = out;
   const std::unique_ptr<DirectoryLock> lock = claim_run_directory(dir, true, force, log);
   handle_leftovers(dir, log);
-  put_in_place(result, output_files(result.outcome), dir, force);
+  put_in_place(run_files(result), dir, force);
   return dir;
 }
 

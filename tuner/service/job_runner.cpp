@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ftc/tune/job/job.hpp"
+#include "ftc/tune/run/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
@@ -21,6 +22,103 @@ std::string megabytes(std::uint64_t bytes) {
   std::snprintf(buf, sizeof buf, "%.1f MB", static_cast<double>(bytes) / 1e6);
   return buf;
 }
+
+// The job store as a run's storage (run/api.hpp): the run API's run_job() tunes the job as
+// `ftctune run` does and hands its checkpoints and files here. A checkpoint is the optimiser's
+// state with only the iteration's new trials (record_progress, O(trials) in all), refused past
+// the job's byte limit (which stops the run); the files are kept for the runner, which stores
+// them with the job's final state in one transaction (held in memory while the store cannot
+// write).
+class JobStoreStorage final : public RunStorage {
+ public:
+  JobStoreStorage(JobStore& store, const JobRecord& rec, std::uint64_t max_bytes,
+                  std::function<void()> wrote, std::function<void(const StoreError&)> failed,
+                  std::function<void()> changed)
+      : store_(store),
+        rec_(rec),
+        max_bytes_(max_bytes),
+        wrote_(std::move(wrote)),
+        failed_(std::move(failed)),
+        changed_(std::move(changed)) {}
+
+  std::string checkpoint_name() const override { return "job " + rec_.id + "'s checkpoint"; }
+  std::optional<Checkpoint> load_checkpoint(const std::string&, std::uint64_t) override {
+    const std::optional<std::string> optimizer = store_.checkpoint(rec_.id);
+    if (!optimizer) {
+      spdlog::info("job {} ({}) started", rec_.id, rec_.name);
+      return std::nullopt;
+    }
+    // The optimiser's state, with the trials recorded beside it.
+    json trials = json::array();
+    for (const std::string& rows : store_.checkpoint_trials(rec_.id)) {
+      trial_bytes_ += rows.size();
+      for (json& t : json::parse(rows)) trials.push_back(std::move(t));
+    }
+    stored_trials_ = trials.size();
+    spdlog::info("job {} resumes after iteration {} (attempt {})", rec_.id, rec_.iteration,
+                 rec_.attempts);
+    return Checkpoint{rec_.iteration,
+                      json{{"optimizer", json::parse(*optimizer)}, {"trials", std::move(trials)}}};
+  }
+  bool save_checkpoint(const std::string&, std::uint64_t, const HistoryRow& h, const Optimizer& o,
+                       const std::vector<Trial>& trials) override {
+    json best = json::object();
+    for (std::size_t i = 0; i < names_.size() && i < h.best.size(); ++i)
+      best[names_[i]] = h.best[i];
+    const std::string rows = trials_json(trials, stored_trials_).dump();
+    const std::string optimizer = o.state().dump();
+    const std::uint64_t bytes = trial_bytes_ + rows.size() + optimizer.size();
+    if (bytes > max_bytes_) {
+      too_large = "its checkpoint (the optimiser's state and the trials so far) reached " +
+                  megabytes(bytes) + " after iteration " + std::to_string(h.iteration) +
+                  ", above the server's limit of " + megabytes(max_bytes_) +
+                  " per job (--max-stored-mib): ask for fewer evaluations";
+      return false;
+    }
+    try {
+      store_.record_progress(rec_.id, h.iteration, h.evaluations, h.best_fitness, best, optimizer,
+                             rows);
+      wrote_();
+      changed_();
+      stored_trials_ = trials.size();
+      trial_bytes_ += rows.size();
+    } catch (const StoreError& e) {
+      if (!e.transient()) throw;
+      // The run goes on: the next checkpoint carries these trials too, and a crash meanwhile
+      // resumes from the last one stored.
+      failed_(e);
+    }
+    return true;
+  }
+  void describe(json& run) const override {
+    // Not a file: the job's id, when it first started and how often.
+    run.erase("job_file");
+    run["job_id"] = rec_.id;
+    run["started_at"] = rec_.started_at;
+    run["attempts"] = rec_.attempts;
+  }
+  void put(const RunJobResult&, const std::map<std::string, std::string>& made) override {
+    files = made;
+  }
+
+  void name_parameters(const Job& job) {
+    for (const ParameterBounds& b : job.tuning->parameters) names_.push_back(b.name);
+  }
+
+  std::string too_large;                      // why the run was stopped, if its checkpoint was
+  std::map<std::string, std::string> files;  // put(): the run's files
+
+ private:
+  JobStore& store_;
+  const JobRecord& rec_;
+  std::uint64_t max_bytes_;
+  std::function<void()> wrote_;
+  std::function<void(const StoreError&)> failed_;
+  std::function<void()> changed_;
+  std::vector<std::string> names_;
+  std::size_t stored_trials_ = 0;
+  std::uint64_t trial_bytes_ = 0;  // of the trials checkpointed so far
+};
 
 }  // namespace
 
@@ -221,105 +319,58 @@ void JobRunner::worker_loop() {
   }
 }
 
-std::map<std::string, std::string> JobRunner::partial_files(
-    const std::string& id, TuningOutcome& r, BatchEvaluator& evaluator,
-    std::chrono::steady_clock::time_point t0) {
-  if (r.optimization.history.empty()) return {};
-  try {
-    compare_best(r, evaluator, opt_.trajectory_rows);
-    std::map<std::string, std::string> files = output_files(r);
-    json run = run_metadata(
-        r, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    run["job_id"] = id;
-    run["completed"] = false;
-    files["run.json"] = run.dump(2) + "\n";
-    std::uint64_t bytes = 0;
-    for (const auto& [name, content] : files) bytes += content.size();
-    if (bytes > opt_.max_stored_bytes) {
-      spdlog::warn("job {}: its partial results take {}, above the limit of {}: not kept", id,
-                   megabytes(bytes), megabytes(opt_.max_stored_bytes));
-      return {};
-    }
-    spdlog::info("job {}: the results of its {} iteration(s) are kept, marked partial", id,
-                 r.optimization.history.size());
-    return files;
-  } catch (const std::exception& e) {
-    spdlog::warn("job {}: its partial results could not be made: {}", id, e.what());
-    return {};
-  }
-}
-
 void JobRunner::run(const JobRecord& rec) {
   const std::string& id = rec.id;
-  const auto t0 = std::chrono::steady_clock::now();
   Held outcome;
   const auto failed = [&](const std::string& why) {
     outcome = Held{{JobStatus::failed, why, JobStore::timestamp(), 0}, {}};
   };
+  const auto cancelled = [&] { return store_.cancel_requested(id) || cancel_deferred(id); };
+  const auto bytes_of = [](const std::map<std::string, std::string>& files) {
+    std::uint64_t bytes = 0;
+    for (const auto& [name, content] : files) bytes += content.size();
+    return bytes;
+  };
   try {
     const Job job = parse_job_text(store_.job_json(id), "job " + id);
-    std::vector<std::string> names;
-    for (const ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
-    const std::optional<std::string> checkpoint = store_.checkpoint(id);
-    json state;
-    RunOptions ro;
-    ro.max_trajectory_rows = opt_.trajectory_rows;
-    std::size_t stored_trials = 0;
-    std::uint64_t trial_bytes = 0;  // of the trials checkpointed so far
-    if (checkpoint) {
-      // The optimiser's state, with the trials recorded beside it.
-      json trials = json::array();
-      for (const std::string& rows : store_.checkpoint_trials(id)) {
-        trial_bytes += rows.size();
-        for (json& t : json::parse(rows)) trials.push_back(std::move(t));
-      }
-      stored_trials = trials.size();
-      state = {{"optimizer", json::parse(*checkpoint)}, {"trials", std::move(trials)}};
-      ro.resume = &state;
-      spdlog::info("job {} resumes after iteration {} (attempt {})", id, rec.iteration,
-                   rec.attempts);
-    } else {
-      spdlog::info("job {} ({}) started", id, rec.name);
-    }
-    std::string too_large;
-    ro.observer = [&](const HistoryRow& h, const Optimizer& o, const std::vector<Trial>& trials) {
-      json best = json::object();
-      for (std::size_t i = 0; i < names.size() && i < h.best.size(); ++i)
-        best[names[i]] = h.best[i];
-      const std::string rows = trials_json(trials, stored_trials).dump();
-      const std::string optimizer = o.state().dump();
-      const std::uint64_t bytes = trial_bytes + rows.size() + optimizer.size();
-      if (bytes > opt_.max_stored_bytes) {
-        too_large = "its checkpoint (the optimiser's state and the trials so far) reached " +
-                    megabytes(bytes) + " after iteration " + std::to_string(h.iteration) +
-                    ", above the server's limit of " + megabytes(opt_.max_stored_bytes) +
-                    " per job (--max-stored-mib): ask for fewer evaluations";
-        return false;
-      }
-      try {
-        store_.record_progress(id, h.iteration, h.evaluations, h.best_fitness, best, optimizer,
-                               rows);
-        store_wrote();
-        changed(id);
-        stored_trials = trials.size();
-        trial_bytes += rows.size();
-      } catch (const StoreError& e) {
-        if (!e.transient()) throw;
-        // The run goes on: the next checkpoint carries these trials too, and a crash meanwhile
-        // resumes from the last one stored.
-        store_failed(e);
-      }
-      return !stopping_ && !store_.cancel_requested(id) && !cancel_deferred(id);
-    };
+    JobStoreStorage storage(
+        store_, rec, opt_.max_stored_bytes, [this] { store_wrote(); },
+        [this](const StoreError& e) { store_failed(e); }, [this, &id] { changed(id); });
+    storage.name_parameters(job);
     const std::unique_ptr<BatchEvaluator> evaluator = make_evaluator_();
-    TuningOutcome r = tune(job, *evaluator, ro);
-    if (!too_large.empty()) {
-      failed(too_large);
-    } else if (store_.cancel_requested(id) || cancel_deferred(id)) {
-      outcome = Held{{JobStatus::cancelled, "", "", 0}, partial_files(id, r, *evaluator, t0)};
-      for (const auto& [name, content] : outcome.files) outcome.state.bytes += content.size();
-      outcome.state.finished_at = JobStore::timestamp();
-    } else if (!r.completed()) {
+    // The run API's run, as `ftctune run` runs it, into the store.
+    RunJobOptions ro;
+    ro.job_file = "job " + id;
+    ro.storage = &storage;
+    ro.evaluator = evaluator.get();
+    ro.checkpoint = CheckpointPolicy::every_iteration;
+    ro.max_trajectory_rows = opt_.trajectory_rows;
+    ro.on_iteration = [&](const IterationReport&) { return !stopping_ && !cancelled(); };
+    // A cancelled job keeps its results so far (a stopping server's job goes back to the queue).
+    ro.keep_partial = [&] { return storage.too_large.empty() && cancelled(); };
+    ro.log = [&id](LogLevel level, const std::string& message) {
+      if (level == LogLevel::warn)
+        spdlog::warn("job {}: {}", id, message);
+      else
+        spdlog::debug("job {}: {}", id, message);
+    };
+    const RunJobResult r = run_job(job, ro);
+    if (!storage.too_large.empty()) {
+      failed(storage.too_large);
+    } else if (cancelled()) {
+      // Stopped after an iteration (its partial results), or finished as the cancel came.
+      std::map<std::string, std::string> files;
+      if (bytes_of(storage.files) > opt_.max_stored_bytes)
+        spdlog::warn("job {}: its partial results take {}, above the limit of {}: not kept", id,
+                     megabytes(bytes_of(storage.files)), megabytes(opt_.max_stored_bytes));
+      else
+        files = std::move(storage.files);
+      if (!files.empty())
+        spdlog::info("job {}: the results of its {} iteration(s) are kept, marked partial", id,
+                     r.outcome.optimization.history.size());
+      outcome = Held{{JobStatus::cancelled, "", JobStore::timestamp(), bytes_of(files)},
+                     std::move(files)};
+    } else if (r.stopped) {
       try {
         store_.requeue(id);
         spdlog::info("job {} checkpointed and put back in the queue", id);
@@ -331,25 +382,17 @@ void JobRunner::run(const JobRecord& rec) {
       }
       return;
     } else {
-      std::map<std::string, std::string> files = output_files(r);
-      const double wall =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      json run = run_metadata(r, wall);
-      run["job_id"] = id;
-      run["started_at"] = rec.started_at;
-      run["attempts"] = rec.attempts;
-      files["run.json"] = run.dump(2) + "\n";
-      std::uint64_t bytes = 0;
-      for (const auto& [name, content] : files) bytes += content.size();
+      const std::uint64_t bytes = bytes_of(storage.files);
       if (bytes > opt_.max_stored_bytes) {
         failed("its results take " + megabytes(bytes) + ", above the server's limit of " +
                megabytes(opt_.max_stored_bytes) +
                " per job (--max-stored-mib): ask for fewer evaluations, scenarios or compared "
                "controllers");
       } else {
-        outcome = Held{{JobStatus::succeeded, "", JobStore::timestamp(), bytes}, std::move(files)};
-        spdlog::info("job {} succeeded in {:.2f} s: J = {:.6g}", id, wall,
-                     r.optimization.best_fitness);
+        outcome = Held{{JobStatus::succeeded, "", JobStore::timestamp(), bytes},
+                       std::move(storage.files)};
+        spdlog::info("job {} succeeded in {:.2f} s: J = {:.6g}", id, r.wall_seconds,
+                     r.outcome.optimization.best_fitness);
       }
     }
   } catch (const std::exception& e) {

@@ -91,12 +91,6 @@ class JobRunner {
   };
   void worker_loop();
   void run(const JobRecord& rec);
-  // The result files of a job cancelled after `r`'s iterations: its best so far compared as a
-  // finished run's best is, gains.json saying optimizer.completed false. Empty when it ran no
-  // iteration, or they would take more than a job may store.
-  std::map<std::string, std::string> partial_files(const std::string& id, TuningOutcome& r,
-                                                   BatchEvaluator& evaluator,
-                                                   std::chrono::steady_clock::time_point t0);
   // Writes a finished job's final state; throws a transient StoreError when the store refused
   // it for now (a job whose files SQLite will never take fails instead). Does not take
   // held_mutex_.

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -18,6 +19,7 @@
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
+#include "ftc/tune/run/checkpoint.hpp"
 #include "ftc/tune/run/evaluate.hpp"
 #include "ftc/tune/run/run_directory.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
@@ -70,6 +72,35 @@ struct IterationReport {
   double elapsed = 0.0, eta = 0.0;     // seconds, of this process
 };
 
+struct RunJobResult;
+
+// Where a run keeps what it writes: the checkpoint it continues from, the one after each
+// iteration, and its finished files. run_job() and resume_job() use the run's output directory
+// (the command line and Python: checkpoint.json, and the files staged, then moved into place with
+// gains.json last) unless they are given another, as the service gives its job store.
+class RunStorage {
+ public:
+  virtual ~RunStorage() = default;
+  // Where the checkpoints go, for messages ("out/table1/checkpoint.json").
+  virtual std::string checkpoint_name() const = 0;
+  // Called once before the run: the checkpoint to continue from (its iteration and its
+  // RunOptions::resume state), or nullopt to start from the first iteration. Throws InputError
+  // for a checkpoint that is damaged or of another job or seed.
+  virtual std::optional<Checkpoint> load_checkpoint(const std::string& job_sha256,
+                                                    std::uint64_t seed) = 0;
+  // After iteration h, when the run checkpoints: what a resume needs (run_checkpoint() of the
+  // optimiser and every trial so far; a storage may keep only the trials new since its last
+  // call). False stops the run (RunJobResult::stopped), as on_iteration's false does.
+  virtual bool save_checkpoint(const std::string& job_sha256, std::uint64_t seed,
+                               const HistoryRow& h, const Optimizer& optimizer,
+                               const std::vector<Trial>& trials) = 0;
+  // Its own fields of run.json (the service's job id and attempts), added before it is written.
+  virtual void describe(nlohmann::json& run) const { (void)run; }
+  // The files of a finished run, or of a stopped one kept partial (RunJobOptions::keep_partial):
+  // name -> content, output_files() with run.json (and history-random.csv with a baseline).
+  virtual void put(const RunJobResult& result, const std::map<std::string, std::string>& files) = 0;
+};
+
 struct RunJobOptions {
   // The job's file, as run.json records it (job_file) and errors name it.
   std::string job_file;
@@ -90,6 +121,15 @@ struct RunJobOptions {
   // Called after every iteration (after the checkpoint is written); false stops the run, which
   // then writes no files (its checkpoint, if it wrote one, stays for a resume).
   std::function<bool(const IterationReport&)> on_iteration;
+  // Asked when the run was stopped (by on_iteration or the storage) after an iteration: true
+  // keeps its files so far, its best compared as a finished run's best is (compare_best), with
+  // gains.json recording optimizer.completed false and run.json "completed": false. Null: none.
+  std::function<bool()> keep_partial;
+  // Null: the output directory `out` (with `write`). Else the checkpoints and files go to it, and
+  // out, force and write do not apply; it is resumed whenever it holds a checkpoint.
+  RunStorage* storage = nullptr;
+  // At most this many rows per comparison trajectory (0: no limit; RunOptions's).
+  std::int64_t max_trajectory_rows = 0;
   RunLog log;
 };
 
@@ -100,7 +140,8 @@ struct RunJobResult {
   std::vector<std::string> files;                // as run.json lists them
   std::string run_json;                          // run.json's text
   double wall_seconds = 0.0;
-  bool stopped = false;  // on_iteration stopped it: nothing was written
+  bool stopped = false;  // on_iteration or the storage stopped it: nothing was written...
+  bool partial = false;  // ...but what keep_partial kept (the files of a partial run)
   // No candidate met the job's hard goals (fitness < 0, the constraint rule's): gains.json holds
   // the least violating one (the command line exits 3).
   bool infeasible() const { return outcome.optimization.best_fitness < 0.0; }
@@ -115,6 +156,9 @@ struct RunJobResult {
 // without a tuning section, one over the memory budget, or an output directory that holds a run
 // (without force) or that another run is writing.
 RunJobResult run_job(const Job& job, const RunJobOptions& options = {});
+// Every file of a finished (or partial) run_job() result, name -> content: output_files(), run.json
+// as the result holds it, and history-random.csv with a baseline. What the storage is given.
+std::map<std::string, std::string> run_files(const RunJobResult& result);
 // The files of a finished run_job() result into `out`, as run_job writes them (the same bytes;
 // run.json as the result holds it): `out` is locked, refused when it holds a run unless `force`
 // (InputError "--out"), and the files go through a staging directory, gains.json last. For a
