@@ -1665,3 +1665,79 @@ TEST(Cli, ServeRefusesLimitsThatCannotHold) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--max-stored-mib"), std::string::npos) << r.err;
 }
+
+// A blocking evaluator for the runner: its jobs stop after their second batch (the initial
+// population and one iteration are checkpointed) and wait there, running, until released.
+struct Gate {
+  std::mutex mutex;
+  std::condition_variable opened;
+  bool open = false;
+  void release() {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      open = true;
+    }
+    opened.notify_all();
+  }
+};
+struct GatedEvaluator final : tune::BatchEvaluator {
+  GatedEvaluator(std::shared_ptr<Gate> g) : gate(std::move(g)) {}
+  std::vector<tune::TaskResult> run(const tune::SimulationBatch& batch) override {
+    if (++batches > 2) {
+      std::unique_lock<std::mutex> lock(gate->mutex);
+      gate->opened.wait(lock, [&] { return gate->open; });
+    }
+    return inner.run(batch);
+  }
+  int concurrency() const override { return inner.concurrency(); }
+  std::string name() const override { return inner.name(); }
+  std::shared_ptr<Gate> gate;
+  tune::TbbEvaluator inner{1};
+  int batches = 0;
+};
+// Releases the gate however the test ends (declared after the service: destroyed before it).
+struct ReleaseOnExit {
+  std::shared_ptr<Gate> gate;
+  ~ReleaseOnExit() { gate->release(); }
+};
+
+// A running job's partial gains (a comparison of its best so far) and trials are made once per
+// checkpoint: twenty requests alternating between two running jobs, each held at one iteration,
+// cost two comparisons, not twenty, and every answer is the same bytes.
+TEST(Service, PartialResultsCostOneComparisonPerCheckpoint) {
+  auto gate = std::make_shared<Gate>();
+  std::atomic<int> made{0};
+  tune::ServiceOptions o;
+  o.concurrent_jobs = 2;
+  o.evaluator = [gate, &made]() -> std::unique_ptr<tune::BatchEvaluator> {
+    // The first two are the runner's (one per job); the others the requests' comparisons.
+    if (made++ < 2) return std::make_unique<GatedEvaluator>(gate);
+    return std::make_unique<tune::TbbEvaluator>(1);
+  };
+  Service s(o);
+  ReleaseOnExit release{gate};
+  const std::string a = s.submit(long_job("held-a"))["id"], b = s.submit(long_job("held-b"))["id"];
+  wait_running(s, a, 1);
+  wait_running(s, b, 1);
+  ASSERT_EQ(made.load(), 2);
+  std::map<std::string, std::string> gains, trials;
+  for (int i = 0; i < 10; ++i)
+    for (const std::string& id : {a, b}) {
+      auto g = s.client->Get(("/v1/jobs/" + id + "/gains").c_str());
+      ASSERT_TRUE(g);
+      ASSERT_EQ(g->status, 200) << g->body;
+      EXPECT_EQ(g->get_header_value("Ftctune-Partial"), "true");
+      if (i == 0) gains[id] = g->body;
+      EXPECT_EQ(g->body, gains[id]);
+      auto t = s.client->Get(("/v1/jobs/" + id + "/trials").c_str());
+      ASSERT_EQ(t->status, 200) << t->body;
+      if (i == 0) trials[id] = t->body;
+      EXPECT_EQ(t->body, trials[id]);
+    }
+  EXPECT_EQ(made.load(), 2 + 2);  // one comparison per job's checkpoint
+  EXPECT_EQ(json::parse(gains[a])["history"].size(), 2u);  // iterations 0 and 1
+  EXPECT_EQ(json::parse(gains[a])["optimizer"]["completed"], false);
+  gate->release();
+  EXPECT_EQ(s.wait_done(a)["status"], "succeeded");
+  EXPECT_EQ(s.wait_done(b)["status"], "succeeded");
+}

@@ -537,7 +537,13 @@ void Api::cancel(const std::string& id, httplib::Response& res) {
 
 void Api::changed(const std::string& id) noexcept {
   try {
-    if (const std::optional<JobRecord> r = store_.get(id))
+    const std::optional<JobRecord> r = store_.get(id);
+    if (!r || r->status != JobStatus::running) {
+      // Its partial results are of no more use (a finished job serves its stored files).
+      std::lock_guard<std::mutex> lock(partial_mutex_);
+      partial_.erase(id);
+    }
+    if (r)
       hub_.publish("job", id, encode(view(*r)));
     else
       hub_.publish("deleted", id, encode(json{{"id", id}}));
@@ -595,10 +601,13 @@ void Api::events(const std::string& job, httplib::Response& res) {
 }
 
 // The partial results of a running job, from its last checkpoint: history and trials as they
-// stand, and gains.json for its best so far (compared as a finished run's best is; computed on
-// request, kept until the next iteration).
+// stand, and gains.json for its best so far (compared as a finished run's best is). Each is made
+// at most once per checkpoint: kept per running job until its next iteration, made by one
+// request at a time (the others wait for it, then take what it made), and dropped once the job
+// stops running. N requests cost one comparison, however they interleave across jobs.
 void Api::running_result(const httplib::Request& req, httplib::Response& res,
-                         const std::string& id, const std::string& what) {
+                         const JobRecord& job, const std::string& what) {
+  const std::string& id = job.id;
   const std::string format = req.has_param("format") ? req.get_param_value("format") : "";
   if (what == "comparison" || what == "report")
     return send_error(res, 409, "not_ready",
@@ -607,27 +616,60 @@ void Api::running_result(const httplib::Request& req, httplib::Response& res,
                           "are served now)");
   if (what == "history" && !format.empty() && format != "csv" && format != "json")
     return send_error(res, 400, "invalid_parameter", "format must be csv or json");
-  const std::optional<JobStore::Checkpoint> c = store_.checkpoint_with_trials(id);
-  if (!c)
-    return send_error(res, 409, "not_ready",
-                      "job " + id + " has not finished its first iteration yet");
-  if (what == "gains") {
+  const bool gains = what == "gains";
+  // What is kept for the job, if it is of its latest checkpoint (the record's iteration, written
+  // with it) and has what is asked for.
+  const auto kept = [&]() -> std::shared_ptr<const PartialResults> {
     std::lock_guard<std::mutex> lock(partial_mutex_);
-    if (partial_gains_.id != id || partial_gains_.iteration != c->iteration) {
-      TuningOutcome r = outcome_of(id, *c);
-      const std::unique_ptr<BatchEvaluator> evaluator =
-          opt_.evaluator ? opt_.evaluator() : std::make_unique<TbbEvaluator>(opt_.threads);
-      compare_best(r, *evaluator, opt_.trajectory_rows);
-      partial_gains_ = {id, c->iteration, gains_document(r).dump(2) + "\n"};
+    const auto it = partial_.find(id);
+    if (it == partial_.end() || it->second->iteration < job.iteration ||
+        (gains && !it->second->gains))
+      return nullptr;
+    return it->second;
+  };
+  std::shared_ptr<const PartialResults> p = kept();
+  if (!p) {
+    std::lock_guard<std::mutex> making(partial_making_mutex_);
+    p = kept();  // made by the request this one waited for
+    if (!p) {
+      const std::optional<JobStore::Checkpoint> c = store_.checkpoint_with_trials(id);
+      if (!c)
+        return send_error(res, 409, "not_ready",
+                          "job " + id + " has not finished its first iteration yet");
+      auto made = std::make_shared<PartialResults>();
+      {
+        std::lock_guard<std::mutex> lock(partial_mutex_);
+        const auto it = partial_.find(id);
+        if (it != partial_.end() && it->second->iteration == c->iteration) *made = *it->second;
+      }
+      made->iteration = c->iteration;
+      if (made->trials.empty() || (gains && !made->gains)) {
+        TuningOutcome r = outcome_of(id, *c);
+        made->trials = trials_csv(r);
+        made->history = history_csv(r);
+        made->history_rows = encode(history_rows(r));
+        if (gains) {
+          const std::unique_ptr<BatchEvaluator> evaluator =
+              opt_.evaluator ? opt_.evaluator() : std::make_unique<TbbEvaluator>(opt_.threads);
+          compare_best(r, *evaluator, opt_.trajectory_rows);
+          made->gains = gains_document(r).dump(2) + "\n";
+        }
+      }
+      p = made;
+      std::lock_guard<std::mutex> lock(partial_mutex_);
+      partial_[id] = p;
+      // Only running jobs are kept (changed() drops the others); at most as many as can run,
+      // whatever a race with a job's end left.
+      if (partial_.size() > static_cast<std::size_t>(std::max(opt_.concurrent_jobs, 1)) + 1)
+        for (auto it = partial_.begin(); it != partial_.end();)
+          it = it->first == id ? std::next(it) : partial_.erase(it);
     }
-    res.set_header("Ftctune-Partial", "true");
-    return res.set_content(partial_gains_.text, "application/json");
   }
-  const TuningOutcome r = outcome_of(id, *c);
   res.set_header("Ftctune-Partial", "true");
-  if (what == "trials") return res.set_content(trials_csv(r), "text/csv");
-  if (format == "json") return send_json(res, 200, history_rows(r));
-  res.set_content(history_csv(r), "text/csv");
+  if (gains) return res.set_content(*p->gains, "application/json");
+  if (what == "trials") return res.set_content(p->trials, "text/csv");
+  if (format == "json") return res.set_content(p->history_rows, "application/json");
+  res.set_content(p->history, "text/csv");
 }
 
 TuningOutcome Api::outcome_of(const std::string& id, const JobStore::Checkpoint& c) {
@@ -672,7 +714,7 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
                         "job " + id +
                             " has finished; its results wait in the server's memory until the "
                             "store can write them");
-    return running_result(req, res, id, what);
+    return running_result(req, res, *job, what);
   }
   // A cancelled job that ran an iteration keeps its results so far, marked partial.
   const bool partial = job->status == JobStatus::cancelled && store_.artifact_sizes(id).count("gains.json");

@@ -5,6 +5,8 @@
 // Private to tuner/service.
 #include <algorithm>
 #include <atomic>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <nlohmann/json.hpp>
@@ -59,7 +61,7 @@ class Api {
   std::optional<Job> check_job(const httplib::Request& req, httplib::Response& res);
   void validate(const httplib::Request& req, httplib::Response& res);
   void submit(const httplib::Request& req, httplib::Response& res);
-  void running_result(const httplib::Request& req, httplib::Response& res, const std::string& id,
+  void running_result(const httplib::Request& req, httplib::Response& res, const JobRecord& job,
                       const std::string& what);
   TuningOutcome outcome_of(const std::string& id, const JobStore::Checkpoint& c);
   void files(const std::string& id, const std::string& name, httplib::Response& res);
@@ -78,14 +80,16 @@ class Api {
   JobRunner& runner_;
   EventHub hub_;
   std::atomic<int> report_counter_{0};
-  // The last partial gains file made for a running job, until its next iteration.
-  struct PartialGains {
-    std::string id;
+  // A running job's partial results, made from its checkpoint of `iteration`: trials.csv,
+  // history.csv, the history as JSON, and gains.json once asked for (a comparison).
+  struct PartialResults {
     int iteration = -1;
-    std::string text;
+    std::string trials, history, history_rows;
+    std::optional<std::string> gains;
   };
-  std::mutex partial_mutex_;
-  PartialGains partial_gains_;
+  std::mutex partial_mutex_;         // guards partial_
+  std::mutex partial_making_mutex_;  // held by the one request making partial results
+  std::map<std::string, std::shared_ptr<const PartialResults>> partial_;  // by running job
 };
 
 }  // namespace ftc::tune::service_detail
