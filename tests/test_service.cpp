@@ -191,7 +191,7 @@ std::string raw_request(const char* source, int port, const std::string& request
 
 std::string post_job(const json& job) {
   const std::string body = job.dump();
-  return "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nConnection: close\r\nContent-Type: "
+  return "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\nContent-Type: "
          "application/json\r\nContent-Length: " +
          std::to_string(body.size()) + "\r\n\r\n" + body;
 }
@@ -320,14 +320,14 @@ TEST(Service, RequestWithoutContentLengthHasAnEmptyBody) {
   const auto t0 = std::chrono::steady_clock::now();
   std::string reply = raw_request("127.0.0.1", s.port,
                                   "POST /v1/jobs/" + queued +
-                                      "/cancel HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+                                      "/cancel HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
   EXPECT_EQ(status_of(reply), 202) << reply;
   EXPECT_NE(reply.find("\"cancelled\""), std::string::npos) << reply;
   EXPECT_LT(std::chrono::steady_clock::now() - t0, 5s);  // not waiting for a body
   for (const char* method : {"PUT", "PATCH"}) {
     reply = raw_request("127.0.0.1", s.port,
                         std::string(method) + " /v1/jobs/" + queued +
-                            " HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+                            " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
     EXPECT_EQ(status_of(reply), 405) << method << ": " << reply;
   }
   auto r = s.client->Post(("/v1/jobs/" + running + "/cancel").c_str(), "", "application/json");
@@ -409,7 +409,7 @@ TEST(Service, RejectsBadRequestsWithJsonErrors) {
     a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
     const std::string head =
-        "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+        "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
         "Transfer-Encoding: chunked\r\n\r\n";
     ASSERT_EQ(::send(fd, head.data(), head.size(), MSG_NOSIGNAL),
               static_cast<ssize_t>(head.size()));
@@ -469,7 +469,7 @@ TEST(Service, RejectsBadRequestsWithJsonErrors) {
 
   // A client that disconnects in the middle of a request leaves the server serving.
   for (const char* partial :
-       {"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Length: 5000\r\n\r\n{\"sche", "GET /v1/jo"}) {
+       {"POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 5000\r\n\r\n{\"sche", "GET /v1/jo"}) {
     const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
     sockaddr_in a{};
     a.sin_family = AF_INET;
@@ -1636,7 +1636,7 @@ TEST(Service, SlowClientsAreCutOffAndHealthStaysAnswered) {
   ASSERT_GE(fd, 0);
   const auto start = Clock::now();
   ASSERT_TRUE(send_all(fd,
-                       "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                       "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
                        "Content-Length: 1000\r\n\r\n"));
   std::string reply;
   bool closed = false;
@@ -1740,4 +1740,69 @@ TEST(Service, PartialResultsCostOneComparisonPerCheckpoint) {
   gate->release();
   EXPECT_EQ(s.wait_done(a)["status"], "succeeded");
   EXPECT_EQ(s.wait_done(b)["status"], "succeeded");
+}
+
+// Without a token, a request must name this machine's loopback in its Host header (a page of
+// another site that reached the service through DNS rebinding names its own), and a request that
+// changes something must not come from a page of another origin. With a token neither applies.
+TEST(Service, WithoutATokenForeignHostsAndCrossOriginChangesAreRefused) {
+  Service s;
+  const std::string port = std::to_string(s.port);
+  const auto request = [&](const std::string& method, const std::string& path,
+                           const std::string& headers, const std::string& body = "") {
+    return raw_request("127.0.0.1", s.port,
+                       method + " " + path + " HTTP/1.1\r\n" + headers +
+                           "Connection: close\r\nContent-Type: application/json\r\n"
+                           "Content-Length: " +
+                           std::to_string(body.size()) + "\r\n\r\n" + body);
+  };
+  for (const std::string& host : std::vector<std::string>{"evil.example:" + port, "evil.example",
+                                                         "localhost.evil.example",
+                                                         "10.0.0.1:" + port, "[::2]:" + port}) {
+    for (const char* path : {"/v1/jobs", "/", "/healthz"}) {
+      const std::string reply = request("GET", path, "Host: " + host + "\r\n");
+      EXPECT_EQ(status_of(reply), 403) << host << " " << path << "\n" << reply;
+      EXPECT_NE(reply.find("forbidden_host"), std::string::npos) << reply;
+    }
+  }
+  for (const std::string& host :
+       std::vector<std::string>{"127.0.0.1:" + port, "localhost:" + port, "[::1]:" + port,
+                                "LocalHost", "app.localhost:" + port, "127.1.2.3"})
+    EXPECT_EQ(status_of(request("GET", "/v1/jobs", "Host: " + host + "\r\n")), 200) << host;
+  EXPECT_EQ(status_of(request("GET", "/v1/jobs", "")), 200);  // no Host: not a browser's
+
+  // State-changing requests from another origin: refused, and nothing changes.
+  const std::string job = tiny_job().dump();
+  const std::string here = "Host: 127.0.0.1:" + port + "\r\n";
+  for (const std::string foreign :
+       {"Origin: http://evil.example\r\n", "Origin: null\r\n", "Origin: http://127.0.0.1:1\r\n",
+        "Sec-Fetch-Site: cross-site\r\n"}) {
+    const std::string reply = request("POST", "/v1/jobs", here + foreign, job);
+    EXPECT_EQ(status_of(reply), 403) << foreign << reply;
+    EXPECT_NE(reply.find("cross_origin"), std::string::npos) << reply;
+  }
+  EXPECT_EQ(s.get("/v1/jobs")["total"], 0);
+  // A read from another origin is served (the browser does not let that page see it: no CORS).
+  EXPECT_EQ(status_of(request("GET", "/v1/jobs", here + "Origin: http://evil.example\r\n")), 200);
+  // The dashboard's own origin, and a script's request without one, may submit.
+  EXPECT_EQ(status_of(request("POST", "/v1/jobs", here + "Origin: http://127.0.0.1:" + port +
+                                                      "\r\nSec-Fetch-Site: same-origin\r\n",
+                              job)),
+            201);
+  const std::string reply = request("POST", "/v1/jobs", here, job);
+  ASSERT_EQ(status_of(reply), 201) << reply;
+  const std::string id = json::parse(reply.substr(reply.find("\r\n\r\n") + 4))["id"];
+  s.wait_done(id);
+  EXPECT_EQ(status_of(request("DELETE", "/v1/jobs/" + id, here + "Origin: http://evil.example\r\n")),
+            403);
+  EXPECT_EQ(s.get("/v1/jobs")["total"], 2);
+
+  // With a token, the token is the check (a page of another site cannot send it).
+  tune::ServiceOptions o;
+  o.token = "secret-token";
+  Service t(o);
+  EXPECT_EQ(status_of(raw_request("127.0.0.1", t.port,
+                                  "GET /v1/jobs HTTP/1.1\r\nHost: tuning.example.org\r\n"
+                                  "Authorization: Bearer secret-token\r\nConnection: close\r\n\r\n")),
+            200);
 }

@@ -1,9 +1,12 @@
 #include "service/api.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <openssl/crypto.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -213,6 +216,35 @@ constexpr const char* kReportPolicy =
     "default-src 'none'; style-src 'unsafe-inline'; img-src data:; base-uri 'none'; "
     "form-action 'none'; frame-ancestors 'none'";
 constexpr const char* kDataPolicy = "default-src 'none'; frame-ancestors 'none'";
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// The host of a Host header's value ("localhost:8080" -> "localhost", "[::1]:80" -> "[::1]"),
+// lower-case.
+std::string host_name(const std::string& host) {
+  if (!host.empty() && host.front() == '[') {
+    const std::size_t end = host.find(']');
+    return lower(host.substr(0, end == std::string::npos ? host.size() : end + 1));
+  }
+  return lower(host.substr(0, host.find(':')));
+}
+
+// A name a browser only ever resolves to this machine: localhost (and *.localhost, RFC 6761),
+// an IPv4 address of 127.0.0.0/8, or [::1]; or the address the server is bound to.
+bool loopback_host(const std::string& name, const std::string& bind) {
+  const std::string suffix = ".localhost";
+  if (name == "localhost" || name == "[::1]" ||
+      (name.size() > suffix.size() &&
+       name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0))
+    return true;
+  in_addr a{};
+  if (::inet_pton(AF_INET, name.c_str(), &a) == 1) return (ntohl(a.s_addr) >> 24) == 127;
+  const std::string b = lower(bind);
+  return name == b || name == "[" + b + "]";
+}
 
 }  // namespace
 
@@ -781,7 +813,39 @@ std::string Api::report(const std::string& id) {
   return html;
 }
 
+bool Api::same_origin(const httplib::Request& req, httplib::Response& res) const {
+  // With a token, a page of another site cannot send it (it is a header, and no CORS header
+  // lets another origin's script add one); the checks are for the service without one, on a
+  // loopback address.
+  if (opt_.token) return true;
+  const std::string host = req.get_header_value("Host");
+  if (!host.empty() && !loopback_host(host_name(host), opt_.bind)) {
+    send_error(res, 403, "forbidden_host",
+               "the Host header names " + host_name(host) +
+                   ", not this machine's loopback (localhost, 127.0.0.1, [::1]): a page of "
+                   "another site reached the service through its own name (DNS rebinding), or "
+                   "it is behind a proxy, which needs --token");
+    return false;
+  }
+  // A request that changes something, sent by a page: it must be the dashboard's own.
+  const std::string& m = req.method;
+  if (m == "GET" || m == "HEAD" || m == "OPTIONS") return true;
+  const std::string origin = req.get_header_value("Origin");
+  const bool cross = req.has_header("Origin")
+                         ? lower(origin) != "http://" + lower(host)
+                         : lower(req.get_header_value("Sec-Fetch-Site")) == "cross-site";
+  if (cross) {
+    send_error(res, 403, "cross_origin",
+               "a " + m + " from a page of another origin (" +
+                   (origin.empty() ? std::string("a cross-site page") : origin) +
+                   ") is refused: only the service's own dashboard may change its jobs");
+    return false;
+  }
+  return true;
+}
+
 bool Api::authenticate(const httplib::Request& req, httplib::Response& res) const {
+  if (!same_origin(req, res)) return false;
   if (authorised(req)) return true;
   res.set_header("WWW-Authenticate", "Bearer");
   send_error(res, 401, "unauthorized",
@@ -845,7 +909,7 @@ void Api::receive(const httplib::Request& req, httplib::Response& res,
 
 void Api::handle(const httplib::Request& req, httplib::Response& res,
                  const httplib::ContentReader* body) {
-  if (!web_asset(req.path) && !authenticate(req, res)) return;
+  if (web_asset(req.path) ? !same_origin(req, res) : !authenticate(req, res)) return;
   if (body)
     receive(req, res, *body);
   else
@@ -866,7 +930,7 @@ void Api::configure(httplib::Server& http) {
   http.Delete(".*", with_body);
   http.Options(".*", handler);
   http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-    return web_asset(req.path) || authenticate(req, res)
+    return (web_asset(req.path) ? same_origin(req, res) : authenticate(req, res))
                ? httplib::Server::HandlerResponse::Unhandled
                : httplib::Server::HandlerResponse::Handled;
   });

@@ -50,7 +50,12 @@ class Api {
 
  private:
   bool authorised(const httplib::Request& req) const;
-  // False after answering 401.
+  // Without a token: the Host must be a loopback name or the bound address (a page of another
+  // site that reached the service through DNS rebinding names its own), and a request that
+  // changes something (not GET, HEAD or OPTIONS) must not come from a page of another origin.
+  // False after answering 403.
+  bool same_origin(const httplib::Request& req, httplib::Response& res) const;
+  // False after answering 403 (same_origin) or 401.
   bool authenticate(const httplib::Request& req, httplib::Response& res) const;
   // Reads the body under the limit (413 above it), then dispatches.
   void receive(const httplib::Request& req, httplib::Response& res,
