@@ -1806,3 +1806,47 @@ TEST(Service, WithoutATokenForeignHostsAndCrossOriginChangesAreRefused) {
                                   "Authorization: Bearer secret-token\r\nConnection: close\r\n\r\n")),
             200);
 }
+
+// One client address may hold at most --max-event-streams-per-client live-update streams (429
+// past them), so that one client cannot take every stream; another address still gets one, and
+// a closed stream frees its place.
+TEST(Service, EventStreamsAreCappedPerClientAddress) {
+  tune::ServiceOptions o;
+  o.max_event_streams_per_client = 2;
+  Service s(o);
+  const auto opened = [](EventClient& c) {
+    return c.received().find(": ftctune events") != std::string::npos;
+  };
+  auto first = std::make_unique<EventClient>(s.port, "/v1/events");
+  EventClient second(s.port, "/v1/events");
+  ASSERT_TRUE(first->wait_for(opened, 10s));
+  ASSERT_TRUE(second.wait_for(opened, 10s));
+  {
+    EventClient third(s.port, "/v1/events");
+    ASSERT_TRUE(third.wait_for([](EventClient& c) { return c.ended.load(); }, 10s));
+    EXPECT_EQ(third.status, 429);
+  }
+  auto r = s.client->Get("/v1/events");
+  ASSERT_TRUE(r);
+  expect_error(r, 429, "too_many_streams");
+  EXPECT_EQ(json::parse(r->body)["error"]["details"]["limit"], 2);
+  // Another client address is not held back by this one's streams.
+  const int fd = connect_from("127.0.0.2", s.port);
+  ASSERT_GE(fd, 0);
+  ASSERT_TRUE(send_all(fd, "GET /v1/events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"));
+  std::string reply;
+  const auto end = std::chrono::steady_clock::now() + 10s * FTC_TEST_SLOWDOWN;
+  while (reply.find(": ftctune events") == std::string::npos &&
+         std::chrono::steady_clock::now() < end)
+    reply += read_until_closed(fd, 100ms);
+  ::close(fd);
+  EXPECT_EQ(status_of(reply), 200) << reply;
+  EXPECT_NE(reply.find(": ftctune events"), std::string::npos) << reply;
+  // A closed page frees its place.
+  first.reset();
+  EXPECT_EQ(wait_health(s, [](const json& h) { return h["event_streams"] == 1; })["event_streams"],
+            1);
+  EventClient again(s.port, "/v1/events");
+  EXPECT_TRUE(again.wait_for(opened, 10s));
+  EXPECT_EQ(again.status, 200);
+}

@@ -173,6 +173,10 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
                   "Live-update streams (the dashboard's pages) open at once, each holding a "
                   "connection; more get 503 (default 32, at most half of --max-connections)")
       ->check(CLI::Range(0, 1023));
+  sub->add_option("--max-event-streams-per-client", o->service.max_event_streams_per_client,
+                  "Live-update streams one address may hold at once; more get 429 (default 8, "
+                  "0: no limit)")
+      ->check(CLI::Range(0, 1023));
   sub->callback([&action, o] { action = [o] { return run_serve(*o); }; });
 }
 

@@ -310,7 +310,7 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   }
   if (p.size() == 2 && p[0] == "v1" && p[1] == "events") {
     if (m != "GET") return method_not_allowed(res, "GET");
-    return events(req.has_param("job") ? req.get_param_value("job") : "", res);
+    return events(req, req.has_param("job") ? req.get_param_value("job") : "", res);
   }
   if (p.size() == 2 && p[0] == "v1" && p[1] == "validate") {
     if (m != "POST") return method_not_allowed(res, "POST");
@@ -350,7 +350,7 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   if (p.size() == 4 && p[3] == "events") {
     if (m != "GET") return method_not_allowed(res, "GET");
     if (!store_.get(id)) return send_error(res, 404, "not_found", "no job " + id);
-    return events(id, res);
+    return events(req, id, res);
   }
   if (p.size() == 4 && p[3] == "cancel") {
     if (m != "POST") return method_not_allowed(res, "POST");
@@ -588,9 +588,20 @@ void Api::changed(const std::string& id) noexcept {
 // iteration, finished, cancelled), `deleted` when it is gone; a comment after 15 s without one
 // keeps the connection alive; a closed page's stream ends within a quarter of a second. With `job` (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each
 // stream holds one of the server's connection threads, so at most --max-event-streams are open
-// at once; more are answered 503.
-void Api::events(const std::string& job, httplib::Response& res) {
-  std::optional<EventHub::Stream> stream = hub_.open();
+// at once; more are answered 503. One client address may hold at most
+// --max-event-streams-per-client of them (429 past that), so that one client cannot take them
+// all.
+void Api::events(const httplib::Request& req, const std::string& job, httplib::Response& res) {
+  EventHub::Refused why = EventHub::Refused::full;
+  std::optional<EventHub::Stream> stream = hub_.open(req.remote_addr, &why);
+  if (!stream && why == EventHub::Refused::client_full) {
+    res.set_header("Retry-After", "10");
+    return send_error(res, 429, "too_many_streams",
+                      "this client has " + std::to_string(hub_.max_per_client()) +
+                          " event streams open, the most one client address may "
+                          "(--max-event-streams-per-client): close a page, or reload it later",
+                      json{{"limit", hub_.max_per_client()}});
+  }
   if (!stream) {
     res.set_header("Retry-After", "10");
     return send_error(res, 503, "too_many_streams",

@@ -29,7 +29,8 @@ class Api {
         store_(store),
         runner_(runner),
         hub_(static_cast<std::size_t>(
-            std::clamp(options.max_event_streams, 0, options.max_connections / 2))) {}
+                 std::clamp(options.max_event_streams, 0, options.max_connections / 2)),
+             static_cast<std::size_t>(std::max(options.max_event_streams_per_client, 0))) {}
 
   // Job `id` changed in the store (or left it): its view goes to every open event stream.
   // Never throws.
@@ -70,7 +71,7 @@ class Api {
                       const std::string& what);
   TuningOutcome outcome_of(const std::string& id, const JobStore::Checkpoint& c);
   void files(const std::string& id, const std::string& name, httplib::Response& res);
-  void events(const std::string& job, httplib::Response& res);
+  void events(const httplib::Request& req, const std::string& job, httplib::Response& res);
   void list(const httplib::Request& req, httplib::Response& res);
   void cancel(const std::string& id, httplib::Response& res);
   void result(const httplib::Request& req, httplib::Response& res, const std::string& id,

@@ -32,17 +32,29 @@ std::size_t EventHub::open_streams() {
   return streams_;
 }
 
-std::optional<EventHub::Stream> EventHub::open() {
+std::optional<EventHub::Stream> EventHub::open(const std::string& client, Refused* why) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (closed_ || streams_ >= max_streams_) return std::nullopt;
+  const auto refuse = [&](Refused r) {
+    if (why) *why = r;
+    return std::nullopt;
+  };
+  if (closed_) return refuse(Refused::closed);
+  const auto it = per_client_.find(client);
+  if (max_per_client_ > 0 && it != per_client_.end() && it->second >= max_per_client_)
+    return refuse(Refused::client_full);
+  if (streams_ >= max_streams_) return refuse(Refused::full);
   ++streams_;
-  return Stream(this, seq_ + 1);
+  ++per_client_[client];
+  return Stream(this, seq_ + 1, client);
 }
 
 EventHub::Stream::~Stream() {
   if (!hub_) return;
   std::lock_guard<std::mutex> lock(hub_->mutex_);
   --hub_->streams_;
+  // A client with no stream left holds no entry: the map is as large as the open streams.
+  const auto it = hub_->per_client_.find(client_);
+  if (it != hub_->per_client_.end() && --it->second == 0) hub_->per_client_.erase(it);
 }
 
 std::optional<std::vector<Event>> EventHub::Stream::next(int timeout_ms) {

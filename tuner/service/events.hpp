@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -23,9 +24,11 @@ struct Event {
 
 class EventHub {
  public:
-  // Keeps the last `backlog` events for streams that are behind; at most `max_streams` open.
-  explicit EventHub(std::size_t max_streams, std::size_t backlog = 1024)
-      : max_streams_(max_streams), backlog_(backlog) {}
+  // Keeps the last `backlog` events for streams that are behind; at most `max_streams` open,
+  // and at most `max_per_client` of them from one client address (0: no such limit).
+  explicit EventHub(std::size_t max_streams, std::size_t max_per_client = 0,
+                    std::size_t backlog = 1024)
+      : max_streams_(max_streams), max_per_client_(max_per_client), backlog_(backlog) {}
 
   // Sends `data` (JSON on one line) as an event of type `type` about job `job_id`.
   void publish(const std::string& type, const std::string& job_id, const std::string& data);
@@ -33,11 +36,14 @@ class EventHub {
   void close();
   std::size_t open_streams();
   std::size_t max_streams() const { return max_streams_; }
+  std::size_t max_per_client() const { return max_per_client_; }
 
   // A stream's place in the events; its slot is freed on destruction.
   class Stream {
    public:
-    Stream(Stream&& o) noexcept : hub_(o.hub_), next_(o.next_) { o.hub_ = nullptr; }
+    Stream(Stream&& o) noexcept : hub_(o.hub_), next_(o.next_), client_(std::move(o.client_)) {
+      o.hub_ = nullptr;
+    }
     Stream(const Stream&) = delete;
     Stream& operator=(const Stream&) = delete;
     Stream& operator=(Stream&&) = delete;
@@ -49,12 +55,17 @@ class EventHub {
 
    private:
     friend class EventHub;
-    Stream(EventHub* hub, std::uint64_t next) : hub_(hub), next_(next) {}
+    Stream(EventHub* hub, std::uint64_t next, std::string client)
+        : hub_(hub), next_(next), client_(std::move(client)) {}
     EventHub* hub_;
     std::uint64_t next_;  // seq of the next event to deliver
+    std::string client_;  // the address it was opened from
   };
-  // A stream of the events from now on; nullopt when `max_streams` are open or the hub closed.
-  std::optional<Stream> open();
+  // Why open() gave no stream.
+  enum class Refused { full, client_full, closed };
+  // A stream of the events from now on for a client at address `client`; nullopt (and why)
+  // when `max_streams` are open, the client has `max_per_client` open, or the hub closed.
+  std::optional<Stream> open(const std::string& client = "", Refused* why = nullptr);
 
  private:
   std::mutex mutex_;
@@ -62,8 +73,9 @@ class EventHub {
   std::deque<Event> events_;  // the last backlog_ events, oldest first
   std::uint64_t seq_ = 0;     // of the last event published
   std::size_t streams_ = 0;
+  std::map<std::string, std::size_t> per_client_;  // open streams by client address (none: 0)
   bool closed_ = false;
-  std::size_t max_streams_, backlog_;
+  std::size_t max_streams_, max_per_client_, backlog_;
 };
 
 }  // namespace ftc::tune::service_detail

@@ -110,6 +110,8 @@ std::vector<FieldError> ServiceOptions::validate() const {
                     "must be at least 1 and below --max-connections (so that one client cannot "
                     "take every connection)"});
   if (max_event_streams < 0) errs.push_back({"--max-event-streams", "must be >= 0"});
+  if (max_event_streams_per_client < 0)
+    errs.push_back({"--max-event-streams-per-client", "must be >= 0 (0: no limit)"});
   if (!(store_retry_seconds > 0)) errs.push_back({"store_retry_seconds", "must be > 0"});
   return errs;
 }

@@ -55,6 +55,8 @@ struct ServiceOptions {
   // threads for as long as its page is open, so at most half of them are streams whatever this
   // says (the API keeps the other half).
   int max_event_streams = 32;
+  // ... and at most this many from one client address (0: no such limit); more are answered 429.
+  int max_event_streams_per_client = 8;
   // How often results the store could not take (a full disk) are tried again.
   double store_retry_seconds = 5;
   // How each job's simulations run; default a TbbEvaluator with `threads` workers.
