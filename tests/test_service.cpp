@@ -1850,3 +1850,70 @@ TEST(Service, EventStreamsAreCappedPerClientAddress) {
   EXPECT_TRUE(again.wait_for(opened, 10s));
   EXPECT_EQ(again.status, 200);
 }
+
+// `ftctune fetch` builds its default path from the server's name for the job; a name that is not
+// one safe folder name (separators, "..", a leading dot) is not used: the files go under the
+// job's id instead, and nothing lands outside out/.
+TEST(Cli, FetchKeepsTheServersJobNameOutOfItsPaths) {
+  const std::string id = "0123456789abcdef";
+  std::string name;
+  std::mutex name_mutex;
+  httplib::Server fake;
+  fake.Get("/v1/jobs/" + id, [&](const httplib::Request&, httplib::Response& res) {
+    std::lock_guard<std::mutex> lock(name_mutex);
+    res.set_content(json{{"id", id}, {"name", name}, {"status", "succeeded"}}.dump(),
+                    "application/json");
+  });
+  fake.Get("/v1/jobs/" + id + "/gains", [&](const httplib::Request&, httplib::Response& res) {
+    res.set_content("{\"optimizer\": {\"completed\": true}}\n", "application/json");
+  });
+  const int port = fake.bind_to_any_port("127.0.0.1");
+  ASSERT_GT(port, 0);
+  std::thread serving([&] { fake.listen_after_bind(); });
+  const std::string server = " --server http://127.0.0.1:" + std::to_string(port);
+  // `ftctune fetch ID` in `dir`, where its default output directory out/ is.
+  const auto fetch_in = [&](const std::filesystem::path& dir) {
+    const std::string cmd = "cd '" + dir.string() + "' && '" FTC_CLI "' fetch " + id + server +
+                            " >'" + (dir / "stdout.txt").string() + "' 2>'" +
+                            (dir / "stderr.txt").string() + "'";
+    const int status = std::system(cmd.c_str());
+    CliResult r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(dir / "stdout.txt");
+    r.err = slurp(dir / "stderr.txt");
+    std::filesystem::remove(dir / "stdout.txt");
+    std::filesystem::remove(dir / "stderr.txt");
+    return r;
+  };
+  const auto files_in = [](const std::filesystem::path& dir) {
+    std::set<std::string> out;
+    for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
+      if (e.is_regular_file()) out.insert(std::filesystem::relative(e.path(), dir).string());
+    return out;
+  };
+  for (const std::string hostile : {"../../escape", "..", ".hidden", "a/b", "/etc/x", "a\\b", ""}) {
+    {
+      std::lock_guard<std::mutex> lock(name_mutex);
+      name = hostile;
+    }
+    const auto dir = fresh_dir("fetch-name") / "cwd";
+    std::filesystem::create_directories(dir);
+    const CliResult r = fetch_in(dir);
+    EXPECT_EQ(r.exit_code, 0) << hostile << ": " << r.err;
+    EXPECT_EQ(files_in(dir.parent_path()),
+              std::set<std::string>{"cwd/out/" + id + "/service-01234567/gains.json"})
+        << hostile;
+    EXPECT_NE(r.err.find("not a safe folder name"), std::string::npos) << r.err;
+  }
+  {
+    std::lock_guard<std::mutex> lock(name_mutex);
+    name = "table1.v2";
+  }
+  const auto dir = fresh_dir("fetch-name-ok");
+  const CliResult r = fetch_in(dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(files_in(dir), std::set<std::string>{"out/table1.v2/service-01234567/gains.json"});
+  EXPECT_EQ(r.err.find("not a safe folder name"), std::string::npos) << r.err;
+  fake.stop();
+  serving.join();
+}

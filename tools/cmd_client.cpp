@@ -2,6 +2,7 @@
 // Server from --server, else $FTCTUNE_SERVER, else http://127.0.0.1:8080; token from
 // $FTCTUNE_TOKEN.
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -145,6 +146,32 @@ void note_partial(const std::string& id, const std::string& gains, bool quiet) {
                id.c_str());
 }
 
+// One folder name made of a name the server gave: letters, digits, '-', '_' and '.', not
+// starting with a dot, at most 100 characters; "" when it is not one (a server may say
+// anything: "../../.ssh", "/etc", ".." must not become a path).
+std::string folder_name(const std::string& name) {
+  if (name.empty() || name.size() > 100 || name.front() == '.') return "";
+  for (const char c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') return "";
+  return name;
+}
+
+// Where a job's files go without -o: out/<job name>/service-<id>/, the job's name and id only
+// as safe folder names (the id in place of an unsafe name; "job" for an unsafe id).
+std::filesystem::path default_fetch_dir(const std::string& name, const std::string& id) {
+  std::string short_id = folder_name(id.substr(0, 8));
+  if (short_id.empty()) short_id = "job";
+  std::string folder = folder_name(name);
+  if (folder.empty()) {
+    folder = folder_name(id).empty() ? short_id : id;
+    std::fprintf(stderr,
+                 "ftctune: warning: the server's name for job %s is not a safe folder name; "
+                 "its files go under %s\n",
+                 short_id.c_str(), default_out_dir_for(folder).c_str());
+  }
+  return default_out_dir_for(folder) / ("service-" + short_id);
+}
+
 int fetch_gains(Api& api, const std::string& id, const std::string& out, const std::string& name,
                 bool quiet, bool force) {
   const std::string gains = api.get("/v1/jobs/" + id + "/gains");
@@ -152,7 +179,7 @@ int fetch_gains(Api& api, const std::string& id, const std::string& out, const s
   // By default in a folder of the service job's own, so a local run's gains.json is never
   // replaced by a fetched one; an existing file is only replaced with --force.
   const std::filesystem::path file =
-      out.empty() ? default_out_dir_for(name) / ("service-" + id.substr(0, 8)) / "gains.json"
+      out.empty() ? default_fetch_dir(name, id) / "gains.json"
                   : std::filesystem::path(out);
   if (std::filesystem::exists(file) && !force)
     throw InputError(file.string(), "",
@@ -168,7 +195,7 @@ int fetch_gains(Api& api, const std::string& id, const std::string& out, const s
 int fetch_all(Api& api, const std::string& id, const std::string& out, const std::string& name,
               const std::string& status, bool quiet, bool force) {
   const std::filesystem::path gains_file =
-      out.empty() ? default_out_dir_for(name) / ("service-" + id.substr(0, 8)) / "gains.json"
+      out.empty() ? default_fetch_dir(name, id) / "gains.json"
                   : std::filesystem::path(out);
   const std::filesystem::path dir = gains_file.parent_path();
   std::vector<std::pair<std::string, std::string>> sources;  // request path, file
@@ -200,7 +227,7 @@ int fetch_all(Api& api, const std::string& id, const std::string& out, const std
     tune::write_file_atomic(dir / file, api.get("/v1/jobs/" + id + path));
     if (!quiet) std::printf("wrote %s\n", (dir / file).c_str());
   }
-  return fetch_gains(api, id, out, name, quiet, force);
+  return fetch_gains(api, id, gains_file.string(), name, quiet, force);
 }
 
 // A job id, or a unique prefix of one among the newest 1000 jobs.
