@@ -1,7 +1,8 @@
 #pragma once
-// The service's workers: each takes the oldest queued job from the store, tunes it with the same
-// tuner as `ftctune run`, checkpoints the optimiser after every iteration and stores the result
-// files with the job's final status. Private to tuner/service.
+// The service's workers: each takes the oldest queued job from the store and runs it as `ftctune
+// run` does, through the run API (run_job, with the job store as its RunStorage: a checkpoint of
+// the optimiser after every iteration, the run's files stored with the job's final status).
+// Private to tuner/service.
 //
 // A store that cannot write (a full disk) costs no finished work and leaves no job stuck: a
 // checkpoint it refuses is skipped (the next one carries its trials), a finished job's final
