@@ -111,6 +111,28 @@ void summary_table(const json& comparison, const Job& job, std::ostringstream& h
   h << "</table>\n";
 }
 
+// comparison.md's goals table: each goal's value per controller, its limit and whether the
+// controller meets every limit, read back out of comparison.json.
+void goals_table(const json& comparison, const Job& job, std::ostringstream& h) {
+  const auto num = [](const json& j) { return detail::format_number(json_number_or(j, NAN)); };
+  h << "<h2>Goals</h2>\n<table><tr><th>controller</th>";
+  for (std::size_t k = 0; k < job.goals.size(); ++k)
+    h << "<th>" << html_escape(goal_label(job, k)) << "</th>";
+  h << "<th>total violation</th><th>feasible</th></tr>\n";
+  for (const json& c : comparison["controllers"]) {
+    const json g = c.value("goals", json::object());
+    const json list = g.value("goals", json::array());
+    h << "<tr><td>" << html_escape(c.value("label", "?")) << "</td>";
+    for (std::size_t k = 0; k < job.goals.size(); ++k)
+      h << "<td>"
+        << num(k < list.size() && list[k].is_object() ? list[k].value("value", json()) : json())
+        << "</td>";
+    h << "<td>" << num(g.value("total_violation", json())) << "</td><td>"
+      << (g.value("feasible", false) ? "yes" : "no") << "</td></tr>\n";
+  }
+  h << "</table>\n";
+}
+
 // The run's evaluation/ (`ftctune evaluate`'s default place), when there is one: its table of
 // aggregates over the held-out members, and its figure.
 void evaluation_section(const fs::path& run_dir, std::ostringstream& h) {
@@ -202,6 +224,7 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
   if (comparison.contains("noise_floor") && comparison["noise_floor"].is_string())
     h << "<p class=\"noise-floor\">" << html_escape(comparison["noise_floor"].get<std::string>())
       << "</p>\n";
+  if (!job.goals.empty()) goals_table(comparison, job, h);
   if (job.ensemble) summary_table(comparison, job, h);
 
   for (std::size_t s = 0; s < S; ++s) {
