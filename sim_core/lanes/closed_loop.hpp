@@ -252,13 +252,6 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
       SampleLanes<N, M>& o = out[i];
       for (int r = 0; r < S2; ++r) lane::store(x[r], o.x[r]);
       for (int r = 0; r < M; ++r) lane::store(u[r], o.u[r]);
-      VM uc = u;  // the command within the actuator's range
-      if (act)
-        for (int r = 0; r < M; ++r) {
-          lane::store(ua[r], o.ua[r]);
-          const T c = lane::select(u[r] < limit_lo[r], limit_lo[r], u[r]);
-          uc[r] = lane::select(c > limit_hi[r], limit_hi[r], c);
-        }
       if (su.kernel_metrics) {
         // The accumulators of lanes/metric_lanes.hpp, called as MetricsAccumulator::sample
         // calls them, lanes that have diverged masked out.
@@ -288,28 +281,50 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
           lane::add_peak<T>(counting & (t >= onset[fi]), en, peak[fi]);
       }
 
-      // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
-      const VN a1 = accel(f, forcing(e, act ? ua : u));
-      VS k1;
-      for (int r = 0; r < N; ++r) {
-        k1[r] = x[N + r];
-        k1[N + r] = a1[r];
-      }
-      for (int j = 0; j < S; ++j) {
-        const double* ej = e + j * 3 * kInstant;
-        if (j > 0) k1 = deriv(x, forcing(ej, act ? ua : u));
-        VM ua_mid = ua, ua_end = ua;
-        if (act) {
-          ua_mid = lag(ua, uc);
-          ua_end = lag(ua_mid, uc);
+      // The substeps, compiled twice: with the actuator model, and without it exactly as before
+      // it existed (no test or copy in the loop of a run without one).
+      const auto substeps = [&](auto with_actuator) FTC_HOT_LAMBDA {
+        constexpr bool A = decltype(with_actuator)::value;
+        [[maybe_unused]] VM uc;  // the command within the actuator's range
+        if constexpr (A)
+          for (int r = 0; r < M; ++r) {
+            lane::store(ua[r], o.ua[r]);
+            const T c = lane::select(u[r] < limit_lo[r], limit_lo[r], u[r]);
+            uc[r] = lane::select(c > limit_hi[r], limit_hi[r], c);
+          }
+        // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
+        const VN a1 = accel(f, forcing(e, A ? ua : u));
+        VS k1;
+        for (int r = 0; r < N; ++r) {
+          k1[r] = x[N + r];
+          k1[N + r] = a1[r];
         }
-        const Forcing mid = forcing(ej + kInstant, act ? ua_mid : u);
-        const Forcing end = forcing(ej + 2 * kInstant, act ? ua_end : u);
-        sim::rk4_advance(
-            x, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
-            [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
-        if (act) ua = ua_end;
-      }
+        for (int j = 0; j < S; ++j) {
+          const double* ej = e + j * 3 * kInstant;
+          if constexpr (A) {
+            if (j > 0) k1 = deriv(x, forcing(ej, ua));
+            const VM ua_mid = lag(ua, uc);
+            const VM ua_end = lag(ua_mid, uc);
+            const Forcing mid = forcing(ej + kInstant, ua_mid);
+            const Forcing end = forcing(ej + 2 * kInstant, ua_end);
+            sim::rk4_advance(
+                x, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
+                [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
+            ua = ua_end;
+          } else {
+            if (j > 0) k1 = deriv(x, forcing(ej, u));
+            const Forcing mid = forcing(ej + kInstant, u);
+            const Forcing end = forcing(ej + 2 * kInstant, u);
+            sim::rk4_advance(
+                x, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
+                [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
+          }
+        }
+      };
+      if (act)
+        substeps(std::true_type{});
+      else
+        substeps(std::false_type{});
       u_prev = u;
 
       Mask inside = lane::abs(x[0]) <= T(1e6);  // false for NaN
