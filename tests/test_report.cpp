@@ -724,4 +724,14 @@ TEST(Report, ComparisonAndPageShowEveryGoalPerController) {
       "<tr><td>" + first.label + "</td><td>" +
       tune::detail::format_number(first.outcome.evaluation.scenarios[0].errors.ise) + "</td>";
   EXPECT_NE(html.find(cells), std::string::npos) << cells;
+  // With the run's evaluation/, the page's evaluation section gives the goals there too.
+  const tune::EvaluationResult ev = tune::evaluate_out_of_sample(job, {}, evaluator);
+  tune::write_evaluation(ev, dir / "run" / "evaluation");
+  const std::string with_evaluation = slurp(tune::render_report(dir / "run").html);
+  const std::size_t section = with_evaluation.find("<h2>Out-of-sample evaluation</h2>");
+  ASSERT_NE(section, std::string::npos);
+  const std::string row = "<tr><td>" + ev.controllers[0].label + "</td><td>" +
+                          tune::detail::format_number(ev.controllers[0].goals[0]) + "</td><td>" +
+                          tune::detail::format_number(ev.controllers[0].goals[1]) + "</td>";
+  EXPECT_NE(with_evaluation.find(row, section), std::string::npos) << row;
 }
