@@ -112,12 +112,13 @@ TEST(Mpi, ActuatorModelReachesEveryRank) {
       dir);
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
   const auto three = mpirun_cli(
-      3, "run jobs/post-fault-actuator.json -q --threads 1 --out '" + (dir / "three").string() + "'",
+      3,
+      "run jobs/post-fault-actuator.json -q --threads 1 --out '" + (dir / "three").string() + "'",
       dir);
   ASSERT_EQ(three.exit_code, 0) << three.err;
   expect_same_run(dir / "plain", dir / "three");
-  const auto ideal =
-      run_cli("run jobs/post-fault.json -q --threads 2 --out '" + (dir / "ideal").string() + "'", dir);
+  const auto ideal = run_cli(
+      "run jobs/post-fault.json -q --threads 2 --out '" + (dir / "ideal").string() + "'", dir);
   ASSERT_EQ(ideal.exit_code, 0) << ideal.err;
   EXPECT_NE(slurp(dir / "ideal" / "history.csv"), slurp(dir / "three" / "history.csv"));
 }

@@ -683,10 +683,9 @@ TEST(Report, ComparisonAndPageShowEveryGoalPerController) {
   const auto dir = fresh_dir("report-goals");
   json j = short_table1_job();
   j.erase("objective");
-  j["goals"] = json::array(
-      {{{"metric", "ise"}, {"window", {0, 5}}, {"minimize", true}},
-       {{"metric", "control_tv"}, {"at_most", 1e9}},
-       {{"metric", "peak_command"}, {"at_most", 1.0}}});
+  j["goals"] = json::array({{{"metric", "ise"}, {"window", {0, 5}}, {"minimize", true}},
+                            {{"metric", "control_tv"}, {"at_most", 1e9}},
+                            {{"metric", "peak_command"}, {"at_most", 1.0}}});
   const tune::Job job = tune::parse_job(j, "goals");
   tune::TbbEvaluator evaluator(2);
   const tune::TuningOutcome r = tune::tune(job, evaluator);

@@ -129,8 +129,13 @@ EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions
   for (const EvaluateOptions::GainsFile& f : options.gains) {
     const runtime::Gains g = runtime::read_gains(f.path);
     check_fits(g, job, f.path.string());
-    r.controllers.push_back({f.label.empty() ? f.path.string() : f.label, f.path.string(),
-                             g.controller, {}, {}, {}, 0.0});
+    r.controllers.push_back({f.label.empty() ? f.path.string() : f.label,
+                             f.path.string(),
+                             g.controller,
+                             {},
+                             {},
+                             {},
+                             0.0});
   }
   for (std::size_t i = 0; i < r.controllers.size(); ++i)
     for (std::size_t j = 0; j < i; ++j)
