@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "checks.hpp"
+#include "ftc/sim/elementary.hpp"
 
 namespace ftc::sim {
 
@@ -58,7 +59,32 @@ std::vector<FieldError> Scenario::validate(const std::string& path, int axes, in
     errs.insert(errs.end(), e.begin(), e.end());
   }
   if (saturation) check(errs, path + "/saturation", kSaturationRange, *saturation);
+  if (actuator) {
+    const std::string a = path + "/actuator";
+    if (!actuator->time_constant && !actuator->rate_limit)
+      errs.push_back({a, "give time_constant, rate_limit or both"});
+    if (actuator->rate_limit)
+      check(errs, a + "/rate_limit", ActuatorModel::kRateLimitRange, *actuator->rate_limit);
+    if (const auto& tau = actuator->time_constant) {
+      const std::size_t before = errs.size();
+      check(errs, a + "/time_constant", ActuatorModel::kTimeConstantRange, *tau);
+      const double h = sample_time / substeps;
+      if (errs.size() == before && std::isfinite(h) && h > 0 &&
+          !(*tau >= ActuatorModel::kMinSteps * h))
+        errs.push_back({a + "/time_constant",
+                        "must be at least 2 integration steps (2 · sample_time / substeps = " +
+                            detail::fmt_num(ActuatorModel::kMinSteps * h) + " s), got " +
+                            detail::fmt_num(*tau)});
+    }
+  }
   return errs;
+}
+
+ActuatorSteps actuator_steps(const ActuatorModel& model, double half_step) {
+  ActuatorSteps s;
+  if (model.time_constant) s.gain = -math::expm1(-half_step / *model.time_constant);
+  if (model.rate_limit) s.max_step = *model.rate_limit * half_step;
+  return s;
 }
 
 const std::vector<double>* Scenario::true_value(std::string_view parameter) const {

@@ -239,7 +239,6 @@ SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
   const StateT x0 = Eigen::Map<const StateT>(scenario.initial_state.data());
   StateT x = x0;
   Vec<M> u_prev = Vec<M>::Zero();
-  Vec<M> u_held = Vec<M>::Zero();
 
   const bool constant_G = plant.input_matrix_is_constant();
   const Mat<N, M> G0 = plant.G(x0);
@@ -270,12 +269,32 @@ SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
     }
     return a;
   };
-  // dX/dt at state s and stage inputs e, with the command of this sample held.
-  const auto deriv = [&](const StateT& s, const Entry& e) FTC_HOT_LAMBDA -> StateT {
+  // dX/dt at state s and stage inputs e, with the plant's input v: the command of this sample
+  // held, or the actuators' output at the stage's instant.
+  const auto deriv = [&](const StateT& s, const Entry& e, const Vec<M>& v) FTC_HOT_LAMBDA
+      -> StateT {
     StateT d;
     d.template head<N>() = s.template tail<N>();
-    d.template tail<N>() = accel(s, drift(plant, s, ws), e, u_held);
+    d.template tail<N>() = accel(s, drift(plant, s, ws), e, v);
     return d;
+  };
+
+  // The actuator model (docs/model.md): its output u_a (0 at t = 0) follows the command clamped
+  // to the actuator's range, stepped over each half step as the kernel steps it.
+  const bool act = scenario.actuator.has_value();
+  const ActuatorSteps act_steps =
+      act ? actuator_steps(*scenario.actuator, 0.5 * h) : ActuatorSteps{};
+  Vec<M> ua = Vec<M>::Zero();
+  const auto lag = [&](const Vec<M>& from, const Vec<M>& uc) FTC_HOT_LAMBDA {
+    const double g = act_steps.gain, s = act_steps.max_step, neg = -s;
+    Vec<M> to;
+    for (int j = 0; j < M; ++j) {
+      double d = (uc[j] - from[j]) * g;
+      d = d > s ? s : d;
+      d = d < neg ? neg : d;
+      to[j] = from[j] + d;
+    }
+    return to;
   };
 
   std::int64_t k = 0;
@@ -283,33 +302,46 @@ SimulationResult run(const P& plant, C& controller, const Scenario& scenario,
     const double t = static_cast<double>(k) * Ts;
     const Vec<N> fx = drift(plant, x, ws);
     const Entry* e = exo.step(k, 0);  // at the start, midpoint, end
-    const Vec<N> a = accel(x, fx, e[0], u_prev);
+    const Vec<N> a = accel(x, fx, e[0], act ? ua : u_prev);
 
     const Vec<M> u =
         controller.step(Measurement<N>{t, x.template head<N>(), x.template tail<N>(), a, &fx,
                                        static_cast<const Plant<N, M>*>(&plant)});
     metrics.sample(t, x, u);
     if (options.record_every > 0 && k % options.record_every == 0)
-      append_row<N, M>(result.trajectory, t, x, u, applied(e[0].fault, u));
+      append_row<N, M>(result.trajectory, t, x, u, applied(e[0].fault, act ? ua : u));
 
-    u_held = u;
+    Vec<M> uc = u;  // the command within the actuator's range
+    if (act)
+      for (int j = 0; j < M; ++j) {
+        const double c = u[j] < context.lo[j] ? context.lo[j] : u[j];
+        uc[j] = c > context.hi[j] ? context.hi[j] : c;
+      }
     // Stage 1 of the first substep is at (t, X): f(X) and Δ(t) are already known.
     StateT k1;
     k1.template head<N>() = x.template tail<N>();
-    k1.template tail<N>() = accel(x, fx, e[0], u);
+    k1.template tail<N>() = accel(x, fx, e[0], act ? ua : u);
     // The last stage of the sample ends at t_{k+1} = (k+1)·Ts, the very instant (bit for bit)
     // at which the next sample's sensor reads; ExogenousInputs forms the instants likewise.
     const int S = scenario.substeps;
     for (int j = 0; j < S; ++j) {
       if (j > 0) {
         e = exo.step(k, j);
-        k1 = deriv(x, e[0]);
+        k1 = deriv(x, e[0], act ? ua : u);
       }
       const Entry& em = e[1];
       const Entry& ee = e[2];
+      Vec<M> ua_mid = ua, ua_end = ua;
+      if (act) {
+        ua_mid = lag(ua, uc);
+        ua_end = lag(ua_mid, uc);
+      }
+      const Vec<M>& vm = act ? ua_mid : u;
+      const Vec<M>& ve = act ? ua_end : u;
       x = rk4_step(
-          x, h, k1, [&](const StateT& s) FTC_HOT_LAMBDA { return deriv(s, em); },
-          [&](const StateT& s) FTC_HOT_LAMBDA { return deriv(s, ee); });
+          x, h, k1, [&](const StateT& s) FTC_HOT_LAMBDA { return deriv(s, em, vm); },
+          [&](const StateT& s) FTC_HOT_LAMBDA { return deriv(s, ee, ve); });
+      if (act) ua = ua_end;
     }
     u_prev = u;
 

@@ -7,6 +7,7 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "ftc/sim/isa.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/sim/plants.hpp"
+#include "ftc/sim/hexarotor.hpp"
 #include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/spacecraft.hpp"
 
@@ -367,5 +369,106 @@ TEST(BatchKernel, WindowMetricsInLanesAreTheControllerLoops) {
     const std::vector<SimulationResult> got = run(tasks, isa);
     for (std::size_t i = 0; i < tasks.size(); ++i)
       expect_same(got[i], want[i], std::string(to_string(isa)) + ", lane " + std::to_string(i));
+  }
+}
+
+namespace {
+
+// The actuator models of docs/model.md in turn: a lag, a rate limit, both, and none.
+std::optional<ActuatorModel> actuator_of(std::size_t l, double tau, double rate) {
+  ActuatorModel m;
+  switch (l % 4) {
+    case 0:
+      m.time_constant = tau;
+      return m;
+    case 1:
+      m.rate_limit = rate;
+      return m;
+    case 2:
+      m.time_constant = tau;
+      m.rate_limit = rate;
+      return m;
+    default:
+      return std::nullopt;
+  }
+}
+
+// Every lane on every instruction set against the Controller loop of the plant class `plant`.
+template <class P>
+void expect_lanes_are_the_controller_loop(const P& plant, const PlantSpec& spec,
+                                          const std::vector<Task>& tasks, const std::string& what) {
+  std::vector<SimulationResult> want;
+  for (const Task& t : tasks) {
+    auto c = make_controller(t.config, plant, t.scenario.sample_time);
+    want.push_back(simulate(plant, *c, t.scenario, t.options));
+  }
+  for (Isa isa : supported_isas()) {
+    const std::vector<SimulationResult> got = run(tasks, isa, spec);
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+      expect_same(got[i], want[i], what + " on " + to_string(isa) + ", lane " + std::to_string(i));
+  }
+}
+
+}  // namespace
+
+// The actuator model in lanes: on every plant (the hexarotor's about its operating point), lanes
+// with a lag, a rate limit, both and none, saturated lanes, a diverging one and recorded ones,
+// give the bits of the Controller loop on every instruction set; and the model changes the run.
+TEST(BatchKernel, ActuatorModelInLanesIsTheControllerLoops) {
+  {
+    std::vector<Task> tasks = varied(ControllerType::pi_fosmc, 9);
+    for (std::size_t l = 0; l < tasks.size(); ++l) {
+      tasks[l].scenario.actuator = actuator_of(l, 0.02, 200.0);
+      if (l % 3 == 2) tasks[l].scenario.saturation = 6.0;
+      tasks[l].options.record_every = l % 2 == 0 ? 40 : 0;
+    }
+    tasks[1].scenario.actuator = actuator_of(0, 0.02, 200.0);  // a lag on the diverging lane
+    expect_lanes_are_the_controller_loop(Spacecraft(), PlantSpec{}, tasks, "spacecraft");
+    const auto any = make_plant(PlantSpec{});
+    Task off = tasks[0];
+    off.scenario.actuator.reset();
+    const double with = any->simulate(tasks[0].config, tasks[0].scenario, tasks[0].options)
+                            .metrics.errors.ise;
+    const double without = any->simulate(off.config, off.scenario, off.options).metrics.errors.ise;
+    EXPECT_TRUE(std::isfinite(with));
+    EXPECT_NE(with, without);
+    EXPECT_TRUE(
+        any->simulate(tasks[1].config, tasks[1].scenario, tasks[1].options).metrics.diverged);
+  }
+  {
+    std::vector<Task> tasks = varied_arm(ControllerType::fosmc, 6);
+    for (std::size_t l = 0; l < tasks.size(); ++l) {
+      tasks[l].scenario.actuator = actuator_of(l, 0.01, 100.0);
+      tasks[l].options.record_every = l % 2 == 0 ? 25 : 0;
+    }
+    expect_lanes_are_the_controller_loop(Manipulator(), arm_spec(), tasks, "arm");
+  }
+  {
+    PlantSpec spec;
+    spec.model = "hexarotor";
+    Scenario s;
+    s.name = "hover";
+    s.duration = 3.0;
+    s.initial_state = {0.2, -0.15, 0.1, 0.0, 0.0, 0.0};
+    s.disturbance = {{1, Shape::sin, 0.2, 1.0, 0.0}, {3, Shape::cos, 0.1, 2.0, 0.0}};
+    Fault loss;
+    loss.actuator = 3;
+    loss.type = FaultType::loss_of_effectiveness;
+    loss.fraction = 0.5;
+    loss.onset = 1.0;
+    s.faults = {loss};
+    std::vector<Task> tasks;
+    for (std::size_t l = 0; l < 6; ++l) {
+      ControllerConfig c = ControllerConfig::table1(ControllerType::pi_fosmc);
+      c.Kp = 1.0 + l;
+      c.Ki = 50.0;
+      Scenario sl = s;
+      sl.actuator = actuator_of(l, 0.02, 50.0);
+      if (l == 4) sl.saturation = 2.0;
+      SimulationOptions o;
+      o.record_every = l % 2 == 0 ? 30 : 0;
+      tasks.push_back({c, sl, o});
+    }
+    expect_lanes_are_the_controller_loop(Hexarotor(), spec, tasks, "hexarotor");
   }
 }

@@ -355,3 +355,64 @@ TEST(Evaluate, MembersCarryTheirFaultsAsFields) {
   }
   EXPECT_GE(kinds.size(), 2u);  // the check saw more than one kind of fault
 }
+
+// A job with goals: every goal's aggregate per controller over the counted members is the goal's
+// aggregate of the members' own metrics, and evaluation.json, evaluation.csv and the printed
+// table carry them with their violations and feasibility.
+TEST(Evaluate, ReportsEveryGoalAggregatedPerController) {
+  json j = short_ensemble_job();
+  const json objective = j["objective"];
+  j.erase("objective");
+  json soft = {{"metric", "ise"}, {"minimize", true}};
+  for (const char* k : {"window", "window_from", "aggregate", "alpha"})
+    if (objective.contains(k)) soft[k] = objective[k];
+  j["goals"] = json::array({soft,
+                            {{"metric", "control_tv"}, {"aggregate", "max"}, {"at_most", 1e9}},
+                            {{"metric", "peak_command"}, {"aggregate", "mean"}, {"at_most", 1.0}}});
+  const tune::Job job = tune::parse_job(j, "robust-goals");
+  tune::EvaluateOptions o;
+  o.count = 4;
+  tune::TbbEvaluator evaluator(2);
+  const tune::EvaluationResult r = tune::evaluate_out_of_sample(job, o, evaluator);
+  for (const tune::EvaluatedController& c : r.controllers) {
+    ASSERT_EQ(c.goals.size(), 3u);
+    double tv = 0, peak_sum = 0;
+    int counted = 0;
+    for (const tune::MemberResult& m : c.members) {
+      ASSERT_EQ(m.goals.size(), 3u);
+      EXPECT_EQ(m.goals[0], m.objective);  // the soft goal is the objective's measure
+      EXPECT_EQ(m.goals[1], m.metrics.get("control_tv"));
+      EXPECT_EQ(m.goals[2], m.metrics.get("max_abs_u"));  // no window: the whole run's peak
+      if (!m.recoverable) continue;
+      ++counted;
+      tv = std::max(tv, m.metrics.get("control_tv"));
+      peak_sum += m.metrics.get("max_abs_u");
+    }
+    ASSERT_GT(counted, 1);
+    EXPECT_EQ(c.goals[0], c.aggregates.objective) << c.label;
+    EXPECT_EQ(c.goals[1], tv) << c.label;
+    EXPECT_NEAR(c.goals[2], peak_sum / counted, 1e-12 * peak_sum) << c.label;
+    EXPECT_GT(c.goals[2], 1.0);
+    EXPECT_DOUBLE_EQ(c.violation, c.goals[2] - 1.0);
+  }
+  std::string text;
+  tune::write_evaluation_json(r, [&](std::string_view s) { text.append(s); });
+  const json doc = json::parse(text);
+  const json& g = doc["controllers"][0]["goals"];
+  EXPECT_EQ(g["goals"][1]["value"].get<double>(), r.controllers[0].goals[1]);
+  EXPECT_EQ(g["goals"][2]["violation"].get<double>(), r.controllers[0].goals[2] - 1.0);
+  EXPECT_FALSE(g["feasible"].get<bool>());
+  EXPECT_EQ(doc["controllers"][0]["members"][1]["goals"][1].get<double>(),
+            r.controllers[0].members[1].goals[1]);
+  std::string csv;
+  tune::write_evaluation_csv(r, [&](std::string_view s) { csv.append(s); });
+  const std::string header = csv.substr(0, csv.find('\n'));
+  EXPECT_NE(header.find(",diverged,goal0_ise,goal1_control_tv,goal2_peak_command"),
+            std::string::npos)
+      << header;
+  const std::string table = tune::evaluation_table(r);
+  EXPECT_NE(table.find("goal2: mean of PEAK_COMMAND[0 s, end] over 5 scenarios <= 1"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("feasible"), std::string::npos);
+}

@@ -714,3 +714,36 @@ TEST(JobGoals, TwoGoalsMayNotAskForDifferentThresholdsOrTails) {
   EXPECT_TRUE(has("/goals/2/threshold", "differs from /goals/1/threshold 0.01")) << errs.size();
   EXPECT_TRUE(has("/goals/4/tail", "differs from /goals/3/tail 2")) << errs.size();
 }
+
+// The scenario's actuator block: absent, a job keeps its canonical form (and hash); present, it
+// reaches the scenario and round-trips; bad values are refused at their paths.
+TEST(JobLoader, ActuatorBlockParsesRoundTripsAndIsCheckedAtItsPaths) {
+  json j = table1();
+  const tune::Job plain = tune::parse_job(j, "t");
+  EXPECT_FALSE(plain.scenarios[0].actuator.has_value());
+  EXPECT_FALSE(tune::to_json(plain)["scenarios"][0].contains("actuator"));
+  j["scenarios"][0]["actuator"] = {{"time_constant", 0.02}, {"rate_limit", 50}};
+  const tune::Job job = tune::parse_job(j, "t");
+  ASSERT_TRUE(job.scenarios[0].actuator.has_value());
+  EXPECT_EQ(*job.scenarios[0].actuator->time_constant, 0.02);
+  EXPECT_EQ(*job.scenarios[0].actuator->rate_limit, 50.0);
+  EXPECT_EQ(tune::to_json(job)["scenarios"][0]["actuator"], j["scenarios"][0]["actuator"]);
+  EXPECT_EQ(tune::to_json(tune::scenario_from_json(tune::to_json(job.scenarios[0]), "s")),
+            tune::to_json(job.scenarios[0]));  // what rank 0 sends its workers
+  j["scenarios"][0]["actuator"] = {{"rate_limit", 50}};
+  EXPECT_FALSE(tune::parse_job(j, "t").scenarios[0].actuator->time_constant.has_value());
+  const std::vector<BadCase> cases = {
+      {"empty", [](json& k) { k["scenarios"][0]["actuator"] = json::object(); },
+       "/scenarios/0/actuator", "time_constant, rate_limit or both"},
+      {"zero time constant", [](json& k) { k["scenarios"][0]["actuator"] = {{"time_constant", 0}}; },
+       "/scenarios/0/actuator/time_constant", "> 0"},
+      {"time constant under two steps",
+       [](json& k) { k["scenarios"][0]["actuator"] = {{"time_constant", 0.0015}}; },
+       "/scenarios/0/actuator/time_constant", "at least 2 integration steps"},
+      {"negative rate limit", [](json& k) { k["scenarios"][0]["actuator"] = {{"rate_limit", -1}}; },
+       "/scenarios/0/actuator/rate_limit", "> 0"},
+      {"unknown key", [](json& k) { k["scenarios"][0]["actuator"] = {{"tau", 0.1}}; },
+       "/scenarios/0/actuator/tau", "unknown key"},
+  };
+  expect_each_case_refused(cases);
+}

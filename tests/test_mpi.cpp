@@ -102,6 +102,27 @@ TEST(Mpi, GainsAreByteIdenticalForOneProcessOneRankAndThreeRanks) {
   EXPECT_EQ(run["threads"], 3);
 }
 
+// The scenario's actuator model travels with the scenarios rank 0 sends (their JSON): three
+// ranks give the files of a plain run, which differ from those of the job without the model.
+TEST(Mpi, ActuatorModelReachesEveryRank) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-actuator");
+  const auto plain = run_cli(
+      "run jobs/post-fault-actuator.json -q --threads 2 --out '" + (dir / "plain").string() + "'",
+      dir);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto three = mpirun_cli(
+      3,
+      "run jobs/post-fault-actuator.json -q --threads 1 --out '" + (dir / "three").string() + "'",
+      dir);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  expect_same_run(dir / "plain", dir / "three");
+  const auto ideal = run_cli(
+      "run jobs/post-fault.json -q --threads 2 --out '" + (dir / "ideal").string() + "'", dir);
+  ASSERT_EQ(ideal.exit_code, 0) << ideal.err;
+  EXPECT_NE(slurp(dir / "ideal" / "history.csv"), slurp(dir / "three" / "history.csv"));
+}
+
 TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {
   REQUIRE_MPI();
   const fs::path dir = fresh_dir("mpi-ensemble");

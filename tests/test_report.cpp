@@ -60,6 +60,7 @@ TEST(Report, RendersEveryFigureAndASelfContainedPage) {
                            "&quot;schema&quot;: &quot;ftctune.job/1&quot;"})
     EXPECT_NE(html.find(text), std::string::npos) << text;
   EXPECT_EQ(html.find("src=\"figures/"), std::string::npos);  // nothing outside the page
+  EXPECT_EQ(html.find("<h2>Goals</h2>"), std::string::npos);  // a job without goals
 }
 
 // report.html holds what comparison.md holds: the objective named by metric, window and
@@ -673,4 +674,63 @@ TEST(Report, LandscapeReportsItsProgressBlockByBlock) {
   ASSERT_GE(calls.size(), 3u);
   EXPECT_EQ(calls.back(), std::make_pair(std::int64_t{144}, std::int64_t{144}));
   for (std::size_t i = 1; i < calls.size(); ++i) EXPECT_GT(calls[i].first, calls[i - 1].first);
+}
+
+// A job with goals: comparison.json, comparison.md and report.html give each goal's value per
+// compared controller, its limit, violation and feasibility; the values are the goals'
+// aggregates of the per-scenario metrics (one scenario here: its metrics themselves).
+TEST(Report, ComparisonAndPageShowEveryGoalPerController) {
+  const auto dir = fresh_dir("report-goals");
+  json j = short_table1_job();
+  j.erase("objective");
+  j["goals"] = json::array({{{"metric", "ise"}, {"window", {0, 5}}, {"minimize", true}},
+                            {{"metric", "control_tv"}, {"at_most", 1e9}},
+                            {{"metric", "peak_command"}, {"at_most", 1.0}}});
+  const tune::Job job = tune::parse_job(j, "goals");
+  tune::TbbEvaluator evaluator(2);
+  const tune::TuningOutcome r = tune::tune(job, evaluator);
+  tune::write_outputs(r, dir / "run");
+  const json doc = json::parse(slurp(dir / "run" / "comparison.json"));
+  const std::string md = slurp(dir / "run" / "comparison.md");
+  ASSERT_EQ(doc["controllers"].size(), r.comparison.size());
+  EXPECT_NE(md.find("| controller | ISE[0 s, 5 s], minimized | CONTROL_TV <= 1e+09 | "
+                    "PEAK_COMMAND[0 s, end] <= 1 | total violation | feasible |"),
+            std::string::npos)
+      << md;
+  for (std::size_t c = 0; c < r.comparison.size(); ++c) {
+    const sim::Metrics& m = r.comparison[c].outcome.evaluation.scenarios.at(0);
+    const json& g = doc["controllers"][c]["goals"];
+    ASSERT_EQ(g["goals"].size(), 3u);
+    EXPECT_EQ(g["goals"][0]["value"].get<double>(), m.errors.ise);  // the window [0, 5) is the run
+    EXPECT_EQ(g["goals"][1]["value"].get<double>(), m.control_tv);
+    EXPECT_EQ(g["goals"][2]["value"].get<double>(), m.max_abs_u);  // the whole run's peak
+    EXPECT_EQ(g["goals"][2]["at_most"].get<double>(), 1.0);
+    EXPECT_EQ(g["goals"][1]["violation"].get<double>(), 0.0);
+    EXPECT_EQ(g["goals"][2]["violation"].get<double>(), m.max_abs_u / 1.0 - 1.0);
+    EXPECT_FALSE(g["feasible"].get<bool>());  // no gains keep every command within 1
+    EXPECT_EQ(g["total_violation"].get<double>(), m.max_abs_u - 1.0);
+    const std::string row = "| " + r.comparison[c].label + " | " +
+                            tune::detail::format_number(m.errors.ise) + " | " +
+                            tune::detail::format_number(m.control_tv) + " | " +
+                            tune::detail::format_number(m.max_abs_u) + " | ";
+    EXPECT_NE(md.find(row), std::string::npos) << row << "\n" << md;
+  }
+  const std::string html = slurp(tune::render_report(dir / "run").html);
+  EXPECT_NE(html.find("<h2>Goals</h2>"), std::string::npos);
+  EXPECT_NE(html.find("<th>PEAK_COMMAND[0 s, end] &lt;= 1</th>"), std::string::npos);
+  const tune::ComparedController& first = r.comparison[0];
+  const std::string cells =
+      "<tr><td>" + first.label + "</td><td>" +
+      tune::detail::format_number(first.outcome.evaluation.scenarios[0].errors.ise) + "</td>";
+  EXPECT_NE(html.find(cells), std::string::npos) << cells;
+  // With the run's evaluation/, the page's evaluation section gives the goals there too.
+  const tune::EvaluationResult ev = tune::evaluate_out_of_sample(job, {}, evaluator);
+  tune::write_evaluation(ev, dir / "run" / "evaluation");
+  const std::string with_evaluation = slurp(tune::render_report(dir / "run").html);
+  const std::size_t section = with_evaluation.find("<h2>Out-of-sample evaluation</h2>");
+  ASSERT_NE(section, std::string::npos);
+  const std::string row = "<tr><td>" + ev.controllers[0].label + "</td><td>" +
+                          tune::detail::format_number(ev.controllers[0].goals[0]) + "</td><td>" +
+                          tune::detail::format_number(ev.controllers[0].goals[1]) + "</td>";
+  EXPECT_NE(with_evaluation.find(row, section), std::string::npos) << row;
 }

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -160,5 +161,102 @@ TEST(Simulation, GenericPlantPathMatchesSpacecraftPath) {
     EXPECT_EQ(a.final_state, b.final_state) << to_string(type);
     EXPECT_EQ(a.metrics.errors.ise, b.metrics.errors.ise) << to_string(type);
     EXPECT_EQ(a.metrics.control_tv, b.metrics.control_tv) << to_string(type);
+  }
+}
+
+namespace {
+
+// An open-loop run of `c` on the spacecraft at rest, every sample recorded: the applied column
+// is the actuators' output u_a(t_k) (after the faults), whatever the plant does.
+SimulationResult actuator_run(const Vec4& command, const ActuatorModel& model,
+                              std::optional<double> saturation = std::nullopt,
+                              std::vector<Fault> faults = {}) {
+  const Spacecraft plant;
+  Scenario s;
+  s.name = "actuator";
+  s.duration = 0.4;
+  s.initial_state = std::vector<double>(6, 0.0);
+  s.saturation = saturation;
+  s.actuator = model;
+  s.faults = std::move(faults);
+  ConstantCommand c(command);
+  SimulationOptions o;
+  o.record_every = 1;
+  return simulate(plant, c, s, o);
+}
+
+}  // namespace
+
+// The lag alone against its closed form u_a(t) = u_c (1 − e^{−t/τ}) from u_a(0) = 0, with the
+// command clamped to the saturation first (actuator 4: 3 → 2.5). The half-step update is the
+// exact solution, so only rounding separates them.
+TEST(Simulation, ActuatorLagFollowsItsClosedForm) {
+  ActuatorModel m;
+  m.time_constant = 0.05;
+  const Vec4 u(2.0, -1.0, 0.5, 3.0);
+  const SimulationResult r = actuator_run(u, m, 2.5);
+  ASSERT_EQ(r.trajectory.rows(), 400u);
+  const Vec4 uc(2.0, -1.0, 0.5, 2.5);
+  for (std::size_t k = 0; k < r.trajectory.rows(); ++k) {
+    const double t = r.trajectory.t(k);
+    for (int j = 0; j < 4; ++j) {
+      EXPECT_EQ(r.trajectory.u_d(k)[j], u[j]);  // the command itself is recorded unclamped
+      EXPECT_NEAR(r.trajectory.u(k)[j], uc[j] * (1.0 - std::exp(-t / 0.05)), 1e-13)
+          << "t = " << t << ", actuator " << j + 1;
+    }
+  }
+  EXPECT_EQ(r.trajectory.u(0)[0], 0.0);  // at rest at t = 0
+  // The metrics price the command (SPEC §16), not the actuator's output.
+  EXPECT_EQ(r.metrics.errors.peak_command, 3.0);
+}
+
+// With a rate limit R the output ramps at R until the lag asks for less (|u_c − u_a| = R τ),
+// then follows the lag: u_c = 3, R = 20/s, τ = 0.05 s ramp to 2 by t = 0.1 s, then
+// u_a = 3 − e^{−(t − 0.1)/τ}. Without a lag (actuator 2) the ramp goes all the way: −0.3 at
+// −2/s is reached at 0.15 s and held.
+TEST(Simulation, ActuatorRateLimitClipsTheSlope) {
+  ActuatorModel lag_and_rate;
+  lag_and_rate.time_constant = 0.05;
+  lag_and_rate.rate_limit = 20.0;
+  const SimulationResult r = actuator_run(Vec4(3.0, -3.0, 0.5, 0.0), lag_and_rate);
+  ActuatorModel rate_only;
+  rate_only.rate_limit = 2.0;
+  const SimulationResult q = actuator_run(Vec4(0.0, -0.3, 0.0, 0.0), rate_only);
+  for (std::size_t k = 0; k < r.trajectory.rows(); ++k) {
+    const double t = r.trajectory.t(k);
+    const double up = t <= 0.1 ? 20.0 * t : 3.0 - std::exp(-(t - 0.1) / 0.05);
+    EXPECT_NEAR(r.trajectory.u(k)[0], up, 1e-12) << "t = " << t;
+    EXPECT_NEAR(r.trajectory.u(k)[1], -up, 1e-12) << "t = " << t;
+    // 0.5 is within R τ = 1 of 0: the rate limit never acts, the lag alone.
+    EXPECT_NEAR(r.trajectory.u(k)[2], 0.5 * (1.0 - std::exp(-t / 0.05)), 1e-13) << "t = " << t;
+    EXPECT_NEAR(q.trajectory.u(k)[1], t <= 0.15 ? -2.0 * t : -0.3, 1e-13) << "t = " << t;
+    if (k > 0) {  // never faster than R
+      const double dt = t - r.trajectory.t(k - 1);
+      EXPECT_LE(std::abs(r.trajectory.u(k)[0] - r.trajectory.u(k - 1)[0]), 20.0 * dt * (1 + 1e-12));
+    }
+  }
+  EXPECT_EQ(q.trajectory.u(q.trajectory.rows() - 1)[1], -0.3);
+}
+
+// The faults act on the actuator's output: a stuck actuator holds its value whatever the lag
+// does, a loss of effectiveness scales the lagged output.
+TEST(Simulation, FaultsActOnTheActuatorsOutput) {
+  ActuatorModel m;
+  m.time_constant = 0.05;
+  Fault stuck;
+  stuck.actuator = 1;
+  stuck.type = FaultType::stuck;
+  stuck.onset = 0.2;
+  stuck.value = -0.7;
+  Fault loe;
+  loe.actuator = 2;
+  loe.type = FaultType::loss_of_effectiveness;
+  loe.onset = 0.0;
+  loe.fraction = 0.25;
+  const SimulationResult r = actuator_run(Vec4(1.0, 2.0, 0.0, 0.0), m, std::nullopt, {stuck, loe});
+  for (std::size_t k = 0; k < r.trajectory.rows(); ++k) {
+    const double t = r.trajectory.t(k), lag = 1.0 - std::exp(-t / 0.05);
+    EXPECT_NEAR(r.trajectory.u(k)[0], t >= 0.2 ? -0.7 : lag, 1e-13) << "t = " << t;
+    EXPECT_NEAR(r.trajectory.u(k)[1], 0.75 * 2.0 * lag, 1e-13) << "t = " << t;
   }
 }

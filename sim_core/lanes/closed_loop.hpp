@@ -11,6 +11,9 @@
 //     a_k = f(X) + G(X)·applied(t, u_{k-1}) + Δ(t)   acceleration sensor, before the new command
 //     u_k = law(X1, X2, a_k, f_model(X), G⁺_model(X))
 //     substeps × RK4 with u_k held; faults and Δ at each stage time
+//   with an actuator model (PackSetup::actuator, docs/model.md) the plant is driven by the
+//   actuators' output u_a instead of the held command: u_a(t_k) in a_k and at each stage, u_a
+//   stepped on the half-step grid towards the command clamped to the actuator's range
 //     a lane with |X_i| > 1e6, inf or NaN has diverged: it stops counting, restarts from X(0)
 //     with a reset controller (so that it takes no slow paths), and the host ignores it
 //   the pack ends when every lane has diverged or all samples are done
@@ -201,6 +204,24 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
   }
   const T Tsv(Ts);
 
+  // The actuator model: its output u_a per actuator and lane (0 at t = 0), and its update over a
+  // half step, u_a ← u_a + clamp((u_c − u_a)·gain, ±max_step) (ftc/sim/scenario.hpp's
+  // ActuatorSteps), towards the command u_c clamped to [limit_lo, limit_hi].
+  const bool act = su.actuator;
+  const T act_gain = row(su.act_gain), act_step = row(su.act_step), act_neg = -act_step;
+  VM ua;
+  ua.fill(T(0.0));
+  const auto lag = [&](const VM& from, const VM& uc) FTC_HOT_LAMBDA -> VM {
+    VM to;
+    for (int j = 0; j < M; ++j) {
+      T d = (uc[j] - from[j]) * act_gain;
+      d = lane::select(d > act_step, act_step, d);
+      d = lane::select(d < act_neg, act_neg, d);
+      to[j] = from[j] + d;
+    }
+    return to;
+  };
+
   SampleLanes<N, M> out[32];
   const int block = su.block < 32 ? su.block : 32;
   std::int64_t k = 0;
@@ -211,7 +232,8 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
       const double* e = exo + i * S * 3 * kInstant;
       VN f, f_model;
       plant.drift(x, f, su.mismatch ? &f_model : nullptr);
-      const VN a = accel(f, forcing(e, u_prev));
+      // The plant's input now: the actuators' output, or the command held since t_{k-1}.
+      const VN a = accel(f, forcing(e, act ? ua : u_prev));
       law::Sample<T, N> m;
       for (int r = 0; r < N; ++r) {
         m.X1[r] = x[r];
@@ -259,22 +281,50 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
           lane::add_peak<T>(counting & (t >= onset[fi]), en, peak[fi]);
       }
 
-      // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
-      const VN a1 = accel(f, forcing(e, u));
-      VS k1;
-      for (int r = 0; r < N; ++r) {
-        k1[r] = x[N + r];
-        k1[N + r] = a1[r];
-      }
-      for (int j = 0; j < S; ++j) {
-        const double* ej = e + j * 3 * kInstant;
-        if (j > 0) k1 = deriv(x, forcing(ej, u));
-        const Forcing mid = forcing(ej + kInstant, u);
-        const Forcing end = forcing(ej + 2 * kInstant, u);
-        sim::rk4_advance(
-            x, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
-            [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
-      }
+      // The substeps, compiled twice: with the actuator model, and without it exactly as before
+      // it existed (no test or copy in the loop of a run without one).
+      const auto substeps = [&](auto with_actuator) FTC_HOT_LAMBDA {
+        constexpr bool A = decltype(with_actuator)::value;
+        [[maybe_unused]] VM uc;  // the command within the actuator's range
+        if constexpr (A)
+          for (int r = 0; r < M; ++r) {
+            lane::store(ua[r], o.ua[r]);
+            const T c = lane::select(u[r] < limit_lo[r], limit_lo[r], u[r]);
+            uc[r] = lane::select(c > limit_hi[r], limit_hi[r], c);
+          }
+        // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
+        const VN a1 = accel(f, forcing(e, A ? ua : u));
+        VS k1;
+        for (int r = 0; r < N; ++r) {
+          k1[r] = x[N + r];
+          k1[N + r] = a1[r];
+        }
+        for (int j = 0; j < S; ++j) {
+          const double* ej = e + j * 3 * kInstant;
+          if constexpr (A) {
+            if (j > 0) k1 = deriv(x, forcing(ej, ua));
+            const VM ua_mid = lag(ua, uc);
+            const VM ua_end = lag(ua_mid, uc);
+            const Forcing mid = forcing(ej + kInstant, ua_mid);
+            const Forcing end = forcing(ej + 2 * kInstant, ua_end);
+            sim::rk4_advance(
+                x, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
+                [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
+            ua = ua_end;
+          } else {
+            if (j > 0) k1 = deriv(x, forcing(ej, u));
+            const Forcing mid = forcing(ej + kInstant, u);
+            const Forcing end = forcing(ej + 2 * kInstant, u);
+            sim::rk4_advance(
+                x, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
+                [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
+          }
+        }
+      };
+      if (act)
+        substeps(std::true_type{});
+      else
+        substeps(std::false_type{});
       u_prev = u;
 
       Mask inside = lane::abs(x[0]) <= T(1e6);  // false for NaN
@@ -298,6 +348,8 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
       counting = counting & inside;
       for (int r = 0; r < S2; ++r) x[r] = lane::select(inside, x[r], x0[r]);
       for (int r = 0; r < M; ++r) u_prev[r] = lane::select(inside, u_prev[r], T(0.0));
+      if (act)
+        for (int r = 0; r < M; ++r) ua[r] = lane::select(inside, ua[r], T(0.0));
       law.reset_lanes(inside);
     }
     if (su.want_samples) host.samples(k - n, n, out);

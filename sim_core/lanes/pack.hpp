@@ -49,6 +49,7 @@ template <int N, int M>
 struct SampleLanes {
   double x[2 * N][kMaxLanes];
   double u[M][kMaxLanes];
+  double ua[M][kMaxLanes];  // with an actuator model (PackSetup::actuator): its output u_a(t_k)
   bool diverged[kMaxLanes];
 };
 
@@ -69,6 +70,12 @@ struct PackSetup {
   double G_pinv[M * N] = {};
   double x0[2 * N][kMaxLanes] = {};
   double saturation[kMaxLanes] = {};  // u_max; +inf for none
+  // The lanes' actuator model (ftc/sim/scenario.hpp's ActuatorModel; every lane of a pack has
+  // one or none): the half step's gain and largest step per lane (ActuatorSteps). The command is
+  // clamped to [limit_lo, limit_hi] (below) before the model follows it.
+  bool actuator = false;
+  double act_gain[kMaxLanes] = {};
+  double act_step[kMaxLanes] = {};
   // For a plant whose actuators work about an operating point (PlantLanes' kTrimmed: a rotor's
   // hover thrust), per actuator and lane: u is a deviation from u0, the faults act on the
   // physical output u0 + u (a loss of effectiveness scales it, a stuck actuator holds it), and

@@ -141,6 +141,10 @@ class Host final : public PackHost<N, M> {
         for (int r = 0; r < 2 * N; ++r) x[r] = out[i].x[r][l];
         for (int r = 0; r < M; ++r) u[r] = out[i].u[r][l];
         if (metrics) metrics_[l].sample(t, x, u);
+        // The plant's input: the actuators' output with a model, else the command.
+        Vec<M> drive = u;
+        if (setup_.actuator)
+          for (int r = 0; r < M; ++r) drive[r] = out[i].ua[r][l];
         if (every > 0 && k % every == 0) {
           const std::size_t stride = Exo::stride(setup_.shared_inputs, width_);
           const double* e =
@@ -151,7 +155,7 @@ class Host final : public PackHost<N, M> {
             effect.gain[r] = e[(Exo::kGain + r) * stride + from];
             effect.offset[r] = e[(Exo::kOffset + r) * stride + from];
           }
-          append_row<N, M>(lanes_[l]->result->trajectory, t, x, u, applied(l, effect, u));
+          append_row<N, M>(lanes_[l]->result->trajectory, t, x, u, applied(l, effect, drive));
         }
         if (out[i].diverged[l]) {
           if (metrics) metrics_[l].mark_diverged(t + Ts);
@@ -273,6 +277,12 @@ void run_pack(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M,
       su.limit_lo[j][l] = c.lo;
       su.limit_hi[j][l] = c.hi;
     }
+    if (const std::optional<ActuatorModel>& a = lane.scenario->actuator) {
+      su.actuator = true;
+      const ActuatorSteps st = actuator_steps(*a, 0.5 * (su.Ts / su.substeps));
+      su.act_gain[l] = st.gain;
+      su.act_step[l] = st.max_step;
+    }
     const double threshold = lane.options->metrics.settling_threshold;
     su.threshold_sq[l] = threshold * threshold;
     su.any_settling = su.any_settling || !std::isnan(threshold);
@@ -344,12 +354,13 @@ template <class P>
 void run_lanes(std::span<LaneTask> lanes, const Mat<P::kAxes, P::kActuators>* G,
                const Mat<P::kActuators, P::kAxes>* G_pinv, bool trimmed, Isa isa) {
   // Lanes can share a pack when their loops have the same shape: sample time, substeps,
-  // samples, control law (and network size). Packs are formed in task order.
-  using Key = std::tuple<double, int, std::int64_t, ControllerType, double>;
+  // samples, control law (and network size), and an actuator model or none. Packs are formed in
+  // task order.
+  using Key = std::tuple<double, int, std::int64_t, ControllerType, double, bool>;
   const auto key = [](const LaneTask& l) {
     const bool adaptive = controller_info(l.config.type).adaptive;
     return Key{l.scenario->sample_time, l.scenario->substeps, l.scenario->samples(), l.config.type,
-               adaptive ? l.config.nodes : 0.0};
+               adaptive ? l.config.nodes : 0.0, l.scenario->actuator.has_value()};
   };
   const std::size_t width = static_cast<std::size_t>(lane_width(isa));
   std::vector<bool> taken(lanes.size(), false);

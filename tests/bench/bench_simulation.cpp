@@ -170,4 +170,21 @@ BENCHMARK(BM_ArmLanes)
     ->Threads(2)
     ->UseRealTime();
 
+// The paper's scenario with the actuator model on (docs/model.md: a 20 ms lag and 200 per s rate
+// limit): what the model costs against BM_Lanes.
+static void BM_ActuatorLanes(benchmark::State& state) {
+  Scenario s = Scenario::paper();
+  ActuatorModel m;
+  m.time_constant = 0.02;
+  m.rate_limit = 200.0;
+  s.actuator = m;
+  run_lanes(state, PlantSpec{}, s);
+}
+
+BENCHMARK(BM_ActuatorLanes)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2, 3}})
+    ->Unit(benchmark::kMillisecond)
+    ->Threads(1)
+    ->UseRealTime();
+
 BENCHMARK_MAIN();

@@ -126,6 +126,26 @@ Ptr<sim::Fault> fault_shape() {
   return shape;
 }
 
+Ptr<sim::ActuatorModel> make_actuator_shape() {
+  using A = sim::ActuatorModel;
+  auto o = std::make_shared<Obj<A>>(
+      "The actuators' dynamics (docs/model.md): each actuator's output follows its command, "
+      "clamped to the actuator's range, with a first-order lag and a rate limit; the faults and "
+      "the saturation act on that output. Give one or both; absent: the command drives the plant");
+  o->optional_number("time_constant", &A::time_constant, A::kTimeConstantRange,
+                     "τ of the lag τ du_a/dt = u_c - u_a (s), at least 2 · sample_time / "
+                     "substeps; absent: no lag",
+                     false);
+  o->optional_number("rate_limit", &A::rate_limit, A::kRateLimitRange,
+                     "|du_a/dt| <= rate_limit (units of u per s); absent: no limit", false);
+  return o;
+}
+
+Ptr<sim::ActuatorModel> actuator_shape() {
+  static const Ptr<sim::ActuatorModel> shape = make_actuator_shape();
+  return shape;
+}
+
 Ptr<sim::Scenario> make_scenario_shape() {
   using S = sim::Scenario;
   auto o = std::make_shared<Obj<S>>(
@@ -141,6 +161,7 @@ Ptr<sim::Scenario> make_scenario_shape() {
   o->array("faults", &S::faults, fault_shape(), "actuator faults; they add up");
   o->optional_number("saturation", &S::saturation, S::kSaturationRange,
                      "|u_j| <= saturation after the faults; absent: none", false);
+  o->optional_object("actuator", &S::actuator, actuator_shape(), "");
   // Model mismatch: the true values of each parameter a registered plant declares uncertain,
   // under the parameter's name (the job's plant must declare it: validate_job).
   for (const job_detail::UncertainKey& k : job_detail::uncertain_keys()) {

@@ -220,14 +220,10 @@ Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario, bool fai
       e.violation += g.violation(e.goals.back());
       continue;
     }
-    std::vector<double> v;  // a scenario where the metric is undefined (NaN) is left out
+    std::vector<double> v;
     for (std::size_t i = 0; i < e.scenarios.size(); ++i)
-      if (counted_[i])
-        if (const double x = goal_value(g, e.scenarios[i], i); !std::isnan(x)) v.push_back(x);
-    // Undefined on every counted scenario (a settling time without faults): NaN, which no limit
-    // accepts, rather than the aggregate of nothing.
-    const double value = v.empty() ? std::numeric_limits<double>::quiet_NaN()
-                                   : g.measure().aggregate_of(std::move(v));
+      if (counted_[i]) v.push_back(goal_value(g, e.scenarios[i], i));
+    const double value = aggregate_goal(g, std::move(v));
     e.goals.push_back(value);
     e.violation += g.violation(value);
   }
@@ -272,6 +268,15 @@ double TuningProblem::goal_value(const GoalConfig& g, const sim::Metrics& m,
       break;
   }
   throw std::logic_error("a goal metric without a value");
+}
+
+double aggregate_goal(const GoalConfig& goal, std::vector<double> values) {
+  // A scenario where the metric is undefined (NaN) is left out; undefined on every counted
+  // scenario (a settling time without faults): NaN, which no limit accepts, rather than the
+  // aggregate of nothing.
+  std::erase_if(values, [](double x) { return std::isnan(x); });
+  return values.empty() ? std::numeric_limits<double>::quiet_NaN()
+                        : goal.measure().aggregate_of(std::move(values));
 }
 
 Summary summarize_values(const ObjectiveConfig& objective, std::vector<double> v) {

@@ -111,9 +111,33 @@ void summary_table(const json& comparison, const Job& job, std::ostringstream& h
   h << "</table>\n";
 }
 
+// comparison.md's goals table: each goal's value per controller, its limit and whether the
+// controller meets every limit, read back out of the controllers of comparison.json (or of
+// evaluation.json, aggregated over `scenarios`; 0: the job's).
+void goals_table(const json& controllers, const Job& job, std::size_t scenarios,
+                 std::ostringstream& h) {
+  const auto num = [](const json& j) { return detail::format_number(json_number_or(j, NAN)); };
+  h << "<table><tr><th>controller</th>";
+  for (std::size_t k = 0; k < job.goals.size(); ++k)
+    h << "<th>" << html_escape(goal_label(job, k, scenarios)) << "</th>";
+  h << "<th>total violation</th><th>feasible</th></tr>\n";
+  for (const json& c : controllers) {
+    const json g = c.value("goals", json::object());
+    const json list = g.value("goals", json::array());
+    h << "<tr><td>" << html_escape(c.value("label", "?")) << "</td>";
+    for (std::size_t k = 0; k < job.goals.size(); ++k)
+      h << "<td>"
+        << num(k < list.size() && list[k].is_object() ? list[k].value("value", json()) : json())
+        << "</td>";
+    h << "<td>" << num(g.value("total_violation", json())) << "</td><td>"
+      << (g.value("feasible", false) ? "yes" : "no") << "</td></tr>\n";
+  }
+  h << "</table>\n";
+}
+
 // The run's evaluation/ (`ftctune evaluate`'s default place), when there is one: its table of
 // aggregates over the held-out members, and its figure.
-void evaluation_section(const fs::path& run_dir, std::ostringstream& h) {
+void evaluation_section(const fs::path& run_dir, const Job& job, std::ostringstream& h) {
   const fs::path dir = run_dir / "evaluation";
   std::error_code ec;
   if (!fs::is_regular_file(dir / "evaluation.json", ec)) return;
@@ -147,6 +171,11 @@ void evaluation_section(const fs::path& run_dir, std::ostringstream& h) {
       << "</td><td>" << a.value("diverged", 0) << "</td></tr>\n";
   }
   h << "</table>\n";
+  if (!job.goals.empty()) {  // each goal aggregated over the same members
+    h << "<p>The job's goals over the same scenarios:</p>\n";
+    goals_table(e["controllers"], job,
+                static_cast<std::size_t>(e.value("listed", 0) + e.value("count", 0)), h);
+  }
   if (const std::optional<std::string> png = fs::is_regular_file(dir / "evaluation.png", ec)
                                                  ? read_file(dir / "evaluation.png")
                                                  : std::nullopt)
@@ -202,6 +231,10 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
   if (comparison.contains("noise_floor") && comparison["noise_floor"].is_string())
     h << "<p class=\"noise-floor\">" << html_escape(comparison["noise_floor"].get<std::string>())
       << "</p>\n";
+  if (!job.goals.empty()) {
+    h << "<h2>Goals</h2>\n";
+    goals_table(comparison["controllers"], job, 0, h);
+  }
   if (job.ensemble) summary_table(comparison, job, h);
 
   for (std::size_t s = 0; s < S; ++s) {
@@ -279,7 +312,7 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
     break;
   }
 
-  evaluation_section(run_dir, h);
+  evaluation_section(run_dir, job, h);
 
   h << "<h2>Run</h2>\n<table>\n";
   for (auto it = run.begin(); it != run.end(); ++it)

@@ -38,11 +38,10 @@ json named(const std::vector<std::string>& names, const Decision& x) {
   return j;
 }
 
-}  // namespace
-
-std::string objective_label(const Job& job) {
-  const ObjectiveConfig& o = job.objective;
-  std::string metric = sim::to_string(o.metric);
+// A metric measured as `o` says (its window when `windowed`), aggregated over the job's
+// scenarios.
+std::string measure_label(std::size_t n, std::string metric, const ObjectiveConfig& o,
+                          bool windowed) {
   for (char& c : metric) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   const auto seconds = [](double t) { return detail::format_number(t, "%.6g") + " s"; };
   std::string window;
@@ -53,8 +52,7 @@ std::string objective_label(const Job& job) {
   else
     window = seconds(o.window.t0) + ", " +
              (std::isfinite(o.window.t1) ? seconds(o.window.t1) : std::string("end"));
-  const std::string value = metric + "[" + window + "]";
-  const std::size_t n = job.scenario_count();
+  const std::string value = windowed ? metric + "[" + window + "]" : metric;
   if (n <= 1) return value;
   std::string aggregate;
   switch (o.aggregate) {
@@ -72,6 +70,34 @@ std::string objective_label(const Job& job) {
       break;
   }
   return aggregate + " of " + value + " over " + std::to_string(n) + " scenarios";
+}
+
+}  // namespace
+
+std::string objective_label(const Job& job) {
+  return measure_label(job.scenario_count(), sim::to_string(job.objective.metric), job.objective,
+                       true);
+}
+
+std::string goal_label(const Job& job, std::size_t k, std::size_t scenarios) {
+  const GoalConfig& g = job.goals.at(k);
+  return measure_label(scenarios ? scenarios : job.scenario_count(), to_string(g.metric),
+                       g.measure(), windowed(g.metric)) +
+         (g.at_most ? " <= " + detail::format_number(*g.at_most, "%.6g") : ", minimized");
+}
+
+json goals_json(const Job& job, const std::vector<double>& values, double violation) {
+  json list = json::array();
+  for (std::size_t k = 0; k < job.goals.size(); ++k) {
+    json goal = to_json(job.goals[k]);
+    const double v = k < values.size() ? values[k] : std::numeric_limits<double>::quiet_NaN();
+    goal["value"] = json_number(v);
+    if (job.goals[k].at_most) goal["violation"] = json_number(job.goals[k].violation(v));
+    list.push_back(std::move(goal));
+  }
+  return {{"goals", std::move(list)},
+          {"total_violation", json_number(violation)},
+          {"feasible", !(violation > 0)}};
 }
 
 std::string label_slug(const std::string& label) {
@@ -128,20 +154,10 @@ json gains_document(const TuningOutcome& r) {
   g["fitness"] = json_number(r.optimization.best_fitness);
   if (!job.goals.empty()) {  // the winner's goals, and the rule that chose it
     const Evaluation& e = r.best().outcome.evaluation;
-    json list = json::array();
-    for (std::size_t k = 0; k < job.goals.size(); ++k) {
-      json goal = to_json(job.goals[k]);
-      const double v = k < e.goals.size() ? e.goals[k] : std::numeric_limits<double>::quiet_NaN();
-      goal["value"] = json_number(v);
-      if (job.goals[k].at_most) goal["violation"] = json_number(job.goals[k].violation(v));
-      list.push_back(std::move(goal));
-    }
-    g["goals"] = {{"goals", std::move(list)},
-                  {"total_violation", json_number(e.violation)},
-                  {"feasible", e.feasible()},
-                  {"rule",
-                   "feasible beats infeasible; between feasible candidates the soft goal "
-                   "decides, between infeasible ones the lesser total violation"}};
+    g["goals"] = goals_json(job, e.goals, e.violation);
+    g["goals"]["rule"] =
+        "feasible beats infeasible; between feasible candidates the soft goal decides, between "
+        "infeasible ones the lesser total violation";
   }
   const ComparedController& base = r.baseline();
   g["baseline"] = {{"controller", to_json(base.controller)},
@@ -248,6 +264,10 @@ json comparison_document(const TuningOutcome& r) {
     cj["controller"] = to_json(c.controller);
     cj["objective"] = json_number(c.outcome.evaluation.objective);
     cj["fitness"] = json_number(c.outcome.evaluation.fitness);
+    // A job with goals: each goal's value over the job's scenarios (members included), as the
+    // search saw it, its limit and violation, and whether the controller meets every limit.
+    if (!r.job.goals.empty())
+      cj["goals"] = goals_json(r.job, c.outcome.evaluation.goals, c.outcome.evaluation.violation);
     if (!c.outcome.error.empty()) cj["error"] = c.outcome.error;
     cj["scenarios"] = json::array();
     // The listed scenarios in full; an ensemble's members in its summary below.
@@ -289,6 +309,26 @@ std::string comparison_markdown(const TuningOutcome& r) {
             : std::string())
     << ").\n";
   if (const std::string nf = noise_floor_sentence(r); !nf.empty()) o << "\n" << nf << "\n";
+  if (!job.goals.empty()) {
+    o << "\n## Goals\n\nEach goal's value per controller, aggregated over the scenarios as the "
+         "search aggregates it; a controller is feasible when it meets every limit.\n\n"
+         "| controller |";
+    for (std::size_t k = 0; k < job.goals.size(); ++k) o << " " << goal_label(job, k) << " |";
+    o << " total violation | feasible |\n|---|";
+    for (std::size_t k = 0; k < job.goals.size(); ++k) o << "---:|";
+    o << "---:|:---:|\n";
+    for (const ComparedController& c : r.comparison) {
+      const Evaluation& e = c.outcome.evaluation;
+      o << "| " << c.label << " |";
+      for (std::size_t k = 0; k < job.goals.size(); ++k)
+        o << " "
+          << detail::format_number(k < e.goals.size() ? e.goals[k]
+                                                      : std::numeric_limits<double>::quiet_NaN())
+          << " |";
+      o << " " << detail::format_number(e.violation) << " | " << (e.feasible() ? "yes" : "no")
+        << " |\n";
+    }
+  }
   if (job.ensemble) {
     o << "\n## All " << r.scenarios << " scenarios (" << r.listed_scenarios << " listed, "
       << r.scenarios - r.listed_scenarios << " ensemble members, seed " << job.ensemble->seed

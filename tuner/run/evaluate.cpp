@@ -64,6 +64,7 @@ MemberResult member_result(const TuningProblem& p, std::size_t i, const sim::Met
   r.objective = m.objective(p.job().objective.metric);
   r.metrics = sim::MetricValues::of(m);
   r.diverged = m.diverged;
+  for (const GoalConfig& g : p.job().goals) r.goals.push_back(p.goal_value(g, m, i));
   return r;
 }
 
@@ -122,14 +123,19 @@ EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions
 
   // The controllers: the compare list, the job's own, then every gains file.
   for (const CompareEntry& c : job.compare)
-    r.controllers.push_back({c.label, "compare", c.controller, {}, {}});
+    r.controllers.push_back({c.label, "compare", c.controller, {}, {}, {}, 0.0});
   r.controllers.push_back(
-      {display_name(job.controller.type) + " (job)", "job", job.controller, {}, {}});
+      {display_name(job.controller.type) + " (job)", "job", job.controller, {}, {}, {}, 0.0});
   for (const EvaluateOptions::GainsFile& f : options.gains) {
     const runtime::Gains g = runtime::read_gains(f.path);
     check_fits(g, job, f.path.string());
-    r.controllers.push_back(
-        {f.label.empty() ? f.path.string() : f.label, f.path.string(), g.controller, {}, {}});
+    r.controllers.push_back({f.label.empty() ? f.path.string() : f.label,
+                             f.path.string(),
+                             g.controller,
+                             {},
+                             {},
+                             {},
+                             0.0});
   }
   for (std::size_t i = 0; i < r.controllers.size(); ++i)
     for (std::size_t j = 0; j < i; ++j)
@@ -145,6 +151,9 @@ EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions
   const auto listed = static_cast<std::int64_t>(job.scenarios.size());
   const std::int64_t total = listed + r.count;
   std::vector<std::vector<double>> counted(r.controllers.size());
+  // Per controller and goal, the counted members' values of the goal's metric.
+  std::vector<std::vector<std::vector<double>>> goal_values(
+      r.controllers.size(), std::vector<std::vector<double>>(job.goals.size()));
   std::vector<int> diverged(r.controllers.size(), 0);
   int unrecoverable = 0;
   for (EvaluatedController& c : r.controllers) c.members.reserve(static_cast<std::size_t>(total));
@@ -168,6 +177,8 @@ EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions
         if (!problem.counted(i)) continue;  // listed, but outside the aggregates
         diverged[c] += per[i].diverged ? 1 : 0;
         counted[c].push_back(r.controllers[c].members.back().objective);
+        for (std::size_t k = 0; k < job.goals.size(); ++k)
+          goal_values[c][k].push_back(r.controllers[c].members.back().goals[k]);
       }
     }
     r.simulations += static_cast<std::int64_t>(controllers.size() * problem.scenarios());
@@ -179,6 +190,11 @@ EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions
     s.scenarios = static_cast<int>(total);
     s.unrecoverable = unrecoverable;
     s.diverged = diverged[c];
+    EvaluatedController& ec = r.controllers[c];
+    for (std::size_t k = 0; k < job.goals.size(); ++k) {
+      ec.goals.push_back(aggregate_goal(job.goals[k], std::move(goal_values[c][k])));
+      ec.violation += job.goals[k].violation(ec.goals.back());
+    }
   }
   return r;
 }
@@ -233,10 +249,11 @@ void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
   out << head << ",\n  \"controllers\": [";
   for (std::size_t c = 0; c < r.controllers.size(); ++c) {
     const EvaluatedController& ec = r.controllers[c];
-    const json meta = {{"label", ec.label},
-                       {"source", ec.source},
-                       {"controller", to_json(ec.controller)},
-                       {"aggregates", summary_json(ec.aggregates)}};
+    json meta = {{"label", ec.label},
+                 {"source", ec.source},
+                 {"controller", to_json(ec.controller)},
+                 {"aggregates", summary_json(ec.aggregates)}};
+    if (!r.job.goals.empty()) meta["goals"] = goals_json(r.job, ec.goals, ec.violation);
     std::string m = meta.dump();
     m.pop_back();
     out << (c ? ",\n    " : "\n    ") << m << ", \"members\": [";
@@ -246,6 +263,10 @@ void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink) {
                   {"recoverable", x.recoverable},
                   {"objective", json_number(x.objective)},
                   {"diverged", x.diverged}};
+      if (!x.goals.empty()) {
+        row["goals"] = json::array();
+        for (double v : x.goals) row["goals"].push_back(json_number(v));
+      }
       // Every field of the record under its name (metrics_json's form): a fault field as an
       // array, one value per fault onset.
       for (std::size_t f = 0; f < sim::kMetricFieldCount; ++f) {
@@ -276,7 +297,11 @@ void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
   const std::size_t faults_n = max_faults(r.job);
   out << "controller,scenario,faults" << fault_columns_header(faults_n) << ",recoverable,objective";
   for (const sim::MetricField& f : sim::kMetricFields) out << "," << f.name;
-  out << ",diverged\n";
+  out << ",diverged";
+  // A job with goals: each goal's metric in its own window, named as trials.csv names them.
+  for (std::size_t k = 0; k < r.job.goals.size(); ++k)
+    out << ",goal" << std::to_string(k) << "_" << to_string(r.job.goals[k].metric);
+  out << "\n";
   for (const EvaluatedController& c : r.controllers) {
     const std::string label = csv_field(c.label);
     for (std::size_t i = 0; i < c.members.size(); ++i) {
@@ -292,7 +317,9 @@ void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
         out << ",";
         for (std::size_t k = 0; k < v.size(); ++k) out << (k ? ";" : "") << csv_number(v[k]);
       }
-      out << (m.diverged ? ",1\n" : ",0\n");
+      out << (m.diverged ? ",1" : ",0");
+      for (double v : m.goals) out << "," << csv_number(v);
+      out << "\n";
     }
   }
   out.flush();
@@ -313,6 +340,27 @@ std::string evaluation_table(const EvaluationResult& r) {
                   c.label.c_str(), f(s.mean).c_str(), f(s.median).c_str(), f(s.p90).c_str(),
                   f(s.max).c_str(), f(s.cvar).c_str(), s.diverged);
     o << buf;
+  }
+  if (r.job.goals.empty()) return o.str();
+  o << "\n  goals, aggregated over the members as the job aggregates them:\n";
+  for (std::size_t k = 0; k < r.job.goals.size(); ++k)
+    o << "    goal" << k << ": "
+      << goal_label(r.job, k, r.job.scenarios.size() + static_cast<std::size_t>(r.count)) << "\n";
+  std::snprintf(buf, sizeof buf, "  %-*s", static_cast<int>(w), "controller");
+  o << buf;
+  for (std::size_t k = 0; k < r.job.goals.size(); ++k) {
+    std::snprintf(buf, sizeof buf, " %11s", ("goal" + std::to_string(k)).c_str());
+    o << buf;
+  }
+  o << "  feasible\n";
+  for (const EvaluatedController& c : r.controllers) {
+    std::snprintf(buf, sizeof buf, "  %-*s", static_cast<int>(w), c.label.c_str());
+    o << buf;
+    for (double v : c.goals) {
+      std::snprintf(buf, sizeof buf, " %11s", detail::format_number(v, "%.5g").c_str());
+      o << buf;
+    }
+    o << (c.violation > 0 ? "  no\n" : "  yes\n");
   }
   return o.str();
 }

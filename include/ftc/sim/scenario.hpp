@@ -2,6 +2,7 @@
 // One closed-loop fault scenario: run length, sampling, initial state, disturbance and faults.
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -20,6 +21,28 @@ struct TrueValue {
   std::vector<double> values;
 };
 
+// The dynamics of a plant's actuators (docs/model.md "Actuator dynamics"): each actuator's output
+// u_a follows its command, clamped to the actuator's range, with a first-order lag τ and a rate
+// limit R; faults and saturation then act on u_a. At least one of the two is given; a scenario
+// without a model drives the plant with the command itself.
+struct ActuatorModel {
+  std::optional<double> time_constant;  // τ in s; absent: no lag
+  std::optional<double> rate_limit;     // R in units of u per s; absent: no limit
+  static constexpr Range kTimeConstantRange = Range::positive();
+  static constexpr Range kRateLimitRange = Range::positive();
+  static constexpr double kMinSteps = 2.0;  // τ ≥ 2 h, h = Ts / substeps
+};
+
+// The model's update over one half step h/2 of RK4 (the instants the plant's inputs are taken
+// at): u_a ← u_a + clamp((u_c − u_a)·gain, −max_step, max_step), gain = 1 − exp(−h/(2τ)) (1
+// without a lag), max_step = R·h/2 (+inf without a limit). Computed once per run, so the loops
+// (the kernel's and the Controller's) share the bits.
+struct ActuatorSteps {
+  double gain = 1.0;
+  double max_step = std::numeric_limits<double>::infinity();
+};
+ActuatorSteps actuator_steps(const ActuatorModel& model, double half_step);
+
 struct Scenario {
   std::string name = "paper";
   double duration = 30.0;     // T in s, a whole number of sample times
@@ -31,6 +54,7 @@ struct Scenario {
   std::vector<DisturbanceTerm> disturbance;
   std::vector<Fault> faults;
   std::optional<double> saturation;  // |u_j| ≤ u_max after the faults; absent = none
+  std::optional<ActuatorModel> actuator;  // absent: the command drives the plant directly
   // The true values of plant parameters the plant declares uncertain (PlantKind::uncertain),
   // when the simulated plant differs from the model the controller is given (model mismatch);
   // empty = the plant's own. Each overrides the plant parameter it names.

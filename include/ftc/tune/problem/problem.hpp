@@ -53,6 +53,11 @@ struct Summary {
   double mean = 0, median = 0, p90 = 0, p99 = 0, max = 0, cvar = 0;
   double objective = 0;  // the job's own aggregate
 };
+// A goal's value over the counted scenarios' values of its metric: its aggregate, the scenarios
+// where the metric is undefined (NaN) left out; NaN when it is undefined on all of them (which no
+// limit accepts). TuningProblem::score and `ftctune evaluate` aggregate with this.
+double aggregate_goal(const GoalConfig& goal, std::vector<double> values);
+
 // The summary of the counted values of a metric (+inf for a diverged run) under the job's
 // objective; the caller fills in the counts of scenarios, unrecoverable and diverged ones.
 Summary summarize_values(const ObjectiveConfig& objective, std::vector<double> counted);

@@ -22,6 +22,14 @@ inline constexpr const char* kGainsSchema = "ftctune.gains/1";
 // Every place that shows the value labels it with this (run's summary, comparison.md,
 // report.html, the figures).
 std::string objective_label(const Job& job);
+// Goal k of the job in words, as objective_label (the metric in capitals, its window when it has
+// one, the aggregate over several scenarios: `scenarios` of them, default the job's), then
+// "minimized" or "<= limit".
+std::string goal_label(const Job& job, std::size_t k, std::size_t scenarios = 0);
+// A candidate's goals as gains.json, comparison.json and evaluation.json give them: "goals" (each
+// goal of the job with its "value" and, for a hard goal, its "violation"), "total_violation" and
+// "feasible". `values` in the job's goal order (missing ones are NaN).
+nlohmann::json goals_json(const Job& job, const std::vector<double>& values, double violation);
 
 // The file of a compared controller's trajectory, relative to the run directory.
 std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std::size_t scenario);

@@ -44,6 +44,7 @@ struct MemberResult {
   // what evaluation.json and evaluation.csv write.
   sim::MetricValues metrics;
   bool diverged = false;
+  std::vector<double> goals;  // a job with goals: each goal's metric on this member, in its window
 };
 
 struct EvaluatedController {
@@ -52,6 +53,10 @@ struct EvaluatedController {
   sim::ControllerConfig controller;
   Summary aggregates;
   std::vector<MemberResult> members;  // every scenario, listed then members
+  // A job with goals: each goal's aggregate over the counted members (aggregate_goal), in the
+  // job's order, and the hard goals' total normalised violation.
+  std::vector<double> goals;
+  double violation = 0;
 };
 
 struct EvaluationResult {
@@ -71,7 +76,8 @@ EvaluationResult evaluate_out_of_sample(const Job& job, const EvaluateOptions& o
 void write_evaluation_json(const EvaluationResult& r, const ChunkSink& sink);
 // evaluation.csv: one row per controller × scenario, with the scenario's faults in words.
 void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink);
-// The table `ftctune evaluate` prints: controller, mean, median, p90, max, CVaR, diverged.
+// The table `ftctune evaluate` prints: controller, mean, median, p90, max, CVaR, diverged; for a
+// job with goals, then each goal's aggregate per controller and whether it meets every limit.
 std::string evaluation_table(const EvaluationResult& r);
 // How many worst members write_evaluation keeps per controller.
 inline constexpr std::size_t kWorstMembers = 5;
