@@ -409,15 +409,20 @@ TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {
   std::istringstream trials(slurp(cwd / "out" / name / "trials.csv"));
   std::string line;
   std::getline(trials, line);
-  EXPECT_EQ(line, "iteration,index,Kp,Ki,objective,fitness,diverged,accepted,objective_paper");
+  EXPECT_EQ(line,
+            "iteration,index,Kp,Ki,objective,fitness,diverged,accepted,capped,simulated,"
+            "objective_paper");
   int rows = 0, accepted = 0;
   while (std::getline(trials, line)) {
     ++rows;
     std::vector<std::string> cells;
     std::stringstream cs(line);
     for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
-    ASSERT_EQ(cells.size(), 9u) << line;
+    ASSERT_EQ(cells.size(), 11u) << line;
     accepted += cells[7] == "1";
+    // One scenario: nothing to cap, every trial simulated it.
+    EXPECT_EQ(cells[8], "0") << line;
+    EXPECT_EQ(cells[9], "1") << line;
   }
   EXPECT_EQ(rows, 9);  // 3 bats x (1 + 2 iterations): one row per evaluation
   EXPECT_GE(accepted, 1);
