@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -130,6 +131,11 @@ TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {
   // settling times and steady-state errors in comparison.json and evaluation.csv must agree.
   json j = ftc::testing::short_ensemble_job();
   j["metrics"] = {{"settling_threshold", 0.01}, {"steady_state_tail", 1.0}};
+  // Enough members and iterations for capping (issue 27) to stop candidates: the coordinator
+  // decides from results by task index, so trials.csv (where each one stopped) is the same.
+  j["ensemble"]["count"] = 11;
+  j["tuning"]["algorithm"]["population"] = 4;
+  j["tuning"]["algorithm"]["iterations"] = 3;
   const fs::path job = write_job(dir, j);
   const auto plain =
       run_cli("run '" + job.string() + "' -q --out '" + (dir / "plain").string() + "'", dir);
@@ -138,6 +144,10 @@ TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {
       3, "run '" + job.string() + "' -q --threads 2 --out '" + (dir / "three").string() + "'", dir);
   ASSERT_EQ(three.exit_code, 0) << three.err;
   expect_same_run(dir / "plain", dir / "three");
+  // A capped row ends with accepted 0, capped 1 and fewer than the 12 scenarios simulated.
+  EXPECT_TRUE(
+      std::regex_search(slurp(dir / "three" / "trials.csv"), std::regex(",0,1,([0-9]|1[01])\n")))
+      << "no capped trial: the comparison proves less";
   // Out-of-sample evaluation spreads its slices over the ranks as well.
   const auto e_plain = run_cli("evaluate '" + job.string() + "' -q --gains '" +
                                    (dir / "plain" / "gains.json").string() +

@@ -159,3 +159,62 @@ TEST(Optimizer, ConstrainedFitnessOrdersCandidatesByTheConstraintRule) {
   EXPECT_EQ(ftc::tune::constrained_fitness(0.25, 0.0), 0.25);  // feasible: J unchanged
   EXPECT_EQ(ftc::tune::constrained_fitness(0.25, inf), -1.0);
 }
+
+// Capping (issue 27) at the optimiser seam: wherever a candidate's fitness lies below the cap
+// the optimiser hands it, a capped evaluation may answer any value below the cap instead; the
+// run must not notice. The probe answers the value just below the cap (the most tempting for a
+// `>=` test) or a very low one, and the whole state (positions, loudness, fitness, engine,
+// history) must be the bits of the run that saw every true value.
+TEST(Optimizer, CapsChangeNoDecisionOfBatOrRandomSearch) {
+  struct Probe final : BatchFitness {
+    bool just_below = true;
+    int capped = 0, uncapped_with_cap = 0;
+    std::vector<double> operator()(const std::vector<Decision>& batch) override {
+      std::vector<double> J;
+      for (const Decision& x : batch) J.push_back(1.0 / (1.0 + rosenbrock(x)));
+      return J;
+    }
+    std::vector<double> evaluate_capped(const std::vector<Decision>& batch,
+                                        const std::vector<double>& caps) override {
+      std::vector<double> J = (*this)(batch);
+      EXPECT_EQ(caps.size(), batch.size());
+      for (std::size_t i = 0; i < J.size(); ++i) {
+        if (!(caps[i] > kNoCap)) continue;
+        if (J[i] < caps[i]) {
+          J[i] = just_below ? std::nextafter(caps[i], -1e300) : -1e300;
+          ++capped;
+        } else {
+          ++uncapped_with_cap;
+        }
+      }
+      return J;
+    }
+  };
+  const SearchSpace s = box(3, -5, 5);
+  for (const AlgorithmPtr& algorithm : {bat(10, 30), random(10, 30)}) {
+    for (const bool just_below : {true, false}) {
+      struct Plain final : BatchFitness {  // the default: every value, caps ignored
+        std::vector<double> operator()(const std::vector<Decision>& batch) override {
+          std::vector<double> J;
+          for (const Decision& x : batch) J.push_back(1.0 / (1.0 + rosenbrock(x)));
+          return J;
+        }
+      } plain;
+      Probe probe;
+      probe.just_below = just_below;
+      auto a = algorithm->make(3, s);
+      auto b = algorithm->make(3, s);
+      const OptimizationResult ra = run_optimizer(*a, plain);
+      const OptimizationResult rb = run_optimizer(*b, probe);
+      EXPECT_EQ(a->state().dump(), b->state().dump()) << algorithm->type();
+      EXPECT_EQ(ra.best, rb.best);
+      EXPECT_EQ(ra.best_fitness, rb.best_fitness);
+      ASSERT_EQ(ra.history.size(), rb.history.size());
+      for (std::size_t i = 0; i < ra.history.size(); ++i)
+        EXPECT_EQ(ra.history[i].extras, rb.history[i].extras);
+      // The test proves something only when candidates were capped and others were not.
+      EXPECT_GT(probe.capped, 50) << algorithm->type();
+      EXPECT_GT(probe.uncapped_with_cap, 0) << algorithm->type();
+    }
+  }
+}

@@ -1,8 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
@@ -202,5 +205,134 @@ TEST(TuningProblem, NoiseFloorProbeNudgesInitialStatesFromTheReservedStream) {
   for (std::size_t i = 0; i < x0.size(); ++i) {
     EXPECT_EQ(x1[i], x0[i] * (1.0 + 1e-12 * (2.0 * r.uniform() - 1.0))) << i;
     EXPECT_NE(x1[i], x0[i]);
+  }
+}
+
+// Capping (issue 27): counting the unknown values as 0 bounds every aggregate from below, to the
+// last bit, however many values are known; with all known it is the aggregate itself, and
+// knowing more never lowers it.
+TEST(Capping, BoundIsALowerBoundOfEveryAggregate) {
+  std::mt19937_64 rng(27);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<tune::ObjectiveConfig> aggregates;
+  for (const tune::Aggregate a : {tune::Aggregate::mean, tune::Aggregate::max}) {
+    tune::ObjectiveConfig o;
+    o.aggregate = a;
+    aggregates.push_back(o);
+  }
+  for (const double q : {0.0, 0.5, 0.9, 0.99, 1.0}) {
+    tune::ObjectiveConfig o;
+    o.aggregate = tune::Aggregate::quantile;
+    o.q = q;
+    aggregates.push_back(o);
+    o.aggregate = tune::Aggregate::cvar;
+    o.alpha = q == 1.0 ? 0.999 : q;
+    aggregates.push_back(o);
+  }
+  int strictly_below = 0;
+  for (const tune::ObjectiveConfig& o : aggregates) {
+    for (int trial = 0; trial < 300; ++trial) {
+      const std::size_t n = 1 + static_cast<std::size_t>(u(rng) * 60);
+      std::vector<double> v(n);
+      for (double& x : v) {
+        const double r = u(rng);
+        // Values over 12 decades, some exactly 0, some diverged (+inf), many alike.
+        x = r < 0.05   ? 0.0
+            : r < 0.08 ? std::numeric_limits<double>::infinity()
+            : r < 0.2  ? 0.1
+                       : std::pow(10.0, -6.0 + 12.0 * u(rng));
+      }
+      const double full = o.aggregate_of(v);
+      std::vector<bool> known(n, false);
+      double previous = 0.0;
+      // Reveal the values one by one in a random order.
+      std::vector<std::size_t> reveal(n);
+      for (std::size_t i = 0; i < n; ++i) reveal[i] = i;
+      std::shuffle(reveal.begin(), reveal.end(), rng);
+      for (std::size_t k = 0; k <= n; ++k) {
+        if (k > 0) known[reveal[k - 1]] = true;
+        const double bound = tune::aggregate_lower_bound(o, v, known);
+        ASSERT_LE(bound, full) << tune::to_string(o.aggregate) << " n=" << n << " k=" << k;
+        ASSERT_GE(bound, previous) << tune::to_string(o.aggregate);
+        strictly_below += bound < full ? 1 : 0;
+        previous = bound;
+      }
+      EXPECT_EQ(previous, full);  // all known: the aggregate, bit for bit
+    }
+  }
+  EXPECT_GT(strictly_below, 1000);
+}
+
+TEST(Capping, HardestFirstPutsTheCountedScenariosInDescendingOrder) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double> ref = {1.0, 5.0, inf, 5.0, 0.5, nan, 9.0};
+  const std::vector<bool> counted = {true, true, true, true, true, true, false};
+  // +inf and NaN (as +inf) first in index order, then 5 (1 before 3), 1, 0.5; the uncounted last.
+  EXPECT_EQ(tune::hardest_first(ref, counted), (std::vector<std::size_t>{2, 5, 1, 3, 0, 4, 6}));
+  EXPECT_EQ(tune::hardest_first({}, counted), (std::vector<std::size_t>{0, 1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(tune::capping_block(7, 3), 2u);
+  EXPECT_EQ(tune::capping_block(101, 8), 8u);
+  EXPECT_EQ(tune::capping_block(101, 1), 26u);
+  EXPECT_EQ(tune::capping_block(1001, 100), 4u);
+  EXPECT_EQ(tune::capping_block(1, 1), 1u);
+}
+
+// A candidate that runs to the end under capping has evaluate()'s outcome to the last bit; a
+// capped one stopped with a bound below its true objective and a fitness bound below its cap.
+TEST(Capping, CappedCandidatesStopBelowTheirCapAndTheOthersScoreExactly) {
+  json j = short_ensemble_job();
+  j["ensemble"]["count"] = 11;
+  const tune::TuningProblem problem(tune::parse_job(j, "x"));
+  std::vector<sim::ControllerConfig> controllers;
+  for (const double kp : {20.0, 1.0, 50.0, 8.0, 35.0, 3.0})
+    for (const double eta : {20.0, 2.5}) {
+      sim::ControllerConfig c = problem.job().controller;
+      c.Kp = kp;
+      c.switching_gain = eta;
+      controllers.push_back(c);
+    }
+  tune::TbbEvaluator evaluator(2);
+  const std::vector<tune::CandidateOutcome> exact = problem.evaluate(controllers, evaluator);
+  // Caps: the fitness of the median candidate for three in four, none for the others.
+  std::vector<double> fitness;
+  for (const tune::CandidateOutcome& o : exact) fitness.push_back(o.evaluation.fitness);
+  std::vector<double> sorted = fitness;
+  std::sort(sorted.begin(), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  std::vector<double> caps(controllers.size(), tune::kNoCap);
+  for (std::size_t i = 0; i < caps.size(); ++i)
+    if (i % 4 != 1) caps[i] = median;
+  std::vector<bool> counted;
+  std::vector<double> reference;
+  for (std::size_t s = 0; s < problem.scenarios(); ++s) {
+    counted.push_back(problem.counted(s));
+    reference.push_back(exact[0].evaluation.scenarios[s].objective(sim::Metric::ise));
+  }
+  for (const bool hardest : {true, false}) {
+    const std::vector<std::size_t> order =
+        tune::hardest_first(hardest ? reference : std::vector<double>{}, counted);
+    const std::vector<tune::CandidateOutcome> capped =
+        problem.evaluate_capped(controllers, caps, order, evaluator);
+    int stopped = 0;
+    for (std::size_t i = 0; i < controllers.size(); ++i) {
+      const tune::Evaluation& c = capped[i].evaluation;
+      const tune::Evaluation& e = exact[i].evaluation;
+      if (!c.capped) {
+        EXPECT_EQ(c.simulated, problem.scenarios());
+        EXPECT_EQ(c.objective, e.objective) << i;
+        EXPECT_EQ(c.fitness, e.fitness) << i;
+        EXPECT_EQ(c.diverged_count, e.diverged_count) << i;
+        continue;
+      }
+      ++stopped;
+      EXPECT_NE(caps[i], tune::kNoCap) << "a candidate without a cap was capped";
+      EXPECT_LT(c.simulated, problem.scenarios());
+      EXPECT_LE(c.objective, e.objective) << i;
+      EXPECT_LT(c.fitness, caps[i]) << i;
+      EXPECT_LT(e.fitness, caps[i]) << "capped although it mattered: " << i;
+      EXPECT_LE(c.diverged_count, e.diverged_count);
+    }
+    EXPECT_GT(stopped, 0) << "nothing was capped: the test would prove nothing";
   }
 }

@@ -409,15 +409,20 @@ TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {
   std::istringstream trials(slurp(cwd / "out" / name / "trials.csv"));
   std::string line;
   std::getline(trials, line);
-  EXPECT_EQ(line, "iteration,index,Kp,Ki,objective,fitness,diverged,accepted,objective_paper");
+  EXPECT_EQ(line,
+            "iteration,index,Kp,Ki,objective,fitness,diverged,accepted,capped,simulated,"
+            "objective_paper");
   int rows = 0, accepted = 0;
   while (std::getline(trials, line)) {
     ++rows;
     std::vector<std::string> cells;
     std::stringstream cs(line);
     for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
-    ASSERT_EQ(cells.size(), 9u) << line;
+    ASSERT_EQ(cells.size(), 11u) << line;
     accepted += cells[7] == "1";
+    // One scenario: nothing to cap, every trial simulated it.
+    EXPECT_EQ(cells[8], "0") << line;
+    EXPECT_EQ(cells[9], "1") << line;
   }
   EXPECT_EQ(rows, 9);  // 3 bats x (1 + 2 iterations): one row per evaluation
   EXPECT_GE(accepted, 1);
@@ -559,4 +564,132 @@ TEST(Cli, RunExitsTwoForTwoSoftGoalsAndThreeWhenNoCandidateMeetsTheLimits) {
   const CliResult none = run(capped_short_job(100));
   EXPECT_EQ(none.exit_code, 3);
   EXPECT_NE(none.err.find("no candidate met the job's hard goals"), std::string::npos) << none.err;
+}
+
+// Capping (issue 27): with capping on and off a run writes the same gains file and history and
+// checkpoints the same optimiser state after every iteration, for the Bat algorithm and random
+// search, on 1 and 2 threads. trials.csv differs only in the capped trials' rows: a lower bound
+// of the objective there, and the row of the same trial without capping never mattered. With
+// capping on, trials.csv (where each candidate stopped) is the same for 1 and 2 threads.
+TEST(TuningRun, CappingChangesNothingButTheCappedTrialsRows) {
+  for (const char* algorithm : {"bat", "random"}) {
+    json j = short_ensemble_job();
+    j["ensemble"]["count"] = 11;
+    j["tuning"]["algorithm"] = {{"type", algorithm}, {"population", 4}, {"iterations", 3}};
+    const tune::Job job = tune::parse_job(j, "x");
+    std::string capped_trials;
+    for (const int threads : {1, 2}) {
+      std::vector<std::string> states[2];
+      tune::TuningOutcome runs[2];
+      for (const bool capping : {false, true}) {
+        tune::RunOptions o;
+        o.capping = capping;
+        o.observer = [&](const tune::HistoryRow&, const tune::Optimizer& opt,
+                         const std::vector<tune::Trial>&) {
+          states[capping].push_back(opt.state().dump());
+          return true;
+        };
+        runs[capping] = tuned(job, threads, std::nullopt, o);
+      }
+      const tune::TuningOutcome& off = runs[0];
+      const tune::TuningOutcome& on = runs[1];
+      EXPECT_EQ(tune::gains_document(on).dump(), tune::gains_document(off).dump()) << algorithm;
+      EXPECT_EQ(tune::history_csv(on), tune::history_csv(off)) << algorithm;
+      EXPECT_EQ(states[1], states[0]) << algorithm;
+      ASSERT_EQ(on.trials.size(), off.trials.size());
+      int capped = 0;
+      for (std::size_t i = 0; i < on.trials.size(); ++i) {
+        const tune::Trial& a = on.trials[i];
+        const tune::Trial& b = off.trials[i];
+        if (!a.capped) {
+          EXPECT_EQ(tune::trials_json(on.trials, i)[0], tune::trials_json(off.trials, i)[0]) << i;
+          continue;
+        }
+        ++capped;
+        EXPECT_FALSE(b.capped);
+        EXPECT_LT(a.simulated, on.scenarios);
+        EXPECT_LE(a.objective, b.objective) << i;
+        EXPECT_GE(a.fitness, b.fitness) << i;
+        EXPECT_FALSE(b.accepted) << "a capped candidate became the best: " << i;
+        EXPECT_EQ(a.parameters, b.parameters);
+      }
+      EXPECT_GT(capped, 0) << algorithm << ": nothing was capped, the test would prove nothing";
+      EXPECT_LT(on.simulations, off.simulations) << algorithm;
+      // The columns: capped, simulated; a capped row says after how many scenarios it stopped.
+      const std::string csv = tune::trials_csv(on);
+      EXPECT_NE(csv.find(",accepted,capped,simulated\n"), std::string::npos) << csv;
+      EXPECT_NE(csv.find(",0,0,12\n"), std::string::npos) << csv;
+      if (threads == 1)
+        capped_trials = csv;
+      else
+        EXPECT_EQ(csv, capped_trials) << algorithm << ": where candidates stop depends on threads";
+    }
+  }
+}
+
+// A capped run stopped after an iteration and resumed writes the uninterrupted run's trials
+// (the incumbent's values, which order the scenarios, are simulated again on resume).
+TEST(TuningRun, ResumedCappedRunWritesTheSameTrials) {
+  json j = short_ensemble_job();
+  j["ensemble"]["count"] = 11;
+  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
+  const tune::Job job = tune::parse_job(j, "x");
+  const tune::TuningOutcome whole = tuned(job, 2);
+  std::string checkpoint;
+  tune::RunOptions stop;
+  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
+                      const std::vector<tune::Trial>& trials) {
+    checkpoint = tune::run_checkpoint(o, trials).dump();
+    return h.iteration < 2;
+  };
+  tuned(job, 1, std::nullopt, stop);
+  const json state = json::parse(checkpoint);
+  bool any_capped = false;
+  for (const json& row : state["trials"]) any_capped = any_capped || row.size() == 9;
+  EXPECT_TRUE(any_capped) << "no capped trial before the checkpoint: the test proves less";
+  tune::RunOptions resume;
+  resume.resume = &state;
+  const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
+  EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
+  EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+}
+
+// `ftctune run --no-capping` simulates every candidate on every scenario: the same gains.json
+// and history.csv as the default (capping), and no capped trial in its trials.csv.
+TEST(Cli, RunWithoutCappingWritesTheSameGainsAndNoCappedTrial) {
+  const auto dir = fresh_dir("run-no-capping");
+  json j = short_ensemble_job();
+  j["ensemble"]["count"] = 11;
+  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
+  tune::write_file_atomic(dir / "job.json", j.dump(2));
+  const std::string job = std::string("'").append((dir / "job.json").string()).append("'");
+  const CliResult a = run_cli("run " + job + " -q --out '" + (dir / "on").string() + "'", dir);
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const CliResult b =
+      run_cli("run " + job + " -q --no-capping --out '" + (dir / "off").string() + "'", dir);
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_EQ(slurp(dir / "on" / "gains.json"), slurp(dir / "off" / "gains.json"));
+  EXPECT_EQ(slurp(dir / "on" / "history.csv"), slurp(dir / "off" / "history.csv"));
+  // The capped column of every row (after objective, fitness, diverged, accepted).
+  const auto capped_rows = [](const std::string& csv) {
+    int n = 0;
+    std::size_t at = csv.find('\n');
+    while (at != std::string::npos && at + 1 < csv.size()) {
+      const std::size_t end = csv.find('\n', at + 1);
+      const std::string row = csv.substr(at + 1, end - at - 1);
+      std::vector<std::string> cells;
+      for (std::size_t p = 0, q; p <= row.size(); p = q + 1) {
+        q = row.find(',', p);
+        if (q == std::string::npos) q = row.size();
+        cells.push_back(row.substr(p, q - p));
+      }
+      n += cells.size() > 9 && cells[9] == "1" ? 1 : 0;  // iteration, index, 3 parameters, ...
+      at = end;
+    }
+    return n;
+  };
+  EXPECT_GT(capped_rows(slurp(dir / "on" / "trials.csv")), 0);
+  EXPECT_EQ(capped_rows(slurp(dir / "off" / "trials.csv")), 0);
+  EXPECT_GT(json::parse(slurp(dir / "off" / "run.json"))["simulations"].get<std::int64_t>(),
+            json::parse(slurp(dir / "on" / "run.json"))["simulations"].get<std::int64_t>());
 }

@@ -23,6 +23,7 @@ struct RunCliOptions {
   std::optional<std::uint64_t> seed;
   bool report = false;
   bool baseline = false;
+  bool no_capping = false;  // evaluate every candidate on every scenario (issue 27)
   bool force = false;
   bool checkpoint = false;     // after every iteration, from the first
   bool no_checkpoint = false;  // never (else: once the run looks like taking over a minute)
@@ -75,6 +76,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   ro.threads = o.threads;
   ro.seed = o.seed;
   ro.baseline = o.baseline;
+  ro.capping = !o.no_capping;
   ro.force = o.force;
   ro.resume = o.resume;
   ro.checkpoint = o.no_checkpoint ? tune::CheckpointPolicy::never
@@ -172,6 +174,9 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
   sub->add_flag(
       "--baseline", opts->baseline,
       "Also run random search with the same budget (history-random.csv, drawn in Fig. 5)");
+  sub->add_flag("--no-capping", opts->no_capping,
+                "Simulate every candidate on every scenario (default: stop a candidate once it "
+                "cannot change the search; the same gains and history, trials.csv marks it)");
   sub->add_flag("--report", opts->report, "Then draw the figures and report.html (ftctune report)");
   sub->add_flag("--force", opts->force, "Replace the run in an output directory that holds one");
   CLI::Option* checkpoint = sub->add_flag(

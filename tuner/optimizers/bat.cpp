@@ -1,5 +1,6 @@
 #include "ftc/tune/optimizers/bat.hpp"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -122,13 +123,26 @@ void BatAlgorithm::iterate(BatchFitness& fitness) {
     candidates.push_back(std::move(cand));
   }
 
-  const std::vector<double> J = evaluate(fitness, candidates);
+  // The loudness tests come next in the stream whatever the fitness: drawn here, before the
+  // evaluation, they are the same numbers, and they tell each candidate's cap (issue 27). A
+  // candidate whose loudness test fails can only change x*, so it matters only above J(x*); one
+  // whose test passes also moves its bat when J >= J_i (and J_i <= J(x*)). Below its cap a
+  // candidate changes nothing: x* only moves for J > J(x*) at the start of the iteration or
+  // later, which is at least the cap.
+  std::vector<double> loudness_test(bats_.size()), caps(bats_.size());
+  for (std::size_t i = 0; i < bats_.size(); ++i) {
+    loudness_test[i] = rng_.uniform();
+    caps[i] = loudness_test[i] < bats_[i].loudness ? std::min(bats_[i].fitness, best_fitness_)
+                                                   : best_fitness_;
+  }
+
+  const std::vector<double> J = evaluate(fitness, candidates, caps);
 
   // ftctune's exp, not libm's, so that the schedule is the same bits on every CPU.
   const double pulse = c.pulse_rate * (1.0 - sim::math::exp(-c.pulse_rate_growth * t));
   for (std::size_t i = 0; i < bats_.size(); ++i) {
     Bat& b = bats_[i];
-    if (rng_.uniform() < b.loudness && J[i] >= b.fitness) {
+    if (loudness_test[i] < b.loudness && J[i] >= b.fitness) {
       b.x = candidates[i];
       b.fitness = J[i];
       b.loudness *= c.loudness_decay;

@@ -202,6 +202,15 @@ std::vector<double> GenerationalOptimizer::evaluate(BatchFitness& fitness,
   return J;
 }
 
+std::vector<double> GenerationalOptimizer::evaluate(BatchFitness& fitness,
+                                                    const std::vector<Decision>& batch,
+                                                    const std::vector<double>& caps) {
+  std::vector<double> J = fitness.evaluate_capped(batch, caps);
+  if (J.size() != batch.size()) throw std::logic_error("fitness returned a wrong-sized batch");
+  evaluations_ += static_cast<std::int64_t>(J.size());
+  return J;
+}
+
 void GenerationalOptimizer::record(std::vector<std::pair<std::string, double>> extras) {
   HistoryRow row;
   row.iteration = t_;

@@ -58,7 +58,9 @@ void RandomSearch::generation(BatchFitness& fitness) {
     for (std::size_t j = 0; j < x.size(); ++j)
       x[j] = rng_.uniform(space_.lower[j], space_.upper[j]);
   }
-  const std::vector<double> J = evaluate(fitness, batch);
+  // A candidate is kept only above the best so far, so that is its cap (none before the first).
+  const std::vector<double> caps(batch.size(), best_.empty() ? kNoCap : best_fitness_);
+  const std::vector<double> J = evaluate(fitness, batch, caps);
   for (std::size_t i = 0; i < batch.size(); ++i)
     if (best_.empty() || J[i] > best_fitness_) {
       best_ = batch[i];

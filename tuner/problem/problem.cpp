@@ -102,6 +102,36 @@ double fitness_of(double objective) {
   return 1.0 / objective;
 }
 
+double aggregate_lower_bound(const ObjectiveConfig& objective, std::vector<double> values,
+                             const std::vector<bool>& known) {
+  for (std::size_t i = 0; i < values.size(); ++i)
+    if (i >= known.size() || !known[i]) values[i] = 0.0;
+  return objective.aggregate_of(std::move(values));
+}
+
+std::vector<std::size_t> hardest_first(std::span<const double> reference,
+                                       const std::vector<bool>& counted) {
+  std::vector<std::size_t> order(counted.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  if (reference.size() != counted.size()) return order;
+  const auto key = [&](std::size_t i) {
+    const double v = reference[i];
+    return std::isnan(v) ? std::numeric_limits<double>::infinity() : v;
+  };
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (counted[a] != counted[b]) return static_cast<bool>(counted[a]);
+    if (!counted[a]) return false;  // index order (stable)
+    return key(a) > key(b);
+  });
+  return order;
+}
+
+std::size_t capping_block(std::size_t scenarios, std::size_t running) {
+  const std::size_t wide =
+      std::max(kCapBlock, (kCapRoundTasks + running - 1) / std::max<std::size_t>(1, running));
+  return std::max<std::size_t>(1, std::min(wide, (scenarios + 3) / 4));
+}
+
 TuningProblem::TuningProblem(Job job)
     : TuningProblem(
           job,
@@ -203,6 +233,7 @@ Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
 Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario, bool failed) const {
   Evaluation e;
   e.scenarios = std::move(per_scenario);
+  e.simulated = e.scenarios.size();
   std::vector<double> values;
   values.reserve(e.scenarios.size());
   for (std::size_t i = 0; i < e.scenarios.size(); ++i) {
@@ -357,6 +388,85 @@ std::vector<CandidateOutcome> TuningProblem::evaluate(
   return out;
 }
 
+std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
+    std::span<const sim::ControllerConfig> controllers, std::span<const double> caps,
+    std::span<const std::size_t> order, BatchEvaluator& evaluator) const {
+  const std::size_t n = controllers.size(), S = scenarios();
+  if (caps.size() != n || order.size() != S)
+    throw std::invalid_argument("evaluate_capped: a cap per candidate, an order of every scenario");
+  const sim::Metric metric = job_->objective.metric;
+  std::vector<std::vector<sim::Metrics>> per(n, std::vector<sim::Metrics>(S));
+  std::vector<std::vector<bool>> known(n, std::vector<bool>(S, false));
+  std::vector<std::size_t> done(n, 0);  // how many of `order` ran
+  std::vector<std::string> error(n);
+  std::vector<bool> running(n, true), capped(n, false);
+  std::vector<double> bound(n, 0.0);
+  std::vector<SimulationTask> tasks;
+  for (;;) {
+    std::vector<std::size_t> live;
+    for (std::size_t c = 0; c < n; ++c)
+      if (running[c]) live.push_back(c);
+    if (live.empty()) break;
+    const std::size_t block = capping_block(S, live.size());
+    tasks.clear();
+    for (std::size_t c : live)
+      for (std::size_t k = done[c]; k < std::min(S, done[c] + block); ++k)
+        tasks.push_back({c, order[k], false});
+    std::vector<TaskResult> results = evaluator.run({*set_, controllers, tasks, 0});
+    for (std::size_t t = 0; t < tasks.size(); ++t) {
+      const std::size_t c = tasks[t].candidate, s = tasks[t].scenario;
+      per[c][s] = std::move(results[t].metrics);
+      known[c][s] = true;
+      if (error[c].empty() && !results[t].error.empty()) error[c] = std::move(results[t].error);
+    }
+    for (std::size_t c : live) {
+      done[c] = std::min(S, done[c] + block);
+      if (done[c] == S) {
+        running[c] = false;
+        continue;
+      }
+      if (!(caps[c] > kNoCap)) continue;
+      // The counted values in scenario order, as score() aggregates them; a task that failed
+      // makes the candidate's objective +inf.
+      std::vector<double> values;
+      std::vector<bool> have;
+      for (std::size_t s = 0; s < S; ++s)
+        if (counted_[s]) {
+          values.push_back(known[c][s] ? per[c][s].objective(metric) : 0.0);
+          have.push_back(known[c][s]);
+        }
+      bound[c] = error[c].empty() ? aggregate_lower_bound(job_->objective, std::move(values), have)
+                                  : std::numeric_limits<double>::infinity();
+      if (fitness_of(bound[c]) < caps[c]) {
+        capped[c] = true;
+        running[c] = false;
+      }
+    }
+  }
+  std::vector<CandidateOutcome> out(n);
+  for (std::size_t c = 0; c < n; ++c) {
+    if (capped[c]) {
+      Evaluation& e = out[c].evaluation;
+      e.capped = true;
+      e.simulated = done[c];
+      e.objective = bound[c];
+      e.fitness = fitness_of(bound[c]);
+      for (std::size_t s = 0; s < S; ++s)
+        if (known[c][s] && per[c][s].diverged) ++e.diverged_count;
+      e.diverged = e.diverged_count > 0;
+      out[c].error = error[c];
+      continue;
+    }
+    out[c].error = error[c];
+    out[c].evaluation = score(std::move(per[c]), !error[c].empty());
+    if (!error[c].empty()) {  // as evaluate() does
+      out[c].evaluation.objective = std::numeric_limits<double>::infinity();
+      out[c].evaluation.fitness = has_limits(*job_) ? -1.0 : 0.0;
+    }
+  }
+  return out;
+}
+
 double TuningProblem::objective(std::span<const double> x, const ObjectiveOptions& options) const {
   if (x.size() != space_.dimension()) {
     std::string names;
@@ -390,12 +500,47 @@ std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batc
   std::vector<sim::ControllerConfig> controllers;
   controllers.reserve(batch.size());
   for (const Decision& x : batch) controllers.push_back(problem_.controller_for(x));
-  const std::vector<CandidateOutcome> out = problem_.evaluate(controllers, evaluator_);
-  simulations_ += static_cast<std::int64_t>(controllers.size() * problem_.scenarios());
+  return record(batch, problem_.evaluate(controllers, evaluator_));
+}
+
+std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>& batch,
+                                                    const std::vector<double>& caps) {
+  const bool any = std::any_of(caps.begin(), caps.end(), [](double c) { return c > kNoCap; });
+  if (!capping_ || !any || !problem_.job().goals.empty() || problem_.scenarios() < 2 ||
+      caps.size() != batch.size())
+    return (*this)(batch);
+  // After a resume the incumbent's values are not in the checkpoint: simulate it again (the
+  // same bits as when it was found), so that the order is the uninterrupted run's.
+  if (incumbent_.empty()) {
+    const Trial* best = nullptr;
+    for (const Trial& t : trials_)
+      if (t.accepted && !t.capped) best = &t;
+    if (best) {
+      const sim::ControllerConfig c = problem_.controller_with(best->parameters);
+      const CandidateOutcome o =
+          problem_.evaluate(std::span<const sim::ControllerConfig>(&c, 1), evaluator_)[0];
+      simulations_ += static_cast<std::int64_t>(problem_.scenarios());
+      for (const sim::Metrics& m : o.evaluation.scenarios)
+        incumbent_.push_back(m.objective(problem_.job().objective.metric));
+    }
+  }
+  std::vector<bool> counted(problem_.scenarios());
+  for (std::size_t s = 0; s < counted.size(); ++s) counted[s] = problem_.counted(s);
+  const std::vector<std::size_t> order = hardest_first(incumbent_, counted);
+  std::vector<sim::ControllerConfig> controllers;
+  controllers.reserve(batch.size());
+  for (const Decision& x : batch) controllers.push_back(problem_.controller_for(x));
+  return record(batch, problem_.evaluate_capped(controllers, caps, order, evaluator_));
+}
+
+std::vector<double> ProblemFitness::record(const std::vector<Decision>& batch,
+                                           std::vector<CandidateOutcome> out) {
   std::vector<double> J(batch.size());
   const bool per_scenario = !problem_.job().ensemble;
+  const sim::Metric metric = problem_.job().objective.metric;
   for (std::size_t i = 0; i < batch.size(); ++i) {
     const Evaluation& e = out[i].evaluation;
+    simulations_ += static_cast<std::int64_t>(e.simulated);
     J[i] = e.fitness;
     Trial t;
     t.iteration = iteration_;
@@ -404,13 +549,20 @@ std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batc
     t.objective = e.objective;
     t.fitness = e.fitness;
     t.diverged = e.diverged_count;
+    t.capped = e.capped;
+    if (e.capped) t.simulated = e.simulated;
     if (per_scenario)
       for (const sim::Metrics& m : e.scenarios)
-        t.scenario_objectives.push_back(m.objective(problem_.job().objective.metric));
+        t.scenario_objectives.push_back(m.objective(metric));
     t.goals = e.goals;
     t.violation = e.violation;
-    t.accepted = e.fitness > best_;
-    best_ = std::max(best_, e.fitness);
+    // A capped candidate's fitness is below its cap, which is at most the best so far.
+    t.accepted = !e.capped && e.fitness > best_;
+    if (t.accepted) {
+      best_ = e.fitness;
+      incumbent_.clear();
+      for (const sim::Metrics& m : e.scenarios) incumbent_.push_back(m.objective(metric));
+    }
     trials_.push_back(std::move(t));
   }
   return J;
@@ -418,7 +570,9 @@ std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batc
 
 void ProblemFitness::resume_trials(std::vector<Trial> before) {
   trials_ = std::move(before);
-  for (const Trial& t : trials_) best_ = std::max(best_, t.fitness);
+  for (const Trial& t : trials_)
+    if (!t.capped) best_ = std::max(best_, t.fitness);
+  incumbent_.clear();
 }
 
 }  // namespace ftc::tune

@@ -207,6 +207,7 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
   RunOptions ro;
   ro.seed = o.seed;
   ro.max_trajectory_rows = o.max_trajectory_rows;
+  ro.capping = o.capping;
   if (resumed) ro.resume = &resumed->state;
   // Checkpoints: asked for, continuing one, or once the run looks like taking over a minute.
   const bool never = o.checkpoint == CheckpointPolicy::never || !writes;
@@ -307,6 +308,7 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
     RunOptions rr;
     rr.seed = o.seed;
     rr.compare = false;
+    rr.capping = o.capping;
     result.random_baseline = tune(random, *evaluator.use, rr);
     say(log, LogLevel::info,
         "random search with the same budget: best J = " +

@@ -198,7 +198,7 @@ std::string trials_csv(const TuningOutcome& r) {
   const std::vector<std::string> names = parameter_names(r.job);
   std::string s = "iteration,index";
   for (const std::string& n : names) s.append(",").append(n);
-  s += ",objective,fitness,diverged,accepted";
+  s += ",objective,fitness,diverged,accepted,capped,simulated";
   if (!r.job.ensemble)
     for (const sim::Scenario& sc : r.job.scenarios) s.append(",objective_").append(sc.name);
   for (std::size_t k = 0; k < r.job.goals.size(); ++k)
@@ -212,6 +212,11 @@ std::string trials_csv(const TuningOutcome& r) {
     num(t.objective);
     num(t.fitness);
     s.append(",").append(std::to_string(t.diverged)).append(t.accepted ? ",1" : ",0");
+    // Capping (issue 27): a capped trial's objective is a lower bound (its fitness an upper
+    // one) after `simulated` of the candidate's scenarios; the values it has not are empty.
+    s.append(t.capped ? ",1," : ",0,")
+        .append(std::to_string(t.capped ? t.simulated : r.job.scenario_count()));
+    if (t.capped && !r.job.ensemble) s.append(r.job.scenarios.size(), ',');
     for (double v : t.scenario_objectives) num(v);
     if (!r.job.goals.empty()) {
       for (double v : t.goals) num(v);

@@ -22,7 +22,8 @@ std::string canonical_job_sha256(const Job& job) { return sha256_hex(to_json(job
 namespace {
 
 // A trial as a compact row: [iteration, index, [parameters], objective, fitness, diverged,
-// [objective per scenario], accepted]; a diverged objective (inf) is null.
+// [objective per scenario], accepted]; a diverged objective (inf) is null. A capped trial
+// (issue 27) has one more element at the end: how many scenarios it simulated.
 nlohmann::json trial_json(const Trial& t) {
   nlohmann::json scen = nlohmann::json::array();
   for (double v : t.scenario_objectives) scen.push_back(json_io::json_number(v));
@@ -35,10 +36,12 @@ nlohmann::json trial_json(const Trial& t) {
     row.push_back(std::move(goals));
     row.push_back(json_io::json_number(t.violation));
   }
+  if (t.capped) row.push_back(t.simulated);
   return row;
 }
 
-// A job with n goals has rows of 10 with n goal values, one without goals rows of 8.
+// A job with n goals has rows of 10 with n goal values, one without goals rows of 8; a capped
+// trial's row one more, its count of scenarios simulated.
 std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goals) {
   const auto bad = [] {
     return InputError("checkpoint", "/trials", "is not a list of trials written by ftctune");
@@ -46,7 +49,9 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goal
   if (!rows.is_array()) throw bad();
   std::vector<Trial> out;
   for (const nlohmann::json& r : rows) {
-    if (!r.is_array() || r.size() != (goals ? 10u : 8u) || !r[0].is_number_integer() ||
+    const std::size_t base = goals ? 10u : 8u;
+    if (!r.is_array() || (r.size() != base && r.size() != base + 1) ||
+        (r.size() == base + 1 && !r[base].is_number_unsigned()) || !r[0].is_number_integer() ||
         !r[1].is_number_integer() || !r[2].is_array() || !r[4].is_number() ||
         !r[5].is_number_integer() || !r[6].is_array() || !r[7].is_boolean())
       throw bad();
@@ -64,7 +69,11 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goal
       t.scenario_objectives.push_back(
           json_io::json_number_or(v, std::numeric_limits<double>::infinity()));
     t.accepted = r[7].get<bool>();
-    if (r.size() == 10) {
+    if (r.size() == base + 1) {
+      t.capped = true;
+      t.simulated = r[base].get<std::size_t>();
+    }
+    if (goals) {
       if (!r[8].is_array() || r[8].size() != goals || !(r[9].is_number() || r[9].is_null()))
         throw bad();
       for (const nlohmann::json& v : r[8]) {
@@ -198,6 +207,7 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
     return row;
   };
   ProblemFitness fitness(problem, evaluator);
+  fitness.set_capping(options.capping);
   IterationObserver observer;
   if (options.observer)
     observer = [&](const HistoryRow& h, const Optimizer& o) {

@@ -600,10 +600,13 @@ function jobView(main, id) {
       });
     }
     const accepted = cols.indexOf('accepted');
+    // A capped trial's objective is a lower bound (issue 27): shown as "≥ bound".
+    const capped = cols.indexOf('capped'), objective = cols.indexOf('objective');
     clear(trialBody);
     for (const r of rows.slice(0, TRIAL_ROWS_SHOWN))
       trialBody.appendChild(el('tr', {class: r[accepted] === '1' ? 'accepted' : ''},
-        r.map((c) => el('td', {class: 'num', text: c}))));
+        r.map((c, i) => el('td', {class: 'num',
+          text: i === objective && capped >= 0 && r[capped] === '1' ? '≥ ' + c : c}))));
     trialCount.textContent = rows.length + ' of ' + trials.rows.length + ' trials' +
       (rows.length > TRIAL_ROWS_SHOWN ? ' (the first ' + TRIAL_ROWS_SHOWN + ' shown)' : '');
   }

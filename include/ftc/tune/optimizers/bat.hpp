@@ -18,7 +18,10 @@
 //                                   never lost)
 //
 // Random numbers are drawn in exactly this order: for initialisation, per bat x_i then v_i; per
-// iteration, per bat β, the pulse test and (if taken) ε; then per bat the loudness test.
+// iteration, per bat β, the pulse test and (if taken) ε; then per bat the loudness test. The
+// loudness tests are drawn before the batch is evaluated (nothing is drawn in between, so they
+// are the same numbers), which gives each candidate its cap (issue 27): its bat's J_i when the
+// test passes, J(x*) at the start of the iteration otherwise.
 #include <string>
 #include <vector>
 

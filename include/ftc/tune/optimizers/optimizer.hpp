@@ -36,7 +36,18 @@ class BatchFitness {
   // run_optimizer says which iteration the evaluations that follow belong to (0: the initial
   // population), for fitness functions that keep a record of every trial.
   virtual void begin_iteration(int /*iteration*/) {}
+  // Capping (issue 27): the same batch, where the optimiser decides the same for every fitness
+  // of candidate i below caps[i] (-inf: no cap, the candidate's value is needed). A fitness
+  // function may stop evaluating a candidate once its fitness is known to lie below its cap and
+  // return an upper bound on it that is below the cap instead. The default evaluates all.
+  virtual std::vector<double> evaluate_capped(const std::vector<Decision>& batch,
+                                              const std::vector<double>& /*caps*/) {
+    return (*this)(batch);
+  }
 };
+
+// The cap that asks for a candidate's value.
+inline constexpr double kNoCap = -std::numeric_limits<double>::infinity();
 
 // A plain function of one decision vector, evaluated on the calling thread (tests, small
 // problems, embedding).
@@ -256,6 +267,9 @@ class GenerationalOptimizer : public Optimizer {
   // Evaluates a batch and counts it; throws std::logic_error when the fitness is of the wrong
   // size (a broken evaluator, not bad input).
   std::vector<double> evaluate(BatchFitness& fitness, const std::vector<Decision>& batch);
+  // The same with a cap per candidate (BatchFitness::evaluate_capped).
+  std::vector<double> evaluate(BatchFitness& fitness, const std::vector<Decision>& batch,
+                               const std::vector<double>& caps);
   // Appends the history row of iteration t_ with the algorithm's extra figures.
   void record(std::vector<std::pair<std::string, double>> extras = {});
   // The common part of a checkpoint, tagged with the algorithm's name, and its inverse (which

@@ -43,6 +43,12 @@ struct Evaluation {
   std::vector<double> goals;
   double violation = 0.0;
   bool feasible() const { return !(violation > 0); }
+  // Capping (issue 27): a candidate whose lower bound passed its cap before every scenario ran.
+  // Its objective is then that lower bound (the objective is at least this), its fitness
+  // fitness_of(bound) (the fitness is at most this), its diverged count that of the scenarios
+  // that ran; `scenarios` and `goals` are empty.
+  bool capped = false;
+  std::size_t simulated = 0;  // scenarios simulated (all of them unless capped)
 };
 
 // A candidate over many scenarios at a glance (SPEC §15's aggregates): the job's metric over the
@@ -70,6 +76,30 @@ struct CandidateOutcome {
 };
 
 double fitness_of(double objective);  // 1/objective; 0 for inf/NaN; +inf for 0
+
+// Capping (issue 27): a lower bound of objective.aggregate_of(values) when only the values with
+// known[i] are known, the others being any numbers >= 0 (every metric an objective takes is, and
+// +inf for a diverged run): the aggregate of the values with each unknown one as 0. Every
+// aggregate (mean in the given order, max, nearest-rank quantile, CVaR) grows with each value,
+// and so do their sums and picks in floating point, which rounds monotonically; so the bound is
+// at most the aggregate computed with the values known, to the last bit.
+double aggregate_lower_bound(const ObjectiveConfig& objective, std::vector<double> values,
+                             const std::vector<bool>& known);
+
+// The order in which capping runs a candidate's scenarios: the counted ones hardest first by
+// the values `reference` (one per scenario, e.g. the incumbent's; NaN as +inf) has on them,
+// ties by index, then those not counted in index order. An empty reference: index order.
+std::vector<std::size_t> hardest_first(std::span<const double> reference,
+                                       const std::vector<bool>& counted);
+
+// The scenarios of a capping round: each candidate still running gets a block of
+// max(kCapBlock, ⌈kCapRoundTasks / running⌉) scenarios (so that a round keeps the threads and
+// lanes busy), but at most ⌈S/4⌉ of its S (so that it is looked at at least four times). Fixed
+// rules of the results only, so that where a candidate stops depends on no thread count, rank
+// count or lane width.
+inline constexpr std::size_t kCapBlock = 4;
+inline constexpr std::size_t kCapRoundTasks = 64;
+std::size_t capping_block(std::size_t scenarios, std::size_t running);
 
 struct ObjectiveOptions {
   // What a diverged candidate's objective is: +inf when unset; an optimiser that cannot handle
@@ -137,6 +167,16 @@ class TuningProblem {
   std::vector<CandidateOutcome> evaluate(std::span<const sim::ControllerConfig> controllers,
                                          BatchEvaluator& evaluator,
                                          std::int64_t record_every = 0) const;
+  // The same with capping (issue 27): the candidates' scenarios run in rounds, each candidate's
+  // in `order` (a permutation of the scenarios), and after each round a candidate with a cap
+  // (> kNoCap) stops once fitness_of(its lower bound) < cap: its outcome is then capped
+  // (Evaluation::capped). A candidate that runs to the end has exactly evaluate()'s outcome.
+  // Every decision is taken here, on the calling thread, from results by task index, so the
+  // outcome depends on no evaluator, thread count, rank count or lane width.
+  std::vector<CandidateOutcome> evaluate_capped(std::span<const sim::ControllerConfig> controllers,
+                                                std::span<const double> caps,
+                                                std::span<const std::size_t> order,
+                                                BatchEvaluator& evaluator) const;
 
   // The objective (minimised) of the parameter values x (natural units, in space().names
   // order), simulated on the calling thread. Throws InputError, before simulating anything,
@@ -174,6 +214,11 @@ struct Trial {
   bool accepted = false;                    // became the run's best so far when evaluated
   std::vector<double> goals;                // a job with goals: each goal's value
   double violation = 0;                     // and the hard goals' total normalised violation
+  // Capping (issue 27): the candidate was stopped after `simulated` of its scenarios, because
+  // its objective (at least `objective`, its lower bound then) could change no decision;
+  // fitness is then the upper bound fitness_of(objective), scenario_objectives and goals empty.
+  bool capped = false;
+  std::size_t simulated = 0;  // only for a capped trial
 };
 
 // The problem as an optimiser sees it: the fitness of a batch of decision vectors, simulated
@@ -183,6 +228,14 @@ class ProblemFitness final : public BatchFitness {
   ProblemFitness(const TuningProblem& problem, BatchEvaluator& evaluator)
       : problem_(problem), evaluator_(evaluator) {}
   std::vector<double> operator()(const std::vector<Decision>& batch) override;
+  // With capping on (the default), runs the candidates with caps through
+  // TuningProblem::evaluate_capped, each one's scenarios hardest first for the incumbent (the
+  // best trial so far, uncapped by construction) as it was when the batch began; a job with
+  // goals is not capped (its goals' values would be unknown). Capped trials are recorded so.
+  std::vector<double> evaluate_capped(const std::vector<Decision>& batch,
+                                      const std::vector<double>& caps) override;
+  void set_capping(bool on) { capping_ = on; }
+  bool capping() const { return capping_; }
   void begin_iteration(int iteration) override {
     iteration_ = iteration;
     index_ = 0;
@@ -200,6 +253,11 @@ class ProblemFitness final : public BatchFitness {
   int iteration_ = 0, index_ = 0;
   double best_ = -2.0;  // best fitness so far; J ≥ -1, so the first trial is accepted
   std::vector<Trial> trials_;
+  bool capping_ = true;
+  // The incumbent's value per scenario (the job's metric), for the order of capped runs; empty
+  // until a trial is accepted (or, after a resume, until the incumbent is simulated again).
+  std::vector<double> incumbent_;
+  std::vector<double> record(const std::vector<Decision>& batch, std::vector<CandidateOutcome> out);
 };
 
 }  // namespace ftc::tune

@@ -35,6 +35,9 @@ struct RunOptions {
   // At most this many rows per comparison trajectory (0: no limit): a longer scenario is
   // recorded at a coarser interval than kComparisonRecordInterval. The metrics do not change.
   std::int64_t max_trajectory_rows = 0;
+  // Exact capping of hopeless candidates (issue 27, ProblemFitness::evaluate_capped): the same
+  // gains, history and checkpointed optimiser state either way; trials.csv marks capped trials.
+  bool capping = true;
 };
 
 // What a run needs to continue after an iteration: the optimiser's state and every trial so
