@@ -388,31 +388,28 @@ std::size_t ProblemFitness::objectives() const { return front_objectives(problem
 
 std::vector<ObjectiveVector> ProblemFitness::objective_vectors(const std::vector<Decision>& batch) {
   if (objectives() < 2) return BatchFitness::objective_vectors(batch);  // throws
-  const std::vector<Evaluation> e = run(batch);
   std::vector<ObjectiveVector> out;
-  out.reserve(e.size());
-  for (const Evaluation& x : e) out.push_back(objective_vector(problem_.job(), x));
+  run(batch, &out);
   return out;
 }
 
 std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batch) {
-  std::vector<double> J;
-  J.reserve(batch.size());
-  for (const Evaluation& e : run(batch)) J.push_back(e.fitness);
-  return J;
+  return run(batch, nullptr);
 }
 
-std::vector<Evaluation> ProblemFitness::run(const std::vector<Decision>& batch) {
+std::vector<double> ProblemFitness::run(const std::vector<Decision>& batch,
+                                        std::vector<ObjectiveVector>* vectors) {
   std::vector<sim::ControllerConfig> controllers;
   controllers.reserve(batch.size());
   for (const Decision& x : batch) controllers.push_back(problem_.controller_for(x));
   const std::vector<CandidateOutcome> out = problem_.evaluate(controllers, evaluator_);
   simulations_ += static_cast<std::int64_t>(controllers.size() * problem_.scenarios());
-  std::vector<Evaluation> scores;
-  scores.reserve(batch.size());
+  std::vector<double> J(batch.size());
   const bool per_scenario = !problem_.job().ensemble;
   for (std::size_t i = 0; i < batch.size(); ++i) {
     const Evaluation& e = out[i].evaluation;
+    J[i] = e.fitness;
+    if (vectors) vectors->push_back(objective_vector(problem_.job(), e));
     Trial t;
     t.iteration = iteration_;
     t.index = index_++;
@@ -428,9 +425,8 @@ std::vector<Evaluation> ProblemFitness::run(const std::vector<Decision>& batch) 
     t.accepted = e.fitness > best_;
     best_ = std::max(best_, e.fitness);
     trials_.push_back(std::move(t));
-    scores.push_back(e);
   }
-  return scores;
+  return J;
 }
 
 void ProblemFitness::resume_trials(std::vector<Trial> before) {

@@ -376,9 +376,12 @@ Front front_from_json(const Job& job, const json& j) {
     for (std::size_t k = 0; k < goals.size(); ++k)
       x.goals.push_back(number(goals[k], at + "/goals/" + std::to_string(k)));
     x.violation = number(p.value("violation", json(0.0)), at + "/violation");
-    x.trial = p.value("trial", std::size_t{0});
+    if (!p.contains("trial") || !p["trial"].is_number_unsigned())
+      fail(at + "/trial", "expected a row of trials.csv");
+    x.trial = p["trial"].get<std::size_t>();
     x.noise_floor.assign(job.goals.size(), std::nullopt);
     const json& noise = p.value("noise_floor", json::array());
+    if (!noise.is_array()) fail(at + "/noise_floor", "expected an array");
     for (std::size_t k = 0; k < noise.size() && k < x.noise_floor.size(); ++k)
       if (noise[k].is_number()) x.noise_floor[k] = noise[k].get<double>();
     if (p.contains("within_noise_of") && p["within_noise_of"].is_number_unsigned())
@@ -389,8 +392,13 @@ Front front_from_json(const Job& job, const json& j) {
     for (const json& r : j["reference_point"]) f.reference.push_back(number(r, "/reference_point"));
   f.hypervolume = number(j.value("hypervolume", json(0.0)), "/hypervolume");
   if (j.contains("picked") && j["picked"].is_object()) {
-    f.picked = j["picked"].value("index", std::size_t{0});
-    f.rule = j["picked"].value("rule", std::string("knee"));
+    const json& index = j["picked"].value("index", json());
+    if (!index.is_number_unsigned() || index.get<std::size_t>() >= f.points.size())
+      fail("/picked/index", "expected a point of the front");
+    f.picked = index.get<std::size_t>();
+    const json& rule = j["picked"].value("rule", json("knee"));
+    if (!rule.is_string()) fail("/picked/rule", "expected a string");
+    f.rule = rule.get<std::string>();
   }
   return f;
 }

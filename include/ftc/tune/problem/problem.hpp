@@ -202,8 +202,10 @@ class ProblemFitness final : public BatchFitness {
   void resume_trials(std::vector<Trial> before);
 
  private:
-  // Simulates and scores a batch, recording its trials.
-  std::vector<Evaluation> run(const std::vector<Decision>& batch);
+  // Simulates and scores a batch, recording its trials: the fitness of each candidate, and its
+  // objective vector appended to `vectors` when given.
+  std::vector<double> run(const std::vector<Decision>& batch,
+                          std::vector<ObjectiveVector>* vectors);
 
   const TuningProblem& problem_;
   BatchEvaluator& evaluator_;
