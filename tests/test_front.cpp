@@ -9,6 +9,7 @@
 
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
+#include "ftc/sim/isa.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/optimizers/hypervolume.hpp"
 #include "ftc/tune/optimizers/pareto_bat.hpp"
@@ -229,4 +230,35 @@ TEST(Front, OneSoftGoalRunsWriteNoFront) {
   const auto files = tune::output_files(tuned(tune::parse_job(j, "one"), 1));
   EXPECT_EQ(files.count("front.json"), 0u);
   EXPECT_EQ(files.at("history.csv").find("hypervolume"), std::string::npos);
+}
+
+TEST(Front, IsTheSameBytesUnderEveryInstructionSet) {
+  // The front, its hypervolume and the knee's gains do not depend on the instruction set the
+  // simulations ran on (FTCTUNE_ISA; the child inherits the environment).
+  const auto dir = fresh_dir("front-isa");
+  json j = front_job();
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  {
+    std::ofstream f(dir / "job.json");
+    f << j.dump();
+  }
+  std::string front, gains;
+  for (const sim::Isa isa : sim::supported_isas()) {
+    const std::string name = sim::to_string(isa);
+    ::setenv("FTCTUNE_ISA", name.c_str(), 1);
+    const CliResult r = run_cli("run -q --no-checkpoint --threads 1 '" + (dir / "job.json").string() +
+                                    "' --out '" + (dir / name).string() + "'",
+                                dir);
+    ::unsetenv("FTCTUNE_ISA");
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    const std::string f = slurp(dir / name / "front.json"), g = slurp(dir / name / "gains.json");
+    ASSERT_FALSE(f.empty());
+    if (front.empty()) {
+      front = f;
+      gains = g;
+    } else {
+      EXPECT_EQ(f, front) << "front.json under FTCTUNE_ISA=" << name;
+      EXPECT_EQ(g, gains) << "gains.json under FTCTUNE_ISA=" << name;
+    }
+  }
 }
