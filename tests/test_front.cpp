@@ -224,6 +224,24 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
   EXPECT_NE(bad.err.find("/rule"), std::string::npos) << bad.err;
 }
 
+TEST(Front, WithoutAFeasibleTrialTheFrontIsEmptyAndTheGainsAreNotDeployable) {
+  json j = front_job();
+  j["goals"][2]["at_most"] = 1e-3;  // no gains keep the peak command under 1 mN m
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  const tune::TuningOutcome r = tuned(tune::parse_job(j, "infeasible"), 1);
+  ASSERT_TRUE(r.front);
+  EXPECT_TRUE(r.front->points.empty());
+  const auto files = tune::output_files(r);
+  const json front = json::parse(files.at("front.json"));
+  EXPECT_TRUE(front["points"].empty());
+  EXPECT_TRUE(front["picked"].is_null());
+  EXPECT_EQ(front["hypervolume"], 0.0);
+  const json gains = tune::gains_document(r);
+  EXPECT_EQ(gains["goals"]["feasible"], false);
+  EXPECT_FALSE(gains["goals"].contains("front"));
+  EXPECT_THROW(runtime::parse_gains(gains, "infeasible"), InputError);  // fitness < 0
+}
+
 TEST(Front, OneSoftGoalRunsWriteNoFront) {
   json j = short_table1_job();
   j["tuning"]["algorithm"]["iterations"] = 0;

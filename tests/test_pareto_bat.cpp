@@ -162,6 +162,23 @@ TEST(ParetoBatAlgorithm, ResumeFromSavedStateContinuesExactlyAndForgedStatesAreR
   EXPECT_THROW(pareto_bat(6, 8, 11, s)->restore(bat_state), InputError);
 }
 
+TEST(ParetoBatAlgorithm, WithoutAFeasiblePointTheLeadersAreThePopulationsLeastViolation) {
+  // Every point of [-5, 5] violates, by 10 - x: no archive, and the bats follow the
+  // population's first front (the least violation) toward x = 5. (This path once iterated over
+  // a destroyed temporary; AddressSanitizer guards it here.)
+  const SearchSpace s = box(1, -5, 5);
+  FunctionObjectives f(2, [](const Decision& x) {
+    return ObjectiveVector{{1 + x[0] * x[0], 1 + (x[0] - 2) * (x[0] - 2)}, 10 - x[0]};
+  });
+  auto opt = pareto_bat(6, 10, 5, s);
+  const OptimizationResult r = run_optimizer(*opt, f);
+  const auto& pb = dynamic_cast<const ParetoBatAlgorithm&>(*opt);
+  EXPECT_TRUE(pb.archive().empty());
+  EXPECT_EQ(r.evaluations, 66);
+  EXPECT_GT(r.best[0], 4.0);
+  EXPECT_LT(r.best_fitness, 0.0);  // constrained_fitness of an infeasible point
+}
+
 TEST(ParetoBatAlgorithm, OneObjectiveRunsOfBatAreTheBatAlgorithm) {
   // The registry's "bat" makes the Bat algorithm for one objective, unchanged.
   const SearchSpace s = box(2, -5, 5);

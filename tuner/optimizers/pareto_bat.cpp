@@ -180,7 +180,8 @@ void ParetoBatAlgorithm::iterate(BatchFitness& fitness) {
   } else {
     std::vector<ObjectiveVector> all;
     for (const Bat& b : bats_) all.push_back(b.f);
-    for (std::size_t i : pareto::nondominated_sort(all).front()) {
+    const std::vector<std::vector<std::size_t>> fronts = pareto::nondominated_sort(all);
+    for (std::size_t i : fronts.front()) {
       pool.push_back(&bats_[i].x);
       pool_f.push_back(bats_[i].f);
     }

@@ -308,7 +308,9 @@ json front_document(const Job& job, const std::string& job_sha256, std::uint64_t
           {"space", "log10"},
           {"reference_point", reference},
           {"hypervolume", json_number(front.hypervolume)},
-          {"picked", {{"index", front.picked}, {"rule", front.rule}}},
+          {"picked", front.points.empty()  // no feasible trial: nothing to pick
+                         ? json()
+                         : json{{"index", front.picked}, {"rule", front.rule}}},
           {"compared", compared},
           {"points", points}};
 }
