@@ -124,6 +124,31 @@ TEST(Mpi, ActuatorModelReachesEveryRank) {
   EXPECT_NE(slurp(dir / "ideal" / "history.csv"), slurp(dir / "three" / "history.csv"));
 }
 
+TEST(Mpi, FrontIsByteIdenticalForAPlainRunAndThreeRanks) {
+  REQUIRE_MPI();
+  // Two soft goals (the Pareto Bat algorithm), 4 bats x 2 iterations on the short Table 1 job.
+  const fs::path dir = fresh_dir("mpi-front");
+  json j = ftc::testing::short_table1_job();
+  j["name"] = "front-mpi";
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"window", {0, 5}}, {"minimize", true}},
+                {{"metric", "control_tv"}, {"minimize", true}}};
+  j["tuning"]["algorithm"]["population"] = 4;
+  const fs::path job = write_job(dir, j);
+  const auto plain = run_cli(
+      "run '" + job.string() + "' -q --threads 2 --out '" + (dir / "plain").string() + "'", dir);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto three = mpirun_cli(
+      3, "run '" + job.string() + "' -q --threads 1 --out '" + (dir / "three").string() + "'",
+      dir);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  expect_same_run(dir / "plain", dir / "three");
+  for (const char* f : {"front.json", "front.csv"}) {
+    ASSERT_TRUE(fs::exists(dir / "plain" / f)) << f;
+    EXPECT_EQ(slurp(dir / "plain" / f), slurp(dir / "three" / f)) << f;
+  }
+}
+
 TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {
   REQUIRE_MPI();
   const fs::path dir = fresh_dir("mpi-ensemble");

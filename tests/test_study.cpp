@@ -117,6 +117,22 @@ TEST(Study, StudyAboveTheMemoryBudgetIsRefusedBeforeAnyRun) {
   EXPECT_FALSE(std::filesystem::exists(dir / "o"));
 }
 
+TEST(Study, AJobOfAParetoFrontIsRefused) {
+  const auto dir = fresh_dir("study-front");
+  nlohmann::json j = short_table1_job();
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"minimize", true}}, {{"metric", "control_tv"}, {"minimize", true}}};
+  std::ofstream(dir / "job.json") << j.dump();
+  const CliResult r = run_cli("study '" + (dir / "job.json").string() +
+                                  "' --algorithms bat --seeds 1 --budget 20 --out '" +
+                                  (dir / "o").string() + "'",
+                              dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/goals"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("Pareto front"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o"));
+}
+
 TEST(Study, BadAlgorithmsSeedsAndBudgetsExitTwo) {
   const auto dir = fresh_dir("study-errors");
   const std::string job = job_file(dir);

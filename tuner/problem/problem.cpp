@@ -65,30 +65,6 @@ std::vector<sim::SimulationOptions> options_of(const Job& job,
   return o;
 }
 
-// What the runs make of a job's goals today: the soft goal is the objective, so it must be an
-// error integral; two or more soft goals would need a Pareto search. Anything else is refused
-// (exit 2) rather than scored by something the job did not ask for.
-std::vector<FieldError> unsupported_goals(const Job& job) {
-  std::vector<FieldError> errs;
-  std::size_t soft = 0;
-  for (const GoalConfig& g : job.goals) soft += g.soft() ? 1 : 0;
-  if (soft >= 2) {
-    errs.push_back({"/goals", std::to_string(soft) +
-                                  " soft goals (\"minimize\": true) ask for a Pareto search, "
-                                  "which ftctune does not offer yet; keep one soft goal and make "
-                                  "the others limits (\"at_most\")"});
-    return errs;
-  }
-  for (std::size_t i = 0; i < job.goals.size(); ++i) {
-    const GoalConfig& g = job.goals[i];
-    if (g.soft() && g.metric > GoalMetric::itae)
-      errs.push_back({"/goals/" + std::to_string(i) + "/metric",
-                      "the soft goal is the search's objective: ise, iae or itae for now (got " +
-                          std::string(to_string(g.metric)) + "; make it a limit with at_most)"});
-  }
-  return errs;
-}
-
 bool has_limits(const Job& job) {
   return std::any_of(job.goals.begin(), job.goals.end(),
                      [](const GoalConfig& g) { return g.at_most.has_value(); });
@@ -145,7 +121,6 @@ TuningProblem::TuningProblem(Job job)
 TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed)
     : job_(std::make_shared<const Job>(std::move(job))), listed_(listed) {
   throw_if_errors("job " + job_->name, job_->validate());
-  throw_if_errors("job " + job_->name, unsupported_goals(*job_));
   std::vector<sim::SimulationOptions> options = options_of(*job_, scenarios);
   set_ =
       std::make_shared<const SimulationSet>(job_->plant, std::move(scenarios), std::move(options));
@@ -496,11 +471,53 @@ double TuningProblem::objective(std::span<const double> x, const ObjectiveOption
   return v;
 }
 
+std::size_t front_objectives(const Job& job) {
+  const auto soft = static_cast<std::size_t>(
+      std::count_if(job.goals.begin(), job.goals.end(), [](const GoalConfig& g) { return g.soft(); }));
+  return soft >= 2 ? soft : 0;
+}
+
+ObjectiveVector objective_vector(const Job& job, const Evaluation& e) {
+  ObjectiveVector o;
+  for (std::size_t k = 0; k < job.goals.size() && k < e.goals.size(); ++k)
+    if (job.goals[k].soft())  // an undefined goal (NaN) is no better than any value
+      o.values.push_back(std::isnan(e.goals[k]) ? std::numeric_limits<double>::infinity()
+                                                : e.goals[k]);
+  o.violation = e.violation;
+  return o;
+}
+
+std::unique_ptr<Optimizer> make_optimizer(const TuningProblem& problem,
+                                          const AlgorithmSettings& algorithm,
+                                          std::uint64_t seed) {
+  if (const std::size_t n = front_objectives(problem.job())) {
+    if (!algorithm.searches_front())  // Job::validate refuses this; a program may not ask it
+      throw InputError("job " + problem.job().name, "/tuning/algorithm/type",
+                       "algorithm " + algorithm.type() + " does not search for a Pareto front");
+    return algorithm.make_front(seed, problem.space(), n);
+  }
+  return algorithm.make(seed, problem.space());
+}
+
+std::size_t ProblemFitness::objectives() const { return front_objectives(problem_.job()); }
+
+std::vector<ObjectiveVector> ProblemFitness::objective_vectors(const std::vector<Decision>& batch) {
+  if (objectives() < 2) return BatchFitness::objective_vectors(batch);  // throws
+  std::vector<ObjectiveVector> out;
+  run(batch, &out);
+  return out;
+}
+
 std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batch) {
+  return run(batch, nullptr);
+}
+
+std::vector<double> ProblemFitness::run(const std::vector<Decision>& batch,
+                                        std::vector<ObjectiveVector>* vectors) {
   std::vector<sim::ControllerConfig> controllers;
   controllers.reserve(batch.size());
   for (const Decision& x : batch) controllers.push_back(problem_.controller_for(x));
-  return record(batch, problem_.evaluate(controllers, evaluator_));
+  return record(batch, problem_.evaluate(controllers, evaluator_), vectors);
 }
 
 std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>& batch,
@@ -534,7 +551,8 @@ std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>&
 }
 
 std::vector<double> ProblemFitness::record(const std::vector<Decision>& batch,
-                                           std::vector<CandidateOutcome> out) {
+                                           std::vector<CandidateOutcome> out,
+                                           std::vector<ObjectiveVector>* vectors) {
   std::vector<double> J(batch.size());
   const bool per_scenario = !problem_.job().ensemble;
   const sim::Metric metric = problem_.job().objective.metric;
@@ -542,6 +560,7 @@ std::vector<double> ProblemFitness::record(const std::vector<Decision>& batch,
     const Evaluation& e = out[i].evaluation;
     simulations_ += static_cast<std::int64_t>(e.simulated);
     J[i] = e.fitness;
+    if (vectors) vectors->push_back(objective_vector(problem_.job(), e));
     Trial t;
     t.iteration = iteration_;
     t.index = index_++;

@@ -220,6 +220,11 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
   using clock = std::chrono::steady_clock;
   if (!job.tuning)
     throw InputError(o.job_file, "/tuning", "is required by ftctune study (what should be tuned?)");
+  // A study ranks algorithms by the best objective; a front is not one number.
+  if (front_objectives(job) >= 2)
+    throw InputError(o.job_file, "/goals",
+                     "ftctune study compares algorithms by one objective, and this job's two or "
+                     "more soft goals ask for a Pareto front: keep one soft goal for a study");
   const std::vector<std::string>& names = o.algorithms;
   const std::vector<std::uint64_t>& seeds = o.seeds;
   check_lists(names, seeds);
