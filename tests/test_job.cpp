@@ -597,28 +597,33 @@ TEST(JobGoals, BadGoalsAreRejectedAtTheirPaths) {
   EXPECT_EQ(errs[0].path, "/goals/1/threshold");
 }
 
-TEST(JobGoals, RunsRefuseTwoSoftGoalsAndASoftGoalThatIsNoErrorIntegral) {
+TEST(JobGoals, ValidationRefusesAFrontTheAlgorithmCannotSearchAndAnObjectiveOfNoErrorIntegral) {
   const auto refusal = [](const json& j) -> std::string {
-    try {
-      tune::TuningProblem problem(tune::parse_job(j, "t"));
-    } catch (const InputError& e) {
-      return e.errors().at(0).path + " " + e.errors().at(0).message;
-    }
-    return "";
+    const std::vector<FieldError> errs = errors_of(j);
+    return errs.empty() ? "" : errs[0].path + " " + errs[0].message;
   };
   // One soft goal on an error integral is the objective: the problem is the objective's.
   EXPECT_EQ(refusal(with_goals(json::array({soft_ise()}))), "");
-  const std::string pareto = refusal(with_goals(
-      json::array({soft_ise(), {{"metric", "control_tv"}, {"minimize", true}}})));
-  EXPECT_NE(pareto.find("/goals 2 soft goals"), std::string::npos) << pareto;
-  EXPECT_NE(pareto.find("Pareto search"), std::string::npos) << pareto;
+  // Two soft goals of any metric ask for a front: random search samples one...
+  json front = with_goals(json::array(
+      {soft_ise(), {{"metric", "control_tv"}, {"minimize", true}},
+       {{"metric", "saturation_fraction"}, {"minimize", true}}}));
+  front["tuning"]["algorithm"] = {{"type", "random"}, {"population", 4}, {"iterations", 1}};
+  EXPECT_EQ(refusal(front), "");
+  EXPECT_NO_THROW(tune::TuningProblem(tune::parse_job(front, "t")));
+  // ...an algorithm of one objective does not, and `validate` says so at the algorithm.
+  front["tuning"]["algorithm"] = {{"type", "pagmo"}, {"name", "sade"},
+                                  {"population", 7}, {"generations", 2}};
+  const std::string pareto = refusal(front);
+  EXPECT_NE(pareto.find("/tuning/algorithm/type 3 soft goals"), std::string::npos) << pareto;
+  EXPECT_NE(pareto.find("Pareto front"), std::string::npos) << pareto;
   // Hard goals on any metric make a constrained search (TuningRun.HardGoalIsMetByTheWinner...).
   EXPECT_EQ(refusal(with_goals(
                 json::array({soft_ise(), {{"metric", "peak_command"}, {"at_most", 17.9}}}))),
             "");
-  // The soft goal is the objective, so it is an error integral.
+  // A single soft goal is the objective, so it is an error integral; validation says so.
   EXPECT_NE(refusal(with_goals(json::array({{{"metric", "control_energy"}, {"minimize", true}}})))
-                .find("/goals/0/metric"),
+                .find("/goals/0/metric a single soft goal"),
             std::string::npos);
 }
 

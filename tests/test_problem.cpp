@@ -204,3 +204,46 @@ TEST(TuningProblem, NoiseFloorProbeNudgesInitialStatesFromTheReservedStream) {
     EXPECT_NE(x1[i], x0[i]);
   }
 }
+
+TEST(TuningProblem, AFrontsFitnessGivesEachCandidatesSoftGoalsAndViolation) {
+  // A job with two soft goals and a hard one: the multi-objective side of the seam gives, per
+  // candidate, the soft goals' values in the job's order and the hard goal's violation, the
+  // same numbers its trial records; a job of one soft goal has no objective vectors.
+  json j = tiny_job("front");
+  j.erase("objective");
+  j["goals"] = {{{"metric", "control_tv"}, {"minimize", true}},
+                {{"metric", "peak_command"}, {"at_most", 1e-3}},
+                {{"metric", "ise"}, {"minimize", true}}};
+  j["tuning"]["algorithm"] = {{"type", "random"}, {"population", 2}, {"iterations", 0}};
+  const tune::TuningProblem p(tune::parse_job(j, "front"));
+  tune::SerialEvaluator serial;
+  tune::ProblemFitness fitness(p, serial);
+  ASSERT_EQ(fitness.objectives(), 2u);
+  const std::vector<tune::Decision> batch = {{20.0, 5.0}, {10.0, 2.0}};  // Kp, Ki
+  ASSERT_EQ(batch[0].size(), p.space().dimension());
+  const std::vector<tune::ObjectiveVector> F = fitness.objective_vectors(batch);
+  ASSERT_EQ(F.size(), 2u);
+  ASSERT_EQ(fitness.trials().size(), 2u);
+  for (std::size_t i = 0; i < F.size(); ++i) {
+    const tune::Trial& t = fitness.trials()[i];
+    ASSERT_EQ(F[i].values.size(), 2u);
+    EXPECT_EQ(F[i].values[0], t.goals[0]);  // control_tv
+    EXPECT_EQ(F[i].values[1], t.goals[2]);  // ise
+    EXPECT_GT(F[i].values[0], 0.0);
+    EXPECT_EQ(F[i].violation, t.violation);
+    EXPECT_GT(F[i].violation, 0.0);  // a 1e-3 limit on the peak command is not met
+    EXPECT_FALSE(F[i].feasible());
+  }
+  EXPECT_EQ(fitness.simulations(), 2);
+  // The run's optimiser of a front: random search samples one.
+  EXPECT_NE(tune::make_optimizer(p, *p.job().tuning->algorithm, 1), nullptr);
+
+  // One soft goal: a problem of one objective.
+  json one = tiny_job("one");
+  one.erase("objective");
+  one["goals"] = {{{"metric", "ise"}, {"minimize", true}}};
+  const tune::TuningProblem q(tune::parse_job(one, "one"));
+  tune::ProblemFitness single(q, serial);
+  EXPECT_EQ(single.objectives(), 0u);
+  EXPECT_THROW(single.objective_vectors(batch), std::logic_error);
+}

@@ -704,11 +704,30 @@ void check_window(const Job& job, const sim::Window& w, WindowFrom from, const s
 
 }
 
-// The goals against the job: a soft goal among them (two or more are the runs' to refuse),
-// windows inside the scenarios, the settling threshold and tail their metrics need, no goal twice.
+// The goals against the job: a soft goal among them, windows inside the scenarios, the settling
+// threshold and tail their metrics need, no goal twice. One soft goal is the search's objective,
+// so it is an error integral; two or more ask for a Pareto front (any metric), which the
+// algorithm must search for.
 void validate_goals(const Job& job, Errors& errs) {
   if (job.goals.empty()) return;
   bool soft = false;
+  const auto soft_goals = std::count_if(job.goals.begin(), job.goals.end(),
+                                        [](const GoalConfig& g) { return g.soft(); });
+  if (soft_goals == 1)
+    for (std::size_t i = 0; i < job.goals.size(); ++i)
+      if (job.goals[i].soft() && job.goals[i].metric > GoalMetric::itae)
+        errs.push_back({"/goals/" + std::to_string(i) + "/metric",
+                        "a single soft goal is the search's objective: ise, iae or itae (got " +
+                            std::string(to_string(job.goals[i].metric)) +
+                            "; make it a limit with at_most, or add a second soft goal for a "
+                            "Pareto front)"});
+  if (soft_goals >= 2 && job.tuning && job.tuning->algorithm &&
+      !job.tuning->algorithm->searches_front())
+    errs.push_back({"/tuning/algorithm/type",
+                    std::to_string(soft_goals) + " soft goals (\"minimize\": true) ask for a "
+                    "Pareto front, which algorithm " + job.tuning->algorithm->type() +
+                    " does not search for (bat and random do); or keep one soft goal and make "
+                    "the others limits (\"at_most\")"});
   std::vector<json> seen;
   for (std::size_t i = 0; i < job.goals.size(); ++i) {
     const GoalConfig& g = job.goals[i];

@@ -122,6 +122,65 @@ Decision decision(const json& j, const std::string& path, const SearchSpace& spa
 
 }  // namespace state_check
 
+namespace {
+
+// An algorithm's settings that also make optimisers of fronts: everything else is the wrapped
+// settings' own, so that runs of one objective do not change by a bit.
+class FrontSettings final : public AlgorithmSettings {
+ public:
+  FrontSettings(AlgorithmPtr inner, MakeFront make_front)
+      : inner_(std::move(inner)), make_front_(std::move(make_front)) {}
+  std::string type() const override { return inner_->type(); }
+  json to_json() const override { return inner_->to_json(); }
+  int population() const override { return inner_->population(); }
+  int iterations() const override { return inner_->iterations(); }
+  std::int64_t evaluations() const override { return inner_->evaluations(); }
+  std::vector<std::string> history_columns() const override { return inner_->history_columns(); }
+  std::vector<FieldError> validate(const std::string& path) const override {
+    return inner_->validate(path);
+  }
+  std::unique_ptr<Optimizer> make(std::uint64_t seed, const SearchSpace& space) const override {
+    return inner_->make(seed, space);
+  }
+  bool searches_front() const override { return true; }
+  std::unique_ptr<Optimizer> make_front(std::uint64_t seed, const SearchSpace& space,
+                                        std::size_t objectives) const override {
+    return make_front_(*inner_, seed, space, objectives);
+  }
+  AlgorithmPtr with_budget(std::int64_t budget) const override {
+    AlgorithmPtr b = inner_->with_budget(budget);
+    return b ? std::make_shared<FrontSettings>(std::move(b), make_front_) : nullptr;
+  }
+
+ private:
+  AlgorithmPtr inner_;
+  MakeFront make_front_;
+};
+
+}  // namespace
+
+AlgorithmInfo with_front(AlgorithmInfo info, MakeFront make_front) {
+  info.parse = [parse = info.parse, make_front](const json& j, const std::string& path,
+                                                std::vector<FieldError>& errors) -> AlgorithmPtr {
+    AlgorithmPtr a = parse(j, path, errors);
+    return a ? std::make_shared<FrontSettings>(std::move(a), make_front) : nullptr;
+  };
+  return info;
+}
+
+std::vector<double> FunctionObjectives::operator()(const std::vector<Decision>& batch) {
+  std::vector<double> J;
+  J.reserve(batch.size());
+  for (const ObjectiveVector& o : objective_vectors(batch)) {
+    const double f = o.values.empty() ? 0.0 : o.values[0];
+    const double fitness = !std::isfinite(f) || f < 0 ? 0.0
+                           : f == 0                   ? std::numeric_limits<double>::infinity()
+                                                      : 1.0 / f;  // as fitness_of (problem.hpp)
+    J.push_back(constrained_fitness(fitness, o.violation));
+  }
+  return J;
+}
+
 AlgorithmPtr parse_algorithm(const json& j, const std::string& path,
                              std::vector<FieldError>& errors) {
   if (!j.is_object()) {
@@ -200,6 +259,18 @@ std::vector<double> GenerationalOptimizer::evaluate(BatchFitness& fitness,
   if (J.size() != batch.size()) throw std::logic_error("fitness returned a wrong-sized batch");
   evaluations_ += static_cast<std::int64_t>(J.size());
   return J;
+}
+
+std::vector<ObjectiveVector> GenerationalOptimizer::evaluate_objectives(
+    BatchFitness& fitness, const std::vector<Decision>& batch) {
+  std::vector<ObjectiveVector> F = fitness.objective_vectors(batch);
+  if (F.size() != batch.size())
+    throw std::logic_error("objective vectors of a wrong-sized batch");
+  for (const ObjectiveVector& f : F)
+    if (f.values.size() != fitness.objectives())
+      throw std::logic_error("an objective vector of the wrong size");
+  evaluations_ += static_cast<std::int64_t>(F.size());
+  return F;
 }
 
 void GenerationalOptimizer::record(std::vector<std::pair<std::string, double>> extras) {

@@ -9,8 +9,13 @@
 namespace ftc::tune {
 
 const std::vector<AlgorithmInfo>& algorithms() {
-  static const std::vector<AlgorithmInfo> all = {bat_algorithm_info(), random_search_info(),
-                                                  pagmo_algorithm_info()};
+  static const std::vector<AlgorithmInfo> all = {
+      bat_algorithm_info(),
+      // Random search samples a front as it samples a best point: its draws ignore the fitness.
+      with_front(random_search_info(),
+                 [](const AlgorithmSettings& s, std::uint64_t seed, const SearchSpace& space,
+                    std::size_t) { return s.make(seed, space); }),
+      pagmo_algorithm_info()};
   return all;
 }
 

@@ -65,30 +65,6 @@ std::vector<sim::SimulationOptions> options_of(const Job& job,
   return o;
 }
 
-// What the runs make of a job's goals today: the soft goal is the objective, so it must be an
-// error integral; two or more soft goals would need a Pareto search. Anything else is refused
-// (exit 2) rather than scored by something the job did not ask for.
-std::vector<FieldError> unsupported_goals(const Job& job) {
-  std::vector<FieldError> errs;
-  std::size_t soft = 0;
-  for (const GoalConfig& g : job.goals) soft += g.soft() ? 1 : 0;
-  if (soft >= 2) {
-    errs.push_back({"/goals", std::to_string(soft) +
-                                  " soft goals (\"minimize\": true) ask for a Pareto search, "
-                                  "which ftctune does not offer yet; keep one soft goal and make "
-                                  "the others limits (\"at_most\")"});
-    return errs;
-  }
-  for (std::size_t i = 0; i < job.goals.size(); ++i) {
-    const GoalConfig& g = job.goals[i];
-    if (g.soft() && g.metric > GoalMetric::itae)
-      errs.push_back({"/goals/" + std::to_string(i) + "/metric",
-                      "the soft goal is the search's objective: ise, iae or itae for now (got " +
-                          std::string(to_string(g.metric)) + "; make it a limit with at_most)"});
-  }
-  return errs;
-}
-
 bool has_limits(const Job& job) {
   return std::any_of(job.goals.begin(), job.goals.end(),
                      [](const GoalConfig& g) { return g.at_most.has_value(); });
@@ -115,7 +91,6 @@ TuningProblem::TuningProblem(Job job)
 TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed)
     : job_(std::make_shared<const Job>(std::move(job))), listed_(listed) {
   throw_if_errors("job " + job_->name, job_->validate());
-  throw_if_errors("job " + job_->name, unsupported_goals(*job_));
   std::vector<sim::SimulationOptions> options = options_of(*job_, scenarios);
   set_ =
       std::make_shared<const SimulationSet>(job_->plant, std::move(scenarios), std::move(options));
@@ -381,17 +356,63 @@ double TuningProblem::objective(std::span<const double> x, const ObjectiveOption
   return v;
 }
 
+std::size_t front_objectives(const Job& job) {
+  const auto soft = static_cast<std::size_t>(
+      std::count_if(job.goals.begin(), job.goals.end(), [](const GoalConfig& g) { return g.soft(); }));
+  return soft >= 2 ? soft : 0;
+}
+
+ObjectiveVector objective_vector(const Job& job, const Evaluation& e) {
+  ObjectiveVector o;
+  for (std::size_t k = 0; k < job.goals.size() && k < e.goals.size(); ++k)
+    if (job.goals[k].soft())  // an undefined goal (NaN) is no better than any value
+      o.values.push_back(std::isnan(e.goals[k]) ? std::numeric_limits<double>::infinity()
+                                                : e.goals[k]);
+  o.violation = e.violation;
+  return o;
+}
+
+std::unique_ptr<Optimizer> make_optimizer(const TuningProblem& problem,
+                                          const AlgorithmSettings& algorithm,
+                                          std::uint64_t seed) {
+  if (const std::size_t n = front_objectives(problem.job())) {
+    if (!algorithm.searches_front())  // Job::validate refuses this; a program may not ask it
+      throw InputError("job " + problem.job().name, "/tuning/algorithm/type",
+                       "algorithm " + algorithm.type() + " does not search for a Pareto front");
+    return algorithm.make_front(seed, problem.space(), n);
+  }
+  return algorithm.make(seed, problem.space());
+}
+
+std::size_t ProblemFitness::objectives() const { return front_objectives(problem_.job()); }
+
+std::vector<ObjectiveVector> ProblemFitness::objective_vectors(const std::vector<Decision>& batch) {
+  if (objectives() < 2) return BatchFitness::objective_vectors(batch);  // throws
+  const std::vector<Evaluation> e = run(batch);
+  std::vector<ObjectiveVector> out;
+  out.reserve(e.size());
+  for (const Evaluation& x : e) out.push_back(objective_vector(problem_.job(), x));
+  return out;
+}
+
 std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batch) {
+  std::vector<double> J;
+  J.reserve(batch.size());
+  for (const Evaluation& e : run(batch)) J.push_back(e.fitness);
+  return J;
+}
+
+std::vector<Evaluation> ProblemFitness::run(const std::vector<Decision>& batch) {
   std::vector<sim::ControllerConfig> controllers;
   controllers.reserve(batch.size());
   for (const Decision& x : batch) controllers.push_back(problem_.controller_for(x));
   const std::vector<CandidateOutcome> out = problem_.evaluate(controllers, evaluator_);
   simulations_ += static_cast<std::int64_t>(controllers.size() * problem_.scenarios());
-  std::vector<double> J(batch.size());
+  std::vector<Evaluation> scores;
+  scores.reserve(batch.size());
   const bool per_scenario = !problem_.job().ensemble;
   for (std::size_t i = 0; i < batch.size(); ++i) {
     const Evaluation& e = out[i].evaluation;
-    J[i] = e.fitness;
     Trial t;
     t.iteration = iteration_;
     t.index = index_++;
@@ -407,8 +428,9 @@ std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batc
     t.accepted = e.fitness > best_;
     best_ = std::max(best_, e.fitness);
     trials_.push_back(std::move(t));
+    scores.push_back(e);
   }
-  return J;
+  return scores;
 }
 
 void ProblemFitness::resume_trials(std::vector<Trial> before) {

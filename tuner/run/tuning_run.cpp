@@ -417,7 +417,7 @@ TuningOutcome tune(const Job& job, BatchEvaluator& evaluator, const RunOptions& 
   const TuningProblem problem(job);
   const std::uint64_t seed = options.seed.value_or(job.tuning->seed);
   const AlgorithmPtr& algorithm = job.tuning->algorithm;
-  const std::unique_ptr<Optimizer> optimizer = algorithm->make(seed, problem.space());
+  const std::unique_ptr<Optimizer> optimizer = make_optimizer(problem, *algorithm, seed);
   return tune(problem, *optimizer, algorithm, seed, evaluator, options);
 }
 
@@ -431,7 +431,7 @@ TuningOutcome checkpoint_outcome(const Job& job, const nlohmann::json& checkpoin
   r.seed = seed.value_or(job.tuning->seed);
   r.algorithm = job.tuning->algorithm;
   describe_problem(problem, r);
-  const std::unique_ptr<Optimizer> optimizer = r.algorithm->make(r.seed, problem.space());
+  const std::unique_ptr<Optimizer> optimizer = make_optimizer(problem, *r.algorithm, r.seed);
   const bool with_trials = checkpoint.is_object() && checkpoint.contains("optimizer");
   try {
     optimizer->restore(with_trials ? checkpoint["optimizer"] : checkpoint);

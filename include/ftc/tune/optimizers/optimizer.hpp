@@ -15,6 +15,7 @@
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -27,6 +28,17 @@
 
 namespace ftc::tune {
 
+// What an optimiser of a Pareto front sees of one candidate (issue 26), as pagmo's problems give
+// a multi-objective fitness: the values of the job's soft goals in the job's order, every one
+// minimised (+inf where the candidate could not be evaluated or a goal is undefined), and the
+// total normalised violation of its hard goals (0: feasible; +inf for a candidate that could not
+// run under limits).
+struct ObjectiveVector {
+  std::vector<double> values;
+  double violation = 0.0;
+  bool feasible() const { return !(violation > 0); }
+};
+
 // What an optimiser needs from the outside world: one fitness per decision vector, in order; a
 // candidate that cannot be evaluated gets 0. Never throws for a candidate.
 class BatchFitness {
@@ -36,6 +48,17 @@ class BatchFitness {
   // run_optimizer says which iteration the evaluations that follow belong to (0: the initial
   // population), for fitness functions that keep a record of every trial.
   virtual void begin_iteration(int /*iteration*/) {}
+
+  // The multi-objective side of the seam. objectives() is the number of soft goals whose front is
+  // searched: 0 for a problem of one objective, which has only the fitness above; >= 2 otherwise.
+  virtual std::size_t objectives() const { return 0; }
+  // The objective vectors of a batch, one per decision vector in order, each of objectives()
+  // values. It evaluates the batch just as operator() does (same simulations, same record of
+  // trials): an optimiser calls one or the other for a batch, never both. Never throws for a
+  // candidate; std::logic_error when the problem has no front (objectives() < 2).
+  virtual std::vector<ObjectiveVector> objective_vectors(const std::vector<Decision>& /*batch*/) {
+    throw std::logic_error("this problem has one objective: it has no objective vectors");
+  }
 };
 
 // A plain function of one decision vector, evaluated on the calling thread (tests, small
@@ -52,6 +75,27 @@ class FunctionFitness final : public BatchFitness {
 
  private:
   std::function<double(const Decision&)> f_;
+};
+
+// A function of one decision vector to its objective vector, evaluated on the calling thread
+// (tests, small problems): a problem of `objectives` (>= 2) soft goals. Its scalar fitness, for
+// an optimiser of one objective, is constrained_fitness(1/values[0], violation).
+class FunctionObjectives final : public BatchFitness {
+ public:
+  FunctionObjectives(std::size_t objectives, std::function<ObjectiveVector(const Decision&)> f)
+      : n_(objectives), f_(std::move(f)) {}
+  std::size_t objectives() const override { return n_; }
+  std::vector<ObjectiveVector> objective_vectors(const std::vector<Decision>& batch) override {
+    std::vector<ObjectiveVector> out;
+    out.reserve(batch.size());
+    for (const Decision& x : batch) out.push_back(f_(x));
+    return out;
+  }
+  std::vector<double> operator()(const std::vector<Decision>& batch) override;
+
+ private:
+  std::size_t n_;
+  std::function<ObjectiveVector(const Decision&)> f_;
 };
 
 // The constraint rule of a job with hard goals (issue 26), as the one fitness every optimiser
@@ -117,6 +161,15 @@ class AlgorithmSettings {
   // Every bad setting, each named `path`/<setting> (settings built in code, not read from JSON).
   virtual std::vector<FieldError> validate(const std::string& path) const = 0;
   virtual std::unique_ptr<Optimizer> make(std::uint64_t seed, const SearchSpace& space) const = 0;
+  // Whether the algorithm searches for a Pareto front: a job with two or more soft goals needs
+  // one (Job::validate refuses the others), and runs the optimiser make_front() gives.
+  virtual bool searches_front() const { return false; }
+  // The optimiser of the front of `objectives` (>= 2) soft goals: it calls
+  // BatchFitness::objective_vectors. Only when searches_front().
+  virtual std::unique_ptr<Optimizer> make_front(std::uint64_t /*seed*/, const SearchSpace& /*space*/,
+                                                std::size_t /*objectives*/) const {
+    throw std::logic_error("algorithm " + type() + " does not search for a Pareto front");
+  }
   // The same settings with as many iterations as `budget` evaluations pay for, the initial
   // population included (so that algorithms can be compared at equal cost); null when the budget
   // does not reach the end of the first iteration after the initial population.
@@ -227,6 +280,16 @@ AlgorithmInfo struct_algorithm(std::string type, std::string description,
   return info;
 }
 
+// The optimiser of a front for an algorithm registered for one objective: given the algorithm's
+// parsed settings (of the registry entry it wraps), the seed, the space and the number of soft
+// goals (>= 2).
+using MakeFront = std::function<std::unique_ptr<Optimizer>(
+    const AlgorithmSettings& settings, std::uint64_t seed, const SearchSpace& space,
+    std::size_t objectives)>;
+// The registry entry `info` whose settings also search for fronts, with `make_front`: parsing,
+// validation, the JSON form, budgets and make() are info's own, unchanged.
+AlgorithmInfo with_front(AlgorithmInfo info, MakeFront make_front);
+
 // Called after every iteration (including 0); returning false stops the run. The optimizer is
 // passed so that a caller can checkpoint its state().
 using IterationObserver = std::function<bool(const HistoryRow&, const Optimizer&)>;
@@ -256,6 +319,10 @@ class GenerationalOptimizer : public Optimizer {
   // Evaluates a batch and counts it; throws std::logic_error when the fitness is of the wrong
   // size (a broken evaluator, not bad input).
   std::vector<double> evaluate(BatchFitness& fitness, const std::vector<Decision>& batch);
+  // The same for an optimiser of a front: the batch's objective vectors, each of
+  // fitness.objectives() values.
+  std::vector<ObjectiveVector> evaluate_objectives(BatchFitness& fitness,
+                                                   const std::vector<Decision>& batch);
   // Appends the history row of iteration t_ with the algorithm's extra figures.
   void record(std::vector<std::pair<std::string, double>> extras = {});
   // The common part of a checkpoint, tagged with the algorithm's name, and its inverse (which

@@ -157,6 +157,16 @@ class TuningProblem {
   std::vector<double sim::ControllerConfig::*> fields_;  // one per coordinate
 };
 
+// The number of soft goals of a job that searches for a Pareto front (two or more), else 0.
+std::size_t front_objectives(const Job& job);
+// A candidate's objective vector (BatchFitness::objective_vectors): its soft goals' values in the
+// job's order, an undefined one (NaN) as +inf, and its hard goals' total violation.
+ObjectiveVector objective_vector(const Job& job, const Evaluation& e);
+// The optimiser a run of the problem uses: the algorithm's optimiser of fronts for a job with two
+// or more soft goals (InputError when the algorithm has none), its usual one otherwise.
+std::unique_ptr<Optimizer> make_optimizer(const TuningProblem& problem,
+                                          const AlgorithmSettings& algorithm, std::uint64_t seed);
+
 // One evaluated candidate, as trials.csv lists it.
 struct Trial {
   int iteration = 0;     // of the optimiser (0: the initial population)
@@ -178,6 +188,9 @@ class ProblemFitness final : public BatchFitness {
   ProblemFitness(const TuningProblem& problem, BatchEvaluator& evaluator)
       : problem_(problem), evaluator_(evaluator) {}
   std::vector<double> operator()(const std::vector<Decision>& batch) override;
+  // A job with two or more soft goals: their values and the violation of its hard goals.
+  std::size_t objectives() const override;
+  std::vector<ObjectiveVector> objective_vectors(const std::vector<Decision>& batch) override;
   void begin_iteration(int iteration) override {
     iteration_ = iteration;
     index_ = 0;
@@ -189,6 +202,9 @@ class ProblemFitness final : public BatchFitness {
   void resume_trials(std::vector<Trial> before);
 
  private:
+  // Simulates and scores a batch, recording its trials.
+  std::vector<Evaluation> run(const std::vector<Decision>& batch);
+
   const TuningProblem& problem_;
   BatchEvaluator& evaluator_;
   std::int64_t simulations_ = 0;
