@@ -625,7 +625,11 @@ TEST(PagmoFront, SettingsAndSizesAreCheckedAtTheirPaths) {
   j["settings"] = {{"diversity_mechanism", "none"}};
   EXPECT_NE(errors(j).find("/tuning/algorithm/settings/diversity_mechanism"), std::string::npos)
       << errors(j);
-  // A front's algorithm has nothing to do with one objective.
+  // A front's algorithm has nothing to do with one objective: the job is refused at the name
+  // (and a run of it, should one be started, stops there too).
+  EXPECT_EQ(problems({{"type", "pagmo"}, {"name", "nsga2"}, {"population", 8}}),
+            "/tuning/algorithm/name: pagmo's nsga2 searches a Pareto front: give the job two or "
+            "more soft goals (\"minimize\": true), or name an algorithm of one objective\n");
   const AlgorithmPtr a = pagmo("nsga2", 8, 2);
   EXPECT_THROW(a->make(1, box(2, 0, 1)), InputError);
   EXPECT_FALSE(pagmo("cmaes", 10, 2)->searches_front());
