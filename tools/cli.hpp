@@ -32,6 +32,7 @@ void add_schema_command(CLI::App& app, const Globals& g, Action& action);
 void add_study_command(CLI::App& app, const Globals& g, Action& action);
 void add_ensemble_command(CLI::App& app, const Globals& g, Action& action);
 void add_evaluate_command(CLI::App& app, const Globals& g, Action& action);
+void add_pick_command(CLI::App& app, const Globals& g, Action& action);
 
 // The MPI ranks and the evaluator of a command's simulations: the run API's (run/api.hpp).
 using tune::make_evaluator;

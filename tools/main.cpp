@@ -83,6 +83,7 @@ int main(int argc, char** argv) {
   ftc::cli::add_study_command(app, globals, action);
   ftc::cli::add_ensemble_command(app, globals, action);
   ftc::cli::add_evaluate_command(app, globals, action);
+  ftc::cli::add_pick_command(app, globals, action);
   ftc::cli::add_serve_command(app, globals, action);
   ftc::cli::add_client_commands(app, globals, action);
 

@@ -46,6 +46,7 @@
 #include <pagmo/population.hpp>
 #include <pagmo/problem.hpp>
 #include <pagmo/types.hpp>
+#include <pagmo/utils/hypervolume.hpp>
 #include <stdexcept>
 
 #include "ftc/runtime/json_reader.hpp"
@@ -1503,9 +1504,19 @@ AlgorithmInfo module_info() {
 }  // namespace ftc::tune
 
 // The module's one exported symbol (the target builds with hidden visibility).
+namespace ftc::tune {
+namespace {
+double module_hypervolume(const std::vector<std::vector<double>>& points,
+                          const std::vector<double>& reference) {
+  return ::pagmo::hypervolume(points, true).compute(reference);
+}
+}  // namespace
+}  // namespace ftc::tune
+
 extern "C" [[gnu::visibility("default")]] const ftc::tune::pagmo_plugin::Api*
 ftctune_pagmo_plugin() {
   static const ftc::tune::pagmo_plugin::Api api{FTC_BUILD_ID, ftc::tune::module_algorithms,
-                                                ftc::tune::module_info};
+                                                ftc::tune::module_info,
+                                                ftc::tune::module_hypervolume};
   return &api;
 }

@@ -4,6 +4,7 @@
 #include <dlfcn.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/optimizers/hypervolume.hpp"
 #include "ftc/tune/optimizers/pagmo.hpp"
 #include "optimizers/pagmo_plugin.hpp"
 
@@ -110,6 +112,23 @@ const PagmoAlgorithmInfo* find_pagmo_algorithm(const std::string& name) {
   for (const PagmoAlgorithmInfo& a : pagmo_algorithms())
     if (a.name == name) return &a;
   return nullptr;
+}
+
+double hypervolume(const std::vector<std::vector<double>>& points,
+                   const std::vector<double>& reference) {
+  std::vector<std::vector<double>> inside;
+  for (const std::vector<double>& p : points) {
+    if (p.size() != reference.size())
+      throw std::invalid_argument("a point of " + std::to_string(p.size()) +
+                                  " objectives against a reference point of " +
+                                  std::to_string(reference.size()));
+    bool strictly = true;
+    for (std::size_t k = 0; k < p.size(); ++k)
+      strictly = strictly && std::isfinite(p[k]) && p[k] < reference[k];
+    if (strictly) inside.push_back(p);
+  }
+  if (inside.empty()) return 0.0;
+  return api().hypervolume(inside, reference);
 }
 
 AlgorithmInfo pagmo_algorithm_info() {

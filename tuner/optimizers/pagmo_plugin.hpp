@@ -16,6 +16,10 @@ struct Api {
   const char* build_id;
   const std::vector<PagmoAlgorithmInfo>& (*algorithms)();
   AlgorithmInfo (*info)();
+  // pagmo::hypervolume(points).compute(reference), for points each strictly better than the
+  // reference in every coordinate (hypervolume.hpp filters them); at least one point.
+  double (*hypervolume)(const std::vector<std::vector<double>>& points,
+                        const std::vector<double>& reference);
 };
 
 inline constexpr const char* kEntryPoint = "ftctune_pagmo_plugin";

@@ -4,13 +4,14 @@
 #include "ftc/tune/optimizers/bat.hpp"
 #include "ftc/tune/optimizers/optimizer.hpp"
 #include "ftc/tune/optimizers/pagmo.hpp"
+#include "ftc/tune/optimizers/pareto_bat.hpp"
 #include "ftc/tune/optimizers/random_search.hpp"
 
 namespace ftc::tune {
 
 const std::vector<AlgorithmInfo>& algorithms() {
   static const std::vector<AlgorithmInfo> all = {
-      bat_algorithm_info(),
+      pareto_bat_info(),  // "bat": the Bat algorithm, and its Pareto form for fronts
       // Random search samples a front as it samples a best point: its draws ignore the fitness.
       with_front(random_search_info(),
                  [](const AlgorithmSettings& s, std::uint64_t seed, const SearchSpace& space,

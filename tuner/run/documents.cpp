@@ -142,6 +142,13 @@ json gains_document(const TuningOutcome& r) {
                   {"rule",
                    "feasible beats infeasible; between feasible candidates the soft goal "
                    "decides, between infeasible ones the lesser total violation"}};
+    if (r.front && !r.front->points.empty()) {
+      g["goals"]["rule"] = front_rule_text(*r.front);
+      g["goals"]["front"] = {{"index", r.front->picked},
+                             {"rule", r.front->rule},
+                             {"points", r.front->points.size()},
+                             {"trial", r.front->points[r.front->picked].trial}};
+    }
   }
   const ComparedController& base = r.baseline();
   g["baseline"] = {{"controller", to_json(base.controller)},
@@ -212,7 +219,9 @@ std::string history_csv(const TuningOutcome& r) {
   std::string s = "iteration,best_fitness";
   for (const std::string& n : parameter_names(r.job)) s += "," + n;
   for (const std::string& c : columns) s += "," + c;
-  s += ",evaluations\n";
+  s += ",evaluations";
+  if (r.front) s += ",hypervolume";  // of the front so far, against front.json's reference point
+  s += "\n";
   char buf[48];
   const auto cell = [&](double v) {
     if (std::isnan(v)) return std::string(",");
@@ -228,7 +237,13 @@ std::string history_csv(const TuningOutcome& r) {
         if (name == c) v = value;
       s += cell(v);
     }
-    s.append(",").append(std::to_string(h.evaluations)).append("\n");
+    s.append(",").append(std::to_string(h.evaluations));
+    if (r.front) {
+      const auto i = static_cast<std::size_t>(h.iteration);
+      s += cell(i < r.hypervolume.size() ? r.hypervolume[i]
+                                         : std::numeric_limits<double>::quiet_NaN());
+    }
+    s.append("\n");
   }
   return s;
 }
@@ -330,6 +345,22 @@ std::map<std::string, std::string> output_files(const TuningOutcome& r) {
   for (std::size_t c = 0; c < r.comparison.size(); ++c)
     for (std::size_t s = 0; s < r.comparison[c].outcome.trajectories.size(); ++s)
       files[trajectory_file(r, c, s)] = trajectory_csv(r.comparison[c].outcome.trajectories[s]);
+  if (r.front) {
+    // The comparison's controllers other than the tuned one, with their goals, for the figures.
+    json compared = json::array();
+    for (const ComparedController& c : r.comparison) {
+      if (c.role == "tuned") continue;
+      json goals = json::array();
+      for (double v : c.outcome.evaluation.goals) goals.push_back(json_number(v));
+      compared.push_back({{"label", c.label},
+                          {"role", c.role},
+                          {"goals", goals},
+                          {"feasible", c.outcome.evaluation.feasible()}});
+    }
+    files["front.json"] =
+        front_document(r.job, r.job_sha256, r.seed, *r.front, compared).dump(2) + "\n";
+    files["front.csv"] = front_csv(r.job, *r.front);
+  }
   return files;
 }
 

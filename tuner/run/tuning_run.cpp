@@ -135,14 +135,31 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
   NoiseFloor nf;
   nf.objective_min = std::numeric_limits<double>::infinity();
   nf.objective_max = -std::numeric_limits<double>::infinity();
+  // Each goal's extremes over the same re-evaluations (a front's noise floor per goal).
+  std::vector<double> goal_min(job.goals.size(), std::numeric_limits<double>::infinity()),
+      goal_max(job.goals.size(), -std::numeric_limits<double>::infinity());
   for (int k = 0; k < nf.repeats; ++k) {
     const TuningProblem p =
         problem.perturbed(r.seed, kNoiseFloorStream + static_cast<std::uint64_t>(k), nf.perturbation);
-    const double v =
+    const Evaluation e =
         p.evaluate(std::span<const sim::ControllerConfig>(&r.tuned_controller, 1), evaluator)[0]
-            .evaluation.objective;
+            .evaluation;
+    const double v = e.objective;
     nf.objective_min = std::min(nf.objective_min, v);
     nf.objective_max = std::max(nf.objective_max, v);
+    for (std::size_t g = 0; g < goal_min.size() && g < e.goals.size(); ++g) {
+      goal_min[g] = std::min(goal_min[g], e.goals[g]);
+      goal_max[g] = std::max(goal_max[g], e.goals[g]);
+    }
+  }
+  if (r.front && !r.front->points.empty()) {
+    const std::vector<double>& at = r.best().outcome.evaluation.goals;
+    std::vector<std::optional<double>> spread(job.goals.size());
+    for (std::size_t g = 0; g < spread.size() && g < at.size(); ++g)
+      if (std::isfinite(goal_max[g]) && std::isfinite(goal_min[g]) && at[g] != 0 &&
+          std::isfinite(at[g]))
+        spread[g] = (goal_max[g] - goal_min[g]) / std::abs(at[g]);
+    apply_noise_floor(*r.front, spread);
   }
   r.simulations +=
       static_cast<std::int64_t>(nf.repeats) * static_cast<std::int64_t>(problem.scenarios());
@@ -229,6 +246,19 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   r.tuned_controller = problem.controller_for(r.optimization.best);
   r.optimization.best = problem.to_parameters(r.optimization.best);
   for (HistoryRow& h : r.optimization.history) h = in_values(std::move(h));
+  if (front_objectives(job) >= 2 && r.optimization.completed) {
+    // The front of every trial; the run's gains are its knee (a front without a feasible point:
+    // the optimiser's best, the least violation).
+    r.front = make_front(job, r.trials);
+    if (!r.front->points.empty()) {
+      const FrontPoint& knee = r.front->points[r.front->picked];
+      r.optimization.best = knee.parameters;
+      r.optimization.best_fitness = r.trials[knee.trial].fitness;
+      r.tuned_controller = problem.controller_with(knee.parameters);
+    }
+    r.hypervolume = hypervolume_history(job, r.trials, r.front->reference,
+                                        r.optimization.history.back().iteration);
+  }
   if (!r.optimization.completed || !options.compare) return r;
   compare_with(problem, r, evaluator, options.max_trajectory_rows);
   return r;

@@ -17,6 +17,7 @@
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/optimizers/optimizer.hpp"
 #include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/run/front.hpp"
 
 namespace ftc::tune {
 
@@ -80,6 +81,11 @@ struct TuningOutcome {
   sim::ControllerConfig tuned_controller;
   std::vector<ComparedController> comparison;  // compare entries, then baseline, then tuned
   std::optional<NoiseFloor> noise_floor;       // with the comparison
+  // A job with two or more soft goals: the front of all trials, its hypervolume after each
+  // iteration (history.csv) and the picked point (run/front.hpp); the tuned controller is the
+  // picked point's.
+  std::optional<Front> front;
+  std::vector<double> hypervolume;
   // Things a user should act on, one sentence each: a tuned parameter that ended within 0.1 % of
   // its search range from a bound (the optimum may lie beyond it); a compared controller that
   // scores better; a much larger control TV than the job's own gains' (comparison_warnings).

@@ -1,0 +1,232 @@
+// The Pareto front of a run (run/front.hpp): the hypervolume against a hand example, the front,
+// knee and noise flags of hand-made trials, pick's rules, and end-to-end runs of a job with two
+// soft goals (front.json, reproducibility across threads and a resume, pick's gains file).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "cli_runner.hpp"
+#include "ftc/runtime/gains.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/optimizers/hypervolume.hpp"
+#include "ftc/tune/optimizers/pareto_bat.hpp"
+#include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/front.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
+#include "short_job.hpp"
+
+using nlohmann::json;
+using namespace ftc;
+using namespace ftc::testing;
+
+namespace {
+
+// A job of two soft goals (ISE and control TV) and one hard goal, on the short Table 1 job with
+// Kp and the switching gain tuned (the latter on a log scale): 4 bats x 3 iterations.
+json front_job() {
+  json j = short_table1_job();
+  j["name"] = "front-short";
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"window", {0, 5}}, {"minimize", true}},
+                {{"metric", "control_tv"}, {"minimize", true}},
+                {{"metric", "peak_command"}, {"at_most", 1e6}}};
+  j["tuning"]["parameters"] = {{"Kp", {1, 50}},
+                               {"switching_gain", {{"bounds", {2, 200}}, {"scale", "log"}}}};
+  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
+  return j;
+}
+
+// Hand-made trials of a job with goals (ise soft, control_tv soft, peak_command hard).
+tune::Trial trial(int iteration, double ise, double tv, double violation = 0.0) {
+  tune::Trial t;
+  t.iteration = iteration;
+  t.parameters = {ise, tv};
+  t.goals = {ise, tv, 1.0};
+  t.violation = violation;
+  t.fitness = violation > 0 ? -0.5 : 1.0 / ise;
+  return t;
+}
+
+}  // namespace
+
+TEST(Hypervolume, ThreePointsInTwoDimensionsAgainstAHandComputedArea) {
+  // (1, 3), (2, 2), (3, 1) against (4, 4): the staircase 1·1 + 1·2 + 1·3 = 6.
+  EXPECT_DOUBLE_EQ(tune::hypervolume({{1, 3}, {2, 2}, {3, 1}}, {4, 4}), 6.0);
+  // A dominated point adds nothing; a point not strictly inside the reference box neither.
+  EXPECT_DOUBLE_EQ(tune::hypervolume({{1, 3}, {2, 2}, {3, 1}, {3, 3}, {5, 0.5}, {4, 1}}, {4, 4}),
+                   6.0);
+  EXPECT_DOUBLE_EQ(tune::hypervolume({{1, 1, 1}}, {2, 3, 4}), 6.0);
+  EXPECT_EQ(tune::hypervolume({}, {1, 1}), 0.0);
+  EXPECT_THROW(tune::hypervolume({{1, 1, 1}}, {2, 2}), std::invalid_argument);
+}
+
+TEST(Front, OfHandMadeTrialsWithReferenceKneeAndHypervolumePerIteration) {
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  // log10 of (ise, tv): (0, 3) (1, 1) (3, 0) on the front; (2, 2) dominated by (1, 1); an
+  // infeasible (0.1, 0.1); a repeat of (10, 10) later.
+  const std::vector<tune::Trial> trials = {trial(0, 1, 1000), trial(0, 100, 100),
+                                           trial(0, 0.1, 0.1, 0.5), trial(1, 10, 10),
+                                           trial(1, 1000, 1), trial(2, 10, 10)};
+  EXPECT_EQ(tune::front_trials(job, trials, trials.size()), (std::vector<std::size_t>{0, 3, 4}));
+  EXPECT_EQ(tune::front_trials(job, trials, 3), (std::vector<std::size_t>{0, 1}));
+  const tune::Front f = tune::make_front(job, trials);
+  ASSERT_EQ(f.points.size(), 3u);
+  EXPECT_EQ(f.points[1].trial, 3u);
+  ASSERT_EQ(f.reference.size(), 2u);
+  EXPECT_DOUBLE_EQ(f.reference[0], 3.1);
+  EXPECT_DOUBLE_EQ(f.reference[1], 3.1);
+  // Staircase on log10 against (3.1, 3.1): 1·0.1 + 2·2.1 + 0.1·3.1 = 4.61.
+  EXPECT_NEAR(f.hypervolume, 4.61, 1e-12);
+  // Normalised: (0, 1), (1/3, 1/3), (1, 0); the line x + y = 1; (1/3, 1/3) is the knee.
+  EXPECT_EQ(f.picked, 1u);
+  const std::vector<double> hv = tune::hypervolume_history(job, trials, f.reference, 2);
+  ASSERT_EQ(hv.size(), 3u);
+  // Iteration 0: (0, 3) and (2, 2): 2·0.1 + 1.1·1.1 = 1.41.
+  EXPECT_NEAR(hv[0], 1.41, 1e-12);
+  EXPECT_NEAR(hv[1], f.hypervolume, 1e-12);
+  EXPECT_EQ(hv[2], hv[1]);
+}
+
+TEST(Front, PointsWithinTheNoiseFloorOfTheirNeighbourAreFlagged) {
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  const std::vector<tune::Trial> trials = {trial(0, 1, 100), trial(0, 1.001, 99.95),
+                                           trial(0, 2, 50)};
+  tune::Front f = tune::make_front(job, trials);
+  ASSERT_EQ(f.points.size(), 3u);
+  // A spread of 0.2 % in each soft goal: (1.001, 99.95) is within it of (1, 100), (2, 50) not.
+  tune::apply_noise_floor(f, {0.002, 0.002, std::nullopt});
+  EXPECT_FALSE(f.points[0].within_noise_of);
+  ASSERT_TRUE(f.points[1].within_noise_of);
+  EXPECT_EQ(*f.points[1].within_noise_of, 0u);
+  EXPECT_FALSE(f.points[2].within_noise_of);
+  ASSERT_TRUE(f.points[f.picked].noise_floor[0]);
+  EXPECT_EQ(*f.points[f.picked].noise_floor[0], 0.002);
+  // A spread of 0.01 % tells them apart; an unmeasured goal never counts as within noise.
+  tune::apply_noise_floor(f, {0.0001, 0.0001, std::nullopt});
+  EXPECT_FALSE(f.points[1].within_noise_of);
+  tune::apply_noise_floor(f, {0.002, std::nullopt, std::nullopt});
+  EXPECT_FALSE(f.points[1].within_noise_of);
+  const json doc = tune::front_document(job, "sha", 1, f, json::array());
+  EXPECT_FALSE(doc["points"][1].contains("within_noise_of"));
+}
+
+TEST(Front, PickRules) {
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  const std::vector<tune::Trial> trials = {trial(0, 1, 1000), trial(0, 10, 10),
+                                           trial(0, 1000, 1)};
+  const tune::Front f = tune::make_front(job, trials);
+  EXPECT_EQ(tune::pick_point(job, f, "knee"), 1u);
+  EXPECT_EQ(tune::pick_point(job, f, "min:ise"), 0u);
+  EXPECT_EQ(tune::pick_point(job, f, "min:control_tv"), 2u);
+  EXPECT_EQ(tune::pick_point(job, f, "index:2"), 2u);
+  // The least ISE among the points whose control TV is at most 10 (10 and 1): ISE 10.
+  EXPECT_EQ(tune::pick_point(job, f, "limit:control_tv<=10"), 1u);
+  EXPECT_EQ(tune::pick_point(job, f, "limit:control_tv<=1e9"), 0u);
+  for (const char* bad : {"index:3", "index:1.5", "min:iae", "limit:control_tv<=0.5",
+                          "limit:control_tv", "limit:control_tv<=x", "best"}) {
+    try {
+      tune::pick_point(job, f, bad);
+      ADD_FAILURE() << bad << " was not refused";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.errors().at(0).path, "/rule") << bad;
+    }
+  }
+}
+
+TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads) {
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  const tune::TuningOutcome one = tuned(job, 1);
+  ASSERT_TRUE(one.front);
+  const auto files = tune::output_files(one);
+  ASSERT_TRUE(files.count("front.json") && files.count("front.csv"));
+  const json front = json::parse(files.at("front.json"));
+  EXPECT_EQ(front["schema"], "ftctune.front/1");
+  EXPECT_EQ(front["goals"].size(), 3u);
+  EXPECT_EQ(front["space"], "log10");
+  const json& points = front["points"];
+  ASSERT_GE(points.size(), 2u);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    EXPECT_EQ(points[i]["feasible"], true);
+    EXPECT_TRUE(points[i]["parameters"].contains("Kp"));
+    EXPECT_TRUE(points[i]["parameters"].contains("switching_gain"));
+    if (i > 0) EXPECT_LT(points[i - 1]["goals"][0], points[i]["goals"][0]);
+    const auto vec = [&](std::size_t k) {
+      return tune::ObjectiveVector{
+          {points[k]["goals"][0].get<double>(), points[k]["goals"][1].get<double>()}, 0.0};
+    };
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if (k != i) EXPECT_FALSE(tune::pareto::dominates(vec(k), vec(i))) << i << " " << k;
+    }
+  }
+  // The gains are the picked point's, with the rule recorded.
+  const json gains = tune::gains_document(one);
+  const std::size_t picked = front["picked"]["index"];
+  EXPECT_EQ(gains["tuned"]["Kp"], points[picked]["parameters"]["Kp"]);
+  EXPECT_EQ(gains["goals"]["front"]["index"], picked);
+  EXPECT_NE(gains["goals"]["rule"].get<std::string>().find("knee"), std::string::npos);
+  // history.csv's hypervolume: non-decreasing, the last the front's.
+  const std::string history = files.at("history.csv");
+  EXPECT_NE(history.find(",hypervolume\n"), std::string::npos);
+  ASSERT_EQ(one.hypervolume.size(), 4u);
+  for (std::size_t i = 1; i < one.hypervolume.size(); ++i)
+    EXPECT_GE(one.hypervolume[i], one.hypervolume[i - 1]);
+  EXPECT_EQ(one.hypervolume.back(), front["hypervolume"].get<double>());
+  // The picked point carries the noise floor of each goal.
+  EXPECT_TRUE(points[picked]["noise_floor"][0].is_number());
+
+  const auto two = tune::output_files(tuned(job, 2));
+  for (const char* f : {"front.json", "front.csv", "gains.json", "history.csv", "trials.csv"})
+    EXPECT_EQ(two.at(f), files.at(f)) << f;
+
+  // Resumed after iteration 1 of 3: the same bytes.
+  std::string checkpoint;
+  tune::RunOptions stop;
+  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
+                      const std::vector<tune::Trial>& trials) {
+    checkpoint = tune::run_checkpoint(o, trials).dump();
+    return h.iteration < 1;
+  };
+  tuned(job, 1, std::nullopt, stop);
+  const json state = json::parse(checkpoint);
+  tune::RunOptions resume;
+  resume.resume = &state;
+  const auto resumed = tune::output_files(tuned(job, 2, std::nullopt, resume));
+  for (const char* f : {"front.json", "front.csv", "gains.json", "history.csv", "trials.csv"})
+    EXPECT_EQ(resumed.at(f), files.at(f)) << f;
+
+  // pick: each rule's gains file loads in the runtime and holds its point.
+  const auto dir = fresh_dir("pick");
+  tune::write_output_files(files, dir);
+  for (const std::string& rule : std::vector<std::string>{
+           "knee", "min:ise", "min:control_tv", "index:1",
+           "limit:control_tv<=" + points[0]["goals"][1].dump()}) {
+    const json g = tune::pick_gains(dir, rule);
+    const std::size_t i = g["goals"]["front"]["index"];
+    EXPECT_EQ(g["tuned"]["Kp"], points[i]["parameters"]["Kp"]) << rule;
+    EXPECT_EQ(g["controller"]["switching_gain"], points[i]["parameters"]["switching_gain"]);
+    EXPECT_EQ(g["goals"]["goals"][1]["value"], points[i]["goals"][1]) << rule;
+    EXPECT_EQ(g.contains("noise_floor"), i == picked) << rule;
+    EXPECT_NO_THROW(runtime::parse_gains(g, rule)) << rule;
+  }
+  EXPECT_EQ(tune::pick_gains(dir, "knee"), gains);
+  EXPECT_EQ(tune::pick_gains(dir, "min:control_tv")["goals"]["front"]["index"],
+            points.size() - 1);
+  // The CLI: a file written whole, exit 2 for a rule that picks nothing.
+  const CliResult ok = run_cli("pick '" + dir.string() + "' --rule index:0 --out '" +
+                                   (dir / "p0.json").string() + "'", dir);
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_EQ(runtime::read_gains(dir / "p0.json").tuned.size(), 2u);
+  const CliResult bad = run_cli("pick '" + dir.string() + "' --rule min:iae", dir);
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("/rule"), std::string::npos) << bad.err;
+}
+
+TEST(Front, OneSoftGoalRunsWriteNoFront) {
+  json j = short_table1_job();
+  j["tuning"]["algorithm"]["iterations"] = 0;
+  const auto files = tune::output_files(tuned(tune::parse_job(j, "one"), 1));
+  EXPECT_EQ(files.count("front.json"), 0u);
+  EXPECT_EQ(files.at("history.csv").find("hypervolume"), std::string::npos);
+}

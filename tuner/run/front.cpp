@@ -1,0 +1,481 @@
+#include "ftc/tune/run/front.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+#include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/tune/optimizers/hypervolume.hpp"
+#include "ftc/tune/optimizers/pareto_bat.hpp"
+
+namespace ftc::tune {
+
+using json_io::json_number;
+using nlohmann::json;
+
+namespace {
+
+std::vector<std::size_t> soft_goals(const Job& job) {
+  std::vector<std::size_t> soft;
+  for (std::size_t k = 0; k < job.goals.size(); ++k)
+    if (job.goals[k].soft()) soft.push_back(k);
+  return soft;
+}
+
+ObjectiveVector soft_vector(const Trial& t, const std::vector<std::size_t>& soft) {
+  ObjectiveVector o;
+  for (std::size_t k : soft)
+    o.values.push_back(k < t.goals.size() ? t.goals[k] : std::numeric_limits<double>::quiet_NaN());
+  o.violation = t.violation;
+  return o;
+}
+
+std::vector<std::vector<double>> log_points(const Front& f) {
+  std::vector<std::vector<double>> p;
+  for (const FrontPoint& x : f.points) p.push_back(log_soft_goals(x.goals, f.soft));
+  return p;
+}
+
+// The knee of log10 points (rule in front.hpp).
+std::size_t knee_of(const std::vector<std::vector<double>>& p) {
+  if (p.size() <= 2) return 0;
+  const std::size_t m = p[0].size();
+  std::vector<double> lo(m, std::numeric_limits<double>::infinity()),
+      hi(m, -std::numeric_limits<double>::infinity());
+  for (const auto& x : p)
+    for (std::size_t k = 0; k < m; ++k) {
+      lo[k] = std::min(lo[k], x[k]);
+      hi[k] = std::max(hi[k], x[k]);
+    }
+  std::vector<std::vector<double>> n = p;
+  for (auto& x : n)
+    for (std::size_t k = 0; k < m; ++k) x[k] = hi[k] > lo[k] ? (x[k] - lo[k]) / (hi[k] - lo[k]) : 0;
+  // The extremes: the best of the first soft goal (index 0, the sort order) and of the second.
+  std::size_t b = 0;
+  for (std::size_t i = 1; i < n.size(); ++i)
+    if (n[i][1] < n[b][1]) b = i;
+  std::vector<double> u(m);
+  double len = 0;
+  for (std::size_t k = 0; k < m; ++k) {
+    u[k] = n[b][k] - n[0][k];
+    len += u[k] * u[k];
+  }
+  len = std::sqrt(len);
+  std::size_t best = 0;
+  double far = -1;
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    std::vector<double> d(m);
+    double along = 0;
+    for (std::size_t k = 0; k < m; ++k) {
+      d[k] = n[i][k] - n[0][k];
+      if (len > 0) along += d[k] * u[k] / len;
+    }
+    double dist = 0;
+    for (std::size_t k = 0; k < m; ++k) {
+      const double r = d[k] - (len > 0 ? along * u[k] / len : 0.0);
+      dist += r * r;
+    }
+    if (dist > far) {
+      far = dist;
+      best = i;
+    }
+  }
+  return best;
+}
+
+[[noreturn]] void refuse(const std::string& path, const std::string& message) {
+  throw InputError("pick", path, message);
+}
+
+// The goal named by a metric in a rule.
+std::size_t goal_named(const Job& job, const std::string& metric) {
+  for (std::size_t k = 0; k < job.goals.size(); ++k)
+    if (metric == to_string(job.goals[k].metric)) return k;
+  std::string known;
+  for (const GoalConfig& g : job.goals) known += (known.empty() ? "" : ", ") + std::string(to_string(g.metric));
+  refuse("/rule", "no goal of the job is \"" + metric + "\" (its goals: " + known + ")");
+}
+
+double parse_number(const std::string& text, const std::string& what) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || text.empty() || !std::isfinite(v))
+    refuse("/rule", what + " \"" + text + "\" is not a number");
+  return v;
+}
+
+}  // namespace
+
+std::vector<double> log_soft_goals(const std::vector<double>& goals,
+                                   const std::vector<std::size_t>& soft) {
+  std::vector<double> out;
+  for (std::size_t k : soft) out.push_back(pareto::log_value(goals.at(k)));
+  return out;
+}
+
+std::vector<std::size_t> front_trials(const Job& job, const std::vector<Trial>& trials,
+                                      std::size_t count) {
+  const std::vector<std::size_t> soft = soft_goals(job);
+  std::vector<std::size_t> candidates;
+  std::vector<ObjectiveVector> F;
+  for (std::size_t i = 0; i < std::min(count, trials.size()); ++i) {
+    ObjectiveVector o = soft_vector(trials[i], soft);
+    if (!o.feasible() ||
+        !std::all_of(o.values.begin(), o.values.end(), [](double v) { return std::isfinite(v); }))
+      continue;
+    bool duplicate = false;
+    for (const ObjectiveVector& g : F) duplicate = duplicate || g.values == o.values;
+    if (duplicate) continue;
+    candidates.push_back(i);
+    F.push_back(std::move(o));
+  }
+  std::vector<std::size_t> front;
+  for (std::size_t i = 0; i < F.size(); ++i) {
+    bool dominated = false;
+    for (std::size_t j = 0; j < F.size() && !dominated; ++j)
+      dominated = j != i && pareto::dominates(F[j], F[i]);
+    if (!dominated) front.push_back(i);
+  }
+  std::sort(front.begin(), front.end(), [&](std::size_t a, std::size_t b) {
+    if (F[a].values != F[b].values) return F[a].values < F[b].values;  // lexicographic
+    return a < b;
+  });
+  for (std::size_t& i : front) i = candidates[i];
+  return front;
+}
+
+std::vector<double> reference_point(const std::vector<std::vector<double>>& p) {
+  if (p.empty()) return {};
+  std::vector<double> r(p[0].size(), -std::numeric_limits<double>::infinity());
+  for (const auto& x : p)
+    for (std::size_t k = 0; k < r.size(); ++k) r[k] = std::max(r[k], x[k]);
+  for (double& v : r) v += kReferenceMarginDecades;
+  return r;
+}
+
+std::vector<double> hypervolume_history(const Job& job, const std::vector<Trial>& trials,
+                                        const std::vector<double>& reference, int last) {
+  const std::vector<std::size_t> soft = soft_goals(job);
+  std::vector<double> hv;
+  std::size_t count = 0;
+  for (int it = 0; it <= last; ++it) {
+    while (count < trials.size() && trials[count].iteration <= it) ++count;
+    std::vector<std::vector<double>> p;
+    for (std::size_t i : front_trials(job, trials, count))
+      p.push_back(log_soft_goals(trials[i].goals, soft));
+    hv.push_back(reference.empty() ? 0.0 : hypervolume(p, reference));
+  }
+  return hv;
+}
+
+Front make_front(const Job& job, const std::vector<Trial>& trials) {
+  Front f;
+  f.soft = soft_goals(job);
+  for (std::size_t i : front_trials(job, trials, trials.size())) {
+    FrontPoint p;
+    p.parameters = trials[i].parameters;
+    p.goals = trials[i].goals;
+    p.violation = trials[i].violation;
+    p.trial = i;
+    p.noise_floor.assign(job.goals.size(), std::nullopt);
+    f.points.push_back(std::move(p));
+  }
+  const std::vector<std::vector<double>> lp = log_points(f);
+  f.reference = reference_point(lp);
+  f.hypervolume = f.reference.empty() ? 0.0 : hypervolume(lp, f.reference);
+  f.picked = lp.empty() ? 0 : knee_of(lp);
+  return f;
+}
+
+void apply_noise_floor(Front& front, const std::vector<std::optional<double>>& spread) {
+  if (front.points.empty()) return;
+  front.points[front.picked].noise_floor = spread;
+  for (std::size_t i = 1; i < front.points.size(); ++i) {
+    const FrontPoint &a = front.points[i - 1], &b = front.points[i];
+    bool inside = true;
+    for (std::size_t k : front.soft) {
+      const std::optional<double> s = k < spread.size() ? spread[k] : std::nullopt;
+      if (!s || !std::isfinite(*s)) {
+        inside = false;
+        break;
+      }
+      inside = inside && std::abs(a.goals[k] - b.goals[k]) <=
+                             *s * std::max(std::abs(a.goals[k]), std::abs(b.goals[k]));
+    }
+    front.points[i].within_noise_of =
+        inside ? std::optional<std::size_t>(a.within_noise_of.value_or(i - 1)) : std::nullopt;
+  }
+}
+
+std::size_t pick_point(const Job& job, const Front& front, const std::string& rule) {
+  if (front.points.empty()) refuse("/rule", "the front has no point");
+  const std::vector<FrontPoint>& p = front.points;
+  if (rule == "knee") return knee_of(log_points(front));
+  const auto colon = rule.find(':');
+  const std::string kind = rule.substr(0, colon), arg = colon == std::string::npos ? "" : rule.substr(colon + 1);
+  if (colon != std::string::npos && kind == "index") {
+    const double n = parse_number(arg, "index");
+    if (n != std::floor(n) || n < 0 || n >= static_cast<double>(p.size()))
+      refuse("/rule", "index " + arg + " is not a point of the front (0.." +
+                          std::to_string(p.size() - 1) + ")");
+    return static_cast<std::size_t>(n);
+  }
+  if (colon != std::string::npos && kind == "min") {
+    const std::size_t g = goal_named(job, arg);
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < p.size(); ++i)
+      if (p[i].goals[g] < p[best].goals[g]) best = i;
+    return best;
+  }
+  if (colon != std::string::npos && kind == "limit") {
+    const auto le = arg.find("<=");
+    if (le == std::string::npos) refuse("/rule", "expected limit:METRIC<=X, got \"" + rule + "\"");
+    const std::size_t g = goal_named(job, arg.substr(0, le));
+    const double x = parse_number(arg.substr(le + 2), "limit");
+    // Of the points within the limit, the least in the first soft goal that is not this one.
+    std::size_t by = front.soft.empty() ? g : front.soft[0];
+    for (std::size_t k : front.soft)
+      if (k != g) {
+        by = k;
+        break;
+      }
+    std::optional<std::size_t> best;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p[i].goals[g] <= x && (!best || p[i].goals[by] < p[*best].goals[by])) best = i;
+    if (!best)
+      refuse("/rule", "no point of the front has " + arg.substr(0, le) + " <= " +
+                          json_io::number_text(x));
+    return *best;
+  }
+  refuse("/rule", "expected knee, min:METRIC, limit:METRIC<=X or index:N, got \"" + rule + "\"");
+}
+
+std::string front_rule_text(const Front& front) {
+  const std::string rule =
+      front.rule == "knee"
+          ? "the knee (with each soft goal's log10 normalised to [0, 1] over the front, the point "
+            "farthest from the line through the best points of the first two soft goals)"
+          : front.rule;
+  return "point " + std::to_string(front.picked) + " of the Pareto front of " +
+         std::to_string(front.points.size()) +
+         " feasible non-dominated trials (front.json), chosen by " + rule;
+}
+
+json front_document(const Job& job, const std::string& job_sha256, std::uint64_t seed,
+                    const Front& front, const json& compared) {
+  json goals = json::array();
+  for (const GoalConfig& g : job.goals) goals.push_back(to_json(g));
+  json reference = json::array();
+  for (double r : front.reference) reference.push_back(json_number(r));
+  json points = json::array();
+  const std::vector<std::string> names =
+      job.tuning ? [&] {
+        std::vector<std::string> n;
+        for (const ParameterBounds& b : job.tuning->parameters) n.push_back(b.name);
+        return n;
+      }()
+                 : std::vector<std::string>{};
+  for (const FrontPoint& p : front.points) {
+    json parameters = json::object();
+    for (std::size_t j = 0; j < p.parameters.size() && j < names.size(); ++j)
+      parameters[names[j]] = json_number(p.parameters[j]);
+    json values = json::array(), noise = json::array();
+    for (double v : p.goals) values.push_back(json_number(v));
+    for (const std::optional<double>& n : p.noise_floor)
+      noise.push_back(n ? json_number(*n) : json());
+    json point = {{"parameters", parameters}, {"goals", values},
+                  {"feasible", !(p.violation > 0)}, {"violation", json_number(p.violation)},
+                  {"noise_floor", noise}, {"trial", p.trial}};
+    if (p.within_noise_of) point["within_noise_of"] = *p.within_noise_of;
+    points.push_back(std::move(point));
+  }
+  return {{"schema", kFrontSchema},
+          {"job", job.name},
+          {"job_sha256", job_sha256},
+          {"seed", seed},
+          {"goals", goals},
+          {"space", "log10"},
+          {"reference_point", reference},
+          {"hypervolume", json_number(front.hypervolume)},
+          {"picked", {{"index", front.picked}, {"rule", front.rule}}},
+          {"compared", compared},
+          {"points", points}};
+}
+
+std::string front_csv(const Job& job, const Front& front) {
+  std::string s = "index";
+  std::vector<std::string> labels;
+  for (const GoalConfig& g : job.goals) labels.push_back(to_string(g.metric));
+  // Two goals of one metric (other windows) are told apart by their position.
+  for (std::size_t k = 0; k < labels.size(); ++k)
+    if (std::count(labels.begin(), labels.end(), labels[k]) > 1)
+      labels[k] += "_" + std::to_string(k);
+  if (job.tuning)
+    for (const ParameterBounds& b : job.tuning->parameters) s += "," + b.name;
+  for (const std::string& l : labels) s += "," + l;
+  s += ",feasible,violation";
+  for (const std::string& l : labels) s += "," + l + "_noise_floor";
+  s += ",trial\n";
+  const auto num = [](double v) -> std::string {  // exact (round-trip) digits, as history.csv
+    if (std::isnan(v)) return "";
+    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+  };
+  for (std::size_t i = 0; i < front.points.size(); ++i) {
+    const FrontPoint& p = front.points[i];
+    s += std::to_string(i);
+    for (double x : p.parameters) s += "," + num(x);
+    for (double g : p.goals) s += "," + num(g);
+    s += std::string(",") + (p.violation > 0 ? "false" : "true") + "," + num(p.violation);
+    for (const std::optional<double>& n : p.noise_floor) s += "," + (n ? num(*n) : std::string());
+    s += "," + std::to_string(p.trial) + "\n";
+  }
+  return s;
+}
+
+Front front_from_json(const Job& job, const json& j) {
+  const auto fail = [](const std::string& path, const std::string& m) -> void {
+    throw InputError("front.json", path, m);
+  };
+  const auto number = [&](const json& v, const std::string& path) {
+    if (v.is_null()) return std::numeric_limits<double>::infinity();
+    if (!v.is_number()) fail(path, "expected a number");
+    return v.get<double>();
+  };
+  if (!j.is_object() || j.value("schema", "") != kFrontSchema)
+    fail("/schema", std::string("expected \"") + kFrontSchema + "\"");
+  Front f;
+  f.soft = soft_goals(job);
+  if (!j.contains("points") || !j["points"].is_array()) fail("/points", "expected an array");
+  for (std::size_t i = 0; i < j["points"].size(); ++i) {
+    const json& p = j["points"][i];
+    const std::string at = "/points/" + std::to_string(i);
+    if (!p.is_object()) fail(at, "expected an object");
+    FrontPoint x;
+    const json& params = p.value("parameters", json::object());
+    for (const ParameterBounds& b : job.tuning->parameters) {
+      if (!params.contains(b.name)) fail(at + "/parameters/" + b.name, "is missing");
+      x.parameters.push_back(number(params[b.name], at + "/parameters/" + b.name));
+    }
+    const json& goals = p.value("goals", json());
+    if (!goals.is_array() || goals.size() != job.goals.size())
+      fail(at + "/goals", "expected " + std::to_string(job.goals.size()) + " values");
+    for (std::size_t k = 0; k < goals.size(); ++k)
+      x.goals.push_back(number(goals[k], at + "/goals/" + std::to_string(k)));
+    x.violation = number(p.value("violation", json(0.0)), at + "/violation");
+    x.trial = p.value("trial", std::size_t{0});
+    x.noise_floor.assign(job.goals.size(), std::nullopt);
+    const json& noise = p.value("noise_floor", json::array());
+    for (std::size_t k = 0; k < noise.size() && k < x.noise_floor.size(); ++k)
+      if (noise[k].is_number()) x.noise_floor[k] = noise[k].get<double>();
+    if (p.contains("within_noise_of") && p["within_noise_of"].is_number_unsigned())
+      x.within_noise_of = p["within_noise_of"].get<std::size_t>();
+    f.points.push_back(std::move(x));
+  }
+  if (j.contains("reference_point") && j["reference_point"].is_array())
+    for (const json& r : j["reference_point"]) f.reference.push_back(number(r, "/reference_point"));
+  f.hypervolume = number(j.value("hypervolume", json(0.0)), "/hypervolume");
+  if (j.contains("picked") && j["picked"].is_object()) {
+    f.picked = j["picked"].value("index", std::size_t{0});
+    f.rule = j["picked"].value("rule", std::string("knee"));
+  }
+  return f;
+}
+
+namespace {
+
+json read_json_file(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string(), "", "cannot be read (is this a run directory of a job "
+                                               "with two or more soft goals?)");
+  try {
+    return json::parse(in);
+  } catch (const json::exception& e) {
+    throw InputError(file.string(), "", std::string("is not JSON: ") + e.what());
+  }
+}
+
+// The cells of row `row` (0: the first after the header) of trials.csv under `names`.
+std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t row,
+                                const std::vector<std::string>& names) {
+  std::ifstream in(file);
+  std::string line;
+  const auto split = [](const std::string& l) {
+    std::vector<std::string> cells;
+    std::size_t start = 0;
+    for (std::size_t i = 0; i <= l.size(); ++i)
+      if (i == l.size() || l[i] == ',') {
+        cells.push_back(l.substr(start, i - start));
+        start = i + 1;
+      }
+    return cells;
+  };
+  if (!std::getline(in, line)) throw InputError(file.string(), "", "has no header");
+  const std::vector<std::string> header = split(line);
+  for (std::size_t i = 0; i <= row; ++i)
+    if (!std::getline(in, line))
+      throw InputError(file.string(), "", "has no row for trial " + std::to_string(row));
+  const std::vector<std::string> cells = split(line);
+  std::vector<double> out;
+  for (const std::string& n : names) {
+    const auto it = std::find(header.begin(), header.end(), n);
+    const auto k = static_cast<std::size_t>(it - header.begin());
+    if (it == header.end() || k >= cells.size())
+      throw InputError(file.string(), "", "has no column " + n);
+    const std::string& c = cells[k];
+    out.push_back(c == "inf" ? std::numeric_limits<double>::infinity()
+                  : c.empty() ? std::numeric_limits<double>::quiet_NaN()
+                              : std::strtod(c.c_str(), nullptr));
+  }
+  return out;
+}
+
+}  // namespace
+
+json pick_gains(const std::filesystem::path& run, const std::string& rule) {
+  const Job job = load_job(run / "job.json");
+  if (front_objectives(job) < 2 || !job.tuning)
+    throw InputError((run / "job.json").string(), "/goals",
+                     "the run's job has fewer than two soft goals: it has no front to pick from");
+  Front front = front_from_json(job, read_json_file(run / "front.json"));
+  const std::size_t i = pick_point(job, front, rule);
+  json g = read_json_file(run / "gains.json");
+  const FrontPoint& p = front.points[i];
+  for (std::size_t j = 0; j < job.tuning->parameters.size(); ++j) {
+    const std::string& name = job.tuning->parameters[j].name;
+    g["controller"][name] = p.parameters[j];
+    g["tuned"][name] = p.parameters[j];
+  }
+  const std::vector<double> cells = trial_cells(run / "trials.csv", p.trial, {"objective", "fitness"});
+  g["objective"]["value"] = json_number(cells[0]);
+  g["fitness"] = json_number(cells[1]);
+  json& goals = g["goals"];
+  for (std::size_t k = 0; k < job.goals.size(); ++k) {
+    goals["goals"][k]["value"] = json_number(p.goals[k]);
+    if (job.goals[k].at_most) goals["goals"][k]["violation"] = json_number(job.goals[k].violation(p.goals[k]));
+  }
+  goals["total_violation"] = json_number(p.violation);
+  goals["feasible"] = !(p.violation > 0);
+  const std::size_t measured = front.picked;
+  front.picked = i;
+  front.rule = rule;
+  goals["rule"] = front_rule_text(front);
+  goals["front"] = {{"index", i}, {"rule", rule}, {"points", front.points.size()}, {"trial", p.trial}};
+  if (i != measured) g.erase("noise_floor");  // measured at the run's own point
+  return g;
+}
+
+}  // namespace ftc::tune
