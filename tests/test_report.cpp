@@ -774,13 +774,24 @@ TEST(FrontReport, PanelPerPairOfSoftGoalsAndLinearAxisForZeroValues) {
     v += 0.125;
   }
   for (auto& c : j["compared"]) c["goals"].push_back(0.25);
+  j["compared"][0]["goals"][0] = 1000;  // ISE more than a decade beyond the front's 0.125..8
+  // The run's own verdict that #4 lies within #3's noise floor (front.json's within_noise_of).
+  j["points"][4]["within_noise_of"] = 3;
   const auto front = tune::report_detail::parse_front(j.dump(), "front.json", 1);
   ASSERT_EQ(front.soft, (std::vector<std::size_t>{0, 1, 3}));
+  EXPECT_TRUE(tune::report_detail::within_noise(front, 3, 4));
+  EXPECT_TRUE(tune::report_detail::within_noise(front, 4, 3));
+  EXPECT_FALSE(tune::report_detail::within_noise(front, 2, 3));
   write_text(dir / "history.csv", kFrontHistory);
   const auto figures = tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::svg);
   EXPECT_TRUE(tune::figure_is_whole(dir / "figures/front-pareto.svg"));
   const std::string gp = slurp(dir / "figures" / "front.gp");
   EXPECT_NE(gp.find("set multiplot layout 1,3"), std::string::npos);
+  EXPECT_NE(gp.find("2,1077\n8,400\n\n"), std::string::npos);  // #3 and #4 linked
+  // Table 1 off the ISE axis: at its right edge, labelled with its values.
+  EXPECT_NE(gp.find("set label 'Table 1 (off scale: 1000, 1200)' at "), std::string::npos) << gp;
+  EXPECT_NE(gp.find("set label 'Table 1 (off scale: 1000, 0.25)' at "), std::string::npos);
+  EXPECT_NE(gp.find("set label 'Table 1' at 1200,0.25"), std::string::npos);  // TV vs saturation
   // One scenario: no aggregate in the labels.
   EXPECT_NE(gp.find("set xlabel 'ISE[first fault, +4 s] [rad²·s]'"), std::string::npos);
   EXPECT_NE(gp.find("set ylabel 'saturation fraction[0 s, end] [1]'"), std::string::npos);
@@ -821,6 +832,9 @@ TEST(FrontReport, BadOrStaleFrontsAreRefusedAtTheirPaths) {
   j = front_fixture();
   j["reference_point"][1] = "far";
   refused_at(j, "/reference_point/1");
+  j = front_fixture();
+  j["points"][2]["within_noise_of"] = 2;
+  refused_at(j, "/points/2/within_noise_of");
 
   const auto dir = fresh_dir("front-stale");
   j = front_fixture();
@@ -875,4 +889,43 @@ TEST(FrontReport, PageHoldsTheFrontTableAndBothFigures) {
   const CliResult cli = run_cli("report '" + run.string() + "'", run.parent_path());
   EXPECT_EQ(cli.exit_code, 0) << cli.err;
   EXPECT_TRUE(tune::figure_is_whole(run / "figures" / "front-pareto.png"));
+}
+
+// A real run with two soft goals (ISE and control TV) and a hard goal: `ftctune report` draws its
+// front.json, marking the point gains.json holds and every compared controller where the run put
+// them.
+TEST(FrontReport, RunWithTwoSoftGoalsGetsItsFrontDrawn) {
+  const auto dir = fresh_dir("front-run");
+  json j = short_table1_job();
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"window", {2, 5}}, {"minimize", true}},
+                {{"metric", "control_tv"}, {"minimize", true}},
+                {{"metric", "peak_command"}, {"at_most", 1e6}}};
+  j["tuning"]["algorithm"] = {{"type", "pagmo"}, {"name", "nsga2"}, {"population", 8},
+                              {"generations", 2}};
+  tune::TbbEvaluator evaluator(2);
+  tune::write_outputs(tune::tune(tune::parse_job(j, "front"), evaluator), dir / "run");
+  const tune::ReportResult r = tune::render_report(dir / "run");
+  EXPECT_TRUE(tune::figure_is_whole(dir / "run" / "figures" / "front-pareto.png"));
+  EXPECT_TRUE(tune::figure_is_whole(dir / "run" / "figures" / "front-hypervolume.png"));
+  const json front = json::parse(slurp(dir / "run" / "front.json"));
+  const std::string gp = slurp(dir / "run" / "figures" / "front.gp");
+  const json& picked = front["points"][front["picked"]["index"].get<std::size_t>()];
+  const auto at = [](const json& goals) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.9g,%.9g", goals[0].get<double>(), goals[1].get<double>());
+    return std::string(buf);
+  };
+  EXPECT_NE(gp.find("set label 'picked' at " + at(picked["goals"])), std::string::npos) << gp;
+  ASSERT_FALSE(front["compared"].empty());
+  // Each compared controller where the run put it, or at the edge with its values when it lies
+  // more than a decade off the front.
+  for (const json& c : front["compared"])
+    EXPECT_TRUE(gp.find(" at " + at(c["goals"]) + " offset") != std::string::npos ||
+                gp.find(c["label"].get<std::string>() + " (off scale: ") != std::string::npos)
+        << c.dump();
+  const std::string html = slurp(r.html);
+  EXPECT_NE(html.find("<h2>Pareto front</h2>"), std::string::npos);
+  EXPECT_NE(html.find("<tr class=\"picked\"><td>" + front["picked"]["index"].dump() + " ★"),
+            std::string::npos);
 }

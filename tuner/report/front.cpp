@@ -167,6 +167,13 @@ Front parse_front(const std::string& text, const std::string& file, std::size_t 
     point.noise_floor = pt.contains("noise_floor")
                             ? r.numbers(pt["noise_floor"], p + "/noise_floor", G, NAN)
                             : std::vector<double>(G, NAN);
+    if (pt.contains("within_noise_of")) {
+      long long k = -1;
+      if (!json_io::json_to_int(pt["within_noise_of"], k) || k < 0 ||
+          static_cast<std::size_t>(k) >= points.size() || static_cast<std::size_t>(k) == i)
+        r.fail(p + "/within_noise_of", "is not the index of another point");
+      point.within_noise_of = static_cast<std::size_t>(k);
+    }
     if (pt.contains("trial")) {
       long long t = 0;
       if (!json_io::json_to_int(pt["trial"], t) || t < 0)
@@ -205,7 +212,8 @@ Front parse_front(const std::string& text, const std::string& file, std::size_t 
   return front;
 }
 
-std::optional<Front> read_front(const fs::path& run_dir, const json& gains, std::size_t scenarios) {
+std::optional<Front> read_front(const fs::path& run_dir, const json& gains, std::size_t scenarios,
+                                const std::vector<std::string>& parameter_order) {
   const fs::path file = run_dir / "front.json";
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) return std::nullopt;
@@ -216,12 +224,23 @@ std::optional<Front> read_front(const fs::path& run_dir, const json& gains, std:
                               ? gains.value(json::json_pointer("/job/sha256"), json("")).get<std::string>()
                               : "";
   if (j.is_object() && j.value("job_sha256", json("")) != own) return std::nullopt;
-  return parse_front(*text, file.string(), scenarios);
+  Front front = parse_front(*text, file.string(), scenarios);
+  for (FrontPoint& p : front.points)
+    std::stable_sort(p.parameters.begin(), p.parameters.end(), [&](const auto& a, const auto& b) {
+      const auto rank = [&](const std::string& name) {
+        return static_cast<std::size_t>(
+            std::find(parameter_order.begin(), parameter_order.end(), name) -
+            parameter_order.begin());
+      };
+      return rank(a.first) < rank(b.first);
+    });
+  return front;
 }
 
 bool within_noise(const Front& front, std::size_t a, std::size_t b) {
   const FrontPoint& p = front.points.at(a);
   const FrontPoint& q = front.points.at(b);
+  if (p.within_noise_of == b || q.within_noise_of == a) return true;
   for (std::size_t g : front.soft) {
     const double u = p.goals[g], v = q.goals[g], fu = p.noise_floor[g], fv = q.noise_floor[g];
     if (!std::isfinite(u) || !std::isfinite(v) || !std::isfinite(fu) || !std::isfinite(fv))
@@ -302,6 +321,70 @@ std::vector<std::pair<double, double>> hypervolume_history(const fs::path& file)
 }
 
 std::string axis_label(const FrontGoal& g) { return g.label + " [" + g.unit + "]"; }
+
+// One axis of a panel: it spans the front's points, and the compared controllers that lie within
+// a decade of them (on a linear axis, within the front's span); one farther off would squeeze the
+// front into a corner, so it is drawn at the edge and labelled with its value. In log10 on a log
+// axis.
+struct Axis {
+  bool log = true;
+  double lo = 0, hi = 1;  // the drawn range (log10 on a log axis)
+  double to(double v) const { return log ? std::log10(v) : v; }
+  double from(double t) const { return log ? std::pow(10.0, t) : t; }
+  bool inside(double v) const { return to(v) >= lo && to(v) <= hi; }
+  double clamp(double v) const { return from(std::clamp(to(v), lo, hi)); }
+  std::string range() const { return "[" + num(from(lo)) + ":" + num(from(hi)) + "]"; }
+};
+
+// Tics of a log axis: gnuplot labels only powers of ten, none at all on a range under a decade,
+// so a narrow range gets round values (1, 2, 5 × 10^k, or finer) labelled.
+std::string log_tics(const char* axis, const Axis& a) {
+  if (!a.log || a.hi - a.lo > 2.5) return std::string("set ") + axis + "tics autofreq\n";
+  const std::vector<std::vector<double>> steps = {
+      {1, 2, 5}, {1, 1.5, 2, 3, 5, 7}, {1, 1.2, 1.5, 2, 2.5, 3, 4, 5, 6, 7, 8, 9}};
+  std::vector<double> tics;
+  for (const std::vector<double>& mantissas : steps) {
+    tics.clear();
+    for (int k = static_cast<int>(std::floor(a.lo)); k <= static_cast<int>(std::ceil(a.hi)); ++k)
+      for (double m : mantissas) {
+        const double v = m * std::pow(10.0, k);
+        if (std::log10(v) >= a.lo && std::log10(v) <= a.hi) tics.push_back(v);
+      }
+    if (tics.size() >= 3) break;
+  }
+  std::string s = std::string("set ") + axis + "tics (";
+  for (std::size_t i = 0; i < tics.size(); ++i)
+    s += (i ? ", '" : "'") + detail::format_number(tics[i], "%g") + "' " + num(tics[i]);
+  return s + ")\n";
+}
+
+Axis axis_of(const Front& front, std::size_t g, bool log) {
+  Axis a;
+  a.log = log;
+  double lo = INFINITY, hi = -INFINITY;
+  for (const FrontPoint& p : front.points)
+    if (std::isfinite(p.goals[g]) && (!log || p.goals[g] > 0)) {
+      lo = std::min(lo, a.to(p.goals[g]));
+      hi = std::max(hi, a.to(p.goals[g]));
+    }
+  if (!(lo <= hi)) return a;
+  const double reach = log ? 1.0 : std::max(hi - lo, 1e-12 + 0.1 * std::fabs(hi));
+  const double flo = lo, fhi = hi;
+  for (const FrontCompared& c : front.compared)
+    if (std::isfinite(c.goals[g]) && (!log || c.goals[g] > 0)) {
+      const double t = a.to(c.goals[g]);
+      if (t >= flo - reach && t <= fhi + reach) {
+        lo = std::min(lo, t);
+        hi = std::max(hi, t);
+      }
+    }
+  const double pad = log ? std::max(0.1, 0.08 * (hi - lo))
+                         : (hi > lo ? 0.08 * (hi - lo) : std::max(1e-12, 0.1 * std::fabs(hi)));
+  a.lo = lo - pad;
+  a.hi = hi + pad;
+  if (!log && lo >= 0 && a.lo < 0) a.lo = 0;  // a goal is not negative
+  return a;
+}
 
 // What the soft goals' log10 space and its reference point are, in words.
 std::string reference_text(const Front& front) {
@@ -386,6 +469,9 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       << (log_y ? "set logscale y\nset format y '%g'\n" : "unset logscale y\nset format y '%g'\n")
       << "set xlabel " << gp(axis_label(front.goals[x])) << " noenhanced\nset ylabel "
       << gp(axis_label(front.goals[y])) << " noenhanced\n";
+    const Axis ax = axis_of(front, x, log_x), ay = axis_of(front, y, log_y);
+    g << "set xrange " << ax.range() << "\nset yrange " << ay.range() << "\n"
+      << log_tics("x", ax) << log_tics("y", ay);
     std::string cmd = "plot ";
     if (any_noise && !bars.empty())
       cmd += block(bars) + " using 1:2:3:4:5:6 with xyerrorbars pt 0 lw 1 lc rgb 'gray55' title " +
@@ -418,29 +504,43 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       if (!std::isfinite(vx) || !std::isfinite(vy)) continue;
       const std::string colour = plot::viridis(0.25 + 0.6 * static_cast<double>(c) /
                                                           std::max<std::size_t>(1, front.compared.size()));
-      cmd += block(num(vx) + "," + num(vy) + "\n") + " using 1:2 with points pt " +
-             std::to_string(kComparedMarks[c % 5]) + " ps 1.8 lc rgb '" + colour + "' title " +
-             gp(name) + ", ";
-      g << "set label " << gp(name) << " at " << num(vx) << "," << num(vy)
-        << " offset 1,0.8 noenhanced front\n";
+      // Off the panel's scale: at its edge, with its values in the label.
+      const bool off = !ax.inside(vx) || !ay.inside(vy);
+      const double px = off ? ax.clamp(vx) : vx, py = off ? ay.clamp(vy) : vy;
+      const std::string text =
+          off ? name + " (off scale: " + detail::format_number(vx) + ", " +
+                    detail::format_number(vy) + ")"
+              : name;
+      cmd += block(num(px) + "," + num(py) + "\n") + " using 1:2 with points pt " +
+             std::to_string(kComparedMarks[c % 5] - (off ? 1 : 0)) + " ps 1.8 lc rgb '" + colour +
+             "' title " + gp(name) + ", ";
+      // Labels staggered, so that controllers close together stay readable; right-aligned at
+      // the right edge.
+      static const double kRaise[] = {0.9, -1.3, 2.0};
+      const bool right = off && ax.to(px) >= ax.hi, top = off && ay.to(py) >= ay.hi;
+      g << "set label " << gp(text) << " at " << num(px) << "," << num(py)
+        << (right ? " right offset -1," : " offset 1,")
+        << num(top ? -1.3 : kRaise[c % 3]) << " noenhanced front\n";
     }
     g << cmd.substr(0, cmd.size() - 2) << "\n";
   }
   g << "unset multiplot\nunset label\nunset logscale x\nunset logscale y\nset format x '%g'\n"
-       "set format y '%g'\nset autoscale\nunset bmargin\n";
+       "set format y '%g'\nset autoscale\nunset bmargin\nset xtics autofreq\nset ytics autofreq\n";
   std::string caption =
       "Each panel shows two soft goals of the points the search kept (a tuned front: the best "
       "trade-offs this run found, not a proven optimum), with the picked point (gains.json) "
       "circled and the compared controllers labelled. Axes are logarithmic where every value is "
-      "positive. Grey bars span each point's noise floor (one relative spread across its "
-      "perturbed re-runs, centred on the value)";
+      "positive. Grey bars span a point's noise floor where the run measured it (one relative "
+      "spread across its perturbed re-runs, centred on the value)";
   caption += any_noise_pair ? "; dashed links join points that lie within each other's noise "
                               "floor on every soft goal: their difference is noise, not a "
                               "trade-off."
-                            : "; no two points lie within each other's noise floor on every "
-                              "soft goal.";
+                            : "; no two points are known to lie within each other's noise floor "
+                              "on every soft goal.";
   if (!any_noise) caption += " No point's noise floor was measured.";
   if (any_infeasible) caption += " Crosses are points that violate a hard goal.";
+  caption += " A compared controller far off the front's scale is drawn at the panel's edge "
+             "(open marker), its values in its label.";
   if (undrawn)
     caption += " " + std::to_string(undrawn) +
                " point-panel(s) with a diverged or missing goal value are not drawn.";

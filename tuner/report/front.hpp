@@ -32,6 +32,8 @@ struct FrontPoint {
   double violation = 0;
   std::vector<double> noise_floor;  // relative spread per goal; NaN where not measured
   long long trial = -1;             // row of trials.csv, -1 when not given
+  // The run's own verdict: the earlier point this one lies within the noise floor of.
+  std::optional<std::size_t> within_noise_of;
 };
 
 struct FrontCompared {
@@ -59,12 +61,15 @@ std::string goal_label(const nlohmann::json& goal, std::size_t scenarios);
 Front parse_front(const std::string& text, const std::string& file, std::size_t scenarios);
 
 // RUN/front.json when there is one of this run (its job_sha256 is gains.json's): a front left
-// by an earlier run of another job is not this run's.
+// by an earlier run of another job is not this run's. Each point's parameters are put in the
+// order of `parameter_order` (the job's), those it does not name after them.
 std::optional<Front> read_front(const std::filesystem::path& run_dir, const nlohmann::json& gains,
-                                std::size_t scenarios);
+                                std::size_t scenarios,
+                                const std::vector<std::string>& parameter_order = {});
 
-// Whether points a and b are apart by less than their noise floors on every soft goal: their
-// noise bands v·(1 ± f/2) overlap on each, so their difference is not a trade-off.
+// Whether the difference between points a and b is noise, not a trade-off: the run says so
+// (one's within_noise_of names the other), or both have noise floors measured and their noise
+// bands v·(1 ± f/2) overlap on every soft goal.
 bool within_noise(const Front& front, std::size_t a, std::size_t b);
 
 // Writes figures/front.gp (the pairwise scatter and the hypervolume over the iterations of

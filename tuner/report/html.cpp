@@ -179,12 +179,13 @@ void front_section(const fs::path& run_dir, const Front& front,
   if (front.picked)
     h << " gains.json holds point #" << *front.picked << ", picked by the rule <code>"
       << html_escape(front.rule) << "</code>; <code>ftctune pick</code> writes another.";
-  h << " The noise floor is each goal's relative spread over the point's perturbed re-runs; ";
+  h << " The noise floor is each goal's relative spread over a point's perturbed re-runs, where "
+       "the run measured it (\u2013 elsewhere); ";
   if (twinned)
     h << twinned << " point(s) lie within another's noise floor on every soft goal (marked "
                     "below): their differences are noise, not a trade-off.";
   else
-    h << "no two points lie within each other's noise floor on every soft goal.";
+    h << "no two points are known to lie within each other's noise floor on every soft goal.";
   h << "</p>\n<table class=\"front\"><tr><th>#</th>";
   for (const std::string& n : param_names) h << "<th>" << html_escape(n) << "</th>";
   for (const FrontGoal& g : front.goals)

@@ -73,7 +73,12 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
       report_detail::draw_run_figures(run_dir, job, gains, series[0], format);
   // A run with two or more soft goals: its front's scatter and hypervolume.
   const std::optional<report_detail::Front> front =
-      report_detail::read_front(run_dir, gains, job.scenario_count());
+      report_detail::read_front(run_dir, gains, job.scenario_count(), [&] {
+        std::vector<std::string> names;
+        if (job.tuning)
+          for (const ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
+        return names;
+      }());
   std::vector<report_detail::Figure> front_figures;
   if (front) {
     front_figures = report_detail::draw_front_figures(run_dir, *front, format);
