@@ -1685,3 +1685,23 @@ TEST(Service, StoredFrontIsListedServedFetchedAndInTheReport) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(slurp(out / "run" / "front.json"), front_json);
 }
+
+// A two-goal job submitted to the service: its front.json and front.csv are those `ftctune run`
+// writes, served with the run's other files.
+TEST(Service, TwoGoalJobServesTheFrontTheRunWrites) {
+  json job = tiny_job("two-goals");
+  job.erase("objective");
+  job["goals"] = {{{"metric", "ise"}, {"window", {0, 0.05}}, {"minimize", true}},
+                  {{"metric", "control_tv"}, {"minimize", true}}};
+  job["tuning"]["algorithm"]["population"] = 4;
+  job["tuning"]["algorithm"]["iterations"] = 2;
+  Service s;
+  const std::string id = s.submit(job)["id"];
+  ASSERT_EQ(s.wait_done(id)["status"], "succeeded");
+  for (const char* name : {"front.json", "front.csv", "history.csv"}) {
+    const auto r = s.client->Get(("/v1/jobs/" + id + "/files/" + name).c_str());
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << name << ": " << r->body;
+    EXPECT_EQ(r->body, expected_file(job, name)) << name;
+  }
+}
