@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -34,9 +35,11 @@ AlgorithmPtr pagmo(const std::string& name, int population, int generations,
                          {"settings", settings}});
 }
 
+// The algorithms of one objective (the multi-objective ones are tested below).
 std::vector<std::string> all_names() {
   std::vector<std::string> names;
-  for (const PagmoAlgorithmInfo& a : pagmo_algorithms()) names.push_back(a.name);
+  for (const PagmoAlgorithmInfo& a : pagmo_algorithms())
+    if (!a.front) names.push_back(a.name);
   return names;
 }
 
@@ -293,7 +296,8 @@ TEST(PagmoSettings, ErrorsNameTheirJsonPath) {
   j["name"] = "pso2";
   EXPECT_EQ(problems(j),
             "/tuning/algorithm/name: unknown pagmo algorithm \"pso2\" (known: bee_colony, cmaes, "
-            "de, de1220, gaco, gwo, ihs, pso, pso_gen, sade, sea, sga, xnes)\n");
+            "de, de1220, gaco, gwo, ihs, maco, moead, nsga2, nspso, pso, pso_gen, sade, sea, sga, "
+            "xnes)\n");
   j = ok;
   j["settings"] = {{"omegaa", 0.5}};
   EXPECT_NE(problems(j).find("/tuning/algorithm/settings/omegaa: unknown key (allowed here: "),
@@ -335,7 +339,7 @@ TEST(PagmoSettings, ErrorsNameTheirJsonPath) {
             "/tuning/algorithm/settings/cc: must be -1 (automatic) or in [0, 1] (got 2)\n");
   EXPECT_EQ(problems({{"type", "pagmo"}}),
             "/tuning/algorithm/name: is required (one of bee_colony, cmaes, de, de1220, gaco, "
-            "gwo, ihs, pso, pso_gen, sade, sea, sga, xnes)\n");
+            "gwo, ihs, maco, moead, nsga2, nspso, pso, pso_gen, sade, sea, sga, xnes)\n");
 }
 
 TEST(PagmoSettings, ResolvedFormHasPagmosDefaultsAndRoundTrips) {
@@ -451,4 +455,258 @@ TEST(Pagmo, LibraryIsLoadedOnlyWhenAJobNamesAPagmoAlgorithm) {
   const ftc::testing::CliResult r =
       ftc::testing::run_cli("validate '" + (dir / "job.json").string() + "'", dir);
   EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// ---- pagmo's multi-objective algorithms (issue 26) --------------------------------------------
+
+namespace {
+
+const char* kFrontAlgorithms[] = {"nsga2", "moead", "nspso", "maco"};
+
+// Settings that fit a population of 8 (MOEA/D's neighbourhood, MHACO's archive).
+json front_settings(const std::string& name) {
+  if (name == "moead") return {{"neighbours", 4}};
+  if (name == "maco") return {{"ker", 4}};
+  return json::object();
+}
+
+// ZDT1 on two variables in [0, 1]: f1 = x0, f2 = g·(1 − sqrt(x0/g)), g = 1 + 9·x1; its front is
+// x1 = 0. With `limit`, the hard goal x0 >= limit (violation (limit − x0)/limit where broken).
+struct Zdt1 {
+  double limit = 0;
+  std::vector<std::pair<Decision, ObjectiveVector>> seen;
+  ObjectiveVector operator()(const Decision& x) {
+    const double g = 1 + 9 * x[1];
+    ObjectiveVector o{{x[0], g * (1 - std::sqrt(x[0] / g))}, 0.0};
+    if (x[0] < limit) o.violation = (limit - x[0]) / limit;
+    seen.emplace_back(x, o);
+    return o;
+  }
+};
+
+// The hypervolume of the feasible points against (1.1, 11), by a sweep over f1.
+double hypervolume2(std::vector<ObjectiveVector> points) {
+  std::vector<std::pair<double, double>> p;
+  for (const ObjectiveVector& o : points)
+    if (o.feasible() && o.values[0] < 1.1 && o.values[1] < 11) p.emplace_back(o.values[0], o.values[1]);
+  std::sort(p.begin(), p.end());
+  double hv = 0, best2 = 11;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    best2 = std::min(best2, p[i].second);
+    const double next = i + 1 < p.size() ? p[i + 1].first : 1.1;
+    hv += (next - p[i].first) * (11 - best2);
+  }
+  return hv;
+}
+
+OptimizationResult solve_front(const AlgorithmPtr& a, std::uint64_t seed, Zdt1& zdt) {
+  FunctionObjectives fitness(2, [&](const Decision& x) { return zdt(x); });
+  const std::unique_ptr<Optimizer> o = a->make_front(seed, box(2, 0, 1), 2);
+  return run_optimizer(*o, fitness);
+}
+
+}  // namespace
+
+// Each algorithm spends what it declares, improves on its initial population's front, and
+// reports as its best point the evaluated feasible point of least first goal.
+TEST(PagmoFront, EveryAlgorithmSpendsItsBudgetImprovesItsFrontAndReportsItsBest) {
+  for (const std::string name : kFrontAlgorithms) {
+    const AlgorithmPtr a = pagmo(name, 8, 10, front_settings(name));
+    ASSERT_TRUE(a->searches_front()) << name;
+    Zdt1 zdt;
+    const OptimizationResult r = solve_front(a, 3, zdt);
+    EXPECT_EQ(r.evaluations, a->evaluations()) << name;
+    ASSERT_EQ(r.history.size(), 11u) << name;
+    ASSERT_EQ(zdt.seen.size(), static_cast<std::size_t>(r.evaluations)) << name;
+    std::vector<ObjectiveVector> initial, all;
+    for (std::size_t i = 0; i < zdt.seen.size(); ++i) {
+      all.push_back(zdt.seen[i].second);
+      if (i < 8) initial.push_back(zdt.seen[i].second);
+    }
+    EXPECT_GT(hypervolume2(all), hypervolume2(initial)) << name;
+    const auto least = std::min_element(zdt.seen.begin(), zdt.seen.end(), [](auto& p, auto& q) {
+      return p.second.values[0] < q.second.values[0];
+    });
+    EXPECT_EQ(r.best, least->first) << name;
+    EXPECT_EQ(r.best_fitness, 1.0 / least->second.values[0]) << name;
+  }
+}
+
+// Hard goals reach pagmo as constrained domination: NSGA-II's population becomes feasible, and the
+// best point is a feasible one.
+TEST(PagmoFront, HardGoalsAreConstrainedDomination) {
+  for (const std::string name : kFrontAlgorithms) {
+    const AlgorithmPtr a = pagmo(name, 8, 10, front_settings(name));
+    Zdt1 zdt;
+    zdt.limit = 0.5;
+    const OptimizationResult r = solve_front(a, 5, zdt);
+    EXPECT_GE(r.best[0], 0.5) << name;
+    EXPECT_GT(r.best_fitness, 0) << name;  // feasible: J = 1/f1
+    const auto feasible = [](const HistoryRow& h) {
+      for (const auto& [k, v] : h.extras)
+        if (k == "generation_feasible") return v;
+      return -1.0;
+    };
+    if (name == "nsga2") {
+      EXPECT_LT(feasible(r.history.front()), 8) << name;
+      EXPECT_EQ(feasible(r.history.back()), 8) << name;
+    }
+  }
+}
+
+TEST(PagmoFront, ResumeFromSavedStateContinuesExactlyForEveryAlgorithm) {
+  for (const std::string name : kFrontAlgorithms) {
+    const AlgorithmPtr a = pagmo(name, 8, 6, front_settings(name));
+    Zdt1 full_zdt;
+    const OptimizationResult uninterrupted = solve_front(a, 11, full_zdt);
+    std::string saved;
+    Zdt1 first_zdt;
+    FunctionObjectives first_f(2, [&](const Decision& x) { return first_zdt(x); });
+    auto first = a->make_front(11, box(2, 0, 1), 2);
+    run_optimizer(*first, first_f, [&](const HistoryRow& h, const Optimizer& o) {
+      saved = o.state().dump();
+      return h.iteration < 3;
+    });
+    const json state = json::parse(saved);
+    Zdt1 after_zdt;
+    FunctionObjectives after_f(2, [&](const Decision& x) { return after_zdt(x); });
+    auto second = a->make_front(999, box(2, 0, 1), 2);
+    const OptimizationResult resumed = run_optimizer(*second, after_f, {}, &state);
+    ASSERT_EQ(resumed.history.size(), uninterrupted.history.size()) << name;
+    for (std::size_t i = 0; i < resumed.history.size(); ++i) {
+      EXPECT_EQ(resumed.history[i].best, uninterrupted.history[i].best) << name << ", " << i;
+      EXPECT_EQ(resumed.history[i].best_fitness, uninterrupted.history[i].best_fitness);
+      EXPECT_EQ(resumed.history[i].evaluations, uninterrupted.history[i].evaluations);
+    }
+    EXPECT_EQ(static_cast<std::int64_t>(after_zdt.seen.size()),
+              uninterrupted.evaluations - resumed.history[3].evaluations)
+        << name;
+    // A damaged log does not replay to the checkpoint's best: the first candidate's first goal
+    // made 0, below every other, makes it the best point.
+    json bad = state;
+    bad["objective_log"][0][0] = 0.0;
+    auto third = a->make_front(11, box(2, 0, 1), 2);
+    EXPECT_THROW(run_optimizer(*third, after_f, {}, &bad), InputError) << name;
+  }
+}
+
+TEST(PagmoFront, SettingsAndSizesAreCheckedAtTheirPaths) {
+  const auto errors = [](const json& algorithm) {
+    std::vector<FieldError> e;
+    parse_algorithm(algorithm, "/tuning/algorithm", e);
+    std::string s;
+    for (const FieldError& f : e) s += to_string(f) + "\n";
+    return s;
+  };
+  const json base = {{"type", "pagmo"}, {"population", 8}, {"generations", 2}};
+  json j = base;
+  j["name"] = "nsga2";
+  j["population"] = 10;
+  EXPECT_NE(errors(j).find("/tuning/algorithm/population: must be a multiple of 4 and at least 8"),
+            std::string::npos)
+      << errors(j);
+  j = base;
+  j["name"] = "moead";
+  EXPECT_NE(errors(j).find("/tuning/algorithm/population: must be at least 21 for moead with "
+                           "neighbours 20"),
+            std::string::npos)
+      << errors(j);
+  j = base;
+  j["name"] = "maco";
+  EXPECT_NE(errors(j).find("/tuning/algorithm/population: must be at least 63 for maco with ker 63"),
+            std::string::npos)
+      << errors(j);
+  j = base;
+  j["name"] = "nsga2";
+  j["settings"] = {{"cr", 1.0}};
+  EXPECT_NE(errors(j).find("/tuning/algorithm/settings/cr"), std::string::npos) << errors(j);
+  j = base;
+  j["name"] = "nspso";
+  j["settings"] = {{"diversity_mechanism", "none"}};
+  EXPECT_NE(errors(j).find("/tuning/algorithm/settings/diversity_mechanism"), std::string::npos)
+      << errors(j);
+  // A front's algorithm has nothing to do with one objective: the job is refused at the name
+  // (and a run of it, should one be started, stops there too).
+  EXPECT_EQ(problems({{"type", "pagmo"}, {"name", "nsga2"}, {"population", 8}}),
+            "/tuning/algorithm/name: pagmo's nsga2 searches a Pareto front: give the job two or "
+            "more soft goals (\"minimize\": true), or name an algorithm of one objective\n");
+  const AlgorithmPtr a = pagmo("nsga2", 8, 2);
+  EXPECT_THROW(a->make(1, box(2, 0, 1)), InputError);
+  EXPECT_FALSE(pagmo("cmaes", 10, 2)->searches_front());
+}
+
+namespace {
+Job two_goal_job(const std::string& name, int generations) {
+  json j = tiny_job("front-" + name);
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"window", {0, 0.05}}, {"minimize", true}},
+                {{"metric", "control_tv"}, {"minimize", true}}};
+  j["tuning"]["algorithm"] = {{"type", "pagmo"},
+                              {"name", name},
+                              {"population", 8},
+                              {"generations", generations},
+                              {"settings", front_settings(name)}};
+  return parse_job(j, "front");
+}
+}  // namespace
+
+// A checkpointed two-goal run resumes to the same files as the uninterrupted one.
+TEST(PagmoTuning, ResumedTwoGoalRunGivesTheSameFiles) {
+  for (const std::string name : {"nsga2", "moead"}) {
+    const Job job = two_goal_job(name, 3);
+    TbbEvaluator evaluator(2);
+    const std::map<std::string, std::string> uninterrupted = output_files(tune::tune(job, evaluator));
+    std::string checkpoint;
+    RunOptions stop;
+    stop.observer = [&](const HistoryRow& h, const Optimizer& o, const std::vector<Trial>& trials) {
+      checkpoint = run_checkpoint(o, trials).dump();
+      return h.iteration < 1;
+    };
+    EXPECT_FALSE(tune::tune(job, evaluator, stop).completed()) << name;
+    const json state = json::parse(checkpoint);
+    RunOptions resume;
+    resume.resume = &state;
+    const std::map<std::string, std::string> resumed =
+        output_files(tune::tune(job, evaluator, resume));
+    for (const auto& [file, text] : uninterrupted)
+      EXPECT_EQ(resumed.at(file), text) << name << ": " << file;
+  }
+}
+
+// A two-goal job (ISE and control TV) through the whole run with each multi-objective algorithm:
+// every file byte-identical on 1 and 2 threads, the budget spent as declared, and a front of
+// several trade-offs among its trials (front.json's points, where the run writes one, mutually
+// non-dominated).
+TEST(PagmoTuning, TwoGoalJobGivesTheSameFilesOnOneAndTwoThreadsAndAFront) {
+  for (const std::string name : kFrontAlgorithms) {
+    const Job job = two_goal_job(name, 2);
+    TbbEvaluator one(1), two(2);
+    const TuningOutcome r1 = tune::tune(job, one);
+    const std::map<std::string, std::string> f1 = output_files(r1),
+                                             f2 = output_files(tune::tune(job, two));
+    ASSERT_EQ(f1.size(), f2.size()) << name;
+    for (const auto& [file, text] : f1) EXPECT_EQ(text, f2.at(file)) << name << ": " << file;
+    EXPECT_EQ(r1.trials.size(), 24u) << name;
+    // The non-dominated feasible trials: more than one, so the search saw a trade-off.
+    std::vector<const Trial*> front;
+    const auto dominates = [](const Trial& a, const Trial& b) {
+      return a.goals[0] <= b.goals[0] && a.goals[1] <= b.goals[1] &&
+             (a.goals[0] < b.goals[0] || a.goals[1] < b.goals[1]);
+    };
+    for (const Trial& t : r1.trials) {
+      bool dominated = !(t.violation == 0) || !std::isfinite(t.goals[0]) ||
+                       !std::isfinite(t.goals[1]);
+      for (const Trial& u : r1.trials) dominated = dominated || dominates(u, t);
+      if (!dominated) front.push_back(&t);
+    }
+    EXPECT_GE(front.size(), 2u) << name;
+    if (f1.count("front.json")) {
+      const json points = json::parse(f1.at("front.json"))["points"];
+      for (const json& p : points)
+        for (const json& q : points)
+          EXPECT_FALSE(p["goals"][0] <= q["goals"][0] && p["goals"][1] <= q["goals"][1] &&
+                       p["goals"] != q["goals"])
+              << name << ": " << p.dump() << " dominates " << q.dump();
+    }
+  }
 }

@@ -11,6 +11,7 @@
 #include "ftc/tune/run/evaluate.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "io/text.hpp"
+#include "report/front.hpp"
 #include "report/gnuplot.hpp"
 #include "short_job.hpp"
 
@@ -733,4 +734,258 @@ TEST(Report, ComparisonAndPageShowEveryGoalPerController) {
                           tune::detail::format_number(ev.controllers[0].goals[0]) + "</td><td>" +
                           tune::detail::format_number(ev.controllers[0].goals[1]) + "</td>";
   EXPECT_NE(with_evaluation.find(row, section), std::string::npos) << row;
+}
+
+// ---- The Pareto front of a run with two or more soft goals (front.json, issue 26) ----------
+
+namespace {
+
+// In the file's order: the parameters' order is the table's.
+nlohmann::ordered_json front_fixture() {
+  return nlohmann::ordered_json::parse(slurp(std::string(FTC_SOURCE_DIR) + "/tests/data/front-two-goals.json"));
+}
+
+void write_text(const std::filesystem::path& p, const std::string& text) {
+  std::filesystem::create_directories(p.parent_path());
+  std::ofstream(p) << text;
+}
+
+// history.csv of a front run: the hypervolume of each iteration's front.
+const char* kFrontHistory =
+    "iteration,best_fitness,Kp,Ki,hypervolume,evaluations\n"
+    "0,1,20,1.5,1.5,10\n1,0.9,21,1.5,2.125,20\n2,0.9,21,1.5,2.375,30\n";
+
+// Adds a hypervolume column to a run's history.csv (a one-goal run has none), rising by 0.25.
+void add_hypervolume_column(const std::filesystem::path& history) {
+  std::stringstream in(slurp(history));
+  std::string line, out;
+  std::getline(in, line);
+  out = line + ",hypervolume\n";
+  for (int k = 0; std::getline(in, line); ++k)
+    out += line + "," + tune::detail::format_number(1 + 0.25 * k, "%g") + "\n";
+  write_text(history, out);
+}
+
+}  // namespace
+
+// The scatter marks the front, its noise bands, the picked point, the job's gains and the
+// compared controllers, each where front.json puts it, on log axes labelled with metric,
+// window, aggregate and unit; the hypervolume figure states its reference point.
+TEST(FrontReport, ScatterMarksPickedBaselineComparedAndNoiseAndHypervolumeStatesItsReference) {
+  const auto dir = fresh_dir("front-figures");
+  const tune::report_detail::Front front =
+      tune::report_detail::parse_front(front_fixture().dump(), "front.json", 7);
+  write_text(dir / "history.csv", kFrontHistory);
+  std::filesystem::create_directories(dir / "figures");
+  const auto figures =
+      tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::png);
+  ASSERT_EQ(figures.size(), 2u);
+  EXPECT_EQ(figures[0].file, "figures/front-pareto.png");
+  EXPECT_EQ(figures[1].file, "figures/front-hypervolume.png");
+  for (const auto& f : figures) {
+    EXPECT_TRUE(tune::figure_is_whole(dir / f.file)) << f.file;
+    EXPECT_GT(std::filesystem::file_size(dir / f.file), 10000u) << f.file;
+  }
+  const std::string gp = slurp(dir / "figures" / "front.gp");
+  // One panel for two soft goals; the hard goal (peak command) is no axis.
+  EXPECT_NE(gp.find("set multiplot layout 1,1"), std::string::npos);
+  EXPECT_NE(gp.find("set logscale x\n"), std::string::npos);
+  EXPECT_NE(gp.find("set logscale y\n"), std::string::npos);
+  EXPECT_NE(gp.find("set xlabel 'CVaR0.9 of ISE[first fault, +4 s] over 7 scenarios [rad²·s]'"),
+            std::string::npos);
+  EXPECT_NE(gp.find("set ylabel 'quantile0.5 of control TV over 7 scenarios [command''s unit]'"),
+            std::string::npos);
+  EXPECT_EQ(gp.find("peak command"), std::string::npos);
+  // The marked points, where front.json has them: picked #2 (0.5, 2500), Table 1 (3.5, 1200),
+  // the job's gains (1.5, 5000) marked infeasible.
+  EXPECT_NE(gp.find("set label 'picked' at 0.5,2500"), std::string::npos);
+  EXPECT_NE(gp.find("'picked (knee), #2'"), std::string::npos);
+  EXPECT_NE(gp.find("set label 'Table 1' at 3.5,1200"), std::string::npos);
+  EXPECT_NE(gp.find("set label 'job''s gains: PI-FOSMC (job) (infeasible)' at 1.5,5000"),
+            std::string::npos);
+  // The front's points, and the noise band of #3: ISE 2·(1 ± 0.03), TV 1077·(1 ± 0.005).
+  for (const char* row : {"0.125,9000\n", "0.13,8950\n", "8,400\n",
+                          "2,1077,1.94,2.06,1071.615,1082.385\n", "8,400,8,8,400,400\n"})
+    EXPECT_NE(gp.find(row), std::string::npos) << row;
+  // #0 and #1 lie within each other's noise floor on both soft goals: linked, not a trade-off.
+  EXPECT_NE(gp.find("0.125,9000\n0.13,8950\n\n"), std::string::npos);
+  EXPECT_NE(gp.find("not a trade-off"), std::string::npos);
+  EXPECT_NE(figures[0].caption.find("not a proven optimum"), std::string::npos);
+  // The hypervolume per iteration, and the reference point in its title and caption.
+  EXPECT_NE(gp.find("0,1.5\n1,2.125\n2,2.375\n"), std::string::npos);
+  EXPECT_NE(gp.find("reference point (1.25, 4.5) in log10 of the soft goals"), std::string::npos);
+  EXPECT_NE(figures[1].caption.find("CVaR0.9 of ISE[first fault, +4 s] over 7 scenarios = 10^1.25"),
+            std::string::npos)
+      << figures[1].caption;
+  EXPECT_NE(figures[1].caption.find("Final front: 2.375."), std::string::npos);
+}
+
+// Three soft goals: a panel per pair. A goal with a zero value gets a linear axis.
+TEST(FrontReport, PanelPerPairOfSoftGoalsAndLinearAxisForZeroValues) {
+  const auto dir = fresh_dir("front-pairs");
+  nlohmann::ordered_json j = front_fixture();
+  j["goals"].push_back({{"metric", "saturation_fraction"}, {"window", {0, nullptr}},
+                        {"aggregate", "mean"}, {"minimize", true}});
+  j["reference_point"].push_back(0.5);
+  double v = 0;
+  for (auto& p : j["points"]) {
+    p["goals"].push_back(v);
+    p["noise_floor"].push_back(nullptr);
+    v += 0.125;
+  }
+  for (auto& c : j["compared"]) c["goals"].push_back(0.25);
+  j["compared"][0]["goals"][0] = 1000;  // ISE more than a decade beyond the front's 0.125..8
+  // The run's own verdict that #4 lies within #3's noise floor (front.json's within_noise_of).
+  j["points"][4]["within_noise_of"] = 3;
+  const auto front = tune::report_detail::parse_front(j.dump(), "front.json", 1);
+  ASSERT_EQ(front.soft, (std::vector<std::size_t>{0, 1, 3}));
+  EXPECT_TRUE(tune::report_detail::within_noise(front, 3, 4));
+  EXPECT_TRUE(tune::report_detail::within_noise(front, 4, 3));
+  EXPECT_FALSE(tune::report_detail::within_noise(front, 2, 3));
+  write_text(dir / "history.csv", kFrontHistory);
+  const auto figures = tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::svg);
+  EXPECT_TRUE(tune::figure_is_whole(dir / "figures/front-pareto.svg"));
+  const std::string gp = slurp(dir / "figures" / "front.gp");
+  EXPECT_NE(gp.find("set multiplot layout 1,3"), std::string::npos);
+  EXPECT_NE(gp.find("2,1077\n8,400\n\n"), std::string::npos);  // #3 and #4 linked
+  // Table 1 off the ISE axis: at its right edge, labelled with its values.
+  EXPECT_NE(gp.find("set label 'Table 1 (off scale: 1000, 1200)' at "), std::string::npos) << gp;
+  EXPECT_NE(gp.find("set label 'Table 1 (off scale: 1000, 0.25)' at "), std::string::npos);
+  EXPECT_NE(gp.find("set label 'Table 1' at 1200,0.25"), std::string::npos);  // TV vs saturation
+  // One scenario: no aggregate in the labels.
+  EXPECT_NE(gp.find("set xlabel 'ISE[first fault, +4 s] [rad²·s]'"), std::string::npos);
+  EXPECT_NE(gp.find("set ylabel 'saturation fraction[0 s, end] [1]'"), std::string::npos);
+  EXPECT_NE(gp.find("unset logscale y\n"), std::string::npos);
+  EXPECT_NE(gp.find("reference point (1.25, 4.5, 0.5)"), std::string::npos);
+}
+
+// A damaged front.json is refused at its JSON path; a front of another job (stale beside a
+// re-run) is not this run's; a front without its history column is an error, not an empty plot.
+TEST(FrontReport, BadOrStaleFrontsAreRefusedAtTheirPaths) {
+  const auto refused_at = [](const nlohmann::ordered_json& j, const std::string& path) {
+    try {
+      tune::report_detail::parse_front(j.dump(), "front.json", 1);
+    } catch (const InputError& e) {
+      ASSERT_FALSE(e.errors().empty());
+      EXPECT_EQ(e.errors()[0].path, path) << e.what();
+      return;
+    }
+    ADD_FAILURE() << "accepted, expected a refusal at " << path;
+  };
+  nlohmann::ordered_json j = front_fixture();
+  j["schema"] = "ftctune.front/0";
+  refused_at(j, "/schema");
+  j = front_fixture();
+  j["picked"]["index"] = 5;
+  refused_at(j, "/picked/index");
+  j = front_fixture();
+  j["points"][3]["goals"].erase(2);
+  refused_at(j, "/points/3/goals");
+  j = front_fixture();
+  j["goals"][1].erase("minimize");
+  refused_at(j, "/goals/1/at_most");
+  j = front_fixture();
+  j["goals"][1]["at_most"] = 10;
+  j["goals"][1].erase("minimize");
+  j["reference_point"].erase(1);
+  refused_at(j, "/goals");
+  j = front_fixture();
+  j["reference_point"][1] = "far";
+  refused_at(j, "/reference_point/1");
+  j = front_fixture();
+  j["points"][2]["within_noise_of"] = 2;
+  refused_at(j, "/points/2/within_noise_of");
+
+  const auto dir = fresh_dir("front-stale");
+  j = front_fixture();
+  j["job_sha256"] = "abc";
+  write_text(dir / "front.json", j.dump());
+  EXPECT_FALSE(tune::report_detail::read_front(dir, json{{"job", {{"sha256", "def"}}}}, 1));
+  ASSERT_TRUE(tune::report_detail::read_front(dir, json{{"job", {{"sha256", "abc"}}}}, 1));
+  write_text(dir / "history.csv", "iteration,best_fitness,evaluations\n0,1,10\n");
+  const auto front = tune::report_detail::parse_front(j.dump(), "front.json", 1);
+  EXPECT_THROW(tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::png),
+               InputError);
+  EXPECT_FALSE(std::filesystem::exists(dir / "figures" / "front-pareto.png"));
+}
+
+// report.html of a run with a front: the front's table (parameters, goals, feasibility, noise
+// floor; the picked point marked, twins within the noise floor said to be so, compared rows)
+// and both figures; `ftctune report` draws the same. A run without one shows neither.
+TEST(FrontReport, PageHoldsTheFrontTableAndBothFigures) {
+  const auto run = finished_run("front-html");
+  std::string html = slurp(tune::render_report(run).html);
+  EXPECT_EQ(html.find("Pareto front"), std::string::npos);
+  const json gains = json::parse(slurp(run / "gains.json"));
+  nlohmann::ordered_json j = front_fixture();
+  j["job_sha256"] = gains["job"]["sha256"].get<std::string>();
+  write_text(run / "front.json", j.dump(2));
+  add_hypervolume_column(run / "history.csv");
+  const tune::ReportResult r = tune::render_report(run);
+  EXPECT_EQ(r.figures.size(), 7u);
+  EXPECT_TRUE(tune::figure_is_whole(run / "figures" / "front-pareto.png"));
+  EXPECT_TRUE(tune::figure_is_whole(run / "figures" / "front-hypervolume.png"));
+  html = slurp(r.html);
+  std::size_t images = 0;
+  for (std::size_t p = 0; (p = html.find("data:image/png;base64,", p)) != std::string::npos; ++p)
+    ++images;
+  EXPECT_EQ(images, 7u);
+  for (const char* text :
+       {"<h2>Pareto front</h2>", "not a proven optimum", "alt=\"Pareto front\"",
+        "alt=\"Hypervolume\"", "reference point (1.25, 4.5), is 2.375",
+        "gains.json holds point #2, picked by the rule <code>knee</code>",
+        "<th>#</th><th>Kp</th><th>Ki</th><th>ISE[first fault, +4 s] [rad²·s] (min)</th>",
+        "<th>peak command[0 s, end] [command's unit] ≤ 17.9</th><th>feasible</th>",
+        "<tr class=\"picked\"><td>2 ★</td><td>20</td><td>1.5</td><td>0.5</td><td>2500</td>"
+        "<td>15</td><td>yes</td><td>0</td><td>5 %</td><td>1 %</td><td>–</td><td>5</td>"
+        "<td>picked (knee)</td></tr>",
+        "<td>within the noise floor of #1</td>", "<td>within the noise floor of #0</td>",
+        "2 point(s) lie within another's noise floor on every soft goal",
+        "<tr class=\"compared\"><td>Table 1</td>", "<td>PI-FOSMC (job) (job's gains)</td>"})
+    EXPECT_NE(html.find(text), std::string::npos) << text;
+  EXPECT_EQ(html.find("optimal"), std::string::npos);
+  // The command draws it too.
+  std::filesystem::remove(run / "figures" / "front-pareto.png");
+  const CliResult cli = run_cli("report '" + run.string() + "'", run.parent_path());
+  EXPECT_EQ(cli.exit_code, 0) << cli.err;
+  EXPECT_TRUE(tune::figure_is_whole(run / "figures" / "front-pareto.png"));
+}
+
+// A real run with two soft goals (ISE and control TV) and a hard goal: `ftctune report` draws its
+// front.json, marking the point gains.json holds and every compared controller where the run put
+// them.
+TEST(FrontReport, RunWithTwoSoftGoalsGetsItsFrontDrawn) {
+  const auto dir = fresh_dir("front-run");
+  json j = short_table1_job();
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"window", {2, 5}}, {"minimize", true}},
+                {{"metric", "control_tv"}, {"minimize", true}},
+                {{"metric", "peak_command"}, {"at_most", 1e6}}};
+  j["tuning"]["algorithm"] = {{"type", "pagmo"}, {"name", "nsga2"}, {"population", 8},
+                              {"generations", 2}};
+  tune::TbbEvaluator evaluator(2);
+  tune::write_outputs(tune::tune(tune::parse_job(j, "front"), evaluator), dir / "run");
+  const tune::ReportResult r = tune::render_report(dir / "run");
+  EXPECT_TRUE(tune::figure_is_whole(dir / "run" / "figures" / "front-pareto.png"));
+  EXPECT_TRUE(tune::figure_is_whole(dir / "run" / "figures" / "front-hypervolume.png"));
+  const json front = json::parse(slurp(dir / "run" / "front.json"));
+  const std::string gp = slurp(dir / "run" / "figures" / "front.gp");
+  const json& picked = front["points"][front["picked"]["index"].get<std::size_t>()];
+  const auto at = [](const json& goals) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.9g,%.9g", goals[0].get<double>(), goals[1].get<double>());
+    return std::string(buf);
+  };
+  EXPECT_NE(gp.find("set label 'picked' at " + at(picked["goals"])), std::string::npos) << gp;
+  ASSERT_FALSE(front["compared"].empty());
+  // Each compared controller where the run put it, or at the edge with its values when it lies
+  // more than a decade off the front.
+  for (const json& c : front["compared"])
+    EXPECT_TRUE(gp.find(" at " + at(c["goals"]) + " offset") != std::string::npos ||
+                gp.find(c["label"].get<std::string>() + " (off scale: ") != std::string::npos)
+        << c.dump();
+  const std::string html = slurp(r.html);
+  EXPECT_NE(html.find("<h2>Pareto front</h2>"), std::string::npos);
+  EXPECT_NE(html.find("<tr class=\"picked\"><td>" + front["picked"]["index"].dump() + " ★"),
+            std::string::npos);
 }

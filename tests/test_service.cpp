@@ -1917,3 +1917,86 @@ TEST(Cli, FetchKeepsTheServersJobNameOutOfItsPaths) {
   fake.stop();
   serving.join();
 }
+
+// A job whose run wrote a front (two or more soft goals): the store keeps front.json and
+// front.csv with the run's other files, /files lists and serves them, `fetch --all` brings them,
+// and the report drawn from the stored files shows the front. The job runner stores every file of
+// output_files(); the front's files stand in here for a two-goal run's (tests/data fixture).
+TEST(Service, StoredFrontIsListedServedFetchedAndInTheReport) {
+  const auto dir = fresh_dir("service-front");
+  const json job = tiny_job("front");
+  std::string id, front_json, front_csv;
+  {
+    tune::JobStore store(dir / "store");
+    tune::Submission sub;
+    sub.job_json = job.dump();
+    sub.name = "front";
+    sub.iterations = 1;
+    sub.total_evaluations = 4;
+    id = store.submit(sub).record.id;
+    ASSERT_EQ(store.claim_next()->id, id);
+    tune::TbbEvaluator evaluator(2);
+    std::map<std::string, std::string> files =
+        tune::output_files(tune::tune(tune::parse_job(job, "front"), evaluator));
+    json front =
+        json::parse(slurp(std::string(FTC_SOURCE_DIR) + "/tests/data/front-two-goals.json"));
+    front["job_sha256"] = json::parse(files.at("gains.json"))["job"]["sha256"];
+    front_json = front.dump(2) + "\n";
+    front_csv = "index,Kp,Ki,ise,control_tv,peak_command,feasible,violation,trial\n"
+                "0,40,2.5,0.125,9000,17.5,true,0,17\n";
+    files["front.json"] = front_json;
+    files["front.csv"] = front_csv;
+    // A front run's history has the hypervolume of each iteration.
+    std::istringstream in(files.at("history.csv"));
+    std::string line, history;
+    std::getline(in, line);
+    history = line + ",hypervolume\n";
+    for (int k = 0; std::getline(in, line); ++k) history += line + "," + std::to_string(k + 1) + "\n";
+    files["history.csv"] = history;
+    store.finish_succeeded(id, files);
+  }
+  tune::ServiceOptions o;
+  o.store = dir / "store";
+  Service s(o);
+  std::set<std::string> names;
+  const json listing = s.get("/v1/jobs/" + id + "/files");
+  for (const json& f : listing["files"]) names.insert(f["name"].get<std::string>());
+  EXPECT_TRUE(names.count("front.json"));
+  EXPECT_TRUE(names.count("front.csv"));
+  const auto served = s.client->Get(("/v1/jobs/" + id + "/files/front.json").c_str());
+  ASSERT_TRUE(served);
+  EXPECT_EQ(served->status, 200);
+  EXPECT_EQ(served->body, front_json);
+  EXPECT_EQ(served->get_header_value("Content-Type"), "application/json");
+  EXPECT_EQ(s.client->Get(("/v1/jobs/" + id + "/files/front.csv").c_str())->body, front_csv);
+  const auto report = s.client->Get(("/v1/jobs/" + id + "/report").c_str());
+  ASSERT_EQ(report->status, 200) << report->body;
+  EXPECT_NE(report->body.find("<h2>Pareto front</h2>"), std::string::npos);
+  EXPECT_NE(report->body.find("alt=\"Hypervolume\""), std::string::npos);
+  const auto out = fresh_dir("service-front-fetch");
+  const CliResult r = run_cli("fetch " + id + " --all -o '" + (out / "run" / "gains.json").string() +
+                                  "' --server http://127.0.0.1:" + std::to_string(s.port),
+                              out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(slurp(out / "run" / "front.json"), front_json);
+}
+
+// A two-goal job submitted to the service: its front.json and front.csv are those `ftctune run`
+// writes, served with the run's other files.
+TEST(Service, TwoGoalJobServesTheFrontTheRunWrites) {
+  json job = tiny_job("two-goals");
+  job.erase("objective");
+  job["goals"] = {{{"metric", "ise"}, {"window", {0, 0.05}}, {"minimize", true}},
+                  {{"metric", "control_tv"}, {"minimize", true}}};
+  job["tuning"]["algorithm"]["population"] = 4;
+  job["tuning"]["algorithm"]["iterations"] = 2;
+  Service s;
+  const std::string id = s.submit(job)["id"];
+  ASSERT_EQ(s.wait_done(id)["status"], "succeeded");
+  for (const char* name : {"front.json", "front.csv", "history.csv"}) {
+    const auto r = s.client->Get(("/v1/jobs/" + id + "/files/" + name).c_str());
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << name << ": " << r->body;
+    EXPECT_EQ(r->body, expected_file(job, name)) << name;
+  }
+}

@@ -177,6 +177,29 @@ def test_submitting_table1_through_the_page(server, browser):
     assert values == sorted(values)
 
 
+def test_a_two_goal_job_shows_its_front(server, browser):
+    job = table1()
+    job["name"] = "two-goals"
+    job["scenarios"][0]["duration"] = 0.05
+    job["scenarios"][0]["faults"][0]["onset"] = 0.01
+    job["scenarios"][0]["faults"][1]["onset"] = 0.03
+    del job["objective"]
+    job["goals"] = [{"metric": "ise", "window": [0, 0.05], "minimize": True},
+                    {"metric": "control_tv", "minimize": True}]
+    job["tuning"]["algorithm"]["population"] = 4
+    job["tuning"]["algorithm"]["iterations"] = 2
+    job_id = server.api("/v1/jobs", job)["id"]
+    assert server.wait_done(job_id)["status"] == "succeeded"
+    front = server.api("/v1/jobs/" + job_id + "/files/front.json")
+    open_job(browser, server, job_id)
+    wait(browser, lambda d: d.find_element(By.ID, "front-chart").get_attribute("data-points")
+         == str(len(front["points"])))
+    assert "Pareto front: %d tuned points" % len(front["points"]) in \
+        browser.find_element(By.CSS_SELECTOR, "#front h3").text
+    browser.execute_script("document.getElementById('front').scrollIntoView()")
+    screenshot(browser, "dashboard-front.png")
+
+
 def test_progress_updates_without_a_reload(server, browser):
     blocker = server.api("/v1/jobs", longer("blocker", 40))["id"]
     job_id = server.api("/v1/jobs", longer("watched", 30))["id"]

@@ -13,6 +13,7 @@
 #include "ftc/runtime/schema.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/ensemble.hpp"
+#include "ftc/tune/optimizers/pagmo.hpp"
 #include "job/shapes.hpp"
 
 namespace ftc::tune {
@@ -725,6 +726,20 @@ void check_window(const Job& job, const sim::Window& w, WindowFrom from, const s
 
 }
 
+// pagmo's multi-objective algorithms search fronts only: a job of one objective (or of one soft
+// goal) cannot run them.
+void validate_front_only(const Job& job, Errors& errs) {
+  if (!job.tuning || !job.tuning->algorithm || job.tuning->algorithm->type() != "pagmo") return;
+  const auto soft = std::count_if(job.goals.begin(), job.goals.end(),
+                                  [](const GoalConfig& g) { return g.soft(); });
+  if (soft >= 2) return;
+  const std::string name = job.tuning->algorithm->to_json().value("name", "");
+  if (const PagmoAlgorithmInfo* info = find_pagmo_algorithm(name); info && info->front)
+    errs.push_back({"/tuning/algorithm/name",
+                    "pagmo's " + name + " searches a Pareto front: give the job two or more soft "
+                    "goals (\"minimize\": true), or name an algorithm of one objective"});
+}
+
 // The goals against the job: a soft goal among them, windows inside the scenarios, the settling
 // threshold and tail their metrics need, no goal twice. One soft goal is the search's objective,
 // so it is an error integral; two or more ask for a Pareto front (any metric), which the
@@ -828,6 +843,7 @@ void validate_job(const Job& job, Errors& errs) {
   if (job.goals.empty()) check_window(job, job.objective.window, job.objective.window_from,
                                       "/objective/window", errs);
   validate_goals(job, errs);
+  validate_front_only(job, errs);
 
   // A scenario's true values replace the plant's values of the uncertain parameters they name.
   for (std::size_t i = 0; kind && i < job.scenarios.size(); ++i) {

@@ -31,6 +31,10 @@
 #include <pagmo/algorithms/gaco.hpp>
 #include <pagmo/algorithms/gwo.hpp>
 #include <pagmo/algorithms/ihs.hpp>
+#include <pagmo/algorithms/maco.hpp>
+#include <pagmo/algorithms/moead.hpp>
+#include <pagmo/algorithms/nsga2.hpp>
+#include <pagmo/algorithms/nspso.hpp>
 #include <pagmo/algorithms/pso.hpp>
 #include <pagmo/algorithms/pso_gen.hpp>
 #include <pagmo/algorithms/sade.hpp>
@@ -46,6 +50,7 @@
 #include <stdexcept>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/input_error.hpp"
 #include "ftc/tune/optimizers/state_check.hpp"
 #include "optimizers/pagmo_plugin.hpp"
 
@@ -683,6 +688,171 @@ std::unique_ptr<Entry> gaco_entry() {
       });
 }
 
+// ---------------------------------------------------------------------------------------------
+// The multi-objective algorithms (issue 26): they search the Pareto front of a job's soft goals.
+// pagmo's NSGA-II, MOEA/D, NSPSO and MHACO take no constraints, so a job's hard goals reach them
+// as constrained domination (Deb et al. 2002) written into the objectives: see FrontLink.
+
+struct Nsga2S {
+  double cr = 0.95, eta_c = 10.0, m = 0.01, eta_m = 50.0;
+};
+struct MoeadS {
+  std::string weight_generation = "grid", decomposition = "tchebycheff";
+  int neighbours = 20;
+  double CR = 1.0, F = 0.5, eta_m = 20.0, realb = 0.9;
+  int limit = 2;
+  bool preserve_diversity = true;
+};
+struct NspsoS {
+  double omega = 0.6, c1 = 2.0, c2 = 2.0, chi = 1.0, v_coeff = 0.5;
+  int leader_selection_range = 60;
+  std::string diversity_mechanism = "crowding distance";
+};
+struct MacoS {
+  int ker = 63;
+  double q = 1.0;
+  int threshold = 1, n_gen_mark = 7, evalstop = 100000;
+  double focus = 0.0;
+};
+
+std::unique_ptr<Entry> nsga2_entry() {
+  using S = Nsga2S;
+  schema::Object<S> o(
+      "NSGA-II (pagmo::nsga2): non-dominated sorting genetic algorithm for a Pareto front; the "
+      "population is a multiple of 4, and each generation's offspring are evaluated as one batch");
+  o.number("cr", &S::cr, Range{0.0, false, 1.0, true}, "crossover probability, in [0, 1)")
+      .number("eta_c", &S::eta_c, Range::between(1, 100), "distribution index of sbx crossover")
+      .number("m", &S::m, Range::unit(), "mutation probability")
+      .number("eta_m", &S::eta_m, Range::between(1, 100),
+              "distribution index of polynomial mutation");
+  PagmoAlgorithmInfo info{"nsga2", "NSGA-II, multi-objective (one batch per generation)", true, 1,
+                          1, 0};
+  info.front = true;
+  return entry<S>(std::move(info), std::move(o),
+                  [](const S&, Sizes sizes, const std::string& path, Errors& e) {
+                    if (sizes.population < 8 || sizes.population % 4 != 0)
+                      e.push_back({path + "/population",
+                                   "must be a multiple of 4 and at least 8 for nsga2 (got " +
+                                       std::to_string(sizes.population) + ")"});
+                  },
+                  [](const S& s, unsigned gen, unsigned seed) {
+                    pagmo::nsga2 a(gen, s.cr, s.eta_c, s.m, s.eta_m, seed);
+                    a.set_bfe(pagmo::bfe{pagmo::member_bfe{}});
+                    return pagmo::algorithm(std::move(a));
+                  });
+}
+
+std::unique_ptr<Entry> moead_entry() {
+  using S = MoeadS;
+  schema::Object<S> o(
+      "MOEA/D (pagmo::moead): decomposition of the front into one weighted problem per member, "
+      "with differential evolution; candidates are evaluated one at a time. With three or more "
+      "soft goals the grid weights need a population of C(H + M - 1, M - 1) for some H");
+  o.choice<std::string>("weight_generation", &S::weight_generation,
+                        {{"grid", "grid"}, {"low discrepancy", "low discrepancy"}, {"random", "random"}},
+                        "how the weight vectors are made")
+      .choice<std::string>("decomposition", &S::decomposition,
+                           {{"tchebycheff", "tchebycheff"}, {"weighted", "weighted"}, {"bi", "bi"}},
+                           "how a weight vector makes one objective of the goals")
+      .integer("neighbours", &S::neighbours, IntRange{2, kMaxPopulation},
+               "size of each weight vector's neighbourhood (less than the population)")
+      .number("CR", &S::CR, Range::unit(), "crossover probability of the DE operator")
+      .number("F", &S::F, Range::unit(), "weight of the DE operator")
+      .number("eta_m", &S::eta_m, Range::non_negative(), "distribution index of the mutation")
+      .number("realb", &S::realb, Range::unit(),
+              "chance that parents come from the neighbourhood rather than the population")
+      .integer("limit", &S::limit, IntRange{0, kMaxPopulation},
+               "most members a new candidate replaces (with preserve_diversity)")
+      .boolean("preserve_diversity", &S::preserve_diversity,
+               "whether realb and limit keep the population diverse");
+  PagmoAlgorithmInfo info{"moead", "MOEA/D, multi-objective by decomposition", false, 1, 1, 0};
+  info.front = true;
+  return entry<S>(std::move(info), std::move(o),
+                  [](const S& s, Sizes sizes, const std::string& path, Errors& e) {
+                    if (sizes.population < s.neighbours + 1)
+                      e.push_back({path + "/population",
+                                   population_text(s.neighbours + 1,
+                                                   " for moead with neighbours " +
+                                                       std::to_string(s.neighbours),
+                                                   sizes.population)});
+                  },
+                  [](const S& s, unsigned gen, unsigned seed) {
+                    return pagmo::algorithm(pagmo::moead(
+                        gen, s.weight_generation, s.decomposition,
+                        static_cast<pagmo::population::size_type>(s.neighbours), s.CR, s.F,
+                        s.eta_m, s.realb, u(s.limit), s.preserve_diversity, seed));
+                  });
+}
+
+std::unique_ptr<Entry> nspso_entry() {
+  using S = NspsoS;
+  schema::Object<S> o(
+      "NSPSO (pagmo::nspso): non-dominated sorting particle swarm for a Pareto front; the swarm "
+      "is evaluated as one batch per generation");
+  o.number("omega", &S::omega, Range::unit(), "particles' inertia weight")
+      .number("c1", &S::c1, Range::positive(), "magnitude of the force toward a particle's best")
+      .number("c2", &S::c2, Range::positive(), "magnitude of the force toward its leader")
+      .number("chi", &S::chi, Range::positive(), "velocity scaling factor")
+      .number("v_coeff", &S::v_coeff, Range::half_open_unit(),
+              "largest velocity, as a fraction of the box")
+      .integer("leader_selection_range", &S::leader_selection_range, IntRange{1, 100},
+               "percentage of the non-dominated particles leaders are drawn from")
+      .choice<std::string>("diversity_mechanism", &S::diversity_mechanism,
+                           {{"crowding distance", "crowding distance"},
+                            {"niche count", "niche count"},
+                            {"max min", "max min"}},
+                           "how leaders are ranked");
+  PagmoAlgorithmInfo info{"nspso", "NSPSO, multi-objective particle swarm (one batch per generation)",
+                          true, 1, 1, 0};
+  info.front = true;
+  return entry<S>(std::move(info), std::move(o), at_least<S>(2, "nspso"),
+                  [](const S& s, unsigned gen, unsigned seed) {
+                    pagmo::nspso a(gen, s.omega, s.c1, s.c2, s.chi, s.v_coeff,
+                                   u(s.leader_selection_range), s.diversity_mechanism, false,
+                                   seed);
+                    a.set_bfe(pagmo::bfe{pagmo::member_bfe{}});
+                    return pagmo::algorithm(std::move(a));
+                  });
+}
+
+std::unique_ptr<Entry> maco_entry() {
+  using S = MacoS;
+  schema::Object<S> o(
+      "MHACO (pagmo::maco): multi-objective hypervolume-based ant colony optimisation; the "
+      "solution archive (ker) must fit in the population, and each generation is evaluated as "
+      "one batch");
+  o.integer("ker", &S::ker, IntRange{1, kMaxPopulation}, "size of the solution archive")
+      .number("q", &S::q, Range::non_negative(), "convergence speed")
+      .integer("threshold", &S::threshold, IntRange{1, kMaxGenerations},
+               "generation from which q is lowered to 0.01 (at most `generations`)")
+      .integer("n_gen_mark", &S::n_gen_mark, IntRange{1, std::numeric_limits<int>::max()},
+               "generations over which the standard deviations shrink")
+      .integer("evalstop", &S::evalstop, IntRange{0, std::numeric_limits<int>::max()},
+               "stop after this many generations without a better ideal point (0: never)")
+      .number("focus", &S::focus, Range::non_negative(), "focus of the search (0: none)");
+  PagmoAlgorithmInfo info{"maco", "MHACO, multi-objective ant colony (one batch per generation)",
+                          true, 1, 1, 0};
+  info.front = true;
+  return entry<S>(
+      std::move(info), std::move(o),
+      [](const S& s, Sizes sizes, const std::string& path, Errors& e) {
+        if (sizes.population < s.ker)
+          e.push_back({path + "/population",
+                       population_text(s.ker, " for maco with ker " + std::to_string(s.ker),
+                                       sizes.population)});
+        if (sizes.generations > 0 && s.threshold > sizes.generations)
+          e.push_back({path + "/settings/threshold",
+                       "must be at most generations " + std::to_string(sizes.generations) +
+                           " (got " + std::to_string(s.threshold) + ")"});
+      },
+      [](const S& s, unsigned gen, unsigned seed) {
+        pagmo::maco a(gen, u(s.ker), s.q, u(s.threshold), u(s.n_gen_mark), u(s.evalstop),
+                      s.focus, false, seed);
+        a.set_bfe(pagmo::bfe{pagmo::member_bfe{}});
+        return pagmo::algorithm(std::move(a));
+      });
+}
+
 const std::vector<std::unique_ptr<Entry>>& entries() {
   static const std::vector<std::unique_ptr<Entry>> all = [] {
     std::vector<std::unique_ptr<Entry>> v;
@@ -693,6 +863,10 @@ const std::vector<std::unique_ptr<Entry>>& entries() {
     v.push_back(gaco_entry());
     v.push_back(gwo_entry());
     v.push_back(ihs_entry());
+    v.push_back(maco_entry());
+    v.push_back(moead_entry());
+    v.push_back(nsga2_entry());
+    v.push_back(nspso_entry());
     v.push_back(pso_entry());
     v.push_back(pso_gen_entry());
     v.push_back(sade_entry());
@@ -881,6 +1055,293 @@ class PagmoOptimizer final : public GenerationalOptimizer {
 };
 
 // ---------------------------------------------------------------------------------------------
+// The search for a front: pagmo's multi-objective algorithms, replayed generation by generation
+// as PagmoOptimizer replays the single-objective ones, with a log of objective vectors.
+
+// Whether candidate a is the better history point: feasible first, then (between infeasible ones)
+// the smaller violation, then the smaller first soft goal (NaN as +inf); ties keep the earlier.
+bool better_point(const ObjectiveVector& a, const ObjectiveVector& b) {
+  if (a.feasible() != b.feasible()) return a.feasible();
+  const auto v = [](double x) { return std::isnan(x) ? std::numeric_limits<double>::infinity() : x; };
+  if (!a.feasible() && v(a.violation) != v(b.violation)) return v(a.violation) < v(b.violation);
+  return v(a.values[0]) < v(b.values[0]);
+}
+
+// The fitness J of a point as the one-objective history row reads it: the constraint rule of its
+// first soft goal (1/f1) and its violation.
+double point_fitness(const ObjectiveVector& o) {
+  const double f = o.values[0];
+  const double J = !std::isfinite(f) || f < 0 ? 0.0
+                   : f == 0                   ? std::numeric_limits<double>::infinity()
+                                              : 1.0 / f;
+  return constrained_fitness(J, o.violation);
+}
+
+// Goal values at or below this count as it on the log scale (a goal that can be 0: saturation).
+constexpr double kLogFloor = 1e-300;
+
+struct FrontLink {
+  BatchFitness* fitness = nullptr;  // null: answer from the log only (checking a checkpoint)
+  const SearchSpace* space = nullptr;
+  std::size_t objectives = 2;
+  std::vector<ObjectiveVector>* log = nullptr;  // every evaluation of the run, in pagmo's order
+  std::int64_t cursor = 0;
+  std::int64_t limit = 0;
+  Decision best;
+  ObjectiveVector best_point;
+  bool has_best = false;
+
+  // What pagmo minimises for a candidate, per soft goal: log10 of the goal (the space the front's
+  // hypervolume is measured in, so that goals decades apart weigh alike; values at or below
+  // kLogFloor count as it), kDivergedObjective for one that is not finite. An infeasible
+  // candidate gets kDivergedObjective·(2 + V/(1 + V)) in every coordinate: any feasible candidate
+  // dominates it, of two infeasible ones the smaller violation V dominates, and equal violations
+  // do not dominate each other. That is constrained domination (Deb et al. 2002), written into
+  // the objectives of an unconstrained problem.
+  void objectives_of(const ObjectiveVector& o, std::vector<double>& out) const {
+    if (!o.feasible()) {
+      const double V = o.violation;
+      const double rank = std::isfinite(V) ? V / (1.0 + V) : 1.0;
+      out.insert(out.end(), objectives, kDivergedObjective * (2.0 + rank));
+      return;
+    }
+    for (std::size_t k = 0; k < objectives; ++k) {
+      const double v = o.values[k];
+      out.push_back(std::isfinite(v) ? std::log10(std::max(v, kLogFloor)) : kDivergedObjective);
+    }
+  }
+
+  // The objectives of a batch, flat (pagmo's batch layout).
+  std::vector<double> evaluate(std::vector<Decision> batch) {
+    const auto n = static_cast<std::int64_t>(batch.size());
+    if (cursor >= limit) throw GenerationEnd{};
+    if (cursor + n > limit) throw std::logic_error("a pagmo batch spans two generations");
+    for (Decision& x : batch)
+      for (std::size_t j = 0; j < x.size(); ++j) x[j] = space->clamp(j, x[j]);
+    const auto logged = static_cast<std::int64_t>(log->size());
+    const std::int64_t cached = std::clamp<std::int64_t>(logged - cursor, 0, n);
+    if (cached < n) {
+      if (!fitness) throw LogExhausted{};
+      const std::vector<Decision> fresh(batch.begin() + cached, batch.end());
+      std::vector<ObjectiveVector> F = fitness->objective_vectors(fresh);
+      if (F.size() != fresh.size())
+        throw std::logic_error("objective vectors of a wrong-sized batch");
+      for (const ObjectiveVector& f : F)
+        if (f.values.size() != objectives)
+          throw std::logic_error("an objective vector of the wrong size");
+      log->insert(log->end(), F.begin(), F.end());
+    }
+    std::vector<double> out;
+    out.reserve(static_cast<std::size_t>(n) * objectives);
+    for (std::int64_t i = 0; i < n; ++i) {
+      const ObjectiveVector& o = (*log)[static_cast<std::size_t>(cursor + i)];
+      objectives_of(o, out);
+      if (!has_best || better_point(o, best_point)) {
+        best = batch[static_cast<std::size_t>(i)];
+        best_point = o;
+        has_best = true;
+      }
+    }
+    cursor += n;
+    return out;
+  }
+};
+
+// The tuning problem of a front as a pagmo UDP: box bounds, `objectives` objectives, batches.
+class FrontUdp {
+ public:
+  FrontUdp() = default;
+  FrontUdp(std::vector<double> lower, std::vector<double> upper, std::size_t objectives,
+           FrontLink* link)
+      : lower_(std::move(lower)), upper_(std::move(upper)), objectives_(objectives), link_(link) {}
+
+  pagmo::vector_double fitness(const pagmo::vector_double& x) const {
+    return linked().evaluate({x});
+  }
+  pagmo::vector_double batch_fitness(const pagmo::vector_double& dvs) const {
+    const std::size_t d = lower_.size();
+    std::vector<Decision> batch(dvs.size() / d);
+    for (std::size_t i = 0; i < batch.size(); ++i)
+      batch[i].assign(dvs.begin() + static_cast<std::ptrdiff_t>(i * d),
+                      dvs.begin() + static_cast<std::ptrdiff_t>((i + 1) * d));
+    return linked().evaluate(std::move(batch));
+  }
+  std::pair<pagmo::vector_double, pagmo::vector_double> get_bounds() const {
+    return {lower_, upper_};
+  }
+  pagmo::vector_double::size_type get_nobj() const { return objectives_; }
+  std::string get_name() const { return "ftctune tuning problem (front)"; }
+  pagmo::thread_safety get_thread_safety() const { return pagmo::thread_safety::none; }
+
+ private:
+  FrontLink& linked() const {
+    if (!link_) throw std::logic_error("pagmo problem without a fitness");
+    return *link_;
+  }
+  std::vector<double> lower_, upper_;
+  std::size_t objectives_ = 2;
+  FrontLink* link_ = nullptr;
+};
+
+class PagmoFrontOptimizer final : public GenerationalOptimizer {
+ public:
+  PagmoFrontOptimizer(const Entry& entry, json settings, Sizes sizes, std::uint64_t seed,
+                      const SearchSpace& space, std::size_t objectives)
+      : GenerationalOptimizer(sizes.generations, seed, space),
+        entry_(entry),
+        settings_(std::move(settings)),
+        sizes_(sizes),
+        objectives_(objectives) {
+    algorithm_seed_ = seed32(rng_);
+    population_seed_ = seed32(rng_);
+  }
+
+  void initialize(BatchFitness& fitness) override {
+    log_.clear();
+    finished_ = false;
+    t_ = 0;
+    finish(replay(&fitness, 0));
+  }
+
+  void iterate(BatchFitness& fitness) override {
+    assert(t_ >= 0 && "initialize() first");
+    ++t_;
+    finish(finished_ ? Replay{evaluations_, evaluations_, best_, best_fitness_, true}
+                     : replay(&fitness, t_));
+  }
+
+  json state() const override {
+    json s = common_state("pagmo");
+    s["name"] = entry_.info().name;
+    s["finished"] = finished_;
+    s["pagmo_seeds"] = {algorithm_seed_, population_seed_};
+    json log = json::array();
+    for (const ObjectiveVector& o : log_) {
+      json row = json::array();
+      for (double v : o.values) row.push_back(json_io::json_number(v));
+      row.push_back(json_io::json_number(o.violation));
+      log.push_back(std::move(row));
+    }
+    s["objective_log"] = std::move(log);
+    return s;
+  }
+
+  void restore(const json& s) override {
+    namespace sc = state_check;
+    restore_common(s, "pagmo", 0, entry_.evaluations_until(sizes_.population, sizes_.generations),
+                   false);
+    const json& name_field = sc::member(s, "", "name");
+    if (!name_field.is_string()) sc::fail("/name", "expected the name of a pagmo algorithm");
+    const std::string name = name_field.get<std::string>();
+    if (name != entry_.info().name)
+      throw InputError("checkpoint", "/name",
+                       "is a state of pagmo's " + name + ", the job runs " + entry_.info().name);
+    finished_ = sc::boolean(sc::member(s, "", "finished"), "/finished");
+    const json& seeds = sc::array(sc::member(s, "", "pagmo_seeds"), "/pagmo_seeds", 2);
+    algorithm_seed_ =
+        static_cast<unsigned>(sc::integer(seeds[0], "/pagmo_seeds/0", 0, 0xffffffffLL));
+    population_seed_ =
+        static_cast<unsigned>(sc::integer(seeds[1], "/pagmo_seeds/1", 0, 0xffffffffLL));
+    const json& log = sc::array(sc::member(s, "", "objective_log"), "/objective_log",
+                                static_cast<std::size_t>(evaluations_));
+    log_.clear();
+    for (std::size_t i = 0; i < log.size(); ++i) {
+      const std::string p = "/objective_log/" + std::to_string(i);
+      const json& row = sc::array(log[i], p, objectives_ + 1);
+      ObjectiveVector o;
+      for (std::size_t k = 0; k < objectives_; ++k)
+        o.values.push_back(sc::fitness(row[k], p + "/" + std::to_string(k)));
+      o.violation = sc::fitness(row[objectives_], p + "/" + std::to_string(objectives_));
+      if (!(o.violation >= 0)) sc::fail(p + "/" + std::to_string(objectives_),
+                                        "expected a violation >= 0");
+      log_.push_back(std::move(o));
+    }
+    bool consistent = true;
+    try {
+      const Replay r = replay(nullptr, t_);
+      consistent = r.evaluations == evaluations_ && r.best == best_ &&
+                   r.best_fitness == best_fitness_ && r.finished == finished_;
+    } catch (const LogExhausted&) {
+      consistent = false;
+    }
+    if (!consistent)
+      throw InputError("checkpoint", "/objective_log",
+                       "does not replay to the checkpoint's best point: a state of another job, "
+                       "seed or setting, or damaged");
+  }
+
+ private:
+  struct Replay {
+    std::int64_t start = 0;
+    std::int64_t evaluations = 0;
+    Decision best;
+    double best_fitness = 0.0;
+    bool finished = false;
+  };
+
+  Replay replay(BatchFitness* fitness, int g) {
+    FrontLink link;
+    link.fitness = fitness;
+    link.space = &space_;
+    link.objectives = objectives_;
+    link.log = &log_;
+    link.limit = entry_.evaluations_until(sizes_.population, g);
+    const pagmo::problem problem{FrontUdp(space_.lower, space_.upper, objectives_, &link)};
+    pagmo::population pop(problem, pagmo::bfe{pagmo::member_bfe{}},
+                          static_cast<pagmo::population::size_type>(sizes_.population),
+                          population_seed_);
+    Replay r;
+    r.start = g == 0 ? 0 : entry_.evaluations_until(sizes_.population, g - 1);
+    if (g > 0) {
+      const pagmo::algorithm algorithm =
+          entry_.make(settings_, sizes_.generations, algorithm_seed_);
+      try {
+        algorithm.evolve(pop);
+        r.finished = true;
+      } catch (const GenerationEnd&) {
+      } catch (const std::invalid_argument& e) {
+        // pagmo refusing the job's shape (MOEA/D's grid weights for three or more goals).
+        throw InputError("job", "/tuning/algorithm",
+                         "pagmo's " + entry_.info().name + " refuses this job: " +
+                             pagmo_message(e));
+      }
+    }
+    r.start = std::min(r.start, link.cursor);
+    r.evaluations = link.cursor;
+    r.best = link.best;
+    r.best_fitness = link.has_best ? point_fitness(link.best_point) : 0.0;
+    return r;
+  }
+
+  void finish(const Replay& r) {
+    evaluations_ = r.evaluations;
+    best_ = r.best;
+    best_fitness_ = r.best_fitness;
+    finished_ = r.finished;
+    // This generation's candidates: how many met every hard goal, and how many had a soft goal
+    // that is not finite (diverged or undefined).
+    int feasible = 0, diverged = 0;
+    for (std::int64_t i = r.start; i < r.evaluations; ++i) {
+      const ObjectiveVector& o = log_[static_cast<std::size_t>(i)];
+      feasible += o.feasible() ? 1 : 0;
+      bool finite = true;
+      for (double v : o.values) finite = finite && std::isfinite(v);
+      diverged += finite ? 0 : 1;
+    }
+    record({{"generation_feasible", static_cast<double>(feasible)},
+            {"generation_diverged", static_cast<double>(diverged)}});
+  }
+
+  const Entry& entry_;
+  json settings_;
+  Sizes sizes_;
+  std::size_t objectives_;
+  unsigned algorithm_seed_ = 0, population_seed_ = 0;
+  std::vector<ObjectiveVector> log_;
+  bool finished_ = false;
+};
+
+// ---------------------------------------------------------------------------------------------
 
 std::shared_ptr<const schema::Object<Sizes>> sizes_shape() {
   static const auto shape = std::make_shared<const schema::Object<Sizes>>(
@@ -911,6 +1372,7 @@ class PagmoSettings final : public AlgorithmSettings {
     return entry_->evaluations_until(sizes_.population, sizes_.generations);
   }
   std::vector<std::string> history_columns() const override {
+    if (entry_->info().front) return {"generation_feasible", "generation_diverged"};
     return {"generation_mean_objective", "generation_diverged"};
   }
   std::vector<FieldError> validate(const std::string& path) const override {
@@ -920,7 +1382,19 @@ class PagmoSettings final : public AlgorithmSettings {
     return errs;
   }
   std::unique_ptr<Optimizer> make(std::uint64_t seed, const SearchSpace& space) const override {
+    if (entry_->info().front)
+      throw InputError("job", "/tuning/algorithm/name",
+                       "pagmo's " + entry_->info().name +
+                           " searches a Pareto front: give the job two or more soft goals "
+                           "(\"minimize\": true), or name an algorithm of one objective");
     return std::make_unique<PagmoOptimizer>(*entry_, settings_, sizes_, seed, space);
+  }
+  bool searches_front() const override { return entry_->info().front; }
+  std::unique_ptr<Optimizer> make_front(std::uint64_t seed, const SearchSpace& space,
+                                        std::size_t objectives) const override {
+    if (!entry_->info().front) return AlgorithmSettings::make_front(seed, space, objectives);
+    return std::make_unique<PagmoFrontOptimizer>(*entry_, settings_, sizes_, seed, space,
+                                                 objectives);
   }
   AlgorithmPtr with_budget(std::int64_t budget) const override {
     const std::int64_t per = entry_->per_generation(sizes_.population);
@@ -1017,7 +1491,9 @@ const std::vector<PagmoAlgorithmInfo>& module_algorithms() {
 AlgorithmInfo module_info() {
   AlgorithmInfo info;
   info.type = "pagmo";
-  info.description = "a single-objective algorithm of pagmo2 (" + known_names() + ")";
+  info.description = "an algorithm of pagmo2 (" + known_names() +
+                     "; nsga2, moead, nspso and maco search the Pareto front of two or more soft "
+                     "goals)";
   info.parse = parse_pagmo;
   info.schema = pagmo_schema;
   return info;

@@ -183,11 +183,97 @@ void evaluation_section(const fs::path& run_dir, const Job& job, std::ostringstr
       << base64(*png) << "\"><figcaption>evaluation/evaluation.png</figcaption></figure>\n";
 }
 
+// The Pareto front (front.json): what it is, a table of its points with the picked one marked
+// and the compared controllers under them, and its figures.
+void front_section(const fs::path& run_dir, const Front& front,
+                   const std::vector<Figure>& figures, std::ostringstream& h) {
+  const std::size_t G = front.goals.size();
+  const auto value = [](double v) { return detail::format_number(v, "%.6g"); };
+  std::vector<std::string> param_names;
+  for (const auto& [name, v] : front.points.front().parameters) param_names.push_back(name);
+  // Per point, the other points it cannot be told apart from.
+  std::vector<std::vector<std::size_t>> twins(front.points.size());
+  std::size_t twinned = 0;
+  for (std::size_t a = 0; a < front.points.size(); ++a)
+    for (std::size_t b = 0; b < front.points.size(); ++b)
+      if (a != b && within_noise(front, a, b)) twins[a].push_back(b);
+  for (const auto& t : twins) twinned += t.empty() ? 0 : 1;
+  h << "<h2>Pareto front</h2>\n<p class=\"front\">The run kept " << front.points.size()
+    << " tuned point(s) that no other candidate it evaluated beats on every soft goal: the "
+       "trade-offs this search found, not a proven optimum. Its hypervolume, on log10 of each "
+       "soft goal against the reference point (";
+  for (std::size_t k = 0; k < front.reference_point.size(); ++k)
+    h << (k ? ", " : "") << value(front.reference_point[k]);
+  h << "), is " << value(front.hypervolume) << ".";
+  if (front.picked)
+    h << " gains.json holds point #" << *front.picked << ", picked by the rule <code>"
+      << html_escape(front.rule) << "</code>; <code>ftctune pick</code> writes another.";
+  h << " The noise floor is each goal's relative spread over a point's perturbed re-runs, where "
+       "the run measured it (\u2013 elsewhere); ";
+  if (twinned)
+    h << twinned << " point(s) lie within another's noise floor on every soft goal (marked "
+                    "below): their differences are noise, not a trade-off.";
+  else
+    h << "no two points are known to lie within each other's noise floor on every soft goal.";
+  h << "</p>\n<table class=\"front\"><tr><th>#</th>";
+  for (const std::string& n : param_names) h << "<th>" << html_escape(n) << "</th>";
+  for (const FrontGoal& g : front.goals)
+    h << "<th>" << html_escape(g.label) << " [" << html_escape(g.unit) << "]"
+      << (g.soft ? " (min)" : " ≤ " + value(g.at_most)) << "</th>";
+  h << "<th>feasible</th><th>violation</th>";
+  for (const FrontGoal& g : front.goals)
+    h << "<th>noise floor " << html_escape(g.label) << "</th>";
+  h << "<th>trial</th><th>note</th></tr>\n";
+  for (std::size_t i = 0; i < front.points.size(); ++i) {
+    const FrontPoint& p = front.points[i];
+    const bool picked = front.picked && *front.picked == i;
+    h << "<tr" << (picked ? " class=\"picked\"" : "") << "><td>" << i << (picked ? " ★" : "")
+      << "</td>";
+    for (const std::string& n : param_names) {
+      double v = NAN;
+      for (const auto& [name, x] : p.parameters)
+        if (name == n) v = x;
+      h << "<td>" << value(v) << "</td>";
+    }
+    for (std::size_t g = 0; g < G; ++g) h << "<td>" << value(p.goals[g]) << "</td>";
+    h << "<td>" << (p.feasible ? "yes" : "no") << "</td><td>" << value(p.violation) << "</td>";
+    for (std::size_t g = 0; g < G; ++g)
+      h << "<td>"
+        << (std::isfinite(p.noise_floor[g])
+                ? detail::format_number(100 * p.noise_floor[g], "%.2g") + " %"
+                : std::string("–"))
+        << "</td>";
+    h << "<td>" << (p.trial >= 0 ? std::to_string(p.trial) : std::string("–")) << "</td><td>";
+    std::string note = picked ? "picked (" + front.rule + ")" : "";
+    if (!twins[i].empty()) {
+      std::string list;
+      for (std::size_t t : twins[i]) list += (list.empty() ? "#" : ", #") + std::to_string(t);
+      note += (note.empty() ? "" : "; ") + std::string("within the noise floor of ") + list;
+    }
+    h << html_escape(note) << "</td></tr>\n";
+  }
+  for (const FrontCompared& c : front.compared) {
+    h << "<tr class=\"compared\"><td>" << html_escape(c.label)
+      << (c.role == "baseline" ? " (job's gains)" : "") << "</td>";
+    for (std::size_t k = 0; k < param_names.size(); ++k) h << "<td></td>";
+    for (std::size_t g = 0; g < G; ++g) h << "<td>" << value(c.goals[g]) << "</td>";
+    h << "<td>" << (c.feasible ? "yes" : "no") << "</td><td></td>";
+    for (std::size_t g = 0; g < G; ++g) h << "<td></td>";
+    h << "<td></td><td>compared</td></tr>\n";
+  }
+  h << "</table>\n";
+  for (const Figure& f : figures)
+    h << "<figure><img alt=\"" << html_escape(f.title) << "\" src=\"data:image/png;base64,"
+      << base64(figure_bytes(run_dir / f.file)) << "\"><figcaption>" << html_escape(f.caption)
+      << "</figcaption></figure>\n";
+}
+
 }  // namespace
 
 std::string report_html(const fs::path& run_dir, const Job& job, const std::string& job_text,
                         const json& gains, const json& comparison, const json& run,
-                        const std::vector<Figure>& figures) {
+                        const std::vector<Figure>& figures, const Front* front,
+                        const std::vector<Figure>& front_figures) {
   const std::size_t S = job.scenarios.size();
   std::ostringstream h;
   const std::string title = "ftctune report: " + job.name;
@@ -200,7 +286,8 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
        "text-align:right}th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}"
        ".settings td{text-align:left;font-family:monospace}"
        "img{max-width:100%;border:1px solid #eee}pre{background:#f7f7f7;padding:1em;overflow:auto}"
-       "figcaption{color:#555;margin-bottom:2em}</style></head><body>\n";
+       "figcaption{color:#555;margin-bottom:2em}tr.picked td{background:#fff4c2;font-weight:bold}"
+       "tr.compared td{background:#f7f7f7}</style></head><body>\n";
   h << "<h1>" << html_escape(title) << "</h1>\n";
   h << "<h2>Tuned gains</h2>\n<table><tr><th>parameter</th><th>tuned</th><th>job's "
        "value</th></tr>\n";
@@ -226,6 +313,8 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
         h << "<li><b>Warning:</b> " << html_escape(w.get<std::string>()) << "</li>\n";
     h << "</ul>\n";
   }
+
+  if (front) front_section(run_dir, *front, front_figures, h);
 
   // comparison.md's noise-floor sentence and, for an ensemble job, its robust table.
   if (comparison.contains("noise_floor") && comparison["noise_floor"].is_string())

@@ -6,6 +6,7 @@
 
 #include "ftc/tune/io/files.hpp"
 #include "report/figures.hpp"
+#include "report/front.hpp"
 #include "report/html.hpp"
 
 namespace ftc::tune {
@@ -70,20 +71,41 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
   fs::create_directories(run_dir / "figures");
   const std::vector<report_detail::Figure> figures =
       report_detail::draw_run_figures(run_dir, job, gains, series[0], format);
+  // A run with two or more soft goals: its front's scatter and hypervolume.
+  const std::optional<report_detail::Front> front =
+      report_detail::read_front(run_dir, gains, job.scenario_count(), [&] {
+        std::vector<std::string> names;
+        if (job.tuning)
+          for (const ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
+        return names;
+      }());
+  std::vector<report_detail::Figure> front_figures;
+  if (front) {
+    front_figures = report_detail::draw_front_figures(run_dir, *front, format);
+  } else {
+    std::error_code ec;
+    fs::remove(run_dir / "figures" / "front.gp", ec);  // of an earlier run's front
+  }
   // Once the new figures are drawn: a figure of an earlier report (another format, another
   // scenario count) must not sit beside them as if it were current.
   std::set<fs::path> current;
   for (const report_detail::Figure& f : figures) current.insert(fs::absolute(run_dir / f.file));
+  for (const report_detail::Figure& f : front_figures)
+    current.insert(fs::absolute(run_dir / f.file));
   for (const auto& e : fs::directory_iterator(run_dir / "figures"))
     if (e.is_regular_file() && (e.path().extension() == ".png" || e.path().extension() == ".svg") &&
         !current.count(fs::absolute(e.path())))
       fs::remove(e.path());
   ReportResult result;
   for (const report_detail::Figure& f : figures) result.figures.push_back(run_dir / f.file);
+  for (const report_detail::Figure& f : front_figures)
+    result.figures.push_back(run_dir / f.file);
   if (!options.html) return result;
   result.html = run_dir / "report.html";
   write_file_atomic(result.html, report_detail::report_html(run_dir, job, job_text, gains,
-                                                            comparison, run, figures));
+                                                            comparison, run, figures,
+                                                            front ? &*front : nullptr,
+                                                            front_figures));
   return result;
 }
 

@@ -453,6 +453,7 @@ function jobView(main, id) {
   const trialBody = el('tbody');
   const comparison = el('div', {id: 'comparison'});
   const figures = el('div', {id: 'figures'});
+  const frontBox = el('div', {id: 'front'});
   const downloads = el('div', {class: 'toolbar', id: 'downloads'});
   const message = el('div');
 
@@ -467,6 +468,7 @@ function jobView(main, id) {
     el('div', {class: 'toolbar'}, trialFilter, trialCount),
     el('div', {class: 'scroll'}, el('table', {id: 'trials-table'}, trialHead, trialBody)),
     el('h3', {text: 'Comparison'}), comparison,
+    frontBox,
     figures,
     el('h3', {text: 'Downloads'}), downloads);
 
@@ -655,8 +657,56 @@ function jobView(main, id) {
           text: fmt(k.scenarios && k.scenarios[i] ? k.scenarios[i][m] : null)})))))))));
   }
 
+  // The Pareto front of a job with two or more soft goals (front.json): its first two soft goals,
+  // the picked point circled, the compared controllers marked. Log axes where every value is
+  // positive.
+  let frontChart = null;
+  function renderFront(front) {
+    clear(frontBox);
+    if (frontChart) { frontChart.destroy(); frontChart = null; }
+    const soft = front.goals.map((g, i) => (g.minimize ? i : -1)).filter((i) => i >= 0);
+    if (soft.length < 2) return;
+    const [a, b] = soft;
+    const name = (g) => g.metric + (g.aggregate ? ' (' + g.aggregate + ')' : '');
+    const finite = (v) => typeof v === 'number' && Number.isFinite(v);
+    const drawable = (g) => finite(g[a]) && finite(g[b]);
+    const points = front.points.filter((p) => drawable(p.goals)).map((p) => ({x: p.goals[a], y: p.goals[b]}));
+    const all = points.concat(front.compared.filter((c) => drawable(c.goals)).map((c) => ({x: c.goals[a], y: c.goals[b]})));
+    const logX = all.every((p) => p.x > 0), logY = all.every((p) => p.y > 0);
+    const canvas = el('canvas', {id: 'front-chart', 'data-points': points.length});
+    frontBox.append(el('h3', {text: 'Pareto front: ' + front.points.length + ' tuned points' +
+                                  (soft.length > 2 ? ' (first two of ' + soft.length + ' soft goals)' : '') +
+                                  ', hypervolume ' + fmt(front.hypervolume, 4)}),
+                    el('div', {class: 'chart-box'}, canvas));
+    const picked = front.points[front.picked.index];
+    const datasets = [{label: 'front', data: points, backgroundColor: '#440154', pointRadius: 3}];
+    if (picked && drawable(picked.goals))
+      datasets.push({label: 'picked (' + front.picked.rule + ')', data: [{x: picked.goals[a], y: picked.goals[b]}],
+                     pointRadius: 9, pointStyle: 'circle', backgroundColor: 'rgba(0,0,0,0)',
+                     borderColor: '#21918c', borderWidth: 2});
+    const styles = ['rect', 'triangle', 'rectRot', 'star', 'crossRot'];
+    front.compared.forEach((c, i) => {
+      if (drawable(c.goals))
+        datasets.push({label: (c.role === 'baseline' ? "job's gains: " : '') + c.label + (c.feasible ? '' : ' (infeasible)'),
+                       data: [{x: c.goals[a], y: c.goals[b]}], pointStyle: styles[i % styles.length],
+                       pointRadius: 7, backgroundColor: colour(i + 1, 1, front.compared.length + 1)});
+    });
+    chartJs().then((Chart) => {
+      if (!canvas.isConnected) return;
+      frontChart = new Chart(canvas, {
+        type: 'scatter', data: {datasets},
+        options: {animation: false, maintainAspectRatio: false, parsing: false,
+                  scales: {x: {type: logX ? 'logarithmic' : 'linear', title: {display: true, text: name(front.goals[a])}},
+                           y: {type: logY ? 'logarithmic' : 'linear', title: {display: true, text: name(front.goals[b])}}},
+                  plugins: {legend: {display: true, position: 'bottom'}}},
+      });
+      charts.push(frontChart);
+    }).catch((e) => showError(message, e));
+  }
+
   async function loadResults() {
     clear(figures);
+    clear(frontBox);
     clear(downloads);
     const finished = isFinished(job.status);
     let c = null, gains = null;
@@ -678,6 +728,8 @@ function jobView(main, id) {
     if (!c) return;
     try {
       const list = await apiJson('/v1/jobs/' + id + '/files');
+      if (list.files.some((f) => f.name === 'front.json'))
+        renderFront(await apiJson('/v1/jobs/' + id + '/files/front.json'));
       const images = list.files.filter((f) => /\.(png|svg)$/.test(f.name));
       if (images.length) figures.appendChild(el('h3', {text: 'Figures'}));
       for (const f of images) {

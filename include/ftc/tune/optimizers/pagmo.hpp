@@ -1,6 +1,5 @@
 #pragma once
-// The single-objective algorithms of pagmo2 as ftctune optimisers (job: tuning.algorithm with
-// "type": "pagmo"):
+// The algorithms of pagmo2 as ftctune optimisers (job: tuning.algorithm with "type": "pagmo"):
 //
 //   {"type": "pagmo", "name": "pso_gen", "population": 10, "generations": 10,
 //    "settings": {"omega": 0.7298, ...}}
@@ -13,6 +12,14 @@
 // run (replayed from the run's log of fitness values, see tuner/optimizers/pagmo.cpp), so
 // progress lines, history rows and per-iteration checkpoints work as for the Bat algorithm.
 // pagmo's algorithm and population are seeded from the run's seed; the checkpoint is the log.
+//
+// For a job with two or more soft goals the multi-objective algorithms (nsga2, moead, nspso, maco
+// = MHACO) search the front: pagmo minimises log10 of each soft goal (the space the front's
+// hypervolume is measured in), kDivergedObjective for a goal that is not finite. They take no
+// constraints, so hard goals are constrained domination (Deb et al. 2002) written into the
+// objectives: an infeasible candidate gets kDivergedObjective·(2 + V/(1 + V)) in every
+// coordinate, which any feasible candidate dominates and which orders infeasible ones by their
+// violation V. The checkpoint is the log of objective vectors.
 //
 // pagmo and Boost stay inside tuner/optimizers/pagmo.cpp: nothing here includes them.
 #include <cstdint>
@@ -37,6 +44,9 @@ struct PagmoAlgorithmInfo {
   // Evaluations per generation: population × per_member + fixed.
   int per_member = 1;
   int fixed = 0;
+  // A multi-objective algorithm (NSGA-II, MOEA/D, NSPSO, MHACO): it searches the Pareto front of
+  // a job with two or more soft goals, and only that.
+  bool front = false;
 };
 
 // The supported algorithms, sorted by name.

@@ -1,0 +1,587 @@
+#include "report/front.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/input_error.hpp"
+#include "ftc/sim/metrics_record.hpp"
+#include "ftc/tune/io/files.hpp"
+#include "io/decimal.hpp"
+#include "io/text.hpp"
+#include "report/gnuplot.hpp"
+
+namespace ftc::tune::report_detail {
+
+namespace fs = std::filesystem;
+using json_io::json_number_or;
+using nlohmann::json;
+using plot::gp;
+
+namespace {
+
+std::string num(double v) {
+  char buf[48];
+  return std::string(buf, detail::write_g9(buf, v));
+}
+
+const sim::MetricField* metric_field(const std::string& name) {
+  for (const sim::MetricField& f : sim::kMetricFields)
+    if (f.name == name) return &f;
+  return nullptr;
+}
+
+// Measured over the whole run, not in a window (GoalConfig's windowed()).
+bool whole_run(const std::string& metric) {
+  return metric == "control_tv" || metric == "peak_error_after_fault";
+}
+
+// Checks of front.json, each failure an InputError at its JSON path.
+struct Reader {
+  const std::string& file;
+
+  [[noreturn]] void fail(const std::string& path, const std::string& message) const {
+    throw InputError(file, path, message);
+  }
+  const json& member(const json& o, const char* key, const std::string& path) const {
+    if (!o.is_object()) fail(path, "expected an object");
+    if (!o.contains(key)) fail(path + "/" + key, "is missing");
+    return o[key];
+  }
+  const json& array(const json& o, const char* key, const std::string& path) const {
+    const json& a = member(o, key, path);
+    if (!a.is_array()) fail(path + "/" + key, "expected an array");
+    return a;
+  }
+  // A number; null is a value that does not exist or a diverged run's, read as `if_null`.
+  double number(const json& v, const std::string& path, double if_null) const {
+    if (v.is_null()) return if_null;
+    if (!v.is_number()) fail(path, "expected a number or null");
+    return v.get<double>();
+  }
+  std::vector<double> numbers(const json& a, const std::string& path, std::size_t count,
+                              double if_null) const {
+    if (!a.is_array()) fail(path, "expected an array");
+    if (a.size() != count)
+      fail(path, "has " + std::to_string(a.size()) + " values; expected " + std::to_string(count));
+    std::vector<double> v;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      v.push_back(number(a[i], path + "/" + std::to_string(i), if_null));
+    return v;
+  }
+  bool boolean(const json& o, const char* key, const std::string& path) const {
+    const json& b = member(o, key, path);
+    if (!b.is_boolean()) fail(path + "/" + key, "expected true or false");
+    return b.get<bool>();
+  }
+};
+
+}  // namespace
+
+std::string goal_label(const json& goal, std::size_t scenarios) {
+  const std::string metric = goal.value("metric", "");
+  const sim::MetricField* f = metric_field(metric);
+  std::string value = f ? sim::plain_label(*f) : metric;
+  if (!whole_run(metric)) {
+    const auto seconds = [](double t) { return detail::format_number(t, "%.6g") + " s"; };
+    const json w = goal.value("window", json::array({0, nullptr}));
+    const double t0 = w.is_array() && w.size() == 2 ? json_number_or(w[0], 0) : 0;
+    const double t1 =
+        w.is_array() && w.size() == 2 ? json_number_or(w[1], INFINITY) : INFINITY;
+    std::string window;
+    if (goal.value("window_from", "start") == "first_fault")
+      window = (t0 == 0 ? std::string("first fault") : "first fault + " + seconds(t0)) + ", " +
+               (std::isfinite(t1) ? "+" + seconds(t1) : std::string("end"));
+    else
+      window = seconds(t0) + ", " + (std::isfinite(t1) ? seconds(t1) : std::string("end"));
+    value += "[" + window + "]";
+  }
+  if (scenarios <= 1) return value;
+  const std::string a = goal.value("aggregate", "mean");
+  std::string aggregate = a;
+  if (a == "quantile")
+    aggregate = "quantile" + detail::format_number(json_number_or(goal.value("q", json(0.9)), 0.9),
+                                                   "%.3g");
+  else if (a == "cvar")
+    aggregate = "CVaR" + detail::format_number(
+                             json_number_or(goal.value("alpha", json(0.9)), 0.9), "%.3g");
+  return aggregate + " of " + value + " over " + std::to_string(scenarios) + " scenarios";
+}
+
+Front parse_front(const std::string& text, const std::string& file, std::size_t scenarios) {
+  const Reader r{file};
+  const json j = json::parse(text, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) r.fail("", "is not a JSON object (damaged output?)");
+  if (j.value("schema", json()) != kFrontSchema)
+    r.fail("/schema", std::string("expected \"") + kFrontSchema + "\"");
+  Front front;
+  const json& goals = r.array(j, "goals", "");
+  for (std::size_t i = 0; i < goals.size(); ++i) {
+    const std::string p = "/goals/" + std::to_string(i);
+    const json& g = goals[i];
+    const json& metric = r.member(g, "metric", p);
+    if (!metric.is_string() || !metric_field(metric.get<std::string>()))
+      r.fail(p + "/metric", "is not a metric of the metrics record");
+    FrontGoal goal;
+    goal.metric = metric.get<std::string>();
+    goal.soft = g.value("minimize", false) == true;
+    if (!goal.soft) {
+      goal.at_most = r.number(r.member(g, "at_most", p), p + "/at_most", NAN);
+      if (!(goal.at_most > 0)) r.fail(p + "/at_most", "expected a limit > 0");
+    } else {
+      front.soft.push_back(i);
+    }
+    goal.label = goal_label(g, scenarios);
+    std::string unit(metric_field(goal.metric)->unit);
+    if (unit.rfind("the ", 0) == 0) unit.erase(0, 4);  // "the command's unit" -> "command's unit"
+    goal.unit = unit;
+    front.goals.push_back(std::move(goal));
+  }
+  const std::size_t G = front.goals.size(), S = front.soft.size();
+  if (S < 2) r.fail("/goals", "a front needs two or more soft goals");
+  front.reference_point = r.numbers(r.member(j, "reference_point", ""), "/reference_point", S, NAN);
+  for (std::size_t k = 0; k < S; ++k)
+    if (!std::isfinite(front.reference_point[k]))
+      r.fail("/reference_point/" + std::to_string(k), "expected a number");
+  front.hypervolume = r.number(r.member(j, "hypervolume", ""), "/hypervolume", NAN);
+
+  const json& points = r.array(j, "points", "");
+  const nlohmann::ordered_json ordered = nlohmann::ordered_json::parse(text, nullptr, false);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::string p = "/points/" + std::to_string(i);
+    const json& pt = points[i];
+    FrontPoint point;
+    const json& params = r.member(pt, "parameters", p);
+    if (!params.is_object()) r.fail(p + "/parameters", "expected an object");
+    // In the file's order (the job's), which json's sorted keys would lose.
+    for (const auto& [key, v] : ordered["points"][i]["parameters"].items())
+      point.parameters.emplace_back(key, r.number(params[key], p + "/parameters/" + key, NAN));
+    point.goals = r.numbers(r.member(pt, "goals", p), p + "/goals", G, INFINITY);
+    point.feasible = r.boolean(pt, "feasible", p);
+    point.violation = pt.contains("violation")
+                          ? r.number(pt["violation"], p + "/violation", INFINITY)
+                          : 0.0;
+    point.noise_floor = pt.contains("noise_floor")
+                            ? r.numbers(pt["noise_floor"], p + "/noise_floor", G, NAN)
+                            : std::vector<double>(G, NAN);
+    if (pt.contains("within_noise_of")) {
+      long long k = -1;
+      if (!json_io::json_to_int(pt["within_noise_of"], k) || k < 0 ||
+          static_cast<std::size_t>(k) >= points.size() || static_cast<std::size_t>(k) == i)
+        r.fail(p + "/within_noise_of", "is not the index of another point");
+      point.within_noise_of = static_cast<std::size_t>(k);
+    }
+    if (pt.contains("trial")) {
+      long long t = 0;
+      if (!json_io::json_to_int(pt["trial"], t) || t < 0)
+        r.fail(p + "/trial", "expected a row index ≥ 0");
+      point.trial = t;
+    }
+    front.points.push_back(std::move(point));
+  }
+  if (front.points.empty()) r.fail("/points", "holds no point");
+  if (j.contains("picked")) {
+    const json& picked = j["picked"];
+    long long index = -1;
+    if (!json_io::json_to_int(r.member(picked, "index", "/picked"), index) || index < 0 ||
+        static_cast<std::size_t>(index) >= front.points.size())
+      r.fail("/picked/index", "is not the index of a point");
+    front.picked = static_cast<std::size_t>(index);
+    const json& rule = r.member(picked, "rule", "/picked");
+    if (!rule.is_string()) r.fail("/picked/rule", "expected a string");
+    front.rule = rule.get<std::string>();
+  }
+  if (j.contains("compared")) {
+    if (!j["compared"].is_array()) r.fail("/compared", "expected an array");
+    for (std::size_t i = 0; i < j["compared"].size(); ++i) {
+      const std::string p = "/compared/" + std::to_string(i);
+      const json& c = j["compared"][i];
+      FrontCompared compared;
+      const json& label = r.member(c, "label", p);
+      if (!label.is_string()) r.fail(p + "/label", "expected a string");
+      compared.label = label.get<std::string>();
+      compared.role = c.value("role", "compare");
+      compared.goals = r.numbers(r.member(c, "goals", p), p + "/goals", G, INFINITY);
+      compared.feasible = r.boolean(c, "feasible", p);
+      front.compared.push_back(std::move(compared));
+    }
+  }
+  return front;
+}
+
+std::optional<Front> read_front(const fs::path& run_dir, const json& gains, std::size_t scenarios,
+                                const std::vector<std::string>& parameter_order) {
+  const fs::path file = run_dir / "front.json";
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return std::nullopt;
+  const std::optional<std::string> text = read_file(file);
+  if (!text) throw InputError(file.string(), "", "cannot be read");
+  const json j = json::parse(*text, nullptr, false);
+  const std::string own = gains.value(json::json_pointer("/job/sha256"), json("")).is_string()
+                              ? gains.value(json::json_pointer("/job/sha256"), json("")).get<std::string>()
+                              : "";
+  if (j.is_object() && j.value("job_sha256", json("")) != own) return std::nullopt;
+  Front front = parse_front(*text, file.string(), scenarios);
+  for (FrontPoint& p : front.points)
+    std::stable_sort(p.parameters.begin(), p.parameters.end(), [&](const auto& a, const auto& b) {
+      const auto rank = [&](const std::string& name) {
+        return static_cast<std::size_t>(
+            std::find(parameter_order.begin(), parameter_order.end(), name) -
+            parameter_order.begin());
+      };
+      return rank(a.first) < rank(b.first);
+    });
+  return front;
+}
+
+bool within_noise(const Front& front, std::size_t a, std::size_t b) {
+  const FrontPoint& p = front.points.at(a);
+  const FrontPoint& q = front.points.at(b);
+  if (p.within_noise_of == b || q.within_noise_of == a) return true;
+  for (std::size_t g : front.soft) {
+    const double u = p.goals[g], v = q.goals[g], fu = p.noise_floor[g], fv = q.noise_floor[g];
+    if (!std::isfinite(u) || !std::isfinite(v) || !std::isfinite(fu) || !std::isfinite(fv))
+      return false;
+    if (std::fabs(u - v) > 0.5 * (fu * std::fabs(u) + fv * std::fabs(v))) return false;
+  }
+  return true;
+}
+
+namespace {
+
+// A goal's column of the points and the compared controllers, and whether a log axis can show it.
+bool log_axis(const Front& front, std::size_t g) {
+  for (const FrontPoint& p : front.points)
+    if (std::isfinite(p.goals[g]) && !(p.goals[g] > 0)) return false;
+  for (const FrontCompared& c : front.compared)
+    if (std::isfinite(c.goals[g]) && !(c.goals[g] > 0)) return false;
+  return true;
+}
+
+// The noise band of value v with relative spread f: v·(1 ± f/2), kept above a tenth of v on a
+// log axis.
+std::pair<double, double> band(double v, double f, bool log) {
+  if (!std::isfinite(f)) return {v, v};
+  double lo = v - 0.5 * f * std::fabs(v), hi = v + 0.5 * f * std::fabs(v);
+  if (log) lo = std::max(lo, 0.1 * v);
+  return {lo, hi};
+}
+
+// The iterations and the hypervolume column of history.csv.
+std::vector<std::pair<double, double>> hypervolume_history(const fs::path& file) {
+  const std::optional<std::string> text = read_file(file);
+  if (!text) throw InputError(file.string(), "", "cannot be read");
+  std::istringstream in(*text);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  {
+    std::istringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) header.push_back(cell);
+  }
+  const auto at = std::find(header.begin(), header.end(), "hypervolume");
+  if (at == header.end())
+    throw InputError(file.string(), "",
+                     "has no hypervolume column, which a run with a front writes (damaged "
+                     "output?)");
+  const std::size_t col = static_cast<std::size_t>(at - header.begin());
+  std::vector<std::pair<double, double>> rows;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    std::vector<std::string> cells;
+    std::size_t from = 0;
+    for (;;) {
+      const std::size_t comma = line.find(',', from);
+      cells.push_back(line.substr(from, comma == std::string::npos ? comma : comma - from));
+      if (comma == std::string::npos) break;
+      from = comma + 1;
+    }
+    if (cells.size() != header.size())
+      throw InputError(file.string(), "", "has a row of " + std::to_string(cells.size()) +
+                                              " cells under a header of " +
+                                              std::to_string(header.size()));
+    const auto parse = [&](const std::string& c) {
+      double v = NAN;
+      if (c.empty()) return v;
+      const std::from_chars_result r = std::from_chars(c.data(), c.data() + c.size(), v);
+      if (r.ec != std::errc() || r.ptr != c.data() + c.size())
+        throw InputError(file.string(), "", "has a cell that is not a number: " + c);
+      return v;
+    };
+    const double it = parse(cells[0]), hv = parse(cells[col]);
+    if (std::isfinite(it) && std::isfinite(hv)) rows.emplace_back(it, hv);
+  }
+  if (rows.empty())
+    throw InputError(file.string(), "", "has no hypervolume value in any iteration");
+  return rows;
+}
+
+std::string axis_label(const FrontGoal& g) { return g.label + " [" + g.unit + "]"; }
+
+// One axis of a panel: it spans the front's points, and the compared controllers that lie within
+// a decade of them (on a linear axis, within the front's span); one farther off would squeeze the
+// front into a corner, so it is drawn at the edge and labelled with its value. In log10 on a log
+// axis.
+struct Axis {
+  bool log = true;
+  double lo = 0, hi = 1;  // the drawn range (log10 on a log axis)
+  double to(double v) const { return log ? std::log10(v) : v; }
+  double from(double t) const { return log ? std::pow(10.0, t) : t; }
+  bool inside(double v) const { return to(v) >= lo && to(v) <= hi; }
+  double clamp(double v) const { return from(std::clamp(to(v), lo, hi)); }
+  std::string range() const { return "[" + num(from(lo)) + ":" + num(from(hi)) + "]"; }
+};
+
+// Tics of a log axis: gnuplot labels only powers of ten, none at all on a range under a decade,
+// so a narrow range gets round values (1, 2, 5 × 10^k, or finer) labelled.
+std::string log_tics(const char* axis, const Axis& a) {
+  if (!a.log || a.hi - a.lo > 2.5) return std::string("set ") + axis + "tics autofreq\n";
+  const std::vector<std::vector<double>> steps = {
+      {1, 2, 5}, {1, 1.5, 2, 3, 5, 7}, {1, 1.2, 1.5, 2, 2.5, 3, 4, 5, 6, 7, 8, 9}};
+  std::vector<double> tics;
+  for (const std::vector<double>& mantissas : steps) {
+    tics.clear();
+    for (int k = static_cast<int>(std::floor(a.lo)); k <= static_cast<int>(std::ceil(a.hi)); ++k)
+      for (double m : mantissas) {
+        const double v = m * std::pow(10.0, k);
+        if (std::log10(v) >= a.lo && std::log10(v) <= a.hi) tics.push_back(v);
+      }
+    if (tics.size() >= 3) break;
+  }
+  std::string s = std::string("set ") + axis + "tics (";
+  for (std::size_t i = 0; i < tics.size(); ++i)
+    s += (i ? ", '" : "'") + detail::format_number(tics[i], "%g") + "' " + num(tics[i]);
+  return s + ")\n";
+}
+
+Axis axis_of(const Front& front, std::size_t g, bool log) {
+  Axis a;
+  a.log = log;
+  double lo = INFINITY, hi = -INFINITY;
+  for (const FrontPoint& p : front.points)
+    if (std::isfinite(p.goals[g]) && (!log || p.goals[g] > 0)) {
+      lo = std::min(lo, a.to(p.goals[g]));
+      hi = std::max(hi, a.to(p.goals[g]));
+    }
+  if (!(lo <= hi)) return a;
+  const double reach = log ? 1.0 : std::max(hi - lo, 1e-12 + 0.1 * std::fabs(hi));
+  const double flo = lo, fhi = hi;
+  for (const FrontCompared& c : front.compared)
+    if (std::isfinite(c.goals[g]) && (!log || c.goals[g] > 0)) {
+      const double t = a.to(c.goals[g]);
+      if (t >= flo - reach && t <= fhi + reach) {
+        lo = std::min(lo, t);
+        hi = std::max(hi, t);
+      }
+    }
+  const double pad = log ? std::max(0.1, 0.08 * (hi - lo))
+                         : (hi > lo ? 0.08 * (hi - lo) : std::max(1e-12, 0.1 * std::fabs(hi)));
+  a.lo = lo - pad;
+  a.hi = hi + pad;
+  if (!log && lo >= 0 && a.lo < 0) a.lo = 0;  // a goal is not negative
+  return a;
+}
+
+// What the soft goals' log10 space and its reference point are, in words.
+std::string reference_text(const Front& front) {
+  std::string s;
+  for (std::size_t k = 0; k < front.soft.size(); ++k) {
+    const FrontGoal& g = front.goals[front.soft[k]];
+    s += (k ? "; " : "") + g.label + " = 10^" + detail::format_number(front.reference_point[k]) +
+         " = " + detail::format_number(std::pow(10.0, front.reference_point[k])) + " " + g.unit;
+  }
+  return s;
+}
+
+}  // namespace
+
+std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& front,
+                                       FigureFormat fmt) {
+  const std::string ext = plot::extension(fmt);
+  const std::size_t S = front.soft.size();
+  std::ostringstream g;
+  g << plot::styles(0);
+  int blocks = 0;
+  const auto block = [&](const std::string& rows) {
+    const std::string name = "$d" + std::to_string(++blocks);
+    g << name << " << EOD\n" << rows << "EOD\n";
+    return name;
+  };
+
+  // The pairwise scatter: one panel per pair of soft goals.
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t a = 0; a < S; ++a)
+    for (std::size_t b = a + 1; b < S; ++b) pairs.emplace_back(front.soft[a], front.soft[b]);
+  const std::size_t cols = std::min<std::size_t>(pairs.size(), 3),
+                    rows = (pairs.size() + cols - 1) / cols;
+  const int width = cols == 1 ? 1000 : static_cast<int>(620 * cols),
+            height = static_cast<int>(640 * rows + 60);
+  const std::string scatter = "figures/front-pareto" + ext;
+  // Marker colours: the front darkest, the picked point and the compared controllers apart.
+  const std::string front_colour = plot::viridis(0.0), picked_colour = plot::viridis(0.6);
+  static const int kComparedMarks[] = {5, 9, 13, 11, 15};
+  bool any_noise = false, any_infeasible = false, any_noise_pair = false;
+  for (const FrontPoint& p : front.points) {
+    for (std::size_t s : front.soft) any_noise = any_noise || std::isfinite(p.noise_floor[s]);
+    any_infeasible = any_infeasible || !p.feasible;
+  }
+  std::vector<std::pair<std::size_t, std::size_t>> noise_pairs;
+  for (std::size_t a = 0; a < front.points.size(); ++a)
+    for (std::size_t b = a + 1; b < front.points.size(); ++b)
+      if (within_noise(front, a, b)) noise_pairs.emplace_back(a, b);
+  any_noise_pair = !noise_pairs.empty();
+
+  g << plot::terminal(fmt, width, height) << "set output " << gp(scatter) << "\n"
+    << "set multiplot layout " << rows << "," << cols << " title "
+    << gp("Pareto front of the tuned points (" + std::to_string(front.points.size()) +
+          " points), pairwise")
+    << " font ',13'\nset key below horizontal maxrows 4 box opaque noenhanced font ',9'\n"
+    << "set bmargin 8\n";
+  std::size_t undrawn = 0;
+  for (const auto& [x, y] : pairs) {
+    const bool log_x = log_axis(front, x), log_y = log_axis(front, y);
+    std::string pts, bars, infeasible, links;
+    for (const FrontPoint& p : front.points) {
+      const double vx = p.goals[x], vy = p.goals[y];
+      if (!std::isfinite(vx) || !std::isfinite(vy)) {
+        ++undrawn;
+        continue;
+      }
+      (p.feasible ? pts : infeasible) += num(vx) + "," + num(vy) + "\n";
+      const auto [x0, x1] = band(vx, p.noise_floor[x], log_x);
+      const auto [y0, y1] = band(vy, p.noise_floor[y], log_y);
+      bars += num(vx) + "," + num(vy) + "," + num(x0) + "," + num(x1) + "," + num(y0) + "," +
+              num(y1) + "\n";
+    }
+    for (const auto& [a, b] : noise_pairs) {
+      const FrontPoint &p = front.points[a], &q = front.points[b];
+      if (std::isfinite(p.goals[x]) && std::isfinite(p.goals[y]) && std::isfinite(q.goals[x]) &&
+          std::isfinite(q.goals[y]))
+        links += num(p.goals[x]) + "," + num(p.goals[y]) + "\n" + num(q.goals[x]) + "," +
+                 num(q.goals[y]) + "\n\n";
+    }
+    g << "unset label\n"
+      << (log_x ? "set logscale x\nset format x '%g'\n" : "unset logscale x\nset format x '%g'\n")
+      << (log_y ? "set logscale y\nset format y '%g'\n" : "unset logscale y\nset format y '%g'\n")
+      << "set xlabel " << gp(axis_label(front.goals[x])) << " noenhanced\nset ylabel "
+      << gp(axis_label(front.goals[y])) << " noenhanced\n";
+    const Axis ax = axis_of(front, x, log_x), ay = axis_of(front, y, log_y);
+    g << "set xrange " << ax.range() << "\nset yrange " << ay.range() << "\n"
+      << log_tics("x", ax) << log_tics("y", ay);
+    std::string cmd = "plot ";
+    if (any_noise && !bars.empty())
+      cmd += block(bars) + " using 1:2:3:4:5:6 with xyerrorbars pt 0 lw 1 lc rgb 'gray55' title " +
+             gp("noise floor (band of one relative spread)") + ", ";
+    if (!links.empty())
+      cmd += block(links) + " using 1:2 with lines dt 2 lw 1.5 lc rgb 'gray30' title " +
+             gp("within each other's noise floor: not a trade-off") + ", ";
+    if (!pts.empty())
+      cmd += block(pts) + " using 1:2 with points pt 7 ps 1.1 lc rgb '" + front_colour +
+             "' title " + gp("front: tuned, non-dominated points") + ", ";
+    if (!infeasible.empty())
+      cmd += block(infeasible) + " using 1:2 with points pt 2 ps 1.1 lc rgb '" + front_colour +
+             "' title 'infeasible point', ";
+    if (front.picked) {
+      const FrontPoint& p = front.points[*front.picked];
+      if (std::isfinite(p.goals[x]) && std::isfinite(p.goals[y])) {
+        const std::string text = "picked (" + front.rule + "), #" + std::to_string(*front.picked);
+        cmd += block(num(p.goals[x]) + "," + num(p.goals[y]) + "\n") +
+               " using 1:2 with points pt 6 ps 3 lw 2.5 lc rgb '" + picked_colour + "' title " +
+               gp(text) + ", ";
+        g << "set label " << gp("picked") << " at " << num(p.goals[x]) << "," << num(p.goals[y])
+          << " offset 1.6,-1.2 textcolor rgb '" << picked_colour << "' front\n";
+      }
+    }
+    for (std::size_t c = 0; c < front.compared.size(); ++c) {
+      const FrontCompared& k = front.compared[c];
+      const double vx = k.goals[x], vy = k.goals[y];
+      const std::string name = (k.role == "baseline" ? "job's gains: " : "") + k.label +
+                               (k.feasible ? "" : " (infeasible)");
+      if (!std::isfinite(vx) || !std::isfinite(vy)) continue;
+      const std::string colour = plot::viridis(0.25 + 0.6 * static_cast<double>(c) /
+                                                          std::max<std::size_t>(1, front.compared.size()));
+      // Off the panel's scale: at its edge, with its values in the label.
+      const bool off = !ax.inside(vx) || !ay.inside(vy);
+      const double px = off ? ax.clamp(vx) : vx, py = off ? ay.clamp(vy) : vy;
+      const std::string text =
+          off ? name + " (off scale: " + detail::format_number(vx) + ", " +
+                    detail::format_number(vy) + ")"
+              : name;
+      cmd += block(num(px) + "," + num(py) + "\n") + " using 1:2 with points pt " +
+             std::to_string(kComparedMarks[c % 5] - (off ? 1 : 0)) + " ps 1.8 lc rgb '" + colour +
+             "' title " + gp(name) + ", ";
+      // Labels staggered, so that controllers close together stay readable; right-aligned at
+      // the right edge.
+      static const double kRaise[] = {0.9, -1.3, 2.0};
+      const bool right = off && ax.to(px) >= ax.hi, top = off && ay.to(py) >= ay.hi;
+      g << "set label " << gp(text) << " at " << num(px) << "," << num(py)
+        << (right ? " right offset -1," : " offset 1,")
+        << num(top ? -1.3 : kRaise[c % 3]) << " noenhanced front\n";
+    }
+    g << cmd.substr(0, cmd.size() - 2) << "\n";
+  }
+  g << "unset multiplot\nunset label\nunset logscale x\nunset logscale y\nset format x '%g'\n"
+       "set format y '%g'\nset autoscale\nunset bmargin\nset xtics autofreq\nset ytics autofreq\n";
+  std::string caption =
+      "Each panel shows two soft goals of the points the search kept (a tuned front: the best "
+      "trade-offs this run found, not a proven optimum), with the picked point (gains.json) "
+      "circled and the compared controllers labelled. Axes are logarithmic where every value is "
+      "positive. Grey bars span a point's noise floor where the run measured it (one relative "
+      "spread across its perturbed re-runs, centred on the value)";
+  caption += any_noise_pair ? "; dashed links join points that lie within each other's noise "
+                              "floor on every soft goal: their difference is noise, not a "
+                              "trade-off."
+                            : "; no two points are known to lie within each other's noise floor "
+                              "on every soft goal.";
+  if (!any_noise) caption += " No point's noise floor was measured.";
+  if (any_infeasible) caption += " Crosses are points that violate a hard goal.";
+  caption += " A compared controller far off the front's scale is drawn at the panel's edge "
+             "(open marker), its values in its label.";
+  if (undrawn)
+    caption += " " + std::to_string(undrawn) +
+               " point-panel(s) with a diverged or missing goal value are not drawn.";
+  std::vector<Figure> figures{{scatter, "Pareto front", caption}};
+
+  // The hypervolume of the front per iteration.
+  const std::vector<std::pair<double, double>> hv = hypervolume_history(run_dir / "history.csv");
+  std::string rows_text;
+  for (const auto& [it, v] : hv) rows_text += num(it) + "," + num(v) + "\n";
+  std::string ref = "(";
+  for (std::size_t k = 0; k < S; ++k) ref += (k ? ", " : "") + num(front.reference_point[k]);
+  ref += ")";
+  const std::string hv_file = "figures/front-hypervolume" + ext;
+  // The unit: decades to the power of the soft goals' count.
+  static const char* const kPowers[] = {"", "", "²", "³", "⁴", "⁵", "⁶", "⁷", "⁸", "⁹"};
+  const std::string decades = S < 10 ? std::string("decade") + kPowers[S]
+                                     : "decade^{" + std::to_string(S) + "}";
+  // Whole iterations on the x axis, about ten tics.
+  const double last = hv.back().first;
+  const std::string xstep = num(std::max(1.0, std::ceil(last / 10)));
+  const std::string data = block(rows_text);
+  g << plot::terminal(fmt, 1000, 600) << "set output " << gp(hv_file) << "\nset title "
+    << gp("Hypervolume of the front per iteration; reference point " + ref +
+          " in log10 of the soft goals")
+    << " font ',12' noenhanced\nset xlabel 'iteration'\nset ylabel "
+    << gp("hypervolume [" + decades + "]") << "\nset xtics " << xstep
+    << "\nset key inside right bottom box opaque\nplot " << data
+    << " using 1:2 with linespoints pt 7 lw 2 lc rgb '" << front_colour << "' title "
+    << gp("front after each iteration") << "\nunset title\nset xtics autofreq\nset key default\n";
+  figures.push_back(
+      {hv_file, "Hypervolume",
+       "The hypervolume the front dominates after each iteration (history.csv), measured on "
+       "log10 of each soft goal against the reference point " +
+           ref + " (" + reference_text(front) +
+           "). A flat stretch means those iterations added no trade-off the front did not have. "
+           "Final front: " +
+           detail::format_number(front.hypervolume, "%.6g") + "."});
+
+  write_file_atomic(run_dir / "figures" / "front.gp", g.str());
+  run_gnuplot(run_dir, "figures/front.gp");
+  return figures;
+}
+
+}  // namespace ftc::tune::report_detail
