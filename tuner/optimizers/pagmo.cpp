@@ -63,20 +63,168 @@ struct GenerationEnd {};
 // Thrown when a replay of a checkpoint needs an evaluation the checkpoint does not have.
 struct LogExhausted {};
 
+// Whether candidate a is the better history point: feasible first, then (between infeasible ones)
+// the smaller violation, then the smaller first soft goal (NaN as +inf); ties keep the earlier.
+bool better_point(const ObjectiveVector& a, const ObjectiveVector& b) {
+  if (a.feasible() != b.feasible()) return a.feasible();
+  const auto v = [](double x) {
+    return std::isnan(x) ? std::numeric_limits<double>::infinity() : x;
+  };
+  if (!a.feasible() && v(a.violation) != v(b.violation)) return v(a.violation) < v(b.violation);
+  return v(a.values[0]) < v(b.values[0]);
+}
+
+// The fitness J of a point as the one-objective history row reads it: the constraint rule of its
+// first soft goal (1/f1) and its violation.
+double point_fitness(const ObjectiveVector& o) {
+  const double f = o.values[0];
+  const double J = !std::isfinite(f) || f < 0 ? 0.0
+                   : f == 0                   ? std::numeric_limits<double>::infinity()
+                                              : 1.0 / f;
+  return constrained_fitness(J, o.violation);
+}
+
+// Goal values at or below this count as it on the log scale (a goal that can be 0: saturation).
+constexpr double kLogFloor = 1e-300;
+
+// What a replayed run logs per evaluation, and how that becomes pagmo's objectives. One
+// objective: the fitness J of each candidate. A front: each candidate's objective vector (its
+// soft goals and the violation of its hard goals).
+template <class Value>
+struct LogOf;
+
+template <>
+struct LogOf<double> {
+  static constexpr const char* key = "fitness_log";
+  static constexpr const char* problem_name = "ftctune tuning problem";
+  static std::vector<double> evaluate(BatchFitness& fitness, const std::vector<Decision>& batch,
+                                      std::size_t /*objectives*/) {
+    std::vector<double> J = fitness(batch);
+    if (J.size() != batch.size()) throw std::logic_error("fitness returned a wrong-sized batch");
+    return J;
+  }
+  // The objective f = 1/J. 1/inf = 0 for a zero objective; an infeasible candidate's J in
+  // [-1, 0) (constrained_fitness) goes above every other, decreasing in J, so pagmo's
+  // minimisation orders candidates as the constraint rule does.
+  static void objectives_of(double J, std::size_t /*objectives*/, std::vector<double>& out) {
+    out.push_back(J > 0 ? 1.0 / J : J == 0 ? kDivergedObjective : kDivergedObjective * (2.0 - J));
+  }
+  static bool better(double a, double b) { return a > b; }
+  static double fitness_of(double J) { return J; }
+  static nlohmann::json to_json(double J) { return json_io::json_number(J); }
+  static double from_json(const nlohmann::json& j, const std::string& path,
+                          std::size_t /*objectives*/) {
+    return state_check::fitness(j, path);
+  }
+  // This generation's candidates: the mean objective of those that did not diverge, and how
+  // many did.
+  static std::vector<std::pair<std::string, double>> generation(const double* first,
+                                                                const double* last) {
+    double sum = 0.0;
+    int finite = 0, diverged = 0;
+    for (const double* J = first; J != last; ++J) {
+      if (*J > 0) {
+        sum += 1.0 / *J;
+        ++finite;
+      } else {
+        ++diverged;
+      }
+    }
+    return {{"generation_mean_objective",
+             finite ? sum / finite : std::numeric_limits<double>::quiet_NaN()},
+            {"generation_diverged", static_cast<double>(diverged)}};
+  }
+};
+
+template <>
+struct LogOf<ObjectiveVector> {
+  static constexpr const char* key = "objective_log";
+  static constexpr const char* problem_name = "ftctune tuning problem (front)";
+  static std::vector<ObjectiveVector> evaluate(BatchFitness& fitness,
+                                               const std::vector<Decision>& batch,
+                                               std::size_t objectives) {
+    std::vector<ObjectiveVector> F = fitness.objective_vectors(batch);
+    if (F.size() != batch.size())
+      throw std::logic_error("objective vectors of a wrong-sized batch");
+    for (const ObjectiveVector& f : F)
+      if (f.values.size() != objectives)
+        throw std::logic_error("an objective vector of the wrong size");
+    return F;
+  }
+  // Per soft goal: log10 of the goal (the space the front's hypervolume is measured in, so that
+  // goals decades apart weigh alike; values at or below kLogFloor count as it),
+  // kDivergedObjective for one that is not finite. An infeasible candidate gets
+  // kDivergedObjective·(2 + V/(1 + V)) in every coordinate: any feasible candidate dominates it,
+  // of two infeasible ones the smaller violation V dominates, and equal violations do not
+  // dominate each other. That is constrained domination (Deb et al. 2002), written into the
+  // objectives of an unconstrained problem.
+  static void objectives_of(const ObjectiveVector& o, std::size_t objectives,
+                            std::vector<double>& out) {
+    if (!o.feasible()) {
+      const double V = o.violation;
+      const double rank = std::isfinite(V) ? V / (1.0 + V) : 1.0;
+      out.insert(out.end(), objectives, kDivergedObjective * (2.0 + rank));
+      return;
+    }
+    for (std::size_t k = 0; k < objectives; ++k) {
+      const double v = o.values[k];
+      out.push_back(std::isfinite(v) ? std::log10(std::max(v, kLogFloor)) : kDivergedObjective);
+    }
+  }
+  static bool better(const ObjectiveVector& a, const ObjectiveVector& b) {
+    return better_point(a, b);
+  }
+  static double fitness_of(const ObjectiveVector& o) { return point_fitness(o); }
+  static nlohmann::json to_json(const ObjectiveVector& o) {
+    nlohmann::json row = nlohmann::json::array();
+    for (double v : o.values) row.push_back(json_io::json_number(v));
+    row.push_back(json_io::json_number(o.violation));
+    return row;
+  }
+  static ObjectiveVector from_json(const nlohmann::json& j, const std::string& p,
+                                   std::size_t objectives) {
+    namespace sc = state_check;
+    const nlohmann::json& row = sc::array(j, p, objectives + 1);
+    ObjectiveVector o;
+    for (std::size_t k = 0; k < objectives; ++k)
+      o.values.push_back(sc::fitness(row[k], p + "/" + std::to_string(k)));
+    o.violation = sc::fitness(row[objectives], p + "/" + std::to_string(objectives));
+    if (!(o.violation >= 0))
+      sc::fail(p + "/" + std::to_string(objectives), "expected a violation >= 0");
+    return o;
+  }
+  // This generation's candidates: how many met every hard goal, and how many had a soft goal
+  // that is not finite (diverged or undefined).
+  static std::vector<std::pair<std::string, double>> generation(const ObjectiveVector* first,
+                                                                const ObjectiveVector* last) {
+    int feasible = 0, diverged = 0;
+    for (const ObjectiveVector* o = first; o != last; ++o) {
+      feasible += o->feasible() ? 1 : 0;
+      bool finite = true;
+      for (double v : o->values) finite = finite && std::isfinite(v);
+      diverged += finite ? 0 : 1;
+    }
+    return {{"generation_feasible", static_cast<double>(feasible)},
+            {"generation_diverged", static_cast<double>(diverged)}};
+  }
+};
+
 // What every copy of the problem inside a replay points to: the log, the fitness for new
 // evaluations, the cut-off, and the best candidate seen. pagmo copies problems freely (evolve()
 // takes the population by value), so the copies share this instead of holding state.
+template <class Value>
 struct Link {
   BatchFitness* fitness = nullptr;  // null: answer from the log only (checking a checkpoint)
   const SearchSpace* space = nullptr;
-  std::vector<double>* log = nullptr;  // J of every evaluation of the run, in pagmo's order
-  std::int64_t cursor = 0;             // evaluations of this replay so far
-  std::int64_t limit = 0;              // evaluations up to the end of the wanted generation
+  std::size_t objectives = 1;
+  std::vector<Value>* log = nullptr;  // every evaluation of the run, in pagmo's order
+  std::int64_t cursor = 0;            // evaluations of this replay so far
+  std::int64_t limit = 0;             // evaluations up to the end of the wanted generation
   Decision best;
-  double best_fitness = 0.0;  // J, larger is better
+  Value best_value{};
   bool has_best = false;
 
-  // Objectives f = 1/J of a batch.
+  // pagmo's objectives of a batch, flat (its batch layout).
   std::vector<double> evaluate(std::vector<Decision> batch) {
     const auto n = static_cast<std::int64_t>(batch.size());
     if (cursor >= limit) throw GenerationEnd{};
@@ -87,46 +235,41 @@ struct Link {
       for (std::size_t j = 0; j < x.size(); ++j) x[j] = space->clamp(j, x[j]);
     const auto logged = static_cast<std::int64_t>(log->size());
     const std::int64_t cached = std::clamp<std::int64_t>(logged - cursor, 0, n);
-    std::vector<double> J(log->begin() + cursor, log->begin() + cursor + cached);
     if (cached < n) {
       if (!fitness) throw LogExhausted{};
       const std::vector<Decision> fresh(batch.begin() + cached, batch.end());
-      const std::vector<double> Jf = (*fitness)(fresh);
-      if (Jf.size() != fresh.size()) throw std::logic_error("fitness returned a wrong-sized batch");
-      log->insert(log->end(), Jf.begin(), Jf.end());
-      J.insert(J.end(), Jf.begin(), Jf.end());
+      std::vector<Value> F = LogOf<Value>::evaluate(*fitness, fresh, objectives);
+      log->insert(log->end(), std::make_move_iterator(F.begin()), std::make_move_iterator(F.end()));
     }
-    cursor += n;
-    std::vector<double> f(J.size());
-    for (std::size_t i = 0; i < J.size(); ++i) {
-      // 1/inf = 0 for a zero objective; an infeasible candidate's J in [-1, 0)
-      // (constrained_fitness) goes above every other, decreasing in J, so pagmo's minimisation
-      // orders candidates as the constraint rule does.
-      f[i] = J[i] > 0    ? 1.0 / J[i]
-             : J[i] == 0 ? kDivergedObjective
-                         : kDivergedObjective * (2.0 - J[i]);
-      if (!has_best || J[i] > best_fitness) {
-        best = batch[i];
-        best_fitness = J[i];
+    std::vector<double> out;
+    out.reserve(static_cast<std::size_t>(n) * objectives);
+    for (std::int64_t i = 0; i < n; ++i) {
+      const Value& v = (*log)[static_cast<std::size_t>(cursor + i)];
+      LogOf<Value>::objectives_of(v, objectives, out);
+      if (!has_best || LogOf<Value>::better(v, best_value)) {
+        best = batch[static_cast<std::size_t>(i)];
+        best_value = v;
         has_best = true;
       }
     }
-    return f;
+    cursor += n;
+    return out;
   }
 };
 
-// The tuning problem as a pagmo UDP: box bounds, one objective, batch fitness.
+// The tuning problem as a pagmo UDP: box bounds, the link's objectives, batch fitness.
+template <class Value>
 class Udp {
  public:
   Udp() = default;
-  Udp(std::vector<double> lower, std::vector<double> upper, Link* link)
+  Udp(std::vector<double> lower, std::vector<double> upper, Link<Value>* link)
       : lower_(std::move(lower)), upper_(std::move(upper)), link_(link) {}
 
   pagmo::vector_double fitness(const pagmo::vector_double& x) const {
-    return {linked().evaluate({x})[0]};
+    return linked().evaluate({x});
   }
-  // A whole generation (pso_gen, gaco) or the initial population in one call, so the evaluator
-  // can simulate all its candidates at once.
+  // A whole generation (pso_gen, gaco, nsga2) or the initial population in one call, so the
+  // evaluator can simulate all its candidates at once.
   pagmo::vector_double batch_fitness(const pagmo::vector_double& dvs) const {
     const std::size_t d = lower_.size();
     std::vector<Decision> batch(dvs.size() / d);
@@ -138,17 +281,18 @@ class Udp {
   std::pair<pagmo::vector_double, pagmo::vector_double> get_bounds() const {
     return {lower_, upper_};
   }
-  std::string get_name() const { return "ftctune tuning problem"; }
+  pagmo::vector_double::size_type get_nobj() const { return link_ ? link_->objectives : 1; }
+  std::string get_name() const { return LogOf<Value>::problem_name; }
   // One run's BatchFitness, which is not to be called from several threads.
   pagmo::thread_safety get_thread_safety() const { return pagmo::thread_safety::none; }
 
  private:
-  Link& linked() const {
+  Link<Value>& linked() const {
     if (!link_) throw std::logic_error("pagmo problem without a fitness");
     return *link_;
   }
   std::vector<double> lower_, upper_;
-  Link* link_ = nullptr;
+  Link<Value>* link_ = nullptr;
 };
 
 using json = nlohmann::json;
@@ -725,21 +869,22 @@ std::unique_ptr<Entry> nsga2_entry() {
       .number("m", &S::m, Range::unit(), "mutation probability")
       .number("eta_m", &S::eta_m, Range::between(1, 100),
               "distribution index of polynomial mutation");
-  PagmoAlgorithmInfo info{"nsga2", "NSGA-II, multi-objective (one batch per generation)", true, 1,
-                          1, 0};
+  PagmoAlgorithmInfo info{
+      "nsga2", "NSGA-II, multi-objective (one batch per generation)", true, 1, 1, 0};
   info.front = true;
-  return entry<S>(std::move(info), std::move(o),
-                  [](const S&, Sizes sizes, const std::string& path, Errors& e) {
-                    if (sizes.population < 8 || sizes.population % 4 != 0)
-                      e.push_back({path + "/population",
-                                   "must be a multiple of 4 and at least 8 for nsga2 (got " +
-                                       std::to_string(sizes.population) + ")"});
-                  },
-                  [](const S& s, unsigned gen, unsigned seed) {
-                    pagmo::nsga2 a(gen, s.cr, s.eta_c, s.m, s.eta_m, seed);
-                    a.set_bfe(pagmo::bfe{pagmo::member_bfe{}});
-                    return pagmo::algorithm(std::move(a));
-                  });
+  return entry<S>(
+      std::move(info), std::move(o),
+      [](const S&, Sizes sizes, const std::string& path, Errors& e) {
+        if (sizes.population < 8 || sizes.population % 4 != 0)
+          e.push_back(
+              {path + "/population", "must be a multiple of 4 and at least 8 for nsga2 (got " +
+                                         std::to_string(sizes.population) + ")"});
+      },
+      [](const S& s, unsigned gen, unsigned seed) {
+        pagmo::nsga2 a(gen, s.cr, s.eta_c, s.m, s.eta_m, seed);
+        a.set_bfe(pagmo::bfe{pagmo::member_bfe{}});
+        return pagmo::algorithm(std::move(a));
+      });
 }
 
 std::unique_ptr<Entry> moead_entry() {
@@ -748,9 +893,10 @@ std::unique_ptr<Entry> moead_entry() {
       "MOEA/D (pagmo::moead): decomposition of the front into one weighted problem per member, "
       "with differential evolution; candidates are evaluated one at a time. With three or more "
       "soft goals the grid weights need a population of C(H + M - 1, M - 1) for some H");
-  o.choice<std::string>("weight_generation", &S::weight_generation,
-                        {{"grid", "grid"}, {"low discrepancy", "low discrepancy"}, {"random", "random"}},
-                        "how the weight vectors are made")
+  o.choice<std::string>(
+       "weight_generation", &S::weight_generation,
+       {{"grid", "grid"}, {"low discrepancy", "low discrepancy"}, {"random", "random"}},
+       "how the weight vectors are made")
       .choice<std::string>("decomposition", &S::decomposition,
                            {{"tchebycheff", "tchebycheff"}, {"weighted", "weighted"}, {"bi", "bi"}},
                            "how a weight vector makes one objective of the goals")
@@ -767,21 +913,21 @@ std::unique_ptr<Entry> moead_entry() {
                "whether realb and limit keep the population diverse");
   PagmoAlgorithmInfo info{"moead", "MOEA/D, multi-objective by decomposition", false, 1, 1, 0};
   info.front = true;
-  return entry<S>(std::move(info), std::move(o),
-                  [](const S& s, Sizes sizes, const std::string& path, Errors& e) {
-                    if (sizes.population < s.neighbours + 1)
-                      e.push_back({path + "/population",
-                                   population_text(s.neighbours + 1,
-                                                   " for moead with neighbours " +
-                                                       std::to_string(s.neighbours),
-                                                   sizes.population)});
-                  },
-                  [](const S& s, unsigned gen, unsigned seed) {
-                    return pagmo::algorithm(pagmo::moead(
-                        gen, s.weight_generation, s.decomposition,
-                        static_cast<pagmo::population::size_type>(s.neighbours), s.CR, s.F,
-                        s.eta_m, s.realb, u(s.limit), s.preserve_diversity, seed));
-                  });
+  return entry<S>(
+      std::move(info), std::move(o),
+      [](const S& s, Sizes sizes, const std::string& path, Errors& e) {
+        if (sizes.population < s.neighbours + 1)
+          e.push_back({path + "/population",
+                       population_text(s.neighbours + 1,
+                                       " for moead with neighbours " + std::to_string(s.neighbours),
+                                       sizes.population)});
+      },
+      [](const S& s, unsigned gen, unsigned seed) {
+        return pagmo::algorithm(
+            pagmo::moead(gen, s.weight_generation, s.decomposition,
+                         static_cast<pagmo::population::size_type>(s.neighbours), s.CR, s.F,
+                         s.eta_m, s.realb, u(s.limit), s.preserve_diversity, seed));
+      });
 }
 
 std::unique_ptr<Entry> nspso_entry() {
@@ -802,14 +948,13 @@ std::unique_ptr<Entry> nspso_entry() {
                             {"niche count", "niche count"},
                             {"max min", "max min"}},
                            "how leaders are ranked");
-  PagmoAlgorithmInfo info{"nspso", "NSPSO, multi-objective particle swarm (one batch per generation)",
-                          true, 1, 1, 0};
+  PagmoAlgorithmInfo info{
+      "nspso", "NSPSO, multi-objective particle swarm (one batch per generation)", true, 1, 1, 0};
   info.front = true;
   return entry<S>(std::move(info), std::move(o), at_least<S>(2, "nspso"),
                   [](const S& s, unsigned gen, unsigned seed) {
                     pagmo::nspso a(gen, s.omega, s.c1, s.c2, s.chi, s.v_coeff,
-                                   u(s.leader_selection_range), s.diversity_mechanism, false,
-                                   seed);
+                                   u(s.leader_selection_range), s.diversity_mechanism, false, seed);
                     a.set_bfe(pagmo::bfe{pagmo::member_bfe{}});
                     return pagmo::algorithm(std::move(a));
                   });
@@ -830,8 +975,8 @@ std::unique_ptr<Entry> maco_entry() {
       .integer("evalstop", &S::evalstop, IntRange{0, std::numeric_limits<int>::max()},
                "stop after this many generations without a better ideal point (0: never)")
       .number("focus", &S::focus, Range::non_negative(), "focus of the search (0: none)");
-  PagmoAlgorithmInfo info{"maco", "MHACO, multi-objective ant colony (one batch per generation)",
-                          true, 1, 1, 0};
+  PagmoAlgorithmInfo info{
+      "maco", "MHACO, multi-objective ant colony (one batch per generation)", true, 1, 1, 0};
   info.front = true;
   return entry<S>(
       std::move(info), std::move(o),
@@ -846,8 +991,8 @@ std::unique_ptr<Entry> maco_entry() {
                            " (got " + std::to_string(s.threshold) + ")"});
       },
       [](const S& s, unsigned gen, unsigned seed) {
-        pagmo::maco a(gen, u(s.ker), s.q, u(s.threshold), u(s.n_gen_mark), u(s.evalstop),
-                      s.focus, false, seed);
+        pagmo::maco a(gen, u(s.ker), s.q, u(s.threshold), u(s.n_gen_mark), u(s.evalstop), s.focus,
+                      false, seed);
         a.set_bfe(pagmo::bfe{pagmo::member_bfe{}});
         return pagmo::algorithm(std::move(a));
       });
@@ -903,14 +1048,18 @@ unsigned seed32(Rng& rng) { return static_cast<unsigned>(rng.uniform() * 4294967
 
 // ---------------------------------------------------------------------------------------------
 
+// A pagmo algorithm stepped one generation at a time by replaying its run (see the top of this
+// file), over a log of J values (one objective) or of objective vectors (a front).
+template <class Value>
 class PagmoOptimizer final : public GenerationalOptimizer {
  public:
   PagmoOptimizer(const Entry& entry, json settings, Sizes sizes, std::uint64_t seed,
-                 const SearchSpace& space)
+                 const SearchSpace& space, std::size_t objectives = 1)
       : GenerationalOptimizer(sizes.generations, seed, space),
         entry_(entry),
         settings_(std::move(settings)),
-        sizes_(sizes) {
+        sizes_(sizes),
+        objectives_(objectives) {
     algorithm_seed_ = seed32(rng_);
     population_seed_ = seed32(rng_);
   }
@@ -936,8 +1085,8 @@ class PagmoOptimizer final : public GenerationalOptimizer {
     s["finished"] = finished_;
     s["pagmo_seeds"] = {algorithm_seed_, population_seed_};
     json log = json::array();
-    for (double J : log_) log.push_back(json_io::json_number(J));
-    s["fitness_log"] = std::move(log);
+    for (const Value& v : log_) log.push_back(LogOf<Value>::to_json(v));
+    s[LogOf<Value>::key] = std::move(log);
     return s;
   }
 
@@ -960,25 +1109,25 @@ class PagmoOptimizer final : public GenerationalOptimizer {
         static_cast<unsigned>(sc::integer(seeds[0], "/pagmo_seeds/0", 0, 0xffffffffLL));
     population_seed_ =
         static_cast<unsigned>(sc::integer(seeds[1], "/pagmo_seeds/1", 0, 0xffffffffLL));
-    const json& log = sc::array(sc::member(s, "", "fitness_log"), "/fitness_log",
+    const std::string key = LogOf<Value>::key;
+    const json& log = sc::array(sc::member(s, "", LogOf<Value>::key), "/" + key,
                                 static_cast<std::size_t>(evaluations_));
     log_.clear();
     for (std::size_t i = 0; i < log.size(); ++i)
-      log_.push_back(sc::fitness(log[i], "/fitness_log/" + std::to_string(i)));
+      log_.push_back(
+          LogOf<Value>::from_json(log[i], "/" + key + "/" + std::to_string(i), objectives_));
     // Replaying the logged evaluations must lead to the checkpoint's own best point: this is
     // what tells a state of another job, seed or algorithm settings from this run's.
     bool consistent = true;
-    {
-      try {
-        const Replay r = replay(nullptr, t_);
-        consistent = r.evaluations == evaluations_ && r.best == best_ &&
-                     r.best_fitness == best_fitness_ && r.finished == finished_;
-      } catch (const LogExhausted&) {
-        consistent = false;
-      }
+    try {
+      const Replay r = replay(nullptr, t_);
+      consistent = r.evaluations == evaluations_ && r.best == best_ &&
+                   r.best_fitness == best_fitness_ && r.finished == finished_;
+    } catch (const LogExhausted&) {
+      consistent = false;
     }
     if (!consistent)
-      throw InputError("checkpoint", "/fitness_log",
+      throw InputError("checkpoint", "/" + key,
                        "does not replay to the checkpoint's best point: a state of another job, "
                        "seed or setting, or damaged");
   }
@@ -995,298 +1144,14 @@ class PagmoOptimizer final : public GenerationalOptimizer {
   // The run from its start to the end of generation g, new evaluations through `fitness` (null:
   // the log must have them all).
   Replay replay(BatchFitness* fitness, int g) {
-    Link link;
-    link.fitness = fitness;
-    link.space = &space_;
-    link.log = &log_;
-    link.limit = entry_.evaluations_until(sizes_.population, g);
-    const pagmo::problem problem{Udp(space_.lower, space_.upper, &link)};
-    // The initial population as one batch.
-    pagmo::population pop(problem, pagmo::bfe{pagmo::member_bfe{}},
-                          static_cast<pagmo::population::size_type>(sizes_.population),
-                          population_seed_);
-    Replay r;
-    r.start = g == 0 ? 0 : entry_.evaluations_until(sizes_.population, g - 1);
-    if (g > 0) {
-      const pagmo::algorithm algorithm =
-          entry_.make(settings_, sizes_.generations, algorithm_seed_);
-      try {
-        algorithm.evolve(pop);
-        r.finished = true;
-      } catch (const GenerationEnd&) {
-      }
-    }
-    r.start = std::min(r.start, link.cursor);
-    r.evaluations = link.cursor;
-    r.best = link.best;
-    r.best_fitness = link.best_fitness;
-    return r;
-  }
-
-  void finish(const Replay& r) {
-    evaluations_ = r.evaluations;
-    best_ = r.best;
-    best_fitness_ = r.best_fitness;
-    finished_ = r.finished;
-    // This generation's candidates: the mean objective of those that did not diverge, and how
-    // many did.
-    double sum = 0.0;
-    int finite = 0, diverged = 0;
-    for (std::int64_t i = r.start; i < r.evaluations; ++i) {
-      const double J = log_[static_cast<std::size_t>(i)];
-      if (J > 0) {
-        sum += 1.0 / J;
-        ++finite;
-      } else {
-        ++diverged;
-      }
-    }
-    record({{"generation_mean_objective",
-             finite ? sum / finite : std::numeric_limits<double>::quiet_NaN()},
-            {"generation_diverged", static_cast<double>(diverged)}});
-  }
-
-  const Entry& entry_;
-  json settings_;
-  Sizes sizes_;
-  unsigned algorithm_seed_ = 0, population_seed_ = 0;
-  std::vector<double> log_;  // J of every evaluation, in pagmo's order
-  bool finished_ = false;
-};
-
-// ---------------------------------------------------------------------------------------------
-// The search for a front: pagmo's multi-objective algorithms, replayed generation by generation
-// as PagmoOptimizer replays the single-objective ones, with a log of objective vectors.
-
-// Whether candidate a is the better history point: feasible first, then (between infeasible ones)
-// the smaller violation, then the smaller first soft goal (NaN as +inf); ties keep the earlier.
-bool better_point(const ObjectiveVector& a, const ObjectiveVector& b) {
-  if (a.feasible() != b.feasible()) return a.feasible();
-  const auto v = [](double x) { return std::isnan(x) ? std::numeric_limits<double>::infinity() : x; };
-  if (!a.feasible() && v(a.violation) != v(b.violation)) return v(a.violation) < v(b.violation);
-  return v(a.values[0]) < v(b.values[0]);
-}
-
-// The fitness J of a point as the one-objective history row reads it: the constraint rule of its
-// first soft goal (1/f1) and its violation.
-double point_fitness(const ObjectiveVector& o) {
-  const double f = o.values[0];
-  const double J = !std::isfinite(f) || f < 0 ? 0.0
-                   : f == 0                   ? std::numeric_limits<double>::infinity()
-                                              : 1.0 / f;
-  return constrained_fitness(J, o.violation);
-}
-
-// Goal values at or below this count as it on the log scale (a goal that can be 0: saturation).
-constexpr double kLogFloor = 1e-300;
-
-struct FrontLink {
-  BatchFitness* fitness = nullptr;  // null: answer from the log only (checking a checkpoint)
-  const SearchSpace* space = nullptr;
-  std::size_t objectives = 2;
-  std::vector<ObjectiveVector>* log = nullptr;  // every evaluation of the run, in pagmo's order
-  std::int64_t cursor = 0;
-  std::int64_t limit = 0;
-  Decision best;
-  ObjectiveVector best_point;
-  bool has_best = false;
-
-  // What pagmo minimises for a candidate, per soft goal: log10 of the goal (the space the front's
-  // hypervolume is measured in, so that goals decades apart weigh alike; values at or below
-  // kLogFloor count as it), kDivergedObjective for one that is not finite. An infeasible
-  // candidate gets kDivergedObjective·(2 + V/(1 + V)) in every coordinate: any feasible candidate
-  // dominates it, of two infeasible ones the smaller violation V dominates, and equal violations
-  // do not dominate each other. That is constrained domination (Deb et al. 2002), written into
-  // the objectives of an unconstrained problem.
-  void objectives_of(const ObjectiveVector& o, std::vector<double>& out) const {
-    if (!o.feasible()) {
-      const double V = o.violation;
-      const double rank = std::isfinite(V) ? V / (1.0 + V) : 1.0;
-      out.insert(out.end(), objectives, kDivergedObjective * (2.0 + rank));
-      return;
-    }
-    for (std::size_t k = 0; k < objectives; ++k) {
-      const double v = o.values[k];
-      out.push_back(std::isfinite(v) ? std::log10(std::max(v, kLogFloor)) : kDivergedObjective);
-    }
-  }
-
-  // The objectives of a batch, flat (pagmo's batch layout).
-  std::vector<double> evaluate(std::vector<Decision> batch) {
-    const auto n = static_cast<std::int64_t>(batch.size());
-    if (cursor >= limit) throw GenerationEnd{};
-    if (cursor + n > limit) throw std::logic_error("a pagmo batch spans two generations");
-    for (Decision& x : batch)
-      for (std::size_t j = 0; j < x.size(); ++j) x[j] = space->clamp(j, x[j]);
-    const auto logged = static_cast<std::int64_t>(log->size());
-    const std::int64_t cached = std::clamp<std::int64_t>(logged - cursor, 0, n);
-    if (cached < n) {
-      if (!fitness) throw LogExhausted{};
-      const std::vector<Decision> fresh(batch.begin() + cached, batch.end());
-      std::vector<ObjectiveVector> F = fitness->objective_vectors(fresh);
-      if (F.size() != fresh.size())
-        throw std::logic_error("objective vectors of a wrong-sized batch");
-      for (const ObjectiveVector& f : F)
-        if (f.values.size() != objectives)
-          throw std::logic_error("an objective vector of the wrong size");
-      log->insert(log->end(), F.begin(), F.end());
-    }
-    std::vector<double> out;
-    out.reserve(static_cast<std::size_t>(n) * objectives);
-    for (std::int64_t i = 0; i < n; ++i) {
-      const ObjectiveVector& o = (*log)[static_cast<std::size_t>(cursor + i)];
-      objectives_of(o, out);
-      if (!has_best || better_point(o, best_point)) {
-        best = batch[static_cast<std::size_t>(i)];
-        best_point = o;
-        has_best = true;
-      }
-    }
-    cursor += n;
-    return out;
-  }
-};
-
-// The tuning problem of a front as a pagmo UDP: box bounds, `objectives` objectives, batches.
-class FrontUdp {
- public:
-  FrontUdp() = default;
-  FrontUdp(std::vector<double> lower, std::vector<double> upper, std::size_t objectives,
-           FrontLink* link)
-      : lower_(std::move(lower)), upper_(std::move(upper)), objectives_(objectives), link_(link) {}
-
-  pagmo::vector_double fitness(const pagmo::vector_double& x) const {
-    return linked().evaluate({x});
-  }
-  pagmo::vector_double batch_fitness(const pagmo::vector_double& dvs) const {
-    const std::size_t d = lower_.size();
-    std::vector<Decision> batch(dvs.size() / d);
-    for (std::size_t i = 0; i < batch.size(); ++i)
-      batch[i].assign(dvs.begin() + static_cast<std::ptrdiff_t>(i * d),
-                      dvs.begin() + static_cast<std::ptrdiff_t>((i + 1) * d));
-    return linked().evaluate(std::move(batch));
-  }
-  std::pair<pagmo::vector_double, pagmo::vector_double> get_bounds() const {
-    return {lower_, upper_};
-  }
-  pagmo::vector_double::size_type get_nobj() const { return objectives_; }
-  std::string get_name() const { return "ftctune tuning problem (front)"; }
-  pagmo::thread_safety get_thread_safety() const { return pagmo::thread_safety::none; }
-
- private:
-  FrontLink& linked() const {
-    if (!link_) throw std::logic_error("pagmo problem without a fitness");
-    return *link_;
-  }
-  std::vector<double> lower_, upper_;
-  std::size_t objectives_ = 2;
-  FrontLink* link_ = nullptr;
-};
-
-class PagmoFrontOptimizer final : public GenerationalOptimizer {
- public:
-  PagmoFrontOptimizer(const Entry& entry, json settings, Sizes sizes, std::uint64_t seed,
-                      const SearchSpace& space, std::size_t objectives)
-      : GenerationalOptimizer(sizes.generations, seed, space),
-        entry_(entry),
-        settings_(std::move(settings)),
-        sizes_(sizes),
-        objectives_(objectives) {
-    algorithm_seed_ = seed32(rng_);
-    population_seed_ = seed32(rng_);
-  }
-
-  void initialize(BatchFitness& fitness) override {
-    log_.clear();
-    finished_ = false;
-    t_ = 0;
-    finish(replay(&fitness, 0));
-  }
-
-  void iterate(BatchFitness& fitness) override {
-    assert(t_ >= 0 && "initialize() first");
-    ++t_;
-    finish(finished_ ? Replay{evaluations_, evaluations_, best_, best_fitness_, true}
-                     : replay(&fitness, t_));
-  }
-
-  json state() const override {
-    json s = common_state("pagmo");
-    s["name"] = entry_.info().name;
-    s["finished"] = finished_;
-    s["pagmo_seeds"] = {algorithm_seed_, population_seed_};
-    json log = json::array();
-    for (const ObjectiveVector& o : log_) {
-      json row = json::array();
-      for (double v : o.values) row.push_back(json_io::json_number(v));
-      row.push_back(json_io::json_number(o.violation));
-      log.push_back(std::move(row));
-    }
-    s["objective_log"] = std::move(log);
-    return s;
-  }
-
-  void restore(const json& s) override {
-    namespace sc = state_check;
-    restore_common(s, "pagmo", 0, entry_.evaluations_until(sizes_.population, sizes_.generations),
-                   false);
-    const json& name_field = sc::member(s, "", "name");
-    if (!name_field.is_string()) sc::fail("/name", "expected the name of a pagmo algorithm");
-    const std::string name = name_field.get<std::string>();
-    if (name != entry_.info().name)
-      throw InputError("checkpoint", "/name",
-                       "is a state of pagmo's " + name + ", the job runs " + entry_.info().name);
-    finished_ = sc::boolean(sc::member(s, "", "finished"), "/finished");
-    const json& seeds = sc::array(sc::member(s, "", "pagmo_seeds"), "/pagmo_seeds", 2);
-    algorithm_seed_ =
-        static_cast<unsigned>(sc::integer(seeds[0], "/pagmo_seeds/0", 0, 0xffffffffLL));
-    population_seed_ =
-        static_cast<unsigned>(sc::integer(seeds[1], "/pagmo_seeds/1", 0, 0xffffffffLL));
-    const json& log = sc::array(sc::member(s, "", "objective_log"), "/objective_log",
-                                static_cast<std::size_t>(evaluations_));
-    log_.clear();
-    for (std::size_t i = 0; i < log.size(); ++i) {
-      const std::string p = "/objective_log/" + std::to_string(i);
-      const json& row = sc::array(log[i], p, objectives_ + 1);
-      ObjectiveVector o;
-      for (std::size_t k = 0; k < objectives_; ++k)
-        o.values.push_back(sc::fitness(row[k], p + "/" + std::to_string(k)));
-      o.violation = sc::fitness(row[objectives_], p + "/" + std::to_string(objectives_));
-      if (!(o.violation >= 0)) sc::fail(p + "/" + std::to_string(objectives_),
-                                        "expected a violation >= 0");
-      log_.push_back(std::move(o));
-    }
-    bool consistent = true;
-    try {
-      const Replay r = replay(nullptr, t_);
-      consistent = r.evaluations == evaluations_ && r.best == best_ &&
-                   r.best_fitness == best_fitness_ && r.finished == finished_;
-    } catch (const LogExhausted&) {
-      consistent = false;
-    }
-    if (!consistent)
-      throw InputError("checkpoint", "/objective_log",
-                       "does not replay to the checkpoint's best point: a state of another job, "
-                       "seed or setting, or damaged");
-  }
-
- private:
-  struct Replay {
-    std::int64_t start = 0;
-    std::int64_t evaluations = 0;
-    Decision best;
-    double best_fitness = 0.0;
-    bool finished = false;
-  };
-
-  Replay replay(BatchFitness* fitness, int g) {
-    FrontLink link;
+    Link<Value> link;
     link.fitness = fitness;
     link.space = &space_;
     link.objectives = objectives_;
     link.log = &log_;
     link.limit = entry_.evaluations_until(sizes_.population, g);
-    const pagmo::problem problem{FrontUdp(space_.lower, space_.upper, objectives_, &link)};
+    const pagmo::problem problem{Udp<Value>(space_.lower, space_.upper, &link)};
+    // The initial population as one batch.
     pagmo::population pop(problem, pagmo::bfe{pagmo::member_bfe{}},
                           static_cast<pagmo::population::size_type>(sizes_.population),
                           population_seed_);
@@ -1301,15 +1166,15 @@ class PagmoFrontOptimizer final : public GenerationalOptimizer {
       } catch (const GenerationEnd&) {
       } catch (const std::invalid_argument& e) {
         // pagmo refusing the job's shape (MOEA/D's grid weights for three or more goals).
-        throw InputError("job", "/tuning/algorithm",
-                         "pagmo's " + entry_.info().name + " refuses this job: " +
-                             pagmo_message(e));
+        throw InputError(
+            "job", "/tuning/algorithm",
+            "pagmo's " + entry_.info().name + " refuses this job: " + pagmo_message(e));
       }
     }
     r.start = std::min(r.start, link.cursor);
     r.evaluations = link.cursor;
     r.best = link.best;
-    r.best_fitness = link.has_best ? point_fitness(link.best_point) : 0.0;
+    r.best_fitness = link.has_best ? LogOf<Value>::fitness_of(link.best_value) : 0.0;
     return r;
   }
 
@@ -1318,18 +1183,7 @@ class PagmoFrontOptimizer final : public GenerationalOptimizer {
     best_ = r.best;
     best_fitness_ = r.best_fitness;
     finished_ = r.finished;
-    // This generation's candidates: how many met every hard goal, and how many had a soft goal
-    // that is not finite (diverged or undefined).
-    int feasible = 0, diverged = 0;
-    for (std::int64_t i = r.start; i < r.evaluations; ++i) {
-      const ObjectiveVector& o = log_[static_cast<std::size_t>(i)];
-      feasible += o.feasible() ? 1 : 0;
-      bool finite = true;
-      for (double v : o.values) finite = finite && std::isfinite(v);
-      diverged += finite ? 0 : 1;
-    }
-    record({{"generation_feasible", static_cast<double>(feasible)},
-            {"generation_diverged", static_cast<double>(diverged)}});
+    record(LogOf<Value>::generation(log_.data() + r.start, log_.data() + r.evaluations));
   }
 
   const Entry& entry_;
@@ -1337,7 +1191,7 @@ class PagmoFrontOptimizer final : public GenerationalOptimizer {
   Sizes sizes_;
   std::size_t objectives_;
   unsigned algorithm_seed_ = 0, population_seed_ = 0;
-  std::vector<ObjectiveVector> log_;
+  std::vector<Value> log_;  // every evaluation, in pagmo's order
   bool finished_ = false;
 };
 
@@ -1387,14 +1241,14 @@ class PagmoSettings final : public AlgorithmSettings {
                        "pagmo's " + entry_->info().name +
                            " searches a Pareto front: give the job two or more soft goals "
                            "(\"minimize\": true), or name an algorithm of one objective");
-    return std::make_unique<PagmoOptimizer>(*entry_, settings_, sizes_, seed, space);
+    return std::make_unique<PagmoOptimizer<double>>(*entry_, settings_, sizes_, seed, space);
   }
   bool searches_front() const override { return entry_->info().front; }
   std::unique_ptr<Optimizer> make_front(std::uint64_t seed, const SearchSpace& space,
                                         std::size_t objectives) const override {
     if (!entry_->info().front) return AlgorithmSettings::make_front(seed, space, objectives);
-    return std::make_unique<PagmoFrontOptimizer>(*entry_, settings_, sizes_, seed, space,
-                                                 objectives);
+    return std::make_unique<PagmoOptimizer<ObjectiveVector>>(*entry_, settings_, sizes_, seed,
+                                                             space, objectives);
   }
   AlgorithmPtr with_budget(std::int64_t budget) const override {
     const std::int64_t per = entry_->per_generation(sizes_.population);
