@@ -3,6 +3,7 @@
 // soft goals (front.json, reproducibility across threads and a resume, pick's gains file).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -240,6 +241,27 @@ TEST(Front, WithoutAFeasibleTrialTheFrontIsEmptyAndTheGainsAreNotDeployable) {
   EXPECT_EQ(gains["goals"]["feasible"], false);
   EXPECT_FALSE(gains["goals"].contains("front"));
   EXPECT_THROW(runtime::parse_gains(gains, "infeasible"), InputError);  // fitness < 0
+}
+
+TEST(Front, RunWithTheRandomSearchBaselineWritesEveryFile) {
+  // The baseline is random search in the registry's form, which searches for fronts too.
+  const auto dir = fresh_dir("front-baseline");
+  json j = front_job();
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  {
+    std::ofstream f(dir / "job.json");
+    f << j.dump();
+  }
+  const CliResult r = run_cli("run -q --no-checkpoint --threads 1 --baseline '" +
+                                  (dir / "job.json").string() + "' --out '" +
+                                  (dir / "out").string() + "'",
+                              dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f : {"front.json", "gains.json", "history.csv", "history-random.csv"})
+    EXPECT_FALSE(slurp(dir / "out" / f).empty()) << f;
+  // Its history: the header and the same two iterations as the run's.
+  const std::string random = slurp(dir / "out" / "history-random.csv");
+  EXPECT_EQ(std::count(random.begin(), random.end(), '\n'), 3) << random;
 }
 
 TEST(Front, OneSoftGoalRunsWriteNoFront) {
