@@ -241,6 +241,35 @@ TEST(Front, WithoutAFeasibleTrialTheFrontIsEmptyAndTheGainsAreNotDeployable) {
   EXPECT_EQ(gains["goals"]["feasible"], false);
   EXPECT_FALSE(gains["goals"].contains("front"));
   EXPECT_THROW(runtime::parse_gains(gains, "infeasible"), InputError);  // fitness < 0
+  // The rule says why there is no front point, not the rule of one soft goal.
+  EXPECT_NE(gains["goals"]["rule"].get<std::string>().find("front (front.json) is empty"),
+            std::string::npos)
+      << gains["goals"]["rule"];
+}
+
+TEST(Front, AReportOfARunWithAnEmptyFrontSaysNoPointMetTheHardGoals) {
+  const auto dir = fresh_dir("front-empty-report");
+  json j = front_job();
+  j["goals"][2]["at_most"] = 1e-3;  // no gains keep the peak command under 1 mN m
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  {
+    std::ofstream f(dir / "job.json");
+    f << j.dump();
+  }
+  const CliResult r = run_cli("run -q --no-checkpoint --threads 1 --report '" +
+                                  (dir / "job.json").string() + "' --out '" +
+                                  (dir / "out").string() + "'",
+                              dir);
+  // 3: the gains met no hard goal and must not be deployed; the report is written all the same.
+  ASSERT_EQ(r.exit_code, 3) << r.err;
+  ASSERT_TRUE(json::parse(slurp(dir / "out" / "front.json"))["points"].empty());
+  const std::string html = slurp(dir / "out" / "report.html");
+  EXPECT_NE(html.find("No trial of the run met the hard goals"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "figures" / "front-pareto.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "figures" / "front-hypervolume.png"));
+  // `ftctune report` of the same run, too.
+  const CliResult again = run_cli("report '" + (dir / "out").string() + "'", dir);
+  EXPECT_EQ(again.exit_code, 0) << again.err;
 }
 
 TEST(Front, RunWithTheRandomSearchBaselineWritesEveryFile) {
