@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <random>
+#include <utility>
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
@@ -89,6 +91,60 @@ TEST(Front, OfHandMadeTrialsWithReferenceKneeAndHypervolumePerIteration) {
   EXPECT_NEAR(hv[0], 1.41, 1e-12);
   EXPECT_NEAR(hv[1], f.hypervolume, 1e-12);
   EXPECT_EQ(hv[2], hv[1]);
+}
+
+TEST(Front, IncrementalHypervolumeHistoryIsTheFromScratchOne) {
+  // A few hundred trials on a coarse grid (repeats and ties in one goal), some infeasible, over
+  // 12 iterations: the front and the hypervolume after each iteration as the definition
+  // computes them from scratch (every earlier trial, all pairs), to the bit.
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  std::mt19937_64 rng(26);
+  std::vector<tune::Trial> trials;
+  for (int it = 0; it < 12; ++it)
+    for (int k = 0; k < 25; ++k) {
+      // A trade-off with scatter: the second goal falls as the first rises.
+      const auto a = static_cast<double>(rng() % 40), b = 39 - a + static_cast<double>(rng() % 6);
+      const double ise = std::pow(10.0, a / 10 - 2), tv = std::pow(10.0, b / 10 - 2);
+      trials.push_back(trial(it, ise, tv, rng() % 7 == 0 ? 0.5 : 0.0));
+    }
+  const auto from_scratch = [&](std::size_t count) {
+    std::vector<std::size_t> kept;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (trials[i].violation > 0) continue;
+      bool repeat = false;
+      for (std::size_t j : kept)
+        repeat = repeat || (trials[j].goals[0] == trials[i].goals[0] &&
+                            trials[j].goals[1] == trials[i].goals[1]);
+      if (!repeat) kept.push_back(i);
+    }
+    std::vector<std::size_t> front;
+    for (std::size_t i : kept) {
+      bool dominated = false;
+      for (std::size_t j : kept) {
+        const double *a = trials[j].goals.data(), *b = trials[i].goals.data();
+        dominated = dominated ||
+                    (a[0] <= b[0] && a[1] <= b[1] && (a[0] < b[0] || a[1] < b[1]));
+      }
+      if (!dominated) front.push_back(i);
+    }
+    std::sort(front.begin(), front.end(), [&](std::size_t a, std::size_t b) {
+      return std::make_pair(trials[a].goals[0], trials[a].goals[1]) <
+             std::make_pair(trials[b].goals[0], trials[b].goals[1]);
+    });
+    return front;
+  };
+  const tune::Front f = tune::make_front(job, trials);
+  ASSERT_GE(f.points.size(), 3u);
+  const std::vector<double> hv = tune::hypervolume_history(job, trials, f.reference, 11);
+  ASSERT_EQ(hv.size(), 12u);
+  for (int it = 0; it < 12; ++it) {
+    const std::size_t count = static_cast<std::size_t>(25 * (it + 1));
+    const std::vector<std::size_t> front = from_scratch(count);
+    EXPECT_EQ(tune::front_trials(job, trials, count), front) << it;
+    std::vector<std::vector<double>> p;
+    for (std::size_t i : front) p.push_back(tune::log_soft_goals(trials[i].goals, {0, 1}));
+    EXPECT_EQ(hv[static_cast<std::size_t>(it)], tune::hypervolume(p, f.reference)) << it;
+  }
 }
 
 TEST(Front, PointsWithinTheNoiseFloorOfTheirNeighbourAreFlagged) {
