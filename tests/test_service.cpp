@@ -1742,6 +1742,83 @@ TEST(Service, PartialResultsCostOneComparisonPerCheckpoint) {
   EXPECT_EQ(s.wait_done(b)["status"], "succeeded");
 }
 
+// An evaluator that says when its first batch arrives, and holds it until released.
+struct HeldEvaluator final : tune::BatchEvaluator {
+  struct Hold {
+    std::mutex mutex;
+    std::condition_variable changed;
+    bool entered = false, open = false;
+  };
+  explicit HeldEvaluator(std::shared_ptr<Hold> h) : hold(std::move(h)) {}
+  std::vector<tune::TaskResult> run(const tune::SimulationBatch& batch) override {
+    {
+      std::unique_lock<std::mutex> lock(hold->mutex);
+      hold->entered = true;
+      hold->changed.notify_all();
+      hold->changed.wait(lock, [&] { return hold->open; });
+    }
+    return inner.run(batch);
+  }
+  int concurrency() const override { return inner.concurrency(); }
+  std::string name() const override { return inner.name(); }
+  std::shared_ptr<Hold> hold;
+  tune::TbbEvaluator inner{1};
+};
+
+// Partial results are made one request at a time per job, not across jobs: while job A's gains
+// are being compared (held in its evaluator), job B's trials are answered.
+TEST(Service, OneJobsPartialComparisonDoesNotHoldUpAnotherJobsTrials) {
+  auto gate = std::make_shared<Gate>();
+  auto hold = std::make_shared<HeldEvaluator::Hold>();
+  const auto open_hold = [hold] {
+    {
+      std::lock_guard<std::mutex> lock(hold->mutex);
+      hold->open = true;
+    }
+    hold->changed.notify_all();
+  };
+  std::atomic<int> made{0};
+  tune::ServiceOptions o;
+  o.concurrent_jobs = 2;
+  o.evaluator = [gate, hold, &made]() -> std::unique_ptr<tune::BatchEvaluator> {
+    // The first two are the runner's (one per job); the third A's comparison.
+    if (made++ < 2) return std::make_unique<GatedEvaluator>(gate);
+    return std::make_unique<HeldEvaluator>(hold);
+  };
+  Service s(o);
+  ReleaseOnExit release{gate};
+  const std::string a = s.submit(long_job("held-a"))["id"], b = s.submit(long_job("held-b"))["id"];
+  wait_running(s, a, 1);
+  wait_running(s, b, 1);
+  int gains_status = 0;
+  std::thread asking([&] {
+    httplib::Client c("127.0.0.1", s.port);
+    c.set_read_timeout(120, 0);
+    auto g = c.Get(("/v1/jobs/" + a + "/gains").c_str());
+    gains_status = g ? g->status : -1;
+  });
+  bool entered = false;
+  {
+    std::unique_lock<std::mutex> lock(hold->mutex);
+    entered = hold->changed.wait_for(lock, 60s, [&] { return hold->entered; });
+  }
+  if (entered) {
+    // Before, this waited for A's comparison (the client gives up after 20 s).
+    httplib::Client c("127.0.0.1", s.port);
+    c.set_read_timeout(20, 0);
+    auto t = c.Get(("/v1/jobs/" + b + "/trials").c_str());
+    EXPECT_TRUE(t && t->status == 200) << (t ? t->body : "no answer while A was compared");
+    if (t) EXPECT_EQ(t->get_header_value("Ftctune-Partial"), "true");
+  }
+  open_hold();
+  asking.join();
+  ASSERT_TRUE(entered) << "job A's comparison never started";
+  EXPECT_EQ(gains_status, 200);
+  gate->release();
+  EXPECT_EQ(s.wait_done(a)["status"], "succeeded");
+  EXPECT_EQ(s.wait_done(b)["status"], "succeeded");
+}
+
 // Without a token, a request must name this machine's loopback in its Host header (a page of
 // another site that reached the service through DNS rebinding names its own), and a request that
 // changes something must not come from a page of another origin. With a token neither applies.

@@ -646,8 +646,9 @@ void Api::events(const httplib::Request& req, const std::string& job, httplib::R
 // The partial results of a running job, from its last checkpoint: history and trials as they
 // stand, and gains.json for its best so far (compared as a finished run's best is). Each is made
 // at most once per checkpoint: kept per running job until its next iteration, made by one
-// request at a time (the others wait for it, then take what it made), and dropped once the job
-// stops running. N requests cost one comparison, however they interleave across jobs.
+// request at a time per job (the others of that job wait for it, then take what it made; other
+// jobs' requests do not), and dropped once the job stops running. N requests cost one comparison
+// per job and checkpoint, however they interleave across jobs.
 void Api::running_result(const httplib::Request& req, httplib::Response& res,
                          const JobRecord& job, const std::string& what) {
   const std::string& id = job.id;
@@ -672,7 +673,8 @@ void Api::running_result(const httplib::Request& req, httplib::Response& res,
   };
   std::shared_ptr<const PartialResults> p = kept();
   if (!p) {
-    std::lock_guard<std::mutex> making(partial_making_mutex_);
+    const std::shared_ptr<std::mutex> job_mutex = making_mutex(id);
+    std::lock_guard<std::mutex> making(*job_mutex);
     p = kept();  // made by the request this one waited for
     if (!p) {
       const std::optional<JobStore::Checkpoint> c = store_.checkpoint_with_trials(id);
@@ -713,6 +715,18 @@ void Api::running_result(const httplib::Request& req, httplib::Response& res,
   if (what == "trials") return res.set_content(p->trials, "text/csv");
   if (format == "json") return res.set_content(p->history_rows, "application/json");
   res.set_content(p->history, "text/csv");
+}
+
+std::shared_ptr<std::mutex> Api::making_mutex(const std::string& id) {
+  std::lock_guard<std::mutex> lock(partial_mutex_);
+  for (auto it = making_.begin(); it != making_.end();)
+    it = it->first != id && it->second.expired() ? making_.erase(it) : std::next(it);
+  std::shared_ptr<std::mutex> m = making_[id].lock();
+  if (!m) {
+    m = std::make_shared<std::mutex>();
+    making_[id] = m;
+  }
+  return m;
 }
 
 TuningOutcome Api::outcome_of(const std::string& id, const JobStore::Checkpoint& c) {
