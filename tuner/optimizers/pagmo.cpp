@@ -51,6 +51,7 @@
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/optimizers/pareto_bat.hpp"
 #include "ftc/tune/optimizers/state_check.hpp"
 #include "optimizers/pagmo_plugin.hpp"
 
@@ -1077,9 +1078,6 @@ double point_fitness(const ObjectiveVector& o) {
   return constrained_fitness(J, o.violation);
 }
 
-// Goal values at or below this count as it on the log scale (a goal that can be 0: saturation).
-constexpr double kLogFloor = 1e-300;
-
 struct FrontLink {
   BatchFitness* fitness = nullptr;  // null: answer from the log only (checking a checkpoint)
   const SearchSpace* space = nullptr;
@@ -1093,7 +1091,7 @@ struct FrontLink {
 
   // What pagmo minimises for a candidate, per soft goal: log10 of the goal (the space the front's
   // hypervolume is measured in, so that goals decades apart weigh alike; values at or below
-  // kLogFloor count as it), kDivergedObjective for one that is not finite. An infeasible
+  // kLogFloor count as it; pareto::log_value, ftctune's log as the Pareto Bat's, not libm's), kDivergedObjective for one that is not finite. An infeasible
   // candidate gets kDivergedObjective·(2 + V/(1 + V)) in every coordinate: any feasible candidate
   // dominates it, of two infeasible ones the smaller violation V dominates, and equal violations
   // do not dominate each other. That is constrained domination (Deb et al. 2002), written into
@@ -1107,7 +1105,7 @@ struct FrontLink {
     }
     for (std::size_t k = 0; k < objectives; ++k) {
       const double v = o.values[k];
-      out.push_back(std::isfinite(v) ? std::log10(std::max(v, kLogFloor)) : kDivergedObjective);
+      out.push_back(std::isfinite(v) ? pareto::log_value(v) : kDivergedObjective);
     }
   }
 
