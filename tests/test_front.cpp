@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <random>
+#include <tuple>
 #include <utility>
 #include <nlohmann/json.hpp>
 
@@ -279,6 +280,34 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
   const CliResult bad = run_cli("pick '" + dir.string() + "' --rule min:iae", dir);
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("/rule"), std::string::npos) << bad.err;
+
+  // Damaged files: each an InputError naming the file and the JSON path, exit 2.
+  json bad_trial = front;
+  bad_trial["points"][0]["trial"] = 100000;
+  json no_goals = gains;
+  no_goals["goals"]["goals"] = 3;
+  const std::vector<std::tuple<std::string, std::string, std::string>> damaged = {
+      {"gains.json", "[1, 2]", ""},
+      {"gains.json", no_goals.dump(), "/goals/goals"},
+      {"front.json", bad_trial.dump(), "/points/0/trial"}};
+  for (const auto& [file, text, path] : damaged) {
+    const auto broken = fresh_dir("pick-damaged");
+    tune::write_output_files(files, broken);
+    {
+      std::ofstream f(broken / file);
+      f << text;
+    }
+    try {
+      tune::pick_gains(broken, "index:0");
+      ADD_FAILURE() << file << " " << path << " was not refused";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.source(), (broken / file).string()) << path;
+      ASSERT_FALSE(e.errors().empty());
+      EXPECT_EQ(e.errors().at(0).path, path);
+    }
+    const CliResult refused = run_cli("pick '" + broken.string() + "' --rule index:0", broken);
+    EXPECT_EQ(refused.exit_code, 2) << file << " " << path << ": " << refused.err;
+  }
 }
 
 TEST(Front, WithoutAFeasibleTrialTheFrontIsEmptyAndTheGainsAreNotDeployable) {

@@ -1945,6 +1945,33 @@ TEST(Service, EventStreamsOfAForeignOriginAreRefused) {
   EXPECT_EQ(s.get("/healthz")["event_streams"], 0);
 }
 
+// `ftctune fetch --all`: a listing of the server's files whose entry has no string name is bad
+// input at its JSON path (exit 2), not a crash, and nothing is written.
+TEST(Cli, FetchAllRefusesAListingWithoutAStringName) {
+  const std::string id = "0123456789abcdef";
+  httplib::Server fake;
+  fake.Get("/v1/jobs/" + id, [&](const httplib::Request&, httplib::Response& res) {
+    res.set_content(json{{"id", id}, {"name", "x"}, {"status", "succeeded"}}.dump(),
+                    "application/json");
+  });
+  fake.Get("/v1/jobs/" + id + "/files", [&](const httplib::Request&, httplib::Response& res) {
+    res.set_content("{\"files\": [{\"name\": \"history.csv\"}, {\"name\": 5}]}",
+                    "application/json");
+  });
+  const int port = fake.bind_to_any_port("127.0.0.1");
+  ASSERT_GT(port, 0);
+  std::thread serving([&] { fake.listen_after_bind(); });
+  const auto dir = fresh_dir("fetch-bad-listing");
+  const CliResult r = run_cli("fetch " + id + " --all -o '" + (dir / "run" / "gains.json").string() +
+                                  "' --server http://127.0.0.1:" + std::to_string(port),
+                              dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/files/1/name"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "run"));
+  fake.stop();
+  serving.join();
+}
+
 // `ftctune fetch` builds its default path from the server's name for the job; a name that is not
 // one safe folder name (separators, "..", a leading dot) is not used: the files go under the
 // job's id instead, and nothing lands outside out/.

@@ -437,8 +437,11 @@ json read_json_file(const std::filesystem::path& file) {
 }
 
 // The cells of row `row` (0: the first after the header) of trials.csv under `names`.
+// The cells `names` of row `row` of trials.csv; a row it does not have is an error of the
+// document that named it (`source` at `path`).
 std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t row,
-                                const std::vector<std::string>& names) {
+                                const std::vector<std::string>& names, const std::string& source,
+                                const std::string& path) {
   std::ifstream in(file);
   std::string line;
   const auto split = [](const std::string& l) {
@@ -455,7 +458,9 @@ std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t r
   const std::vector<std::string> header = split(line);
   for (std::size_t i = 0; i <= row; ++i)
     if (!std::getline(in, line))
-      throw InputError(file.string(), "", "has no row for trial " + std::to_string(row));
+      throw InputError(source, path,
+                       "is trial " + std::to_string(row) + ", a row " + file.string() +
+                           " does not have");
   const std::vector<std::string> cells = split(line);
   std::vector<double> out;
   for (const std::string& n : names) {
@@ -480,14 +485,31 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
                      "the run's job has fewer than two soft goals: it has no front to pick from");
   Front front = front_from_json(job, read_json_file(run / "front.json"));
   const std::size_t i = pick_point(job, front, rule);
+  const std::string gains_file = (run / "gains.json").string();
   json g = read_json_file(run / "gains.json");
+  if (!g.is_object()) throw InputError(gains_file, "", "expected an object");
+  if (!g.contains("goals") || !g["goals"].is_object())
+    throw InputError(gains_file, "/goals", "expected an object (the run's goals)");
+  if (!g["goals"].contains("goals") || !g["goals"]["goals"].is_array() ||
+      g["goals"]["goals"].size() != job.goals.size())
+    throw InputError(gains_file, "/goals/goals",
+                     "expected an array of the job's " + std::to_string(job.goals.size()) +
+                         " goals");
+  for (std::size_t k = 0; k < job.goals.size(); ++k)
+    if (!g["goals"]["goals"][k].is_object())
+      throw InputError(gains_file, "/goals/goals/" + std::to_string(k), "expected an object");
+  for (const char* key : {"controller", "tuned", "objective"})
+    if (g.contains(key) && !g[key].is_object())
+      throw InputError(gains_file, std::string("/") + key, "expected an object");
   const FrontPoint& p = front.points[i];
   for (std::size_t j = 0; j < job.tuning->parameters.size(); ++j) {
     const std::string& name = job.tuning->parameters[j].name;
     g["controller"][name] = p.parameters[j];
     g["tuned"][name] = p.parameters[j];
   }
-  const std::vector<double> cells = trial_cells(run / "trials.csv", p.trial, {"objective", "fitness"});
+  const std::vector<double> cells = trial_cells(run / "trials.csv", p.trial, {"objective", "fitness"},
+                                             (run / "front.json").string(),
+                                             "/points/" + std::to_string(i) + "/trial");
   g["objective"]["value"] = json_number(cells[0]);
   g["fitness"] = json_number(cells[1]);
   json& goals = g["goals"];
