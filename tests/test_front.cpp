@@ -3,8 +3,12 @@
 // soft goals (front.json, reproducibility across threads and a resume, pick's gains file).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <random>
+#include <tuple>
+#include <utility>
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
@@ -88,6 +92,60 @@ TEST(Front, OfHandMadeTrialsWithReferenceKneeAndHypervolumePerIteration) {
   EXPECT_NEAR(hv[0], 1.41, 1e-12);
   EXPECT_NEAR(hv[1], f.hypervolume, 1e-12);
   EXPECT_EQ(hv[2], hv[1]);
+}
+
+TEST(Front, IncrementalHypervolumeHistoryIsTheFromScratchOne) {
+  // A few hundred trials on a coarse grid (repeats and ties in one goal), some infeasible, over
+  // 12 iterations: the front and the hypervolume after each iteration as the definition
+  // computes them from scratch (every earlier trial, all pairs), to the bit.
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  std::mt19937_64 rng(26);
+  std::vector<tune::Trial> trials;
+  for (int it = 0; it < 12; ++it)
+    for (int k = 0; k < 25; ++k) {
+      // A trade-off with scatter: the second goal falls as the first rises.
+      const auto a = static_cast<double>(rng() % 40), b = 39 - a + static_cast<double>(rng() % 6);
+      const double ise = std::pow(10.0, a / 10 - 2), tv = std::pow(10.0, b / 10 - 2);
+      trials.push_back(trial(it, ise, tv, rng() % 7 == 0 ? 0.5 : 0.0));
+    }
+  const auto from_scratch = [&](std::size_t count) {
+    std::vector<std::size_t> kept;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (trials[i].violation > 0) continue;
+      bool repeat = false;
+      for (std::size_t j : kept)
+        repeat = repeat || (trials[j].goals[0] == trials[i].goals[0] &&
+                            trials[j].goals[1] == trials[i].goals[1]);
+      if (!repeat) kept.push_back(i);
+    }
+    std::vector<std::size_t> front;
+    for (std::size_t i : kept) {
+      bool dominated = false;
+      for (std::size_t j : kept) {
+        const double *a = trials[j].goals.data(), *b = trials[i].goals.data();
+        dominated = dominated ||
+                    (a[0] <= b[0] && a[1] <= b[1] && (a[0] < b[0] || a[1] < b[1]));
+      }
+      if (!dominated) front.push_back(i);
+    }
+    std::sort(front.begin(), front.end(), [&](std::size_t a, std::size_t b) {
+      return std::make_pair(trials[a].goals[0], trials[a].goals[1]) <
+             std::make_pair(trials[b].goals[0], trials[b].goals[1]);
+    });
+    return front;
+  };
+  const tune::Front f = tune::make_front(job, trials);
+  ASSERT_GE(f.points.size(), 3u);
+  const std::vector<double> hv = tune::hypervolume_history(job, trials, f.reference, 11);
+  ASSERT_EQ(hv.size(), 12u);
+  for (int it = 0; it < 12; ++it) {
+    const std::size_t count = static_cast<std::size_t>(25 * (it + 1));
+    const std::vector<std::size_t> front = from_scratch(count);
+    EXPECT_EQ(tune::front_trials(job, trials, count), front) << it;
+    std::vector<std::vector<double>> p;
+    for (std::size_t i : front) p.push_back(tune::log_soft_goals(trials[i].goals, {0, 1}));
+    EXPECT_EQ(hv[static_cast<std::size_t>(it)], tune::hypervolume(p, f.reference)) << it;
+  }
 }
 
 TEST(Front, PointsWithinTheNoiseFloorOfTheirNeighbourAreFlagged) {
@@ -222,6 +280,34 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
   const CliResult bad = run_cli("pick '" + dir.string() + "' --rule min:iae", dir);
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("/rule"), std::string::npos) << bad.err;
+
+  // Damaged files: each an InputError naming the file and the JSON path, exit 2.
+  json bad_trial = front;
+  bad_trial["points"][0]["trial"] = 100000;
+  json no_goals = gains;
+  no_goals["goals"]["goals"] = 3;
+  const std::vector<std::tuple<std::string, std::string, std::string>> damaged = {
+      {"gains.json", "[1, 2]", ""},
+      {"gains.json", no_goals.dump(), "/goals/goals"},
+      {"front.json", bad_trial.dump(), "/points/0/trial"}};
+  for (const auto& [file, text, path] : damaged) {
+    const auto broken = fresh_dir("pick-damaged");
+    tune::write_output_files(files, broken);
+    {
+      std::ofstream f(broken / file);
+      f << text;
+    }
+    try {
+      tune::pick_gains(broken, "index:0");
+      ADD_FAILURE() << file << " " << path << " was not refused";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.source(), (broken / file).string()) << path;
+      ASSERT_FALSE(e.errors().empty());
+      EXPECT_EQ(e.errors().at(0).path, path);
+    }
+    const CliResult refused = run_cli("pick '" + broken.string() + "' --rule index:0", broken);
+    EXPECT_EQ(refused.exit_code, 2) << file << " " << path << ": " << refused.err;
+  }
 }
 
 TEST(Front, WithoutAFeasibleTrialTheFrontIsEmptyAndTheGainsAreNotDeployable) {
@@ -240,6 +326,56 @@ TEST(Front, WithoutAFeasibleTrialTheFrontIsEmptyAndTheGainsAreNotDeployable) {
   EXPECT_EQ(gains["goals"]["feasible"], false);
   EXPECT_FALSE(gains["goals"].contains("front"));
   EXPECT_THROW(runtime::parse_gains(gains, "infeasible"), InputError);  // fitness < 0
+  // The rule says why there is no front point, not the rule of one soft goal.
+  EXPECT_NE(gains["goals"]["rule"].get<std::string>().find("front (front.json) is empty"),
+            std::string::npos)
+      << gains["goals"]["rule"];
+}
+
+TEST(Front, AReportOfARunWithAnEmptyFrontSaysNoPointMetTheHardGoals) {
+  const auto dir = fresh_dir("front-empty-report");
+  json j = front_job();
+  j["goals"][2]["at_most"] = 1e-3;  // no gains keep the peak command under 1 mN m
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  {
+    std::ofstream f(dir / "job.json");
+    f << j.dump();
+  }
+  const CliResult r = run_cli("run -q --no-checkpoint --threads 1 --report '" +
+                                  (dir / "job.json").string() + "' --out '" +
+                                  (dir / "out").string() + "'",
+                              dir);
+  // 3: the gains met no hard goal and must not be deployed; the report is written all the same.
+  ASSERT_EQ(r.exit_code, 3) << r.err;
+  ASSERT_TRUE(json::parse(slurp(dir / "out" / "front.json"))["points"].empty());
+  const std::string html = slurp(dir / "out" / "report.html");
+  EXPECT_NE(html.find("No trial of the run met the hard goals"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "figures" / "front-pareto.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "figures" / "front-hypervolume.png"));
+  // `ftctune report` of the same run, too.
+  const CliResult again = run_cli("report '" + (dir / "out").string() + "'", dir);
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+}
+
+TEST(Front, RunWithTheRandomSearchBaselineWritesEveryFile) {
+  // The baseline is random search in the registry's form, which searches for fronts too.
+  const auto dir = fresh_dir("front-baseline");
+  json j = front_job();
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  {
+    std::ofstream f(dir / "job.json");
+    f << j.dump();
+  }
+  const CliResult r = run_cli("run -q --no-checkpoint --threads 1 --baseline '" +
+                                  (dir / "job.json").string() + "' --out '" +
+                                  (dir / "out").string() + "'",
+                              dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f : {"front.json", "gains.json", "history.csv", "history-random.csv"})
+    EXPECT_FALSE(slurp(dir / "out" / f).empty()) << f;
+  // Its history: the header and the same two iterations as the run's.
+  const std::string random = slurp(dir / "out" / "history-random.csv");
+  EXPECT_EQ(std::count(random.begin(), random.end(), '\n'), 3) << random;
 }
 
 TEST(Front, OneSoftGoalRunsWriteNoFront) {

@@ -202,8 +202,14 @@ int fetch_all(Api& api, const std::string& id, const std::string& out, const std
   if (status == "running") {
     sources = {{"/history?format=csv", "history.csv"}, {"/trials", "trials.csv"}};
   } else {
-    const json list = json::parse(api.get("/v1/jobs/" + id + "/files"));
-    for (const json& f : list["files"]) {
+    const std::string listing = "/v1/jobs/" + id + "/files";
+    const json list = json::parse(api.get(listing), nullptr, false);
+    if (!list.is_object() || !list.contains("files") || !list["files"].is_array())
+      throw InputError(listing, "/files", "expected an array of the job's files");
+    for (std::size_t i = 0; i < list["files"].size(); ++i) {
+      const json& f = list["files"][i];
+      if (!f.is_object() || !f.contains("name") || !f["name"].is_string())
+        throw InputError(listing, "/files/" + std::to_string(i) + "/name", "expected a string");
       const std::string file = f["name"];
       // Stored names are the server's: nothing may land outside the folder.
       if (file == "gains.json" || file.empty() || file.front() == '/' ||

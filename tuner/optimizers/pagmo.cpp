@@ -51,6 +51,7 @@
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/optimizers/pareto_bat.hpp"
 #include "ftc/tune/optimizers/state_check.hpp"
 #include "optimizers/pagmo_plugin.hpp"
 
@@ -83,9 +84,6 @@ double point_fitness(const ObjectiveVector& o) {
                                               : 1.0 / f;
   return constrained_fitness(J, o.violation);
 }
-
-// Goal values at or below this count as it on the log scale (a goal that can be 0: saturation).
-constexpr double kLogFloor = 1e-300;
 
 // What a replayed run logs per evaluation, and how that becomes pagmo's objectives. One
 // objective: the fitness J of each candidate. A front: each candidate's objective vector (its
@@ -152,7 +150,8 @@ struct LogOf<ObjectiveVector> {
     return F;
   }
   // Per soft goal: log10 of the goal (the space the front's hypervolume is measured in, so that
-  // goals decades apart weigh alike; values at or below kLogFloor count as it),
+  // goals decades apart weigh alike; values at or below kLogFloor count as it; pareto::log_value,
+  // ftctune's log as the Pareto Bat's, not libm's),
   // kDivergedObjective for one that is not finite. An infeasible candidate gets
   // kDivergedObjective·(2 + V/(1 + V)) in every coordinate: any feasible candidate dominates it,
   // of two infeasible ones the smaller violation V dominates, and equal violations do not
@@ -168,7 +167,7 @@ struct LogOf<ObjectiveVector> {
     }
     for (std::size_t k = 0; k < objectives; ++k) {
       const double v = o.values[k];
-      out.push_back(std::isfinite(v) ? std::log10(std::max(v, kLogFloor)) : kDivergedObjective);
+      out.push_back(std::isfinite(v) ? pareto::log_value(v) : kDivergedObjective);
     }
   }
   static bool better(const ObjectiveVector& a, const ObjectiveVector& b) {

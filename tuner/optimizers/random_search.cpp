@@ -1,6 +1,7 @@
 #include "ftc/tune/optimizers/random_search.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace ftc::tune {
 
@@ -39,12 +40,19 @@ AlgorithmPtr random_search_like(const AlgorithmSettings& other) {
   // Whole generations within the other's budget, at least one.
   s.iterations = static_cast<int>(std::max<std::int64_t>(
       0, other.evaluations() / std::max(1, other.population()) - 1));
-  return std::make_shared<StructSettings<RandomSearchSettings>>(
-      "random", s, random_shape(),
-      [](const RandomSearchSettings& r, std::uint64_t seed, const SearchSpace& space) {
-        return std::make_unique<RandomSearch>(r, seed, space);
-      },
-      std::vector<std::string>{});
+  // Parsed by the registry's entry, so that it is in the registry's form: one that also
+  // searches for fronts, which a job of two or more soft goals needs (a run of one objective
+  // does not change by a bit: the front form forwards everything else).
+  const AlgorithmInfo* info = find_algorithm("random");
+  std::vector<FieldError> errs;
+  AlgorithmPtr a = info ? info->parse(nlohmann::json{{"type", "random"},
+                                                     {"population", s.population},
+                                                     {"iterations", s.iterations}},
+                                      "/tuning/algorithm", errs)
+                        : nullptr;
+  throw_if_errors("algorithm", std::move(errs));
+  if (!a) throw std::logic_error("random search is not in the algorithm registry");
+  return a;
 }
 
 RandomSearch::RandomSearch(const RandomSearchSettings& settings, std::uint64_t seed,

@@ -142,10 +142,14 @@ Front parse_front(const std::string& text, const std::string& file, std::size_t 
   }
   const std::size_t G = front.goals.size(), S = front.soft.size();
   if (S < 2) r.fail("/goals", "a front needs two or more soft goals");
-  front.reference_point = r.numbers(r.member(j, "reference_point", ""), "/reference_point", S, NAN);
-  for (std::size_t k = 0; k < S; ++k)
-    if (!std::isfinite(front.reference_point[k]))
-      r.fail("/reference_point/" + std::to_string(k), "expected a number");
+  // A run with no feasible trial has an empty front, and no reference point to measure it by.
+  const json& reference = r.member(j, "reference_point", "");
+  if (!(reference.is_array() && reference.empty())) {
+    front.reference_point = r.numbers(reference, "/reference_point", S, NAN);
+    for (std::size_t k = 0; k < S; ++k)
+      if (!std::isfinite(front.reference_point[k]))
+        r.fail("/reference_point/" + std::to_string(k), "expected a number");
+  }
   front.hypervolume = r.number(r.member(j, "hypervolume", ""), "/hypervolume", NAN);
 
   const json& points = r.array(j, "points", "");
@@ -182,8 +186,10 @@ Front parse_front(const std::string& text, const std::string& file, std::size_t 
     }
     front.points.push_back(std::move(point));
   }
-  if (front.points.empty()) r.fail("/points", "holds no point");
-  if (j.contains("picked")) {
+  if (!front.points.empty() && front.reference_point.empty())
+    r.fail("/reference_point", "is empty, but the front has points");
+  // null: no point was picked (an empty front).
+  if (j.contains("picked") && !(j["picked"].is_null() && front.points.empty())) {
     const json& picked = j["picked"];
     long long index = -1;
     if (!json_io::json_to_int(r.member(picked, "index", "/picked"), index) || index < 0 ||
@@ -401,6 +407,9 @@ std::string reference_text(const Front& front) {
 
 std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& front,
                                        FigureFormat fmt) {
+  // An empty front (no trial met the hard goals): no point to draw, and a hypervolume that is 0
+  // in every iteration, against no reference point. The report says so in words.
+  if (front.points.empty()) return {};
   const std::string ext = plot::extension(fmt);
   const std::size_t S = front.soft.size();
   std::ostringstream g;

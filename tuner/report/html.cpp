@@ -189,6 +189,13 @@ void front_section(const fs::path& run_dir, const Front& front,
                    const std::vector<Figure>& figures, std::ostringstream& h) {
   const std::size_t G = front.goals.size();
   const auto value = [](double v) { return detail::format_number(v, "%.6g"); };
+  if (front.points.empty()) {
+    h << "<h2>Pareto front</h2>\n<p class=\"front\">No trial of the run met the hard goals, so "
+         "its Pareto front is empty: there is no trade-off to show and no point was picked. "
+         "gains.json holds the trial with the least total violation of the hard goals, which is "
+         "not deployable (its fitness is negative).</p>\n";
+    return;
+  }
   std::vector<std::string> param_names;
   for (const auto& [name, v] : front.points.front().parameters) param_names.push_back(name);
   // Per point, the other points it cannot be told apart from.

@@ -80,9 +80,8 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
         return names;
       }());
   std::vector<report_detail::Figure> front_figures;
-  if (front) {
-    front_figures = report_detail::draw_front_figures(run_dir, *front, format);
-  } else {
+  if (front) front_figures = report_detail::draw_front_figures(run_dir, *front, format);
+  if (front_figures.empty()) {  // no front, or an empty one
     std::error_code ec;
     fs::remove(run_dir / "figures" / "front.gp", ec);  // of an earlier run's front
   }

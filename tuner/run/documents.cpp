@@ -158,6 +158,11 @@ json gains_document(const TuningOutcome& r) {
     g["goals"]["rule"] =
         "feasible beats infeasible; between feasible candidates the soft goal decides, between "
         "infeasible ones the lesser total violation";
+    if (r.front && r.front->points.empty())
+      g["goals"]["rule"] =
+          "no trial met the hard goals, so the Pareto front (front.json) is empty and no point "
+          "was picked: these are the gains of the trial with the least total violation of the "
+          "hard goals";
     if (r.front && !r.front->points.empty()) {
       g["goals"]["rule"] = front_rule_text(*r.front);
       g["goals"]["front"] = {{"index", r.front->picked},

@@ -5,7 +5,9 @@
 #include <cstdlib>
 #include <fstream>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <stdexcept>
 
@@ -124,35 +126,49 @@ std::vector<double> log_soft_goals(const std::vector<double>& goals,
   return out;
 }
 
-std::vector<std::size_t> front_trials(const Job& job, const std::vector<Trial>& trials,
-                                      std::size_t count) {
-  const std::vector<std::size_t> soft = soft_goals(job);
-  std::vector<std::size_t> candidates;
-  std::vector<ObjectiveVector> F;
-  for (std::size_t i = 0; i < std::min(count, trials.size()); ++i) {
-    ObjectiveVector o = soft_vector(trials[i], soft);
+namespace {
+
+// The non-dominated set of the feasible trials offered so far whose soft goals are all finite,
+// one trial per distinct vector of soft goals (the first offered), ordered by the vector
+// (lexicographic). Offering a trial costs one pass over the set: a trial dominated by a member,
+// or equal to one, is not kept; the members it dominates leave (a trial they dominated is
+// dominated by it too, so no trial that left ever returns).
+class NonDominated {
+ public:
+  explicit NonDominated(std::vector<std::size_t> soft) : soft_(std::move(soft)) {}
+
+  void offer(const std::vector<Trial>& trials, std::size_t i) {
+    ObjectiveVector o = soft_vector(trials[i], soft_);
     if (!o.feasible() ||
         !std::all_of(o.values.begin(), o.values.end(), [](double v) { return std::isfinite(v); }))
-      continue;
-    bool duplicate = false;
-    for (const ObjectiveVector& g : F) duplicate = duplicate || g.values == o.values;
-    if (duplicate) continue;
-    candidates.push_back(i);
-    F.push_back(std::move(o));
+      return;
+    if (members_.count(o.values)) return;
+    for (const auto& [values, index] : members_)
+      if (pareto::dominates(ObjectiveVector{values, 0.0}, o)) return;
+    for (auto it = members_.begin(); it != members_.end();)
+      it = pareto::dominates(o, ObjectiveVector{it->first, 0.0}) ? members_.erase(it)
+                                                                 : std::next(it);
+    members_.emplace(std::move(o.values), i);
   }
-  std::vector<std::size_t> front;
-  for (std::size_t i = 0; i < F.size(); ++i) {
-    bool dominated = false;
-    for (std::size_t j = 0; j < F.size() && !dominated; ++j)
-      dominated = j != i && pareto::dominates(F[j], F[i]);
-    if (!dominated) front.push_back(i);
+  std::vector<std::size_t> indices() const {
+    std::vector<std::size_t> out;
+    out.reserve(members_.size());
+    for (const auto& [values, index] : members_) out.push_back(index);
+    return out;
   }
-  std::sort(front.begin(), front.end(), [&](std::size_t a, std::size_t b) {
-    if (F[a].values != F[b].values) return F[a].values < F[b].values;  // lexicographic
-    return a < b;
-  });
-  for (std::size_t& i : front) i = candidates[i];
-  return front;
+
+ private:
+  std::vector<std::size_t> soft_;
+  std::map<std::vector<double>, std::size_t> members_;
+};
+
+}  // namespace
+
+std::vector<std::size_t> front_trials(const Job& job, const std::vector<Trial>& trials,
+                                      std::size_t count) {
+  NonDominated front(soft_goals(job));
+  for (std::size_t i = 0; i < std::min(count, trials.size()); ++i) front.offer(trials, i);
+  return front.indices();
 }
 
 std::vector<double> reference_point(const std::vector<std::vector<double>>& p) {
@@ -167,13 +183,15 @@ std::vector<double> reference_point(const std::vector<std::vector<double>>& p) {
 std::vector<double> hypervolume_history(const Job& job, const std::vector<Trial>& trials,
                                         const std::vector<double>& reference, int last) {
   const std::vector<std::size_t> soft = soft_goals(job);
+  // The front after each iteration, kept across iterations: each offers only its own trials.
+  NonDominated front(soft);
   std::vector<double> hv;
   std::size_t count = 0;
   for (int it = 0; it <= last; ++it) {
-    while (count < trials.size() && trials[count].iteration <= it) ++count;
+    for (; count < trials.size() && trials[count].iteration <= it; ++count)
+      front.offer(trials, count);
     std::vector<std::vector<double>> p;
-    for (std::size_t i : front_trials(job, trials, count))
-      p.push_back(log_soft_goals(trials[i].goals, soft));
+    for (std::size_t i : front.indices()) p.push_back(log_soft_goals(trials[i].goals, soft));
     hv.push_back(reference.empty() ? 0.0 : hypervolume(p, reference));
   }
   return hv;
@@ -419,8 +437,11 @@ json read_json_file(const std::filesystem::path& file) {
 }
 
 // The cells of row `row` (0: the first after the header) of trials.csv under `names`.
+// The cells `names` of row `row` of trials.csv; a row it does not have is an error of the
+// document that named it (`source` at `path`).
 std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t row,
-                                const std::vector<std::string>& names) {
+                                const std::vector<std::string>& names, const std::string& source,
+                                const std::string& path) {
   std::ifstream in(file);
   std::string line;
   const auto split = [](const std::string& l) {
@@ -437,7 +458,9 @@ std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t r
   const std::vector<std::string> header = split(line);
   for (std::size_t i = 0; i <= row; ++i)
     if (!std::getline(in, line))
-      throw InputError(file.string(), "", "has no row for trial " + std::to_string(row));
+      throw InputError(source, path,
+                       "is trial " + std::to_string(row) + ", a row " + file.string() +
+                           " does not have");
   const std::vector<std::string> cells = split(line);
   std::vector<double> out;
   for (const std::string& n : names) {
@@ -462,14 +485,31 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
                      "the run's job has fewer than two soft goals: it has no front to pick from");
   Front front = front_from_json(job, read_json_file(run / "front.json"));
   const std::size_t i = pick_point(job, front, rule);
+  const std::string gains_file = (run / "gains.json").string();
   json g = read_json_file(run / "gains.json");
+  if (!g.is_object()) throw InputError(gains_file, "", "expected an object");
+  if (!g.contains("goals") || !g["goals"].is_object())
+    throw InputError(gains_file, "/goals", "expected an object (the run's goals)");
+  if (!g["goals"].contains("goals") || !g["goals"]["goals"].is_array() ||
+      g["goals"]["goals"].size() != job.goals.size())
+    throw InputError(gains_file, "/goals/goals",
+                     "expected an array of the job's " + std::to_string(job.goals.size()) +
+                         " goals");
+  for (std::size_t k = 0; k < job.goals.size(); ++k)
+    if (!g["goals"]["goals"][k].is_object())
+      throw InputError(gains_file, "/goals/goals/" + std::to_string(k), "expected an object");
+  for (const char* key : {"controller", "tuned", "objective"})
+    if (g.contains(key) && !g[key].is_object())
+      throw InputError(gains_file, std::string("/") + key, "expected an object");
   const FrontPoint& p = front.points[i];
   for (std::size_t j = 0; j < job.tuning->parameters.size(); ++j) {
     const std::string& name = job.tuning->parameters[j].name;
     g["controller"][name] = p.parameters[j];
     g["tuned"][name] = p.parameters[j];
   }
-  const std::vector<double> cells = trial_cells(run / "trials.csv", p.trial, {"objective", "fitness"});
+  const std::vector<double> cells = trial_cells(run / "trials.csv", p.trial, {"objective", "fitness"},
+                                             (run / "front.json").string(),
+                                             "/points/" + std::to_string(i) + "/trial");
   g["objective"]["value"] = json_number(cells[0]);
   g["fitness"] = json_number(cells[1]);
   json& goals = g["goals"];

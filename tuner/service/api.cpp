@@ -246,6 +246,24 @@ bool loopback_host(const std::string& name, const std::string& bind) {
   return name == b || name == "[" + b + "]";
 }
 
+// A request a page of another origin sent: its Origin is not this service's (http://<Host>), or,
+// without an Origin, the browser says it is cross-site.
+bool cross_origin(const httplib::Request& req) {
+  return req.has_header("Origin")
+             ? lower(req.get_header_value("Origin")) != "http://" + lower(req.get_header_value("Host"))
+             : lower(req.get_header_value("Sec-Fetch-Site")) == "cross-site";
+}
+
+// A peer address of this machine's loopback: 127.0.0.0/8, ::1 or an IPv4-mapped 127.x.
+bool loopback_address(const std::string& address) {
+  in_addr a{};
+  if (::inet_pton(AF_INET, address.c_str(), &a) == 1) return (ntohl(a.s_addr) >> 24) == 127;
+  in6_addr b{};
+  if (::inet_pton(AF_INET6, address.c_str(), &b) == 1)
+    return IN6_IS_ADDR_LOOPBACK(&b) || (IN6_IS_ADDR_V4MAPPED(&b) && b.s6_addr[12] == 127);
+  return false;
+}
+
 }  // namespace
 
 json Api::view(const JobRecord& r) {
@@ -588,12 +606,22 @@ void Api::changed(const std::string& id) noexcept {
 // iteration, finished, cancelled), `deleted` when it is gone; a comment after 15 s without one
 // keeps the connection alive; a closed page's stream ends within a quarter of a second. With `job` (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each
 // stream holds one of the server's connection threads, so at most --max-event-streams are open
-// at once; more are answered 503. One client address may hold at most
+// at once; more are answered 503. One client address other than loopback may hold at most
 // --max-event-streams-per-client of them (429 past that), so that one client cannot take them
-// all.
+// all; without a token the service is on loopback, where every local page shares one address,
+// so there only the global cap applies, and a page of another origin gets no stream (403
+// cross_origin: an EventSource of a foreign page would hold a slot).
 void Api::events(const httplib::Request& req, const std::string& job, httplib::Response& res) {
+  if (!opt_.token && cross_origin(req)) {
+    const std::string origin = req.get_header_value("Origin");
+    return send_error(res, 403, "cross_origin",
+                      "an event stream for a page of another origin (" +
+                          (origin.empty() ? std::string("a cross-site page") : origin) +
+                          ") is refused: only the service's own dashboard may hold one");
+  }
   EventHub::Refused why = EventHub::Refused::full;
-  std::optional<EventHub::Stream> stream = hub_.open(req.remote_addr, &why);
+  std::optional<EventHub::Stream> stream =
+      hub_.open(loopback_address(req.remote_addr) ? "" : req.remote_addr, &why);
   if (!stream && why == EventHub::Refused::client_full) {
     res.set_header("Retry-After", "10");
     return send_error(res, 429, "too_many_streams",
@@ -646,8 +674,9 @@ void Api::events(const httplib::Request& req, const std::string& job, httplib::R
 // The partial results of a running job, from its last checkpoint: history and trials as they
 // stand, and gains.json for its best so far (compared as a finished run's best is). Each is made
 // at most once per checkpoint: kept per running job until its next iteration, made by one
-// request at a time (the others wait for it, then take what it made), and dropped once the job
-// stops running. N requests cost one comparison, however they interleave across jobs.
+// request at a time per job (the others of that job wait for it, then take what it made; other
+// jobs' requests do not), and dropped once the job stops running. N requests cost one comparison
+// per job and checkpoint, however they interleave across jobs.
 void Api::running_result(const httplib::Request& req, httplib::Response& res,
                          const JobRecord& job, const std::string& what) {
   const std::string& id = job.id;
@@ -672,7 +701,8 @@ void Api::running_result(const httplib::Request& req, httplib::Response& res,
   };
   std::shared_ptr<const PartialResults> p = kept();
   if (!p) {
-    std::lock_guard<std::mutex> making(partial_making_mutex_);
+    const std::shared_ptr<std::mutex> job_mutex = making_mutex(id);
+    std::lock_guard<std::mutex> making(*job_mutex);
     p = kept();  // made by the request this one waited for
     if (!p) {
       const std::optional<JobStore::Checkpoint> c = store_.checkpoint_with_trials(id);
@@ -713,6 +743,18 @@ void Api::running_result(const httplib::Request& req, httplib::Response& res,
   if (what == "trials") return res.set_content(p->trials, "text/csv");
   if (format == "json") return res.set_content(p->history_rows, "application/json");
   res.set_content(p->history, "text/csv");
+}
+
+std::shared_ptr<std::mutex> Api::making_mutex(const std::string& id) {
+  std::lock_guard<std::mutex> lock(partial_mutex_);
+  for (auto it = making_.begin(); it != making_.end();)
+    it = it->first != id && it->second.expired() ? making_.erase(it) : std::next(it);
+  std::shared_ptr<std::mutex> m = making_[id].lock();
+  if (!m) {
+    m = std::make_shared<std::mutex>();
+    making_[id] = m;
+  }
+  return m;
 }
 
 TuningOutcome Api::outcome_of(const std::string& id, const JobStore::Checkpoint& c) {
@@ -842,10 +884,7 @@ bool Api::same_origin(const httplib::Request& req, httplib::Response& res) const
   const std::string& m = req.method;
   if (m == "GET" || m == "HEAD" || m == "OPTIONS") return true;
   const std::string origin = req.get_header_value("Origin");
-  const bool cross = req.has_header("Origin")
-                         ? lower(origin) != "http://" + lower(host)
-                         : lower(req.get_header_value("Sec-Fetch-Site")) == "cross-site";
-  if (cross) {
+  if (cross_origin(req)) {
     send_error(res, 403, "cross_origin",
                "a " + m + " from a page of another origin (" +
                    (origin.empty() ? std::string("a cross-site page") : origin) +

@@ -93,8 +93,11 @@ class Api {
     std::string trials, history, history_rows;
     std::optional<std::string> gains;
   };
-  std::mutex partial_mutex_;         // guards partial_
-  std::mutex partial_making_mutex_;  // held by the one request making partial results
+  std::mutex partial_mutex_;  // guards partial_ and making_
+  // Per job, held by the one request making its partial results (one job's comparison does not
+  // hold up another's trials): shared by the requests that use it, dropped when none does.
+  std::map<std::string, std::weak_ptr<std::mutex>> making_;
+  std::shared_ptr<std::mutex> making_mutex(const std::string& id);
   std::map<std::string, std::shared_ptr<const PartialResults>> partial_;  // by running job
 };
 

@@ -39,12 +39,14 @@ std::optional<EventHub::Stream> EventHub::open(const std::string& client, Refuse
     return std::nullopt;
   };
   if (closed_) return refuse(Refused::closed);
-  const auto it = per_client_.find(client);
-  if (max_per_client_ > 0 && it != per_client_.end() && it->second >= max_per_client_)
-    return refuse(Refused::client_full);
+  if (!client.empty()) {
+    const auto it = per_client_.find(client);
+    if (max_per_client_ > 0 && it != per_client_.end() && it->second >= max_per_client_)
+      return refuse(Refused::client_full);
+  }
   if (streams_ >= max_streams_) return refuse(Refused::full);
   ++streams_;
-  ++per_client_[client];
+  if (!client.empty()) ++per_client_[client];
   return Stream(this, seq_ + 1, client);
 }
 
@@ -52,6 +54,7 @@ EventHub::Stream::~Stream() {
   if (!hub_) return;
   std::lock_guard<std::mutex> lock(hub_->mutex_);
   --hub_->streams_;
+  if (client_.empty()) return;  // not counted per client
   // A client with no stream left holds no entry: the map is as large as the open streams.
   const auto it = hub_->per_client_.find(client_);
   if (it != hub_->per_client_.end() && --it->second == 0) hub_->per_client_.erase(it);

@@ -64,7 +64,9 @@ class EventHub {
   // Why open() gave no stream.
   enum class Refused { full, client_full, closed };
   // A stream of the events from now on for a client at address `client`; nullopt (and why)
-  // when `max_streams` are open, the client has `max_per_client` open, or the hub closed.
+  // when `max_streams` are open, the client has `max_per_client` open, or the hub closed. A
+  // client "" (the service's own machine, on loopback) is not counted per client: only
+  // `max_streams` bounds its streams.
   std::optional<Stream> open(const std::string& client = "", Refused* why = nullptr);
 
  private:

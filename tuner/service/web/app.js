@@ -678,6 +678,11 @@ function jobView(main, id) {
                                   (soft.length > 2 ? ' (first two of ' + soft.length + ' soft goals)' : '') +
                                   ', hypervolume ' + fmt(front.hypervolume, 4)}),
                     el('div', {class: 'chart-box'}, canvas));
+    // A front without a feasible point: nothing to draw, and no point picked.
+    if (!front.points.length || !front.picked) {
+      frontBox.append(el('h3', {text: 'Pareto front: empty (no trial met the hard goals)'}));
+      return;
+    }
     const picked = front.points[front.picked.index];
     const datasets = [{label: 'front', data: points, backgroundColor: '#440154', pointRadius: 3}];
     if (picked && drawable(picked.goals))

@@ -19,7 +19,8 @@
 // initial states) gives each goal's relative spread at the picked point. Two neighbouring
 // points of the front (in first-goal order) whose soft goals all differ by no more than that
 // spread (relative, of the larger value) are not a trade-off: the later one is flagged
-// "within_noise_of" the earlier one's index, and the knee and min rules skip flagged points.
+// "within_noise_of" the earlier one's index. The flag is information only: flagged points stay
+// in the front and its hypervolume, and every rule (the knee, min, limit, index) may pick one.
 #include <cstddef>
 #include <filesystem>
 #include <optional>
