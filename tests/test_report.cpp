@@ -807,7 +807,7 @@ TEST(FrontReport, ScatterMarksPickedBaselineComparedAndNoiseAndHypervolumeStates
   for (const char* row : {"0.125,9000\n", "0.13,8950\n", "8,400\n",
                           "2,1077,1.94,2.06,1071.615,1082.385\n", "8,400,8,8,400,400\n"})
     EXPECT_NE(gp.find(row), std::string::npos) << row;
-  // #0 and #1 lie within each other's noise floor on both soft goals: linked, not a trade-off.
+  // #0 and #1 differ by less than the noise floor on both soft goals: linked, not a trade-off.
   EXPECT_NE(gp.find("0.125,9000\n0.13,8950\n\n"), std::string::npos);
   EXPECT_NE(gp.find("not a trade-off"), std::string::npos);
   EXPECT_NE(figures[0].caption.find("not a proven optimum"), std::string::npos);
@@ -940,7 +940,8 @@ TEST(FrontReport, PageHoldsTheFrontTableAndBothFigures) {
         "<td>15</td><td>yes</td><td>0</td><td>5 %</td><td>1 %</td><td>–</td><td>5</td>"
         "<td>picked (knee)</td></tr>",
         "<td>within the noise floor of #1</td>", "<td>within the noise floor of #0</td>",
-        "2 point(s) lie within another's noise floor on every soft goal",
+        "2 point(s) differ from another by no more than the noise floor of one of the two on "
+        "every soft goal",
         "<tr class=\"compared\"><td>Table 1</td>", "<td>PI-FOSMC (job) (job's gains)</td>"})
     EXPECT_NE(html.find(text), std::string::npos) << text;
   EXPECT_EQ(html.find("optimal"), std::string::npos);

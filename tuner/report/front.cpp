@@ -248,10 +248,14 @@ bool within_noise(const Front& front, std::size_t a, std::size_t b) {
   const FrontPoint& q = front.points.at(b);
   if (p.within_noise_of == b || q.within_noise_of == a) return true;
   for (std::size_t g : front.soft) {
-    const double u = p.goals[g], v = q.goals[g], fu = p.noise_floor[g], fv = q.noise_floor[g];
-    if (!std::isfinite(u) || !std::isfinite(v) || !std::isfinite(fu) || !std::isfinite(fv))
+    const double u = p.goals[g], v = q.goals[g];
+    const auto floor = [g](const FrontPoint& x) {  // NaN where the run measured none
+      return std::isfinite(x.goals[g]) ? x.noise_floor[g] * std::fabs(x.goals[g]) : NAN;
+    };
+    const double fu = floor(p), fv = floor(q);
+    if (!std::isfinite(fu) && !std::isfinite(fv)) return false;
+    if (!(std::fabs(u - v) <= std::max(std::isfinite(fu) ? fu : 0.0, std::isfinite(fv) ? fv : 0.0)))
       return false;
-    if (std::fabs(u - v) > 0.5 * (fu * std::fabs(u) + fv * std::fabs(v))) return false;
   }
   return true;
 }
@@ -487,7 +491,7 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
              gp("noise floor (band of one relative spread)") + ", ";
     if (!links.empty())
       cmd += block(links) + " using 1:2 with lines dt 2 lw 1.5 lc rgb 'gray30' title " +
-             gp("within each other's noise floor: not a trade-off") + ", ";
+             gp("within one's noise floor on every goal: not a trade-off") + ", ";
     if (!pts.empty())
       cmd += block(pts) + " using 1:2 with points pt 7 ps 1.1 lc rgb '" + front_colour +
              "' title " + gp("front: tuned, non-dominated points") + ", ";
@@ -541,11 +545,11 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       "circled and the compared controllers labelled. Axes are logarithmic where every value is "
       "positive. Grey bars span a point's noise floor where the run measured it (one relative "
       "spread across its perturbed re-runs, centred on the value)";
-  caption += any_noise_pair ? "; dashed links join points that lie within each other's noise "
-                              "floor on every soft goal: their difference is noise, not a "
-                              "trade-off."
-                            : "; no two points are known to lie within each other's noise floor "
-                              "on every soft goal.";
+  caption += any_noise_pair ? "; dashed links join points whose difference on every soft goal "
+                              "is within the noise floor of one of them (the larger of the "
+                              "two): their difference is noise, not a trade-off."
+                            : "; no two points differ by less than the noise floor of one of "
+                              "them on every soft goal.";
   if (!any_noise) caption += " No point's noise floor was measured.";
   if (any_infeasible) caption += " Crosses are points that violate a hard goal.";
   caption += " A compared controller far off the front's scale is drawn at the panel's edge "

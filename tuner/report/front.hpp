@@ -68,8 +68,9 @@ std::optional<Front> read_front(const std::filesystem::path& run_dir, const nloh
                                 const std::vector<std::string>& parameter_order = {});
 
 // Whether the difference between points a and b is noise, not a trade-off: the run says so
-// (one's within_noise_of names the other), or both have noise floors measured and their noise
-// bands v·(1 ± f/2) overlap on every soft goal.
+// (one's within_noise_of names the other), or on every soft goal |u - v| <= max(f_u·|u|, f_v·|v|)
+// with each point's own noise floor f (one not measured does not count; neither measured: not
+// noise), the rule of the run's within_noise_of (ftc/tune/run/front.hpp), for any two points.
 bool within_noise(const Front& front, std::size_t a, std::size_t b);
 
 // Writes figures/front.gp (the pairwise scatter and the hypervolume over the iterations of

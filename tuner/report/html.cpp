@@ -218,10 +218,11 @@ void front_section(const fs::path& run_dir, const Front& front,
   h << " The noise floor is each goal's relative spread over a point's perturbed re-runs, where "
        "the run measured it (\u2013 elsewhere); ";
   if (twinned)
-    h << twinned << " point(s) lie within another's noise floor on every soft goal (marked "
-                    "below): their differences are noise, not a trade-off.";
+    h << twinned << " point(s) differ from another by no more than the noise floor of one of "
+                    "the two on every soft goal (marked below): their differences are noise, "
+                    "not a trade-off.";
   else
-    h << "no two points are known to lie within each other's noise floor on every soft goal.";
+    h << "no two points differ by less than the noise floor of one of them on every soft goal.";
   h << "</p>\n<table class=\"front\"><tr><th>#</th>";
   for (const std::string& n : param_names) h << "<th>" << html_escape(n) << "</th>";
   for (const FrontGoal& g : front.goals)

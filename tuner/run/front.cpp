@@ -216,24 +216,31 @@ Front make_front(const Job& job, const std::vector<Trial>& trials) {
   return f;
 }
 
-void apply_noise_floor(Front& front, const std::vector<std::optional<double>>& spread) {
-  if (front.points.empty()) return;
-  front.points[front.picked].noise_floor = spread;
-  for (std::size_t i = 1; i < front.points.size(); ++i) {
-    const FrontPoint &a = front.points[i - 1], &b = front.points[i];
-    bool inside = true;
-    for (std::size_t k : front.soft) {
-      const std::optional<double> s = k < spread.size() ? spread[k] : std::nullopt;
-      if (!s || !std::isfinite(*s)) {
-        inside = false;
-        break;
-      }
-      inside = inside && std::abs(a.goals[k] - b.goals[k]) <=
-                             *s * std::max(std::abs(a.goals[k]), std::abs(b.goals[k]));
-    }
-    front.points[i].within_noise_of =
-        inside ? std::optional<std::size_t>(a.within_noise_of.value_or(i - 1)) : std::nullopt;
+bool within_noise_floor(const Front& front, std::size_t a, std::size_t b) {
+  const FrontPoint &p = front.points.at(a), &q = front.points.at(b);
+  for (std::size_t k : front.soft) {
+    const auto floor = [k](const FrontPoint& x) -> std::optional<double> {
+      const std::optional<double> s = k < x.noise_floor.size() ? x.noise_floor[k] : std::nullopt;
+      if (!s || !std::isfinite(*s) || !std::isfinite(x.goals[k])) return std::nullopt;
+      return *s * std::abs(x.goals[k]);
+    };
+    const std::optional<double> fp = floor(p), fq = floor(q);
+    if (!fp && !fq) return false;
+    if (!(std::abs(p.goals[k] - q.goals[k]) <= std::max(fp.value_or(0.0), fq.value_or(0.0))))
+      return false;
   }
+  return true;
+}
+
+void apply_noise_floor(Front& front,
+                       const std::vector<std::vector<std::optional<double>>>& spreads) {
+  for (std::size_t i = 0; i < front.points.size() && i < spreads.size(); ++i)
+    front.points[i].noise_floor = spreads[i];
+  for (std::size_t i = 0; i < front.points.size(); ++i)
+    front.points[i].within_noise_of =
+        i > 0 && within_noise_floor(front, i - 1, i)
+            ? std::optional<std::size_t>(front.points[i - 1].within_noise_of.value_or(i - 1))
+            : std::nullopt;
 }
 
 std::size_t pick_point(const Job& job, const Front& front, const std::string& rule) {

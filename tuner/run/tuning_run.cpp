@@ -113,6 +113,66 @@ void describe_problem(const TuningProblem& problem, TuningOutcome& r) {
     r.listed_recoverable.push_back(problem.recoverable(i));
 }
 
+// Each controller's extremes over the noise floor's R re-evaluations (SPEC §14): its objective's
+// and each goal's least and greatest value.
+struct PerturbedExtremes {
+  double objective_min = std::numeric_limits<double>::infinity();
+  double objective_max = -std::numeric_limits<double>::infinity();
+  std::vector<double> goal_min, goal_max;
+};
+
+// `controllers` on R copies of the problem whose initial states are nudged (streams
+// kNoiseFloorStream + k, relative size nf.perturbation): one batch per copy, so the evaluator
+// fills its lanes, threads and ranks, and each controller's results come back by its index,
+// whatever else the batch holds.
+std::vector<PerturbedExtremes> perturbed_extremes(
+    const TuningProblem& problem, std::uint64_t seed,
+    std::span<const sim::ControllerConfig> controllers, const NoiseFloor& nf,
+    BatchEvaluator& evaluator) {
+  const std::size_t goals = problem.job().goals.size();
+  std::vector<PerturbedExtremes> ex(controllers.size());
+  for (PerturbedExtremes& e : ex) {
+    e.goal_min.assign(goals, std::numeric_limits<double>::infinity());
+    e.goal_max.assign(goals, -std::numeric_limits<double>::infinity());
+  }
+  for (int k = 0; k < nf.repeats; ++k) {
+    const TuningProblem p =
+        problem.perturbed(seed, kNoiseFloorStream + static_cast<std::uint64_t>(k), nf.perturbation);
+    const std::vector<CandidateOutcome> out = p.evaluate(controllers, evaluator);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      const Evaluation& e = out[i].evaluation;
+      ex[i].objective_min = std::min(ex[i].objective_min, e.objective);
+      ex[i].objective_max = std::max(ex[i].objective_max, e.objective);
+      for (std::size_t g = 0; g < goals && g < e.goals.size(); ++g) {
+        ex[i].goal_min[g] = std::min(ex[i].goal_min[g], e.goals[g]);
+        ex[i].goal_max[g] = std::max(ex[i].goal_max[g], e.goals[g]);
+      }
+    }
+  }
+  return ex;
+}
+
+// Each goal's relative spread (max - min)/|value| at a point whose goal values are `at`; none
+// where the value is 0 or not finite or a re-run's value is not finite.
+std::vector<std::optional<double>> goal_spreads(const PerturbedExtremes& ex,
+                                                const std::vector<double>& at) {
+  std::vector<std::optional<double>> spread(ex.goal_min.size());
+  for (std::size_t g = 0; g < spread.size() && g < at.size(); ++g)
+    if (std::isfinite(ex.goal_max[g]) && std::isfinite(ex.goal_min[g]) && at[g] != 0 &&
+        std::isfinite(at[g]))
+      spread[g] = (ex.goal_max[g] - ex.goal_min[g]) / std::abs(at[g]);
+  return spread;
+}
+
+// The controllers of a front's points, in its order.
+std::vector<sim::ControllerConfig> front_controllers(const TuningProblem& problem,
+                                                     const Front& front) {
+  std::vector<sim::ControllerConfig> c;
+  c.reserve(front.points.size());
+  for (const FrontPoint& p : front.points) c.push_back(problem.controller_with(p.parameters));
+  return c;
+}
+
 // The comparison of r's best controller with the job's own and its compare entries, and the
 // noise floor of the best (tune() after a completed run, compare_best() after a stopped one).
 void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator& evaluator,
@@ -140,38 +200,28 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
     r.comparison[i].outcome = std::move(outcomes[i]);
   }
   r.simulations += static_cast<std::int64_t>(controllers.size() * problem.scenarios());
-  // The noise floor: the winner on R copies of the problem whose initial states are nudged.
+  // The noise floor: the winner (with a front, every point of it) on R copies of the problem
+  // whose initial states are nudged.
   NoiseFloor nf;
-  nf.objective_min = std::numeric_limits<double>::infinity();
-  nf.objective_max = -std::numeric_limits<double>::infinity();
-  // Each goal's extremes over the same re-evaluations (a front's noise floor per goal).
-  std::vector<double> goal_min(job.goals.size(), std::numeric_limits<double>::infinity()),
-      goal_max(job.goals.size(), -std::numeric_limits<double>::infinity());
-  for (int k = 0; k < nf.repeats; ++k) {
-    const TuningProblem p =
-        problem.perturbed(r.seed, kNoiseFloorStream + static_cast<std::uint64_t>(k), nf.perturbation);
-    const Evaluation e =
-        p.evaluate(std::span<const sim::ControllerConfig>(&r.tuned_controller, 1), evaluator)[0]
-            .evaluation;
-    const double v = e.objective;
-    nf.objective_min = std::min(nf.objective_min, v);
-    nf.objective_max = std::max(nf.objective_max, v);
-    for (std::size_t g = 0; g < goal_min.size() && g < e.goals.size(); ++g) {
-      goal_min[g] = std::min(goal_min[g], e.goals[g]);
-      goal_max[g] = std::max(goal_max[g], e.goals[g]);
-    }
-  }
+  std::vector<sim::ControllerConfig> probed{r.tuned_controller};
+  std::size_t tuned_at = 0;
   if (r.front && !r.front->points.empty()) {
-    const std::vector<double>& at = r.best().outcome.evaluation.goals;
-    std::vector<std::optional<double>> spread(job.goals.size());
-    for (std::size_t g = 0; g < spread.size() && g < at.size(); ++g)
-      if (std::isfinite(goal_max[g]) && std::isfinite(goal_min[g]) && at[g] != 0 &&
-          std::isfinite(at[g]))
-        spread[g] = (goal_max[g] - goal_min[g]) / std::abs(at[g]);
-    apply_noise_floor(*r.front, spread);
+    probed = front_controllers(problem, *r.front);
+    tuned_at = r.front->picked;
+    probed[tuned_at] = r.tuned_controller;
   }
-  r.simulations +=
-      static_cast<std::int64_t>(nf.repeats) * static_cast<std::int64_t>(problem.scenarios());
+  const std::vector<PerturbedExtremes> ex =
+      perturbed_extremes(problem, r.seed, probed, nf, evaluator);
+  nf.objective_min = ex[tuned_at].objective_min;
+  nf.objective_max = ex[tuned_at].objective_max;
+  if (r.front && !r.front->points.empty()) {
+    std::vector<std::vector<std::optional<double>>> spreads;
+    for (std::size_t i = 0; i < r.front->points.size(); ++i)
+      spreads.push_back(goal_spreads(ex[i], r.front->points[i].goals));
+    apply_noise_floor(*r.front, spreads);
+  }
+  r.simulations += static_cast<std::int64_t>(nf.repeats) *
+                   static_cast<std::int64_t>(probed.size() * problem.scenarios());
   nf.relative_spread =
       (nf.objective_max - nf.objective_min) / r.best().outcome.evaluation.objective;
   r.noise_floor = nf;

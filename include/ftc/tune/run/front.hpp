@@ -15,12 +15,18 @@
 // (their best points); ties go to the smaller first goal. A front of one or two points: the
 // first.
 //
-// Noise: the run's noise floor (SPEC §14: the picked point re-evaluated R times with nudged
-// initial states) gives each goal's relative spread at the picked point. Two neighbouring
-// points of the front (in first-goal order) whose soft goals all differ by no more than that
-// spread (relative, of the larger value) are not a trade-off: the later one is flagged
-// "within_noise_of" the earlier one's index. The flag is information only: flagged points stay
-// in the front and its hypervolume, and every rule (the knee, min, limit, index) may pick one.
+// Noise: every point of the front is re-evaluated on the R copies of the problem whose initial
+// states are nudged (SPEC §14's noise floor, the same copies for every point, all points in one
+// batch per copy); a goal's noise floor at a point is its relative spread over those runs,
+// (max - min)/|value at the point|, none where that is undefined (a zero or non-finite value).
+// Two neighbouring points a and b of the front (in its order: by the first soft goal) are not a
+// trade-off when on every soft goal |a - b| <= max(f_a·|a|, f_b·|b|), each point with its OWN
+// floor f (a point without a floor on that goal does not count; neither with one: they are told
+// apart). The later one is then flagged "within_noise_of" the first point of the run of such
+// neighbours it ends (a chain a~b~c flags b and c with a's index, though c may be farther from a
+// than its own floor: the chain is one design region, named by its first point). The flag is
+// information only: flagged points stay in the front and its hypervolume, and every rule (the
+// knee, min, limit, index) may pick one.
 #include <cstddef>
 #include <filesystem>
 #include <optional>
@@ -42,7 +48,7 @@ struct FrontPoint {
   std::vector<double> goals;  // every goal's value, in the job's goal order
   double violation = 0.0;     // 0: on the front every point is feasible
   std::size_t trial = 0;      // row of trials.csv
-  // Each goal's relative spread under the noise-floor probe; measured at the picked point only.
+  // Each goal's relative spread at this point under the noise-floor probe (none: undefined).
   std::vector<std::optional<double>> noise_floor;
   std::optional<std::size_t> within_noise_of;  // an earlier point it is not told apart from
 };
@@ -71,9 +77,13 @@ std::vector<double> hypervolume_history(const Job& job, const std::vector<Trial>
                                         const std::vector<double>& reference, int last);
 // The front of a run's trials with its reference point and hypervolume, the knee picked.
 Front make_front(const Job& job, const std::vector<Trial>& trials);
-// Flags the points within the noise floor `spread` (per goal, relative; NaN or missing: none)
-// of their predecessor, and records it as the picked point's noise floor.
-void apply_noise_floor(Front& front, const std::vector<std::optional<double>>& spread);
+// Whether points a and b lie within the noise floor of one of them on every soft goal (rule
+// above).
+bool within_noise_floor(const Front& front, std::size_t a, std::size_t b);
+// Records each point's noise floor (`spreads[i]`: point i's, per goal, relative) and flags the
+// points within the noise floor of their predecessor (rule above).
+void apply_noise_floor(Front& front,
+                       const std::vector<std::vector<std::optional<double>>>& spreads);
 
 // The sentence gains.json records as the rule that chose its point.
 std::string front_rule_text(const Front& front);
