@@ -123,3 +123,12 @@ TEST(Decimal, G9ListMatchesOneByOne) {
     EXPECT_EQ(std::string(buf.data(), end), expected) << count << " numbers";
   }
 }
+
+// The string form the report's gnuplot scripts print numbers with: printf's "%.9g".
+TEST(Decimal, G9StringIsPrintfG9) {
+  for (double v : {0.0, -0.0, 1.0, -2.5, 0.1, 1e-300, 123456789.5, 3e15, 1.0 / 3.0,
+                   std::numeric_limits<double>::infinity(),
+                   -std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::quiet_NaN()})
+    EXPECT_EQ(ftc::tune::detail::g9_string(v), printf_g9(v)) << printf_g9(v);
+}

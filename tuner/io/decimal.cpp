@@ -212,4 +212,9 @@ char* write_f6(char* out, double v) {
   return out + 6;
 }
 
+std::string g9_string(double v) {
+  char buf[48];
+  return std::string(buf, write_g9(buf, v));
+}
+
 }  // namespace ftc::tune::detail

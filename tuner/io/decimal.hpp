@@ -2,6 +2,7 @@
 // Fast decimal output for trajectory CSVs: exactly what printf's "%.9g" and "%.6f" print, at a
 // fraction of the cost of printf or of std::to_chars with a precision. Private to tuner/.
 #include <cstddef>
+#include <string>
 
 namespace ftc::tune::detail {
 
@@ -12,5 +13,7 @@ char* write_g9(char* out, double v);
 // 24 bytes of room per number.
 char* write_g9_list(char* out, const double* v, std::size_t count, char separator);
 char* write_f6(char* out, double v);
+// write_g9's text as a string (the numbers of gnuplot scripts and their data blocks).
+std::string g9_string(double v);
 
 }  // namespace ftc::tune::detail

@@ -27,10 +27,7 @@ std::string capitalised(std::string s) {
   return s;
 }
 
-std::string num(double v) {
-  char buf[48];
-  return std::string(buf, detail::write_g9(buf, v));
-}
+constexpr auto num = &detail::g9_string;  // %.9g, as every number of the gnuplot scripts
 
 // A trajectory CSV, column by column.
 using Columns = std::vector<std::vector<double>>;

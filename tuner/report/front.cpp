@@ -23,10 +23,7 @@ using plot::gp;
 
 namespace {
 
-std::string num(double v) {
-  char buf[48];
-  return std::string(buf, detail::write_g9(buf, v));
-}
+constexpr auto num = &detail::g9_string;  // %.9g, as every number of the gnuplot scripts
 
 const sim::MetricField* metric_field(const std::string& name) {
   for (const sim::MetricField& f : sim::kMetricFields)
