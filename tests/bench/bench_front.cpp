@@ -5,9 +5,11 @@
 // 200 points drawn at random from that grid. Hypervolume on log10 of each goal against the
 // reference point 0.1 decade beyond the grid front's worst value of each goal.
 //
-//   build/tests/ftc_bench_front [threads] [seeds]     (default: all hardware threads, 5 seeds)
+//   build/tests/ftc_bench_front [threads] [seeds] [at_least]
+//                                  (default: all hardware threads, 5 seeds, no check)
 //
-// Prints each hypervolume and its ratio to the grid's. Not a Google Benchmark: it measures
+// Prints each hypervolume and its ratio to the grid's; with at_least (a percentage), exits 1
+// when a seed's ratio is below it (ctest: Bench.ParetoBatFrontKeeps99PercentOfTheGridsHypervolume). Not a Google Benchmark: it measures
 // quality, not time.
 #include <algorithm>
 #include <cmath>
@@ -58,6 +60,9 @@ std::vector<std::vector<double>> front_points(const tune::Job& job,
 int main(int argc, char** argv) {
   const int threads = argc > 1 ? std::atoi(argv[1]) : 0;
   const int seeds = argc > 2 ? std::atoi(argv[2]) : 5;
+  // A third argument makes it a check (ctest): exit 1 when a seed's front has less than that
+  // percentage of the grid's hypervolume.
+  const double at_least = argc > 3 ? std::atof(argv[3]) : 0.0;
   tune::TbbEvaluator evaluator(threads);
 
   // The grid: 41 x 41, Kp linear in [1, 50], the switching gain log-spaced in [2, 200].
@@ -105,6 +110,12 @@ int main(int argc, char** argv) {
   }
   std::printf("pareto bat: ratio %.2f-%.2f %% (mean %.2f %%) over %d seeds\n", 100 * lo, 100 * hi,
               100 * sum / seeds, seeds);
+  if (argc > 3) {
+    const bool holds = seeds > 0 && 100 * lo >= at_least;
+    std::printf("%s: the least ratio %.2f %% is %s %.2f %%\n", holds ? "ok" : "FAILED", 100 * lo,
+                holds ? "at least" : "below", at_least);
+    return holds ? 0 : 1;
+  }
 
   // For scale: 200 grid points drawn at random (without replacement), many draws.
   std::mt19937_64 rng(12345);
