@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <regex>
 
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
@@ -621,6 +622,90 @@ TEST(TuningRun, CappingChangesNothingButTheCappedTrialsRows) {
       const std::string csv = tune::trials_csv(on);
       EXPECT_NE(csv.find(",accepted,capped,simulated\n"), std::string::npos) << csv;
       EXPECT_NE(csv.find(",0,0,12\n"), std::string::npos) << csv;
+      if (threads == 1)
+        capped_trials = csv;
+      else
+        EXPECT_EQ(csv, capped_trials) << algorithm << ": where candidates stop depends on threads";
+    }
+  }
+}
+
+// Capping with goals (issue 27): a job of one soft goal and hard goals (limits on the largest
+// control TV and the median peak command, which have lower bounds, and on the steady-state error,
+// which has none) writes the same gains, history and optimiser states with capping on and off,
+// for the Bat algorithm and random search on 1 and 2 threads; capped trials never became the best
+// and their goals are lower bounds. In trials.csv a capped row's goal without a bound is empty,
+// and its feasibility too unless its violation's bound already exceeds 0.
+TEST(TuningRun, CappingWithGoalsChangesNothingButTheCappedTrialsRows) {
+  json j = short_ensemble_job();
+  j["ensemble"]["count"] = 11;
+  j.erase("objective");
+  // Limits of the short job's scale: met by some candidates, broken by others.
+  j["goals"] = {{{"metric", "ise"},
+                 {"window", {0, 4}},
+                 {"window_from", "first_fault"},
+                 {"aggregate", "cvar"},
+                 {"alpha", 0.8},
+                 {"minimize", true}},
+                {{"metric", "control_tv"}, {"aggregate", "max"}, {"at_most", 1000}},
+                {{"metric", "peak_command"}, {"aggregate", "quantile"}, {"q", 0.5},
+                 {"at_most", 30}},
+                {{"metric", "steady_state_error"}, {"tail", 1.0}, {"at_most", 1e300}}};
+  for (const char* algorithm : {"bat", "random"}) {
+    j["tuning"]["algorithm"] = {{"type", algorithm}, {"population", 4}, {"iterations", 3}};
+    const tune::Job job = tune::parse_job(j, "x");
+    std::string capped_trials;
+    for (const int threads : {1, 2}) {
+      std::vector<std::string> states[2];
+      tune::TuningOutcome runs[2];
+      for (const bool capping : {false, true}) {
+        tune::RunOptions o;
+        o.capping = capping;
+        o.observer = [&](const tune::HistoryRow&, const tune::Optimizer& opt,
+                         const std::vector<tune::Trial>&) {
+          states[capping].push_back(opt.state().dump());
+          return true;
+        };
+        runs[capping] = tuned(job, threads, std::nullopt, o);
+      }
+      const tune::TuningOutcome& off = runs[0];
+      const tune::TuningOutcome& on = runs[1];
+      EXPECT_EQ(tune::gains_document(on).dump(), tune::gains_document(off).dump()) << algorithm;
+      EXPECT_EQ(tune::history_csv(on), tune::history_csv(off)) << algorithm;
+      EXPECT_EQ(states[1], states[0]) << algorithm;
+      ASSERT_EQ(on.trials.size(), off.trials.size());
+      int capped = 0, capped_infeasible = 0, feasible = 0, infeasible = 0;
+      for (std::size_t i = 0; i < on.trials.size(); ++i) {
+        const tune::Trial& a = on.trials[i];
+        const tune::Trial& b = off.trials[i];
+        (b.violation > 0 ? infeasible : feasible) += 1;
+        if (!a.capped) {
+          EXPECT_EQ(tune::trials_json(on.trials, i)[0], tune::trials_json(off.trials, i)[0]) << i;
+          continue;
+        }
+        ++capped;
+        capped_infeasible += a.violation > 0 ? 1 : 0;
+        EXPECT_FALSE(b.capped);
+        EXPECT_LT(a.simulated, on.scenarios);
+        EXPECT_LE(a.objective, b.objective) << i;
+        EXPECT_GE(a.fitness, b.fitness) << i;
+        EXPECT_LE(a.violation, b.violation) << i;
+        ASSERT_EQ(a.goals.size(), 4u);
+        for (std::size_t k = 0; k < 3; ++k) EXPECT_LE(a.goals[k], b.goals[k]) << i;
+        EXPECT_TRUE(std::isnan(a.goals[3]));
+        EXPECT_FALSE(b.accepted) << "a capped candidate became the best: " << i;
+        EXPECT_EQ(a.parameters, b.parameters);
+      }
+      EXPECT_GT(feasible, 0) << algorithm;
+      EXPECT_GT(infeasible, 0) << algorithm;
+      EXPECT_GT(capped, 0) << algorithm << ": nothing was capped, the test would prove nothing";
+      EXPECT_GT(capped_infeasible, 0) << algorithm << ": no candidate stopped on its limits";
+      EXPECT_LT(on.simulations, off.simulations) << algorithm;
+      // A capped row: capped 1, the members it ran, the goals' bounds (the steady-state error's
+      // empty), the violation's bound and feasible 0 (broken) or empty (not known).
+      const std::string csv = tune::trials_csv(on);
+      EXPECT_TRUE(std::regex_search(csv, std::regex(",1,[0-9]+,[^,\n]+,[^,\n]+,[^,\n]+,,[^,\n]+,0\n")))
+          << csv;
       if (threads == 1)
         capped_trials = csv;
       else
