@@ -149,6 +149,45 @@ TEST(Mpi, FrontIsByteIdenticalForAPlainRunAndThreeRanks) {
   }
 }
 
+// Capping with goals (issue 27): a job of one soft goal and hard goals on the short ensemble,
+// capped plain and under three ranks, writes the same files, trials.csv (where each candidate
+// stopped, the bounds of its goals) included; with --no-capping the same gains and history.
+TEST(Mpi, CappedGoalJobIsByteIdenticalToAPlainRun) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-goals");
+  json j = ftc::testing::short_ensemble_job();
+  j["ensemble"]["count"] = 11;
+  j["tuning"]["algorithm"]["population"] = 4;
+  j["tuning"]["algorithm"]["iterations"] = 3;
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"},
+                 {"window", {0, 4}},
+                 {"window_from", "first_fault"},
+                 {"aggregate", "cvar"},
+                 {"alpha", 0.8},
+                 {"minimize", true}},
+                {{"metric", "control_tv"}, {"aggregate", "max"}, {"at_most", 1000}},
+                {{"metric", "peak_command"}, {"aggregate", "quantile"}, {"q", 0.5},
+                 {"at_most", 30}}};
+  const fs::path job = write_job(dir, j);
+  const auto plain =
+      run_cli("run '" + job.string() + "' -q --out '" + (dir / "plain").string() + "'", dir);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto off = run_cli(
+      "run '" + job.string() + "' -q --no-capping --out '" + (dir / "off").string() + "'", dir);
+  ASSERT_EQ(off.exit_code, 0) << off.err;
+  const auto three = mpirun_cli(
+      3, "run '" + job.string() + "' -q --threads 1 --out '" + (dir / "three").string() + "'", dir);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  expect_same_run(dir / "plain", dir / "three");
+  for (const char* f : {"gains.json", "history.csv"})
+    EXPECT_EQ(slurp(dir / "plain" / f), slurp(dir / "off" / f)) << f;
+  // A capped row stopped on its limits: capped 1, under 12 members, feasible 0.
+  EXPECT_TRUE(std::regex_search(slurp(dir / "three" / "trials.csv"),
+                                std::regex(",1,([0-9]|1[01]),[^,\n]+,[^,\n]+,[^,\n]+,[^,\n]+,0\n")))
+      << "no trial capped on its limits: the comparison proves less";
+}
+
 TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {
   REQUIRE_MPI();
   const fs::path dir = fresh_dir("mpi-ensemble");
