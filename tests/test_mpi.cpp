@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "cli_runner.hpp"
+#include "goal_job.hpp"
 #include "short_job.hpp"
 
 extern char** environ;
@@ -155,29 +156,16 @@ TEST(Mpi, FrontIsByteIdenticalForAPlainRunAndThreeRanks) {
 TEST(Mpi, CappedGoalJobIsByteIdenticalToAPlainRun) {
   REQUIRE_MPI();
   const fs::path dir = fresh_dir("mpi-goals");
-  json j = ftc::testing::short_ensemble_job();
-  j["ensemble"]["count"] = 11;
+  json j = ftc::testing::goal_ensemble_job(1000, 30, false);
   j["tuning"]["algorithm"]["population"] = 4;
   j["tuning"]["algorithm"]["iterations"] = 3;
-  j.erase("objective");
-  j["goals"] = {{{"metric", "ise"},
-                 {"window", {0, 4}},
-                 {"window_from", "first_fault"},
-                 {"aggregate", "cvar"},
-                 {"alpha", 0.8},
-                 {"minimize", true}},
-                {{"metric", "control_tv"}, {"aggregate", "max"}, {"at_most", 1000}},
-                {{"metric", "peak_command"}, {"aggregate", "quantile"}, {"q", 0.5},
-                 {"at_most", 30}}};
-  const fs::path job = write_job(dir, j);
-  const auto plain =
-      run_cli("run '" + job.string() + "' -q --out '" + (dir / "plain").string() + "'", dir);
-  ASSERT_EQ(plain.exit_code, 0) << plain.err;
-  const auto off = run_cli(
-      "run '" + job.string() + "' -q --no-capping --out '" + (dir / "off").string() + "'", dir);
-  ASSERT_EQ(off.exit_code, 0) << off.err;
-  const auto three = mpirun_cli(
-      3, "run '" + job.string() + "' -q --threads 1 --out '" + (dir / "three").string() + "'", dir);
+  const std::string job = "run '" + write_job(dir, j).string() + "' -q ";
+  const auto out = [&](const char* name) { return "--out '" + (dir / name).string() + "'"; };
+  for (const std::string& args : {job + out("plain"), job + "--no-capping " + out("off")}) {
+    const auto r = run_cli(args, dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  const auto three = mpirun_cli(3, job + "--threads 1 " + out("three"), dir);
   ASSERT_EQ(three.exit_code, 0) << three.err;
   expect_same_run(dir / "plain", dir / "three");
   for (const char* f : {"gains.json", "history.csv"})

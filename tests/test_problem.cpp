@@ -16,6 +16,7 @@
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
+#include "goal_job.hpp"
 #include "short_job.hpp"
 
 using nlohmann::json;
@@ -341,27 +342,6 @@ namespace {
 
 bool same_bits(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
 
-// The short ensemble job (11 members) scored by a soft CVaR of the post-fault ISE under three
-// hard goals: the largest control TV and the median peak command at most the given limits (of
-// the metrics with a lower bound), and the mean steady-state error (a metric without one) at
-// most a limit no candidate breaks.
-json goal_ensemble_job(double tv_limit, double peak_limit) {
-  json j = short_ensemble_job();
-  j["ensemble"]["count"] = 11;
-  j.erase("objective");
-  j["goals"] = {{{"metric", "ise"},
-                 {"window", {0, 4}},
-                 {"window_from", "first_fault"},
-                 {"aggregate", "cvar"},
-                 {"alpha", 0.8},
-                 {"minimize", true}},
-                {{"metric", "control_tv"}, {"aggregate", "max"}, {"at_most", tv_limit}},
-                {{"metric", "peak_command"}, {"aggregate", "quantile"}, {"q", 0.5},
-                 {"at_most", peak_limit}},
-                {{"metric", "steady_state_error"}, {"tail", 1.0}, {"at_most", 1e300}}};
-  return j;
-}
-
 }  // namespace
 
 // Capping with goals (issue 27): the metrics whose aggregate has a lower bound while members
@@ -445,7 +425,7 @@ TEST(Capping, GoalJobsAreCappedOnlyWhereNoDecisionChanges) {
       }
   };
   // The limits: the median TV and peak command of these controllers, so that some meet them.
-  const tune::TuningProblem loose(tune::parse_job(goal_ensemble_job(1e300, 1e300), "x"));
+  const tune::TuningProblem loose(tune::parse_job(goal_ensemble_job(1e300, 1e300, true), "x"));
   controllers_for(loose);
   std::vector<double> tv, peak;
   for (const tune::CandidateOutcome& o : loose.evaluate(controllers, evaluator)) {
@@ -455,7 +435,7 @@ TEST(Capping, GoalJobsAreCappedOnlyWhereNoDecisionChanges) {
   std::sort(tv.begin(), tv.end());
   std::sort(peak.begin(), peak.end());
   const tune::TuningProblem problem(
-      tune::parse_job(goal_ensemble_job(tv[tv.size() / 2], peak[peak.size() / 3]), "x"));
+      tune::parse_job(goal_ensemble_job(tv[tv.size() / 2], peak[peak.size() / 3], true), "x"));
   const std::vector<tune::CandidateOutcome> exact = problem.evaluate(controllers, evaluator);
   std::vector<double> feasible, infeasible;
   for (const tune::CandidateOutcome& o : exact)
