@@ -689,28 +689,32 @@ TEST(TuningRun, CappingWithGoalsChangesNothingButTheCappedTrialsRows) {
 // A capped run stopped after an iteration and resumed writes the uninterrupted run's trials
 // (the incumbent's values, which order the scenarios, are simulated again on resume).
 TEST(TuningRun, ResumedCappedRunWritesTheSameTrials) {
-  json j = short_ensemble_job();
-  j["ensemble"]["count"] = 11;
-  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
-  const tune::Job job = tune::parse_job(j, "x");
-  const tune::TuningOutcome whole = tuned(job, 2);
-  std::string checkpoint;
-  tune::RunOptions stop;
-  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
-                      const std::vector<tune::Trial>& trials) {
-    checkpoint = tune::run_checkpoint(o, trials).dump();
-    return h.iteration < 2;
-  };
-  tuned(job, 1, std::nullopt, stop);
-  const json state = json::parse(checkpoint);
-  bool any_capped = false;
-  for (const json& row : state["trials"]) any_capped = any_capped || row.size() == 9;
-  EXPECT_TRUE(any_capped) << "no capped trial before the checkpoint: the test proves less";
-  tune::RunOptions resume;
-  resume.resume = &state;
-  const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
-  EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
-  EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+  json objective = short_ensemble_job();
+  objective["ensemble"]["count"] = 11;
+  // A job with goals too: its capped rows carry the goals' bounds (null where none) across.
+  for (json j : {objective, goal_ensemble_job(1000, 30, true)}) {
+    j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
+    const tune::Job job = tune::parse_job(j, "x");
+    const tune::TuningOutcome whole = tuned(job, 2);
+    std::string checkpoint;
+    tune::RunOptions stop;
+    stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
+                        const std::vector<tune::Trial>& trials) {
+      checkpoint = tune::run_checkpoint(o, trials).dump();
+      return h.iteration < 2;
+    };
+    tuned(job, 1, std::nullopt, stop);
+    const json state = json::parse(checkpoint);
+    bool any_capped = false;  // a capped row has one more element: 9 (11 with goals)
+    for (const json& row : state["trials"])
+      any_capped = any_capped || row.size() == (job.goals.empty() ? 9u : 11u);
+    EXPECT_TRUE(any_capped) << "no capped trial before the checkpoint: the test proves less";
+    tune::RunOptions resume;
+    resume.resume = &state;
+    const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
+    EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
+    EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+  }
 }
 
 // `ftctune run --no-capping` simulates every candidate on every scenario: the same gains.json
