@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "cli_runner.hpp"
+#include "goal_job.hpp"
 #include "short_job.hpp"
 
 extern char** environ;
@@ -147,6 +148,32 @@ TEST(Mpi, FrontIsByteIdenticalForAPlainRunAndThreeRanks) {
     ASSERT_TRUE(fs::exists(dir / "plain" / f)) << f;
     EXPECT_EQ(slurp(dir / "plain" / f), slurp(dir / "three" / f)) << f;
   }
+}
+
+// Capping with goals (issue 27): a job of one soft goal and hard goals on the short ensemble,
+// capped plain and under three ranks, writes the same files, trials.csv (where each candidate
+// stopped, the bounds of its goals) included; with --no-capping the same gains and history.
+TEST(Mpi, CappedGoalJobIsByteIdenticalToAPlainRun) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-goals");
+  json j = ftc::testing::goal_ensemble_job(1000, 30, false);
+  j["tuning"]["algorithm"]["population"] = 4;
+  j["tuning"]["algorithm"]["iterations"] = 3;
+  const std::string job = "run '" + write_job(dir, j).string() + "' -q ";
+  const auto out = [&](const char* name) { return "--out '" + (dir / name).string() + "'"; };
+  for (const std::string& args : {job + out("plain"), job + "--no-capping " + out("off")}) {
+    const auto r = run_cli(args, dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  const auto three = mpirun_cli(3, job + "--threads 1 " + out("three"), dir);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  expect_same_run(dir / "plain", dir / "three");
+  for (const char* f : {"gains.json", "history.csv"})
+    EXPECT_EQ(slurp(dir / "plain" / f), slurp(dir / "off" / f)) << f;
+  // A capped row stopped on its limits: capped 1, under 12 members, feasible 0.
+  EXPECT_TRUE(std::regex_search(slurp(dir / "three" / "trials.csv"),
+                                std::regex(",1,([0-9]|1[01]),[^,\n]+,[^,\n]+,[^,\n]+,[^,\n]+,0\n")))
+      << "no trial capped on its limits: the comparison proves less";
 }
 
 TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {

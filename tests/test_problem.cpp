@@ -16,6 +16,7 @@
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
+#include "goal_job.hpp"
 #include "short_job.hpp"
 
 using nlohmann::json;
@@ -335,6 +336,159 @@ TEST(Capping, CappedCandidatesStopBelowTheirCapAndTheOthersScoreExactly) {
     }
     EXPECT_GT(stopped, 0) << "nothing was capped: the test would prove nothing";
   }
+}
+
+namespace {
+
+bool same_bits(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+
+}  // namespace
+
+// Capping with goals (issue 27): the metrics whose aggregate has a lower bound while members
+// are unknown are those defined on every member.
+TEST(Capping, GoalsOfMetricsDefinedOnEveryMemberHaveALowerBound) {
+  using tune::GoalMetric;
+  const GoalMetric bounded[] = {GoalMetric::ise,        GoalMetric::iae,
+                                GoalMetric::itae,       GoalMetric::control_tv,
+                                GoalMetric::control_energy, GoalMetric::peak_command};
+  const GoalMetric unbounded[] = {GoalMetric::saturation_fraction,
+                                  GoalMetric::peak_error_after_fault, GoalMetric::settling_time,
+                                  GoalMetric::steady_state_error};
+  tune::GoalConfig g;
+  for (const GoalMetric m : bounded) {
+    g.metric = m;
+    EXPECT_TRUE(tune::goal_has_lower_bound(g)) << tune::to_string(m);
+  }
+  for (const GoalMetric m : unbounded) {
+    g.metric = m;
+    EXPECT_FALSE(tune::goal_has_lower_bound(g)) << tune::to_string(m);
+  }
+}
+
+// The bound on a candidate's constrained fitness from lower bounds of its objective and its
+// violation is above the fitness of every candidate with values at least those (so a capped
+// candidate could not have been accepted), even for violations one ulp apart, and equal to or
+// above the fitness of the bounds themselves (a tie with the cap is never capped).
+TEST(Capping, FitnessUpperBoundFollowsTheConstraintRule) {
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(tune::fitness_upper_bound(4.0, 0.0), 0.25);  // no violation: fitness_of(objective)
+  EXPECT_EQ(tune::fitness_upper_bound(inf, 0.0), 0.0);
+  EXPECT_EQ(tune::fitness_upper_bound(0.0, 0.0), inf);
+  EXPECT_EQ(tune::fitness_upper_bound(4.0, inf), -1.0);  // infinite violation: exactly -1
+  // Where the rounded ratio V/(1 + V) falls as V grows (1 at 2^53, 1 - 2^-52 one ulp above).
+  const double v53 = 0x1p53, above = std::nextafter(v53, inf);
+  ASSERT_LT(tune::constrained_fitness(0.0, v53), tune::constrained_fitness(0.0, above));
+  EXPECT_GE(tune::fitness_upper_bound(1.0, v53), tune::constrained_fitness(0.0, above));
+  std::mt19937_64 rng(2627);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int checked = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const double v = std::pow(10.0, -320.0 + 620.0 * u(rng));
+    const double o = std::pow(10.0, -12.0 + 24.0 * u(rng));
+    const double ub = tune::fitness_upper_bound(o, v);
+    ASSERT_LT(ub, 0.0) << v;  // a violation bound above 0: the candidate is infeasible
+    ASSERT_GE(ub, tune::constrained_fitness(tune::fitness_of(o), v)) << v;  // the tie
+    // Larger true violations: the next doubles, and factors up to 2.
+    double w = v;
+    for (int k = 0; k < 8; ++k) {
+      w = std::nextafter(w, inf);
+      // (at least: for V above about 2^53 every J rounds to -1, which the bound is then)
+      ASSERT_GE(ub, tune::constrained_fitness(tune::fitness_of(o * 2), w)) << v << " " << w;
+      ++checked;
+    }
+    const double far = v * (1.0 + u(rng));
+    ASSERT_GE(ub, tune::constrained_fitness(0.0, far)) << v << " " << far;
+    ASSERT_GE(ub, -1.0);
+    // Any feasible candidate is above it: a feasible cap always caps an infeasible candidate.
+    ASSERT_LT(ub, tune::constrained_fitness(tune::fitness_of(o), 0.0));
+  }
+  EXPECT_EQ(checked, 160000);
+}
+
+// A job with goals under capping: a candidate that runs to the end has evaluate()'s outcome
+// (goals and violation included) to the last bit; a capped one stopped with every bound on the
+// right side (objective, goals of bounded metrics and violation at most the true ones, goals
+// without a bound NaN, fitness at least the true one) and could not have been accepted: its
+// true fitness is below its cap. A cap equal to the candidate's own fitness (a tie, which the
+// Bat algorithm accepts) never caps it.
+TEST(Capping, GoalJobsAreCappedOnlyWhereNoDecisionChanges) {
+  std::vector<sim::ControllerConfig> controllers;
+  tune::TbbEvaluator evaluator(2);
+  const auto controllers_for = [&](const tune::TuningProblem& problem) {
+    controllers.clear();
+    for (const double kp : {20.0, 1.0, 50.0, 8.0, 35.0, 3.0})
+      for (const double eta : {20.0, 2.5, 150.0}) {
+        sim::ControllerConfig c = problem.job().controller;
+        c.Kp = kp;
+        c.switching_gain = eta;
+        controllers.push_back(c);
+      }
+  };
+  // The limits: the median TV and peak command of these controllers, so that some meet them.
+  const tune::TuningProblem loose(tune::parse_job(goal_ensemble_job(1e300, 1e300, true), "x"));
+  controllers_for(loose);
+  std::vector<double> tv, peak;
+  for (const tune::CandidateOutcome& o : loose.evaluate(controllers, evaluator)) {
+    tv.push_back(o.evaluation.goals.at(1));
+    peak.push_back(o.evaluation.goals.at(2));
+  }
+  std::sort(tv.begin(), tv.end());
+  std::sort(peak.begin(), peak.end());
+  const tune::TuningProblem problem(
+      tune::parse_job(goal_ensemble_job(tv[tv.size() / 2], peak[peak.size() / 3], true), "x"));
+  const std::vector<tune::CandidateOutcome> exact = problem.evaluate(controllers, evaluator);
+  std::vector<double> feasible, infeasible;
+  for (const tune::CandidateOutcome& o : exact)
+    (o.evaluation.feasible() ? feasible : infeasible).push_back(o.evaluation.fitness);
+  ASSERT_GE(feasible.size(), 2u);
+  ASSERT_GE(infeasible.size(), 2u);
+  std::sort(feasible.begin(), feasible.end());
+  std::sort(infeasible.begin(), infeasible.end());
+  // Caps: none, the candidate's own fitness (a tie), the median feasible fitness, the best
+  // infeasible one (the least violation).
+  std::vector<double> caps(controllers.size());
+  for (std::size_t i = 0; i < caps.size(); ++i)
+    caps[i] = i % 4 == 0   ? tune::kNoCap
+              : i % 4 == 1 ? exact[i].evaluation.fitness
+              : i % 4 == 2 ? feasible[feasible.size() / 2]
+                           : infeasible.back();
+  std::vector<bool> counted;
+  for (std::size_t s = 0; s < problem.scenarios(); ++s) counted.push_back(problem.counted(s));
+  const std::vector<std::size_t> order = tune::hardest_first({}, counted);
+  const std::vector<tune::CandidateOutcome> capped =
+      problem.evaluate_capped(controllers, caps, order, evaluator);
+  int stopped = 0, stopped_infeasible = 0, stopped_below_infeasible_cap = 0;
+  for (std::size_t i = 0; i < controllers.size(); ++i) {
+    const tune::Evaluation& c = capped[i].evaluation;
+    const tune::Evaluation& e = exact[i].evaluation;
+    ASSERT_EQ(c.goals.size(), 4u);
+    if (!c.capped) {
+      EXPECT_EQ(c.simulated, problem.scenarios());
+      EXPECT_EQ(c.objective, e.objective) << i;
+      EXPECT_EQ(c.fitness, e.fitness) << i;
+      EXPECT_EQ(c.violation, e.violation) << i;
+      for (std::size_t k = 0; k < 4; ++k) EXPECT_TRUE(same_bits(c.goals[k], e.goals[k])) << i;
+      continue;
+    }
+    ++stopped;
+    EXPECT_NE(i % 4, 0u) << "a candidate without a cap was capped";
+    EXPECT_NE(i % 4, 1u) << "a tie with the cap was capped: the Bat algorithm accepts it";
+    EXPECT_LT(c.simulated, problem.scenarios());
+    EXPECT_LE(c.objective, e.objective) << i;
+    EXPECT_LT(c.fitness, caps[i]) << i;
+    EXPECT_GE(c.fitness, e.fitness) << i;
+    EXPECT_LT(e.fitness, caps[i]) << "capped although it mattered: " << i;
+    for (std::size_t k = 0; k < 3; ++k) EXPECT_LE(c.goals[k], e.goals[k]) << i << " " << k;
+    EXPECT_TRUE(std::isnan(c.goals[3])) << "steady_state_error has no lower bound";
+    EXPECT_LE(c.violation, e.violation) << i;
+    stopped_infeasible += c.violation > 0 ? 1 : 0;
+    stopped_below_infeasible_cap += caps[i] < 0 ? 1 : 0;
+  }
+  // The test proves something only when candidates stopped on their limits, against feasible
+  // and infeasible caps.
+  EXPECT_GT(stopped, 0);
+  EXPECT_GT(stopped_infeasible, 0);
+  EXPECT_GT(stopped_below_infeasible_cap, 0);
 }
 
 TEST(TuningProblem, AFrontsFitnessGivesEachCandidatesSoftGoalsAndViolation) {

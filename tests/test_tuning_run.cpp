@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <regex>
 
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
@@ -14,6 +15,7 @@
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
+#include "goal_job.hpp"
 #include "short_job.hpp"
 
 using nlohmann::json;
@@ -568,92 +570,151 @@ TEST(Cli, RunExitsTwoForAFrontOfAnAlgorithmOfOneObjectiveAndThreeWhenNoCandidate
   EXPECT_NE(none.err.find("no candidate met the job's hard goals"), std::string::npos) << none.err;
 }
 
+namespace {
+
+// A job run with capping on and off (issue 27), on 1 and 2 threads: the capped trials and the
+// trials.csv of the capped run on 2 threads, and the feasibility of the uncapped trials.
+struct CappingComparison {
+  std::vector<tune::Trial> capped;
+  std::string csv;
+  int feasible = 0, infeasible = 0;
+};
+
+// Runs the job with capping on and off and checks what must hold: the same gains file, history
+// and optimiser state after every iteration; the same trial wherever it was not capped; a capped
+// trial stopped early, never became the best, and its objective, goals (NaN: no bound) and
+// violation are at most the true ones, its fitness at least; the capped run's trials.csv (where
+// each candidate stopped) is the same for 1 and 2 threads, and it simulated less.
+CappingComparison compare_capping(const json& j, const std::string& algorithm) {
+  CappingComparison r;
+  std::string one_thread;
+  const tune::Job job = tune::parse_job(j, "x");
+  for (const int threads : {1, 2}) {
+    std::vector<std::string> states[2];
+    tune::TuningOutcome runs[2];
+    for (const bool capping : {false, true}) {
+      tune::RunOptions o;
+      o.capping = capping;
+      o.observer = [&](const tune::HistoryRow&, const tune::Optimizer& opt,
+                       const std::vector<tune::Trial>&) {
+        states[capping].push_back(opt.state().dump());
+        return true;
+      };
+      runs[capping] = tuned(job, threads, std::nullopt, o);
+    }
+    const tune::TuningOutcome& off = runs[0];
+    const tune::TuningOutcome& on = runs[1];
+    EXPECT_EQ(tune::gains_document(on).dump(), tune::gains_document(off).dump()) << algorithm;
+    EXPECT_EQ(tune::history_csv(on), tune::history_csv(off)) << algorithm;
+    EXPECT_EQ(states[1], states[0]) << algorithm;
+    EXPECT_LT(on.simulations, off.simulations) << algorithm;
+    EXPECT_EQ(on.trials.size(), off.trials.size());
+    r = CappingComparison{};
+    for (std::size_t i = 0; i < on.trials.size() && i < off.trials.size(); ++i) {
+      const tune::Trial& a = on.trials[i];
+      const tune::Trial& b = off.trials[i];
+      (b.violation > 0 ? r.infeasible : r.feasible) += 1;
+      if (!a.capped) {
+        EXPECT_EQ(tune::trials_json(on.trials, i)[0], tune::trials_json(off.trials, i)[0]) << i;
+        continue;
+      }
+      r.capped.push_back(a);
+      EXPECT_FALSE(b.capped);
+      EXPECT_LT(a.simulated, on.scenarios);
+      EXPECT_LE(a.objective, b.objective) << i;
+      EXPECT_GE(a.fitness, b.fitness) << i;
+      EXPECT_LE(a.violation, b.violation) << i;
+      EXPECT_EQ(a.goals.size(), b.goals.size());
+      for (std::size_t k = 0; k < a.goals.size() && k < b.goals.size(); ++k)
+        if (!std::isnan(a.goals[k])) EXPECT_LE(a.goals[k], b.goals[k]) << i << " " << k;
+      EXPECT_FALSE(b.accepted) << "a capped candidate became the best: " << i;
+      EXPECT_EQ(a.parameters, b.parameters);
+    }
+    const std::string csv = tune::trials_csv(on);
+    if (threads == 2) EXPECT_EQ(csv, one_thread) << algorithm << ": where stops depend on threads";
+    one_thread = csv;
+    r.csv = csv;
+  }
+  return r;
+}
+
+}  // namespace
+
 // Capping (issue 27): with capping on and off a run writes the same gains file and history and
 // checkpoints the same optimiser state after every iteration, for the Bat algorithm and random
 // search, on 1 and 2 threads. trials.csv differs only in the capped trials' rows: a lower bound
-// of the objective there, and the row of the same trial without capping never mattered. With
-// capping on, trials.csv (where each candidate stopped) is the same for 1 and 2 threads.
+// of the objective there, and the row of the same trial without capping never mattered.
 TEST(TuningRun, CappingChangesNothingButTheCappedTrialsRows) {
   for (const char* algorithm : {"bat", "random"}) {
     json j = short_ensemble_job();
     j["ensemble"]["count"] = 11;
     j["tuning"]["algorithm"] = {{"type", algorithm}, {"population", 4}, {"iterations", 3}};
-    const tune::Job job = tune::parse_job(j, "x");
-    std::string capped_trials;
-    for (const int threads : {1, 2}) {
-      std::vector<std::string> states[2];
-      tune::TuningOutcome runs[2];
-      for (const bool capping : {false, true}) {
-        tune::RunOptions o;
-        o.capping = capping;
-        o.observer = [&](const tune::HistoryRow&, const tune::Optimizer& opt,
-                         const std::vector<tune::Trial>&) {
-          states[capping].push_back(opt.state().dump());
-          return true;
-        };
-        runs[capping] = tuned(job, threads, std::nullopt, o);
-      }
-      const tune::TuningOutcome& off = runs[0];
-      const tune::TuningOutcome& on = runs[1];
-      EXPECT_EQ(tune::gains_document(on).dump(), tune::gains_document(off).dump()) << algorithm;
-      EXPECT_EQ(tune::history_csv(on), tune::history_csv(off)) << algorithm;
-      EXPECT_EQ(states[1], states[0]) << algorithm;
-      ASSERT_EQ(on.trials.size(), off.trials.size());
-      int capped = 0;
-      for (std::size_t i = 0; i < on.trials.size(); ++i) {
-        const tune::Trial& a = on.trials[i];
-        const tune::Trial& b = off.trials[i];
-        if (!a.capped) {
-          EXPECT_EQ(tune::trials_json(on.trials, i)[0], tune::trials_json(off.trials, i)[0]) << i;
-          continue;
-        }
-        ++capped;
-        EXPECT_FALSE(b.capped);
-        EXPECT_LT(a.simulated, on.scenarios);
-        EXPECT_LE(a.objective, b.objective) << i;
-        EXPECT_GE(a.fitness, b.fitness) << i;
-        EXPECT_FALSE(b.accepted) << "a capped candidate became the best: " << i;
-        EXPECT_EQ(a.parameters, b.parameters);
-      }
-      EXPECT_GT(capped, 0) << algorithm << ": nothing was capped, the test would prove nothing";
-      EXPECT_LT(on.simulations, off.simulations) << algorithm;
-      // The columns: capped, simulated; a capped row says after how many scenarios it stopped.
-      const std::string csv = tune::trials_csv(on);
-      EXPECT_NE(csv.find(",accepted,capped,simulated\n"), std::string::npos) << csv;
-      EXPECT_NE(csv.find(",0,0,12\n"), std::string::npos) << csv;
-      if (threads == 1)
-        capped_trials = csv;
-      else
-        EXPECT_EQ(csv, capped_trials) << algorithm << ": where candidates stop depends on threads";
+    const CappingComparison r = compare_capping(j, algorithm);
+    EXPECT_FALSE(r.capped.empty()) << algorithm << ": nothing was capped, the test would prove nothing";
+    // The columns: capped, simulated; a capped row says after how many scenarios it stopped.
+    EXPECT_NE(r.csv.find(",accepted,capped,simulated\n"), std::string::npos) << r.csv;
+    EXPECT_NE(r.csv.find(",0,0,12\n"), std::string::npos) << r.csv;
+  }
+}
+
+// Capping with goals (issue 27): a job of one soft goal and hard goals (limits on the largest
+// control TV and the median peak command, which have lower bounds, and on the steady-state error,
+// which has none) changes nothing but the capped trials' rows either, and some candidates stop
+// on their limits. In trials.csv a capped row's goal without a bound is empty, and its
+// feasibility too unless its violation's bound already exceeds 0.
+TEST(TuningRun, CappingWithGoalsChangesNothingButTheCappedTrialsRows) {
+  for (const char* algorithm : {"bat", "random"}) {
+    // Limits of the short job's scale: met by some candidates, broken by others.
+    json j = goal_ensemble_job(1000, 30, true);
+    j["tuning"]["algorithm"] = {{"type", algorithm}, {"population", 4}, {"iterations", 3}};
+    const CappingComparison r = compare_capping(j, algorithm);
+    EXPECT_GT(r.feasible, 0) << algorithm;
+    EXPECT_GT(r.infeasible, 0) << algorithm;
+    EXPECT_FALSE(r.capped.empty()) << algorithm << ": nothing was capped, the test would prove nothing";
+    int on_limits = 0;
+    for (const tune::Trial& t : r.capped) {
+      on_limits += t.violation > 0 ? 1 : 0;
+      ASSERT_EQ(t.goals.size(), 4u);
+      EXPECT_TRUE(std::isnan(t.goals[3])) << "steady_state_error has no lower bound";
     }
+    EXPECT_GT(on_limits, 0) << algorithm << ": no candidate stopped on its limits";
+    // A capped row: capped 1, the members it ran, the goals' bounds (the steady-state error's
+    // empty), the violation's bound and feasible 0 (broken) or empty (not known).
+    EXPECT_TRUE(
+        std::regex_search(r.csv, std::regex(",1,[0-9]+,[^,\n]+,[^,\n]+,[^,\n]+,,[^,\n]+,0\n")))
+        << r.csv;
   }
 }
 
 // A capped run stopped after an iteration and resumed writes the uninterrupted run's trials
 // (the incumbent's values, which order the scenarios, are simulated again on resume).
 TEST(TuningRun, ResumedCappedRunWritesTheSameTrials) {
-  json j = short_ensemble_job();
-  j["ensemble"]["count"] = 11;
-  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
-  const tune::Job job = tune::parse_job(j, "x");
-  const tune::TuningOutcome whole = tuned(job, 2);
-  std::string checkpoint;
-  tune::RunOptions stop;
-  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
-                      const std::vector<tune::Trial>& trials) {
-    checkpoint = tune::run_checkpoint(o, trials).dump();
-    return h.iteration < 2;
-  };
-  tuned(job, 1, std::nullopt, stop);
-  const json state = json::parse(checkpoint);
-  bool any_capped = false;
-  for (const json& row : state["trials"]) any_capped = any_capped || row.size() == 9;
-  EXPECT_TRUE(any_capped) << "no capped trial before the checkpoint: the test proves less";
-  tune::RunOptions resume;
-  resume.resume = &state;
-  const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
-  EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
-  EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+  json objective = short_ensemble_job();
+  objective["ensemble"]["count"] = 11;
+  // A job with goals too: its capped rows carry the goals' bounds (null where none) across.
+  for (json j : {objective, goal_ensemble_job(1000, 30, true)}) {
+    j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
+    const tune::Job job = tune::parse_job(j, "x");
+    const tune::TuningOutcome whole = tuned(job, 2);
+    std::string checkpoint;
+    tune::RunOptions stop;
+    stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
+                        const std::vector<tune::Trial>& trials) {
+      checkpoint = tune::run_checkpoint(o, trials).dump();
+      return h.iteration < 2;
+    };
+    tuned(job, 1, std::nullopt, stop);
+    const json state = json::parse(checkpoint);
+    bool any_capped = false;  // a capped row has one more element: 9 (11 with goals)
+    for (const json& row : state["trials"])
+      any_capped = any_capped || row.size() == (job.goals.empty() ? 9u : 11u);
+    EXPECT_TRUE(any_capped) << "no capped trial before the checkpoint: the test proves less";
+    tune::RunOptions resume;
+    resume.resume = &state;
+    const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
+    EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
+    EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+  }
 }
 
 // `ftctune run --no-capping` simulates every candidate on every scenario: the same gains.json

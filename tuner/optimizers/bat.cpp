@@ -68,6 +68,53 @@ Decision bat_frequency_move(const SearchSpace& space, const Decision& x, Decisio
   return c;
 }
 
+void BatMotion::start(const BatSettings& s, const SearchSpace& space, Rng& rng) {
+  const std::size_t d = space.dimension();
+  x.resize(d);
+  v.resize(d);
+  for (std::size_t j = 0; j < d; ++j) x[j] = rng.uniform(space.lower[j], space.upper[j]);
+  for (std::size_t j = 0; j < d; ++j) v[j] = rng.uniform();
+  loudness = s.loudness;
+  pulse_rate = s.pulse_rate;
+}
+
+Decision BatMotion::candidate(const BatSettings& s, const SearchSpace& space, Rng& rng,
+                              const Decision& leader, double mean_loudness) {
+  const double f = s.f_min + (s.f_max - s.f_min) * rng.uniform();
+  Decision c = bat_frequency_move(space, x, v, leader, f);
+  if (rng.uniform() > pulse_rate) {  // local random walk around the leader (eq. 39)
+    for (std::size_t j = 0; j < space.dimension(); ++j)
+      c[j] = space.clamp(j, leader[j] + rng.uniform(-1.0, 1.0) * mean_loudness);
+  }
+  return c;
+}
+
+void BatMotion::accept(const Decision& c, const BatSettings& s, double pulse) {
+  x = c;
+  loudness *= s.loudness_decay;
+  pulse_rate = pulse;
+}
+
+nlohmann::json BatMotion::to_json() const {
+  return {{"x", x}, {"v", v}, {"loudness", loudness}, {"pulse_rate", pulse_rate}};
+}
+
+BatMotion BatMotion::from_json(const nlohmann::json& b, const std::string& at,
+                               const BatSettings& s, const SearchSpace& space) {
+  namespace sc = state_check;
+  BatMotion m;
+  m.x = sc::decision(sc::member(b, at, "x"), at + "/x", space, true);
+  m.v = sc::decision(sc::member(b, at, "v"), at + "/v", space, false);
+  m.loudness = sc::number(sc::member(b, at, "loudness"), at + "/loudness", 0.0, s.loudness);
+  m.pulse_rate =
+      sc::number(sc::member(b, at, "pulse_rate"), at + "/pulse_rate", 0.0, s.pulse_rate);
+  return m;
+}
+
+double bat_pulse_rate(const BatSettings& s, int t) {
+  return s.pulse_rate * (1.0 - sim::math::exp(-s.pulse_rate_growth * t));
+}
+
 BatAlgorithm::BatAlgorithm(const BatSettings& settings, std::uint64_t seed,
                            const SearchSpace& space)
     : GenerationalOptimizer(settings.iterations, seed, space), settings_(settings) {
@@ -76,16 +123,10 @@ BatAlgorithm::BatAlgorithm(const BatSettings& settings, std::uint64_t seed,
 }
 
 void BatAlgorithm::initialize(BatchFitness& fitness) {
-  const std::size_t d = space_.dimension();
   bats_.assign(static_cast<std::size_t>(settings_.population), Bat{});
   std::vector<Decision> batch;
   for (Bat& b : bats_) {
-    b.x.resize(d);
-    b.v.resize(d);
-    for (std::size_t j = 0; j < d; ++j) b.x[j] = rng_.uniform(space_.lower[j], space_.upper[j]);
-    for (std::size_t j = 0; j < d; ++j) b.v[j] = rng_.uniform();
-    b.loudness = settings_.loudness;
-    b.pulse_rate = settings_.pulse_rate;
+    b.start(settings_, space_, rng_);
     batch.push_back(b.x);
   }
   const std::vector<double> J = evaluate(fitness, batch);
@@ -103,25 +144,12 @@ void BatAlgorithm::initialize(BatchFitness& fitness) {
 void BatAlgorithm::iterate(BatchFitness& fitness) {
   assert(t_ >= 0 && "initialize() first");
   const int t = t_ + 1;
-  const std::size_t d = space_.dimension();
-  const BatSettings& c = settings_;
-
-  double mean_loudness = 0.0;
-  for (const Bat& b : bats_) mean_loudness += b.loudness;
-  mean_loudness /= static_cast<double>(bats_.size());
-
+  const double mean_loudness = bat_means(bats_).first;
   const Decision best = best_;  // x* as it was at the start of the iteration
   std::vector<Decision> candidates;
   candidates.reserve(bats_.size());
-  for (Bat& b : bats_) {
-    const double f = c.f_min + (c.f_max - c.f_min) * rng_.uniform();
-    Decision cand = bat_frequency_move(space_, b.x, b.v, best, f);
-    if (rng_.uniform() > b.pulse_rate) {  // local random walk around the best (eq. 39)
-      for (std::size_t j = 0; j < d; ++j)
-        cand[j] = space_.clamp(j, best[j] + rng_.uniform(-1.0, 1.0) * mean_loudness);
-    }
-    candidates.push_back(std::move(cand));
-  }
+  for (Bat& b : bats_)
+    candidates.push_back(b.candidate(settings_, space_, rng_, best, mean_loudness));
 
   // The loudness tests come next in the stream whatever the fitness: drawn here, before the
   // evaluation, they are the same numbers, and they tell each candidate's cap (issue 27). A
@@ -138,15 +166,12 @@ void BatAlgorithm::iterate(BatchFitness& fitness) {
 
   const std::vector<double> J = evaluate(fitness, candidates, caps);
 
-  // ftctune's exp, not libm's, so that the schedule is the same bits on every CPU.
-  const double pulse = c.pulse_rate * (1.0 - sim::math::exp(-c.pulse_rate_growth * t));
+  const double pulse = bat_pulse_rate(settings_, t);
   for (std::size_t i = 0; i < bats_.size(); ++i) {
     Bat& b = bats_[i];
     if (loudness_test[i] < b.loudness && J[i] >= b.fitness) {
-      b.x = candidates[i];
+      b.accept(candidates[i], settings_, pulse);
       b.fitness = J[i];
-      b.loudness *= c.loudness_decay;
-      b.pulse_rate = pulse;
     }
     if (J[i] > best_fitness_) {
       best_ = candidates[i];
@@ -160,12 +185,11 @@ void BatAlgorithm::iterate(BatchFitness& fitness) {
 nlohmann::json BatAlgorithm::state() const {
   nlohmann::json s = common_state("bat");
   s["bats"] = nlohmann::json::array();
-  for (const Bat& b : bats_)
-    s["bats"].push_back({{"x", b.x},
-                         {"v", b.v},
-                         {"loudness", b.loudness},
-                         {"pulse_rate", b.pulse_rate},
-                         {"fitness", json_number(b.fitness)}});
+  for (const Bat& b : bats_) {
+    nlohmann::json j = b.to_json();
+    j["fitness"] = json_number(b.fitness);
+    s["bats"].push_back(std::move(j));
+  }
   return s;
 }
 
@@ -182,12 +206,7 @@ void BatAlgorithm::restore(const nlohmann::json& s) {
     const std::string at = "/bats/" + std::to_string(i);
     const nlohmann::json& b = bats[i];
     Bat bat;
-    bat.x = sc::decision(sc::member(b, at, "x"), at + "/x", space_, true);
-    bat.v = sc::decision(sc::member(b, at, "v"), at + "/v", space_, false);
-    bat.loudness = sc::number(sc::member(b, at, "loudness"), at + "/loudness", 0.0,
-                              settings_.loudness);
-    bat.pulse_rate = sc::number(sc::member(b, at, "pulse_rate"), at + "/pulse_rate", 0.0,
-                                settings_.pulse_rate);
+    static_cast<BatMotion&>(bat) = BatMotion::from_json(b, at, settings_, space_);
     bat.fitness = sc::fitness(sc::member(b, at, "fitness"), at + "/fitness");
     restored.push_back(std::move(bat));
   }
@@ -195,13 +214,8 @@ void BatAlgorithm::restore(const nlohmann::json& s) {
 }
 
 void BatAlgorithm::record_iteration() {
-  double loudness = 0.0, pulse_rate = 0.0;
-  for (const Bat& b : bats_) {
-    loudness += b.loudness;
-    pulse_rate += b.pulse_rate;
-  }
-  const double n = static_cast<double>(bats_.size());
-  record({{"mean_loudness", loudness / n}, {"mean_pulse_rate", pulse_rate / n}});
+  const auto [loudness, pulse_rate] = bat_means(bats_);
+  record({{"mean_loudness", loudness}, {"mean_pulse_rate", pulse_rate}});
 }
 
 }  // namespace ftc::tune

@@ -137,17 +137,11 @@ ParetoBatAlgorithm::ParetoBatAlgorithm(const BatSettings& settings, std::uint64_
 }
 
 void ParetoBatAlgorithm::initialize(BatchFitness& fitness) {
-  const std::size_t d = space_.dimension();
   bats_.assign(static_cast<std::size_t>(settings_.population), Bat{});
   archive_.clear();
   std::vector<Decision> batch;
   for (Bat& b : bats_) {  // the draws of bat.hpp's initialisation, in its order
-    b.x.resize(d);
-    b.v.resize(d);
-    for (std::size_t j = 0; j < d; ++j) b.x[j] = rng_.uniform(space_.lower[j], space_.upper[j]);
-    for (std::size_t j = 0; j < d; ++j) b.v[j] = rng_.uniform();
-    b.loudness = settings_.loudness;
-    b.pulse_rate = settings_.pulse_rate;
+    b.start(settings_, space_, rng_);
     batch.push_back(b.x);
   }
   const std::vector<ObjectiveVector> F = evaluate_objectives(fitness, batch);
@@ -162,12 +156,7 @@ void ParetoBatAlgorithm::initialize(BatchFitness& fitness) {
 void ParetoBatAlgorithm::iterate(BatchFitness& fitness) {
   assert(t_ >= 0 && "initialize() first");
   const int t = t_ + 1;
-  const std::size_t d = space_.dimension();
-  const BatSettings& c = settings_;
-
-  double mean_loudness = 0.0;
-  for (const Bat& b : bats_) mean_loudness += b.loudness;
-  mean_loudness /= static_cast<double>(bats_.size());
+  const double mean_loudness = bat_means(bats_).first;
 
   // The leader pool as it is at the start of the iteration, with its crowding distances.
   std::vector<const Decision*> pool;
@@ -199,26 +188,17 @@ void ParetoBatAlgorithm::iterate(BatchFitness& fitness) {
   for (Bat& b : bats_) {
     const std::size_t k1 = draw(), k2 = draw();
     const Decision leader = *pool[crowding[k2] > crowding[k1] ? k2 : k1];
-    const double f = c.f_min + (c.f_max - c.f_min) * rng_.uniform();
-    Decision cand = bat_frequency_move(space_, b.x, b.v, leader, f);
-    if (rng_.uniform() > b.pulse_rate) {  // local random walk around the leader (eq. 39)
-      for (std::size_t j = 0; j < d; ++j)
-        cand[j] = space_.clamp(j, leader[j] + rng_.uniform(-1.0, 1.0) * mean_loudness);
-    }
-    candidates.push_back(std::move(cand));
+    candidates.push_back(b.candidate(settings_, space_, rng_, leader, mean_loudness));
   }
 
   const std::vector<ObjectiveVector> F = evaluate_objectives(fitness, candidates);
 
-  // ftctune's exp, not libm's, so that the schedule is the same bits on every CPU.
-  const double pulse = c.pulse_rate * (1.0 - sim::math::exp(-c.pulse_rate_growth * t));
+  const double pulse = bat_pulse_rate(settings_, t);
   for (std::size_t i = 0; i < bats_.size(); ++i) {
     Bat& b = bats_[i];
     if (rng_.uniform() < b.loudness && !pareto::dominates(b.f, F[i])) {
-      b.x = candidates[i];
+      b.accept(candidates[i], settings_, pulse);
       b.f = F[i];
-      b.loudness *= c.loudness_decay;
-      b.pulse_rate = pulse;
     }
     offer(candidates[i], F[i]);
   }
@@ -261,25 +241,19 @@ void ParetoBatAlgorithm::record_iteration() {
     best_ = bats_[best].x;
     best_fitness_ = scalar_fitness(bats_[best].f);
   }
-  double loudness = 0.0, pulse_rate = 0.0;
-  for (const Bat& b : bats_) {
-    loudness += b.loudness;
-    pulse_rate += b.pulse_rate;
-  }
-  const double n = static_cast<double>(bats_.size());
-  record({{"mean_loudness", loudness / n}, {"mean_pulse_rate", pulse_rate / n}});
+  const auto [loudness, pulse_rate] = bat_means(bats_);
+  record({{"mean_loudness", loudness}, {"mean_pulse_rate", pulse_rate}});
 }
 
 json ParetoBatAlgorithm::state() const {
   json s = common_state("pareto_bat");
   s["objectives"] = objectives_;
   s["bats"] = json::array();
-  for (const Bat& b : bats_)
-    s["bats"].push_back({{"x", b.x},
-                         {"v", b.v},
-                         {"loudness", b.loudness},
-                         {"pulse_rate", b.pulse_rate},
-                         {"f", to_json(b.f)}});
+  for (const Bat& b : bats_) {
+    json j = b.to_json();
+    j["f"] = to_json(b.f);
+    s["bats"].push_back(std::move(j));
+  }
   s["archive"] = json::array();
   for (const Member& m : archive_) s["archive"].push_back({{"x", m.x}, {"f", to_json(m.f)}});
   return s;
@@ -299,12 +273,7 @@ void ParetoBatAlgorithm::restore(const json& s) {
     const std::string at = "/bats/" + std::to_string(i);
     const json& b = bats[i];
     Bat bat;
-    bat.x = sc::decision(sc::member(b, at, "x"), at + "/x", space_, true);
-    bat.v = sc::decision(sc::member(b, at, "v"), at + "/v", space_, false);
-    bat.loudness = sc::number(sc::member(b, at, "loudness"), at + "/loudness", 0.0,
-                              settings_.loudness);
-    bat.pulse_rate = sc::number(sc::member(b, at, "pulse_rate"), at + "/pulse_rate", 0.0,
-                                settings_.pulse_rate);
+    static_cast<BatMotion&>(bat) = BatMotion::from_json(b, at, settings_, space_);
     bat.f = objectives_from_json(sc::member(b, at, "f"), at + "/f", n);
     restored.push_back(std::move(bat));
   }

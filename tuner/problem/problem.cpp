@@ -85,6 +85,31 @@ double aggregate_lower_bound(const ObjectiveConfig& objective, std::vector<doubl
   return objective.aggregate_of(std::move(values));
 }
 
+bool goal_has_lower_bound(const GoalConfig& goal) {
+  switch (goal.metric) {
+    case GoalMetric::ise:
+    case GoalMetric::iae:
+    case GoalMetric::itae:
+    case GoalMetric::control_tv:
+    case GoalMetric::control_energy:
+    case GoalMetric::peak_command:
+      return true;
+    default:  // NaN on some members: the count the aggregate takes is not known in advance
+      return false;
+  }
+}
+
+double fitness_upper_bound(double objective, double violation) {
+  if (!(violation > 0)) return fitness_of(objective);
+  if (!(violation <= std::numeric_limits<double>::max())) return -1.0;  // exact: V' = +inf too
+  // 1 - 2^-50: rounding V/(1 + V) (twice) moves it by under 2^-52 relative either way, the
+  // product below by under 2^-53, so the result stays above -V'/(1 + V') for every V' >= V,
+  // although the rounded ratio itself does not always grow with V (it is 1 for V = 2^53,
+  // 1 - 2^-52 for V = 2^53 + 2). A subnormal ratio comes from V < 2^-53, where 1 + V rounds to
+  // 1 and V/1 is exact.
+  return constrained_fitness(0.0, violation) * (1.0 - 0x1p-50);
+}
+
 std::vector<std::size_t> hardest_first(std::span<const double> reference,
                                        const std::vector<bool>& counted) {
   std::vector<std::size_t> order(counted.size());
@@ -375,7 +400,8 @@ std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
   std::vector<std::size_t> done(n, 0);  // how many of `order` ran
   std::vector<std::string> error(n);
   std::vector<bool> running(n, true), capped(n, false);
-  std::vector<double> bound(n, 0.0);
+  std::vector<double> bound(n, 0.0), upper(n, 0.0), violation_bound(n, 0.0);
+  std::vector<std::vector<double>> goal_bound(n);
   std::vector<SimulationTask> tasks;
   for (;;) {
     std::vector<std::size_t> live;
@@ -412,9 +438,30 @@ std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
         }
       bound[c] = error[c].empty() ? aggregate_lower_bound(job_->objective, std::move(values), have)
                                   : std::numeric_limits<double>::infinity();
-      if (fitness_of(bound[c]) < caps[c]) {
+      // A job with goals: each goal's lower bound the same way, and the violation they give.
+      goal_bound[c].clear();
+      violation_bound[c] = 0.0;
+      for (const GoalConfig& g : job_->goals) {
+        double lb = std::numeric_limits<double>::quiet_NaN();  // no bound: counts 0 below
+        if (!error[c].empty()) {
+          lb = std::numeric_limits<double>::infinity();  // as score() has a failed candidate
+        } else if (goal_has_lower_bound(g)) {
+          std::vector<double> v;
+          for (std::size_t s = 0; s < S; ++s)
+            if (counted_[s]) v.push_back(known[c][s] ? goal_value(g, per[c][s], s) : 0.0);
+          lb = aggregate_lower_bound(g.measure(), std::move(v), have);
+        }
+        goal_bound[c].push_back(lb);
+        if (!std::isnan(lb)) violation_bound[c] += g.violation(lb);
+      }
+      // A failed candidate's fitness is known: evaluate()'s.
+      const double most = !error[c].empty() && has_limits(*job_)
+                              ? -1.0
+                              : fitness_upper_bound(bound[c], violation_bound[c]);
+      if (most < caps[c]) {
         capped[c] = true;
         running[c] = false;
+        upper[c] = most;
       }
     }
   }
@@ -425,7 +472,9 @@ std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
       e.capped = true;
       e.simulated = done[c];
       e.objective = bound[c];
-      e.fitness = fitness_of(bound[c]);
+      e.fitness = upper[c];
+      e.goals = std::move(goal_bound[c]);
+      e.violation = violation_bound[c];
       for (std::size_t s = 0; s < S; ++s)
         if (known[c][s] && per[c][s].diverged) ++e.diverged_count;
       e.diverged = e.diverged_count > 0;
@@ -523,7 +572,7 @@ std::vector<double> ProblemFitness::run(const std::vector<Decision>& batch,
 std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>& batch,
                                                     const std::vector<double>& caps) {
   const bool any = std::any_of(caps.begin(), caps.end(), [](double c) { return c > kNoCap; });
-  if (!capping_ || !any || !problem_.job().goals.empty() || problem_.scenarios() < 2 ||
+  if (!capping_ || !any || front_objectives(problem_.job()) > 0 || problem_.scenarios() < 2 ||
       caps.size() != batch.size())
     return (*this)(batch);
   // After a resume the incumbent's values are not in the checkpoint: simulate it again (the

@@ -231,9 +231,16 @@ std::string trials_csv(const TuningOutcome& r) {
     if (t.capped && !r.job.ensemble) s.append(r.job.scenarios.size(), ',');
     for (double v : t.scenario_objectives) num(v);
     if (!r.job.goals.empty()) {
-      for (double v : t.goals) num(v);
+      // A capped trial's goals and violation are lower bounds (a goal without one empty), and
+      // its feasibility is known only when the bound of its violation is above 0.
+      for (double v : t.goals) {
+        if (t.capped && std::isnan(v))
+          s += ',';
+        else
+          num(v);
+      }
       num(t.violation);
-      s.append(t.violation > 0 ? ",0" : ",1");
+      s.append(t.violation > 0 ? ",0" : t.capped ? "," : ",1");
     }
     s += '\n';
   }

@@ -602,13 +602,16 @@ function jobView(main, id) {
       });
     }
     const accepted = cols.indexOf('accepted');
-    // A capped trial's objective is a lower bound (issue 27): shown as "≥ bound".
-    const capped = cols.indexOf('capped'), objective = cols.indexOf('objective');
+    // A capped trial's objective, goals and violation are lower bounds (issue 27): shown as
+    // "≥ bound" (a goal without a bound is empty).
+    const capped = cols.indexOf('capped');
+    const bounded = new Set(cols.map((c, i) =>
+      c === 'objective' || c === 'violation' || /^goal[0-9]+_/.test(c) ? i : -1));
     clear(trialBody);
     for (const r of rows.slice(0, TRIAL_ROWS_SHOWN))
       trialBody.appendChild(el('tr', {class: r[accepted] === '1' ? 'accepted' : ''},
         r.map((c, i) => el('td', {class: 'num',
-          text: i === objective && capped >= 0 && r[capped] === '1' ? '≥ ' + c : c}))));
+          text: bounded.has(i) && c !== '' && capped >= 0 && r[capped] === '1' ? '≥ ' + c : c}))));
     trialCount.textContent = rows.length + ' of ' + trials.rows.length + ' trials' +
       (rows.length > TRIAL_ROWS_SHOWN ? ' (the first ' + TRIAL_ROWS_SHOWN + ' shown)' : '');
   }

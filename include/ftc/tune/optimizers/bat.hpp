@@ -23,6 +23,7 @@
 // are the same numbers), which gives each candidate its cap (issue 27): its bat's J_i when the
 // test passes, J(x*) at the start of the iteration otherwise.
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ftc/tune/optimizers/optimizer.hpp"
@@ -49,11 +50,45 @@ struct BatSettings {
 Decision bat_frequency_move(const SearchSpace& space, const Decision& x, Decision& v,
                             const Decision& best, double f);
 
+// What moves a bat, in the Bat algorithm and in the Pareto Bat algorithm (pareto_bat.hpp) alike:
+// its position, velocity, loudness and pulse rate, and the steps above on them. Each draws its
+// random numbers in the order given at the top of this file.
+struct BatMotion {
+  Decision x, v;
+  double loudness = 0.0, pulse_rate = 0.0;
+
+  // Initialisation: x ~ U(lb, ub), then v ~ U(0, 1)^d; A = A0, r = r0.
+  void start(const BatSettings& s, const SearchSpace& space, Rng& rng);
+  // The candidate: β, the frequency move toward `leader` (x* or, for a front, a leader from the
+  // archive), then the pulse test and, when taken, the walk clamp(leader + ε Ā) (eq. 39).
+  Decision candidate(const BatSettings& s, const SearchSpace& space, Rng& rng,
+                     const Decision& leader, double mean_loudness);
+  // Moving to an accepted candidate: x = c, A *= loudness_decay, r = `pulse` (eqs. 40, 41).
+  void accept(const Decision& c, const BatSettings& s, double pulse);
+  // The checkpoint's fields (x, v, loudness, pulse_rate) and their inverse, which checks each
+  // (a position inside the space, a finite velocity, A in [0, A0], r in [0, r0]) at `at`.
+  nlohmann::json to_json() const;
+  static BatMotion from_json(const nlohmann::json& b, const std::string& at,
+                             const BatSettings& s, const SearchSpace& space);
+};
+// r0 (1 - exp(-γ t)), with ftctune's exp so that the schedule is the same bits on every CPU.
+double bat_pulse_rate(const BatSettings& s, int t);
+// The mean loudness Ā and pulse rate of a population, summed in bat order.
+template <class B>
+std::pair<double, double> bat_means(const std::vector<B>& bats) {
+  double loudness = 0.0, pulse_rate = 0.0;
+  for (const B& b : bats) {
+    loudness += b.loudness;
+    pulse_rate += b.pulse_rate;
+  }
+  const double n = static_cast<double>(bats.size());
+  return {loudness / n, pulse_rate / n};
+}
+
 class BatAlgorithm final : public GenerationalOptimizer {
  public:
-  struct Bat {
-    Decision x, v;
-    double loudness = 0.0, pulse_rate = 0.0, fitness = 0.0;
+  struct Bat : BatMotion {
+    double fitness = 0.0;
   };
 
   // The settings must be valid (BatSettings::validate).

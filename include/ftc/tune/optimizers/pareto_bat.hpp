@@ -60,9 +60,7 @@ std::vector<double> crowding_distance(const std::vector<ObjectiveVector>& points
 
 class ParetoBatAlgorithm final : public GenerationalOptimizer {
  public:
-  struct Bat {
-    Decision x, v;
-    double loudness = 0.0, pulse_rate = 0.0;
+  struct Bat : BatMotion {
     ObjectiveVector f;
   };
   struct Member {

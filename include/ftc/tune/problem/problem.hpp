@@ -45,8 +45,9 @@ struct Evaluation {
   bool feasible() const { return !(violation > 0); }
   // Capping (issue 27): a candidate whose lower bound passed its cap before every scenario ran.
   // Its objective is then that lower bound (the objective is at least this), its fitness
-  // fitness_of(bound) (the fitness is at most this), its diverged count that of the scenarios
-  // that ran; `scenarios` and `goals` are empty.
+  // fitness_upper_bound() of its bounds (the fitness is at most this), its diverged count that of
+  // the scenarios that ran; `scenarios` is empty, and `goals` and `violation` of a job with goals
+  // are lower bounds (a goal without one NaN).
   bool capped = false;
   std::size_t simulated = 0;  // scenarios simulated (all of them unless capped)
 };
@@ -85,6 +86,26 @@ double fitness_of(double objective);  // 1/objective; 0 for inf/NaN; +inf for 0
 // at most the aggregate computed with the values known, to the last bit.
 double aggregate_lower_bound(const ObjectiveConfig& objective, std::vector<double> values,
                              const std::vector<bool>& known);
+
+// Capping with goals (issue 27): whether a goal's aggregate has a lower bound while members are
+// unknown. Its metric must be defined (not NaN) on every member, so that the aggregate is over a
+// count fixed in advance and aggregate_lower_bound() applies: ise, iae, itae, control_tv,
+// control_energy and peak_command (>= 0, +inf for a diverged run). saturation_fraction,
+// settling_time, steady_state_error and peak_error_after_fault are NaN on some members (no
+// sample, no fault, no tail) unless the member diverges (+inf), so how many values the aggregate
+// takes is unknown until every member ran: such a goal contributes nothing to the bound.
+bool goal_has_lower_bound(const GoalConfig& goal);
+
+// Capping with goals: an upper bound of the constrained fitness (constrained_fitness) of a
+// candidate whose objective is at least `objective` and whose hard goals' total violation is at
+// least `violation` (both lower bounds, as aggregate_lower_bound gives them). Without violation:
+// fitness_of(objective), which bounds a feasible candidate's 1/objective and exceeds every
+// infeasible one's J < 0. With violation V > 0 the candidate is infeasible, J = -V'/(1 + V') for
+// its true V' >= V; since V/(1 + V) rounds to within 2 ulp either way of the exact ratio, which
+// grows with V (the rounded one does not always), the bound is -(V/(1 + V))·(1 - 2^-50), above
+// every such J by a few ulp: a candidate within them of its cap is never capped. -1 (exact) for
+// V = +inf.
+double fitness_upper_bound(double objective, double violation);
 
 // The order in which capping runs a candidate's scenarios: the counted ones hardest first by
 // the values `reference` (one per scenario, e.g. the incumbent's; NaN as +inf) has on them,
@@ -169,8 +190,13 @@ class TuningProblem {
                                          std::int64_t record_every = 0) const;
   // The same with capping (issue 27): the candidates' scenarios run in rounds, each candidate's
   // in `order` (a permutation of the scenarios), and after each round a candidate with a cap
-  // (> kNoCap) stops once fitness_of(its lower bound) < cap: its outcome is then capped
-  // (Evaluation::capped). A candidate that runs to the end has exactly evaluate()'s outcome.
+  // (> kNoCap) stops once the upper bound of its fitness is below the cap: its outcome is then
+  // capped (Evaluation::capped). The bound is fitness_upper_bound() of its objective's lower
+  // bound and, for a job with goals, the total violation of its hard goals' lower bounds
+  // (goal_has_lower_bound; the others count 0); a candidate whose simulation failed has its
+  // exact fitness. A capped candidate's goals are their lower bounds (NaN where the goal has
+  // none), its violation theirs. A candidate that runs to the end has exactly evaluate()'s
+  // outcome.
   // Every decision is taken here, on the calling thread, from results by task index, so the
   // outcome depends on no evaluator, thread count, rank count or lane width.
   std::vector<CandidateOutcome> evaluate_capped(std::span<const sim::ControllerConfig> controllers,
@@ -226,7 +252,8 @@ struct Trial {
   double violation = 0;                     // and the hard goals' total normalised violation
   // Capping (issue 27): the candidate was stopped after `simulated` of its scenarios, because
   // its objective (at least `objective`, its lower bound then) could change no decision;
-  // fitness is then the upper bound fitness_of(objective), scenario_objectives and goals empty.
+  // fitness is then an upper bound (fitness_upper_bound), scenario_objectives empty, and goals
+  // and violation lower bounds (NaN for a goal without one).
   bool capped = false;
   std::size_t simulated = 0;  // only for a capped trial
 };
@@ -240,8 +267,9 @@ class ProblemFitness final : public BatchFitness {
   std::vector<double> operator()(const std::vector<Decision>& batch) override;
   // With capping on (the default), runs the candidates with caps through
   // TuningProblem::evaluate_capped, each one's scenarios hardest first for the incumbent (the
-  // best trial so far, uncapped by construction) as it was when the batch began; a job with
-  // goals is not capped (its goals' values would be unknown). Capped trials are recorded so.
+  // best trial so far, uncapped by construction) as it was when the batch began. A job of one
+  // soft goal and hard goals is capped on the bounds of its goals; a job of a Pareto front is
+  // not (docs/performance.md says why). Capped trials are recorded so.
   std::vector<double> evaluate_capped(const std::vector<Decision>& batch,
                                       const std::vector<double>& caps) override;
   void set_capping(bool on) { capping_ = on; }
