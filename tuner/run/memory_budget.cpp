@@ -7,13 +7,33 @@
 #include <cstdlib>
 
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/job/ensemble.hpp"
 
 namespace ftc::tune {
 
+namespace {
+
+double members(const Job& job) {
+  return job.ensemble ? static_cast<double>(job.ensemble->count) : 0.0;
+}
+
+// The scenarios whose objectives every trial keeps: those of a job without an ensemble.
+double trial_scenarios(const Job& job) {
+  return job.ensemble ? 0.0 : static_cast<double>(job.scenarios.size());
+}
+
+}  // namespace
+
+double bytes_per_member(const Job& job) {
+  const double population = job.tuning ? job.tuning->algorithm->population() : 0.0;
+  const double at_once = population + 1.0 + static_cast<double>(job.compare.size()) + 2.0;
+  return kBytesPerMemberValue * at_once * (1.0 + static_cast<double>(job.goals.size()));
+}
+
 double estimated_run_bytes(const Job& job, double evaluations) {
-  const auto scenarios = static_cast<double>(job.scenario_count());
-  return kRunBaseBytes + scenarios * kBytesPerScenario +
-         evaluations * scenarios * kBytesPerTrialObjective;
+  return kRunBaseBytes + static_cast<double>(job.scenarios.size()) * kBytesPerScenario +
+         members(job) * bytes_per_member(job) +
+         evaluations * trial_scenarios(job) * kBytesPerTrialObjective;
 }
 
 double estimated_run_bytes(const Job& job) {
@@ -47,15 +67,29 @@ void check_memory_budget(const Job& job, double evaluations, double budget,
                          const std::string& source) {
   const double need = estimated_run_bytes(job, evaluations);
   if (need <= budget) return;
-  char evals[32];
-  std::snprintf(evals, sizeof evals, "%.15g", evaluations);
-  throw InputError(
-      source, "",
-      "the job would need about " + bytes_text(need) + " of memory (" +
-          std::to_string(job.scenario_count()) + " scenarios at about 3.5 kB each, and one " +
-          "objective per scenario for each of its " + evals +
-          " evaluations), more than the budget of " + bytes_text(budget) +
-          ": give fewer ensemble members or evaluations (FTCTUNE_MEMORY_MIB sets the budget)");
+  throw InputError(source, "",
+                   "the job would need about " + bytes_text(need) + " of memory (" +
+                       memory_need_text(job, evaluations) + "), more than the budget of " +
+                       bytes_text(budget) +
+                       ": give fewer ensemble members, scenarios or evaluations, or a smaller "
+                       "population (FTCTUNE_MEMORY_MIB sets the budget)");
+}
+
+std::string memory_need_text(const Job& job, double evaluations) {
+  const std::size_t listed = job.scenarios.size();
+  std::string out = std::to_string(listed) + (listed == 1 ? " listed scenario at about 3.5 kB"
+                                                          : " listed scenarios at about 3.5 kB each");
+  if (job.ensemble) {
+    char each[64];
+    std::snprintf(each, sizeof each, "%.0f bytes each", bytes_per_member(job));
+    out += ", " + std::to_string(job.ensemble->count) + " ensemble members at about " + each;
+  } else if (listed > 0) {
+    char evals[32];
+    std::snprintf(evals, sizeof evals, "%.15g", evaluations);
+    out += ", and one objective per scenario for each of its " + std::string(evals) +
+           " evaluations";
+  }
+  return out;
 }
 
 void check_memory_budget(const Job& job, double budget, const std::string& source) {
