@@ -197,8 +197,9 @@ TEST(Cli, RunAboveTheMemoryBudgetIsRefusedBeforeTheWork) {
               dir);
   ::unsetenv("FTCTUNE_MEMORY_MIB");
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("the job would need about 259 MB of memory (1 listed scenario at about "
-                       "3.5 kB, 1000000 ensemble members at about 192 bytes each)"),
+  EXPECT_NE(r.err.find("the job would need about 259 MB of memory (1 listed scenario with the "
+                       "comparison's trajectories at about 0.273 MB, 1000000 ensemble members "
+                       "at about 192 bytes each)"),
             std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("more than the budget of 105 MB"), std::string::npos) << r.err;

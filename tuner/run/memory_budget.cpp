@@ -7,7 +7,9 @@
 #include <cstdlib>
 
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/plants.hpp"
 #include "ftc/tune/job/ensemble.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::tune {
 
@@ -24,6 +26,21 @@ double trial_scenarios(const Job& job) {
 
 }  // namespace
 
+double listed_scenario_bytes(const Job& job) {
+  if (job.scenarios.empty()) return 0.0;
+  // The comparison's trajectories: a row of one time and 2(n + m) numbers every
+  // comparison_record_every samples, per compared controller (its entries, the job's, the tuned).
+  const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
+  const double width = kind ? 1.0 + 2.0 * (kind->axes + kind->actuators) : 1.0;
+  const std::int64_t every = comparison_record_every(job);
+  double rows = 0;
+  for (const sim::Scenario& s : job.scenarios)
+    rows += static_cast<double>((s.samples() + every - 1) / every);
+  const double controllers = static_cast<double>(job.compare.size()) + 2.0;
+  return static_cast<double>(job.scenarios.size()) * kBytesPerScenario +
+         rows * width * 8.0 * controllers;
+}
+
 double bytes_per_member(const Job& job) {
   const double population = job.tuning ? job.tuning->algorithm->population() : 0.0;
   const double at_once = population + 1.0 + static_cast<double>(job.compare.size()) + 2.0;
@@ -31,7 +48,7 @@ double bytes_per_member(const Job& job) {
 }
 
 double estimated_run_bytes(const Job& job, double evaluations) {
-  return kRunBaseBytes + static_cast<double>(job.scenarios.size()) * kBytesPerScenario +
+  return kRunBaseBytes + listed_scenario_bytes(job) +
          members(job) * bytes_per_member(job) +
          evaluations * trial_scenarios(job) * kBytesPerTrialObjective;
 }
@@ -77,8 +94,10 @@ void check_memory_budget(const Job& job, double evaluations, double budget,
 
 std::string memory_need_text(const Job& job, double evaluations) {
   const std::size_t listed = job.scenarios.size();
-  std::string out = std::to_string(listed) + (listed == 1 ? " listed scenario at about 3.5 kB"
-                                                          : " listed scenarios at about 3.5 kB each");
+  std::string out = std::to_string(listed) +
+                    (listed == 1 ? " listed scenario" : " listed scenarios") +
+                    " with the comparison's trajectories at about " +
+                    bytes_text(listed_scenario_bytes(job));
   if (job.ensemble) {
     char each[64];
     std::snprintf(each, sizeof each, "%.0f bytes each", bytes_per_member(job));
