@@ -206,10 +206,20 @@ Rows rows_of(const py::array_t<double, py::array::c_style | py::array::forcecast
   return r;
 }
 
+// The job's problem with every scenario held, its ensemble's members included (a run's problem
+// generates them as they are simulated and keeps only the listed scenarios' metrics), so that
+// metrics() has a row for each member.
+tune::TuningProblem holding_every_scenario(const tune::Job& job) {
+  std::vector<sim::Scenario> all = job.scenarios;
+  for (sim::Scenario& m : tune::expand_ensemble(job)) all.push_back(std::move(m));
+  return tune::TuningProblem(job, std::move(all), job.scenarios.size());
+}
+
 // A job as a tuning problem, with its evaluator (threads as `ftctune run --threads`).
 struct Problem {
   Problem(const Job& j, std::optional<int> threads)
-      : problem((require_tuning(j, "Problem"), j.job)), evaluator(threads_of(threads)) {}
+      : problem((require_tuning(j, "Problem"), holding_every_scenario(j.job))),
+        evaluator(threads_of(threads)) {}
   tune::TuningProblem problem;
   PythonEvaluator evaluator;
   // One batch at a time through the evaluator: Python threads may share a Problem.

@@ -183,11 +183,13 @@ TEST(Cli, NegativeThreadCountsAreRefusedEverywhere) {
 }
 
 // Memory by design: a run that would not fit the memory budget (FTCTUNE_MEMORY_MIB here) is
-// refused before any work, exit 2, saying how much it would need.
+// refused before any work, exit 2, saying how much it would need. Members are generated as they
+// are simulated, so it takes 10^6 of them (192 bytes each for 3 bats, the incumbent and 4
+// compared controllers) to pass 100 MiB.
 TEST(Cli, RunAboveTheMemoryBudgetIsRefusedBeforeTheWork) {
   const auto dir = fresh_dir("memory-budget");
   json j = short_table1_job();
-  j["ensemble"] = {{"count", 100000}, {"seed", 1}};
+  j["ensemble"] = {{"count", 1000000}, {"seed", 1}};
   ftc::tune::write_file_atomic(dir / "job.json", j.dump());
   ::setenv("FTCTUNE_MEMORY_MIB", "100", 1);
   const CliResult r =
@@ -195,7 +197,9 @@ TEST(Cli, RunAboveTheMemoryBudgetIsRefusedBeforeTheWork) {
               dir);
   ::unsetenv("FTCTUNE_MEMORY_MIB");
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("the job would need about 433 MB of memory (100001 scenarios"),
+  EXPECT_NE(r.err.find("the job would need about 259 MB of memory (1 listed scenario with the "
+                       "comparison's trajectories at about 0.273 MB, 1000000 ensemble members "
+                       "at about 192 bytes each)"),
             std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("more than the budget of 105 MB"), std::string::npos) << r.err;

@@ -1431,23 +1431,27 @@ TEST(Service, RealFullDiskOnATmpfs) {
 // Issue 13, defect 2: what one job may store is bounded. A job that cannot fit is refused when
 // submitted; one that outgrows the limit fails with the reason, while it runs (its checkpointed
 // trials) or at its end (its result files).
-// Memory by design: a job whose run would hold more than --max-job-mib (its ensemble expanded,
-// its trials' objectives) is refused when submitted, 413 saying how much it would need; it used
-// to be accepted and drive the server to 1.79 GB.
+// Memory by design: a job whose run would hold more than --max-job-mib (a few numbers per
+// ensemble member and controller scored at once) is refused when submitted, 413 saying how much
+// it would need. The audit's 1e6-member job drove the server to 1.79 GB when members were held;
+// now generated as they are simulated, it needs an estimated 235 MB: over a limit of 128 MiB.
 TEST(Service, JobAboveTheMemoryBudgetIsRefusedWith413) {
   tune::ServiceOptions o;
   o.max_steps = 1e18;  // the memory check, not the steps budget
+  o.max_job_memory_bytes = std::uint64_t{128} << 20;
   Service s(o);
   json j = tiny_job("million-members");
   j["ensemble"] = {{"count", 1000000}, {"seed", 1}};
   auto r = s.client->Post("/v1/jobs", j.dump(), "application/json");
   expect_error(r, 413, "job_too_large");
-  EXPECT_NE(r->body.find("the job would need about 3.68 GB of memory (1000001 scenarios"),
+  EXPECT_NE(r->body.find("the job would need about 235 MB of memory (1 listed scenario with the "
+                          "comparison's trajectories at about 0.0352 MB, 1000000 ensemble "
+                          "members at about 168 bytes each)"),
             std::string::npos)
       << r->body;
-  EXPECT_NE(r->body.find("above the server's limit of 1.07 GB per job"), std::string::npos)
+  EXPECT_NE(r->body.find("above the server's limit of 134 MB per job"), std::string::npos)
       << r->body;
-  j["ensemble"]["count"] = 1000;  // about 71 MB
+  j["ensemble"]["count"] = 1000;  // about 67 MB
   r = s.client->Post("/v1/jobs", j.dump(), "application/json");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 201) << r->body;

@@ -101,7 +101,7 @@ TEST(Study, WritesOneRowPerRunTheTableAndTheFigure) {
 TEST(Study, StudyAboveTheMemoryBudgetIsRefusedBeforeAnyRun) {
   const auto dir = fresh_dir("study-memory");
   nlohmann::json j = short_table1_job();
-  j["ensemble"] = {{"count", 100000}, {"seed", 1}};
+  j["ensemble"] = {{"count", 1000000}, {"seed", 1}};
   std::ofstream(dir / "job.json") << j.dump();
   ::setenv("FTCTUNE_MEMORY_MIB", "100", 1);
   const CliResult r = run_cli("study '" + (dir / "job.json").string() +
@@ -110,8 +110,9 @@ TEST(Study, StudyAboveTheMemoryBudgetIsRefusedBeforeAnyRun) {
                               dir);
   ::unsetenv("FTCTUNE_MEMORY_MIB");
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("would need about 506 MB of memory (100001 scenarios at about 3.5 kB each, "
-                       "and one objective per scenario for each of its 100 evaluations)"),
+  EXPECT_NE(r.err.find("would need about 259 MB of memory (1 listed scenario with the "
+                       "comparison's trajectories at about 0.273 MB, 1000000 ensemble members "
+                       "at about 192 bytes each)"),
             std::string::npos)
       << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "o"));

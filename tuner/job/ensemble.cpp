@@ -31,7 +31,7 @@ SplitMix64 SplitMix64::member(std::uint64_t seed, std::uint64_t k) {
 }
 
 std::uint64_t SplitMix64::next_bits() {
-  s_ += 0x9E3779B97F4A7C15ULL;
+  s_ += kGamma;
   return mix(s_);
 }
 

@@ -1123,7 +1123,9 @@ Job parse_job(const json& j_in, const std::string& source,
                       "job has none (give the scenarios inline)"});
     } else {
       const std::filesystem::path file = *base_dir / ref["file"].get<std::string>();
-      const std::optional<std::string> text = read_file(file);
+      // Memory: the text goes once parsed, and the entries move from the file's document into
+      // the job's, which goes once the job is read (one document at a time, not three).
+      std::optional<std::string> text = read_file(file);
       json doc;
       bool parsed = false;
       if (!text) {
@@ -1135,6 +1137,7 @@ Job parse_job(const json& j_in, const std::string& source,
         } catch (const InputError& e) {
           errs.push_back({"/scenarios/file", e.what()});
         }
+        text.reset();
       }
       if (parsed) {
         if (!doc.is_object())
@@ -1149,7 +1152,7 @@ Job parse_job(const json& j_in, const std::string& source,
         else if (!doc.contains("scenarios") || !doc["scenarios"].is_array())
           errs.push_back({"/scenarios/file", file.string() + " lists no scenarios"});
         else
-          for (json entry : doc["scenarios"]) {
+          for (json& entry : doc["scenarios"]) {
             std::optional<bool> r;
             if (entry.is_object() && entry.contains("recoverable")) {
               if (entry["recoverable"].is_boolean())
@@ -1177,6 +1180,7 @@ Job parse_job(const json& j_in, const std::string& source,
     errs.push_back({"/goals", "must hold at least one goal"});
   Job job;
   job_shape().read(j, "", job, errs);
+  j = json();  // the job holds what it read
   for (const GoalConfig& g : job.goals)
     if (g.soft() && g.metric <= GoalMetric::itae) {
       job.objective = g.measure();

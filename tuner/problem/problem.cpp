@@ -70,7 +70,57 @@ bool has_limits(const Job& job) {
                      [](const GoalConfig& g) { return g.at_most.has_value(); });
 }
 
+// A goal's value on a scenario's metrics (TuningProblem::goal_value).
+double goal_value_on(const GoalConfig& g, const sim::Metrics& m, const sim::Scenario& s) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  if (g.metric == GoalMetric::control_tv) return m.diverged ? inf : m.control_tv;
+  if (g.metric == GoalMetric::peak_error_after_fault) {
+    if (m.diverged) return inf;
+    double peak = std::numeric_limits<double>::quiet_NaN();
+    for (double p : m.peak_error_after_fault)
+      if (!std::isnan(p)) peak = std::isnan(peak) ? p : std::max(peak, p);
+    return peak;
+  }
+  const sim::Window w = g.measure().window_of(s);
+  const sim::ErrorIntegrals* in = same_window(w, m.window) ? &m.errors : nullptr;
+  for (std::size_t k = 0; !in && k < m.extra_windows.size(); ++k)
+    if (same_window(w, m.extra_windows[k])) in = &m.extra[k];
+  if (!in) throw std::logic_error("a goal's window was not simulated");
+  switch (g.metric) {
+    case GoalMetric::ise:
+      return in->ise;
+    case GoalMetric::iae:
+      return in->iae;
+    case GoalMetric::itae:
+      return in->itae;
+    case GoalMetric::control_energy:
+      return in->control_energy;
+    case GoalMetric::peak_command:
+      return in->peak_command;
+    case GoalMetric::saturation_fraction:
+      return in->saturation_fraction;
+    case GoalMetric::settling_time:
+      return in->settling_time;
+    case GoalMetric::steady_state_error:
+      return in->steady_state_error;
+    default:
+      break;
+  }
+  throw std::logic_error("a goal metric without a value");
+}
+
 }  // namespace
+
+// Per scenario index, what a candidate's score needs: the job's metric, whether it diverged,
+// each goal's value (counted scenarios of a job with goals), and the metrics of the first
+// held.size() scenarios when they are kept.
+struct TuningProblem::Tally {
+  std::vector<sim::Metrics> held;
+  std::vector<double> values;
+  std::vector<unsigned char> diverged;
+  std::vector<std::vector<double>> goals;
+  std::string error;  // the first task error to come in
+};
 
 double fitness_of(double objective) {
   if (!std::isfinite(objective) || objective < 0) return 0.0;
@@ -133,15 +183,42 @@ std::size_t capping_block(std::size_t scenarios, std::size_t running) {
   return std::max<std::size_t>(1, std::min(wide, (scenarios + 3) / 4));
 }
 
-TuningProblem::TuningProblem(Job job)
-    : TuningProblem(
-          job,
-          [&] {
-            std::vector<sim::Scenario> all = job.scenarios;
-            for (sim::Scenario& m : expand_ensemble(job)) all.push_back(std::move(m));
-            return all;
-          }(),
-          job.scenarios.size()) {}
+TuningProblem::TuningProblem(Job job) : TuningProblem(job, job.scenarios, job.scenarios.size()) {
+  if (!job_->ensemble) return;
+  // The members, one at a time: validated and classified here, generated again when simulated.
+  members_ = static_cast<std::size_t>(job_->ensemble->count);
+  member_seed_ = job_->ensemble->seed;
+  const sim::AnyPlant& plant = set_->plant();
+  const bool include = job_->ensemble->unrecoverable == Unrecoverable::include;
+  recoverable_.reserve(scenarios());
+  counted_.reserve(scenarios());
+  for (std::size_t i = set_->size(); i < scenarios(); ++i) {
+    const sim::Scenario sc = member(i);
+    throw_if_errors("scenario " + sc.name, sc.validate("", plant.axes(), plant.actuators()));
+    recoverable_.push_back(plant.recoverable(sc));
+    counted_.push_back(recoverable_.back() || include);
+  }
+}
+
+sim::Scenario TuningProblem::member(std::size_t i) const {
+  const std::size_t k = i - set_->size();
+  sim::Scenario s = ensemble_member(*job_, member_seed_, static_cast<std::int64_t>(k));
+  // Every member has the base's initial-state size: member k's draws of a probe start after
+  // the held scenarios' and those of the k members before it.
+  for (const Perturbation& p : perturbations_) {
+    SplitMix64 r = SplitMix64::member(p.seed, p.k);
+    r.skip(p.held_draws + static_cast<std::uint64_t>(k) * s.initial_state.size());
+    for (double& x : s.initial_state) x *= 1.0 + p.eps * (2.0 * r.uniform() - 1.0);
+  }
+  return s;
+}
+
+sim::Scenario TuningProblem::scenario(std::size_t i) const {
+  if (i < set_->size()) return set_->scenario(i);
+  if (i < scenarios()) return member(i);
+  throw std::out_of_range("scenario " + std::to_string(i) + " of " +
+                          std::to_string(scenarios()));
+}
 
 TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed)
     : job_(std::make_shared<const Job>(std::move(job))), listed_(listed) {
@@ -202,10 +279,9 @@ sim::ControllerConfig TuningProblem::controller_with(std::span<const double> x) 
 
 sim::SimulationOptions TuningProblem::simulation_options(std::size_t scenario,
                                                          std::int64_t record_every) const {
-  if (scenario >= set_->size())
-    throw std::out_of_range("scenario " + std::to_string(scenario) + " of " +
-                            std::to_string(set_->size()));
-  sim::SimulationOptions o = set_->options(scenario);
+  sim::SimulationOptions o = scenario < set_->size()
+                                 ? set_->options(scenario)
+                                 : options_of(*job_, this->scenario(scenario));  // or throws
   o.record_every = record_every;
   return o;
 }
@@ -214,7 +290,7 @@ sim::SimulationResult TuningProblem::simulate(const sim::ControllerConfig& contr
                                               std::size_t scenario,
                                               std::int64_t record_every) const {
   const sim::SimulationOptions options = simulation_options(scenario, record_every);
-  return plant().simulate(controller, set_->scenario(scenario), options);
+  return plant().simulate(controller, this->scenario(scenario), options);
 }
 
 std::vector<SimulationTask> TuningProblem::tasks(std::size_t candidates, bool record_listed) const {
@@ -226,79 +302,111 @@ std::vector<SimulationTask> TuningProblem::tasks(std::size_t candidates, bool re
   return t;
 }
 
-Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
-  return score(std::move(per_scenario), false);
+TuningProblem::Tally TuningProblem::new_tally(std::size_t keep, std::size_t n) const {
+  Tally t;
+  t.held.resize(keep);
+  t.values.assign(n, 0.0);
+  t.diverged.assign(n, 0);
+  t.goals.assign(job_->goals.size(),
+                 std::vector<double>(n, std::numeric_limits<double>::quiet_NaN()));
+  return t;
 }
 
-Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario, bool failed) const {
+void TuningProblem::take(Tally& t, std::size_t s, TaskResult&& r,
+                         const sim::Scenario* scenario) const {
+  const sim::Metrics& m = r.metrics;
+  t.values[s] = m.objective(job_->objective.metric);  // +inf if diverged
+  t.diverged[s] = m.diverged ? 1 : 0;
+  // A task that failed holds no windows to read; its candidate meets no goal anyway.
+  if (r.error.empty() && counted_[s])
+    for (std::size_t g = 0; g < job_->goals.size(); ++g)
+      t.goals[g][s] = goal_value_on(job_->goals[g], m, *scenario);
+  if (t.error.empty() && !r.error.empty()) t.error = std::move(r.error);
+  if (s < t.held.size()) t.held[s] = std::move(r.metrics);
+}
+
+Evaluation TuningProblem::finish(Tally&& t) const {
+  const bool failed = !t.error.empty();
   Evaluation e;
-  e.scenarios = std::move(per_scenario);
-  e.simulated = e.scenarios.size();
+  e.scenarios = std::move(t.held);
+  e.simulated = t.values.size();
   std::vector<double> values;
-  values.reserve(e.scenarios.size());
-  for (std::size_t i = 0; i < e.scenarios.size(); ++i) {
-    const sim::Metrics& m = e.scenarios[i];
-    e.diverged = e.diverged || m.diverged;
-    e.diverged_count += m.diverged ? 1 : 0;
-    if (counted_[i]) values.push_back(m.objective(job_->objective.metric));  // +inf if diverged
+  values.reserve(t.values.size());
+  for (std::size_t i = 0; i < t.values.size(); ++i) {
+    e.diverged = e.diverged || t.diverged[i];
+    e.diverged_count += t.diverged[i] ? 1 : 0;
+    if (!counted_[i]) continue;
+    e.diverged_counted += t.diverged[i] ? 1 : 0;
+    values.push_back(t.values[i]);
   }
   e.objective = job_->objective.aggregate_of(std::move(values));
   e.fitness = fitness_of(e.objective);
-  for (const GoalConfig& g : job_->goals) {
+  for (std::size_t g = 0; g < job_->goals.size(); ++g) {
+    const GoalConfig& goal = job_->goals[g];
     // A candidate that could not run meets no goal (its records hold no windows to read).
     if (failed) {
       e.goals.push_back(std::numeric_limits<double>::infinity());
-      e.violation += g.violation(e.goals.back());
+      e.violation += goal.violation(e.goals.back());
       continue;
     }
     std::vector<double> v;
-    for (std::size_t i = 0; i < e.scenarios.size(); ++i)
-      if (counted_[i]) v.push_back(goal_value(g, e.scenarios[i], i));
-    const double value = aggregate_goal(g, std::move(v));
+    for (std::size_t i = 0; i < t.values.size(); ++i)
+      if (counted_[i]) v.push_back(t.goals[g][i]);
+    const double value = aggregate_goal(goal, std::move(v));
     e.goals.push_back(value);
-    e.violation += g.violation(value);
+    e.violation += goal.violation(value);
   }
   e.fitness = constrained_fitness(e.fitness, e.violation);
+  e.values = std::move(t.values);
   return e;
+}
+
+Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
+  const std::size_t n = per_scenario.size();
+  Tally t = new_tally(n, n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::optional<sim::Scenario> sc;  // for the goals' windows
+    if (!job_->goals.empty() && counted_[i]) sc = scenario(i);
+    take(t, i, TaskResult{std::move(per_scenario[i]), {}, {}}, sc ? &*sc : nullptr);
+  }
+  return finish(std::move(t));
 }
 
 double TuningProblem::goal_value(const GoalConfig& g, const sim::Metrics& m,
                                  std::size_t scenario) const {
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  if (g.metric == GoalMetric::control_tv) return m.diverged ? inf : m.control_tv;
-  if (g.metric == GoalMetric::peak_error_after_fault) {
-    if (m.diverged) return inf;
-    double peak = std::numeric_limits<double>::quiet_NaN();
-    for (double p : m.peak_error_after_fault)
-      if (!std::isnan(p)) peak = std::isnan(peak) ? p : std::max(peak, p);
-    return peak;
+  if (scenario < set_->size()) return goal_value_on(g, m, set_->scenario(scenario));
+  return goal_value_on(g, m, this->scenario(scenario));
+}
+
+TuningProblem::Block TuningProblem::block_set(std::vector<SimulationTask> tasks) const {
+  const std::size_t held = set_->size();
+  if (std::all_of(tasks.begin(), tasks.end(),
+                  [&](const SimulationTask& t) { return t.scenario < held; }))
+    return {set_, std::move(tasks)};
+  std::vector<std::size_t> ids;
+  ids.reserve(tasks.size());
+  for (const SimulationTask& t : tasks) ids.push_back(t.scenario);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  std::vector<sim::Scenario> scenarios;
+  std::vector<sim::SimulationOptions> options;
+  scenarios.reserve(ids.size());
+  options.reserve(ids.size());
+  for (std::size_t i : ids) {
+    if (i < held) {
+      scenarios.push_back(set_->scenario(i));
+      options.push_back(set_->options(i));
+    } else {
+      scenarios.push_back(member(i));
+      options.push_back(options_of(*job_, scenarios.back()));
+    }
   }
-  const sim::Window w = g.measure().window_of(set_->scenario(scenario));
-  const sim::ErrorIntegrals* in = same_window(w, m.window) ? &m.errors : nullptr;
-  for (std::size_t k = 0; !in && k < m.extra_windows.size(); ++k)
-    if (same_window(w, m.extra_windows[k])) in = &m.extra[k];
-  if (!in) throw std::logic_error("a goal's window was not simulated");
-  switch (g.metric) {
-    case GoalMetric::ise:
-      return in->ise;
-    case GoalMetric::iae:
-      return in->iae;
-    case GoalMetric::itae:
-      return in->itae;
-    case GoalMetric::control_energy:
-      return in->control_energy;
-    case GoalMetric::peak_command:
-      return in->peak_command;
-    case GoalMetric::saturation_fraction:
-      return in->saturation_fraction;
-    case GoalMetric::settling_time:
-      return in->settling_time;
-    case GoalMetric::steady_state_error:
-      return in->steady_state_error;
-    default:
-      break;
-  }
-  throw std::logic_error("a goal metric without a value");
+  for (SimulationTask& t : tasks)
+    t.scenario = static_cast<std::size_t>(std::lower_bound(ids.begin(), ids.end(), t.scenario) -
+                                          ids.begin());
+  return {std::make_shared<const SimulationSet>(
+              set_->with_scenarios(std::move(scenarios), std::move(options))),
+          std::move(tasks)};
 }
 
 double aggregate_goal(const GoalConfig& goal, std::vector<double> values) {
@@ -333,14 +441,13 @@ Summary summarize_values(const ObjectiveConfig& objective, std::vector<double> v
 
 Summary TuningProblem::summarize(const Evaluation& e) const {
   std::vector<double> v;
-  for (std::size_t i = 0; i < e.scenarios.size(); ++i)
-    if (counted_[i]) v.push_back(e.scenarios[i].objective(job_->objective.metric));
+  for (std::size_t i = 0; i < e.values.size(); ++i)
+    if (counted_[i]) v.push_back(e.values[i]);
   Summary s = summarize_values(job_->objective, std::move(v));
-  s.scenarios = static_cast<int>(e.scenarios.size());
+  s.scenarios = static_cast<int>(e.values.size());
   s.unrecoverable = unrecoverable();
   // Like the aggregates, the count follows the unrecoverable policy.
-  for (std::size_t i = 0; i < e.scenarios.size(); ++i)
-    s.diverged += counted_[i] && e.scenarios[i].diverged ? 1 : 0;
+  s.diverged = e.diverged_counted;
   s.objective = e.objective;
   return s;
 }
@@ -352,33 +459,52 @@ TuningProblem TuningProblem::perturbed(std::uint64_t seed, std::uint64_t k, doub
   scenarios.reserve(set_->size());
   options.reserve(set_->size());
   SplitMix64 r = SplitMix64::member(seed, k);
+  std::uint64_t draws = 0;
   for (std::size_t i = 0; i < set_->size(); ++i) {
     scenarios.push_back(set_->scenario(i));
     options.push_back(set_->options(i));  // the initial state moves no window
-    for (double& x : scenarios.back().initial_state) x *= 1.0 + eps * (2.0 * r.uniform() - 1.0);
+    for (double& x : scenarios.back().initial_state) {
+      x *= 1.0 + eps * (2.0 * r.uniform() - 1.0);
+      ++draws;
+    }
   }
   p.set_ = std::make_shared<const SimulationSet>(
       set_->with_scenarios(std::move(scenarios), std::move(options)));
+  p.perturbations_.push_back({seed, k, eps, draws});  // the members', as they are generated
   return p;
 }
 
 std::vector<CandidateOutcome> TuningProblem::evaluate(
     std::span<const sim::ControllerConfig> controllers, BatchEvaluator& evaluator,
-    std::int64_t record_every) const {
-  const std::vector<SimulationTask> t = tasks(controllers.size(), record_every > 0);
-  std::vector<TaskResult> results = evaluator.run({*set_, controllers, t, record_every});
-  const std::size_t S = scenarios();
-  std::vector<CandidateOutcome> out(controllers.size());
-  for (std::size_t i = 0; i < controllers.size(); ++i) {
-    std::vector<sim::Metrics> per;
-    per.reserve(S);
-    for (std::size_t s = 0; s < S; ++s) {
-      TaskResult& r = results[i * S + s];
-      per.push_back(std::move(r.metrics));
-      if (t[i * S + s].record) out[i].trajectories.push_back(std::move(r.trajectory));
-      if (out[i].error.empty() && !r.error.empty()) out[i].error = r.error;
+    std::int64_t record_every, bool keep_metrics) const {
+  const std::size_t n = controllers.size(), S = scenarios();
+  std::vector<CandidateOutcome> out(n);
+  std::vector<Tally> tally;
+  tally.reserve(n);
+  for (std::size_t i = 0; i < n; ++i)
+    tally.push_back(new_tally(keep_metrics ? set_->size() : 0, S));
+  // Block by block of scenarios, in order (each candidate's results come in scenario order):
+  // the block's members are generated for it and dropped with its results.
+  const std::size_t per_block =
+      std::max(kMinBlockScenarios, kBlockTasks / std::max<std::size_t>(1, n));
+  std::vector<SimulationTask> t;
+  for (std::size_t begin = 0; begin < S; begin += per_block) {
+    const std::size_t end = std::min(S, begin + per_block);
+    t.clear();
+    for (std::size_t c = 0; c < n; ++c)
+      for (std::size_t s = begin; s < end; ++s)
+        t.push_back({c, s, record_every > 0 && s < listed_scenarios()});
+    const Block b = block_set(t);
+    std::vector<TaskResult> results = evaluator.run({*b.set, controllers, b.tasks, record_every});
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      const std::size_t c = t[k].candidate;
+      if (t[k].record) out[c].trajectories.push_back(std::move(results[k].trajectory));
+      take(tally[c], t[k].scenario, std::move(results[k]), &b.set->scenario(b.tasks[k].scenario));
     }
-    out[i].evaluation = score(std::move(per), !out[i].error.empty());
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i].error = tally[i].error;
+    out[i].evaluation = finish(std::move(tally[i]));
     if (!out[i].error.empty()) {
       out[i].evaluation.objective = std::numeric_limits<double>::infinity();
       // Below every candidate that ran: 0, or the worst infeasible one's -1 under limits.
@@ -394,11 +520,12 @@ std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
   const std::size_t n = controllers.size(), S = scenarios();
   if (caps.size() != n || order.size() != S)
     throw std::invalid_argument("evaluate_capped: a cap per candidate, an order of every scenario");
-  const sim::Metric metric = job_->objective.metric;
-  std::vector<std::vector<sim::Metrics>> per(n, std::vector<sim::Metrics>(S));
+  std::vector<Tally> tally;  // by scenario: each candidate's come in its order
+  tally.reserve(n);
+  for (std::size_t c = 0; c < n; ++c) tally.push_back(new_tally(0, S));
   std::vector<std::vector<bool>> known(n, std::vector<bool>(S, false));
   std::vector<std::size_t> done(n, 0);  // how many of `order` ran
-  std::vector<std::string> error(n);
+  const auto error = [&](std::size_t c) -> const std::string& { return tally[c].error; };
   std::vector<bool> running(n, true), capped(n, false);
   std::vector<double> bound(n, 0.0), upper(n, 0.0), violation_bound(n, 0.0);
   std::vector<std::vector<double>> goal_bound(n);
@@ -413,12 +540,12 @@ std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
     for (std::size_t c : live)
       for (std::size_t k = done[c]; k < std::min(S, done[c] + block); ++k)
         tasks.push_back({c, order[k], false});
-    std::vector<TaskResult> results = evaluator.run({*set_, controllers, tasks, 0});
+    const Block b = block_set(tasks);
+    std::vector<TaskResult> results = evaluator.run({*b.set, controllers, b.tasks, 0});
     for (std::size_t t = 0; t < tasks.size(); ++t) {
       const std::size_t c = tasks[t].candidate, s = tasks[t].scenario;
-      per[c][s] = std::move(results[t].metrics);
+      take(tally[c], s, std::move(results[t]), &b.set->scenario(b.tasks[t].scenario));
       known[c][s] = true;
-      if (error[c].empty() && !results[t].error.empty()) error[c] = std::move(results[t].error);
     }
     for (std::size_t c : live) {
       done[c] = std::min(S, done[c] + block);
@@ -433,29 +560,30 @@ std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
       std::vector<bool> have;
       for (std::size_t s = 0; s < S; ++s)
         if (counted_[s]) {
-          values.push_back(known[c][s] ? per[c][s].objective(metric) : 0.0);
+          values.push_back(known[c][s] ? tally[c].values[s] : 0.0);
           have.push_back(known[c][s]);
         }
-      bound[c] = error[c].empty() ? aggregate_lower_bound(job_->objective, std::move(values), have)
+      bound[c] = error(c).empty() ? aggregate_lower_bound(job_->objective, std::move(values), have)
                                   : std::numeric_limits<double>::infinity();
       // A job with goals: each goal's lower bound the same way, and the violation they give.
       goal_bound[c].clear();
       violation_bound[c] = 0.0;
-      for (const GoalConfig& g : job_->goals) {
+      for (std::size_t gi = 0; gi < job_->goals.size(); ++gi) {
+        const GoalConfig& g = job_->goals[gi];
         double lb = std::numeric_limits<double>::quiet_NaN();  // no bound: counts 0 below
-        if (!error[c].empty()) {
+        if (!error(c).empty()) {
           lb = std::numeric_limits<double>::infinity();  // as score() has a failed candidate
         } else if (goal_has_lower_bound(g)) {
           std::vector<double> v;
           for (std::size_t s = 0; s < S; ++s)
-            if (counted_[s]) v.push_back(known[c][s] ? goal_value(g, per[c][s], s) : 0.0);
+            if (counted_[s]) v.push_back(known[c][s] ? tally[c].goals[gi][s] : 0.0);
           lb = aggregate_lower_bound(g.measure(), std::move(v), have);
         }
         goal_bound[c].push_back(lb);
         if (!std::isnan(lb)) violation_bound[c] += g.violation(lb);
       }
       // A failed candidate's fitness is known: evaluate()'s.
-      const double most = !error[c].empty() && has_limits(*job_)
+      const double most = !error(c).empty() && has_limits(*job_)
                               ? -1.0
                               : fitness_upper_bound(bound[c], violation_bound[c]);
       if (most < caps[c]) {
@@ -476,14 +604,14 @@ std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
       e.goals = std::move(goal_bound[c]);
       e.violation = violation_bound[c];
       for (std::size_t s = 0; s < S; ++s)
-        if (known[c][s] && per[c][s].diverged) ++e.diverged_count;
+        if (known[c][s] && tally[c].diverged[s]) ++e.diverged_count;
       e.diverged = e.diverged_count > 0;
-      out[c].error = error[c];
+      out[c].error = error(c);
       continue;
     }
-    out[c].error = error[c];
-    out[c].evaluation = score(std::move(per[c]), !error[c].empty());
-    if (!error[c].empty()) {  // as evaluate() does
+    out[c].error = error(c);
+    out[c].evaluation = finish(std::move(tally[c]));
+    if (!out[c].error.empty()) {  // as evaluate() does
       out[c].evaluation.objective = std::numeric_limits<double>::infinity();
       out[c].evaluation.fitness = has_limits(*job_) ? -1.0 : 0.0;
     }
@@ -566,7 +694,7 @@ std::vector<double> ProblemFitness::run(const std::vector<Decision>& batch,
   std::vector<sim::ControllerConfig> controllers;
   controllers.reserve(batch.size());
   for (const Decision& x : batch) controllers.push_back(problem_.controller_for(x));
-  return record(batch, problem_.evaluate(controllers, evaluator_), vectors);
+  return record(batch, problem_.evaluate(controllers, evaluator_, 0, false), vectors);
 }
 
 std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>& batch,
@@ -583,11 +711,10 @@ std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>&
       if (t.accepted && !t.capped) best = &t;
     if (best) {
       const sim::ControllerConfig c = problem_.controller_with(best->parameters);
-      const CandidateOutcome o =
-          problem_.evaluate(std::span<const sim::ControllerConfig>(&c, 1), evaluator_)[0];
+      const CandidateOutcome o = problem_.evaluate(std::span<const sim::ControllerConfig>(&c, 1),
+                                                   evaluator_, 0, false)[0];
       simulations_ += static_cast<std::int64_t>(problem_.scenarios());
-      for (const sim::Metrics& m : o.evaluation.scenarios)
-        incumbent_.push_back(m.objective(problem_.job().objective.metric));
+      incumbent_ = o.evaluation.values;
     }
   }
   std::vector<bool> counted(problem_.scenarios());
@@ -604,7 +731,6 @@ std::vector<double> ProblemFitness::record(const std::vector<Decision>& batch,
                                            std::vector<ObjectiveVector>* vectors) {
   std::vector<double> J(batch.size());
   const bool per_scenario = !problem_.job().ensemble;
-  const sim::Metric metric = problem_.job().objective.metric;
   for (std::size_t i = 0; i < batch.size(); ++i) {
     const Evaluation& e = out[i].evaluation;
     simulations_ += static_cast<std::int64_t>(e.simulated);
@@ -619,17 +745,14 @@ std::vector<double> ProblemFitness::record(const std::vector<Decision>& batch,
     t.diverged = e.diverged_count;
     t.capped = e.capped;
     if (e.capped) t.simulated = e.simulated;
-    if (per_scenario)
-      for (const sim::Metrics& m : e.scenarios)
-        t.scenario_objectives.push_back(m.objective(metric));
+    if (per_scenario) t.scenario_objectives = e.values;
     t.goals = e.goals;
     t.violation = e.violation;
     // A capped candidate's fitness is below its cap, which is at most the best so far.
     t.accepted = !e.capped && e.fitness > best_;
     if (t.accepted) {
       best_ = e.fitness;
-      incumbent_.clear();
-      for (const sim::Metrics& m : e.scenarios) incumbent_.push_back(m.objective(metric));
+      incumbent_ = e.values;
     }
     trials_.push_back(std::move(t));
   }

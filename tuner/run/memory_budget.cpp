@@ -7,13 +7,50 @@
 #include <cstdlib>
 
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/plants.hpp"
+#include "ftc/tune/job/ensemble.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::tune {
 
+namespace {
+
+double members(const Job& job) {
+  return job.ensemble ? static_cast<double>(job.ensemble->count) : 0.0;
+}
+
+// The scenarios whose objectives every trial keeps: those of a job without an ensemble.
+double trial_scenarios(const Job& job) {
+  return job.ensemble ? 0.0 : static_cast<double>(job.scenarios.size());
+}
+
+}  // namespace
+
+double listed_scenario_bytes(const Job& job) {
+  if (job.scenarios.empty()) return 0.0;
+  // The comparison's trajectories: a row of one time and 2(n + m) numbers every
+  // comparison_record_every samples, per compared controller (its entries, the job's, the tuned).
+  const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
+  const double width = kind ? 1.0 + 2.0 * (kind->axes + kind->actuators) : 1.0;
+  const std::int64_t every = comparison_record_every(job);
+  double rows = 0;
+  for (const sim::Scenario& s : job.scenarios)
+    rows += static_cast<double>((s.samples() + every - 1) / every);
+  const double controllers = static_cast<double>(job.compare.size()) + 2.0;
+  return static_cast<double>(job.scenarios.size()) * kBytesPerScenario +
+         rows * width * 8.0 * controllers;
+}
+
+double bytes_per_member(const Job& job) {
+  const double population = job.tuning ? job.tuning->algorithm->population() : 0.0;
+  const double at_once = population + 1.0 + static_cast<double>(job.compare.size()) + 2.0;
+  return kBytesPerMemberValue * at_once * (1.0 + static_cast<double>(job.goals.size()));
+}
+
 double estimated_run_bytes(const Job& job, double evaluations) {
-  const auto scenarios = static_cast<double>(job.scenario_count());
-  return kRunBaseBytes + scenarios * kBytesPerScenario +
-         evaluations * scenarios * kBytesPerTrialObjective;
+  return kRunBaseBytes + listed_scenario_bytes(job) +
+         members(job) * bytes_per_member(job) +
+         evaluations * trial_scenarios(job) * kBytesPerTrialObjective;
 }
 
 double estimated_run_bytes(const Job& job) {
@@ -47,15 +84,31 @@ void check_memory_budget(const Job& job, double evaluations, double budget,
                          const std::string& source) {
   const double need = estimated_run_bytes(job, evaluations);
   if (need <= budget) return;
-  char evals[32];
-  std::snprintf(evals, sizeof evals, "%.15g", evaluations);
-  throw InputError(
-      source, "",
-      "the job would need about " + bytes_text(need) + " of memory (" +
-          std::to_string(job.scenario_count()) + " scenarios at about 3.5 kB each, and one " +
-          "objective per scenario for each of its " + evals +
-          " evaluations), more than the budget of " + bytes_text(budget) +
-          ": give fewer ensemble members or evaluations (FTCTUNE_MEMORY_MIB sets the budget)");
+  throw InputError(source, "",
+                   "the job would need about " + bytes_text(need) + " of memory (" +
+                       memory_need_text(job, evaluations) + "), more than the budget of " +
+                       bytes_text(budget) +
+                       ": give fewer ensemble members, scenarios or evaluations, or a smaller "
+                       "population (FTCTUNE_MEMORY_MIB sets the budget)");
+}
+
+std::string memory_need_text(const Job& job, double evaluations) {
+  const std::size_t listed = job.scenarios.size();
+  std::string out = std::to_string(listed) +
+                    (listed == 1 ? " listed scenario" : " listed scenarios") +
+                    " with the comparison's trajectories at about " +
+                    bytes_text(listed_scenario_bytes(job));
+  if (job.ensemble) {
+    char each[64];
+    std::snprintf(each, sizeof each, "%.0f bytes each", bytes_per_member(job));
+    out += ", " + std::to_string(job.ensemble->count) + " ensemble members at about " + each;
+  } else if (listed > 0) {
+    char evals[32];
+    std::snprintf(evals, sizeof evals, "%.15g", evaluations);
+    out += ", and one objective per scenario for each of its " + std::string(evals) +
+           " evaluations";
+  }
+  return out;
 }
 
 void check_memory_budget(const Job& job, double budget, const std::string& source) {

@@ -432,11 +432,13 @@ std::optional<Job> Api::check_job(const httplib::Request& req, httplib::Response
       need > static_cast<double>(opt_.max_job_memory_bytes)) {
     send_error(res, 413, "job_too_large",
                "the job would need about " + bytes_text(need) + " of memory (" +
-                   std::to_string(job.scenario_count()) +
-                   " scenarios, ensemble members included, and their objectives for "
-                   "every evaluation), above the server's limit of " +
+                   memory_need_text(job, job.tuning ? static_cast<double>(
+                                                          job.tuning->algorithm->evaluations())
+                                                    : 1.0) +
+                   "), above the server's limit of " +
                    bytes_text(static_cast<double>(opt_.max_job_memory_bytes)) +
-                   " per job: ask for fewer ensemble members or evaluations",
+                   " per job: ask for fewer ensemble members, scenarios or evaluations, or a "
+                   "smaller population",
                json{{"bytes", need}, {"limit", opt_.max_job_memory_bytes}});
     return std::nullopt;
   }

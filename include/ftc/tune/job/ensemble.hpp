@@ -27,8 +27,11 @@ class SplitMix64 {
   explicit SplitMix64(std::uint64_t state) : s_(state) {}
   std::uint64_t next_bits();
   double uniform() { return static_cast<double>(next_bits() >> 11) * 0x1.0p-53; }  // [0, 1)
+  // Moves the stream on by n draws, as n calls of next_bits() would (the state is a counter).
+  void skip(std::uint64_t n) { s_ += n * kGamma; }
 
  private:
+  static constexpr std::uint64_t kGamma = 0x9E3779B97F4A7C15ULL;
   std::uint64_t s_;
 };
 

@@ -3,9 +3,12 @@
 // listed under tuning.parameters; a candidate is simulated on every scenario of the job and
 // scored by the job's objective, the metric in the window aggregated over the scenarios;
 // fitness J = 1/objective, and J = 0 when a scenario diverged. The problem owns all of that:
-// it holds its plant and scenarios, with their simulation options, as a SimulationSet, builds
-// the tasks over it and scores their results; evaluators only run the tasks, optimisers only
-// see fitness.
+// it holds its plant and its held scenarios (the listed ones), with their simulation options,
+// as a SimulationSet, generates its ensemble's members when a block of tasks needs them (SPEC
+// §12: member k depends on k and the seed only) and drops them after, builds the tasks and
+// scores their results; evaluators only run the tasks, optimisers only see fitness. So a
+// problem holds a few numbers per member (which scenarios count, and per candidate being
+// scored its values), never the members themselves: memory by design (issue 29).
 //
 // Copyable (copies share the immutable plant) and immutable after construction, so any number
 // of threads may simulate and score at once.
@@ -33,11 +36,18 @@ namespace ftc::tune {
 
 // A candidate's score.
 struct Evaluation {
-  std::vector<sim::Metrics> scenarios;  // per scenario of the problem (listed, then members)
+  // The metrics of each held scenario (TuningProblem::held_scenarios(): the listed ones, or
+  // every one of a problem given its scenarios), in order; empty when the caller did not ask to
+  // keep them (TuningProblem::evaluate's keep_metrics).
+  std::vector<sim::Metrics> scenarios;
+  // The job's metric on every scenario (listed, then members), +inf for a diverged run: what
+  // the summaries and the capping order read, 8 bytes a member.
+  std::vector<double> values;
   double objective = 0.0;               // the aggregate; +inf when it takes a diverged run
   double fitness = 0.0;                 // 1/objective; 0 when the objective is +inf
   bool diverged = false;                // some scenario diverged
   int diverged_count = 0;               // how many (counted or not)
+  int diverged_counted = 0;             // how many of the counted ones
   // A job with goals: each goal's aggregate, in the job's order, and the total normalised
   // violation of its hard goals (fitness is then constrained_fitness(1/objective, violation)).
   std::vector<double> goals;
@@ -46,8 +56,8 @@ struct Evaluation {
   // Capping (issue 27): a candidate whose lower bound passed its cap before every scenario ran.
   // Its objective is then that lower bound (the objective is at least this), its fitness
   // fitness_upper_bound() of its bounds (the fitness is at most this), its diverged count that of
-  // the scenarios that ran; `scenarios` is empty, and `goals` and `violation` of a job with goals
-  // are lower bounds (a goal without one NaN).
+  // the scenarios that ran; `scenarios` and `values` are empty, and `goals` and `violation` of a
+  // job with goals are lower bounds (a goal without one NaN).
   bool capped = false;
   std::size_t simulated = 0;  // scenarios simulated (all of them unless capped)
 };
@@ -131,27 +141,30 @@ struct ObjectiveOptions {
 class TuningProblem {
  public:
   // Throws InputError when the job does not validate. A job without a tuning section is a
-  // problem of dimension 0 (its own controller only: simulate, compare). The job's ensemble is
-  // expanded here, on the calling thread, and appended to its listed scenarios.
+  // problem of dimension 0 (its own controller only: simulate, compare). The job's ensemble's
+  // members follow its listed scenarios; each is generated here once, on the calling thread, to
+  // be validated and classified (recoverable, counted), and again whenever it is simulated.
   explicit TuningProblem(Job job);
-  // The same with these scenarios in place of the listed ones and the ensemble's members (the
-  // ensemble's unrecoverable policy still applies): a slice of a large evaluation.
+  // The same with these scenarios, all held, in place of the listed ones and the ensemble's
+  // members (the ensemble's unrecoverable policy still applies): a slice of a large evaluation.
   TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed);
 
   const Job& job() const { return *job_; }
   // Tells problems apart without comparing them: copies share it, every other problem (a
-  // perturbed() one included) has its own. It is the identity of the problem's SimulationSet.
+  // perturbed() one included) has its own. It is the identity of the problem's held set.
   std::uint64_t identity() const { return set_->identity(); }
   const sim::AnyPlant& plant() const { return set_->plant(); }
-  // The plant and the scenarios with their simulation options, which the tasks index into.
-  const SimulationSet& simulations() const { return *set_; }
   // The search space in search coordinates: ln x for a parameter on a log scale, x otherwise.
   const SearchSpace& space() const { return space_; }
 
   // The scenarios: the job's listed ones, then its ensemble's members.
-  std::size_t scenarios() const { return set_->size(); }
+  std::size_t scenarios() const { return set_->size() + members_; }
   std::size_t listed_scenarios() const { return listed_; }
-  const sim::Scenario& scenario(std::size_t i) const { return set_->scenario(i); }
+  // The scenarios the problem holds (the first ones); the others, its ensemble's members, it
+  // generates when they are simulated.
+  std::size_t held_scenarios() const { return set_->size(); }
+  // Scenario i: a held one's copy, or the member generated (and perturbed) as it is simulated.
+  sim::Scenario scenario(std::size_t i) const;
   // Whether gains can control the scenario once its faults have started (SPEC §12), and
   // whether it counts in the objective (unrecoverable ones are left out unless the ensemble
   // says include).
@@ -175,8 +188,9 @@ class TuningProblem {
   sim::SimulationResult simulate(const sim::ControllerConfig& controller, std::size_t scenario,
                                  std::int64_t record_every = 0) const;
 
-  // The tasks of n candidates: every (candidate, scenario) pair, candidate-major; with
-  // `record_listed` the listed scenarios' trajectories are kept (never the members').
+  // The tasks of n candidates: every (candidate, scenario) pair, candidate-major, scenario the
+  // index of the problem's scenario; with `record_listed` the listed scenarios' trajectories are
+  // kept (never the members'). evaluate() runs them block by block.
   std::vector<SimulationTask> tasks(std::size_t candidates, bool record_listed = false) const;
   // A goal's value on one scenario's metrics: the metric in the goal's window (which
   // simulation_options() asks for) or over the whole run; NaN where it is undefined (no fault).
@@ -184,10 +198,15 @@ class TuningProblem {
   // A candidate's score from its metrics on every scenario.
   Evaluation score(std::vector<sim::Metrics> per_scenario) const;
   Summary summarize(const Evaluation& e) const;
-  // Simulates and scores controllers through an evaluator, one outcome per controller.
+  // Simulates and scores controllers through an evaluator, one outcome per controller. The
+  // tasks run in blocks of scenarios (kBlockTasks tasks, at least kMinBlockScenarios
+  // scenarios), each block's members generated for it; each result is the same bits however
+  // the tasks are split. Without keep_metrics the evaluations' `scenarios` stay empty.
   std::vector<CandidateOutcome> evaluate(std::span<const sim::ControllerConfig> controllers,
-                                         BatchEvaluator& evaluator,
-                                         std::int64_t record_every = 0) const;
+                                         BatchEvaluator& evaluator, std::int64_t record_every = 0,
+                                         bool keep_metrics = true) const;
+  static constexpr std::size_t kBlockTasks = 8192;
+  static constexpr std::size_t kMinBlockScenarios = 256;
   // The same with capping (issue 27): the candidates' scenarios run in rounds, each candidate's
   // in `order` (a permutation of the scenarios), and after each round a candidate with a cap
   // (> kNoCap) stops once the upper bound of its fitness is below the cap: its outcome is then
@@ -211,16 +230,42 @@ class TuningProblem {
 
   // A copy whose scenarios start from initial states multiplied component by component by
   // 1 + eps (2u - 1), u from the SPEC §12 stream of member k with the given seed, drawn in
-  // scenario order then component order: the noise-floor probe of SPEC §14.
+  // scenario order then component order: the noise-floor probe of SPEC §14. (A generated
+  // member takes its draws where the stream stands after the scenarios before it.)
   TuningProblem perturbed(std::uint64_t seed, std::uint64_t k, double eps) const;
 
  private:
-  // score(), for a candidate whose tasks failed (`failed`): its goals get +inf, as no record
-  // holds the windows they read.
-  Evaluation score(std::vector<sim::Metrics> per_scenario, bool failed) const;
+  // What a candidate's scoring holds while its tasks' results come in, by scenario index.
+  struct Tally;
+  // A tally of n scenarios keeping the metrics of the first `keep`.
+  Tally new_tally(std::size_t keep, std::size_t n) const;
+  // Takes the result of scenario s (simulated as `scenario`, which a job with goals needs for
+  // their windows) into the tally.
+  void take(Tally& t, std::size_t s, TaskResult&& r, const sim::Scenario* scenario) const;
+  // The candidate's evaluation from a tally with every scenario in; a failed candidate's (an
+  // error) goals get +inf, as no record holds the windows they read.
+  Evaluation finish(Tally&& t) const;
+  // The set the tasks run on: the held set when they name held scenarios only, else a set of
+  // just the scenarios they name (members generated here), the tasks' indices made the set's.
+  struct Block {
+    std::shared_ptr<const SimulationSet> set;
+    std::vector<SimulationTask> tasks;
+  };
+  Block block_set(std::vector<SimulationTask> tasks) const;
+  sim::Scenario member(std::size_t i) const;  // scenario i >= held_scenarios(), generated
+
+  // The noise-floor probe's nudges, in the order they were applied.
+  struct Perturbation {
+    std::uint64_t seed = 0, k = 0;
+    double eps = 0;
+    std::uint64_t held_draws = 0;  // the draws the held scenarios took
+  };
 
   std::shared_ptr<const Job> job_;
-  std::shared_ptr<const SimulationSet> set_;
+  std::shared_ptr<const SimulationSet> set_;  // the held scenarios
+  std::size_t members_ = 0;                   // generated ones after them
+  std::uint64_t member_seed_ = 0;
+  std::vector<Perturbation> perturbations_;
   std::vector<bool> recoverable_, counted_;
   std::size_t listed_ = 0;
   SearchSpace space_;

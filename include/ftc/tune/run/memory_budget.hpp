@@ -1,9 +1,12 @@
 #pragma once
 // Memory by design: what a tuning run must hold is estimated up front, and a job over the budget
 // is refused before any work (exit 2 in the CLI, 413 in the service), saying how much it would
-// need. The figures are measured (docs/reliability.md): a run holds every scenario, its ensemble
-// expanded, with its per-scenario state (about 3.5 kB each, the service's figure), and for every trial one objective per
-// scenario (8 bytes). `evaluate` and `ensemble` stream their members and are not bounded by it.
+// need. The figures are measured (docs/reliability.md). A run holds its listed scenarios, with
+// their copies and the comparison's trajectories on them, but not its ensemble's members, which it generates block by
+// block: for each member it holds a few numbers per controller it scores at once (a batch of the
+// population, the incumbent, the comparison's controllers), one more per goal. A job without an
+// ensemble keeps one objective per scenario (8 bytes) in every trial. `evaluate` and `ensemble`
+// stream their members and are not bounded by it.
 #include <cstdint>
 #include <string>
 
@@ -11,12 +14,24 @@
 
 namespace ftc::tune {
 
-inline constexpr double kRunBaseBytes = 64.0 * (1 << 20);  // the process, the job, the pools
-inline constexpr double kBytesPerScenario = 3584.0;  // measured: 1.98 kB in run, 3.2 kB served
+// The process, the job, the pools and one block of generated members.
+inline constexpr double kRunBaseBytes = 64.0 * (1 << 20);
+// A listed scenario, its copies, its metrics and files' buffers (measured: 28 kB a scenario of
+// 20 ms at 10^3 listed, 31 kB at 10^5), besides the comparison's trajectories.
+inline constexpr double kBytesPerScenario = 32768.0;
+// A member's numbers for one controller scored at once (and one more of each per goal): its
+// value, whether it diverged, the counted values' copy as they are aggregated.
+inline constexpr double kBytesPerMemberValue = 24.0;
 inline constexpr double kBytesPerTrialObjective = 8.0;
 
-// The bytes a tuning run of `job` holds at its peak (its trials: evaluations × scenarios
-// objectives), by the figures above.
+// The bytes the job's listed scenarios take in a run: kBytesPerScenario each and the rows of the
+// comparison's trajectories on them (8 bytes a number).
+double listed_scenario_bytes(const Job& job);
+// The bytes a member takes in a run of the job: kBytesPerMemberValue for each controller scored
+// at once (its population, the incumbent, its compare entries, the job's and the tuned
+// controller), times one plus its goals.
+double bytes_per_member(const Job& job);
+// The bytes a tuning run of `job` holds at its peak, by the figures above.
 double estimated_run_bytes(const Job& job);
 // The same for a run of `evaluations` evaluations (a study's budget) instead of the job's own.
 double estimated_run_bytes(const Job& job, double evaluations);
@@ -31,6 +46,10 @@ double memory_budget_bytes();
 void check_memory_budget(const Job& job, double budget, const std::string& source);
 void check_memory_budget(const Job& job, double evaluations, double budget,
                          const std::string& source);
+
+// What the estimate counts, for messages: "1 listed scenario with the comparison's trajectories
+// at about 1.47 MB, 100000 ensemble members at about 144 bytes each".
+std::string memory_need_text(const Job& job, double evaluations);
 
 // "1.9 GB", "650 MB": a byte count for messages.
 std::string bytes_text(double bytes);
