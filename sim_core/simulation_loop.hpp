@@ -49,6 +49,10 @@ class ExogenousInputs {
     for (const Phasor& p : phasors_of(f.faults(), 0.5 * h_)) phasors_.push_back(p);
     sin_.resize(phasors_.size() * kInstants);
     cos_.resize(phasors_.size() * kInstants);
+    // Only a bias fault reads its cosine (FaultSet::evaluate), and only from its onset on.
+    for (std::size_t i = 0; i < f.faults().size(); ++i)
+      if (f.faults()[i].type == FaultType::bias) bias_.push_back(i);
+    active_.reserve(phasors_.size());  // the loop allocates nothing
   }
 
   // The inputs at the start, midpoint and end of substep j of sample k: three consecutive
@@ -80,10 +84,18 @@ class ExogenousInputs {
         ++k;
       }
     }
+    // The phasors whose values the block reads: every disturbance term's, and a bias fault's
+    // once the block reaches its onset (before it, ρ = 0 and FaultSet::evaluate reads no
+    // cosine; t < onset for every instant of the block when it holds for the last one). Each
+    // phasor is anchored at the block's first instant, so a table left out changes no other.
+    active_.clear();
+    for (std::size_t i = 0; i < n_dist_; ++i) active_.push_back(i);
+    for (const std::size_t i : bias_)
+      if (!(t_[kInstants - 1] < faults_.faults()[i].onset)) active_.push_back(n_dist_ + i);
     std::size_t first = 0;
-    for (; first + 4 <= phasors_.size(); first += 4) tabulate<4>(first);
-    for (; first + 2 <= phasors_.size(); first += 2) tabulate<2>(first);
-    if (first < phasors_.size()) tabulate<1>(first);
+    for (; first + 4 <= active_.size(); first += 4) tabulate<4>(first);
+    for (; first + 2 <= active_.size(); first += 2) tabulate<2>(first);
+    if (first < active_.size()) tabulate<1>(first);
 
     dist_.evaluate(
         kInstants,
@@ -96,20 +108,25 @@ class ExogenousInputs {
         [&](std::size_t n) -> FaultEffect<M>& { return entries_[n].fault; });
   }
 
-  // Phasors i .. i + G - 1 over the block. Local copies keep each rotation in registers, and a
-  // group advances together so that the CPU overlaps their dependency chains.
+  // The phasors active_[a .. a + G - 1] over the block. Local copies keep each rotation in
+  // registers, and a group advances together so that the CPU overlaps their dependency chains.
   template <int G>
-  void tabulate(std::size_t i) {
+  void tabulate(std::size_t a) {
     std::array<Phasor, G> q;
+    double* sin_of[G];
+    double* cos_of[G];
     for (int g = 0; g < G; ++g) {
-      q[g] = phasors_[i + g];
+      const std::size_t i = active_[a + g];
+      q[g] = phasors_[i];
       q[g].anchor(t_[0]);
+      sin_of[g] = &sin_[i * kInstants];
+      cos_of[g] = &cos_[i * kInstants];
     }
     for (int n = 0; n < kInstants; ++n)
       for (int g = 0; g < G; ++g) {
         if (n > 0) q[g].advance();
-        sin_[(i + g) * kInstants + n] = q[g].sin();
-        cos_[(i + g) * kInstants + n] = q[g].cos();
+        sin_of[g][n] = q[g].sin();
+        cos_of[g][n] = q[g].cos();
       }
   }
 
@@ -120,6 +137,8 @@ class ExogenousInputs {
   std::vector<Phasor> phasors_;  // the disturbance terms', then the faults'; sized once
   std::size_t n_dist_;
   std::vector<double> sin_, cos_;  // per phasor, its values at the block's instants
+  std::vector<std::size_t> bias_;    // the bias faults' indices
+  std::vector<std::size_t> active_;  // the phasors tabulated for the current block
   std::array<double, kInstants> t_{};
   std::array<Entry, kInstants> entries_;
   int used_ = kSteps;  // steps of the current block handed out

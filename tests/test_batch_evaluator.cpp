@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ftc/sim/controller.hpp"
@@ -98,6 +99,37 @@ TEST(BatchEvaluator, RunsTasksWithoutAProblemToTheBitsOfSimulate) {
         EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0) << what;
       }
     }
+  }
+}
+
+// Tasks come candidate by candidate (as TuningProblem::tasks and the capping rounds make them);
+// packs take them scenario by scenario, so that candidates on one ensemble member share its
+// inputs' tables: every task once, the scenarios in order, each scenario's candidates in order.
+TEST(BatchEvaluator, PacksHoldEachScenariosCandidatesTogether) {
+  std::vector<sim::Scenario> scenarios(5, sim::Scenario::paper());
+  for (std::size_t s = 0; s < scenarios.size(); ++s) {
+    scenarios[s].name = "member" + std::to_string(s);
+    scenarios[s].faults[0].onset = 5.0 + static_cast<double>(s);
+  }
+  const tune::SimulationSet set({"spacecraft", {}}, std::move(scenarios),
+                                std::vector<sim::SimulationOptions>(5));
+  const std::vector<sim::ControllerConfig> candidates(3);
+  std::vector<tune::SimulationTask> tasks;
+  for (std::size_t c = 0; c < candidates.size(); ++c)
+    for (std::size_t s = 1; s < set.size(); ++s) tasks.push_back({c, s, false});
+  const tune::SimulationBatch batch{set, candidates, tasks, 0};
+  const std::size_t width = static_cast<std::size_t>(set.plant().pack_width());
+  for (int workers : {1, 2, 16}) {
+    std::vector<std::pair<std::size_t, std::size_t>> order;  // (scenario, candidate)
+    for (const std::vector<std::size_t>& pack : tune::plan_packs(batch, workers)) {
+      EXPECT_GE(pack.size(), 1u);
+      EXPECT_LE(pack.size(), width);
+      for (std::size_t k : pack) order.emplace_back(tasks[k].scenario, tasks[k].candidate);
+    }
+    ASSERT_EQ(order.size(), tasks.size()) << workers << " workers";
+    for (std::size_t i = 0; i < order.size(); ++i)
+      EXPECT_EQ(order[i], std::make_pair(1 + i / candidates.size(), i % candidates.size()))
+          << workers << " workers, task " << i;
   }
 }
 

@@ -3,6 +3,8 @@
 // grouping into packs, and the host side of a pack (exogenous inputs, metrics, trajectories),
 // in plain C++ compiled once, for plant class P. Private to sim_core (plants/plant_adapter.hpp).
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <array>
 #include <span>
@@ -56,8 +58,23 @@ PackKernel<N, M> kernel_for(Isa isa) {
   }
 }
 
-// The host of one pack: per distinct scenario one ExogenousInputs (lanes of one scenario share
-// it), per lane its metrics and trajectory.
+// Whether two disturbances are the same terms, bit for bit (ensemble members share their base's).
+inline bool same_terms(const std::vector<DisturbanceTerm>& a,
+                       const std::vector<DisturbanceTerm>& b) {
+  const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (a[i].axis != b[i].axis || a[i].shape != b[i].shape ||
+        bits(a[i].amplitude) != bits(b[i].amplitude) ||
+        bits(a[i].frequency) != bits(b[i].frequency) || bits(a[i].phase) != bits(b[i].phase))
+      return false;
+  return true;
+}
+
+// The host of one pack: per distinct scenario the faults' effects, per distinct disturbance Δ(t)
+// (each an ExogenousInputs with the other part empty: lanes of one scenario share the first,
+// lanes whose scenarios have the same disturbance terms, as an ensemble's members do, the
+// second), per lane its metrics and trajectory.
 template <int N, int M>
 class Host final : public PackHost<N, M> {
   using Exo = ExoRows<N, M>;
@@ -69,7 +86,12 @@ class Host final : public PackHost<N, M> {
       const Scenario& s = *lanes_[l]->scenario;
       std::size_t g = 0;
       while (g < groups_.size() && groups_[g].scenario != &s) ++g;
-      if (g == groups_.size()) groups_.emplace_back(s);
+      if (g == groups_.size()) {
+        std::size_t d = 0;
+        while (d < dists_.size() && !same_terms(dists_[d].disturbance.terms(), s.disturbance)) ++d;
+        if (d == dists_.size()) dists_.emplace_back(s);
+        groups_.emplace_back(s, d);
+      }
       group_of_.push_back(g);
       std::vector<double> onsets;
       for (const Fault& f : s.faults) onsets.push_back(f.onset);
@@ -93,6 +115,9 @@ class Host final : public PackHost<N, M> {
       groups_[group_of_[l]].lanes.push_back(static_cast<int>(l));
     // Unused lanes repeat lane 0.
     for (int l = static_cast<int>(lanes_.size()); l < width; ++l) groups_[0].lanes.push_back(l);
+    for (const Group& g : groups_)
+      for (const int l : g.lanes) dists_[g.dist].lanes.push_back(l);
+    for (Dist& d : dists_) std::sort(d.lanes.begin(), d.lanes.end());
     done_.assign(lanes_.size(), false);
     buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3 * Exo::kCount *
                    Exo::stride(setup.shared_inputs, width));
@@ -107,14 +132,23 @@ class Host final : public PackHost<N, M> {
       for (int j = 0; j < S; ++j) {
         double* out =
             &buffer_[(static_cast<std::size_t>(i) * S + j) * 3 * Exo::kCount * stride];
+        for (Dist& d : dists_) {
+          const auto* e = d.exo.step(k0 + i, j);
+          for (int q = 0; q < 3; ++q) {
+            double* rows = out + q * Exo::kCount * stride;
+            for (const int l : d.lanes) {
+              if (shared && l > 0) break;
+              for (int r = 0; r < N; ++r)
+                rows[(Exo::kDist + r) * stride + l] = e[q].disturbance[r];
+            }
+          }
+        }
         for (Group& g : groups_) {
           const auto* e = g.exo.step(k0 + i, j);
           for (int q = 0; q < 3; ++q) {
             double* rows = out + q * Exo::kCount * stride;
             for (const int l : g.lanes) {
               if (shared && l > 0) break;
-              for (int r = 0; r < N; ++r)
-                rows[(Exo::kDist + r) * stride + l] = e[q].disturbance[r];
               for (int r = 0; r < M; ++r) {
                 rows[(Exo::kGain + r) * stride + l] = e[q].fault.gain[r];
                 rows[(Exo::kOffset + r) * stride + l] = e[q].fault.offset[r];
@@ -212,23 +246,36 @@ class Host final : public PackHost<N, M> {
   }
 
  private:
+  // The lanes of one scenario: its faults' effects (exo's disturbance is empty).
   struct Group {
-    explicit Group(const Scenario& s)
+    Group(const Scenario& s, std::size_t d)
         : scenario(&s),
-          disturbance(s.disturbance),
+          dist(d),
           faults(s.faults, s.saturation),
-          exo(disturbance, faults, s.sample_time, s.substeps) {}
+          exo(none, faults, s.sample_time, s.substeps) {}
     const Scenario* scenario;
+    std::size_t dist;        // its disturbance in dists_
     std::vector<int> lanes;  // in increasing order
-    Disturbance disturbance;
+    Disturbance none;
     FaultSet faults;
     ExogenousInputs<N, M> exo;  // refers to the two above: groups never move (deque)
+  };
+  // The lanes of one disturbance: Δ(t) (exo's faults are empty). The lanes of a pack share the
+  // sample time and the substeps, so the first scenario's serve every lane.
+  struct Dist {
+    explicit Dist(const Scenario& s)
+        : disturbance(s.disturbance), exo(disturbance, none, s.sample_time, s.substeps) {}
+    std::vector<int> lanes;  // in increasing order
+    Disturbance disturbance;
+    FaultSet none;
+    ExogenousInputs<N, M> exo;  // refers to the two above: never moves (deque)
   };
 
   std::vector<LaneTask*> lanes_;
   int width_;
   const PackSetup<N, M>& setup_;
   std::deque<Group> groups_;
+  std::deque<Dist> dists_;
   std::vector<std::size_t> group_of_;
   std::vector<MetricsAccumulator<N, M>> metrics_;
   std::vector<bool> done_;

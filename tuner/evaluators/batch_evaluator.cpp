@@ -108,6 +108,13 @@ std::vector<std::vector<std::size_t>> plan_packs(const SimulationBatch& batch, i
       groups[static_cast<std::size_t>(it - keys.begin())].push_back(k);
     }
   }
+  // Within a group, the tasks of one scenario next to each other: lanes of one scenario share its
+  // disturbance and fault tables (sim_core/plants/lane_host.hpp), or broadcast them when a whole
+  // pack has one scenario, so that several candidates on the same members cost less host work.
+  for (auto& g : groups)
+    std::stable_sort(g.begin(), g.end(), [&](std::size_t a, std::size_t b) {
+      return batch.tasks[a].scenario < batch.tasks[b].scenario;
+    });
   std::size_t full = 0;
   for (const auto& g : groups) full += (g.size() + width - 1) / width;
   // Fewer full packs than workers: split each group further, down to one task a pack.

@@ -100,7 +100,8 @@ void run_pack(const SimulationBatch& batch, std::span<const std::size_t> pack,
               std::span<TaskResult> results);
 
 // The batch's tasks in packs for run_pack: tasks that can share lanes (same sample time,
-// substeps and duration) go together, in task order, at most the plant's pack width to a pack;
+// substeps and duration) go together, ordered by scenario (stable: candidates of one scenario
+// share its inputs' tables), at most the plant's pack width to a pack;
 // when that leaves fewer packs than `workers`, the packs are made smaller so that every worker
 // gets one. Lanes give the same bits however tasks are packed, so this only affects speed.
 std::vector<std::vector<std::size_t>> plan_packs(const SimulationBatch& batch, int workers);
