@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <regex>
 
@@ -755,4 +756,39 @@ TEST(Cli, RunWithoutCappingWritesTheSameGainsAndNoCappedTrial) {
   EXPECT_EQ(capped_rows(slurp(dir / "off" / "trials.csv")), 0);
   EXPECT_GT(json::parse(slurp(dir / "off" / "run.json"))["simulations"].get<std::int64_t>(),
             json::parse(slurp(dir / "on" / "run.json"))["simulations"].get<std::int64_t>());
+}
+
+// A checkpoint's trials keep a goal of +inf (a diverged member's) apart from NaN (no scenario
+// defines the metric, or a capped row's goal without a bound), so that a resumed run's
+// trials.csv shows each as the uninterrupted run did.
+TEST(TuningRun, CheckpointTrialsKeepAnInfiniteGoalApartFromNaN) {
+  tune::Trial t;
+  t.iteration = 1;
+  t.index = 0;
+  t.parameters = {2.0};
+  t.objective = std::numeric_limits<double>::infinity();
+  t.fitness = 0.0;
+  t.diverged = 1;
+  t.scenario_objectives = {std::numeric_limits<double>::infinity()};
+  t.goals = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN(),
+             0.25};
+  t.violation = 0.5;
+  t.capped = true;
+  t.simulated = 3;
+  const json rows = tune::trials_json({t});
+  EXPECT_EQ(rows[0][8], json::array({"inf", nullptr, 0.25}));
+  const std::vector<tune::Trial> back = tune::trials_from_json(json::parse(rows.dump()), 3);
+  ASSERT_EQ(back.size(), 1u);
+  ASSERT_EQ(back[0].goals.size(), 3u);
+  EXPECT_TRUE(std::isinf(back[0].goals[0]) && back[0].goals[0] > 0);
+  EXPECT_TRUE(std::isnan(back[0].goals[1]));
+  EXPECT_EQ(back[0].goals[2], 0.25);
+  EXPECT_TRUE(back[0].capped);
+  EXPECT_EQ(back[0].simulated, 3u);
+  EXPECT_THROW(tune::trials_from_json(json::array({json::array(
+                                          {1, 0, json::array({2.0}), nullptr, 0.0, 1,
+                                           json::array(), false, json::array({"-inf", nullptr, 0.25}),
+                                           0.5})}),
+                                      3),
+               InputError);
 }

@@ -293,15 +293,6 @@ sim::SimulationResult TuningProblem::simulate(const sim::ControllerConfig& contr
   return plant().simulate(controller, this->scenario(scenario), options);
 }
 
-std::vector<SimulationTask> TuningProblem::tasks(std::size_t candidates, bool record_listed) const {
-  std::vector<SimulationTask> t;
-  t.reserve(candidates * scenarios());
-  for (std::size_t c = 0; c < candidates; ++c)
-    for (std::size_t s = 0; s < scenarios(); ++s)
-      t.push_back({c, s, record_listed && s < listed_scenarios()});
-  return t;
-}
-
 TuningProblem::Tally TuningProblem::new_tally(std::size_t keep, std::size_t n) const {
   Tally t;
   t.held.resize(keep);

@@ -41,10 +41,15 @@ double listed_scenario_bytes(const Job& job) {
          rows * width * 8.0 * controllers;
 }
 
+std::size_t controllers_at_once(const Job& job) {
+  const std::size_t population =
+      job.tuning ? static_cast<std::size_t>(job.tuning->algorithm->population()) : 0;
+  return population + 1 + job.compare.size() + 2;
+}
+
 double bytes_per_member(const Job& job) {
-  const double population = job.tuning ? job.tuning->algorithm->population() : 0.0;
-  const double at_once = population + 1.0 + static_cast<double>(job.compare.size()) + 2.0;
-  return kBytesPerMemberValue * at_once * (1.0 + static_cast<double>(job.goals.size()));
+  return kBytesPerMemberValue * static_cast<double>(controllers_at_once(job)) *
+         (1.0 + static_cast<double>(job.goals.size()));
 }
 
 double estimated_run_bytes(const Job& job, double evaluations) {

@@ -12,6 +12,7 @@
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/sha256.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/memory_budget.hpp"
 
 namespace ftc::tune {
 
@@ -32,7 +33,10 @@ nlohmann::json trial_json(const Trial& t) {
                              t.fitness, t.diverged, scen, t.accepted});
   if (!t.goals.empty()) {  // a job with goals: [goal values], total violation
     nlohmann::json goals = nlohmann::json::array();
-    for (double v : t.goals) goals.push_back(json_io::json_number(v));
+    // +inf (a diverged member's) as "inf", so that a resumed run tells it from NaN (null: no
+    // scenario defines the metric, or a capped row's goal without a bound) as the run did.
+    for (double v : t.goals)
+      goals.push_back(std::isinf(v) && v > 0 ? nlohmann::json("inf") : json_io::json_number(v));
     row.push_back(std::move(goals));
     row.push_back(json_io::json_number(t.violation));
   }
@@ -40,8 +44,11 @@ nlohmann::json trial_json(const Trial& t) {
   return row;
 }
 
+}  // namespace
+
 // A job with n goals has rows of 10 with n goal values, one without goals rows of 8; a capped
 // trial's row one more, its count of scenarios simulated.
+
 std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goals) {
   const auto bad = [] {
     return InputError("checkpoint", "/trials", "is not a list of trials written by ftctune");
@@ -77,8 +84,12 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goal
       if (!r[8].is_array() || r[8].size() != goals || !(r[9].is_number() || r[9].is_null()))
         throw bad();
       for (const nlohmann::json& v : r[8]) {
+        if (v.is_string() && v.get<std::string>() == "inf") {
+          t.goals.push_back(std::numeric_limits<double>::infinity());
+          continue;
+        }
         if (!v.is_number() && !v.is_null()) throw bad();
-        // null: NaN (no scenario defines the metric) or +inf; the value decides nothing later
+        // null: NaN (no scenario defines the metric, or a capped row's goal without a bound)
         t.goals.push_back(json_io::json_number_or(v, std::numeric_limits<double>::quiet_NaN()));
       }
       t.violation = json_io::json_number_or(r[9], std::numeric_limits<double>::infinity());
@@ -87,8 +98,6 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goal
   }
   return out;
 }
-
-}  // namespace
 
 nlohmann::json trials_json(const std::vector<Trial>& trials, std::size_t from) {
   nlohmann::json rows = nlohmann::json::array();
@@ -135,17 +144,25 @@ std::vector<PerturbedExtremes> perturbed_extremes(
     e.goal_min.assign(goals, std::numeric_limits<double>::infinity());
     e.goal_max.assign(goals, -std::numeric_limits<double>::infinity());
   }
+  // In groups of as many controllers as the run scores at once (the memory budget's count): each
+  // controller's result depends on its own tasks only, so the grouping changes no bit.
+  const std::size_t group = std::max<std::size_t>(1, controllers_at_once(problem.job()));
   for (int k = 0; k < nf.repeats; ++k) {
     const TuningProblem p =
         problem.perturbed(seed, kNoiseFloorStream + static_cast<std::uint64_t>(k), nf.perturbation);
-    const std::vector<CandidateOutcome> out = p.evaluate(controllers, evaluator);
-    for (std::size_t i = 0; i < out.size(); ++i) {
-      const Evaluation& e = out[i].evaluation;
-      ex[i].objective_min = std::min(ex[i].objective_min, e.objective);
-      ex[i].objective_max = std::max(ex[i].objective_max, e.objective);
-      for (std::size_t g = 0; g < goals && g < e.goals.size(); ++g) {
-        ex[i].goal_min[g] = std::min(ex[i].goal_min[g], e.goals[g]);
-        ex[i].goal_max[g] = std::max(ex[i].goal_max[g], e.goals[g]);
+    for (std::size_t from = 0; from < controllers.size(); from += group) {
+      const std::size_t n = std::min(group, controllers.size() - from);
+      const std::vector<CandidateOutcome> out =
+          p.evaluate(controllers.subspan(from, n), evaluator, 0, false);
+      for (std::size_t j = 0; j < out.size(); ++j) {
+        const std::size_t i = from + j;
+        const Evaluation& e = out[j].evaluation;
+        ex[i].objective_min = std::min(ex[i].objective_min, e.objective);
+        ex[i].objective_max = std::max(ex[i].objective_max, e.objective);
+        for (std::size_t g = 0; g < goals && g < e.goals.size(); ++g) {
+          ex[i].goal_min[g] = std::min(ex[i].goal_min[g], e.goals[g]);
+          ex[i].goal_max[g] = std::max(ex[i].goal_max[g], e.goals[g]);
+        }
       }
     }
   }

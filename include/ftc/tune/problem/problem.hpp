@@ -188,10 +188,6 @@ class TuningProblem {
   sim::SimulationResult simulate(const sim::ControllerConfig& controller, std::size_t scenario,
                                  std::int64_t record_every = 0) const;
 
-  // The tasks of n candidates: every (candidate, scenario) pair, candidate-major, scenario the
-  // index of the problem's scenario; with `record_listed` the listed scenarios' trajectories are
-  // kept (never the members'). evaluate() runs them block by block.
-  std::vector<SimulationTask> tasks(std::size_t candidates, bool record_listed = false) const;
   // A goal's value on one scenario's metrics: the metric in the goal's window (which
   // simulation_options() asks for) or over the whole run; NaN where it is undefined (no fault).
   double goal_value(const GoalConfig& goal, const sim::Metrics& m, std::size_t scenario) const;

@@ -31,6 +31,10 @@ double listed_scenario_bytes(const Job& job);
 // at once (its population, the incumbent, its compare entries, the job's and the tuned
 // controller), times one plus its goals.
 double bytes_per_member(const Job& job);
+// How many controllers the run scores at once (and bytes_per_member counts): the population,
+// the incumbent, the compare entries, the job's and the tuned. The noise floor of a front's
+// points is measured in groups of this many, so that a large front stays within the budget.
+std::size_t controllers_at_once(const Job& job);
 // The bytes a tuning run of `job` holds at its peak, by the figures above.
 double estimated_run_bytes(const Job& job);
 // The same for a run of `evaluations` evaluations (a study's budget) instead of the job's own.

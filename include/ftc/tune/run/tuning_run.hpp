@@ -47,6 +47,9 @@ nlohmann::json run_checkpoint(const Optimizer& optimizer, const std::vector<Tria
 // The "trials" part of a checkpoint for trials[from..]: a store that keeps each iteration's new
 // trials beside the optimiser's state writes O(trials) in all, not O(trials²).
 nlohmann::json trials_json(const std::vector<Trial>& trials, std::size_t from = 0);
+// The trials of a checkpoint's "trials" (rows of a job with `goals` goals); InputError at
+// /trials if they are not rows trials_json wrote.
+std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goals);
 
 // Trajectories of the comparison are recorded every 10 ms of simulated time.
 inline constexpr double kComparisonRecordInterval = 0.01;
