@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
@@ -66,6 +67,20 @@ inline tune::TuningOutcome tuned(const tune::Job& job, int threads,
   tune::RunOptions o = base;
   o.seed = seed;
   return tune::tune(job, evaluator, o);
+}
+
+// The checkpoint of a run of `job` on one thread stopped after iteration `last`: what a resumed
+// run starts from.
+inline nlohmann::json checkpoint_after(const tune::Job& job, int last) {
+  std::string checkpoint;
+  tune::RunOptions stop;
+  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
+                      const std::vector<tune::Trial>& trials) {
+    checkpoint = tune::run_checkpoint(o, trials).dump();
+    return h.iteration < last;
+  };
+  tuned(job, 1, std::nullopt, stop);
+  return nlohmann::json::parse(checkpoint);
 }
 
 }  // namespace ftc::testing

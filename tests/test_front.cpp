@@ -16,6 +16,7 @@
 #include "ftc/runtime/gains.hpp"
 #include "ftc/sim/isa.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/hypervolume.hpp"
 #include "ftc/tune/optimizers/pareto_bat.hpp"
 #include "ftc/tune/run/documents.hpp"
@@ -53,6 +54,16 @@ tune::Trial trial(int iteration, double ise, double tv, double violation = 0.0) 
   t.violation = violation;
   t.fitness = violation > 0 ? -0.5 : 1.0 / ise;
   return t;
+}
+
+// `ftctune run -q --no-checkpoint --threads 1 FLAGS` of job j (written to dir/job.json) into
+// dir/OUT.
+CliResult run_job(const std::filesystem::path& dir, const json& j, const std::string& flags,
+                  const std::string& out) {
+  tune::write_file_atomic(dir / "job.json", j.dump());
+  return run_cli("run -q --no-checkpoint --threads 1 " + flags + " '" +
+                     (dir / "job.json").string() + "' --out '" + (dir / out).string() + "'",
+                 dir);
 }
 
 }  // namespace
@@ -316,15 +327,7 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
     EXPECT_EQ(two.at(f), files.at(f)) << f;
 
   // Resumed after iteration 1 of 3: the same bytes.
-  std::string checkpoint;
-  tune::RunOptions stop;
-  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
-                      const std::vector<tune::Trial>& trials) {
-    checkpoint = tune::run_checkpoint(o, trials).dump();
-    return h.iteration < 1;
-  };
-  tuned(job, 1, std::nullopt, stop);
-  const json state = json::parse(checkpoint);
+  const json state = checkpoint_after(job, 1);
   tune::RunOptions resume;
   resume.resume = &state;
   const auto resumed = tune::output_files(tuned(job, 2, std::nullopt, resume));
@@ -413,14 +416,7 @@ TEST(Front, AReportOfARunWithAnEmptyFrontSaysNoPointMetTheHardGoals) {
   json j = front_job();
   j["goals"][2]["at_most"] = 1e-3;  // no gains keep the peak command under 1 mN m
   j["tuning"]["algorithm"]["iterations"] = 1;
-  {
-    std::ofstream f(dir / "job.json");
-    f << j.dump();
-  }
-  const CliResult r = run_cli("run -q --no-checkpoint --threads 1 --report '" +
-                                  (dir / "job.json").string() + "' --out '" +
-                                  (dir / "out").string() + "'",
-                              dir);
+  const CliResult r = run_job(dir, j, "--report", "out");
   // 3: the gains met no hard goal and must not be deployed; the report is written all the same.
   ASSERT_EQ(r.exit_code, 3) << r.err;
   ASSERT_TRUE(json::parse(slurp(dir / "out" / "front.json"))["points"].empty());
@@ -438,14 +434,7 @@ TEST(Front, RunWithTheRandomSearchBaselineWritesEveryFile) {
   const auto dir = fresh_dir("front-baseline");
   json j = front_job();
   j["tuning"]["algorithm"]["iterations"] = 1;
-  {
-    std::ofstream f(dir / "job.json");
-    f << j.dump();
-  }
-  const CliResult r = run_cli("run -q --no-checkpoint --threads 1 --baseline '" +
-                                  (dir / "job.json").string() + "' --out '" +
-                                  (dir / "out").string() + "'",
-                              dir);
+  const CliResult r = run_job(dir, j, "--baseline", "out");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const char* f : {"front.json", "gains.json", "history.csv", "history-random.csv"})
     EXPECT_FALSE(slurp(dir / "out" / f).empty()) << f;
@@ -468,17 +457,11 @@ TEST(Front, IsTheSameBytesUnderEveryInstructionSet) {
   const auto dir = fresh_dir("front-isa");
   json j = front_job();
   j["tuning"]["algorithm"]["iterations"] = 1;
-  {
-    std::ofstream f(dir / "job.json");
-    f << j.dump();
-  }
   std::string front, gains;
   for (const sim::Isa isa : sim::supported_isas()) {
     const std::string name = sim::to_string(isa);
     ::setenv("FTCTUNE_ISA", name.c_str(), 1);
-    const CliResult r = run_cli("run -q --no-checkpoint --threads 1 '" + (dir / "job.json").string() +
-                                    "' --out '" + (dir / name).string() + "'",
-                                dir);
+    const CliResult r = run_job(dir, j, "", name);
     ::unsetenv("FTCTUNE_ISA");
     ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
     const std::string f = slurp(dir / name / "front.json"), g = slurp(dir / name / "gains.json");

@@ -531,15 +531,7 @@ TEST(TuningRun, ResumedConstrainedRunKeepsTheGoalsOfEveryTrial) {
   const tune::Job job = tune::parse_job(capped_short_job(100), "capped");
   const tune::TuningOutcome whole = tuned(job, 2);
   for (const tune::Trial& t : whole.trials) ASSERT_GT(t.violation, 0.0);
-  std::string checkpoint;
-  tune::RunOptions stop;
-  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
-                      const std::vector<tune::Trial>& trials) {
-    checkpoint = tune::run_checkpoint(o, trials).dump();
-    return h.iteration < 1;
-  };
-  tuned(job, 1, std::nullopt, stop);
-  const json state = json::parse(checkpoint);
+  const json state = checkpoint_after(job, 1);
   tune::RunOptions resume;
   resume.resume = &state;
   const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
@@ -697,15 +689,7 @@ TEST(TuningRun, ResumedCappedRunWritesTheSameTrials) {
     j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
     const tune::Job job = tune::parse_job(j, "x");
     const tune::TuningOutcome whole = tuned(job, 2);
-    std::string checkpoint;
-    tune::RunOptions stop;
-    stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer& o,
-                        const std::vector<tune::Trial>& trials) {
-      checkpoint = tune::run_checkpoint(o, trials).dump();
-      return h.iteration < 2;
-    };
-    tuned(job, 1, std::nullopt, stop);
-    const json state = json::parse(checkpoint);
+    const json state = checkpoint_after(job, 2);
     bool any_capped = false;  // a capped row has one more element: 9 (11 with goals)
     for (const json& row : state["trials"])
       any_capped = any_capped || row.size() == (job.goals.empty() ? 9u : 11u);
