@@ -307,6 +307,66 @@ TEST(JobLoader, ScenariosFileIsReadAsStrictly) {
   }
 }
 
+// The file's entries are read as the file is parsed, one at a time; what they hold counts only
+// once the file proves to be a scenarios file, as if the whole file were read before them.
+TEST(JobLoader, ScenariosFileEntriesAreJudgedOnlyInAScenariosFile) {
+  const std::filesystem::path dir = ftc::testing::fresh_dir("scenarios-file-entries");
+  json j = table1();
+  const json good = j["scenarios"][0];
+  j["scenarios"] = {{"file", "members.json"}};
+  std::ofstream(dir / "job.json") << j.dump();
+  json bad = good;
+  bad["name"] = "second";
+  bad["duration"] = -1;
+  const auto errors_with = [&](const std::string& text) {
+    std::ofstream(dir / "members.json") << text;
+    try {
+      tune::load_job(dir / "job.json");
+    } catch (const InputError& e) {
+      return e.errors();
+    }
+    return std::vector<FieldError>{};
+  };
+  // The schema comes after the entries, as `ftctune ensemble` writes it (keys sorted).
+  const std::string entries = json::array({good, bad}).dump();
+  std::vector<FieldError> errs =
+      errors_with(R"({"scenarios": )" + entries + R"(, "schema": "ftctune.scenarios/1"})");
+  ASSERT_FALSE(errs.empty());
+  EXPECT_EQ(errs.front().path, "/scenarios/1/duration") << errs.front().message;
+  errs = errors_with(R"({"scenarios": )" + entries + R"(, "schema": "ftctune.job/1"})");
+  ASSERT_EQ(errs.size(), 1u) << ftc::to_string(errs.at(1));
+  EXPECT_EQ(errs[0].path, "/scenarios/file");
+  EXPECT_NE(errs[0].message.find("not a scenarios file"), std::string::npos) << errs[0].message;
+  errs = errors_with(R"({"schema": "ftctune.scenarios/1", "scenarios": )" + entries + ", ");
+  ASSERT_EQ(errs.size(), 1u) << ftc::to_string(errs.at(1));
+  EXPECT_EQ(errs[0].path, "/scenarios/file");
+  EXPECT_NE(errs[0].message.find("invalid JSON"), std::string::npos) << errs[0].message;
+  json flagged = good;
+  flagged["recoverable"] = 1;
+  errs = errors_with(
+      json{{"schema", "ftctune.scenarios/1"}, {"scenarios", json::array({flagged})}}.dump());
+  ASSERT_EQ(errs.size(), 1u) << ftc::to_string(errs.at(1));
+  EXPECT_NE(errs[0].message.find("/scenarios/0/recoverable must be true or false"),
+            std::string::npos)
+      << errs[0].message;
+  // A good file loads the scenarios the inline job lists.
+  bad["duration"] = 40;
+  std::ofstream(dir / "members.json")
+      << json{{"schema", "ftctune.scenarios/1"}, {"scenarios", {good, bad}}}.dump();
+  json inline_job = table1();
+  inline_job["scenarios"] = {good, bad};
+  EXPECT_EQ(tune::to_json(tune::load_job(dir / "job.json")).dump(),
+            tune::to_json(tune::parse_job(inline_job, "inline")).dump());
+  // What is not a file to read is an error of the job's field.
+  std::filesystem::remove(dir / "members.json");
+  std::filesystem::create_directory(dir / "members.json");
+  errs = errors_with("");
+  ASSERT_EQ(errs.size(), 1u) << ftc::to_string(errs.at(1));
+  EXPECT_EQ(errs[0].path, "/scenarios/file");
+  EXPECT_NE(errs[0].message.find("is a directory, not a file to read"), std::string::npos)
+      << errs[0].message;
+}
+
 TEST(JobLoader, MissingFileIsInputError) {
   EXPECT_THROW(tune::load_job("/nonexistent/job.json"), InputError);
 }

@@ -9,26 +9,44 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <functional>
+#include <istream>
+#include <streambuf>
 #include <sstream>
 
 #include "ftc/sim/input_error.hpp"
 
 namespace ftc::json_io {
 
-std::optional<std::string> read_file(const std::filesystem::path& path, std::uint64_t max_bytes) {
-  // O_NONBLOCK: opening a FIFO does not wait for a writer. What is not a regular file (a
-  // directory, a FIFO, /dev/zero behind a link) is refused before a byte is read, and so is a
-  // file larger than max_bytes.
-  struct Fd {
-    int fd;
-    ~Fd() {
-      if (fd >= 0) ::close(fd);
-    }
-  } f{::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC)};
-  if (f.fd < 0) return std::nullopt;
+namespace {
+
+// A file descriptor closed when it goes.
+struct Fd {
+  int fd = -1;
+  Fd() = default;
+  Fd(const Fd&) = delete;
+  Fd& operator=(const Fd&) = delete;
+  ~Fd() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
+InputError too_big(const std::filesystem::path& path, std::uint64_t max_bytes) {
+  return InputError(path.string(), "",
+                    "is larger than " + std::to_string(max_bytes >> 20) +
+                        " MiB, the most a file of its kind may hold");
+}
+
+// Opens `path` for reading: false when it cannot be opened. O_NONBLOCK: opening a FIFO does not
+// wait for a writer. What is not a regular file (a directory, a FIFO, /dev/zero behind a link)
+// is refused before a byte is read, and so is a file larger than max_bytes.
+bool open_regular(const std::filesystem::path& path, std::uint64_t max_bytes, Fd& f) {
+  f.fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (f.fd < 0) return false;
   struct stat st {};
-  if (::fstat(f.fd, &st) != 0) return std::nullopt;
+  if (::fstat(f.fd, &st) != 0) return false;
   if (!S_ISREG(st.st_mode)) {
     const char* kind = S_ISDIR(st.st_mode)    ? "a directory"
                        : S_ISFIFO(st.st_mode) ? "a FIFO"
@@ -38,24 +56,34 @@ std::optional<std::string> read_file(const std::filesystem::path& path, std::uin
                                               : "not a regular file";
     throw InputError(path.string(), "", std::string("is ") + kind + ", not a file to read");
   }
-  const auto too_big = [&] {
-    return InputError(path.string(), "",
-                      "is larger than " + std::to_string(max_bytes >> 20) +
-                          " MiB, the most a file of its kind may hold");
-  };
-  if (static_cast<std::uint64_t>(st.st_size) > max_bytes) throw too_big();
+  if (static_cast<std::uint64_t>(st.st_size) > max_bytes) throw too_big(path, max_bytes);
+  return true;
+}
+
+// read(2) that retries on EINTR: the bytes read, 0 at the end, -1 on an error.
+ssize_t read_some(int fd, char* buf, std::size_t n) {
+  for (;;) {
+    const ssize_t got = ::read(fd, buf, n);
+    if (got >= 0 || errno != EINTR) return got;
+  }
+}
+
+}  // namespace
+
+std::optional<std::string> read_file(const std::filesystem::path& path, std::uint64_t max_bytes) {
+  Fd f;
+  if (!open_regular(path, max_bytes, f)) return std::nullopt;
+  struct stat st {};
+  if (::fstat(f.fd, &st) != 0) return std::nullopt;
   std::string text;
   text.reserve(static_cast<std::size_t>(st.st_size));
   char buf[65536];
   for (;;) {
-    const ssize_t n = ::read(f.fd, buf, sizeof buf);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return std::nullopt;
-    }
+    const ssize_t n = read_some(f.fd, buf, sizeof buf);
+    if (n < 0) return std::nullopt;
     if (n == 0) break;
     text.append(buf, static_cast<std::size_t>(n));
-    if (text.size() > max_bytes) throw too_big();  // it grew while read
+    if (text.size() > max_bytes) throw too_big(path, max_bytes);  // it grew while read
   }
   return text;
 }
@@ -181,20 +209,29 @@ constexpr std::size_t kMaxDepth = 256;
 
 // Builds the document like json::parse, but tracks the JSON path of the value being read, so an
 // error (a number out of range, a duplicate key) names it, and stops at the first problem
-// instead of throwing library exceptions.
+// instead of throwing library exceptions. When given a key and a receiver, the elements of the
+// root object's array under that key are handed over one by one as each is complete, and not
+// kept: the document then holds that array empty.
 class StrictReader : public json::json_sax_t {
  public:
-  StrictReader(json& root, std::string_view text) : root_(root), text_(text) {}
+  using Locate = std::function<std::string(std::size_t)>;  // "line L, column C" of an offset
+  using Element = std::function<void(std::size_t, json&&)>;
+
+  StrictReader(json& root, Locate locate, std::string streamed_key = {}, Element element = {})
+      : root_(root),
+        locate_(std::move(locate)),
+        streamed_key_(std::move(streamed_key)),
+        element_(std::move(element)) {}
 
   const std::optional<FieldError>& error() const { return error_; }
 
-  bool null() override { return put(nullptr) != nullptr; }
-  bool boolean(bool v) override { return put(v) != nullptr; }
-  bool number_integer(number_integer_t v) override { return put(v) != nullptr; }
-  bool number_unsigned(number_unsigned_t v) override { return put(v) != nullptr; }
-  bool number_float(number_float_t v, const string_t&) override { return put(v) != nullptr; }
-  bool string(string_t& v) override { return put(std::move(v)) != nullptr; }
-  bool binary(binary_t& v) override { return put(std::move(v)) != nullptr; }
+  bool null() override { return scalar(nullptr); }
+  bool boolean(bool v) override { return scalar(v); }
+  bool number_integer(number_integer_t v) override { return scalar(v); }
+  bool number_unsigned(number_unsigned_t v) override { return scalar(v); }
+  bool number_float(number_float_t v, const string_t&) override { return scalar(v); }
+  bool string(string_t& v) override { return scalar(std::move(v)); }
+  bool binary(binary_t& v) override { return scalar(std::move(v)); }
   bool start_object(std::size_t) override { return open(json::object()); }
   bool start_array(std::size_t) override { return open(json::array()); }
   bool end_object() override { return close(); }
@@ -218,7 +255,7 @@ class StrictReader : public json::json_sax_t {
       error_ = FieldError{path(), std::string("invalid JSON: number ")
                                       .append(token)
                                       .append(" is out of the range of a double, at ")
-                                      .append(line_column(text_, start))};
+                                      .append(locate_(start))};
       return false;
     }
     std::string msg = e.what();  // drop the "[json.exception.parse_error.101] " prefix
@@ -231,7 +268,9 @@ class StrictReader : public json::json_sax_t {
  private:
   struct Frame {
     json* value;
-    std::string key;  // objects: the key being read
+    std::string key;        // objects: the key being read
+    std::size_t count = 0;  // arrays: the elements begun so far (handed-over ones included)
+    bool streamed = false;  // the array whose elements are handed over
   };
 
   // The JSON pointer of the value being read: an array's last element while it is open, the
@@ -243,7 +282,7 @@ class StrictReader : public json::json_sax_t {
       if (f.value->is_object()) {
         p.append("/").append(pointer_escape(f.key));
       } else {
-        const std::size_t n = f.value->size();
+        const std::size_t n = f.count;
         p.append("/").append(std::to_string(i + 1 < frames_.size() && n > 0 ? n - 1 : n));
       }
     }
@@ -256,14 +295,32 @@ class StrictReader : public json::json_sax_t {
       root_ = json(std::forward<V>(v));
       return &root_;
     }
-    json& parent = *frames_.back().value;
+    Frame& f = frames_.back();
+    json& parent = *f.value;
     if (parent.is_array()) {
+      ++f.count;
       parent.push_back(json(std::forward<V>(v)));
       return &parent.back();
     }
-    json& slot = parent[frames_.back().key];
+    json& slot = parent[f.key];
     slot = json(std::forward<V>(v));
     return &slot;
+  }
+
+  template <class V>
+  bool scalar(V&& v) {
+    put(std::forward<V>(v));
+    hand_over();
+    return true;
+  }
+
+  // Hands over a complete element of the streamed array, if the value just completed is one.
+  void hand_over() {
+    if (frames_.empty() || !frames_.back().streamed) return;
+    Frame& f = frames_.back();
+    json item = std::move(f.value->back());
+    f.value->erase(f.value->size() - 1);
+    element_(f.count - 1, std::move(item));
   }
 
   bool open(json&& empty) {
@@ -273,21 +330,79 @@ class StrictReader : public json::json_sax_t {
           std::string("nested deeper than ").append(std::to_string(kMaxDepth)).append(" levels")};
       return false;
     }
+    const bool streamed = element_ && empty.is_array() && frames_.size() == 1 &&
+                          frames_[0].value->is_object() && frames_[0].key == streamed_key_;
     json* v = put(std::move(empty));
-    frames_.push_back({v, {}});
+    frames_.push_back({v, {}, 0, streamed});
     return true;
   }
 
   bool close() {
     frames_.pop_back();
+    hand_over();
     return true;
   }
 
   json& root_;
-  std::string_view text_;
+  Locate locate_;
+  std::string streamed_key_;
+  Element element_;
   std::vector<Frame> frames_;
   std::optional<FieldError> error_;
 };
+
+// Reads a file through a buffer of its own, stopping after `limit` bytes (what a first pass
+// counted), so the parser sees the bytes that pass checked even if the file grows meanwhile.
+class FdBuf : public std::streambuf {
+ public:
+  FdBuf(int fd, std::uint64_t limit) : fd_(fd), left_(limit) {}
+
+ protected:
+  int_type underflow() override {
+    if (gptr() < egptr()) return traits_type::to_int_type(*gptr());
+    if (left_ == 0) return traits_type::eof();
+    const std::size_t want =
+        static_cast<std::size_t>(std::min<std::uint64_t>(sizeof buf_, left_));
+    const ssize_t n = read_some(fd_, buf_, want);
+    if (n <= 0) return traits_type::eof();
+    left_ -= static_cast<std::uint64_t>(n);
+    setg(buf_, buf_, buf_ + n);
+    return traits_type::to_int_type(*gptr());
+  }
+
+ private:
+  int fd_;
+  std::uint64_t left_;
+  char buf_[65536];
+};
+
+// "line L, column C" of a byte offset in a file, as line_column gives it for text.
+std::string file_line_column(int fd, std::uint64_t offset) {
+  std::uint64_t line = 1, last_newline_end = 0, at = 0;  // the offset after the last '\n'
+  char buf[65536];
+  while (at < offset) {
+    const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(sizeof buf, offset - at));
+    const ssize_t n = ::pread(fd, buf, want, static_cast<off_t>(at));
+    if (n <= 0) break;
+    for (ssize_t i = 0; i < n; ++i)
+      if (buf[i] == '\n') {
+        ++line;
+        last_newline_end = at + static_cast<std::uint64_t>(i) + 1;
+      }
+    at += static_cast<std::uint64_t>(n);
+  }
+  offset = std::min(offset, at);
+  return std::string("line ")
+      .append(std::to_string(line))
+      .append(", column ")
+      .append(std::to_string(offset - last_newline_end + 1));
+}
+
+std::string not_utf8_message(unsigned char b, const std::string& where) {
+  char byte[8];
+  std::snprintf(byte, sizeof byte, "0x%02X", b);
+  return std::string("invalid JSON: not UTF-8 (byte ").append(byte).append(" at ").append(where).append(")");
+}
 
 }  // namespace
 
@@ -320,19 +435,65 @@ std::string printable(std::string_view text) {
 json parse_json_text(const std::string& text, const std::string& source) {
   // JSON text is UTF-8 (RFC 8259, 8.1). Checked first, so that no message below quotes a broken
   // byte (a service would fail to encode its error response).
-  if (const auto bad = invalid_utf8(text)) {
-    char byte[8];
-    std::snprintf(byte, sizeof byte, "0x%02X", static_cast<unsigned char>(text[*bad]));
+  if (const auto bad = invalid_utf8(text))
     throw InputError(source, "",
-                     std::string("invalid JSON: not UTF-8 (byte ")
-                         .append(byte)
-                         .append(" at ")
-                         .append(line_column(text, *bad))
-                         .append(")"));
-  }
+                     not_utf8_message(static_cast<unsigned char>(text[*bad]),
+                                      line_column(text, *bad)));
   json doc;
-  StrictReader reader(doc, text);
+  StrictReader reader(doc, [&text](std::size_t at) { return line_column(text, at); });
   if (!json::sax_parse(text, &reader)) {
+    if (!reader.error()) throw InputError(source, "", "invalid JSON");
+    const FieldError& e = *reader.error();
+    throw InputError(source, e.path, printable(e.message));
+  }
+  return doc;
+}
+
+std::optional<json> parse_json_file(const std::filesystem::path& path, const std::string& source,
+                                    const std::string& streamed_key,
+                                    const std::function<void(std::size_t, json&&)>& element,
+                                    std::uint64_t max_bytes) {
+  Fd f;
+  if (!open_regular(path, max_bytes, f)) return std::nullopt;
+  // First pass: the bytes are UTF-8 (as parse_json_text checks the text), and how many there
+  // are. A sequence cut by the end of a buffer is carried into the next one.
+  std::uint64_t total = 0;
+  {
+    char buf[65536 + 4];
+    std::size_t carried = 0;
+    for (;;) {
+      const ssize_t n = read_some(f.fd, buf + carried, 65536);
+      if (n < 0) return std::nullopt;
+      const bool end = n == 0;
+      const std::size_t have = carried + static_cast<std::size_t>(n);
+      const std::string_view chunk(buf, have);
+      std::size_t i = 0;
+      while (i < have) {
+        const std::size_t len = utf8_sequence(chunk, i);
+        if (len == 0) {
+          if (!end && have - i < 4) break;  // perhaps cut short: judged with the next bytes
+          const std::uint64_t at = total - carried + i;
+          throw InputError(source, "",
+                           not_utf8_message(static_cast<unsigned char>(chunk[i]),
+                                            file_line_column(f.fd, at)));
+        }
+        i += len;
+      }
+      total += static_cast<std::uint64_t>(n);
+      if (total > max_bytes) throw too_big(path, max_bytes);  // it grew while read
+      if (end) break;
+      carried = have - i;
+      std::memmove(buf, buf + i, carried);
+    }
+  }
+  if (::lseek(f.fd, 0, SEEK_SET) != 0) return std::nullopt;
+  FdBuf buf(f.fd, total);
+  std::istream in(&buf);
+  json doc;
+  const int fd = f.fd;
+  StrictReader reader(
+      doc, [fd](std::size_t at) { return file_line_column(fd, at); }, streamed_key, element);
+  if (!json::sax_parse(in, &reader)) {
     if (!reader.error()) throw InputError(source, "", "invalid JSON");
     const FieldError& e = *reader.error();
     throw InputError(source, e.path, printable(e.message));

@@ -1111,7 +1111,12 @@ Job parse_job(const json& j_in, const std::string& source,
   // writes); its entries take the place of the list, and their stated recoverability is
   // checked against the plant below.
   std::vector<std::optional<bool>> stated;
-  bool file_failed = false;
+  // The file's entries, read one by one as the file is parsed (the file's text and document are
+  // never whole in memory), with the errors they hold: those count only once the file as a
+  // whole proves to be a scenarios file, as if it were read first and its entries after.
+  std::vector<sim::Scenario> listed;
+  Errors entry_errs, flag_errs;
+  bool from_file = false, file_failed = false;
   if (j.is_object() && j.contains("scenarios") && j["scenarios"].is_object()) {
     const json ref = j["scenarios"];
     j["scenarios"] = json::array();
@@ -1123,50 +1128,51 @@ Job parse_job(const json& j_in, const std::string& source,
                       "job has none (give the scenarios inline)"});
     } else {
       const std::filesystem::path file = *base_dir / ref["file"].get<std::string>();
-      // Memory: the text goes once parsed, and the entries move from the file's document into
-      // the job's, which goes once the job is read (one document at a time, not three).
-      std::optional<std::string> text = read_file(file);
-      json doc;
-      bool parsed = false;
-      if (!text) {
-        errs.push_back({"/scenarios/file", "cannot open " + file.string()});
-      } else {
-        try {
-          doc = json_io::parse_json_text(*text, file.string());
-          parsed = true;
-        } catch (const InputError& e) {
-          errs.push_back({"/scenarios/file", e.what()});
+      const auto entry = [&](std::size_t i, json&& e) {
+        std::optional<bool> r;
+        if (e.is_object() && e.contains("recoverable")) {
+          if (e["recoverable"].is_boolean())
+            r = e["recoverable"].get<bool>();
+          else
+            flag_errs.push_back({"/scenarios/file", file.string() + ": /scenarios/" +
+                                                        std::to_string(i) +
+                                                        "/recoverable must be true or false"});
+          e.erase("recoverable");
         }
-        text.reset();
+        stated.push_back(r);
+        listed.emplace_back();
+        scenario_shape()->read(e, "/scenarios/" + std::to_string(i), listed.back(), entry_errs);
+      };
+      std::optional<json> doc;
+      try {
+        doc = json_io::parse_json_file(file, file.string(), "scenarios", entry);
+        if (!doc) errs.push_back({"/scenarios/file", "cannot open " + file.string()});
+      } catch (const InputError& e) {
+        if (e.source() != file.string()) throw;  // not the file's reading: the entry's own
+        errs.push_back({"/scenarios/file", e.what()});
       }
-      if (parsed) {
-        if (!doc.is_object())
+      if (doc) {
+        if (!doc->is_object())
           errs.push_back({"/scenarios/file", file.string() + " is not a JSON object"});
-        else if (!doc.contains("schema") || !doc["schema"].is_string() ||
-                 doc["schema"].get<std::string>() != kScenariosSchema)
+        else if (!doc->contains("schema") || !(*doc)["schema"].is_string() ||
+                 (*doc)["schema"].get<std::string>() != kScenariosSchema)
           errs.push_back(
               {"/scenarios/file",
                file.string() + " is " +
-                   (doc.contains("schema") ? doc["schema"].dump() : std::string("unnamed")) +
+                   (doc->contains("schema") ? (*doc)["schema"].dump() : std::string("unnamed")) +
                    ", not a scenarios file (" + kScenariosSchema + ")"});
-        else if (!doc.contains("scenarios") || !doc["scenarios"].is_array())
+        else if (!doc->contains("scenarios") || !(*doc)["scenarios"].is_array())
           errs.push_back({"/scenarios/file", file.string() + " lists no scenarios"});
         else
-          for (json& entry : doc["scenarios"]) {
-            std::optional<bool> r;
-            if (entry.is_object() && entry.contains("recoverable")) {
-              if (entry["recoverable"].is_boolean())
-                r = entry["recoverable"].get<bool>();
-              else
-                errs.push_back({"/scenarios/file", file.string() + ": /scenarios/" +
-                                                       std::to_string(stated.size()) +
-                                                       "/recoverable must be true or false"});
-              entry.erase("recoverable");
-            }
-            stated.push_back(r);
-            j["scenarios"].push_back(std::move(entry));
-          }
+          from_file = true;
       }
+    }
+    if (from_file) {
+      errs.insert(errs.end(), flag_errs.begin(), flag_errs.end());
+    } else {
+      stated.clear();
+      listed = {};
+      entry_errs.clear();
     }
     file_failed = !errs.empty();
   }
@@ -1181,6 +1187,10 @@ Job parse_job(const json& j_in, const std::string& source,
   Job job;
   job_shape().read(j, "", job, errs);
   j = json();  // the job holds what it read
+  if (from_file) {
+    job.scenarios = std::move(listed);
+    errs.insert(errs.end(), entry_errs.begin(), entry_errs.end());
+  }
   for (const GoalConfig& g : job.goals)
     if (g.soft() && g.metric <= GoalMetric::itae) {
       job.objective = g.measure();

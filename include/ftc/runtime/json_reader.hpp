@@ -4,6 +4,7 @@
 // keys nobody asked for.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -85,6 +86,18 @@ inline constexpr std::uint64_t kMaxCheckpointBytes = std::uint64_t{16} << 30;
 // checkpoint, whose size the run itself chose).
 std::optional<std::string> read_file(const std::filesystem::path& path,
                                      std::uint64_t max_bytes = kMaxInputFileBytes);
+
+// Reads a JSON file as parse_json_text reads text (the same checks, the same messages), without
+// holding its text, and without holding the elements of the array under `streamed_key` in the
+// root object: each is given to `element` (its index and value) as soon as it is complete and
+// then dropped, so the document returned holds that array empty and the memory the reading
+// takes does not grow with the array's length (beyond what `element` keeps). nullopt when the file cannot be opened or
+// read; InputError as read_file (not a regular file, larger than max_bytes) and
+// parse_json_text. Any exception `element` throws passes through.
+std::optional<nlohmann::json> parse_json_file(
+    const std::filesystem::path& path, const std::string& source, const std::string& streamed_key,
+    const std::function<void(std::size_t, nlohmann::json&&)>& element,
+    std::uint64_t max_bytes = kMaxInputFileBytes);
 
 // Numbers in output JSON: non-finite values (a diverged run's +inf) are written as null, and
 // read back as `if_null`.
