@@ -1444,8 +1444,8 @@ TEST(Service, JobAboveTheMemoryBudgetIsRefusedWith413) {
   j["ensemble"] = {{"count", 1000000}, {"seed", 1}};
   auto r = s.client->Post("/v1/jobs", j.dump(), "application/json");
   expect_error(r, 413, "job_too_large");
-  EXPECT_NE(r->body.find("the job would need about 235 MB of memory (1 listed scenario with the "
-                          "comparison's trajectories at about 0.0352 MB, 1000000 ensemble "
+  EXPECT_NE(r->body.find("the job would need about 235 MB of memory (1 listed scenario and its "
+                          "comparison at about 0.0679 MB, 1000000 ensemble "
                           "members at about 168 bytes each)"),
             std::string::npos)
       << r->body;

@@ -37,7 +37,8 @@ double listed_scenario_bytes(const Job& job) {
   for (const sim::Scenario& s : job.scenarios)
     rows += static_cast<double>((s.samples() + every - 1) / every);
   const double controllers = static_cast<double>(job.compare.size()) + 2.0;
-  return static_cast<double>(job.scenarios.size()) * kBytesPerScenario +
+  return static_cast<double>(job.scenarios.size()) *
+             (kBytesPerScenario + controllers * kBytesPerScenarioController) +
          rows * width * 8.0 * controllers;
 }
 
@@ -100,8 +101,8 @@ void check_memory_budget(const Job& job, double evaluations, double budget,
 std::string memory_need_text(const Job& job, double evaluations) {
   const std::size_t listed = job.scenarios.size();
   std::string out = std::to_string(listed) +
-                    (listed == 1 ? " listed scenario" : " listed scenarios") +
-                    " with the comparison's trajectories at about " +
+                    (listed == 1 ? " listed scenario and its" : " listed scenarios and their") +
+                    " comparison at about " +
                     bytes_text(listed_scenario_bytes(job));
   if (job.ensemble) {
     char each[64];

@@ -16,16 +16,22 @@ namespace ftc::tune {
 
 // The process, the job, the pools and one block of generated members.
 inline constexpr double kRunBaseBytes = 64.0 * (1 << 20);
-// A listed scenario, its copies, its metrics and files' buffers (measured: 28 kB a scenario of
-// 20 ms at 10^3 listed, 31 kB at 10^5), besides the comparison's trajectories.
-inline constexpr double kBytesPerScenario = 32768.0;
+// A listed scenario: the scenario, its entry in the job's documents (the job read, job.json) and
+// its objectives; and for each controller the comparison runs on it (the job's, each compare
+// entry, the tuned), its metrics, its entries in comparison.json and comparison.md and its
+// trajectory file's buffers, besides the trajectory's rows. Measured on scenarios of 20 ms
+// (MemoryBudget.AListedScenarioTakesNoMoreThanItIsCharged): 34.7 kB with 2 controllers, 56.9 kB
+// with 4, 77.1 kB with 6, that is about 13.5 kB and 10.6 kB per controller.
+inline constexpr double kBytesPerScenario = 16384.0;
+inline constexpr double kBytesPerScenarioController = 12288.0;
 // A member's numbers for one controller scored at once (and one more of each per goal): its
 // value, whether it diverged, the counted values' copy as they are aggregated.
 inline constexpr double kBytesPerMemberValue = 24.0;
 inline constexpr double kBytesPerTrialObjective = 8.0;
 
-// The bytes the job's listed scenarios take in a run: kBytesPerScenario each and the rows of the
-// comparison's trajectories on them (8 bytes a number).
+// The bytes the job's listed scenarios take in a run: kBytesPerScenario each, and for each
+// controller compared on them kBytesPerScenarioController and the rows of its trajectory
+// (8 bytes a number).
 double listed_scenario_bytes(const Job& job);
 // The bytes a member takes in a run of the job: kBytesPerMemberValue for each controller scored
 // at once (its population, the incumbent, its compare entries, the job's and the tuned
@@ -51,8 +57,8 @@ void check_memory_budget(const Job& job, double budget, const std::string& sourc
 void check_memory_budget(const Job& job, double evaluations, double budget,
                          const std::string& source);
 
-// What the estimate counts, for messages: "1 listed scenario with the comparison's trajectories
-// at about 1.47 MB, 100000 ensemble members at about 144 bytes each".
+// What the estimate counts, for messages: "1 listed scenario and its comparison at about
+// 0.306 MB, 1000000 ensemble members at about 192 bytes each".
 std::string memory_need_text(const Job& job, double evaluations);
 
 // "1.9 GB", "650 MB": a byte count for messages.
