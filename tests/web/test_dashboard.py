@@ -196,6 +196,32 @@ def test_a_two_goal_job_shows_its_front(server, browser):
          == str(len(front["points"])))
     assert "Pareto front: %d tuned points" % len(front["points"]) in \
         browser.find_element(By.CSS_SELECTOR, "#front h3").text
+    # Each point's noise floor: a band on the chart and a cell of the table, as front.json has it.
+    points = front["points"]
+    finite = [p for p in points if any(isinstance(f, float) for f in p["noise_floor"][:2])]
+    assert finite, "the test job's front has measured floors"
+    chart = browser.find_element(By.ID, "front-chart")
+    assert chart.get_attribute("data-noise-bands") == str(len(finite))
+    assert chart.get_attribute("data-noise-links") == \
+        str(sum(1 for p in points if "within_noise_of" in p))
+    rows = browser.find_elements(By.CSS_SELECTOR, "#front-points tbody tr")
+    assert len(rows) == len(points)
+    for k, (row, p) in enumerate(zip(rows, points)):
+        cells = [c.text for c in row.find_elements(By.TAG_NAME, "td")]
+        assert cells[0] == str(k) and cells[1] == str(p["trial"])
+        for g in range(2):
+            f = p["noise_floor"][g]
+            if f is None:
+                assert cells[3 + 2 * g] == "–"
+            else:
+                shown = float(cells[3 + 2 * g].removeprefix("± ").removesuffix(" %"))
+                assert abs(shown - 100 * f) <= 0.05 * 100 * f, (k, g, cells, f)
+        assert cells[-1] == ("point %d" % p["within_noise_of"] if "within_noise_of" in p else "")
+    assert "picked" in rows[front["picked"]["index"]].get_attribute("class")
+    # One button per file, though the page loads the finished job twice (on opening it and when
+    # its live stream opens).
+    buttons = texts(browser, "#downloads button")
+    assert sorted(buttons) == sorted(set(buttons)) and "gains.json" in buttons, buttons
     browser.execute_script("document.getElementById('front').scrollIntoView()")
     screenshot(browser, "dashboard-front.png")
 

@@ -661,8 +661,11 @@ function jobView(main, id) {
   }
 
   // The Pareto front of a job with two or more soft goals (front.json): its first two soft goals,
-  // the picked point circled, the compared controllers marked. Log axes where every value is
-  // positive.
+  // the picked point circled, the compared controllers marked, each point's noise floor as a band
+  // of one relative spread on each axis (SPEC 14), and a dashed link between neighbours within
+  // each other's floor on every soft goal (front.json's within_noise_of: not a trade-off), as
+  // report.html draws them. A table lists every point with its floors. Log axes where every
+  // value is positive.
   let frontChart = null;
   function renderFront(front) {
     clear(frontBox);
@@ -692,6 +695,34 @@ function jobView(main, id) {
       datasets.push({label: 'picked (' + front.picked.rule + ')', data: [{x: picked.goals[a], y: picked.goals[b]}],
                      pointRadius: 9, pointStyle: 'circle', backgroundColor: 'rgba(0,0,0,0)',
                      borderColor: '#21918c', borderWidth: 2});
+    // Bands: x·(1 ± f) on each axis, a gap between points (NaN breaks the line).
+    const band = (v, f) => (finite(f) ? [v * (1 - f), v * (1 + f)] : [v, v]);
+    const gap = {x: NaN, y: NaN};
+    const bands = [];
+    let banded = 0;
+    for (const p of front.points) {
+      if (!drawable(p.goals)) continue;
+      const f = p.noise_floor || [];
+      if (!finite(f[a]) && !finite(f[b])) continue;
+      const x = p.goals[a], y = p.goals[b], [x0, x1] = band(x, f[a]), [y0, y1] = band(y, f[b]);
+      bands.push({x: x0, y}, {x: x1, y}, gap, {x, y: y0}, {x, y: y1}, gap);
+      ++banded;
+    }
+    if (banded)
+      datasets.push({label: 'noise floor (band of one relative spread)', data: bands, showLine: true,
+                     spanGaps: false, pointRadius: 0, borderColor: '#8c8c8c', borderWidth: 1});
+    const links = [];
+    front.points.forEach((p) => {
+      const q = Number.isInteger(p.within_noise_of) ? front.points[p.within_noise_of] : null;
+      if (q && drawable(p.goals) && drawable(q.goals))
+        links.push({x: q.goals[a], y: q.goals[b]}, {x: p.goals[a], y: p.goals[b]}, gap);
+    });
+    if (links.length)
+      datasets.push({label: "within one's noise floor on every goal: not a trade-off", data: links,
+                     showLine: true, spanGaps: false, pointRadius: 0, borderColor: '#4d4d4d',
+                     borderWidth: 1.5, borderDash: [5, 4]});
+    canvas.dataset.noiseBands = String(banded);
+    canvas.dataset.noiseLinks = String(links.length / 3);
     const styles = ['rect', 'triangle', 'rectRot', 'star', 'crossRot'];
     front.compared.forEach((c, i) => {
       if (drawable(c.goals))
@@ -710,12 +741,28 @@ function jobView(main, id) {
       });
       charts.push(frontChart);
     }).catch((e) => showError(message, e));
+    // Every point: its soft goals with their floors, and the point it is not a trade-off with.
+    const softName = soft.map((i) => name(front.goals[i]));
+    const percent = (f) => (finite(f) ? '± ' + fmt(100 * f, 2) + ' %' : '–');
+    frontBox.append(el('div', {class: 'scroll'}, el('table', {id: 'front-points'},
+      el('thead', null, el('tr', null, ['point', 'trial'].concat(
+        ...softName.map((n) => [n, 'noise floor']), ['feasible', 'not a trade-off with']).map(
+        (h) => el('th', {text: h})))),
+      el('tbody', null, front.points.map((p, k) => el('tr', {class: k === front.picked.index ? 'picked' : ''},
+        el('td', {class: 'num', text: String(k)}), el('td', {class: 'num', text: String(p.trial)}),
+        soft.map((i) => [el('td', {class: 'num', text: fmt(p.goals[i])}),
+                         el('td', {class: 'num', text: percent((p.noise_floor || [])[i])})]),
+        el('td', {text: p.feasible ? 'yes' : 'no'}),
+        el('td', {text: Number.isInteger(p.within_noise_of) ? 'point ' + p.within_noise_of : ''})))))));
   }
 
+  // The page opens a job and its live stream reopens it, so two loads can overlap: the newer one
+  // wins, and an older one still awaiting its answers draws nothing (it drew every download
+  // button twice).
+  let resultsRun = 0;
   async function loadResults() {
-    clear(figures);
-    clear(frontBox);
-    clear(downloads);
+    const run = ++resultsRun;
+    const stale = () => run !== resultsRun;
     const finished = isFinished(job.status);
     let c = null, gains = null;
     try {
@@ -724,6 +771,10 @@ function jobView(main, id) {
     } catch (e) {
       if (!(e instanceof ApiError && e.status === 409)) showError(message, e);
     }
+    if (stale()) return;
+    clear(figures);
+    clear(frontBox);
+    clear(downloads);
     renderComparison(c, gains);
     const items = [['gains.json', '/gains'], ['trials.csv', '/trials'], ['history.csv', '/history']];
     if (c) items.push(['comparison.md', '/comparison?format=md'], ['report.html', '/report']);
@@ -736,8 +787,12 @@ function jobView(main, id) {
     if (!c) return;
     try {
       const list = await apiJson('/v1/jobs/' + id + '/files');
-      if (list.files.some((f) => f.name === 'front.json'))
-        renderFront(await apiJson('/v1/jobs/' + id + '/files/front.json'));
+      if (stale()) return;
+      if (list.files.some((f) => f.name === 'front.json')) {
+        const front = await apiJson('/v1/jobs/' + id + '/files/front.json');
+        if (stale()) return;
+        renderFront(front);
+      }
       const images = list.files.filter((f) => /\.(png|svg)$/.test(f.name));
       if (images.length) figures.appendChild(el('h3', {text: 'Figures'}));
       for (const f of images) {
@@ -745,7 +800,9 @@ function jobView(main, id) {
         const res = await request('/v1/jobs/' + id + '/files/' +
                                   f.name.split('/').map(encodeURIComponent).join('/'));
         if (!res.ok) continue;
-        const url = URL.createObjectURL(await res.blob());
+        const blob = await res.blob();
+        if (stale()) return;
+        const url = URL.createObjectURL(blob);
         figures.appendChild(el('figure', null, el('img', {src: url, alt: f.name}),
                                el('figcaption', {text: f.name})));
       }
