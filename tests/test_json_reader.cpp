@@ -1,9 +1,6 @@
 // Strict JSON reading (sim_core/runtime/json_reader.cpp): a file read as a stream, with the
 // elements of one array handed over one by one, is read exactly as its whole text is.
 #include <gtest/gtest.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -15,6 +12,7 @@
 #include "cli_runner.hpp"
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "peak_memory.hpp"
 
 namespace {
 
@@ -148,13 +146,8 @@ TEST(JsonReader, AFileThatCannotBeReadIsSaidSo) {
 // several times its size. Measured in a child process, by its peak resident set over its size
 // when it began.
 TEST(JsonReader, ReadingAStreamedArrayTakesMemoryThatDoesNotGrowWithItsLength) {
-#if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-  GTEST_SKIP() << "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
-#endif
-#endif
+  if (FTC_NO_PEAK_TO_MEASURE)
+    GTEST_SKIP() << "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
   const auto dir = ftc::testing::fresh_dir("json-reader-memory");
   json item = {{"name", "member-0"},
                {"initial_state", {-0.7, -0.07, 1.5, 0.3, 1.3, -0.2}},
@@ -168,32 +161,12 @@ TEST(JsonReader, ReadingAStreamedArrayTakesMemoryThatDoesNotGrowWithItsLength) {
     return p;
   };
   const auto growth_kb = [](const std::filesystem::path& p, int n) {
-    int fd[2];
-    if (::pipe(fd) != 0) return -1L;
-    const pid_t pid = ::fork();
-    if (pid == 0) {
-      ::close(fd[0]);
-      long pages = 0, resident = 0;
-      std::ifstream("/proc/self/statm") >> pages >> resident;
-      const long before = resident * (::sysconf(_SC_PAGESIZE) / 1024);
+    return ftc::testing::peak_growth_kb([&p, n] {
       std::size_t count = 0;
       const std::optional<json> doc = json_io::parse_json_file(
           p, p.string(), "scenarios", [&](std::size_t, json&& e) { count += e.size(); });
-      rusage u{};
-      ::getrusage(RUSAGE_SELF, &u);
-      const long grown = u.ru_maxrss - before;
-      const bool whole = doc && count == 3u * static_cast<std::size_t>(n);
-      const bool sent = ::write(fd[1], &grown, sizeof grown) == sizeof grown;
-      ::_exit(whole && sent ? 0 : 1);
-    }
-    ::close(fd[1]);
-    long grown = -1;
-    if (::read(fd[0], &grown, sizeof grown) != sizeof grown) grown = -1;
-    ::close(fd[0]);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << n << " elements";
-    return grown;
+      return doc && count == 3u * static_cast<std::size_t>(n);
+    });
   };
   const std::filesystem::path small_file = file_of(100), large_file = file_of(60000);
   ASSERT_GT(std::filesystem::file_size(large_file), 12u << 20);

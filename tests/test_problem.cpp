@@ -20,6 +20,7 @@
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "goal_job.hpp"
+#include "peak_memory.hpp"
 #include "short_job.hpp"
 
 using nlohmann::json;
@@ -281,22 +282,10 @@ TEST(TuningProblem, GeneratedMembersScoreAsTheExpandedEnsembleToTheBit) {
 // took about 2 kB a member (200 MB more at 10^5). Measured in a child process, by its peak
 // resident set over its size when it began.
 TEST(TuningProblem, PeakMemoryDoesNotGrowWithTheMemberCount) {
-#if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-  GTEST_SKIP() << "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
-#endif
-#endif
+  if (FTC_NO_PEAK_TO_MEASURE)
+    GTEST_SKIP() << "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
   const auto growth_kb = [](std::int64_t members) {
-    int fd[2];
-    if (::pipe(fd) != 0) return -1L;
-    const pid_t pid = ::fork();
-    if (pid == 0) {
-      ::close(fd[0]);
-      long pages = 0, resident = 0;
-      std::ifstream("/proc/self/statm") >> pages >> resident;
-      const long before = resident * (::sysconf(_SC_PAGESIZE) / 1024);
+    return ftc::testing::peak_growth_kb([members] {
       json j = tiny_job("members");
       j["scenarios"][0]["duration"] = 0.02;
       j["scenarios"][0]["faults"] = json::array();
@@ -307,22 +296,9 @@ TEST(TuningProblem, PeakMemoryDoesNotGrowWithTheMemberCount) {
       const sim::ControllerConfig c = p.job().controller;
       const tune::CandidateOutcome o =
           p.evaluate(std::span<const sim::ControllerConfig>(&c, 1), serial)[0];
-      rusage u{};
-      ::getrusage(RUSAGE_SELF, &u);
-      const long grown = u.ru_maxrss - before;
-      const bool whole = o.evaluation.values.size() == static_cast<std::size_t>(members) + 1 &&
-                         p.held_scenarios() == 1 && std::isfinite(o.evaluation.objective);
-      const bool sent = ::write(fd[1], &grown, sizeof grown) == sizeof grown;
-      ::_exit(whole && sent ? 0 : 1);
-    }
-    ::close(fd[1]);
-    long grown = -1;
-    if (::read(fd[0], &grown, sizeof grown) != sizeof grown) grown = -1;
-    ::close(fd[0]);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << members << " members";
-    return grown;
+      return o.evaluation.values.size() == static_cast<std::size_t>(members) + 1 &&
+             p.held_scenarios() == 1 && std::isfinite(o.evaluation.objective);
+    });
   };
   const long small = growth_kb(1000), large = growth_kb(100000);
   ASSERT_GE(small, 0);

@@ -1,0 +1,59 @@
+#pragma once
+// How much a piece of work adds to a process's peak resident set, measured in a child process
+// (fork): the child's peak (ru_maxrss) once the work is done, over its resident size when it
+// began. The memory-by-design tests (issue 29) compare two sizes of the same work.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <functional>
+
+// AddressSanitizer's quarantine keeps freed blocks: there is no peak to measure under it.
+#if defined(__SANITIZE_ADDRESS__)
+#define FTC_NO_PEAK_TO_MEASURE 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define FTC_NO_PEAK_TO_MEASURE 1
+#endif
+#endif
+#ifndef FTC_NO_PEAK_TO_MEASURE
+#define FTC_NO_PEAK_TO_MEASURE 0
+#endif
+
+namespace ftc::testing {
+
+// The kB the peak grew by while `work` ran in a child process; -1 when the work failed (it
+// returned false or threw) or the child could not say.
+inline long peak_growth_kb(const std::function<bool()>& work) {
+  int fd[2];
+  if (::pipe(fd) != 0) return -1;
+  const pid_t pid = ::fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    ::close(fd[0]);
+    long pages = 0, resident = 0;
+    std::ifstream("/proc/self/statm") >> pages >> resident;
+    const long before = resident * (::sysconf(_SC_PAGESIZE) / 1024);
+    bool done = false;
+    try {
+      done = work();
+    } catch (...) {
+      done = false;
+    }
+    rusage u{};
+    ::getrusage(RUSAGE_SELF, &u);
+    const long grown = done ? u.ru_maxrss - before : -1;
+    const bool sent = ::write(fd[1], &grown, sizeof grown) == sizeof grown;
+    ::_exit(done && sent ? 0 : 1);
+  }
+  ::close(fd[1]);
+  long grown = -1;
+  if (::read(fd[0], &grown, sizeof grown) != sizeof grown) grown = -1;
+  ::close(fd[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? grown : -1;
+}
+
+}  // namespace ftc::testing
