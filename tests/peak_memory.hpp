@@ -1,13 +1,14 @@
 #pragma once
 // How much a piece of work adds to a process's peak resident set, measured in a child process
-// (fork): the child's peak (ru_maxrss) once the work is done, over its resident size when it
-// began. The memory-by-design tests (issue 29) compare two sizes of the same work.
+// (fork): the child's peak (VmHWM) once the work is done, over its resident size when it began. The memory-by-design tests (issue 29) compare two sizes of the same work.
+#include <malloc.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <fstream>
 #include <functional>
+#include <string>
 
 // AddressSanitizer's quarantine keeps freed blocks: there is no peak to measure under it.
 #if defined(__SANITIZE_ADDRESS__)
@@ -23,6 +24,14 @@
 
 namespace ftc::testing {
 
+// A "Name: N kB" line of /proc/self/status, -1 when it is missing.
+inline long status_kb(const std::string& name) {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(name, 0) == 0) return std::stol(line.substr(name.size()));
+  return -1;
+}
+
 // The kB the peak grew by while `work` ran in a child process; -1 when the work failed (it
 // returned false or threw) or the child could not say.
 inline long peak_growth_kb(const std::function<bool()>& work) {
@@ -32,18 +41,20 @@ inline long peak_growth_kb(const std::function<bool()>& work) {
   if (pid < 0) return -1;
   if (pid == 0) {
     ::close(fd[0]);
-    long pages = 0, resident = 0;
-    std::ifstream("/proc/self/statm") >> pages >> resident;
-    const long before = resident * (::sysconf(_SC_PAGESIZE) / 1024);
+    // The child starts with the parent's heap, freed blocks included, resident: work that reused
+    // them would not raise the peak. They go back to the system first, and the peak is reset to
+    // what is left (Linux's clear_refs "5"), so that the peak counts every page the work touches.
+    ::malloc_trim(0);
+    const bool reset = static_cast<bool>(std::ofstream("/proc/self/clear_refs") << "5");
+    const long before = status_kb("VmRSS:");
     bool done = false;
     try {
       done = work();
     } catch (...) {
       done = false;
     }
-    rusage u{};
-    ::getrusage(RUSAGE_SELF, &u);
-    const long grown = done ? u.ru_maxrss - before : -1;
+    const long peak = status_kb("VmHWM:");
+    const long grown = done && reset && before >= 0 && peak >= 0 ? peak - before : -1;
     const bool sent = ::write(fd[1], &grown, sizeof grown) == sizeof grown;
     ::_exit(done && sent ? 0 : 1);
   }

@@ -333,19 +333,36 @@ TEST(JobLoader, ScenariosFileEntriesAreJudgedOnlyInAScenariosFile) {
       errors_with(R"({"scenarios": )" + entries + R"(, "schema": "ftctune.scenarios/1"})");
   ASSERT_FALSE(errs.empty());
   EXPECT_EQ(errs.front().path, "/scenarios/1/duration") << errs.front().message;
+  // Among the job's own errors, in the place of the job's scenarios: after the plant's, before
+  // the controller's, as when the entries were read with the job.
+  json also_bad = j;
+  also_bad["controller"]["Kp"] = "high";
+  also_bad["plant"]["inertia"] = "heavy";
+  std::ofstream(dir / "job.json") << also_bad.dump();
+  json unread = bad;
+  unread["duration"] = "long";  // an error of reading, as the plant's and the controller's
+  errs = errors_with(R"({"scenarios": )" + json::array({good, unread}).dump() +
+                     R"(, "schema": "ftctune.scenarios/1"})");
+  std::vector<std::string> paths;
+  for (const FieldError& e : errs) paths.push_back(e.path);
+  ASSERT_GE(paths.size(), 3u) << ::testing::PrintToString(paths);
+  EXPECT_EQ(paths[0], "/plant/inertia");
+  EXPECT_EQ(paths[1], "/scenarios/1/duration");
+  EXPECT_EQ(paths[2], "/controller/Kp");
+  std::ofstream(dir / "job.json") << j.dump();
   errs = errors_with(R"({"scenarios": )" + entries + R"(, "schema": "ftctune.job/1"})");
-  ASSERT_EQ(errs.size(), 1u) << ftc::to_string(errs.at(1));
+  ASSERT_EQ(errs.size(), 1u) << (errs.size() > 1 ? ftc::to_string(errs[1]) : std::string());
   EXPECT_EQ(errs[0].path, "/scenarios/file");
   EXPECT_NE(errs[0].message.find("not a scenarios file"), std::string::npos) << errs[0].message;
   errs = errors_with(R"({"schema": "ftctune.scenarios/1", "scenarios": )" + entries + ", ");
-  ASSERT_EQ(errs.size(), 1u) << ftc::to_string(errs.at(1));
+  ASSERT_EQ(errs.size(), 1u) << (errs.size() > 1 ? ftc::to_string(errs[1]) : std::string());
   EXPECT_EQ(errs[0].path, "/scenarios/file");
   EXPECT_NE(errs[0].message.find("invalid JSON"), std::string::npos) << errs[0].message;
   json flagged = good;
   flagged["recoverable"] = 1;
   errs = errors_with(
       json{{"schema", "ftctune.scenarios/1"}, {"scenarios", json::array({flagged})}}.dump());
-  ASSERT_EQ(errs.size(), 1u) << ftc::to_string(errs.at(1));
+  ASSERT_EQ(errs.size(), 1u) << (errs.size() > 1 ? ftc::to_string(errs[1]) : std::string());
   EXPECT_NE(errs[0].message.find("/scenarios/0/recoverable must be true or false"),
             std::string::npos)
       << errs[0].message;
@@ -361,7 +378,7 @@ TEST(JobLoader, ScenariosFileEntriesAreJudgedOnlyInAScenariosFile) {
   std::filesystem::remove(dir / "members.json");
   std::filesystem::create_directory(dir / "members.json");
   errs = errors_with("");
-  ASSERT_EQ(errs.size(), 1u) << ftc::to_string(errs.at(1));
+  ASSERT_EQ(errs.size(), 1u) << (errs.size() > 1 ? ftc::to_string(errs[1]) : std::string());
   EXPECT_EQ(errs[0].path, "/scenarios/file");
   EXPECT_NE(errs[0].message.find("is a directory, not a file to read"), std::string::npos)
       << errs[0].message;

@@ -66,6 +66,13 @@ std::string padding() {
   return pad.dump(1);
 }
 
+// A text whose `bytes` start at offset `at` inside a string value, followed by `rest`.
+std::string placed(const std::string& bytes, std::size_t at, const std::string& rest) {
+  std::string t = "{\"pad\": \"";
+  t += std::string(at - t.size(), 'x');
+  return t + bytes + rest;
+}
+
 }  // namespace
 
 TEST(JsonReader, AFileReadAsAStreamGivesTheDocumentAndErrorsOfItsText) {
@@ -93,6 +100,13 @@ TEST(JsonReader, AFileReadAsAStreamGivesTheDocumentAndErrorsOfItsText) {
       "{\"scenarios\": [" + std::string(300, '[') + std::string(300, ']') + "]}",
       "{\"scenarios\": [1, 2",
       "",
+      // UTF-8 sequences cut by the reader's 64 KiB buffers, and by the end of the file
+      placed("\xe2\x82", 65534, "x\", \"scenarios\": [1]}"),
+      placed("\xf0", 65535, "\x9f\x9b\xb0\", \"scenarios\": [1]}"),
+      placed("\xf0\x9f\x9b", 65533, "\xb0\", \"scenarios\": [1]}"),
+      placed("\xf0\x9f\x9b", 65533, "\xb0\xb0\", \"scenarios\": [1]}"),
+      placed("\xe2\x82", 65534, ""),
+      "{\"scenarios\": [\"\xf0\x9f",
   };
   for (std::size_t t = 0; t < texts.size(); ++t) {
     const std::filesystem::path p = dir / ("case-" + std::to_string(t) + ".json");
@@ -120,6 +134,30 @@ TEST(JsonReader, AFileReadAsAStreamGivesTheDocumentAndErrorsOfItsText) {
   EXPECT_NE(e->message.find("out of the range of a double, at line 5003, column 32"),
             std::string::npos)
       << e->message;
+}
+
+// The file is read twice (UTF-8, then the parse): bytes that change in between are not parsed.
+TEST(JsonReader, AFileChangedWhileItIsReadIsRefused) {
+  const auto dir = ftc::testing::fresh_dir("json-reader-changed");
+  const std::filesystem::path p = dir / "changing.json";
+  const std::string text = "{\"scenarios\": [1, \"" + std::string(200000, 'a') + "\"]}";
+  for (const bool shorten : {false, true}) {
+    write(p, text);
+    // Once the first element is in, past the parser's first buffer a byte becomes 0xFF, or the
+    // file loses its end.
+    const auto change = [&](std::size_t, json&&) {
+      if (shorten) {
+        std::filesystem::resize_file(p, 100000);
+      } else {
+        std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(150000);
+        f.put('\xff');
+      }
+    };
+    const auto e = failure_of([&] { json_io::parse_json_file(p, "c", "scenarios", change); });
+    ASSERT_TRUE(e) << shorten;
+    EXPECT_EQ(e->message, "changed while it was read; read it again") << shorten;
+  }
 }
 
 TEST(JsonReader, AFileThatCannotBeReadIsSaidSo) {

@@ -351,21 +351,79 @@ class StrictReader : public json::json_sax_t {
   std::optional<FieldError> error_;
 };
 
+// Checks bytes for UTF-8 as they come, buffer by buffer: a sequence cut by a buffer's end is
+// judged with the next buffer's bytes.
+class Utf8Check {
+ public:
+  // The offset (from the first byte fed) of the first byte that is not well-formed UTF-8 among
+  // `n` more bytes, nullopt while all are; `end` says no byte follows them.
+  std::optional<std::uint64_t> feed(const char* p, std::size_t n, bool end) {
+    std::size_t i = 0;
+    if (carried_ > 0) {  // complete the cut sequence with the first new bytes
+      const std::size_t take = std::min(n, sizeof head_ - carried_);
+      std::memcpy(head_ + carried_, p, take);
+      const std::size_t have = carried_ + take;
+      const std::size_t len = utf8_sequence(std::string_view(head_, have), 0);
+      if (len == 0) {
+        if (!end && have < 4 && take == n) {  // still cut short: wait for more
+          carried_ = have;
+          return std::nullopt;
+        }
+        return at_;
+      }
+      i = len - carried_;  // the new bytes it used
+      at_ += carried_;
+      carried_ = 0;
+    }
+    const std::string_view chunk(p, n);
+    while (i < n) {
+      const std::size_t len = utf8_sequence(chunk, i);
+      if (len == 0) {
+        if (!end && n - i < 4) {  // perhaps cut short: judged with the next bytes
+          carried_ = n - i;
+          std::memcpy(head_, p + i, carried_);
+          at_ += i;
+          return std::nullopt;
+        }
+        return at_ + i;
+      }
+      i += len;
+    }
+    at_ += n;
+    return std::nullopt;
+  }
+
+ private:
+  char head_[8] = {};
+  std::size_t carried_ = 0;  // the first bytes of a cut sequence, in head_
+  std::uint64_t at_ = 0;     // the offset of head_[0] while carrying, else of the next buffer
+};
+
 // Reads a file through a buffer of its own, stopping after `limit` bytes (what a first pass
-// counted), so the parser sees the bytes that pass checked even if the file grows meanwhile.
+// counted), so the parser sees no more bytes than that pass checked. The bytes are checked for
+// UTF-8 again as they are read: a file rewritten between the passes is noticed, not parsed.
 class FdBuf : public std::streambuf {
  public:
   FdBuf(int fd, std::uint64_t limit) : fd_(fd), left_(limit) {}
+  bool failed() const { return failed_; }    // a read failed
+  bool changed() const { return changed_; }  // bytes the first pass did not see
 
  protected:
   int_type underflow() override {
     if (gptr() < egptr()) return traits_type::to_int_type(*gptr());
-    if (left_ == 0) return traits_type::eof();
+    if (left_ == 0 || failed_ || changed_) return traits_type::eof();
     const std::size_t want =
         static_cast<std::size_t>(std::min<std::uint64_t>(sizeof buf_, left_));
     const ssize_t n = read_some(fd_, buf_, want);
-    if (n <= 0) return traits_type::eof();
+    if (n <= 0) {  // an error, or the file got shorter
+      (n < 0 ? failed_ : changed_) = true;
+      return traits_type::eof();
+    }
     left_ -= static_cast<std::uint64_t>(n);
+    if (utf8_.feed(buf_, static_cast<std::size_t>(n), left_ == 0)) {
+      changed_ = true;
+      return traits_type::eof();
+    }
     setg(buf_, buf_, buf_ + n);
     return traits_type::to_int_type(*gptr());
   }
@@ -373,16 +431,22 @@ class FdBuf : public std::streambuf {
  private:
   int fd_;
   std::uint64_t left_;
+  bool failed_ = false, changed_ = false;
+  Utf8Check utf8_;
   char buf_[65536];
 };
 
-// "line L, column C" of a byte offset in a file, as line_column gives it for text.
-std::string file_line_column(int fd, std::uint64_t offset) {
+// "line L, column C" of a byte offset in the first `size` bytes of a file, as line_column gives
+// it for text.
+std::string file_line_column(int fd, std::uint64_t offset, std::uint64_t size) {
+  offset = std::min(offset, size);
   std::uint64_t line = 1, last_newline_end = 0, at = 0;  // the offset after the last '\n'
   char buf[65536];
   while (at < offset) {
-    const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(sizeof buf, offset - at));
+    const std::size_t want =
+        static_cast<std::size_t>(std::min<std::uint64_t>(sizeof buf, offset - at));
     const ssize_t n = ::pread(fd, buf, want, static_cast<off_t>(at));
+    if (n < 0 && errno == EINTR) continue;
     if (n <= 0) break;
     for (ssize_t i = 0; i < n; ++i)
       if (buf[i] == '\n') {
@@ -456,34 +520,23 @@ std::optional<json> parse_json_file(const std::filesystem::path& path, const std
   Fd f;
   if (!open_regular(path, max_bytes, f)) return std::nullopt;
   // First pass: the bytes are UTF-8 (as parse_json_text checks the text), and how many there
-  // are. A sequence cut by the end of a buffer is carried into the next one.
+  // are.
   std::uint64_t total = 0;
   {
-    char buf[65536 + 4];
-    std::size_t carried = 0;
+    char buf[65536];
+    Utf8Check utf8;
     for (;;) {
-      const ssize_t n = read_some(f.fd, buf + carried, 65536);
+      const ssize_t n = read_some(f.fd, buf, sizeof buf);
       if (n < 0) return std::nullopt;
-      const bool end = n == 0;
-      const std::size_t have = carried + static_cast<std::size_t>(n);
-      const std::string_view chunk(buf, have);
-      std::size_t i = 0;
-      while (i < have) {
-        const std::size_t len = utf8_sequence(chunk, i);
-        if (len == 0) {
-          if (!end && have - i < 4) break;  // perhaps cut short: judged with the next bytes
-          const std::uint64_t at = total - carried + i;
-          throw InputError(source, "",
-                           not_utf8_message(static_cast<unsigned char>(chunk[i]),
-                                            file_line_column(f.fd, at)));
-        }
-        i += len;
+      if (const auto bad = utf8.feed(buf, static_cast<std::size_t>(n), n == 0)) {
+        unsigned char b = 0;
+        if (::pread(f.fd, &b, 1, static_cast<off_t>(*bad)) != 1) return std::nullopt;
+        throw InputError(source, "",
+                         not_utf8_message(b, file_line_column(f.fd, *bad, total + n)));
       }
+      if (n == 0) break;
       total += static_cast<std::uint64_t>(n);
       if (total > max_bytes) throw too_big(path, max_bytes);  // it grew while read
-      if (end) break;
-      carried = have - i;
-      std::memmove(buf, buf + i, carried);
     }
   }
   if (::lseek(f.fd, 0, SEEK_SET) != 0) return std::nullopt;
@@ -492,8 +545,12 @@ std::optional<json> parse_json_file(const std::filesystem::path& path, const std
   json doc;
   const int fd = f.fd;
   StrictReader reader(
-      doc, [fd](std::size_t at) { return file_line_column(fd, at); }, streamed_key, element);
-  if (!json::sax_parse(in, &reader)) {
+      doc, [fd, total](std::size_t at) { return file_line_column(fd, at, total); }, streamed_key,
+      element);
+  const bool parsed = json::sax_parse(in, &reader);
+  if (buf.failed()) return std::nullopt;
+  if (buf.changed()) throw InputError(source, "", "changed while it was read; read it again");
+  if (!parsed) {
     if (!reader.error()) throw InputError(source, "", "invalid JSON");
     const FieldError& e = *reader.error();
     throw InputError(source, e.path, printable(e.message));

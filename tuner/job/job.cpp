@@ -1185,11 +1185,19 @@ Job parse_job(const json& j_in, const std::string& source,
   if (has_goals && j["goals"].is_array() && j["goals"].empty())
     errs.push_back({"/goals", "must hold at least one goal"});
   Job job;
+  const std::size_t read_from = errs.size();
   job_shape().read(j, "", job, errs);
   j = json();  // the job holds what it read
   if (from_file) {
     job.scenarios = std::move(listed);
-    errs.insert(errs.end(), entry_errs.begin(), entry_errs.end());
+    // The entries' errors where reading them in the job would have put them: after those of
+    // the fields the job's shape reads before "scenarios" (make_job_shape's order).
+    const auto before_scenarios = [](const FieldError& e) {
+      return e.path == "/schema" || e.path == "/name" || e.path.rfind("/plant", 0) == 0;
+    };
+    auto at = errs.begin() + static_cast<std::ptrdiff_t>(read_from);
+    while (at != errs.end() && before_scenarios(*at)) ++at;
+    errs.insert(at, entry_errs.begin(), entry_errs.end());
   }
   for (const GoalConfig& g : job.goals)
     if (g.soft() && g.metric <= GoalMetric::itae) {

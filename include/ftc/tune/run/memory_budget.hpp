@@ -20,8 +20,8 @@ inline constexpr double kRunBaseBytes = 64.0 * (1 << 20);
 // its objectives; and for each controller the comparison runs on it (the job's, each compare
 // entry, the tuned), its metrics, its entries in comparison.json and comparison.md and its
 // trajectory file's buffers, besides the trajectory's rows. Measured on scenarios of 20 ms
-// (MemoryBudget.AListedScenarioTakesNoMoreThanItIsCharged): 34.7 kB with 2 controllers, 56.9 kB
-// with 4, 77.1 kB with 6, that is about 13.5 kB and 10.6 kB per controller.
+// (MemoryBudget.AListedScenarioTakesNoMoreThanItIsCharged): 34.6 kB with 2 controllers, 56.0 kB
+// with 4, 76.4 kB with 6, that is about 14 kB and 10.4 kB per controller.
 inline constexpr double kBytesPerScenario = 16384.0;
 inline constexpr double kBytesPerScenarioController = 12288.0;
 // A member's numbers for one controller scored at once (and one more of each per goal): its
