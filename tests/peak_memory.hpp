@@ -1,6 +1,8 @@
 #pragma once
 // How much a piece of work adds to a process's peak resident set, measured in a child process
-// (fork): the child's peak (VmHWM) once the work is done, over its resident size when it began. The memory-by-design tests (issue 29) compare two sizes of the same work.
+// (fork): the child's peak (VmHWM) once the work is done, over its resident size when it began.
+// The memory-by-design tests (issue 29) compare two sizes of the same work.
+#include <fcntl.h>
 #include <malloc.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -10,19 +12,30 @@
 #include <functional>
 #include <string>
 
-// AddressSanitizer's quarantine keeps freed blocks: there is no peak to measure under it.
+namespace ftc::testing {
+
+// Resets the process's peak resident set to its current size (Linux's clear_refs "5").
+inline bool reset_peak() {
+  const int fd = ::open("/proc/self/clear_refs", O_WRONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  const bool done = ::write(fd, "5", 1) == 1;
+  ::close(fd);
+  return done;
+}
+
+// Why a peak cannot be measured here, nullptr when it can.
+inline const char* why_no_peak() {
 #if defined(__SANITIZE_ADDRESS__)
-#define FTC_NO_PEAK_TO_MEASURE 1
+  return "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
 #elif defined(__has_feature)
 #if __has_feature(address_sanitizer)
-#define FTC_NO_PEAK_TO_MEASURE 1
+  return "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
 #endif
 #endif
-#ifndef FTC_NO_PEAK_TO_MEASURE
-#define FTC_NO_PEAK_TO_MEASURE 0
-#endif
-
-namespace ftc::testing {
+  if (!reset_peak())
+    return "this system does not let a process reset its peak (/proc/self/clear_refs)";
+  return nullptr;
+}
 
 // A "Name: N kB" line of /proc/self/status, -1 when it is missing.
 inline long status_kb(const std::string& name) {
@@ -45,7 +58,7 @@ inline long peak_growth_kb(const std::function<bool()>& work) {
     // them would not raise the peak. They go back to the system first, and the peak is reset to
     // what is left (Linux's clear_refs "5"), so that the peak counts every page the work touches.
     ::malloc_trim(0);
-    const bool reset = static_cast<bool>(std::ofstream("/proc/self/clear_refs") << "5");
+    const bool reset = reset_peak();
     const long before = status_kb("VmRSS:");
     bool done = false;
     try {

@@ -184,8 +184,7 @@ TEST(JsonReader, AFileThatCannotBeReadIsSaidSo) {
 // several times its size. Measured in a child process, by its peak resident set over its size
 // when it began.
 TEST(JsonReader, ReadingAStreamedArrayTakesMemoryThatDoesNotGrowWithItsLength) {
-  if (FTC_NO_PEAK_TO_MEASURE)
-    GTEST_SKIP() << "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
+  if (const char* why = ftc::testing::why_no_peak()) GTEST_SKIP() << why;
   const auto dir = ftc::testing::fresh_dir("json-reader-memory");
   json item = {{"name", "member-0"},
                {"initial_state", {-0.7, -0.07, 1.5, 0.3, 1.3, -0.2}},

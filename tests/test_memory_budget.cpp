@@ -57,8 +57,7 @@ double peak_growth(const std::string& text) {
 // trajectories) against the growth of a run's peak from 300 to 2300 of them, with 2, 4 and 6
 // controllers compared.
 TEST(MemoryBudget, AListedScenarioTakesNoMoreThanItIsCharged) {
-  if (FTC_NO_PEAK_TO_MEASURE)
-    GTEST_SKIP() << "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
+  if (const char* why = ftc::testing::why_no_peak()) GTEST_SKIP() << why;
   // With the job's and the tuned controller only, and with two and four compare entries besides
   // (Table 1's two, again under other labels).
   for (const std::size_t compared : {0u, 2u, 4u}) {

@@ -282,8 +282,7 @@ TEST(TuningProblem, GeneratedMembersScoreAsTheExpandedEnsembleToTheBit) {
 // took about 2 kB a member (200 MB more at 10^5). Measured in a child process, by its peak
 // resident set over its size when it began.
 TEST(TuningProblem, PeakMemoryDoesNotGrowWithTheMemberCount) {
-  if (FTC_NO_PEAK_TO_MEASURE)
-    GTEST_SKIP() << "AddressSanitizer's quarantine keeps freed blocks: no peak to measure";
+  if (const char* why = ftc::testing::why_no_peak()) GTEST_SKIP() << why;
   const auto growth_kb = [](std::int64_t members) {
     return ftc::testing::peak_growth_kb([members] {
       json j = tiny_job("members");
