@@ -20,7 +20,10 @@ using namespace ftc::testing;
 // The simulator fills the disturbance and the fault effects a block of half steps at a time,
 // from sinusoids advanced by rotation. Against a plain RK4 that evaluates Δ(t) and the faults
 // with libm at every stage, an open-loop run with every kind of fault, onsets between grid
-// instants, several substeps and saturation must agree to rounding.
+// instants, several substeps and saturation must agree to rounding. The bias starts inside a
+// block of half steps, whose cosine is the first the simulator tabulates (none before its
+// onset): tabulating from the next block on instead fails here (checked), while the lanes-versus-
+// scalar tests, sharing the tables, would not see it.
 TEST(Simulation, ExogenousInputsFollowTheirDefinitions) {
   const Spacecraft plant;
   Scenario s = Scenario::paper();

@@ -72,9 +72,11 @@ inline bool same_terms(const std::vector<DisturbanceTerm>& a,
 }
 
 // The host of one pack: per distinct scenario the faults' effects, per distinct disturbance Δ(t)
-// (each an ExogenousInputs with the other part empty: lanes of one scenario share the first,
-// lanes whose scenarios have the same disturbance terms, as an ensemble's members do, the
-// second), per lane its metrics and trajectory.
+// that more than one of its scenarios has (each an ExogenousInputs with the other part empty:
+// lanes of one scenario share the first, lanes whose scenarios have the same disturbance terms,
+// as an ensemble's members do, the second), per lane its metrics and trajectory. A scenario
+// whose disturbance no other scenario of the pack has steps both in one table: a pack of one
+// scenario (Table 1's job, a landscape) builds one table, not two.
 template <int N, int M>
 class Host final : public PackHost<N, M> {
   using Exo = ExoRows<N, M>;
@@ -82,15 +84,23 @@ class Host final : public PackHost<N, M> {
  public:
   Host(std::span<LaneTask* const> lanes, int width, const PackSetup<N, M>& setup)
       : lanes_(lanes.begin(), lanes.end()), width_(width), setup_(setup) {
+    // The distinct scenarios and, for each, which distinct disturbance it has.
+    std::vector<const Scenario*> scenarios, first_with;  // first_with[d]: d's first scenario
+    std::vector<std::size_t> dist_of, users;
     for (std::size_t l = 0; l < lanes_.size(); ++l) {
       const Scenario& s = *lanes_[l]->scenario;
       std::size_t g = 0;
-      while (g < groups_.size() && groups_[g].scenario != &s) ++g;
-      if (g == groups_.size()) {
+      while (g < scenarios.size() && scenarios[g] != &s) ++g;
+      if (g == scenarios.size()) {
         std::size_t d = 0;
-        while (d < dists_.size() && !same_terms(dists_[d].disturbance.terms(), s.disturbance)) ++d;
-        if (d == dists_.size()) dists_.emplace_back(s);
-        groups_.emplace_back(s, d);
+        while (d < first_with.size() && !same_terms(first_with[d]->disturbance, s.disturbance)) ++d;
+        if (d == first_with.size()) {
+          first_with.push_back(&s);
+          users.push_back(0);
+        }
+        ++users[d];
+        scenarios.push_back(&s);
+        dist_of.push_back(d);
       }
       group_of_.push_back(g);
       std::vector<double> onsets;
@@ -111,12 +121,22 @@ class Host final : public PackHost<N, M> {
       if (o.record_every > 0)
         r.trajectory.values.reserve((setup.samples / o.record_every + 1) * r.trajectory.width());
     }
+    // A table per disturbance shared by scenarios; the others go with their scenario's faults.
+    std::vector<std::size_t> table(first_with.size(), Group::kOwn);
+    for (std::size_t d = 0; d < first_with.size(); ++d)
+      if (users[d] > 1) {
+        table[d] = dists_.size();
+        dists_.emplace_back(*first_with[d]);
+      }
+    for (std::size_t g = 0; g < scenarios.size(); ++g)
+      groups_.emplace_back(*scenarios[g], table[dist_of[g]]);
     for (std::size_t l = 0; l < lanes_.size(); ++l)
       groups_[group_of_[l]].lanes.push_back(static_cast<int>(l));
     // Unused lanes repeat lane 0.
     for (int l = static_cast<int>(lanes_.size()); l < width; ++l) groups_[0].lanes.push_back(l);
     for (const Group& g : groups_)
-      for (const int l : g.lanes) dists_[g.dist].lanes.push_back(l);
+      if (g.dist != Group::kOwn)
+        for (const int l : g.lanes) dists_[g.dist].lanes.push_back(l);
     for (Dist& d : dists_) std::sort(d.lanes.begin(), d.lanes.end());
     done_.assign(lanes_.size(), false);
     buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3 * Exo::kCount *
@@ -145,10 +165,14 @@ class Host final : public PackHost<N, M> {
         }
         for (Group& g : groups_) {
           const auto* e = g.exo.step(k0 + i, j);
+          const bool own = g.dist == Group::kOwn;
           for (int q = 0; q < 3; ++q) {
             double* rows = out + q * Exo::kCount * stride;
             for (const int l : g.lanes) {
               if (shared && l > 0) break;
+              if (own)
+                for (int r = 0; r < N; ++r)
+                  rows[(Exo::kDist + r) * stride + l] = e[q].disturbance[r];
               for (int r = 0; r < M; ++r) {
                 rows[(Exo::kGain + r) * stride + l] = e[q].fault.gain[r];
                 rows[(Exo::kOffset + r) * stride + l] = e[q].fault.offset[r];
@@ -246,17 +270,18 @@ class Host final : public PackHost<N, M> {
   }
 
  private:
-  // The lanes of one scenario: its faults' effects (exo's disturbance is empty).
+  // The lanes of one scenario: its faults' effects, and its disturbance too when no other
+  // scenario of the pack has it (else exo's disturbance is empty and dists_ steps it).
   struct Group {
+    static constexpr std::size_t kOwn = static_cast<std::size_t>(-1);
     Group(const Scenario& s, std::size_t d)
-        : scenario(&s),
-          dist(d),
+        : dist(d),
+          disturbance(d == kOwn ? Disturbance(s.disturbance) : Disturbance()),
           faults(s.faults, s.saturation),
-          exo(none, faults, s.sample_time, s.substeps) {}
-    const Scenario* scenario;
-    std::size_t dist;        // its disturbance in dists_
+          exo(disturbance, faults, s.sample_time, s.substeps) {}
+    std::size_t dist;        // its disturbance in dists_, or kOwn
     std::vector<int> lanes;  // in increasing order
-    Disturbance none;
+    Disturbance disturbance;
     FaultSet faults;
     ExogenousInputs<N, M> exo;  // refers to the two above: groups never move (deque)
   };
