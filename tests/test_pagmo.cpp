@@ -287,6 +287,12 @@ TEST(PagmoOptimizer, RejectsCheckpointsOfOtherRunsAndDamagedOnes) {
   forged = good;
   forged["fitness_log"][3] = "x";
   rejected(pso, forged, "/fitness_log/3");
+  // No run gives a fitness below -1 (an infeasible candidate's -V/(1+V)). Every objective of
+  // bee_colony's replay infinite made its onlooker loop spin for ever: refused before the replay.
+  const AlgorithmPtr bees = pagmo("bee_colony", 6, 3);
+  json hive = state_of(bees, 1);
+  for (json& f : hive["fitness_log"]) f = -1e300;
+  rejected(bees, hive, "/fitness_log/0: expected a number in [-1, ");
 }
 
 TEST(PagmoSettings, ErrorsNameTheirJsonPath) {
@@ -309,6 +315,15 @@ TEST(PagmoSettings, ErrorsNameTheirJsonPath) {
             "/tuning/algorithm/settings/variant: expected an integer, got a number\n");
   j["settings"] = {{"omega", 1.5}};
   EXPECT_EQ(problems(j), "/tuning/algorithm/settings/omega: must be in [0, 1] (got 1.5)\n");
+  // The adaptive random topology draws neighb_param - 1 informants per particle, again and
+  // again: no more than the swarm (2e9 allocated tens of GB).
+  j = ok;
+  j["settings"] = {{"neighb_type", 4}, {"neighb_param", 2000000000}};
+  EXPECT_EQ(problems(j),
+            "/tuning/algorithm/settings/neighb_param: must be at most the population (10) for the "
+            "adaptive random topology, got 2000000000\n");
+  j["settings"]["neighb_param"] = 10;
+  EXPECT_EQ(problems(j), "");
   j = ok;
   j["iterations"] = 10;  // the Bat algorithm's word; pagmo's is generations
   EXPECT_NE(problems(j).find("/tuning/algorithm/iterations: unknown key"), std::string::npos);

@@ -94,7 +94,10 @@ double number(const json& j, const std::string& path, double lo, double hi) {
 
 double fitness(const json& j, const std::string& path) {
   if (j.is_null()) return std::numeric_limits<double>::infinity();
-  return number(j, path, -HUGE_VAL, HUGE_VAL);
+  // A run gives J >= 0, or -V/(1 + V) in [-1, 0) for an infeasible candidate (null: +inf). A
+  // forged value below -1 is refused: fed to pagmo's replay as an infinite objective, it hung
+  // bee_colony's onlooker loop.
+  return number(j, path, -1.0, HUGE_VAL);
 }
 
 bool boolean(const json& j, const std::string& path) {

@@ -652,6 +652,14 @@ void pso_sizes(const PsoS& s, Sizes sizes, const std::string& path, Errors& e) {
          population_text(
              radius, " for the lbest topology with neighb_param " + std::to_string(s.neighb_param),
              sizes.population)});
+  // The adaptive random topology gives each particle neighb_param - 1 informants, drawn again
+  // after every generation without improvement: more than the swarm is only memory (2e9 took
+  // tens of GB).
+  if (s.neighb_type == 4 && s.neighb_param > sizes.population)
+    e.push_back({path + "/settings/neighb_param",
+                 "must be at most the population (" + std::to_string(sizes.population) +
+                     ") for the adaptive random topology, got " +
+                     std::to_string(s.neighb_param)});
 }
 
 std::unique_ptr<Entry> pso_entry() {

@@ -22,7 +22,8 @@ std::int64_t integer(const nlohmann::json& j, const std::string& path, std::int6
                      std::int64_t hi);
 // A number in [lo, hi] (a finite one unless the bounds are infinite).
 double number(const nlohmann::json& j, const std::string& path, double lo, double hi);
-// A fitness: any number, or null for a diverged one (read as +inf, as state() writes it).
+// A fitness: a number from -1 on (an infeasible candidate's -V/(1+V) is above -1), or null for a
+// diverged one (read as +inf, as state() writes it).
 double fitness(const nlohmann::json& j, const std::string& path);
 bool boolean(const nlohmann::json& j, const std::string& path);
 // A vector of the space's dimension of finite numbers, inside its bounds when `bounded`.
