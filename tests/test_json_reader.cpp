@@ -106,6 +106,9 @@ TEST(JsonReader, AFileReadAsAStreamGivesTheDocumentAndErrorsOfItsText) {
       placed("\xf0\x9f\x9b", 65533, "\xb0\", \"scenarios\": [1]}"),
       placed("\xf0\x9f\x9b", 65533, "\xb0\xb0\", \"scenarios\": [1]}"),
       placed("\xe2\x82", 65534, ""),
+      placed("\xff", 65535, "\", \"scenarios\": [1]}"),
+      placed("\xe2", 65535, "x\", \"scenarios\": [1]}"),
+      placed("\x80", 65536, "\", \"scenarios\": [1]}"),
       "{\"scenarios\": [\"\xf0\x9f",
   };
   for (std::size_t t = 0; t < texts.size(); ++t) {

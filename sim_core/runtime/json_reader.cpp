@@ -401,7 +401,8 @@ class Utf8Check {
 
 // Reads a file through a buffer of its own, stopping after `limit` bytes (what a first pass
 // counted), so the parser sees no more bytes than that pass checked. The bytes are checked for
-// UTF-8 again as they are read: a file rewritten between the passes is noticed, not parsed.
+// UTF-8 again as they are read: a file that got shorter, or whose bytes are no longer UTF-8, is
+// noticed, not parsed (one rewritten into other valid text is read as it then is).
 class FdBuf : public std::streambuf {
  public:
   FdBuf(int fd, std::uint64_t limit) : fd_(fd), left_(limit) {}

@@ -1193,7 +1193,8 @@ Job parse_job(const json& j_in, const std::string& source,
     // The entries' errors where reading them in the job would have put them: after those of
     // the fields the job's shape reads before "scenarios" (make_job_shape's order).
     const auto before_scenarios = [](const FieldError& e) {
-      return e.path == "/schema" || e.path == "/name" || e.path.rfind("/plant", 0) == 0;
+      return e.path == "/schema" || e.path == "/name" || e.path == "/plant" ||
+             e.path.rfind("/plant/", 0) == 0;
     };
     auto at = errs.begin() + static_cast<std::ptrdiff_t>(read_from);
     while (at != errs.end() && before_scenarios(*at)) ++at;
