@@ -661,11 +661,12 @@ function jobView(main, id) {
   }
 
   // The Pareto front of a job with two or more soft goals (front.json): its first two soft goals,
-  // the picked point circled, the compared controllers marked, each point's noise floor as a band
-  // of one relative spread on each axis (SPEC 14), and a dashed link between neighbours within
-  // each other's floor on every soft goal (front.json's within_noise_of: not a trade-off), as
-  // report.html draws them. A table lists every point with its floors. Log axes where every
-  // value is positive.
+  // the picked point circled, the compared controllers marked, and as report.html draws them
+  // (tuner/report/front.cpp): each point's noise floor f (SPEC 14, the relative spread of its
+  // nudged copies) as a band of width f·|v| centred on the value on each axis, and a dashed link
+  // between two points that are no trade-off (on every soft goal |a - b| <= the larger of their
+  // floors f·|v|, or front.json's within_noise_of). A table lists every point with its floors and
+  // those links. Log axes where every value is positive.
   let frontChart = null;
   function renderFront(front) {
     clear(frontBox);
@@ -695,8 +696,13 @@ function jobView(main, id) {
       datasets.push({label: 'picked (' + front.picked.rule + ')', data: [{x: picked.goals[a], y: picked.goals[b]}],
                      pointRadius: 9, pointStyle: 'circle', backgroundColor: 'rgba(0,0,0,0)',
                      borderColor: '#21918c', borderWidth: 2});
-    // Bands: x·(1 ± f) on each axis, a gap between points (NaN breaks the line).
-    const band = (v, f) => (finite(f) ? [v * (1 - f), v * (1 + f)] : [v, v]);
+    // Bands: v·(1 ± f/2) on each axis, kept above v/10 on a log axis (as the report does), a
+    // gap between points (NaN breaks the line).
+    const band = (v, f, log) => {
+      if (!finite(f)) return [v, v];
+      const half = 0.5 * f * Math.abs(v);
+      return [log ? Math.max(v - half, 0.1 * v) : v - half, v + half];
+    };
     const gap = {x: NaN, y: NaN};
     const bands = [];
     let banded = 0;
@@ -704,19 +710,39 @@ function jobView(main, id) {
       if (!drawable(p.goals)) continue;
       const f = p.noise_floor || [];
       if (!finite(f[a]) && !finite(f[b])) continue;
-      const x = p.goals[a], y = p.goals[b], [x0, x1] = band(x, f[a]), [y0, y1] = band(y, f[b]);
+      const x = p.goals[a], y = p.goals[b];
+      const [x0, x1] = band(x, f[a], logX), [y0, y1] = band(y, f[b], logY);
       bands.push({x: x0, y}, {x: x1, y}, gap, {x, y: y0}, {x, y: y1}, gap);
       ++banded;
     }
     if (banded)
       datasets.push({label: 'noise floor (band of one relative spread)', data: bands, showLine: true,
                      spanGaps: false, pointRadius: 0, borderColor: '#8c8c8c', borderWidth: 1});
+    // The pairs that are no trade-off, by report.html's rule (within_noise in front.cpp).
+    const floorOf = (x, g) => (finite(x.goals[g]) && finite((x.noise_floor || [])[g])
+      ? x.noise_floor[g] * Math.abs(x.goals[g]) : NaN);
+    const withinNoise = (i, k) => {
+      const p = front.points[i], q = front.points[k];
+      if (p.within_noise_of === k || q.within_noise_of === i) return true;
+      for (const g of soft) {
+        const fu = floorOf(p, g), fv = floorOf(q, g);
+        if (!finite(fu) && !finite(fv)) return false;
+        if (!(Math.abs(p.goals[g] - q.goals[g]) <= Math.max(finite(fu) ? fu : 0, finite(fv) ? fv : 0)))
+          return false;
+      }
+      return true;
+    };
+    const partners = front.points.map(() => []);
     const links = [];
-    front.points.forEach((p) => {
-      const q = Number.isInteger(p.within_noise_of) ? front.points[p.within_noise_of] : null;
-      if (q && drawable(p.goals) && drawable(q.goals))
-        links.push({x: q.goals[a], y: q.goals[b]}, {x: p.goals[a], y: p.goals[b]}, gap);
-    });
+    for (let i = 0; i < front.points.length; ++i)
+      for (let k = i + 1; k < front.points.length; ++k) {
+        if (!withinNoise(i, k)) continue;
+        partners[i].push(k);
+        partners[k].push(i);
+        const p = front.points[i], q = front.points[k];
+        if (drawable(p.goals) && drawable(q.goals))
+          links.push({x: p.goals[a], y: p.goals[b]}, {x: q.goals[a], y: q.goals[b]}, gap);
+      }
     if (links.length)
       datasets.push({label: "within one's noise floor on every goal: not a trade-off", data: links,
                      showLine: true, spanGaps: false, pointRadius: 0, borderColor: '#4d4d4d',
@@ -741,26 +767,28 @@ function jobView(main, id) {
       });
       charts.push(frontChart);
     }).catch((e) => showError(message, e));
-    // Every point: its soft goals with their floors, and the point it is not a trade-off with.
+    // Every point: its soft goals with their floors (the spread, as the report prints it), and
+    // the points it is no trade-off with.
     const softName = soft.map((i) => name(front.goals[i]));
-    const percent = (f) => (finite(f) ? '± ' + fmt(100 * f, 2) + ' %' : '–');
+    const percent = (f) => (finite(f) ? fmt(100 * f, 2) + ' %' : '–');
     frontBox.append(el('div', {class: 'scroll'}, el('table', {id: 'front-points'},
       el('thead', null, el('tr', null, ['point', 'trial'].concat(
-        ...softName.map((n) => [n, 'noise floor']), ['feasible', 'not a trade-off with']).map(
+        ...softName.map((n) => [n, 'noise floor (spread)']), ['feasible', 'no trade-off with']).map(
         (h) => el('th', {text: h})))),
       el('tbody', null, front.points.map((p, k) => el('tr', {class: k === front.picked.index ? 'picked' : ''},
         el('td', {class: 'num', text: String(k)}), el('td', {class: 'num', text: String(p.trial)}),
         soft.map((i) => [el('td', {class: 'num', text: fmt(p.goals[i])}),
                          el('td', {class: 'num', text: percent((p.noise_floor || [])[i])})]),
         el('td', {text: p.feasible ? 'yes' : 'no'}),
-        el('td', {text: Number.isInteger(p.within_noise_of) ? 'point ' + p.within_noise_of : ''})))))));
+        el('td', {text: partners[k].map((i) => 'point ' + i).join(', ')})))))));
   }
 
   // The page opens a job and its live stream reopens it, so two loads can overlap: the newer one
   // wins, and an older one still awaiting its answers draws nothing (it drew every download
   // button twice).
   let resultsRun = 0;
-  async function loadResults() {
+  const loadResults = () => loadingWhile(drawResults);
+  async function drawResults() {
     const run = ++resultsRun;
     const stale = () => run !== resultsRun;
     const finished = isFinished(job.status);
@@ -809,9 +837,24 @@ function jobView(main, id) {
     } catch (e) { /* no files: nothing to show */ }
   }
 
-  async function loadJob() {
+  // Loads under way, the job's and its results' (body's data-loading, which the browser test
+  // waits on before it reads the page).
+  let loading = 0;
+  async function loadingWhile(work) {
+    document.body.dataset.loading = String(++loading);
     try {
-      job = await apiJson('/v1/jobs/' + id);
+      return await work();
+    } finally {
+      document.body.dataset.loading = String(--loading);
+    }
+  }
+  const loadJob = () => loadingWhile(readJob);
+  async function readJob() {
+    try {
+      const fresh = await apiJson('/v1/jobs/' + id);
+      // An event may have told of the job's end while this answer was on its way: an older
+      // snapshot does not take the finished job back to running (its results would vanish).
+      if (!(job && isFinished(job.status) && !isFinished(fresh.status))) job = fresh;
     } catch (e) {
       clear(header);
       showError(header, e);
