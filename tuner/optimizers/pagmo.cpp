@@ -816,7 +816,8 @@ std::unique_ptr<Entry> gaco_entry() {
       .integer("impstop", &S::impstop, IntRange{0, std::numeric_limits<int>::max()},
                "stop after this many generations without improvement (0: never)")
       .integer("evalstop", &S::evalstop, IntRange{0, std::numeric_limits<int>::max()},
-               "stop after this many evaluations without improvement (0: never)")
+               "stop after this many generations whose best does not improve on the archive's "
+               "(pagmo counts them per generation, though it names them evaluations; 0: never)")
       .number("focus", &S::focus, Range::non_negative(), "focus of the search (0: none)");
   return entry<S>(
       {"gaco", "extended ant colony optimisation (one batch per generation)", true, 1, 1, 0},
