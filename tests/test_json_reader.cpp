@@ -81,10 +81,12 @@ TEST(JsonReader, AFileReadAsAStreamGivesTheDocumentAndErrorsOfItsText) {
   ASSERT_GT(pad.size(), 70000u);
   // A two-byte sequence straddling the first buffer's end, wherever that falls in the padding.
   std::string straddle = "{\"pad\": \"";
-  straddle += std::string(65536 - straddle.size() - 1, 'x') + "\xc3\xa9" + "\", \"scenarios\": [1]}";
+  straddle +=
+      std::string(65536 - straddle.size() - 1, 'x') + "\xc3\xa9" + "\", \"scenarios\": [1]}";
   const std::vector<std::string> texts = {
       // accepted
-      R"({"schema": "s", "scenarios": [{"a": 1}, [2, {"b": []}], 3, "x", null, {"scenarios": [4]}]})",
+      R"({"schema": "s", "scenarios": [{"a": 1}, [2, {"b": []}], 3, "x", null,
+          {"scenarios": [4]}]})",
       R"({"scenarios": [], "other": {"scenarios": [5]}})",
       R"([{"scenarios": [6]}])",
       "{\"pad\": " + pad + ", \"scenarios\": [{\"name\": \"\xc3\xa9\xf0\x9f\x9b\xb0\"}]}",

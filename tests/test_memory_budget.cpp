@@ -53,8 +53,8 @@ double peak_growth(const std::string& text) {
 }  // namespace
 
 // Issue 29: a job is refused up front when its estimate is above the budget, so the estimate must
-// not undercount. The listed scenarios' charge (kBytesPerScenario, kBytesPerScenarioController and the comparison's
-// trajectories) against the growth of a run's peak from 300 to 2300 of them, with 2, 4 and 6
+// not undercount. The listed scenarios' charge (kBytesPerScenario, kBytesPerScenarioController
+// and the comparison's trajectories) against the growth of a run's peak from 300 to 2300 of them, with 2, 4 and 6
 // controllers compared.
 TEST(MemoryBudget, AListedScenarioTakesNoMoreThanItIsCharged) {
   if (const char* why = ftc::testing::why_no_peak()) GTEST_SKIP() << why;

@@ -466,7 +466,11 @@ std::string file_line_column(int fd, std::uint64_t offset, std::uint64_t size) {
 std::string not_utf8_message(unsigned char b, const std::string& where) {
   char byte[8];
   std::snprintf(byte, sizeof byte, "0x%02X", b);
-  return std::string("invalid JSON: not UTF-8 (byte ").append(byte).append(" at ").append(where).append(")");
+  return std::string("invalid JSON: not UTF-8 (byte ")
+      .append(byte)
+      .append(" at ")
+      .append(where)
+      .append(")");
 }
 
 }  // namespace

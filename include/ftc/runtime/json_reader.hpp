@@ -91,9 +91,10 @@ std::optional<std::string> read_file(const std::filesystem::path& path,
 // holding its text, and without holding the elements of the array under `streamed_key` in the
 // root object: each is given to `element` (its index and value) as soon as it is complete and
 // then dropped, so the document returned holds that array empty and the memory the reading
-// takes does not grow with the array's length (beyond what `element` keeps). nullopt when the file cannot be opened or
-// read; InputError as read_file (not a regular file, larger than max_bytes) and
-// parse_json_text. Any exception `element` throws passes through.
+// takes does not grow with the array's length (beyond what `element` keeps). nullopt when the
+// file cannot be opened or read; InputError as read_file (not a regular file, larger than
+// max_bytes) and parse_json_text, and "changed while it was read" when the bytes the parser
+// reads are not those a first pass checked. Any exception `element` throws passes through.
 std::optional<nlohmann::json> parse_json_file(
     const std::filesystem::path& path, const std::string& source, const std::string& streamed_key,
     const std::function<void(std::size_t, nlohmann::json&&)>& element,
