@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <optional>
@@ -199,6 +200,69 @@ TEST(BatchKernel, LanesOfDifferentScenariosGiveTheScalarBits) {
     const std::vector<SimulationResult> got = run(tasks, isa);
     for (std::size_t i = 0; i < tasks.size(); ++i)
       expect_same(got[i], want[i], std::string(to_string(isa)) + ", member " + std::to_string(i));
+  }
+}
+
+// A bias fault's cosine is tabulated only from the block of its onset on (simulation_loop.hpp's
+// ExogenousInputs, blocks of 16 RK4 steps: 16 samples here). Onsets inside a block, exactly on a
+// block's boundary and past the run's end: every lane on every instruction set gives the scalar
+// bits, and the recorded applied command carries the bias's closed form from the onset's sample
+// on (a table started a block late would leave its cosine unset there).
+TEST(BatchKernel, BiasOnsetInsideABlockOnItsBoundaryAndPastTheEnd) {
+  const Scenario base = short_paper();
+  const double Ts = base.sample_time;
+  ASSERT_EQ(base.substeps, 1);
+  ASSERT_EQ(base.faults[0].type, FaultType::bias);
+  ASSERT_EQ(base.faults[0].actuator, 1);
+  ASSERT_FALSE(base.saturation.has_value());
+  // Block 125 spans samples 2000..2015; its first instant is formed as k·Ts, as here.
+  const std::vector<double> onsets = {static_cast<double>(2007) * Ts + 0.5 * Ts,  // mid-step
+                                      static_cast<double>(2011) * Ts,  // a sample inside it
+                                      static_cast<double>(2000) * Ts,  // its boundary
+                                      base.duration + 0.5};            // never
+  // The scenarios share their disturbance (the pack's tables of Δ(t) and of the faults apart),
+  // or each has its own (one table per scenario, lane_host.hpp's Group::kOwn).
+  for (const bool own_disturbance : {false, true}) {
+    std::vector<Task> tasks;
+    for (std::size_t i = 0; i < onsets.size(); ++i) {
+      Scenario s = base;
+      s.name = "bias" + std::to_string(i);
+      s.faults[0].onset = onsets[i];
+      s.faults[0].phase = 0.3 * static_cast<double>(i);
+      if (own_disturbance)
+        for (DisturbanceTerm& d : s.disturbance) d.amplitude *= 1.0 + 0.1 * static_cast<double>(i);
+      SimulationOptions o;
+      o.record_every = 1;
+      tasks.push_back({ControllerConfig::table1(ControllerType::pi_fosmc), s, o});
+    }
+    const std::vector<SimulationResult> want = run_alone(tasks);
+    for (Isa isa : supported_isas()) {
+      const std::vector<SimulationResult> got = run(tasks, isa);
+      for (std::size_t i = 0; i < tasks.size(); ++i)
+        expect_same(got[i], want[i],
+                    std::string(to_string(isa)) + ", onset " + std::to_string(i) +
+                        (own_disturbance ? ", own disturbance" : ""));
+    }
+    constexpr int M = 4;  // the spacecraft's reaction wheels
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+      const Trajectory& tr = want[i].trajectory;
+      ASSERT_EQ(tr.actuators, M);
+      const FaultSet faults(tasks[i].scenario.faults, tasks[i].scenario.saturation);
+      ASSERT_EQ(tr.rows(), static_cast<std::size_t>(base.samples()));
+      // Actuator 1's applied command less its command, from a block before block 125 to the end
+      // of the one after it.
+      int biased = 0;
+      for (std::int64_t k = 1984; k < 2048; ++k) {
+        const std::size_t row = static_cast<std::size_t>(k);
+        const double t = tr.t(row);
+        const double offset = tr.u(row)[0] - tr.u_d(row)[0];
+        const double expected = faults.effect<M>(t).offset[0];
+        EXPECT_NEAR(offset, expected, 1e-9) << "onset " << i << ", sample " << k;
+        if (expected != 0.0) ++biased;
+      }
+      EXPECT_EQ(biased, i == 3 ? 0 : 2048 - static_cast<int>(std::ceil(onsets[i] / Ts - 1e-9)))
+          << "onset " << i;
+    }
   }
 }
 
