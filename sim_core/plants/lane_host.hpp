@@ -152,34 +152,9 @@ class Host final : public PackHost<N, M> {
       for (int j = 0; j < S; ++j) {
         double* out =
             &buffer_[(static_cast<std::size_t>(i) * S + j) * 3 * Exo::kCount * stride];
-        for (Dist& d : dists_) {
-          const auto* e = d.exo.step(k0 + i, j);
-          for (int q = 0; q < 3; ++q) {
-            double* rows = out + q * Exo::kCount * stride;
-            for (const int l : d.lanes) {
-              if (shared && l > 0) break;
-              for (int r = 0; r < N; ++r)
-                rows[(Exo::kDist + r) * stride + l] = e[q].disturbance[r];
-            }
-          }
-        }
-        for (Group& g : groups_) {
-          const auto* e = g.exo.step(k0 + i, j);
-          const bool own = g.dist == Group::kOwn;
-          for (int q = 0; q < 3; ++q) {
-            double* rows = out + q * Exo::kCount * stride;
-            for (const int l : g.lanes) {
-              if (shared && l > 0) break;
-              if (own)
-                for (int r = 0; r < N; ++r)
-                  rows[(Exo::kDist + r) * stride + l] = e[q].disturbance[r];
-              for (int r = 0; r < M; ++r) {
-                rows[(Exo::kGain + r) * stride + l] = e[q].fault.gain[r];
-                rows[(Exo::kOffset + r) * stride + l] = e[q].fault.offset[r];
-              }
-            }
-          }
-        }
+        for (Dist& d : dists_) scatter(d.exo.step(k0 + i, j), d.lanes, out, true, false);
+        for (Group& g : groups_)
+          scatter(g.exo.step(k0 + i, j), g.lanes, out, g.dist == Group::kOwn, true);
       }
     return buffer_.data();
   }
@@ -270,6 +245,28 @@ class Host final : public PackHost<N, M> {
   }
 
  private:
+  // Writes a table's three entries (a substep's start, midpoint and end) into the rows of its
+  // lanes (lane 0 only when the pack shares its inputs): Δ's rows when `disturbance`, the
+  // faults' gain and offset rows when `faults`.
+  void scatter(const typename ExogenousInputs<N, M>::Entry* e, const std::vector<int>& lanes,
+               double* out, bool disturbance, bool faults) {
+    const bool shared = setup_.shared_inputs;
+    const int stride = Exo::stride(shared, width_);
+    for (int q = 0; q < 3; ++q) {
+      double* rows = out + q * Exo::kCount * stride;
+      for (const int l : lanes) {
+        if (shared && l > 0) break;
+        if (disturbance)
+          for (int r = 0; r < N; ++r) rows[(Exo::kDist + r) * stride + l] = e[q].disturbance[r];
+        if (faults)
+          for (int r = 0; r < M; ++r) {
+            rows[(Exo::kGain + r) * stride + l] = e[q].fault.gain[r];
+            rows[(Exo::kOffset + r) * stride + l] = e[q].fault.offset[r];
+          }
+      }
+    }
+  }
+
   // The lanes of one scenario: its faults' effects, and its disturbance too when no other
   // scenario of the pack has it (else exo's disturbance is empty and dists_ steps it).
   struct Group {

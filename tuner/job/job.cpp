@@ -1191,10 +1191,13 @@ Job parse_job(const json& j_in, const std::string& source,
   if (from_file) {
     job.scenarios = std::move(listed);
     // The entries' errors where reading them in the job would have put them: after those of
-    // the fields the job's shape reads before "scenarios" (make_job_shape's order).
-    const auto before_scenarios = [](const FieldError& e) {
-      return e.path == "/schema" || e.path == "/name" || e.path == "/plant" ||
-             e.path.rfind("/plant/", 0) == 0;
+    // the fields the job's shape reads before "scenarios" (read() reports in its fields' order).
+    const std::size_t scenarios_at = job_shape().field_index("scenarios");
+    const auto before_scenarios = [&](const FieldError& e) {
+      if (e.path.size() < 2) return false;  // the job as a whole
+      const std::size_t end = e.path.find('/', 1);
+      const std::string key = e.path.substr(1, end == std::string::npos ? end : end - 1);
+      return job_shape().field_index(key) < scenarios_at;
     };
     auto at = errs.begin() + static_cast<std::ptrdiff_t>(read_from);
     while (at != errs.end() && before_scenarios(*at)) ++at;

@@ -456,10 +456,13 @@ class Object final : public Shape<T> {
     if (!required.empty()) s["required"] = required;
     return s;
   }
-  bool has(const std::string& key) const {
-    for (const Field& f : fields_)
-      if (f.key == key) return true;
-    return false;
+  bool has(const std::string& key) const { return field_index(key) < fields_.size(); }
+  // The field's place in the order read() reports errors in (its fields', then unknown keys'):
+  // the number of fields for a key that is not one.
+  std::size_t field_index(const std::string& key) const {
+    std::size_t i = 0;
+    while (i < fields_.size() && fields_[i].key != key) ++i;
+    return i;
   }
 
  private:
