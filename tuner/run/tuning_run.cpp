@@ -48,7 +48,6 @@ nlohmann::json trial_json(const Trial& t) {
 
 // A job with n goals has rows of 10 with n goal values, one without goals rows of 8; a capped
 // trial's row one more, its count of scenarios simulated.
-
 std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goals) {
   const auto bad = [] {
     return InputError("checkpoint", "/trials", "is not a list of trials written by ftctune");
