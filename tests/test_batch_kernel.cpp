@@ -203,7 +203,50 @@ TEST(BatchKernel, LanesOfDifferentScenariosGiveTheScalarBits) {
   }
 }
 
-// A bias fault's cosine is tabulated only from the block of its onset on (simulation_loop.hpp's
+// A pack's metrics in any number of windows and fault onsets are accumulated in the lanes
+// (lanes/metric_lanes.hpp's MetricLanes: the kernel once kept 8 of each and left more to a second
+// accumulator on the host): 13 windows and 11 faults, lanes with fewer of either beside them, give
+// the scalar bits on every instruction set, and the windows that tile the run add up to its ISE.
+TEST(BatchKernel, ManyWindowsAndFaultsAreMeasuredInTheLanes) {
+  std::vector<Task> tasks = varied(ControllerType::pi_fosmc, 8);
+  for (std::size_t l = 0; l < tasks.size(); ++l) {
+    Task& t = tasks[l];
+    t.options.extra_windows.clear();
+    const int windows = l % 2 == 0 ? 12 : 3;  // extra windows tiling [0, 12)
+    for (int w = 0; w < windows; ++w)
+      t.options.extra_windows.push_back({12.0 * w / windows, 12.0 * (w + 1) / windows});
+    const int faults = l % 3 == 0 ? 11 : 2;
+    t.scenario.faults.resize(2);
+    for (int f = 2; f < faults; ++f) {
+      Fault loe;
+      loe.actuator = 1 + f % 4;
+      loe.type = FaultType::loss_of_effectiveness;
+      loe.onset = 2.5 + 0.8 * f;
+      loe.fraction = 0.01 * f;
+      t.scenario.faults.push_back(loe);
+    }
+    t.options.metrics.settling_threshold = 0.05;
+    t.options.metrics.steady_state_tail = 2.0;
+  }
+  const std::vector<SimulationResult> want = run_alone(tasks);
+  for (Isa isa : supported_isas()) {
+    const std::vector<SimulationResult> got = run(tasks, isa);
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+      expect_same(got[i], want[i], std::string(to_string(isa)) + ", lane " + std::to_string(i));
+  }
+  const Metrics& m = want[0].metrics;
+  ASSERT_EQ(m.extra.size(), 12u);
+  ASSERT_EQ(m.peak_error_after_fault.size(), 11u);
+  ASSERT_FALSE(m.diverged);
+  double ise = 0.0;
+  for (const ErrorIntegrals& e : m.extra) ise += e.ise;
+  EXPECT_NEAR(ise, m.errors.ise, 1e-12 * m.errors.ise);
+  // Each fault's peak error from its onset on: a later onset sees no larger peak.
+  for (std::size_t f = 3; f < 11; ++f)
+    EXPECT_LE(m.peak_error_after_fault[f], m.peak_error_after_fault[f - 1]) << f;
+}
+
+// A bias fault's cosine is tabulated only from the block of its onset on (exogenous_inputs.hpp's
 // ExogenousInputs, blocks of 16 RK4 steps: 16 samples here). Onsets inside a block, exactly on a
 // block's boundary and past the run's end: every lane on every instruction set gives the scalar
 // bits, and the recorded applied command carries the bias's closed form from the onset's sample
@@ -403,7 +446,8 @@ TEST(BatchKernel, InstructionSetsAreNamedAndOrdered) {
 
 // The window metrics of issue 26 in lanes: lanes with a settling threshold and a steady-state
 // tail among lanes without, saturated lanes and a diverging one; every lane on every instruction
-// set gives the bits of the Controller loop (sim::simulate, its MetricsAccumulator).
+// set gives the bits of the Controller loop (sim::simulate: the same loop with the controller as
+// its law).
 TEST(BatchKernel, WindowMetricsInLanesAreTheControllerLoops) {
   const Spacecraft sc;
   std::vector<Task> tasks = varied(ControllerType::pi_fosmc, 9);

@@ -1,9 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -14,16 +16,16 @@
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
 #include "io/text.hpp"
-#include "metrics_accumulator.hpp"
+#include "lanes/metric_lanes.hpp"
+#include "plants/lane_host.hpp"
 #include "short_job.hpp"
 
 namespace {
 
 using ftc::sim::ErrorIntegrals;
 using ftc::sim::Metrics;
-using ftc::sim::MetricsAccumulator;
-using ftc::sim::StateOf;
-using ftc::sim::Vec;
+using ftc::sim::Scenario;
+using ftc::sim::SimulationOptions;
 using ftc::sim::Window;
 
 // A hand-made trajectory of a plant with 2 axes and 2 actuators, Ts = 0.5 s, four samples
@@ -45,16 +47,62 @@ const Sample kTrajectory[] = {
     {1.5, {0.0, 0.25}, {-1.0, -2.0}},
 };
 
-Metrics accumulate(Window window, std::vector<Window> extra, std::vector<double> onsets) {
-  MetricsAccumulator<2, 2> acc(0.5, window, std::move(extra), std::move(onsets));
-  for (const Sample& s : kTrajectory) {
-    StateOf<2> x;
-    x << s.e[0], s.e[1], 7.0, -7.0;  // X2 takes no part in any metric
-    Vec<2> u;
-    u << s.u[0], s.u[1];
-    acc.sample(s.t, x, u);
+// A scenario of `duration` seconds with a fault at each onset (only the onsets matter here).
+Scenario with_onsets(std::vector<double> onsets, double duration = 2.0) {
+  Scenario s;
+  s.duration = duration;
+  for (double t : onsets) {
+    ftc::sim::Fault f;
+    f.onset = t;
+    s.faults.push_back(f);
   }
-  return acc.result();
+  return s;
+}
+
+// The trajectory through the metrics of one simulated lane: set up by the host's MetricRows,
+// accumulated by the kernel's MetricLanes (one lane, T = double), read back by MetricRows, as the
+// closed loop does (lanes/closed_loop.hpp, plants/lane_host.hpp). `limits`: the command's
+// [lo, hi] per actuator (else ± the scenario's saturation); `diverged_at`: the run stopped there.
+struct Limits {
+  double lo[2], hi[2];
+};
+Metrics measure(const Scenario& s, const SimulationOptions& o,
+                std::span<const Sample> samples = kTrajectory,
+                std::optional<Limits> limits = std::nullopt,
+                std::optional<double> diverged_at = std::nullopt) {
+  namespace detail = ftc::sim::detail;
+  detail::LaneTask lane;
+  lane.scenario = &s;
+  lane.options = &o;
+  if (limits)
+    for (int j = 0; j < 2; ++j) {
+      lane.lo[j] = limits->lo[j];
+      lane.hi[j] = limits->hi[j];
+    }
+  detail::LaneTask* lanes[1] = {&lane};
+  detail::MetricSetup<2> setup;
+  detail::MetricRows<2> rows;
+  rows.set(lanes, 1, limits.has_value(), setup);
+  detail::MetricLanes<double, 2, 2> acc(setup);
+  std::array<double, 2> u_prev{};
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const Sample& p = samples[k];
+    const std::array<double, 4> x = {p.e[0], p.e[1], 7.0, -7.0};  // X2 takes no part
+    const std::array<double, 2> u = {p.u[0], p.u[1]};
+    acc.sample(true, static_cast<std::int64_t>(k), 0.5, x, u, u_prev);
+    u_prev = u;
+  }
+  detail::MetricsOut out;
+  rows.outputs(out);
+  acc.write(0, setup.first_onset[0], out);
+  return rows.read(0, out, o, s, diverged_at);
+}
+
+Metrics accumulate(Window window, std::vector<Window> extra, std::vector<double> onsets) {
+  SimulationOptions o;
+  o.window = window;
+  o.extra_windows = std::move(extra);
+  return measure(with_onsets(std::move(onsets)), o);
 }
 
 }  // namespace
@@ -96,12 +144,10 @@ TEST(Metrics, WindowIsHalfOpen) {
 }
 
 TEST(Metrics, DivergedRunHasInfiniteErrorIntegralsInEveryWindow) {
-  MetricsAccumulator<2, 2> acc(0.5, Window{}, {Window{0.0, 1.0}}, {});
-  StateOf<2> x = StateOf<2>::Zero();
-  x[0] = 1.0;
-  acc.sample(0.0, x, Vec<2>::Ones());
-  acc.mark_diverged(0.5);
-  const Metrics& m = acc.result();
+  SimulationOptions o;
+  o.extra_windows = {Window{0.0, 1.0}};
+  const Sample first[] = {{0.0, {1.0, 0.0}, {1.0, 1.0}}};
+  const Metrics m = measure(with_onsets({}), o, first, std::nullopt, 0.5);
   constexpr double inf = std::numeric_limits<double>::infinity();
   EXPECT_TRUE(m.diverged);
   EXPECT_EQ(m.diverged_at, 0.5);
@@ -121,8 +167,13 @@ TEST(Metrics, LaneThatStoppedCountingKeepsItsSums) {
   EXPECT_EQ(e.abs, 7.0);
   const lane::ErrorTerms<double> d = lane::error_terms(0.5, 0.5 * 2.0, e);
   for (const bool counting : {false, true}) {
-    double ise = 1.0, iae = 2.0, itae = 3.0, max_abs_u = 0.5, tv = 0.25, peak = 1.0;
-    lane::add_error_terms<double>(counting, d, ise, iae, itae);
+    double max_abs_u = 0.5, tv = 0.25, peak = 1.0;
+    lane::WindowSums<double> w;
+    w.ise = 1.0;
+    w.iae = 2.0;
+    w.itae = 3.0;
+    lane::add_error_terms<double>(counting, d, w);
+    const double ise = w.ise, iae = w.iae, itae = w.itae;
     lane::add_max_abs_u<2, double>(counting, u, max_abs_u);
     lane::add_control_tv<2, double>(counting, u, u_prev, tv);
     lane::add_peak<double>(counting, std::sqrt(e.sq), peak);
@@ -422,16 +473,16 @@ TEST(Metrics, RecordSaysHowEachFieldCombinesOverScenarios) {
   EXPECT_EQ(over_scenarios(metric_field("control_tv"), std::vector<double>{1.0, 2.0}), 3.0);
   EXPECT_EQ(over_scenarios(metric_field("max_abs_u"), v), 2.0);
   EXPECT_EQ(over_scenarios(metric_field("peak_error_after_fault"), v), 2.0);
-  EXPECT_TRUE(std::isnan(
-      over_scenarios(metric_field("peak_error_after_fault"), std::vector<double>{nan})));
+  EXPECT_TRUE(
+      std::isnan(over_scenarios(metric_field("peak_error_after_fault"), std::vector<double>{nan})));
   EXPECT_THROW(metric_field("no_such_metric"), std::logic_error);
   // Every field of the tables is in the note under them with its unit, the control TV with its
   // definition; the others are not.
   const std::string note = ftc::sim::units_note(false);
   for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields)
-    EXPECT_EQ(note.find(ftc::sim::plain_label(f) + " in " + std::string(f.unit)) !=
-                  std::string::npos,
-              f.in_tables)
+    EXPECT_EQ(
+        note.find(ftc::sim::plain_label(f) + " in " + std::string(f.unit)) != std::string::npos,
+        f.in_tables)
         << f.name << ": " << note;
   EXPECT_EQ(over_scenarios(metric_field("saturation_fraction"), v), 2.75 / 3.0);  // the mean
   EXPECT_NE(note.find("control TV = Σ‖u_k − u_{k−1}‖ (chattering)"), std::string::npos) << note;
@@ -447,21 +498,13 @@ TEST(Metrics, WindowMetricsMatchHandComputedTrajectory) {
   //   2  1    1        4      2
   //   3  1.5  0.0625   5      2
   const auto run = [](Window w, double threshold, double tail, std::vector<double> onsets) {
-    ftc::sim::MetricContext<2> c;
-    c.duration = 2.0;
-    c.lo << -3.0, -2.0;
-    c.hi << 3.0, 2.0;
-    c.settings.settling_threshold = threshold;
-    c.settings.steady_state_tail = tail;
-    MetricsAccumulator<2, 2> acc(0.5, w, {Window{0.0, 1.0}}, std::move(onsets), c);
-    for (const Sample& s : kTrajectory) {
-      StateOf<2> x;
-      x << s.e[0], s.e[1], 7.0, -7.0;
-      Vec<2> u;
-      u << s.u[0], s.u[1];
-      acc.sample(s.t, x, u);
-    }
-    return acc.result();
+    SimulationOptions o;
+    o.window = w;
+    o.extra_windows = {Window{0.0, 1.0}};
+    o.metrics.settling_threshold = threshold;
+    o.metrics.steady_state_tail = tail;
+    return measure(with_onsets(std::move(onsets)), o, kTrajectory,
+                   Limits{{-3.0, -2.0}, {3.0, 2.0}});
   };
   const double nan = std::numeric_limits<double>::quiet_NaN(),
                inf = std::numeric_limits<double>::infinity();
@@ -488,7 +531,7 @@ TEST(Metrics, WindowMetricsMatchHandComputedTrajectory) {
   EXPECT_EQ(late.errors.control_energy, 4.5);
   EXPECT_EQ(late.errors.peak_command, 2.0);
   EXPECT_EQ(late.errors.saturation_fraction, 2.0 / 3.0);
-  EXPECT_EQ(late.errors.settling_time, 0.25);  // below 2 from the first sample after the fault
+  EXPECT_EQ(late.errors.settling_time, 0.25);       // below 2 from the first sample after the fault
   EXPECT_EQ(late.errors.steady_state_error, 0.25);  // the tail [1.5, inf): sample 3
   // Not below 0.2 by the window's end: +inf; no threshold, tail or fault: NaN.
   EXPECT_EQ(run(Window{}, 0.2, nan, {0.75}).errors.settling_time, inf);
@@ -497,21 +540,14 @@ TEST(Metrics, WindowMetricsMatchHandComputedTrajectory) {
   EXPECT_TRUE(std::isnan(none.errors.steady_state_error));
   EXPECT_TRUE(std::isnan(run(Window{}, 0.8, nan, {}).errors.settling_time));
   // Without limits no sample is at one.
-  MetricsAccumulator<2, 2> unlimited(0.5, Window{}, {}, {});
-  for (const Sample& s : kTrajectory) {
-    StateOf<2> xs;
-    xs << s.e[0], s.e[1], 0.0, 0.0;
-    Vec<2> u;
-    u << s.u[0], s.u[1];
-    unlimited.sample(s.t, xs, u);
-  }
-  EXPECT_EQ(unlimited.result().errors.saturation_fraction, 0.0);
+  EXPECT_EQ(measure(with_onsets({}), SimulationOptions{}).errors.saturation_fraction, 0.0);
   // A diverged run: every window metric +inf.
-  MetricsAccumulator<2, 2> d(0.5, Window{}, {Window{0.0, 1.0}}, {0.75});
-  d.mark_diverged(0.5);
+  SimulationOptions o;
+  o.extra_windows = {Window{0.0, 1.0}};
+  const Metrics d = measure(with_onsets({0.75}), o, kTrajectory, std::nullopt, 0.5);
   for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields)
     if (f.scope == ftc::sim::MetricScope::window) {
-      EXPECT_EQ(d.result().errors.*f.in_window, inf) << f.name;
-      EXPECT_EQ(d.result().extra[0].*f.in_window, inf) << f.name;
+      EXPECT_EQ(d.errors.*f.in_window, inf) << f.name;
+      EXPECT_EQ(d.extra[0].*f.in_window, inf) << f.name;
     }
 }

@@ -40,10 +40,11 @@ namespace law {
 template <class T, int N>
 using V = std::array<T, N>;
 
-// One sample's measurements as a law reads them.
+// One sample's measurements as a law reads them, at t = k·Ts.
 template <class T, int N>
 struct Sample {
   V<T, N> X1, X2, a, f;  // f is read by the model-based laws only
+  double t = 0.0;        // read by a runtime Controller only (closed_loop.hpp's ObjectLaw)
 };
 
 // W values of one lane-dependent gain, one per lane's configuration.

@@ -10,8 +10,10 @@
 namespace ftc::sim::detail {
 inline namespace FTC_ISA_NS {
 
+// Out of line, as it is rare. x by value: an address passed to it would make the caller's state
+// (the closed loop's X) addressable, and its compiler would then keep it in memory throughout.
 template <class T>
-[[gnu::noinline]] void anchor_sincos(const T& x, T& s, T& c) {
+[[gnu::noinline]] void anchor_sincos(T x, T& s, T& c) {
   lane::sincos(x, s, c);
 }
 

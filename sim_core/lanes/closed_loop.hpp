@@ -1,25 +1,18 @@
 #pragma once
-// The closed loop (SPEC §4) for W simulations of one plant in lockstep, one per lane of T, with
-// the control law Law (controllers/laws.hpp), written once for every plant. A plant gives its
-// dynamics as lane code, PlantLanes<P> (plants/<plant>_lanes.cpp), the way controllers/laws.hpp
-// gives the laws: the constants per lane (the PackSetup's truth and model rows, read once) apart
-// from what changes (the state X, which the loop owns, and the plant's scratch space, such as
-// angle trackers). With T = double it is the scalar simulator: AnyPlant::simulate() and the SIMD
-// lanes run this same code, which is why a lane reproduces the scalar run to the last bit.
+// The closed loop of SPEC §4, written once: for W simulations of one plant in lockstep, one per
+// lane of T, with a control law (controllers/laws.hpp) and the plant's lane code. Everything
+// that simulates runs it: the batch kernels (T a SIMD batch, every plant, every instruction
+// set), AnyPlant::simulate (T = double, one lane of the scalar kernel) and the runtime's
+// sim::simulate with a Controller object (one lane, the controller as the law: ObjectLaw). So a
+// lane reproduces the scalar run, and a runtime controller a tuning run's lane, to the last bit.
+// ClosedLoop::step() advances one sample (the acceleration sensor, the law, the metrics, the
+// faults and limits, RK4); run_closed_loop() calls it for every sample of a pack.
 //
-//   per sample k, t = k Ts, for every lane:
-//     a_k = f(X) + G(X)·applied(t, u_{k-1}) + Δ(t)   acceleration sensor, before the new command
-//     u_k = law(X1, X2, a_k, f_model(X), G⁺_model(X))
-//     substeps × RK4 with u_k held; faults and Δ at each stage time
-//   with an actuator model (PackSetup::actuator, docs/model.md) the plant is driven by the
-//   actuators' output u_a instead of the held command: u_a(t_k) in a_k and at each stage, u_a
-//   stepped on the half-step grid towards the command clamped to the actuator's range
-//     a lane with |X_i| > 1e6, inf or NaN has diverged: it stops counting, restarts from X(0)
-//     with a reset controller (so that it takes no slow paths), and the host ignores it
-//   the pack ends when every lane has diverged or all samples are done
-//
-// PlantLanes<P> gives the plant's shape, static constexpr int N, M, and for the lane type T a
-// class Lanes<T> with
+// A plant gives its dynamics as lane code, PlantLanes<P> (plants/<plant>_lanes.cpp), the way
+// controllers/laws.hpp gives the laws: the constants per lane (the PackSetup's truth and model
+// rows, read once) apart from what changes (the state X, which the loop owns, and the plant's
+// scratch space, such as angle trackers). PlantLanes<P> gives the plant's shape, static
+// constexpr int N, M, and for the lane type T a class Lanes<T> with
 //   static constexpr bool kConstantInput;
 //   static constexpr bool kTrimmed;   actuators about an operating point (PackSetup::u0, lo, hi)
 //   Lanes(const PackSetup<N, M>&)                       the constants of every lane
@@ -47,54 +40,171 @@ inline namespace FTC_ISA_NS {
 template <class P>
 struct PlantLanes;
 
-template <class T, class P, template <class, int, int> class Law, bool SharedInputs, int N, int M>
-void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin) {
-  using Plant = typename PlantLanes<P>::template Lanes<T>;
-  static_assert(PlantLanes<P>::N == N && PlantLanes<P>::M == M);
-  constexpr int S2 = 2 * N;
-  constexpr bool kConstantInput = Plant::kConstantInput;
-  constexpr int W = lane::kWidth<T>;
+// The closed loop of a pack: the constants of its lanes (from the PackSetup) and the loop's state
+// (X, the held command, the actuators' output, which lanes still count), over the plant's lane
+// code, the control law and the metrics' sums it is given. step() advances every lane by one
+// sample, as MuJoCo's mj_step advances its data by one step; run_closed_loop() calls it for
+// every sample. Plant is a PlantLanes<P>::Lanes<T> (or ObjectPlantLanes); Law has
+// step(law::Sample, G⁺, u) and reset_lanes(keep) (controllers/laws.hpp, or ObjectLaw).
+// Every member function is inlined and the loop's address is never taken, so that the compiler
+// keeps its state and constants in registers, as it would local variables (a loop object that
+// escaped cost the scalar kernels 3 to 6 % in reloads).
+template <class T, class Plant, class Law, bool SharedInputs, int N, int M>
+class ClosedLoop {
+  static constexpr int S2 = 2 * N;
+  static constexpr bool kConstantInput = Plant::kConstantInput;
+  static constexpr bool kTrimmed = Plant::kTrimmed;
+  static constexpr int W = lane::kWidth<T>;
+  static_assert(W <= kMaxLanes);
   using Mask = lane::Mask<T>;
   using VN = std::array<T, N>;
   using VM = std::array<T, M>;
   using VS = std::array<T, S2>;
   using Exo = ExoRows<N, M>;
-  static_assert(W <= kMaxLanes);
+  // Row r of an instant's exogenous inputs (ExoRows): one value for every lane, or each lane's.
+  static constexpr int kStride = Exo::stride(SharedInputs, W);
 
-  const ControllerConfig* configs[W];
-  for (int l = 0; l < W; ++l) configs[l] = su.configs[l < su.lanes ? l : 0];
-  Law<T, N, M> law(configs, su.Ts);
+ public:
+  // The values of an instant's inputs, then the three instants (start, midpoint, end) of a
+  // substep and the substeps of a sample: sample i of a block of inputs is at
+  // exo + i · kSample(substeps).
+  static constexpr int kInstant = Exo::kCount * kStride;
+  static constexpr int sample_stride(int substeps) { return substeps * 3 * kInstant; }
 
-  const auto row = [](const double* r) { return lane::load_lanes<T>(r); };
-  // Row r of an instant's exogenous inputs (ExoRows): one value for every lane, or each lane's own.
-  constexpr int kStride = Exo::stride(SharedInputs, W);
-  constexpr int kInstant = Exo::kCount * kStride;
-  const auto input = [](const double* e, int r) FTC_HOT_LAMBDA {
+  FTC_HOT_INLINE ClosedLoop(const PackSetup<N, M>& su, Plant& plant, Law& law,
+                            MetricLanes<T, N, M>& metrics)
+      : su_(su),
+        plant_(plant),
+        law_(law),
+        metrics_(metrics),
+        sat_(row(su.saturation)),
+        Ts_(su.Ts),
+        hv_(su.Ts / su.substeps),
+        h2_(0.5 * (su.Ts / su.substeps)),
+        h6_((su.Ts / su.substeps) / 6.0),
+        S_(su.substeps),
+        act_(su.actuator),
+        act_gain_(row(su.act_gain)),
+        act_step_(row(su.act_step)),
+        act_neg_(-act_step_) {
+    if constexpr (kTrimmed)
+      for (int j = 0; j < M; ++j) {
+        u0_[j] = row(su.u0[j]);
+        lo_u_[j] = row(su.lo[j]);
+        hi_u_[j] = row(su.hi[j]);
+      }
+    for (int i = 0; i < S2; ++i) x0_[i] = row(su.x0[i]);
+    if constexpr (kConstantInput)
+      for (int i = 0; i < N * M; ++i) G_[i] = T(su.G[i]);
+    for (int j = 0; j < M; ++j) {
+      limit_lo_[j] = row(su.metrics.limit_lo[j]);
+      limit_hi_[j] = row(su.metrics.limit_hi[j]);
+    }
+    x_ = x0_;
+    u_prev_.fill(T(0.0));
+    ua_.fill(T(0.0));
+    live_count_ = su.lanes;
+    double c[W];
+    for (int l = 0; l < W; ++l) {
+      live_[l] = l < su.lanes;
+      c[l] = live_[l] ? 0.0 : 1.0;
+      samples_[l] = su.samples;
+      diverged_[l] = false;
+      diverged_at_[l] = 0.0;
+    }
+    counting_ = lane::load_lanes<T>(c) == T(0.0);
+  }
+
+  // Whether some lane still counts (the others have diverged).
+  FTC_HOT_INLINE bool running() const { return live_count_ > 0; }
+
+  // Sample k of every lane, t = k·Ts, `e` its exogenous inputs (sample_stride values):
+  //   a_k = f(X) + G(X)·applied(t, u_{k-1}) + Δ(t)   the acceleration sensor, before the command
+  //   u_k = law(X1, X2, a_k, f_model(X), G⁺_model(X))
+  //   the metrics of (t, X, u_k)
+  //   substeps × RK4 with u_k held; faults and Δ at each stage time
+  // With an actuator model (PackSetup::actuator, docs/model.md) the plant is driven by the
+  // actuators' output u_a instead of the held command: u_a(t_k) in a_k and at each stage, u_a
+  // stepped on the half-step grid towards the command clamped to the actuator's range. A lane
+  // with |X_i| > 1e6, inf or NaN has diverged: it stops counting, restarts from X(0) with a reset
+  // controller (so that it takes no slow paths), and its results are those at that step. `o`
+  // receives X(t_k), u_k, u_a(t_k) and the lanes that diverged in this step.
+  FTC_HOT_INLINE void step(std::int64_t k, const double* e, SampleLanes<N, M>& o) {
+    VN f, f_model;
+    plant_.drift(x_, f, su_.mismatch ? &f_model : nullptr);
+    // The plant's input now: the actuators' output, or the command held since t_{k-1}.
+    const VN a = accel(f, forcing(e, act_ ? ua_ : u_prev_));
+    law::Sample<T, N> m;
+    m.t = static_cast<double>(k) * Ts_;
+    for (int r = 0; r < N; ++r) {
+      m.X1[r] = x_[r];
+      m.X2[r] = x_[N + r];
+    }
+    m.a = a;
+    m.f = su_.mismatch ? f_model : f;
+    VM u;
+    if constexpr (kConstantInput) {
+      law_.step(m, su_.G_pinv, u);
+    } else {
+      T G_pinv[M * N];
+      plant_.pinv(x_, G_pinv);
+      law_.step(m, static_cast<const T*>(G_pinv), u);
+    }
+    for (int r = 0; r < S2; ++r) lane::store(x_[r], o.x[r]);
+    for (int r = 0; r < M; ++r) lane::store(u[r], o.u[r]);
+    metrics_.sample(counting_, k, Ts_, x_, u, u_prev_);
+    if (act_)
+      substeps<true>(e, f, u, o);
+    else
+      substeps<false>(e, f, u, o);
+    u_prev_ = u;
+
+    Mask inside = lane::abs(x_[0]) <= T(1e6);  // false for NaN
+    for (int r = 1; r < S2; ++r) inside = inside & (lane::abs(x_[r]) <= T(1e6));
+    if (lane::all(inside)) [[likely]] {
+      for (int l = 0; l < W; ++l) o.diverged[l] = false;
+      return;
+    }
+    // Lanes that left the bounds: those still counting end here (their final state is this
+    // one), and every such lane restarts from X(0) with a reset controller.
+    lane::store_mask(lane::mask_not(inside), o.diverged);
+    for (int l = 0; l < W; ++l) {
+      if (!o.diverged[l] || !live_[l]) continue;
+      live_[l] = false;
+      --live_count_;
+      samples_[l] = k + 1;
+      diverged_[l] = true;
+      diverged_at_[l] = static_cast<double>(k) * Ts_ + Ts_;
+      for (int r = 0; r < S2; ++r) x_end_[r][l] = lane::lane_of(x_[r], l);
+    }
+    counting_ = counting_ & inside;
+    for (int r = 0; r < S2; ++r) x_[r] = lane::select(inside, x_[r], x0_[r]);
+    for (int r = 0; r < M; ++r) u_prev_[r] = lane::select(inside, u_prev_[r], T(0.0));
+    if (act_)
+      for (int r = 0; r < M; ++r) ua_[r] = lane::select(inside, ua_[r], T(0.0));
+    law_.reset_lanes(inside);
+  }
+
+  // Each lane's end: its samples, final state, divergence and metrics.
+  FTC_HOT_INLINE void finish(PackFinal<N, M>& fin) const {
+    for (int l = 0; l < W; ++l) {
+      fin.samples[l] = samples_[l];
+      fin.diverged[l] = diverged_[l];
+      fin.diverged_at[l] = diverged_at_[l];
+      for (int r = 0; r < S2; ++r)
+        fin.x[r][l] = live_[l] || l >= su_.lanes ? lane::lane_of(x_[r], l) : x_end_[r][l];
+      if (l < su_.lanes) metrics_.write(l, su_.metrics.first_onset[l], fin.metrics);
+    }
+  }
+
+ private:
+  FTC_HOT_INLINE static T row(const double* r) { return lane::load_lanes<T>(r); }
+  FTC_HOT_INLINE static T input(const double* e, int r) {
     if constexpr (SharedInputs)
       return T(e[r]);
     else
       return lane::load_lanes<T>(e + r * kStride);
-  };
-  Plant plant(su);
-  const T sat = row(su.saturation);
-  constexpr bool kTrimmed = Plant::kTrimmed;
-  std::array<T, M> u0, lo_u, hi_u;
-  if constexpr (kTrimmed)
-    for (int j = 0; j < M; ++j) {
-      u0[j] = row(su.u0[j]);
-      lo_u[j] = row(su.lo[j]);
-      hi_u[j] = row(su.hi[j]);
-    }
-  VS x0;
-  for (int i = 0; i < S2; ++i) x0[i] = row(su.x0[i]);
-  T G[N * M];
-  if constexpr (kConstantInput)
-    for (int i = 0; i < N * M; ++i) G[i] = T(su.G[i]);
-
-  const double Ts = su.Ts;
-  const double h = Ts / su.substeps;
-  const T hv(h), h2(0.5 * h), h6(h / 6.0);
-  const int S = su.substeps;
+  }
 
   // dX2/dt = f(X) + G u + Δ(t), u the command u_d after the faults and saturation at one
   // instant. The applied u (and with a constant G the forcing G u) and Δ depend on the instant
@@ -105,48 +215,48 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
     VN dist;
     VM u;
   };
-  const auto forcing = [&](const double* e, const VM& u_d) FTC_HOT_LAMBDA -> Forcing {
+  FTC_HOT_INLINE Forcing forcing(const double* e, const VM& u_d) const {
     Forcing F;
     for (int j = 0; j < M; ++j) {
       if constexpr (kTrimmed) {
         // The faults act on the physical output u0 + u_d; then the saturation and the limits.
         const T v =
-            (input(e, Exo::kGain + j) * (u0[j] + u_d[j]) + input(e, Exo::kOffset + j)) - u0[j];
-        const T lo = lane::select(v < -sat, -sat, v);
-        const T s = lane::select(lo > sat, sat, lo);
-        const T l = lane::select(s < lo_u[j], lo_u[j], s);
-        F.u[j] = lane::select(l > hi_u[j], hi_u[j], l);
+            (input(e, Exo::kGain + j) * (u0_[j] + u_d[j]) + input(e, Exo::kOffset + j)) - u0_[j];
+        const T lo = lane::select(v < -sat_, -sat_, v);
+        const T s = lane::select(lo > sat_, sat_, lo);
+        const T l = lane::select(s < lo_u_[j], lo_u_[j], s);
+        F.u[j] = lane::select(l > hi_u_[j], hi_u_[j], l);
       } else {
         const T v = input(e, Exo::kGain + j) * u_d[j] + input(e, Exo::kOffset + j);
-        const T lo = lane::select(v < -sat, -sat, v);
-        F.u[j] = lane::select(lo > sat, sat, lo);
+        const T lo = lane::select(v < -sat_, -sat_, v);
+        F.u[j] = lane::select(lo > sat_, sat_, lo);
       }
     }
     for (int i = 0; i < N; ++i) {
       if constexpr (kConstantInput) {
-        T g = G[i * M] * F.u[0];
-        for (int j = 1; j < M; ++j) g = g + G[i * M + j] * F.u[j];
+        T g = G_[i * M] * F.u[0];
+        for (int j = 1; j < M; ++j) g = g + G_[i * M + j] * F.u[j];
         F.Gu[i] = g;
       }
       F.dist[i] = input(e, Exo::kDist + i);
     }
     return F;
-  };
-  // The acceleration at the state of the last drift() call.
-  const auto accel = [&](const VN& f, const Forcing& F) FTC_HOT_LAMBDA -> VN {
+  }
+  // The acceleration at the state of the plant's last drift() call.
+  FTC_HOT_INLINE VN accel(const VN& f, const Forcing& F) {
     VN a;
     if constexpr (kConstantInput) {
       for (int i = 0; i < N; ++i) a[i] = (f[i] + F.Gu[i]) + F.dist[i];
     } else {
       VN Gu;
-      plant.input(F.u, Gu);
+      plant_.input(F.u, Gu);
       for (int i = 0; i < N; ++i) a[i] = (f[i] + Gu[i]) + F.dist[i];
     }
     return a;
-  };
-  const auto deriv = [&](const VS& x, const Forcing& F) FTC_HOT_LAMBDA -> VS {
+  }
+  FTC_HOT_INLINE VS deriv(const VS& x, const Forcing& F) {
     VN f;
-    plant.drift(x, f, nullptr);
+    plant_.drift(x, f, nullptr);
     const VN a = accel(f, F);
     VS d;
     for (int i = 0; i < N; ++i) {
@@ -154,261 +264,181 @@ void run_closed_loop(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<
       d[N + i] = a[i];
     }
     return d;
-  };
-
-  VS x = x0;
-  VM u_prev;
-  u_prev.fill(T(0.0));
-  bool live[W];  // lanes still counting
-  for (int l = 0; l < W; ++l) live[l] = l < su.lanes;
-  int live_count = su.lanes;
-  for (int l = 0; l < W; ++l) {
-    fin.samples[l] = su.samples;
-    fin.diverged[l] = false;
   }
-
-  // The metrics' sums (lanes/metric_lanes.hpp), per window and fault onset.
-  const int nw = su.kernel_metrics ? su.windows : 0, no = su.kernel_metrics ? su.onsets : 0;
-  T w0[kMaxWindows], w1[kMaxWindows], ise[kMaxWindows], iae[kMaxWindows], itae[kMaxWindows];
-  for (int i = 0; i < nw; ++i) {
-    w0[i] = row(su.window[i][0]);
-    w1[i] = row(su.window[i][1]);
-    ise[i] = iae[i] = itae[i] = T(0.0);
-  }
-  T onset[kMaxOnsets], peak[kMaxOnsets];
-  for (int i = 0; i < no; ++i) {
-    onset[i] = row(su.onset[i]);
-    peak[i] = T(std::numeric_limits<double>::quiet_NaN());
-  }
-  T max_abs_u(0.0), control_tv(0.0);
-  // The command, settling and steady-state sums per window (the steady-state tail's start per
-  // window and lane, NaN for a lane without a tail; the settling threshold² per lane, NaN
-  // without one).
-  lane::WindowSums<T> sums[kMaxWindows];
-  T tail0[kMaxWindows];
-  for (int i = 0; i < nw; ++i) tail0[i] = row(su.tail_start[i]);
-  std::array<T, M> limit_lo, limit_hi;
-  for (int j = 0; j < M; ++j) {
-    limit_lo[j] = row(su.limit_lo[j]);
-    limit_hi[j] = row(su.limit_hi[j]);
-  }
-  const T first_fault = row(su.first_onset), threshold_sq = row(su.threshold_sq);
-  const Mask settling_lane = threshold_sq == threshold_sq;  // not NaN
-  const bool settling = su.kernel_metrics && su.any_settling;
-  const bool need_en = no > 0 || (su.kernel_metrics && su.any_tail);
-  Mask counting = T(0.0) == T(0.0);
-  {
-    double c[W];
-    for (int l = 0; l < W; ++l) c[l] = live[l] ? 0.0 : 1.0;
-    counting = lane::load_lanes<T>(c) == T(0.0);
-  }
-  const T Tsv(Ts);
-
-  // The actuator model: its output u_a per actuator and lane (0 at t = 0), and its update over a
-  // half step, u_a ← u_a + clamp((u_c − u_a)·gain, ±max_step) (ftc/sim/scenario.hpp's
-  // ActuatorSteps), towards the command u_c clamped to [limit_lo, limit_hi].
-  const bool act = su.actuator;
-  const T act_gain = row(su.act_gain), act_step = row(su.act_step), act_neg = -act_step;
-  VM ua;
-  ua.fill(T(0.0));
-  const auto lag = [&](const VM& from, const VM& uc) FTC_HOT_LAMBDA -> VM {
+  // The actuator model's update over a half step, u_a ← u_a + clamp((u_c − u_a)·gain,
+  // ±max_step) (ftc/sim/scenario.hpp's ActuatorSteps), towards the command u_c.
+  FTC_HOT_INLINE VM lag(const VM& from, const VM& uc) const {
     VM to;
     for (int j = 0; j < M; ++j) {
-      T d = (uc[j] - from[j]) * act_gain;
-      d = lane::select(d > act_step, act_step, d);
-      d = lane::select(d < act_neg, act_neg, d);
+      T d = (uc[j] - from[j]) * act_gain_;
+      d = lane::select(d > act_step_, act_step_, d);
+      d = lane::select(d < act_neg_, act_neg_, d);
       to[j] = from[j] + d;
     }
     return to;
-  };
+  }
 
+  // The substeps of one sample, compiled twice: with the actuator model (A), and without it
+  // exactly as before it existed (no test or copy in the loop of a run without one). f: f(X) at
+  // the sample's state, known from the acceleration sensor.
+  template <bool A>
+  FTC_HOT_INLINE void substeps(const double* e, const VN& f, const VM& u, SampleLanes<N, M>& o) {
+    [[maybe_unused]] VM uc;  // the command within the actuator's range
+    if constexpr (A)
+      for (int r = 0; r < M; ++r) {
+        lane::store(ua_[r], o.ua[r]);
+        const T c = lane::select(u[r] < limit_lo_[r], limit_lo_[r], u[r]);
+        uc[r] = lane::select(c > limit_hi_[r], limit_hi_[r], c);
+      }
+    // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
+    const VN a1 = accel(f, forcing(e, A ? ua_ : u));
+    VS k1;
+    for (int r = 0; r < N; ++r) {
+      k1[r] = x_[N + r];
+      k1[N + r] = a1[r];
+    }
+    const T hv(hv_), h2(h2_), h6(h6_);
+    for (int j = 0; j < S_; ++j) {
+      const double* ej = e + j * 3 * kInstant;
+      if constexpr (A) {
+        if (j > 0) k1 = deriv(x_, forcing(ej, ua_));
+        const VM ua_mid = lag(ua_, uc);
+        const VM ua_end = lag(ua_mid, uc);
+        const Forcing mid = forcing(ej + kInstant, ua_mid);
+        const Forcing end = forcing(ej + 2 * kInstant, ua_end);
+        sim::rk4_advance(
+            x_, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
+            [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
+        ua_ = ua_end;
+      } else {
+        if (j > 0) k1 = deriv(x_, forcing(ej, u));
+        const Forcing mid = forcing(ej + kInstant, u);
+        const Forcing end = forcing(ej + 2 * kInstant, u);
+        sim::rk4_advance(
+            x_, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
+            [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
+      }
+    }
+  }
+
+  const PackSetup<N, M>& su_;
+  Plant& plant_;
+  Law& law_;
+  MetricLanes<T, N, M>& metrics_;
+  T sat_;
+  std::array<T, M> u0_, lo_u_, hi_u_;  // kTrimmed: the operating point and the deviation's range
+  std::array<T, M> limit_lo_, limit_hi_;
+  T G_[N * M];  // kConstantInput
+  const double Ts_, hv_, h2_, h6_;
+  const int S_;
+  const bool act_;
+  const T act_gain_, act_step_, act_neg_;
+  VS x0_, x_;
+  VM u_prev_, ua_;
+  bool live_[W];  // lanes still counting
+  int live_count_ = 0;
+  Mask counting_;
+  std::int64_t samples_[W];
+  bool diverged_[W];
+  double diverged_at_[W];
+  double x_end_[S2][W];
+};
+
+// The loop: every sample of the pack through ClosedLoop::step, the inputs fetched and the
+// samples handed to the host a block at a time; the pack ends when every lane has diverged or
+// all samples are done.
+template <class T, bool SharedInputs, class MakePlant, class MakeLaw, int N, int M>
+void run_closed_loop(const PackSetup<N, M>& su, MakePlant&& make_plant, MakeLaw&& make_law,
+                     PackHost<N, M>& host, PackFinal<N, M>& fin) {
+  using Plant = decltype(make_plant());
+  using Law = decltype(make_law());
+  using Loop = ClosedLoop<T, Plant, Law, SharedInputs, N, M>;
+  Plant plant = make_plant();
+  Law law = make_law();
+  MetricLanes<T, N, M> metrics(su.metrics);
+  Loop loop(su, plant, law, metrics);
+  const int stride = Loop::sample_stride(su.substeps);
   SampleLanes<N, M> out[32];
   const int block = su.block < 32 ? su.block : 32;
   std::int64_t k = 0;
-  while (k < su.samples && live_count > 0) {
+  while (k < su.samples && loop.running()) {
     const int n = static_cast<int>(su.samples - k < block ? su.samples - k : block);
     const double* exo = host.inputs(k, n);
-    for (int i = 0; i < n; ++i, ++k) {
-      const double* e = exo + i * S * 3 * kInstant;
-      VN f, f_model;
-      plant.drift(x, f, su.mismatch ? &f_model : nullptr);
-      // The plant's input now: the actuators' output, or the command held since t_{k-1}.
-      const VN a = accel(f, forcing(e, act ? ua : u_prev));
-      law::Sample<T, N> m;
-      for (int r = 0; r < N; ++r) {
-        m.X1[r] = x[r];
-        m.X2[r] = x[N + r];
-      }
-      m.a = a;
-      m.f = su.mismatch ? f_model : f;
-      VM u;
-      if constexpr (kConstantInput) {
-        law.step(m, su.G_pinv, u);
-      } else {
-        T G_pinv[M * N];
-        plant.pinv(x, G_pinv);
-        law.step(m, static_cast<const T*>(G_pinv), u);
-      }
-      SampleLanes<N, M>& o = out[i];
-      for (int r = 0; r < S2; ++r) lane::store(x[r], o.x[r]);
-      for (int r = 0; r < M; ++r) lane::store(u[r], o.u[r]);
-      if (su.kernel_metrics) {
-        // The accumulators of lanes/metric_lanes.hpp, called as MetricsAccumulator::sample
-        // calls them, lanes that have diverged masked out.
-        const double td = static_cast<double>(k) * Ts;
-        const T t(td);
-        const lane::ErrorNorms<T> en2 = lane::error_norms<N, T>(x);
-        const lane::ErrorTerms<T> terms = lane::error_terms(Tsv, T(Ts * td), en2);
-        const lane::CommandNorms<T> cn = lane::command_norms<M, T>(u);
-        const T energy_term = Tsv * cn.sq;
-        const Mask saturated = lane::at_limit<M, T>(u, limit_lo, limit_hi);
-        const T en = need_en ? lane::sqrt(en2.sq) : T(0.0);
-        Mask above = settling_lane, after_fault = settling_lane;
-        if (settling) {
-          above = en2.sq >= threshold_sq;
-          after_fault = settling_lane & (t >= first_fault);
-        }
-        for (int wi = 0; wi < nw; ++wi) {
-          const Mask in = counting & lane::in_window(t, w0[wi], w1[wi]);
-          lane::add_error_terms<T>(in, terms, ise[wi], iae[wi], itae[wi]);
-          lane::add_command<T>(in, energy_term, cn.max_abs, saturated, sums[wi]);
-          if (settling) lane::add_settling<T>(in & after_fault, above, t, sums[wi].settled_from);
-          if (su.any_tail) lane::add_tail<T>(in & (t >= tail0[wi]), en, sums[wi]);
-        }
-        lane::add_max<T>(counting, cn.max_abs, max_abs_u);
-        if (k > 0) lane::add_control_tv<M, T>(counting, u, u_prev, control_tv);
-        for (int fi = 0; fi < no; ++fi)
-          lane::add_peak<T>(counting & (t >= onset[fi]), en, peak[fi]);
-      }
-
-      // The substeps, compiled twice: with the actuator model, and without it exactly as before
-      // it existed (no test or copy in the loop of a run without one).
-      const auto substeps = [&](auto with_actuator) FTC_HOT_LAMBDA {
-        constexpr bool A = decltype(with_actuator)::value;
-        [[maybe_unused]] VM uc;  // the command within the actuator's range
-        if constexpr (A)
-          for (int r = 0; r < M; ++r) {
-            lane::store(ua[r], o.ua[r]);
-            const T c = lane::select(u[r] < limit_lo[r], limit_lo[r], u[r]);
-            uc[r] = lane::select(c > limit_hi[r], limit_hi[r], c);
-          }
-        // Stage 1 of the first substep is at (t, X): f(X) and the inputs are already known.
-        const VN a1 = accel(f, forcing(e, A ? ua : u));
-        VS k1;
-        for (int r = 0; r < N; ++r) {
-          k1[r] = x[N + r];
-          k1[N + r] = a1[r];
-        }
-        for (int j = 0; j < S; ++j) {
-          const double* ej = e + j * 3 * kInstant;
-          if constexpr (A) {
-            if (j > 0) k1 = deriv(x, forcing(ej, ua));
-            const VM ua_mid = lag(ua, uc);
-            const VM ua_end = lag(ua_mid, uc);
-            const Forcing mid = forcing(ej + kInstant, ua_mid);
-            const Forcing end = forcing(ej + 2 * kInstant, ua_end);
-            sim::rk4_advance(
-                x, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
-                [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
-            ua = ua_end;
-          } else {
-            if (j > 0) k1 = deriv(x, forcing(ej, u));
-            const Forcing mid = forcing(ej + kInstant, u);
-            const Forcing end = forcing(ej + 2 * kInstant, u);
-            sim::rk4_advance(
-                x, k1, h2, hv, h6, [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, mid); },
-                [&](const VS& s) FTC_HOT_LAMBDA { return deriv(s, end); });
-          }
-        }
-      };
-      if (act)
-        substeps(std::true_type{});
-      else
-        substeps(std::false_type{});
-      u_prev = u;
-
-      Mask inside = lane::abs(x[0]) <= T(1e6);  // false for NaN
-      for (int r = 1; r < S2; ++r) inside = inside & (lane::abs(x[r]) <= T(1e6));
-      if (lane::all(inside)) [[likely]] {
-        for (int l = 0; l < W; ++l) o.diverged[l] = false;
-        continue;
-      }
-      // Lanes that left the bounds: those still counting end here (their final state is this
-      // one), and every such lane restarts from X(0) with a reset controller.
-      lane::store_mask(lane::mask_not(inside), o.diverged);
-      for (int l = 0; l < W; ++l) {
-        if (!o.diverged[l] || !live[l]) continue;
-        live[l] = false;
-        --live_count;
-        fin.samples[l] = k + 1;
-        fin.diverged[l] = true;
-        fin.diverged_at[l] = static_cast<double>(k) * Ts + Ts;
-        for (int r = 0; r < S2; ++r) fin.x[r][l] = lane::lane_of(x[r], l);
-      }
-      counting = counting & inside;
-      for (int r = 0; r < S2; ++r) x[r] = lane::select(inside, x[r], x0[r]);
-      for (int r = 0; r < M; ++r) u_prev[r] = lane::select(inside, u_prev[r], T(0.0));
-      if (act)
-        for (int r = 0; r < M; ++r) ua[r] = lane::select(inside, ua[r], T(0.0));
-      law.reset_lanes(inside);
-    }
+    for (int i = 0; i < n; ++i, ++k) loop.step(k, exo + i * stride, out[i]);
     if (su.want_samples) host.samples(k - n, n, out);
   }
-  // Each sum to its field's slot of the metrics record (ftc/sim/metrics_record.hpp).
-  constexpr std::size_t kIse = metric_slot("ise"), kIae = metric_slot("iae"),
-                        kItae = metric_slot("itae"), kMaxAbsU = metric_slot("max_abs_u"),
-                        kControlTv = metric_slot("control_tv"),
-                        kPeak = metric_slot("peak_error_after_fault"),
-                        kEnergy = metric_slot("control_energy"),
-                        kPeakCommand = metric_slot("peak_command"),
-                        kSaturation = metric_slot("saturation_fraction"),
-                        kSettling = metric_slot("settling_time"),
-                        kSteady = metric_slot("steady_state_error");
-  for (int l = 0; l < W; ++l) {
-    for (int wi = 0; wi < nw; ++wi) {
-      fin.window_field[kIse][wi][l] = lane::lane_of(ise[wi], l);
-      fin.window_field[kIae][wi][l] = lane::lane_of(iae[wi], l);
-      fin.window_field[kItae][wi][l] = lane::lane_of(itae[wi], l);
-      const lane::WindowSums<T>& s = sums[wi];
-      lane::WindowSums<double> one;
-      one.energy = lane::lane_of(s.energy, l);
-      one.peak = lane::lane_of(s.peak, l);
-      one.saturated = lane::lane_of(s.saturated, l);
-      one.samples = lane::lane_of(s.samples, l);
-      one.settled_from = lane::lane_of(s.settled_from, l);
-      one.tail_sum = lane::lane_of(s.tail_sum, l);
-      one.tail_samples = lane::lane_of(s.tail_samples, l);
-      const lane::WindowMetrics w = lane::finish_window(one, su.first_onset[l]);
-      fin.window_field[kEnergy][wi][l] = w.control_energy;
-      fin.window_field[kPeakCommand][wi][l] = w.peak_command;
-      fin.window_field[kSaturation][wi][l] = w.saturation_fraction;
-      fin.window_field[kSettling][wi][l] = w.settling_time;
-      fin.window_field[kSteady][wi][l] = w.steady_state_error;
-    }
-    for (int fi = 0; fi < no; ++fi) fin.fault_field[kPeak][fi][l] = lane::lane_of(peak[fi], l);
-    fin.run_field[kMaxAbsU][l] = lane::lane_of(max_abs_u, l);
-    fin.run_field[kControlTv][l] = lane::lane_of(control_tv, l);
-  }
-  for (int l = 0; l < W; ++l)
-    if (live[l] || l >= su.lanes)
-      for (int r = 0; r < S2; ++r) fin.x[r][l] = lane::lane_of(x[r], l);
+  loop.finish(fin);
 }
 
-// The kernel of one instruction set: the law and the kind of inputs chosen once per pack.
-template <class T, class P, template <class, int, int> class Law, int N, int M>
-void run_law(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin) {
-  if (su.shared_inputs)
-    run_closed_loop<T, P, Law, true>(su, host, fin);
-  else
-    run_closed_loop<T, P, Law, false>(su, host, fin);
-}
-
+// The pack with the law of its controller type (chosen once per pack) and the kind of inputs.
 template <class T, class P, int N, int M>
 void run_pack(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin) {
+  using Plant = typename PlantLanes<P>::template Lanes<T>;
+  const auto make_plant = [&] { return Plant(su); };
+  const ControllerConfig* configs[lane::kWidth<T>];
+  for (int l = 0; l < lane::kWidth<T>; ++l) configs[l] = su.configs[l < su.lanes ? l : 0];
   visit_controller_type(su.configs[0]->type, [&](auto t) {
-    run_law<T, P, law::LawOf<decltype(t)::value>::template type>(su, host, fin);
+    using Law = typename law::LawOf<decltype(t)::value>::template type<T, N, M>;
+    const auto make_law = [&] { return Law(configs, su.Ts); };
+    if (su.shared_inputs)
+      run_closed_loop<T, true>(su, make_plant, make_law, host, fin);
+    else
+      run_closed_loop<T, false>(su, make_plant, make_law, host, fin);
   });
 }
+
+// A runtime Controller as the law of one lane (T = double): the loop hands it the sample's time
+// and measurements, and f(X) of the simulated plant (a controller whose model is that plant
+// reuses it), through the host's ObjectController.
+template <int N, int M>
+class ObjectLaw {
+ public:
+  explicit ObjectLaw(const ObjectController& c) : c_(c) { c_.reset(c_.self); }
+  void reset_lanes(bool keep) {
+    if (!keep) c_.reset(c_.self);
+  }
+  template <class GP>
+  FTC_HOT_INLINE void step(const law::Sample<double, N>& m, const GP*, law::V<double, M>& u) {
+    c_.step(c_.self, m.t, m.X1.data(), m.X2.data(), m.a.data(), m.f.data(), u.data());
+  }
+
+ private:
+  ObjectController c_;
+};
+
+// A plant seen only through the Plant<n, m> interface, as lane code of one lane (T = double):
+// f(X) and G(X) through the host's ObjectPlant, G u summed G(i,0) u0 + G(i,1) u1 + ... as the
+// loop sums a constant G. G⁺ is the controller's own business (ObjectLaw ignores it).
+template <int N, int M>
+class ObjectPlantLanes {
+ public:
+  static constexpr bool kTrimmed = false;
+  static constexpr bool kConstantInput = false;
+
+  explicit ObjectPlantLanes(const ObjectPlant& p) : p_(p) {}
+  FTC_HOT_INLINE void drift(const std::array<double, 2 * N>& x, std::array<double, N>& f,
+                            std::array<double, N>* f_model) {
+    p_.f(p_.self, x.data(), f.data());
+    if (f_model) *f_model = f;
+    x_ = x;
+  }
+  FTC_HOT_INLINE void input(const std::array<double, M>& u, std::array<double, N>& Gu) const {
+    double G[N * M];
+    p_.G(p_.self, x_.data(), G);
+    for (int i = 0; i < N; ++i) {
+      double g = G[i * M] * u[0];
+      for (int j = 1; j < M; ++j) g = g + G[i * M + j] * u[j];
+      Gu[i] = g;
+    }
+  }
+  FTC_HOT_INLINE void pinv(const std::array<double, 2 * N>&, double* out) const {
+    for (int i = 0; i < M * N; ++i) out[i] = 0.0;
+  }
+
+ private:
+  ObjectPlant p_;
+  std::array<double, 2 * N> x_{};  // the state of the last drift()
+};
 
 // The lane type of the instruction set this file is compiled for (FTC_LANE_ARCH, set by
 // ftc_plant_kernels() in sim_core/CMakeLists.txt): one double without it.
@@ -424,16 +454,49 @@ void pack_kernel(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M
 }
 
 }  // namespace FTC_ISA_NS
+
+// Defined only in the scalar copy of a plant's kernel file (FTC_KERNEL_COPY: sim_core/
+// CMakeLists.txt), where PlantLanes<P> is complete; elsewhere it is only called.
+#if defined(FTC_KERNEL_COPY) && !defined(FTC_LANE_ARCH)
+namespace isa_scalar {
+template <class P, int N, int M>
+void controller_kernel(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin,
+                       const ObjectController& c) {
+  using Plant = typename PlantLanes<P>::template Lanes<double>;
+  run_closed_loop<double, true>(
+      su, [&] { return Plant(su); }, [&] { return ObjectLaw<N, M>(c); }, host, fin);
+}
+}  // namespace isa_scalar
+#endif
+
+inline namespace FTC_ISA_NS {}  // namespace FTC_ISA_NS
 }  // namespace ftc::sim::detail
 
 // In a plant's lanes file, after its PlantLanes<P>: the kernel of P for the instruction set the
-// file is compiled for (lanes/pack.hpp declares one per instruction set).
-#define FTC_PLANT_KERNEL(P)                                                                     \
+// file is compiled for (lanes/pack.hpp declares one per instruction set), and in the scalar copy
+// the loop of P with a runtime Controller (controller_kernel).
+#define FTC_PLANT_KERNEL(P)                                                                      \
+  FTC_PLANT_CONTROLLER_KERNEL(P)                                                                 \
   template void ftc::sim::detail::FTC_ISA_NS::pack_kernel<P, ftc::sim::detail::PlantLanes<P>::N, \
-                                                          ftc::sim::detail::PlantLanes<P>::M>(  \
-      const ftc::sim::detail::PackSetup<ftc::sim::detail::PlantLanes<P>::N,                    \
-                                        ftc::sim::detail::PlantLanes<P>::M>&,                  \
-      ftc::sim::detail::PackHost<ftc::sim::detail::PlantLanes<P>::N,                           \
-                                 ftc::sim::detail::PlantLanes<P>::M>&,                         \
-      ftc::sim::detail::PackFinal<ftc::sim::detail::PlantLanes<P>::N,                          \
+                                                          ftc::sim::detail::PlantLanes<P>::M>(   \
+      const ftc::sim::detail::PackSetup<ftc::sim::detail::PlantLanes<P>::N,                      \
+                                        ftc::sim::detail::PlantLanes<P>::M>&,                    \
+      ftc::sim::detail::PackHost<ftc::sim::detail::PlantLanes<P>::N,                             \
+                                 ftc::sim::detail::PlantLanes<P>::M>&,                           \
+      ftc::sim::detail::PackFinal<ftc::sim::detail::PlantLanes<P>::N,                            \
                                   ftc::sim::detail::PlantLanes<P>::M>&);
+
+#if defined(FTC_LANE_ARCH)
+#define FTC_PLANT_CONTROLLER_KERNEL(P)
+#else
+#define FTC_PLANT_CONTROLLER_KERNEL(P)                                            \
+  template void ftc::sim::detail::isa_scalar::controller_kernel<                  \
+      P, ftc::sim::detail::PlantLanes<P>::N, ftc::sim::detail::PlantLanes<P>::M>( \
+      const ftc::sim::detail::PackSetup<ftc::sim::detail::PlantLanes<P>::N,       \
+                                        ftc::sim::detail::PlantLanes<P>::M>&,     \
+      ftc::sim::detail::PackHost<ftc::sim::detail::PlantLanes<P>::N,              \
+                                 ftc::sim::detail::PlantLanes<P>::M>&,            \
+      ftc::sim::detail::PackFinal<ftc::sim::detail::PlantLanes<P>::N,             \
+                                  ftc::sim::detail::PlantLanes<P>::M>&,           \
+      const ftc::sim::detail::ObjectController&);
+#endif

@@ -1,10 +1,11 @@
 #pragma once
-// The batch simulator's interface between the host (plants/lane_host.hpp: scenarios,
-// disturbances, faults, metrics, trajectories, in plain C++ compiled once) and the kernels
-// (lanes/closed_loop.hpp: the closed loop of W simulations of one plant in W SIMD lanes,
-// compiled once per plant and instruction set). Only plain arrays cross it, so that nothing
-// compiled for one instruction set is shared with code compiled for another. Every array is
-// sized by the plant's shape: n axes, m actuators (template parameters N, M).
+// The simulator's interface between the host (plants/lane_host.hpp: scenarios, disturbances,
+// faults, the metrics' setup and read-back, trajectories, in plain C++ compiled once) and the
+// kernels (lanes/closed_loop.hpp: the one closed loop, of W simulations of one plant in W SIMD
+// lanes, compiled once per plant and instruction set). Only plain arrays and plain functions
+// cross it, so that nothing compiled for one instruction set is shared with code compiled for
+// another. Every array is sized by the plant's shape: n axes, m actuators (template parameters
+// N, M).
 //
 // A pack is up to W simulations in lockstep that share the sample time, the substeps, the
 // number of samples, the controller type (and the network size of the adaptive one) and, when
@@ -23,10 +24,6 @@ inline constexpr int kMaxLanes = 8;  // AVX-512: 8 doubles
 inline constexpr int kMaxPlantConstants = 8;
 // Actuators of a plant with an operating point (PackSetup::trimmed).
 inline constexpr int kMaxActuators = 8;
-// Metrics the kernel accumulates itself (SPEC §6; the host's MetricsAccumulator otherwise):
-// the objective window and the extra ones, and the peak error after each fault onset.
-inline constexpr int kMaxWindows = 8;
-inline constexpr int kMaxOnsets = 8;
 
 // The exogenous inputs at one instant (a stage time of RK4): the disturbance Δ(t) and the fault
 // effect u = gain ⊙ u_d + offset, as kCount rows of `stride` doubles each. The stride is 1 when
@@ -53,6 +50,41 @@ struct SampleLanes {
   bool diverged[kMaxLanes];
 };
 
+// What a pack's metrics are measured against (SPEC §6, §16; ftc/sim/metrics.hpp), per lane:
+// lanes/metric_lanes.hpp's MetricLanes reads it, for any number of windows and fault onsets.
+// Arrays are lane-minor, kMaxLanes doubles a row; the host owns the storage of the per-window
+// and per-onset rows (plants/lane_host.hpp).
+template <int M>
+struct MetricSetup {
+  int windows = 0;                     // the objective window, then the extra ones
+  const double* window = nullptr;      // [windows][2][kMaxLanes]: [t0, t1); [inf, inf) unused
+  const double* tail_start = nullptr;  // [windows][kMaxLanes]: the steady-state tail, NaN: none
+  int onsets = 0;
+  const double* onset = nullptr;  // [onsets][kMaxLanes]: each fault's onset, inf: unused
+  // The command limits of saturation_fraction per actuator, the earliest fault onset (+inf:
+  // none) and the settling threshold squared (NaN: no settling time), per lane; whether any lane
+  // has a threshold or a tail.
+  double limit_lo[M][kMaxLanes] = {};
+  double limit_hi[M][kMaxLanes] = {};
+  double first_onset[kMaxLanes] = {};
+  double threshold_sq[kMaxLanes] = {};
+  bool any_settling = false;
+  bool any_tail = false;
+};
+
+// The metrics of a pack's lanes at its end, each field of the metrics record
+// (ftc/sim/metrics_record.hpp) at its slot among the fields of its scope (metric_slot("ise"),
+// ...): per window, per run, per fault onset. The host owns the per-window and per-onset storage
+// and reads every field back by the same table.
+struct MetricsOut {
+  static constexpr std::size_t kWindowFields = metric_count(MetricScope::window);
+  static constexpr std::size_t kRunFields = metric_count(MetricScope::run);
+  static constexpr std::size_t kFaultFields = metric_count(MetricScope::fault);
+  double* window = nullptr;  // [windows][kWindowFields][kMaxLanes]
+  double run[kRunFields][kMaxLanes] = {};
+  double* fault = nullptr;  // [onsets][kFaultFields][kMaxLanes]
+};
+
 template <int N, int M>
 struct PackSetup {
   int lanes = 1;  // in use, 1 .. W
@@ -72,7 +104,7 @@ struct PackSetup {
   double saturation[kMaxLanes] = {};  // u_max; +inf for none
   // The lanes' actuator model (ftc/sim/scenario.hpp's ActuatorModel; every lane of a pack has
   // one or none): the half step's gain and largest step per lane (ActuatorSteps). The command is
-  // clamped to [limit_lo, limit_hi] (below) before the model follows it.
+  // clamped to [limit_lo, limit_hi] (MetricSetup) before the model follows it.
   bool actuator = false;
   double act_gain[kMaxLanes] = {};
   double act_step[kMaxLanes] = {};
@@ -88,24 +120,8 @@ struct PackSetup {
   std::int64_t samples = 0;
   int block = 16;  // samples per exchange with the host
 
-  // The kernel accumulates the metrics (else the host does, from PackHost::samples).
-  bool kernel_metrics = false;
-  bool want_samples = true;  // call PackHost::samples (recording, or the host's metrics)
-  int windows = 0;           // [t0, t1) per lane: 0 the objective window, then the extra ones
-  double window[kMaxWindows][2][kMaxLanes] = {};  // unused: [inf, inf)
-  int onsets = 0;
-  double onset[kMaxOnsets][kMaxLanes] = {};  // unused: inf
-  // The window metrics' setup (ftc/sim/metrics.hpp, sim_core/metrics_accumulator.hpp): the
-  // command limits of saturation_fraction per actuator and lane, the earliest fault onset
-  // (+inf: none), the settling threshold squared (NaN: no settling time) and each window's
-  // steady-state tail start (NaN: no tail), per lane; whether any lane has a threshold or a tail.
-  double limit_lo[M][kMaxLanes] = {};
-  double limit_hi[M][kMaxLanes] = {};
-  double first_onset[kMaxLanes] = {};
-  double threshold_sq[kMaxLanes] = {};
-  double tail_start[kMaxWindows][kMaxLanes] = {};
-  bool any_settling = false;
-  bool any_tail = false;
+  bool want_samples = false;  // call PackHost::samples (a lane records its trajectory)
+  MetricSetup<M> metrics;
 };
 
 // The host side, called twice per block of samples (never per sample).
@@ -128,19 +144,30 @@ struct PackFinal {
   std::int64_t samples[kMaxLanes];  // samples simulated per lane
   bool diverged[kMaxLanes];
   double diverged_at[kMaxLanes];  // s
-  // With kernel_metrics: the record's fields (ftc/sim/metrics_record.hpp) by scope, each at its
-  // slot (metric_slot("ise") and so on): per window (the objective window first), per lane, or
-  // per fault onset. The host reads them back by the same table.
-  static constexpr std::size_t kWindowFields = metric_count(MetricScope::window);
-  static constexpr std::size_t kRunFields = metric_count(MetricScope::run);
-  static constexpr std::size_t kFaultFields = metric_count(MetricScope::fault);
-  double window_field[kWindowFields][kMaxWindows][kMaxLanes];
-  double run_field[kRunFields][kMaxLanes];
-  double fault_field[kFaultFields][kMaxOnsets][kMaxLanes];
+  MetricsOut metrics;
 };
 
 template <int N, int M>
 using PackKernel = void (*)(const PackSetup<N, M>&, PackHost<N, M>&, PackFinal<N, M>&);
+
+// A runtime Controller object (ftc/sim/controller.hpp) as the loop's control law, one lane: the
+// host's two functions over it (plants/lane_host.hpp), so that the kernel needs no Eigen.
+struct ObjectController {
+  void* self = nullptr;
+  void (*reset)(void* self) = nullptr;
+  // u_d (m values) from the sample's time, X1, X2, the measured acceleration a (n values each)
+  // and f(X) of the simulated plant, which a model-based controller of that plant reuses.
+  void (*step)(void* self, double t, const double* X1, const double* X2, const double* a,
+               const double* f, double* u) = nullptr;
+};
+
+// A plant known only through the Plant<n, m> interface (not a registered class, so without lane
+// code), one lane: f(X) and G(X) (n × m, row-major) through the host.
+struct ObjectPlant {
+  const void* self = nullptr;
+  void (*f)(const void* self, const double* x, double* f) = nullptr;
+  void (*G)(const void* self, const double* x, double* G) = nullptr;
+};
 
 // The kernel of plant class P (its lane code: PlantLanes<P>, lanes/closed_loop.hpp), one per
 // instruction set, each in the namespace of its instruction set (lanes/lane.hpp says why).
@@ -149,16 +176,29 @@ using PackKernel = void (*)(const PackSetup<N, M>&, PackHost<N, M>&, PackFinal<N
 #ifndef FTC_ISA_NS
 #define FTC_ISA_NS isa_scalar
 #endif
-inline namespace FTC_ISA_NS {}  // inline from its first declaration on (the others are not)
-#define FTC_DECLARE_PACK_KERNEL(ns)                                                          \
-  namespace ns {                                                                             \
-  template <class P, int N, int M>                                                           \
-  void pack_kernel(const PackSetup<N, M>&, PackHost<N, M>&, PackFinal<N, M>&);              \
+inline namespace FTC_ISA_NS {}  // namespace FTC_ISA_NS
+#define FTC_DECLARE_PACK_KERNEL(ns)                                            \
+  namespace ns {                                                               \
+  template <class P, int N, int M>                                             \
+  void pack_kernel(const PackSetup<N, M>&, PackHost<N, M>&, PackFinal<N, M>&); \
   }
 FTC_DECLARE_PACK_KERNEL(isa_scalar)
 FTC_DECLARE_PACK_KERNEL(isa_sse2)
 FTC_DECLARE_PACK_KERNEL(isa_avx2)
 FTC_DECLARE_PACK_KERNEL(isa_avx512)
 #undef FTC_DECLARE_PACK_KERNEL
+
+// The loop of plant class P with a runtime Controller for its law (sim::simulate), in one lane of
+// the scalar kernel: P's scalar lanes file defines it (FTC_PLANT_KERNEL).
+namespace isa_scalar {
+template <class P, int N, int M>
+void controller_kernel(const PackSetup<N, M>&, PackHost<N, M>&, PackFinal<N, M>&,
+                       const ObjectController&);
+// The same for a plant known only through the Plant<n, m> interface: plants/registry.cpp
+// defines it for the registered shapes.
+template <int N, int M>
+void object_plant_kernel(const PackSetup<N, M>&, PackHost<N, M>&, PackFinal<N, M>&,
+                         const ObjectController&, const ObjectPlant&);
+}  // namespace isa_scalar
 
 }  // namespace ftc::sim::detail

@@ -1,28 +1,34 @@
 #pragma once
-// Any plant's simulations through its batch kernels (lanes/pack.hpp, lanes/closed_loop.hpp):
-// grouping into packs, and the host side of a pack (exogenous inputs, metrics, trajectories),
-// in plain C++ compiled once, for plant class P. Private to sim_core (plants/plant_adapter.hpp).
+// Every simulation goes through the one closed loop (lanes/closed_loop.hpp) from here: grouping
+// tasks into packs, the host side of a pack (exogenous inputs, the metrics' setup and read-back,
+// trajectories), in plain C++ compiled once, for plant class P; and a runtime Controller object
+// in one lane of the scalar kernel (run_controller, sim::simulate). Private to sim_core
+// (plants/plant_adapter.hpp, plants/registry.cpp).
 #include <algorithm>
-#include <bit>
-#include <cstdint>
-#include <cmath>
 #include <array>
-#include <span>
+#include <bit>
+#include <cmath>
+#include <cstdint>
 #include <deque>
 #include <limits>
 #include <memory>
+#include <optional>
+#include <span>
 #include <tuple>
+#include <type_traits>
 #include <vector>
 
+#include "exogenous_inputs.hpp"
+#include "ftc/sim/controller.hpp"
 #include "ftc/sim/disturbance.hpp"
 #include "ftc/sim/faults.hpp"
 #include "ftc/sim/isa.hpp"
 #include "ftc/sim/metrics.hpp"
+#include "ftc/sim/metrics_record.hpp"
+#include "ftc/sim/plant.hpp"
 #include "ftc/sim/scenario.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "lanes/pack.hpp"
-#include "metrics_accumulator.hpp"
-#include "simulation_loop.hpp"
 
 namespace ftc::sim::detail {
 
@@ -37,6 +43,154 @@ struct LaneTask {
   // a plant that has them.
   std::array<double, kMaxActuators> u0{}, lo{}, hi{};
   SimulationResult* result = nullptr;
+};
+
+// The limits saturation_fraction measures the command against: ±u_max, and for a plant with an
+// operating point the deviation's [lo, hi] within them (the loop applies both).
+struct CommandLimits {
+  double lo, hi;
+};
+inline CommandLimits command_limits(double u_max, double lo, double hi) {
+  return {lo > -u_max ? lo : -u_max, hi < u_max ? hi : u_max};
+}
+
+// The command after the faults, the saturation and the limits for a plant whose actuators work
+// about an operating point (actuator_trim(), as Hexarotor's): the faults act on u0 + u_d. The
+// operations of the loop's (lanes/closed_loop.hpp), for the recorded rows.
+template <int M, class Trim>
+Vec<M> apply_trimmed(const Trim& t, const FaultSet& faults, const FaultEffect<M>& e,
+                     const Vec<M>& u_d) {
+  const double m = faults.saturation().value_or(std::numeric_limits<double>::infinity());
+  Vec<M> u;
+  for (int j = 0; j < M; ++j) {
+    double v = (e.gain[j] * (t.u0[j] + u_d[j]) + e.offset[j]) - t.u0[j];
+    v = v < -m ? -m : v;
+    v = v > m ? m : v;
+    v = v < t.lo[j] ? t.lo[j] : v;
+    u[j] = v > t.hi[j] ? t.hi[j] : v;
+  }
+  return u;
+}
+
+// One recorded sample; out of line, as it is rare and would bloat the loop.
+template <int N, int M>
+[[gnu::noinline]] void append_row(Trajectory& tr, double t, const StateOf<N>& x, const Vec<M>& u_d,
+                                  const Vec<M>& u) {
+  std::vector<double>& v = tr.values;
+  v.push_back(t);
+  v.insert(v.end(), x.data(), x.data() + 2 * N);
+  v.insert(v.end(), u_d.data(), u_d.data() + M);
+  v.insert(v.end(), u.data(), u.data() + M);
+}
+
+// The metrics' side of a pack on the host: what each lane measures against (MetricSetup: its
+// windows, their steady-state tails, its fault onsets, the command limits, the first onset and
+// the settling threshold), the storage of those rows and of the values the kernel writes
+// (MetricsOut), and the read-back of a lane's values into its Metrics, every field of the record
+// from its slot (ftc/sim/metrics_record.hpp). The kernel's MetricLanes (lanes/metric_lanes.hpp)
+// accumulates in between.
+template <int M>
+class MetricRows {
+ public:
+  // The rows of `lanes` (lanes past them up to `width` repeat lane 0), as many windows and onsets
+  // as the lane with the most has; a lane with fewer has [inf, inf) windows and onsets at inf,
+  // which count no sample. `trimmed`: the limits are the deviation's [lo, hi] within ±u_max.
+  void set(std::span<LaneTask* const> lanes, int width, bool trimmed, MetricSetup<M>& ms) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    std::size_t windows = 0, onsets = 0;
+    for (const LaneTask* l : lanes) {
+      windows = std::max(windows, 1 + l->options->extra_windows.size());
+      onsets = std::max(onsets, l->scenario->faults.size());
+    }
+    window_.assign(windows * 2 * kMaxLanes, inf);
+    tail_.assign(windows * kMaxLanes, std::numeric_limits<double>::quiet_NaN());
+    onset_.assign(onsets * kMaxLanes, inf);
+    for (int l = 0; l < width; ++l) {
+      const LaneTask& lane = *lanes[l < static_cast<int>(lanes.size()) ? l : 0];
+      const SimulationOptions& o = *lane.options;
+      const Scenario& s = *lane.scenario;
+      const std::size_t own = 1 + o.extra_windows.size();
+      const double tail = o.metrics.steady_state_tail;
+      for (std::size_t w = 0; w < windows; ++w) {
+        const Window win = w == 0 ? o.window : w < own ? o.extra_windows[w - 1] : Window{inf, inf};
+        window_[(2 * w) * kMaxLanes + l] = win.t0;
+        window_[(2 * w + 1) * kMaxLanes + l] = win.t1;
+        tail_[w * kMaxLanes + l] = tail_start(win, s.duration, tail);
+      }
+      ms.any_tail = ms.any_tail || !std::isnan(tail);
+      ms.first_onset[l] = inf;  // without a fault
+      for (std::size_t f = 0; f < s.faults.size(); ++f) {
+        onset_[f * kMaxLanes + l] = s.faults[f].onset;
+        ms.first_onset[l] =
+            s.faults[f].onset < ms.first_onset[l] ? s.faults[f].onset : ms.first_onset[l];
+      }
+      // What saturation_fraction measures the command against (the actuator model clamps the
+      // command to it too).
+      const double u_max = s.saturation.value_or(inf);
+      for (int j = 0; j < M; ++j) {
+        const CommandLimits c = trimmed ? command_limits(u_max, lane.lo[j], lane.hi[j])
+                                        : command_limits(u_max, -inf, inf);
+        ms.limit_lo[j][l] = c.lo;
+        ms.limit_hi[j][l] = c.hi;
+      }
+      const double threshold = o.metrics.settling_threshold;
+      ms.threshold_sq[l] = threshold * threshold;
+      ms.any_settling = ms.any_settling || !std::isnan(threshold);
+    }
+    ms.windows = static_cast<int>(windows);
+    ms.window = window_.data();
+    ms.tail_start = tail_.data();
+    ms.onsets = static_cast<int>(onsets);
+    ms.onset = onset_.data();
+    window_out_.assign(windows * MetricsOut::kWindowFields * kMaxLanes, 0.0);
+    fault_out_.assign(onsets * MetricsOut::kFaultFields * kMaxLanes, 0.0);
+  }
+
+  // Where the kernel writes the values.
+  void outputs(MetricsOut& out) {
+    out.window = window_out_.data();
+    out.fault = fault_out_.data();
+  }
+
+  // Lane l's record: its windows and fault onsets (from `o` and `s`), each field's value from
+  // `out`, then +inf in every window when it diverged at `diverged_at`.
+  Metrics read(std::size_t l, const MetricsOut& out, const SimulationOptions& o, const Scenario& s,
+               std::optional<double> diverged_at) const {
+    constexpr std::size_t kWindowFields = MetricsOut::kWindowFields;
+    constexpr std::size_t kFaultFields = MetricsOut::kFaultFields;
+    Metrics m;
+    m.window = o.window;
+    m.extra_windows = o.extra_windows;
+    m.extra.assign(o.extra_windows.size(), ErrorIntegrals{});
+    for (const Fault& f : s.faults) m.fault_onsets.push_back(f.onset);
+    std::size_t slot[3] = {0, 0, 0};
+    for (const MetricField& f : kMetricFields) {
+      const std::size_t k = slot[static_cast<std::size_t>(f.scope)]++;
+      const auto in_window = [&](std::size_t w) {
+        return out.window[(w * kWindowFields + k) * kMaxLanes + l];
+      };
+      switch (f.scope) {
+        case MetricScope::window:
+          m.errors.*f.in_window = in_window(0);
+          for (std::size_t w = 0; w < m.extra.size(); ++w)
+            m.extra[w].*f.in_window = in_window(w + 1);
+          break;
+        case MetricScope::run:
+          m.*f.per_run = out.run[k][l];
+          break;
+        case MetricScope::fault:
+          (m.*f.per_fault).resize(m.fault_onsets.size());
+          for (std::size_t i = 0; i < m.fault_onsets.size(); ++i)
+            (m.*f.per_fault)[i] = out.fault[(i * kFaultFields + k) * kMaxLanes + l];
+          break;
+      }
+    }
+    if (diverged_at) m.mark_diverged(*diverged_at);
+    return m;
+  }
+
+ private:
+  std::vector<double> window_, tail_, onset_, window_out_, fault_out_;
 };
 
 namespace lane_host {
@@ -74,16 +228,18 @@ inline bool same_terms(const std::vector<DisturbanceTerm>& a,
 // The host of one pack: per distinct scenario the faults' effects, per distinct disturbance Δ(t)
 // that more than one of its scenarios has (each an ExogenousInputs with the other part empty:
 // lanes of one scenario share the first, lanes whose scenarios have the same disturbance terms,
-// as an ensemble's members do, the second), per lane its metrics and trajectory. A scenario
-// whose disturbance no other scenario of the pack has steps both in one table: a pack of one
-// scenario (Table 1's job, a landscape) builds one table, not two.
+// as an ensemble's members do, the second), per lane its trajectory, and the storage of the
+// metrics' per-window and per-onset rows (MetricSetup, MetricsOut). A scenario whose disturbance
+// no other scenario of the pack has steps both in one table: a pack of one scenario (Table 1's
+// job, a landscape) builds one table, not two.
 template <int N, int M>
 class Host final : public PackHost<N, M> {
   using Exo = ExoRows<N, M>;
 
  public:
-  Host(std::span<LaneTask* const> lanes, int width, const PackSetup<N, M>& setup)
-      : lanes_(lanes.begin(), lanes.end()), width_(width), setup_(setup) {
+  // Fills the setup's metrics (MetricRows) from the lanes' options and scenarios.
+  Host(std::span<LaneTask* const> lanes, int width, bool trimmed, PackSetup<N, M>& setup)
+      : lanes_(lanes.begin(), lanes.end()), width_(width), trimmed_(trimmed), setup_(setup) {
     // The distinct scenarios and, for each, which distinct disturbance it has.
     std::vector<const Scenario*> scenarios, first_with;  // first_with[d]: d's first scenario
     std::vector<std::size_t> dist_of, users;
@@ -103,17 +259,7 @@ class Host final : public PackHost<N, M> {
         dist_of.push_back(d);
       }
       group_of_.push_back(g);
-      std::vector<double> onsets;
-      for (const Fault& f : s.faults) onsets.push_back(f.onset);
       const SimulationOptions& o = *lanes_[l]->options;
-      MetricContext<M> context;
-      context.duration = s.duration;
-      for (int j = 0; j < M; ++j) {
-        context.lo[j] = setup.limit_lo[j][l];
-        context.hi[j] = setup.limit_hi[j][l];
-      }
-      context.settings = o.metrics;
-      metrics_.emplace_back(s.sample_time, o.window, o.extra_windows, std::move(onsets), context);
       SimulationResult& r = *lanes_[l]->result;
       r = SimulationResult{};
       r.trajectory.axes = N;
@@ -141,6 +287,7 @@ class Host final : public PackHost<N, M> {
     done_.assign(lanes_.size(), false);
     buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3 * Exo::kCount *
                    Exo::stride(setup.shared_inputs, width));
+    metrics_.set(lanes, width, trimmed, setup.metrics);
   }
 
   const double* inputs(std::int64_t k0, int n) override {
@@ -150,8 +297,7 @@ class Host final : public PackHost<N, M> {
     const int stride = Exo::stride(shared, width_);
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < S; ++j) {
-        double* out =
-            &buffer_[(static_cast<std::size_t>(i) * S + j) * 3 * Exo::kCount * stride];
+        double* out = &buffer_[(static_cast<std::size_t>(i) * S + j) * 3 * Exo::kCount * stride];
         for (Dist& d : dists_) scatter(d.exo.step(k0 + i, j), d.lanes, out, true, false);
         for (Group& g : groups_)
           scatter(g.exo.step(k0 + i, j), g.lanes, out, g.dist == Group::kOwn, true);
@@ -159,29 +305,28 @@ class Host final : public PackHost<N, M> {
     return buffer_.data();
   }
 
+  // The recorded rows: every record_every-th sample of a lane that records, with the command
+  // after the faults, the saturation and the limits as the loop formed it.
   void samples(std::int64_t k0, int n, const SampleLanes<N, M>* out) override {
-    const bool metrics = !setup_.kernel_metrics;
     const int S = setup_.substeps;
     for (std::size_t l = 0; l < lanes_.size(); ++l) {
-      if (done_[l]) continue;
-      const double Ts = setup_.Ts;
       const std::int64_t every = lanes_[l]->options->record_every;
+      if (done_[l] || every <= 0) continue;
+      const double Ts = setup_.Ts;
       for (int i = 0; i < n; ++i) {
         const std::int64_t k = k0 + i;
         const double t = static_cast<double>(k) * Ts;
-        StateOf<N> x;
-        Vec<M> u;
-        for (int r = 0; r < 2 * N; ++r) x[r] = out[i].x[r][l];
-        for (int r = 0; r < M; ++r) u[r] = out[i].u[r][l];
-        if (metrics) metrics_[l].sample(t, x, u);
-        // The plant's input: the actuators' output with a model, else the command.
-        Vec<M> drive = u;
-        if (setup_.actuator)
-          for (int r = 0; r < M; ++r) drive[r] = out[i].ua[r][l];
-        if (every > 0 && k % every == 0) {
+        if (k % every == 0) {
+          StateOf<N> x;
+          Vec<M> u;
+          for (int r = 0; r < 2 * N; ++r) x[r] = out[i].x[r][l];
+          for (int r = 0; r < M; ++r) u[r] = out[i].u[r][l];
+          // The plant's input: the actuators' output with a model, else the command.
+          Vec<M> drive = u;
+          if (setup_.actuator)
+            for (int r = 0; r < M; ++r) drive[r] = out[i].ua[r][l];
           const std::size_t stride = Exo::stride(setup_.shared_inputs, width_);
-          const double* e =
-              &buffer_[static_cast<std::size_t>(i) * S * 3 * Exo::kCount * stride];
+          const double* e = &buffer_[static_cast<std::size_t>(i) * S * 3 * Exo::kCount * stride];
           const std::size_t from = setup_.shared_inputs ? 0 : l;
           FaultEffect<M> effect;
           for (int r = 0; r < M; ++r) {
@@ -191,7 +336,6 @@ class Host final : public PackHost<N, M> {
           append_row<N, M>(lanes_[l]->result->trajectory, t, x, u, applied(l, effect, drive));
         }
         if (out[i].diverged[l]) {
-          if (metrics) metrics_[l].mark_diverged(t + Ts);
           done_[l] = true;
           break;
         }
@@ -200,47 +344,26 @@ class Host final : public PackHost<N, M> {
   }
 
   // The command after the faults, the saturation and (for a plant with an operating point) the
-  // limits, as the kernel forms it (lanes/closed_loop.hpp).
+  // limits, as the loop forms it (lanes/closed_loop.hpp).
   Vec<M> applied(std::size_t l, const FaultEffect<M>& e, const Vec<M>& u_d) const {
     const FaultSet& faults = groups_[group_of_[l]].faults;
     if (!trimmed_) return faults.apply(e, u_d);
-    return apply_trimmed<M>(*lanes_[l], faults, e, u_d);  // the Controller loop's operations
+    return apply_trimmed<M>(*lanes_[l], faults, e, u_d);
   }
-  bool trimmed_ = false;
 
+  // Where the kernel writes the metrics.
+  void outputs(PackFinal<N, M>& fin) { metrics_.outputs(fin.metrics); }
+
+  // Each lane's result: its samples, final state and metrics.
   void finish(const PackFinal<N, M>& fin) {
     for (std::size_t l = 0; l < lanes_.size(); ++l) {
       SimulationResult& r = *lanes_[l]->result;
       r.samples = fin.samples[l];
       r.final_state.resize(2 * N);
       for (int i = 0; i < 2 * N; ++i) r.final_state[i] = fin.x[i][l];
-      if (!setup_.kernel_metrics) {
-        r.metrics = metrics_[l].result();
-        continue;
-      }
-      // The kernel's sums (lanes/metric_lanes.hpp), arranged as MetricsAccumulator arranges its
-      // own: each field of the record from its slot (ftc/sim/metrics_record.hpp).
-      Metrics m = metrics_[l].result();
-      std::size_t slot[3] = {0, 0, 0};
-      for (const MetricField& f : kMetricFields) {
-        const std::size_t s = slot[static_cast<std::size_t>(f.scope)]++;
-        switch (f.scope) {
-          case MetricScope::window:
-            m.errors.*f.in_window = fin.window_field[s][0][l];
-            for (std::size_t w = 0; w < m.extra.size(); ++w)
-              m.extra[w].*f.in_window = fin.window_field[s][w + 1][l];
-            break;
-          case MetricScope::run:
-            m.*f.per_run = fin.run_field[s][l];
-            break;
-          case MetricScope::fault:
-            for (std::size_t i = 0; i < (m.*f.per_fault).size(); ++i)
-              (m.*f.per_fault)[i] = fin.fault_field[s][i][l];
-            break;
-        }
-      }
-      if (fin.diverged[l]) m.mark_diverged(fin.diverged_at[l]);
-      r.metrics = std::move(m);
+      r.metrics =
+          metrics_.read(l, fin.metrics, *lanes_[l]->options, *lanes_[l]->scenario,
+                        fin.diverged[l] ? std::optional<double>(fin.diverged_at[l]) : std::nullopt);
     }
   }
 
@@ -295,20 +418,21 @@ class Host final : public PackHost<N, M> {
 
   std::vector<LaneTask*> lanes_;
   int width_;
+  bool trimmed_;  // the plant's actuators work about an operating point
   const PackSetup<N, M>& setup_;
   std::deque<Group> groups_;
   std::deque<Dist> dists_;
   std::vector<std::size_t> group_of_;
-  std::vector<MetricsAccumulator<N, M>> metrics_;
   std::vector<bool> done_;
   std::vector<double> buffer_;  // the inputs of a block (PackHost::inputs)
+  MetricRows<M> metrics_;
 };
 
-// G and G⁺ when the plant's are constant (else null: its lane code forms them).
-template <class P, int N, int M>
-void run_pack(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M, N>* G_pinv,
-              bool trimmed, Isa isa) {
-  const int width = lane_width(isa);
+// The setup of a pack of lanes of one loop shape, but for its metrics (Host fills them): G and G⁺
+// when the plant's are constant (else null: its lane code forms them).
+template <int N, int M>
+PackSetup<N, M> pack_setup(std::span<LaneTask* const> lanes, const Mat<N, M>* G,
+                           const Mat<M, N>* G_pinv, bool trimmed, int width) {
   PackSetup<N, M> su;
   su.lanes = static_cast<int>(lanes.size());
   const Scenario& s0 = *lanes[0]->scenario;
@@ -337,69 +461,38 @@ void run_pack(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M,
       su.hi[j][l] = lane.hi[j];
     }
     su.saturation[l] = lane.scenario->saturation.value_or(std::numeric_limits<double>::infinity());
-    // What saturation_fraction measures the command against (the host's accumulators read them
-    // too), and the settling threshold.
-    for (int j = 0; j < M; ++j) {
-      constexpr double inf = std::numeric_limits<double>::infinity();
-      const CommandLimits c = trimmed ? command_limits(su.saturation[l], lane.lo[j], lane.hi[j])
-                                      : command_limits(su.saturation[l], -inf, inf);
-      su.limit_lo[j][l] = c.lo;
-      su.limit_hi[j][l] = c.hi;
-    }
     if (const std::optional<ActuatorModel>& a = lane.scenario->actuator) {
       su.actuator = true;
       const ActuatorSteps st = actuator_steps(*a, 0.5 * (su.Ts / su.substeps));
       su.act_gain[l] = st.gain;
       su.act_step[l] = st.max_step;
     }
-    const double threshold = lane.options->metrics.settling_threshold;
-    su.threshold_sq[l] = threshold * threshold;
-    su.any_settling = su.any_settling || !std::isnan(threshold);
-    su.first_onset[l] = std::numeric_limits<double>::infinity();  // metrics_accumulator.hpp's
-    for (const Fault& f : lane.scenario->faults)
-      su.first_onset[l] = f.onset < su.first_onset[l] ? f.onset : su.first_onset[l];
   }
-  // The metrics in the kernel, unless a lane has more windows or faults than it keeps.
-  su.kernel_metrics = true;
   su.want_samples = false;
-  for (const LaneTask* l : lanes) {
-    su.windows = std::max(su.windows, 1 + static_cast<int>(l->options->extra_windows.size()));
-    su.onsets = std::max(su.onsets, static_cast<int>(l->scenario->faults.size()));
-    su.want_samples = su.want_samples || l->options->record_every > 0;
-  }
-  if (su.windows > kMaxWindows || su.onsets > kMaxOnsets) {
-    su.kernel_metrics = false;
-    su.want_samples = true;
-  } else {
-    constexpr double inf = std::numeric_limits<double>::infinity();
-    for (int l = 0; l < width; ++l) {
-      const LaneTask& lane = *lanes[l < su.lanes ? l : 0];
-      const SimulationOptions& o = *lane.options;
-      for (int w = 0; w < su.windows; ++w) {
-        const std::size_t e = static_cast<std::size_t>(w);
-        const Window win = w == 0                        ? o.window
-                           : e <= o.extra_windows.size() ? o.extra_windows[e - 1]
-                                                         : Window{inf, inf};
-        su.window[w][0][l] = win.t0;
-        su.window[w][1][l] = win.t1;
-        const double tail = o.metrics.steady_state_tail;
-        su.tail_start[w][l] = tail_start(win, lane.scenario->duration, tail);
-        su.any_tail = su.any_tail || !std::isnan(tail);
-      }
-      for (int f = 0; f < su.onsets; ++f) {
-        const std::size_t e = static_cast<std::size_t>(f);
-        su.onset[f][l] = e < lane.scenario->faults.size() ? lane.scenario->faults[e].onset : inf;
-      }
-    }
-  }
+  for (const LaneTask* l : lanes) su.want_samples = su.want_samples || l->options->record_every > 0;
   su.shared_inputs = true;
   for (const LaneTask* l : lanes)
     su.shared_inputs = su.shared_inputs && l->scenario == lanes[0]->scenario;
-  Host<N, M> host(lanes, width, su);
-  host.trimmed_ = trimmed;
+  return su;
+}
+
+// Runs a pack through `kernel`: its setup, its host, the kernel, the results.
+template <int N, int M, class Kernel>
+void run_pack_with(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M, N>* G_pinv,
+                   bool trimmed, int width, Kernel&& kernel) {
+  PackSetup<N, M> su = pack_setup<N, M>(lanes, G, G_pinv, trimmed, width);
+  Host<N, M> host(lanes, width, trimmed, su);
   PackFinal<N, M> fin{};
-  kernel_for<P, N, M>(isa)(su, host, fin);
+  host.outputs(fin);
+  kernel(su, host, fin);
   host.finish(fin);
+}
+
+// G and G⁺ when the plant's are constant (else null: its lane code forms them).
+template <class P, int N, int M>
+void run_pack(std::span<LaneTask* const> lanes, const Mat<N, M>* G, const Mat<M, N>* G_pinv,
+              bool trimmed, Isa isa) {
+  run_pack_with<N, M>(lanes, G, G_pinv, trimmed, lane_width(isa), kernel_for<P, N, M>(isa));
 }
 
 // The narrowest instruction set up to `widest` that holds n lanes: a wide register costs more
@@ -428,7 +521,8 @@ void run_lanes(std::span<LaneTask> lanes, const Mat<P::kAxes, P::kActuators>* G,
   using Key = std::tuple<double, int, std::int64_t, ControllerType, double, bool>;
   const auto key = [](const LaneTask& l) {
     const bool adaptive = controller_info(l.config.type).adaptive;
-    return Key{l.scenario->sample_time, l.scenario->substeps, l.scenario->samples(), l.config.type,
+    return Key{l.scenario->sample_time,         l.scenario->substeps,
+               l.scenario->samples(),           l.config.type,
                adaptive ? l.config.nodes : 0.0, l.scenario->actuator.has_value()};
   };
   const std::size_t width = static_cast<std::size_t>(lane_width(isa));
@@ -446,6 +540,97 @@ void run_lanes(std::span<LaneTask> lanes, const Mat<P::kAxes, P::kActuators>* G,
     lane_host::run_pack<P, P::kAxes, P::kActuators>(pack, G, G_pinv, trimmed,
                                                     lane_host::narrowest(isa, pack.size()));
   }
+}
+
+// A runtime Controller and the simulated plant it is in closed loop with, as the kernel's
+// ObjectController calls them: the controller gets f(X) of that plant with the plant's address
+// (Measurement::f_of), so that a model-based controller of the same plant object reuses it.
+template <int N, int M>
+struct ControllerBinding {
+  Controller<N, M>* controller;
+  const Plant<N, M>* plant;
+
+  ObjectController functions() {
+    ObjectController o;
+    o.self = this;
+    o.reset = [](void* self) { static_cast<ControllerBinding*>(self)->controller->reset(); };
+    o.step = [](void* self, double t, const double* X1, const double* X2, const double* a,
+                const double* f, double* u) {
+      const ControllerBinding& b = *static_cast<ControllerBinding*>(self);
+      const Vec<N> fx = Eigen::Map<const Vec<N>>(f);
+      const Vec<M> out = b.controller->step(
+          Measurement<N>{t, Eigen::Map<const Vec<N>>(X1), Eigen::Map<const Vec<N>>(X2),
+                         Eigen::Map<const Vec<N>>(a), &fx, static_cast<const void*>(b.plant)});
+      for (int j = 0; j < M; ++j) u[j] = out[j];
+    };
+    return o;
+  }
+};
+
+// A plant known only through the Plant<N, M> interface, as the kernel's ObjectPlant calls it.
+template <int N, int M>
+ObjectPlant object_plant(const Plant<N, M>& plant) {
+  ObjectPlant o;
+  o.self = &plant;
+  o.f = [](const void* self, const double* x, double* f) {
+    const Vec<N> v = static_cast<const Plant<N, M>*>(self)->f(Eigen::Map<const StateOf<N>>(x));
+    for (int i = 0; i < N; ++i) f[i] = v[i];
+  };
+  o.G = [](const void* self, const double* x, double* G) {
+    const Mat<N, M> g = static_cast<const Plant<N, M>*>(self)->G(Eigen::Map<const StateOf<N>>(x));
+    for (int i = 0; i < N; ++i)
+      for (int j = 0; j < M; ++j) G[i * M + j] = g(i, j);
+  };
+  return o;
+}
+
+// The runtime's sim::simulate: `controller` in closed loop with `plant`, in one lane of the
+// scalar kernel's loop with the controller as its law, so that it replays a tuning run's lane to
+// the last bit. P is a registered plant class (its lanes file's controller_kernel runs its lane
+// code) or Plant<N, M> itself (a plant known only through the interface: ObjectPlantLanes calls
+// its f and G, object_plant_kernel, plants/registry.cpp). The scenario is valid.
+template <class P>
+SimulationResult run_controller(const P& plant, Controller<P::kAxes, P::kActuators>& controller,
+                                const Scenario& scenario, const SimulationOptions& options) {
+  constexpr int N = P::kAxes, M = P::kActuators;
+  constexpr bool kRegistered = !std::is_same_v<P, Plant<N, M>>;
+  SimulationResult result;
+  LaneTask lane;
+  lane.config = controller.config();
+  lane.scenario = &scenario;
+  lane.options = &options;
+  lane.result = &result;
+  bool trimmed = false;
+  if constexpr (kRegistered) {
+    const auto k = plant.f_constants();
+    std::copy(k.begin(), k.end(), lane.truth.begin());
+    lane.model = lane.truth;
+    if constexpr (requires { plant.actuator_trim(); }) {
+      trimmed = true;
+      const auto t = plant.actuator_trim();
+      for (int j = 0; j < M; ++j) {
+        lane.u0[j] = t.u0[j];
+        lane.lo[j] = t.lo[j];
+        lane.hi[j] = t.hi[j];
+      }
+    }
+  }
+  const StateOf<N> x0 = Eigen::Map<const StateOf<N>>(scenario.initial_state.data());
+  const bool constant = kRegistered && plant.input_matrix_is_constant();
+  const Mat<N, M> G = constant ? plant.G(x0) : Mat<N, M>::Zero();
+  const Mat<M, N> G_pinv = constant ? plant.G_pinv(x0) : Mat<M, N>::Zero();
+  ControllerBinding<N, M> binding{&controller, &plant};
+  const ObjectController c = binding.functions();
+  LaneTask* lanes[1] = {&lane};
+  lane_host::run_pack_with<N, M>(
+      lanes, constant ? &G : nullptr, constant ? &G_pinv : nullptr, trimmed, 1,
+      [&](const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin) {
+        if constexpr (kRegistered)
+          isa_scalar::controller_kernel<P, N, M>(su, host, fin, c);
+        else
+          isa_scalar::object_plant_kernel<N, M>(su, host, fin, c, object_plant(plant));
+      });
+  return result;
 }
 
 }  // namespace ftc::sim::detail

@@ -1,7 +1,7 @@
 // The registered plants. Adding a plant takes its own files (its class, its PlantKind, its
 // dynamics and lane code: docs/architecture.md, "Plant seam") plus the lines marked below: the
 // list of kinds, the list of classes for the runtime's simulate() with a Controller object,
-// and, for a new shape (n, m), the two instantiations.
+// and, for a new shape (n, m), the three instantiations.
 #include <stdexcept>
 #include <tuple>
 
@@ -9,15 +9,15 @@
 #include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/spacecraft.hpp"
+#include "lanes/closed_loop.hpp"
 #include "plants/kinds.hpp"
-#include "plants/manipulator_dynamics.hpp"
-#include "plants/spacecraft_dynamics.hpp"
-#include "simulation_loop.hpp"
+#include "plants/lane_host.hpp"
 
 namespace ftc::sim {
 
 const std::vector<PlantKind>& plant_kinds() {
-  static const std::vector<PlantKind> kinds = {detail::spacecraft_kind(), detail::manipulator_kind(),
+  static const std::vector<PlantKind> kinds = {detail::spacecraft_kind(),
+                                               detail::manipulator_kind(),
                                                detail::hexarotor_kind()};  // <- add here
   return kinds;
 }
@@ -26,8 +26,8 @@ namespace {
 
 using RegisteredPlants = std::tuple<Spacecraft, Manipulator, Hexarotor>;  // <- and here
 
-// The loop compiled for the registered class the plant is (found by dynamic_cast), or for the
-// Plant<N, M> interface when it is none of them.
+// The one loop with the controller for its law: with the lane code of the registered class the
+// plant is (found by dynamic_cast), or through the Plant<N, M> interface when it is none of them.
 template <int N, int M, std::size_t I = 0>
 SimulationResult run_registered(const Plant<N, M>& plant, Controller<N, M>& controller,
                                 const Scenario& scenario, const SimulationOptions& options) {
@@ -35,10 +35,10 @@ SimulationResult run_registered(const Plant<N, M>& plant, Controller<N, M>& cont
     using P = std::tuple_element_t<I, RegisteredPlants>;
     if constexpr (P::kAxes == N && P::kActuators == M)
       if (const auto* p = dynamic_cast<const P*>(&plant))
-        return detail::run(*p, controller, scenario, options);
+        return detail::run_controller(*p, controller, scenario, options);
     return run_registered<N, M, I + 1>(plant, controller, scenario, options);
   } else {
-    return detail::run(plant, controller, scenario, options);
+    return detail::run_controller(plant, controller, scenario, options);
   }
 }
 
@@ -51,13 +51,26 @@ SimulationResult simulate(const Plant<N, M>& plant, Controller<N, M>& controller
   return run_registered(plant, controller, scenario, options);
 }
 
+namespace detail::isa_scalar {
+template <int N, int M>
+void object_plant_kernel(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFinal<N, M>& fin,
+                         const ObjectController& c, const ObjectPlant& p) {
+  run_closed_loop<double, true>(
+      su, [&] { return ObjectPlantLanes<N, M>(p); }, [&] { return ObjectLaw<N, M>(c); }, host, fin);
+}
+}  // namespace detail::isa_scalar
+
 // One per plant shape (n, m), with make_controller in controllers/factory.cpp.  <- and here
-template SimulationResult simulate<3, 4>(const Plant<3, 4>&, Controller<3, 4>&, const Scenario&,
-                                         const SimulationOptions&);
-template SimulationResult simulate<2, 3>(const Plant<2, 3>&, Controller<2, 3>&, const Scenario&,
-                                         const SimulationOptions&);
-template SimulationResult simulate<3, 6>(const Plant<3, 6>&, Controller<3, 6>&, const Scenario&,
-                                         const SimulationOptions&);
+#define FTC_SHAPE(N, M)                                                                            \
+  template SimulationResult simulate<N, M>(const Plant<N, M>&, Controller<N, M>&, const Scenario&, \
+                                           const SimulationOptions&);                              \
+  template void detail::isa_scalar::object_plant_kernel<N, M>(                                     \
+      const detail::PackSetup<N, M>&, detail::PackHost<N, M>&, detail::PackFinal<N, M>&,           \
+      const detail::ObjectController&, const detail::ObjectPlant&);
+FTC_SHAPE(3, 4)
+FTC_SHAPE(2, 3)
+FTC_SHAPE(3, 6)
+#undef FTC_SHAPE
 
 const PlantKind* find_plant_kind(std::string_view model) {
   for (const PlantKind& k : plant_kinds())
@@ -189,8 +202,7 @@ void PlantKind::scale(const UncertainParameter& u, std::vector<double>& values,
                       std::span<const double> factors) {
   switch (u.scaling) {
     case Scaling::elementwise:
-      for (std::size_t i = 0; i < values.size() && i < factors.size(); ++i)
-        values[i] *= factors[i];
+      for (std::size_t i = 0; i < values.size() && i < factors.size(); ++i) values[i] *= factors[i];
       return;
   }
 }
