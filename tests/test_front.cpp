@@ -6,16 +6,16 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <span>
 #include <tuple>
 #include <utility>
-#include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
-#include "ftc/sim/isa.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/isa.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/hypervolume.hpp"
 #include "ftc/tune/optimizers/pareto_bat.hpp"
@@ -83,9 +83,9 @@ TEST(Front, OfHandMadeTrialsWithReferenceKneeAndHypervolumePerIteration) {
   const tune::Job job = tune::parse_job(front_job(), "front");
   // log10 of (ise, tv): (0, 3) (1, 1) (3, 0) on the front; (2, 2) dominated by (1, 1); an
   // infeasible (0.1, 0.1); a repeat of (10, 10) later.
-  const std::vector<tune::Trial> trials = {trial(0, 1, 1000), trial(0, 100, 100),
+  const std::vector<tune::Trial> trials = {trial(0, 1, 1000),       trial(0, 100, 100),
                                            trial(0, 0.1, 0.1, 0.5), trial(1, 10, 10),
-                                           trial(1, 1000, 1), trial(2, 10, 10)};
+                                           trial(1, 1000, 1),       trial(2, 10, 10)};
   EXPECT_EQ(tune::front_trials(job, trials, trials.size()), (std::vector<std::size_t>{0, 3, 4}));
   EXPECT_EQ(tune::front_trials(job, trials, 3), (std::vector<std::size_t>{0, 1}));
   const tune::Front f = tune::make_front(job, trials);
@@ -135,8 +135,7 @@ TEST(Front, IncrementalHypervolumeHistoryIsTheFromScratchOne) {
       bool dominated = false;
       for (std::size_t j : kept) {
         const double *a = trials[j].goals.data(), *b = trials[i].goals.data();
-        dominated = dominated ||
-                    (a[0] <= b[0] && a[1] <= b[1] && (a[0] < b[0] || a[1] < b[1]));
+        dominated = dominated || (a[0] <= b[0] && a[1] <= b[1] && (a[0] < b[0] || a[1] < b[1]));
       }
       if (!dominated) front.push_back(i);
     }
@@ -223,8 +222,7 @@ TEST(Front, ARunOfPointsEachWithinItsNeighboursFloorIsNamedByItsFirst) {
 
 TEST(Front, PickRules) {
   const tune::Job job = tune::parse_job(front_job(), "front");
-  const std::vector<tune::Trial> trials = {trial(0, 1, 1000), trial(0, 10, 10),
-                                           trial(0, 1000, 1)};
+  const std::vector<tune::Trial> trials = {trial(0, 1, 1000), trial(0, 10, 10), trial(0, 1000, 1)};
   const tune::Front f = tune::make_front(job, trials);
   EXPECT_EQ(tune::pick_point(job, f, "knee"), 1u);
   EXPECT_EQ(tune::pick_point(job, f, "min:ise"), 0u);
@@ -337,9 +335,9 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
   // pick: each rule's gains file loads in the runtime and holds its point.
   const auto dir = fresh_dir("pick");
   tune::write_output_files(files, dir);
-  for (const std::string& rule : std::vector<std::string>{
-           "knee", "min:ise", "min:control_tv", "index:1",
-           "limit:control_tv<=" + points[0]["goals"][1].dump()}) {
+  for (const std::string& rule :
+       std::vector<std::string>{"knee", "min:ise", "min:control_tv", "index:1",
+                                "limit:control_tv<=" + points[0]["goals"][1].dump()}) {
     const json g = tune::pick_gains(dir, rule);
     const std::size_t i = g["goals"]["front"]["index"];
     EXPECT_EQ(g["tuned"]["Kp"], points[i]["parameters"]["Kp"]) << rule;
@@ -349,11 +347,10 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
     EXPECT_NO_THROW(runtime::parse_gains(g, rule)) << rule;
   }
   EXPECT_EQ(tune::pick_gains(dir, "knee"), gains);
-  EXPECT_EQ(tune::pick_gains(dir, "min:control_tv")["goals"]["front"]["index"],
-            points.size() - 1);
+  EXPECT_EQ(tune::pick_gains(dir, "min:control_tv")["goals"]["front"]["index"], points.size() - 1);
   // The CLI: a file written whole, exit 2 for a rule that picks nothing.
-  const CliResult ok = run_cli("pick '" + dir.string() + "' --rule index:0 --out '" +
-                                   (dir / "p0.json").string() + "'", dir);
+  const CliResult ok = run_cli(
+      "pick '" + dir.string() + "' --rule index:0 --out '" + (dir / "p0.json").string() + "'", dir);
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
   EXPECT_EQ(runtime::read_gains(dir / "p0.json").tuned.size(), 2u);
   const CliResult bad = run_cli("pick '" + dir.string() + "' --rule min:iae", dir);

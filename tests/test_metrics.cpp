@@ -422,16 +422,16 @@ TEST(Metrics, RecordSaysHowEachFieldCombinesOverScenarios) {
   EXPECT_EQ(over_scenarios(metric_field("control_tv"), std::vector<double>{1.0, 2.0}), 3.0);
   EXPECT_EQ(over_scenarios(metric_field("max_abs_u"), v), 2.0);
   EXPECT_EQ(over_scenarios(metric_field("peak_error_after_fault"), v), 2.0);
-  EXPECT_TRUE(std::isnan(
-      over_scenarios(metric_field("peak_error_after_fault"), std::vector<double>{nan})));
+  EXPECT_TRUE(
+      std::isnan(over_scenarios(metric_field("peak_error_after_fault"), std::vector<double>{nan})));
   EXPECT_THROW(metric_field("no_such_metric"), std::logic_error);
   // Every field of the tables is in the note under them with its unit, the control TV with its
   // definition; the others are not.
   const std::string note = ftc::sim::units_note(false);
   for (const ftc::sim::MetricField& f : ftc::sim::kMetricFields)
-    EXPECT_EQ(note.find(ftc::sim::plain_label(f) + " in " + std::string(f.unit)) !=
-                  std::string::npos,
-              f.in_tables)
+    EXPECT_EQ(
+        note.find(ftc::sim::plain_label(f) + " in " + std::string(f.unit)) != std::string::npos,
+        f.in_tables)
         << f.name << ": " << note;
   EXPECT_EQ(over_scenarios(metric_field("saturation_fraction"), v), 2.75 / 3.0);  // the mean
   EXPECT_NE(note.find("control TV = Σ‖u_k − u_{k−1}‖ (chattering)"), std::string::npos) << note;
@@ -488,7 +488,7 @@ TEST(Metrics, WindowMetricsMatchHandComputedTrajectory) {
   EXPECT_EQ(late.errors.control_energy, 4.5);
   EXPECT_EQ(late.errors.peak_command, 2.0);
   EXPECT_EQ(late.errors.saturation_fraction, 2.0 / 3.0);
-  EXPECT_EQ(late.errors.settling_time, 0.25);  // below 2 from the first sample after the fault
+  EXPECT_EQ(late.errors.settling_time, 0.25);       // below 2 from the first sample after the fault
   EXPECT_EQ(late.errors.steady_state_error, 0.25);  // the tail [1.5, inf): sample 3
   // Not below 0.2 by the window's end: +inf; no threshold, tail or fault: NaN.
   EXPECT_EQ(run(Window{}, 0.2, nan, {0.75}).errors.settling_time, inf);

@@ -304,8 +304,8 @@ TEST(TuningProblem, PeakMemoryDoesNotGrowWithTheMemberCount) {
   ASSERT_GE(large, 0);
   // 10^5 members of 8 bytes and a block of 8192 scenarios are about 15 MB; 40 MB is a generous
   // bound that an expanded ensemble (about 200 MB) would break.
-  EXPECT_LT(large - small, 40 * 1024) << "peak grew by " << small << " kB at 10^3 members and by "
-                                      << large << " kB at 10^5";
+  EXPECT_LT(large - small, 40 * 1024)
+      << "peak grew by " << small << " kB at 10^3 members and by " << large << " kB at 10^5";
 }
 
 // Capping (issue 27): counting the unknown values as 0 bounds every aggregate from below, to the
@@ -447,9 +447,12 @@ bool same_bits(double a, double b) { return a == b || (std::isnan(a) && std::isn
 // are unknown are those defined on every member.
 TEST(Capping, GoalsOfMetricsDefinedOnEveryMemberHaveALowerBound) {
   using tune::GoalMetric;
-  const GoalMetric bounded[] = {GoalMetric::ise,        GoalMetric::iae,
-                                GoalMetric::itae,       GoalMetric::control_tv,
-                                GoalMetric::control_energy, GoalMetric::peak_command};
+  const GoalMetric bounded[] = {GoalMetric::ise,
+                                GoalMetric::iae,
+                                GoalMetric::itae,
+                                GoalMetric::control_tv,
+                                GoalMetric::control_energy,
+                                GoalMetric::peak_command};
   const GoalMetric unbounded[] = {GoalMetric::saturation_fraction,
                                   GoalMetric::peak_error_after_fault, GoalMetric::settling_time,
                                   GoalMetric::steady_state_error};

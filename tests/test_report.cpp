@@ -742,7 +742,8 @@ namespace {
 
 // In the file's order: the parameters' order is the table's.
 nlohmann::ordered_json front_fixture() {
-  return nlohmann::ordered_json::parse(slurp(std::string(FTC_SOURCE_DIR) + "/tests/data/front-two-goals.json"));
+  return nlohmann::ordered_json::parse(
+      slurp(std::string(FTC_SOURCE_DIR) + "/tests/data/front-two-goals.json"));
 }
 
 void write_text(const std::filesystem::path& p, const std::string& text) {
@@ -777,8 +778,7 @@ TEST(FrontReport, ScatterMarksPickedBaselineComparedAndNoiseAndHypervolumeStates
       tune::report_detail::parse_front(front_fixture().dump(), "front.json", 7);
   write_text(dir / "history.csv", kFrontHistory);
   std::filesystem::create_directories(dir / "figures");
-  const auto figures =
-      tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::png);
+  const auto figures = tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::png);
   ASSERT_EQ(figures.size(), 2u);
   EXPECT_EQ(figures[0].file, "figures/front-pareto.png");
   EXPECT_EQ(figures[1].file, "figures/front-hypervolume.png");
@@ -824,8 +824,10 @@ TEST(FrontReport, ScatterMarksPickedBaselineComparedAndNoiseAndHypervolumeStates
 TEST(FrontReport, PanelPerPairOfSoftGoalsAndLinearAxisForZeroValues) {
   const auto dir = fresh_dir("front-pairs");
   nlohmann::ordered_json j = front_fixture();
-  j["goals"].push_back({{"metric", "saturation_fraction"}, {"window", {0, nullptr}},
-                        {"aggregate", "mean"}, {"minimize", true}});
+  j["goals"].push_back({{"metric", "saturation_fraction"},
+                        {"window", {0, nullptr}},
+                        {"aggregate", "mean"},
+                        {"minimize", true}});
   j["reference_point"].push_back(0.5);
   double v = 0;
   for (auto& p : j["points"]) {
@@ -962,8 +964,8 @@ TEST(FrontReport, RunWithTwoSoftGoalsGetsItsFrontDrawn) {
   j["goals"] = {{{"metric", "ise"}, {"window", {2, 5}}, {"minimize", true}},
                 {{"metric", "control_tv"}, {"minimize", true}},
                 {{"metric", "peak_command"}, {"at_most", 1e6}}};
-  j["tuning"]["algorithm"] = {{"type", "pagmo"}, {"name", "nsga2"}, {"population", 8},
-                              {"generations", 2}};
+  j["tuning"]["algorithm"] = {
+      {"type", "pagmo"}, {"name", "nsga2"}, {"population", 8}, {"generations", 2}};
   tune::TbbEvaluator evaluator(2);
   tune::write_outputs(tune::tune(tune::parse_job(j, "front"), evaluator), dir / "run");
   const tune::ReportResult r = tune::render_report(dir / "run");

@@ -126,7 +126,8 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
       const sim::MetricValues m = sim::MetricValues::of(e.scenarios[i]);
       std::printf("  %-16s", job.scenarios[i].name.c_str());
       for (std::size_t f = 0; f < sim::kMetricFieldCount; ++f)
-        if (sim::kMetricFields[f].in_tables && sim::kMetricFields[f].scope != sim::MetricScope::fault)
+        if (sim::kMetricFields[f].in_tables &&
+            sim::kMetricFields[f].scope != sim::MetricScope::fault)
           std::printf(" %12s", fmt(m.field(f)[0]).c_str());
       std::printf("  %s\n", e.scenarios[i].diverged ? "yes" : "no");
     }

@@ -421,9 +421,9 @@ struct MpiEvaluator::Impl {
   MpiOptions options;
   int size = 1;
   tbb::task_arena arena;
-  std::vector<int> threads;        // per rank
-  std::vector<std::string> host;   // per rank
-  std::uint64_t set_sent = 0;      // identity of the simulation set the workers hold
+  std::vector<int> threads;       // per rank
+  std::vector<std::string> host;  // per rank
+  std::uint64_t set_sent = 0;     // identity of the simulation set the workers hold
 
   Impl(const Session& s, MpiOptions o)
       : options(o),

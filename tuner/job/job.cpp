@@ -191,13 +191,13 @@ Ptr<sim::Scenario> make_scenario_shape() {
              schema::annotate(k.declared->range, item);
              if (!k.declared->unit.empty()) unit = " (" + k.declared->unit + ")";
            }
-           return json{{"type", "array"},
-                       {"items", item},
-                       {"description", "the true " + k.parameter + " of the simulated plant" +
-                                           unit + ", for a plant that declares it uncertain (" +
-                                           k.models +
-                                           "); the controller keeps the job's plant as its "
-                                           "model. Absent: the plant's"}};
+           return json{
+               {"type", "array"},
+               {"items", item},
+               {"description", "the true " + k.parameter + " of the simulated plant" + unit +
+                                   ", for a plant that declares it uncertain (" + k.models +
+                                   "); the controller keeps the job's plant as its "
+                                   "model. Absent: the plant's"}};
          }});
   }
   return o;
@@ -315,23 +315,21 @@ Ptr<ObjectiveConfig> make_objective_shape() {
             "ise = ∫‖e‖² dt, iae = ∫Σ|e_i| dt, itae = ∫t Σ|e_i| dt over the window");
   add_window_field(*o);
   add_aggregate_fields(*o);
-  o->rule([](const O& obj, const std::string& path, Errors& e) {
-    check_aggregate_keys(obj, path, e);
-  });
+  o->rule(
+      [](const O& obj, const std::string& path, Errors& e) { check_aggregate_keys(obj, path, e); });
   return o;
 }
 
-constexpr GoalMetric kGoalMetrics[] = {
-    GoalMetric::ise,
-    GoalMetric::iae,
-    GoalMetric::itae,
-    GoalMetric::control_tv,
-    GoalMetric::control_energy,
-    GoalMetric::peak_command,
-    GoalMetric::saturation_fraction,
-    GoalMetric::peak_error_after_fault,
-    GoalMetric::settling_time,
-    GoalMetric::steady_state_error};
+constexpr GoalMetric kGoalMetrics[] = {GoalMetric::ise,
+                                       GoalMetric::iae,
+                                       GoalMetric::itae,
+                                       GoalMetric::control_tv,
+                                       GoalMetric::control_energy,
+                                       GoalMetric::peak_command,
+                                       GoalMetric::saturation_fraction,
+                                       GoalMetric::peak_error_after_fault,
+                                       GoalMetric::settling_time,
+                                       GoalMetric::steady_state_error};
 
 Ptr<GoalConfig> make_goal_shape() {
   using G = GoalConfig;
@@ -361,8 +359,7 @@ Ptr<GoalConfig> make_goal_shape() {
               if (g.minimize) out["minimize"] = true;
             },
             [] {
-              return json{{"const", true},
-                          {"description", "a soft goal: the search minimises it"}};
+              return json{{"const", true}, {"description", "a soft goal: the search minimises it"}};
             }});
   o->optional_number("at_most", &G::at_most, schema::Range::positive(),
                      "a hard goal: the limit the aggregate must not exceed (> 0)");
@@ -375,11 +372,13 @@ Ptr<GoalConfig> make_goal_shape() {
   o->rule([](const G& g, const std::string& path, Errors& e) {
     check_aggregate_keys(g, path, e);
     if (!g.minimize && !g.at_most)
-      e.push_back({path, "needs \"minimize\": true (a soft goal) or \"at_most\": a limit (a "
-                         "hard goal)"});
+      e.push_back({path,
+                   "needs \"minimize\": true (a soft goal) or \"at_most\": a limit (a "
+                   "hard goal)"});
     else if (g.minimize && g.at_most)
-      e.push_back({path + "/at_most", "a goal is minimised or limited, not both; give the limit "
-                                      "as a second goal"});
+      e.push_back({path + "/at_most",
+                   "a goal is minimised or limited, not both; give the limit "
+                   "as a second goal"});
     if (g.threshold && g.metric != GoalMetric::settling_time)
       e.push_back({path + "/threshold", "is used only with metric \"settling_time\""});
     if (g.tail && g.metric != GoalMetric::steady_state_error)
@@ -709,21 +708,19 @@ namespace {
 // from each run's start, not after any scenario's end.
 void check_window(const Job& job, const sim::Window& w, WindowFrom from, const std::string& path,
                   Errors& errs) {
-    if (!std::isfinite(w.t0) || w.t0 < 0)
-    errs.push_back(
-        {path + "/0", "must be >= 0 (got " + json_io::number_text(w.t0) + ")"});
+  if (!std::isfinite(w.t0) || w.t0 < 0)
+    errs.push_back({path + "/0", "must be >= 0 (got " + json_io::number_text(w.t0) + ")"});
   else if (!(w.t1 > w.t0))
-    errs.push_back({path, "end " + json_io::number_text(w.t1) +
-                                             " must be after start " + json_io::number_text(w.t0)});
+    errs.push_back({path, "end " + json_io::number_text(w.t1) + " must be after start " +
+                              json_io::number_text(w.t0)});
   else if (std::isfinite(w.t1) && from == WindowFrom::start)
     for (const sim::Scenario& s : job.scenarios)
       if (std::isfinite(s.duration) && w.t1 > s.duration + 1e-12) {
-        errs.push_back({path + "/1",
-                        "end " + json_io::number_text(w.t1) + " is after the end of scenario \"" +
-                            s.name + "\" (" + json_io::number_text(s.duration) + " s)"});
+        errs.push_back({path + "/1", "end " + json_io::number_text(w.t1) +
+                                         " is after the end of scenario \"" + s.name + "\" (" +
+                                         json_io::number_text(s.duration) + " s)"});
         break;
       }
-
 }
 
 // pagmo's multi-objective algorithms search fronts only: a job of one objective (or of one soft
@@ -736,8 +733,9 @@ void validate_front_only(const Job& job, Errors& errs) {
   const std::string name = job.tuning->algorithm->to_json().value("name", "");
   if (const PagmoAlgorithmInfo* info = find_pagmo_algorithm(name); info && info->front)
     errs.push_back({"/tuning/algorithm/name",
-                    "pagmo's " + name + " searches a Pareto front: give the job two or more soft "
-                    "goals (\"minimize\": true), or name an algorithm of one objective"});
+                    "pagmo's " + name +
+                        " searches a Pareto front: give the job two or more soft "
+                        "goals (\"minimize\": true), or name an algorithm of one objective"});
 }
 
 // The goals against the job: a soft goal among them, windows inside the scenarios, the settling
@@ -760,10 +758,12 @@ void validate_goals(const Job& job, Errors& errs) {
   if (soft_goals >= 2 && job.tuning && job.tuning->algorithm &&
       !job.tuning->algorithm->searches_front())
     errs.push_back({"/tuning/algorithm/type",
-                    std::to_string(soft_goals) + " soft goals (\"minimize\": true) ask for a "
-                    "Pareto front, which algorithm " + job.tuning->algorithm->type() +
-                    " does not search for (bat and random do); or keep one soft goal and make "
-                    "the others limits (\"at_most\")"});
+                    std::to_string(soft_goals) +
+                        " soft goals (\"minimize\": true) ask for a "
+                        "Pareto front, which algorithm " +
+                        job.tuning->algorithm->type() +
+                        " does not search for (bat and random do); or keep one soft goal and make "
+                        "the others limits (\"at_most\")"});
   std::vector<json> seen;
   for (std::size_t i = 0; i < job.goals.size(); ++i) {
     const GoalConfig& g = job.goals[i];
@@ -779,10 +779,9 @@ void validate_goals(const Job& job, Errors& errs) {
         errs.push_back({p + "/" + key, std::string(to_string(m)) + " needs a " + key +
                                            ": give it here or as /metrics/" + job_key});
       else if (own && from_job && *own != *from_job)
-        errs.push_back({p + "/" + key,
-                        json_io::number_text(*own) + " differs from /metrics/" + job_key + " " +
-                            json_io::number_text(*from_job) +
-                            " (a run measures one; give it in one place)"});
+        errs.push_back({p + "/" + key, json_io::number_text(*own) + " differs from /metrics/" +
+                                           job_key + " " + json_io::number_text(*from_job) +
+                                           " (a run measures one; give it in one place)"});
     };
     settings(g.threshold, GoalMetric::settling_time, "threshold", "settling_threshold",
              &MetricsConfig::settling_threshold);
@@ -812,8 +811,9 @@ void validate_goals(const Job& job, Errors& errs) {
     seen.push_back(std::move(canonical));
   }
   if (!soft)
-    errs.push_back({"/goals", "needs one goal with \"minimize\": true (the search's objective); "
-                              "every goal here is a limit"});
+    errs.push_back({"/goals",
+                    "needs one goal with \"minimize\": true (the search's objective); "
+                    "every goal here is a limit"});
 }
 
 // The checks that span the job's parts: names, the scenarios against the plant's shape, the
@@ -840,8 +840,8 @@ void validate_job(const Job& job, Errors& errs) {
       errs.push_back({p + "/name", "duplicate scenario name \"" + s.name + "\""});
   }
 
-  if (job.goals.empty()) check_window(job, job.objective.window, job.objective.window_from,
-                                      "/objective/window", errs);
+  if (job.goals.empty())
+    check_window(job, job.objective.window, job.objective.window_from, "/objective/window", errs);
   validate_goals(job, errs);
   validate_front_only(job, errs);
 
@@ -1041,7 +1041,8 @@ ObjectiveConfig GoalConfig::measure() const {
 
 double GoalConfig::violation(double value) const {
   if (!at_most) return 0.0;
-  if (!(value <= std::numeric_limits<double>::max())) return std::numeric_limits<double>::infinity();
+  if (!(value <= std::numeric_limits<double>::max()))
+    return std::numeric_limits<double>::infinity();
   return std::max(0.0, value / *at_most - 1.0);
 }
 
@@ -1180,8 +1181,9 @@ Job parse_job(const json& j_in, const std::string& source,
   // that is an error integral), which is what the runs score by.
   const bool has_goals = j.is_object() && j.contains("goals");
   if (has_goals && j.contains("objective"))
-    errs.push_back({"/goals", "a job gives \"objective\" or \"goals\", not both (the objective "
-                              "is a single soft goal)"});
+    errs.push_back({"/goals",
+                    "a job gives \"objective\" or \"goals\", not both (the objective "
+                    "is a single soft goal)"});
   if (has_goals && j["goals"].is_array() && j["goals"].empty())
     errs.push_back({"/goals", "must hold at least one goal"});
   Job job;

@@ -216,8 +216,7 @@ sim::Scenario TuningProblem::member(std::size_t i) const {
 sim::Scenario TuningProblem::scenario(std::size_t i) const {
   if (i < set_->size()) return set_->scenario(i);
   if (i < scenarios()) return member(i);
-  throw std::out_of_range("scenario " + std::to_string(i) + " of " +
-                          std::to_string(scenarios()));
+  throw std::out_of_range("scenario " + std::to_string(i) + " of " + std::to_string(scenarios()));
 }
 
 TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed)
@@ -640,8 +639,8 @@ double TuningProblem::objective(std::span<const double> x, const ObjectiveOption
 }
 
 std::size_t front_objectives(const Job& job) {
-  const auto soft = static_cast<std::size_t>(
-      std::count_if(job.goals.begin(), job.goals.end(), [](const GoalConfig& g) { return g.soft(); }));
+  const auto soft = static_cast<std::size_t>(std::count_if(
+      job.goals.begin(), job.goals.end(), [](const GoalConfig& g) { return g.soft(); }));
   return soft >= 2 ? soft : 0;
 }
 
@@ -656,8 +655,7 @@ ObjectiveVector objective_vector(const Job& job, const Evaluation& e) {
 }
 
 std::unique_ptr<Optimizer> make_optimizer(const TuningProblem& problem,
-                                          const AlgorithmSettings& algorithm,
-                                          std::uint64_t seed) {
+                                          const AlgorithmSettings& algorithm, std::uint64_t seed) {
   if (const std::size_t n = front_objectives(problem.job())) {
     if (!algorithm.searches_front())  // Job::validate refuses this; a program may not ask it
       throw InputError("job " + problem.job().name, "/tuning/algorithm/type",
@@ -702,8 +700,8 @@ std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>&
       if (t.accepted && !t.capped) best = &t;
     if (best) {
       const sim::ControllerConfig c = problem_.controller_with(best->parameters);
-      const CandidateOutcome o = problem_.evaluate(std::span<const sim::ControllerConfig>(&c, 1),
-                                                   evaluator_, 0, false)[0];
+      const CandidateOutcome o =
+          problem_.evaluate(std::span<const sim::ControllerConfig>(&c, 1), evaluator_, 0, false)[0];
       simulations_ += static_cast<std::int64_t>(problem_.scenarios());
       incumbent_ = o.evaluation.values;
     }

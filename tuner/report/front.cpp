@@ -86,8 +86,7 @@ std::string goal_label(const json& goal, std::size_t scenarios) {
     const auto seconds = [](double t) { return detail::format_number(t, "%.6g") + " s"; };
     const json w = goal.value("window", json::array({0, nullptr}));
     const double t0 = w.is_array() && w.size() == 2 ? json_number_or(w[0], 0) : 0;
-    const double t1 =
-        w.is_array() && w.size() == 2 ? json_number_or(w[1], INFINITY) : INFINITY;
+    const double t1 = w.is_array() && w.size() == 2 ? json_number_or(w[1], INFINITY) : INFINITY;
     std::string window;
     if (goal.value("window_from", "start") == "first_fault")
       window = (t0 == 0 ? std::string("first fault") : "first fault + " + seconds(t0)) + ", " +
@@ -100,11 +99,11 @@ std::string goal_label(const json& goal, std::size_t scenarios) {
   const std::string a = goal.value("aggregate", "mean");
   std::string aggregate = a;
   if (a == "quantile")
-    aggregate = "quantile" + detail::format_number(json_number_or(goal.value("q", json(0.9)), 0.9),
-                                                   "%.3g");
+    aggregate =
+        "quantile" + detail::format_number(json_number_or(goal.value("q", json(0.9)), 0.9), "%.3g");
   else if (a == "cvar")
-    aggregate = "CVaR" + detail::format_number(
-                             json_number_or(goal.value("alpha", json(0.9)), 0.9), "%.3g");
+    aggregate =
+        "CVaR" + detail::format_number(json_number_or(goal.value("alpha", json(0.9)), 0.9), "%.3g");
   return aggregate + " of " + value + " over " + std::to_string(scenarios) + " scenarios";
 }
 
@@ -162,9 +161,8 @@ Front parse_front(const std::string& text, const std::string& file, std::size_t 
       point.parameters.emplace_back(key, r.number(params[key], p + "/parameters/" + key, NAN));
     point.goals = r.numbers(r.member(pt, "goals", p), p + "/goals", G, INFINITY);
     point.feasible = r.boolean(pt, "feasible", p);
-    point.violation = pt.contains("violation")
-                          ? r.number(pt["violation"], p + "/violation", INFINITY)
-                          : 0.0;
+    point.violation =
+        pt.contains("violation") ? r.number(pt["violation"], p + "/violation", INFINITY) : 0.0;
     point.noise_floor = pt.contains("noise_floor")
                             ? r.numbers(pt["noise_floor"], p + "/noise_floor", G, NAN)
                             : std::vector<double>(G, NAN);
@@ -223,9 +221,10 @@ std::optional<Front> read_front(const fs::path& run_dir, const json& gains, std:
   const std::optional<std::string> text = read_file(file);
   if (!text) throw InputError(file.string(), "", "cannot be read");
   const json j = json::parse(*text, nullptr, false);
-  const std::string own = gains.value(json::json_pointer("/job/sha256"), json("")).is_string()
-                              ? gains.value(json::json_pointer("/job/sha256"), json("")).get<std::string>()
-                              : "";
+  const std::string own =
+      gains.value(json::json_pointer("/job/sha256"), json("")).is_string()
+          ? gains.value(json::json_pointer("/job/sha256"), json("")).get<std::string>()
+          : "";
   if (j.is_object() && j.value("job_sha256", json("")) != own) return std::nullopt;
   Front front = parse_front(*text, file.string(), scenarios);
   for (FrontPoint& p : front.points)
@@ -308,9 +307,9 @@ std::vector<std::pair<double, double>> hypervolume_history(const fs::path& file)
       from = comma + 1;
     }
     if (cells.size() != header.size())
-      throw InputError(file.string(), "", "has a row of " + std::to_string(cells.size()) +
-                                              " cells under a header of " +
-                                              std::to_string(header.size()));
+      throw InputError(file.string(), "",
+                       "has a row of " + std::to_string(cells.size()) +
+                           " cells under a header of " + std::to_string(header.size()));
     const auto parse = [&](const std::string& c) {
       double v = NAN;
       if (c.empty()) return v;
@@ -512,15 +511,14 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       const std::string name = (k.role == "baseline" ? "job's gains: " : "") + k.label +
                                (k.feasible ? "" : " (infeasible)");
       if (!std::isfinite(vx) || !std::isfinite(vy)) continue;
-      const std::string colour = plot::viridis(0.25 + 0.6 * static_cast<double>(c) /
-                                                          std::max<std::size_t>(1, front.compared.size()));
+      const std::string colour = plot::viridis(
+          0.25 + 0.6 * static_cast<double>(c) / std::max<std::size_t>(1, front.compared.size()));
       // Off the panel's scale: at its edge, with its values in the label.
       const bool off = !ax.inside(vx) || !ay.inside(vy);
       const double px = off ? ax.clamp(vx) : vx, py = off ? ay.clamp(vy) : vy;
-      const std::string text =
-          off ? name + " (off scale: " + detail::format_number(vx) + ", " +
-                    detail::format_number(vy) + ")"
-              : name;
+      const std::string text = off ? name + " (off scale: " + detail::format_number(vx) + ", " +
+                                         detail::format_number(vy) + ")"
+                                   : name;
       cmd += block(num(px) + "," + num(py) + "\n") + " using 1:2 with points pt " +
              std::to_string(kComparedMarks[c % 5] - (off ? 1 : 0)) + " ps 1.8 lc rgb '" + colour +
              "' title " + gp(name) + ", ";
@@ -529,8 +527,8 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       static const double kRaise[] = {0.9, -1.3, 2.0};
       const bool right = off && ax.to(px) >= ax.hi, top = off && ay.to(py) >= ay.hi;
       g << "set label " << gp(text) << " at " << num(px) << "," << num(py)
-        << (right ? " right offset -1," : " offset 1,")
-        << num(top ? -1.3 : kRaise[c % 3]) << " noenhanced front\n";
+        << (right ? " right offset -1," : " offset 1,") << num(top ? -1.3 : kRaise[c % 3])
+        << " noenhanced front\n";
     }
     g << cmd.substr(0, cmd.size() - 2) << "\n";
   }
@@ -549,8 +547,9 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
                               "them on every soft goal.";
   if (!any_noise) caption += " No point's noise floor was measured.";
   if (any_infeasible) caption += " Crosses are points that violate a hard goal.";
-  caption += " A compared controller far off the front's scale is drawn at the panel's edge "
-             "(open marker), its values in its label.";
+  caption +=
+      " A compared controller far off the front's scale is drawn at the panel's edge "
+      "(open marker), its values in its label.";
   if (undrawn)
     caption += " " + std::to_string(undrawn) +
                " point-panel(s) with a diverged or missing goal value are not drawn.";
@@ -566,8 +565,8 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
   const std::string hv_file = "figures/front-hypervolume" + ext;
   // The unit: decades to the power of the soft goals' count.
   static const char* const kPowers[] = {"", "", "²", "³", "⁴", "⁵", "⁶", "⁷", "⁸", "⁹"};
-  const std::string decades = S < 10 ? std::string("decade") + kPowers[S]
-                                     : "decade^{" + std::to_string(S) + "}";
+  const std::string decades =
+      S < 10 ? std::string("decade") + kPowers[S] : "decade^{" + std::to_string(S) + "}";
   // Whole iterations on the x axis, about ten tics.
   const double last = hv.back().first;
   const std::string xstep = num(std::max(1.0, std::ceil(last / 10)));

@@ -44,7 +44,7 @@ struct FrontCompared {
 
 struct Front {
   std::vector<FrontGoal> goals;
-  std::vector<std::size_t> soft;       // indices of the soft goals in `goals`
+  std::vector<std::size_t> soft;        // indices of the soft goals in `goals`
   std::vector<double> reference_point;  // per soft goal, in log10 of it
   double hypervolume = 0;
   std::optional<std::size_t> picked;

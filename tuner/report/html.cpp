@@ -185,8 +185,8 @@ void evaluation_section(const fs::path& run_dir, const Job& job, std::ostringstr
 
 // The Pareto front (front.json): what it is, a table of its points with the picked one marked
 // and the compared controllers under them, and its figures.
-void front_section(const fs::path& run_dir, const Front& front,
-                   const std::vector<Figure>& figures, std::ostringstream& h) {
+void front_section(const fs::path& run_dir, const Front& front, const std::vector<Figure>& figures,
+                   std::ostringstream& h) {
   const std::size_t G = front.goals.size();
   const auto value = [](double v) { return detail::format_number(v, "%.6g"); };
   if (front.points.empty()) {
@@ -218,9 +218,10 @@ void front_section(const fs::path& run_dir, const Front& front,
   h << " The noise floor is each goal's relative spread over a point's perturbed re-runs, where "
        "the run measured it (\u2013 elsewhere); ";
   if (twinned)
-    h << twinned << " point(s) differ from another by no more than the noise floor of one of "
-                    "the two on every soft goal (marked below): their differences are noise, "
-                    "not a trade-off.";
+    h << twinned
+      << " point(s) differ from another by no more than the noise floor of one of "
+         "the two on every soft goal (marked below): their differences are noise, "
+         "not a trade-off.";
   else
     h << "no two points differ by less than the noise floor of one of them on every soft goal.";
   h << "</p>\n<table class=\"front\"><tr><th>#</th>";
@@ -229,8 +230,7 @@ void front_section(const fs::path& run_dir, const Front& front,
     h << "<th>" << html_escape(g.label) << " [" << html_escape(g.unit) << "]"
       << (g.soft ? " (min)" : " ≤ " + value(g.at_most)) << "</th>";
   h << "<th>feasible</th><th>violation</th>";
-  for (const FrontGoal& g : front.goals)
-    h << "<th>noise floor " << html_escape(g.label) << "</th>";
+  for (const FrontGoal& g : front.goals) h << "<th>noise floor " << html_escape(g.label) << "</th>";
   h << "<th>trial</th><th>note</th></tr>\n";
   for (std::size_t i = 0; i < front.points.size(); ++i) {
     const FrontPoint& p = front.points[i];
@@ -346,8 +346,7 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
     };
     // A window field's null is a diverged run (+inf), another's a value never reached.
     const auto cell = [&](const sim::MetricField& f, const json& v) {
-      h << "<td>"
-        << detail::format_number(f.scope == MetricScope::window ? integral(v) : num_or(v))
+      h << "<td>" << detail::format_number(f.scope == MetricScope::window ? integral(v) : num_or(v))
         << "</td>";
     };
     for (const sim::MetricField& f : sim::kMetricFields)

@@ -97,14 +97,12 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
       fs::remove(e.path());
   ReportResult result;
   for (const report_detail::Figure& f : figures) result.figures.push_back(run_dir / f.file);
-  for (const report_detail::Figure& f : front_figures)
-    result.figures.push_back(run_dir / f.file);
+  for (const report_detail::Figure& f : front_figures) result.figures.push_back(run_dir / f.file);
   if (!options.html) return result;
   result.html = run_dir / "report.html";
-  write_file_atomic(result.html, report_detail::report_html(run_dir, job, job_text, gains,
-                                                            comparison, run, figures,
-                                                            front ? &*front : nullptr,
-                                                            front_figures));
+  write_file_atomic(result.html,
+                    report_detail::report_html(run_dir, job, job_text, gains, comparison, run,
+                                               figures, front ? &*front : nullptr, front_figures));
   return result;
 }
 

@@ -1,10 +1,10 @@
 #include "ftc/tune/run/front.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <cmath>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -100,7 +100,8 @@ std::size_t goal_named(const Job& job, const std::string& metric) {
   for (std::size_t k = 0; k < job.goals.size(); ++k)
     if (metric == to_string(job.goals[k].metric)) return k;
   std::string known;
-  for (const GoalConfig& g : job.goals) known += (known.empty() ? "" : ", ") + std::string(to_string(g.metric));
+  for (const GoalConfig& g : job.goals)
+    known += (known.empty() ? "" : ", ") + std::string(to_string(g.metric));
   refuse("/rule", "no goal of the job is \"" + metric + "\" (its goals: " + known + ")");
 }
 
@@ -248,7 +249,8 @@ std::size_t pick_point(const Job& job, const Front& front, const std::string& ru
   const std::vector<FrontPoint>& p = front.points;
   if (rule == "knee") return knee_of(log_points(front));
   const auto colon = rule.find(':');
-  const std::string kind = rule.substr(0, colon), arg = colon == std::string::npos ? "" : rule.substr(colon + 1);
+  const std::string kind = rule.substr(0, colon),
+                    arg = colon == std::string::npos ? "" : rule.substr(colon + 1);
   if (colon != std::string::npos && kind == "index") {
     const double n = parse_number(arg, "index");
     if (n != std::floor(n) || n < 0 || n >= static_cast<double>(p.size()))
@@ -279,8 +281,8 @@ std::size_t pick_point(const Job& job, const Front& front, const std::string& ru
     for (std::size_t i = 0; i < p.size(); ++i)
       if (p[i].goals[g] <= x && (!best || p[i].goals[by] < p[*best].goals[by])) best = i;
     if (!best)
-      refuse("/rule", "no point of the front has " + arg.substr(0, le) + " <= " +
-                          json_io::number_text(x));
+      refuse("/rule",
+             "no point of the front has " + arg.substr(0, le) + " <= " + json_io::number_text(x));
     return *best;
   }
   refuse("/rule", "expected knee, min:METRIC, limit:METRIC<=X or index:N, got \"" + rule + "\"");
@@ -319,9 +321,9 @@ json front_document(const Job& job, const std::string& job_sha256, std::uint64_t
     for (double v : p.goals) values.push_back(json_number(v));
     for (const std::optional<double>& n : p.noise_floor)
       noise.push_back(n ? json_number(*n) : json());
-    json point = {{"parameters", parameters}, {"goals", values},
+    json point = {{"parameters", parameters},       {"goals", values},
                   {"feasible", !(p.violation > 0)}, {"violation", json_number(p.violation)},
-                  {"noise_floor", noise}, {"trial", p.trial}};
+                  {"noise_floor", noise},           {"trial", p.trial}};
     if (p.within_noise_of) point["within_noise_of"] = *p.within_noise_of;
     points.push_back(std::move(point));
   }
@@ -434,8 +436,10 @@ namespace {
 
 json read_json_file(const std::filesystem::path& file) {
   std::ifstream in(file);
-  if (!in) throw InputError(file.string(), "", "cannot be read (is this a run directory of a job "
-                                               "with two or more soft goals?)");
+  if (!in)
+    throw InputError(file.string(), "",
+                     "cannot be read (is this a run directory of a job "
+                     "with two or more soft goals?)");
   try {
     return json::parse(in);
   } catch (const json::exception& e) {
@@ -465,9 +469,9 @@ std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t r
   const std::vector<std::string> header = split(line);
   for (std::size_t i = 0; i <= row; ++i)
     if (!std::getline(in, line))
-      throw InputError(source, path,
-                       "is trial " + std::to_string(row) + ", a row " + file.string() +
-                           " does not have");
+      throw InputError(
+          source, path,
+          "is trial " + std::to_string(row) + ", a row " + file.string() + " does not have");
   const std::vector<std::string> cells = split(line);
   std::vector<double> out;
   for (const std::string& n : names) {
@@ -476,7 +480,7 @@ std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t r
     if (it == header.end() || k >= cells.size())
       throw InputError(file.string(), "", "has no column " + n);
     const std::string& c = cells[k];
-    out.push_back(c == "inf" ? std::numeric_limits<double>::infinity()
+    out.push_back(c == "inf"  ? std::numeric_limits<double>::infinity()
                   : c.empty() ? std::numeric_limits<double>::quiet_NaN()
                               : std::strtod(c.c_str(), nullptr));
   }
@@ -499,9 +503,9 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
     throw InputError(gains_file, "/goals", "expected an object (the run's goals)");
   if (!g["goals"].contains("goals") || !g["goals"]["goals"].is_array() ||
       g["goals"]["goals"].size() != job.goals.size())
-    throw InputError(gains_file, "/goals/goals",
-                     "expected an array of the job's " + std::to_string(job.goals.size()) +
-                         " goals");
+    throw InputError(
+        gains_file, "/goals/goals",
+        "expected an array of the job's " + std::to_string(job.goals.size()) + " goals");
   for (std::size_t k = 0; k < job.goals.size(); ++k)
     if (!g["goals"]["goals"][k].is_object())
       throw InputError(gains_file, "/goals/goals/" + std::to_string(k), "expected an object");
@@ -514,15 +518,16 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
     g["controller"][name] = p.parameters[j];
     g["tuned"][name] = p.parameters[j];
   }
-  const std::vector<double> cells = trial_cells(run / "trials.csv", p.trial, {"objective", "fitness"},
-                                             (run / "front.json").string(),
-                                             "/points/" + std::to_string(i) + "/trial");
+  const std::vector<double> cells =
+      trial_cells(run / "trials.csv", p.trial, {"objective", "fitness"},
+                  (run / "front.json").string(), "/points/" + std::to_string(i) + "/trial");
   g["objective"]["value"] = json_number(cells[0]);
   g["fitness"] = json_number(cells[1]);
   json& goals = g["goals"];
   for (std::size_t k = 0; k < job.goals.size(); ++k) {
     goals["goals"][k]["value"] = json_number(p.goals[k]);
-    if (job.goals[k].at_most) goals["goals"][k]["violation"] = json_number(job.goals[k].violation(p.goals[k]));
+    if (job.goals[k].at_most)
+      goals["goals"][k]["violation"] = json_number(job.goals[k].violation(p.goals[k]));
   }
   goals["total_violation"] = json_number(p.violation);
   goals["feasible"] = !(p.violation > 0);
@@ -530,7 +535,8 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
   front.picked = i;
   front.rule = rule;
   goals["rule"] = front_rule_text(front);
-  goals["front"] = {{"index", i}, {"rule", rule}, {"points", front.points.size()}, {"trial", p.trial}};
+  goals["front"] = {
+      {"index", i}, {"rule", rule}, {"points", front.points.size()}, {"trial", p.trial}};
   if (i != measured) g.erase("noise_floor");  // measured at the run's own point
   return g;
 }

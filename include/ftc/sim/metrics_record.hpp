@@ -15,8 +15,8 @@
 #include <cstdint>
 #include <cstring>
 #include <iterator>
-#include <stdexcept>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <type_traits>

@@ -43,11 +43,11 @@ struct Evaluation {
   // The job's metric on every scenario (listed, then members), +inf for a diverged run: what
   // the summaries and the capping order read, 8 bytes a member.
   std::vector<double> values;
-  double objective = 0.0;               // the aggregate; +inf when it takes a diverged run
-  double fitness = 0.0;                 // 1/objective; 0 when the objective is +inf
-  bool diverged = false;                // some scenario diverged
-  int diverged_count = 0;               // how many (counted or not)
-  int diverged_counted = 0;             // how many of the counted ones
+  double objective = 0.0;    // the aggregate; +inf when it takes a diverged run
+  double fitness = 0.0;      // 1/objective; 0 when the objective is +inf
+  bool diverged = false;     // some scenario diverged
+  int diverged_count = 0;    // how many (counted or not)
+  int diverged_counted = 0;  // how many of the counted ones
   // A job with goals: each goal's aggregate, in the job's order, and the total normalised
   // violation of its hard goals (fitness is then constrained_fitness(1/objective, violation)).
   std::vector<double> goals;

@@ -29,11 +29,10 @@
 // knee, min, limit, index) may pick one.
 #include <cstddef>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/problem/problem.hpp"
@@ -44,7 +43,7 @@ inline constexpr const char* kFrontSchema = "ftctune.front/1";
 inline constexpr double kReferenceMarginDecades = 0.1;
 
 struct FrontPoint {
-  Decision parameters;       // natural units, in the space's order
+  Decision parameters;        // natural units, in the space's order
   std::vector<double> goals;  // every goal's value, in the job's goal order
   double violation = 0.0;     // 0: on the front every point is feasible
   std::size_t trial = 0;      // row of trials.csv
@@ -54,7 +53,7 @@ struct FrontPoint {
 };
 
 struct Front {
-  std::vector<std::size_t> soft;  // the soft goals' indices in the job's goals
+  std::vector<std::size_t> soft;   // the soft goals' indices in the job's goals
   std::vector<FrontPoint> points;  // sorted by the first soft goal, ascending
   std::vector<double> reference;   // log10, one per soft goal
   double hypervolume = 0.0;
