@@ -260,7 +260,9 @@ struct Problem {
     for (const auto& o : out)
       for (const sim::Metrics& m : o.evaluation.scenarios) {
         segments = std::max(segments, m.extra.size());
-        faults = std::max(faults, m.peak_error_after_fault.size());
+        for (const sim::MetricField& f : sim::kMetricFields)
+          if (f.scope == sim::MetricScope::fault)
+            faults = std::max(faults, (m.*f.per_fault).size());
       }
     std::map<std::string, std::vector<double>> num;
     std::vector<std::string> order;
@@ -281,7 +283,7 @@ struct Problem {
         candidate.push_back(static_cast<std::int64_t>(i));
         scenario.push_back(problem.scenario(s).name);
         for (std::size_t j = 0; j < names.size(); ++j) column(names[j]).push_back(r.rows[i][j]);
-        column("objective").push_back(m.objective(problem.job().objective.metric));
+        column("objective").push_back(problem.job().objective.value(m));
         for (const sim::MetricField& f : sim::kMetricFields) {
           const std::string name(f.name);
           switch (f.scope) {

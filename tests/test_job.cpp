@@ -89,7 +89,7 @@ TEST(JobLoader, FillsDefaultsForOmittedKeys) {
   EXPECT_EQ(job.plant.model, "spacecraft");
   EXPECT_EQ(job.plant.values, (std::vector<double>{20.0, 17.0, 15.0, 1.1e-3}));
   EXPECT_EQ(job.controller.c2, 9.0);
-  EXPECT_EQ(job.objective.metric, sim::Metric::ise);
+  EXPECT_EQ(job.objective.metric->name, "ise");
   EXPECT_FALSE(job.tuning.has_value());
 }
 
@@ -602,13 +602,14 @@ TEST(JobGoals, ParseWriteBackCanonicallyAndGiveTheObjective) {
   const tune::Job job = tune::parse_job(with_goals(goals), "t");
   ASSERT_EQ(job.goals.size(), 4u);
   EXPECT_TRUE(job.goals[0].soft());
-  EXPECT_EQ(job.goals[1].metric, tune::GoalMetric::control_tv);
+  EXPECT_EQ(job.goals[1].metric, &sim::kMetricFields[sim::metric_index("control_tv")]);
   EXPECT_EQ(job.goals[1].aggregate, tune::Aggregate::cvar);
   EXPECT_EQ(job.goals[1].alpha, 0.8);
   EXPECT_EQ(job.goals[2].at_most, 17.9);
   EXPECT_EQ(job.goals[3].window_from, tune::WindowFrom::first_fault);
   // The soft goal on ise is the objective the runs score by.
-  EXPECT_EQ(job.objective.metric, sim::Metric::ise);
+  EXPECT_EQ(job.objective.metric, job.goals[0].metric);
+  EXPECT_EQ(job.objective.metric->name, "ise");
   EXPECT_EQ(job.objective.window.t0, 10.0);
   EXPECT_EQ(job.objective.window.t1, 30.0);
   // Written back with every default filled in, without an objective, and stable.
@@ -632,6 +633,85 @@ TEST(JobGoals, ParseWriteBackCanonicallyAndGiveTheObjective) {
   EXPECT_EQ(job.goals[2].violation(std::numeric_limits<double>::infinity()),
             std::numeric_limits<double>::infinity());
   EXPECT_EQ(job.goals[0].violation(1e9), 0.0);  // soft: never violated
+}
+
+// Which metrics a goal and the objective may name, whether a goal takes a window, and which one
+// takes a threshold or a tail: each from the metrics record's traits, for every field, and the
+// JSON Schema's enums are the table's.
+TEST(JobLoader, GoalMetricsAndTheirChecksComeFromTheMetricsRecord) {
+  const auto has_error = [](const json& j, const std::string& path, const std::string& text) {
+    for (const FieldError& e : errors_of(j))
+      if (e.path == path && e.message.find(text) != std::string::npos) return true;
+    return false;
+  };
+  std::vector<std::string> goal_names, objective_names;
+  for (const sim::MetricField& f : sim::kMetricFields) {
+    const std::string name(f.name);
+    if (f.goal) goal_names.push_back(name);
+    if (f.objective) objective_names.push_back(name);
+    // What the field is measured against, given in the goal.
+    json goal = {{"metric", name}, {"at_most", 1}};
+    if (f.setting == sim::MetricSetting::settling_threshold) goal["threshold"] = 0.05;
+    if (f.setting == sim::MetricSetting::steady_state_tail) goal["tail"] = 2;
+    const json limited = with_goals({soft_ise(), goal});
+    if (!f.goal) {
+      EXPECT_TRUE(has_error(limited, "/goals/1/metric", "must be one of")) << name;
+      continue;
+    }
+    const tune::Job job = tune::parse_job(limited, name);
+    EXPECT_EQ(job.goals[1].metric, &f) << name;
+    EXPECT_EQ(job.goals[1].windowed(), f.scope == sim::MetricScope::window) << name;
+    // A window only for a window field.
+    json windowed = goal;
+    windowed["window"] = {1, 2};
+    const json with_window = with_goals({soft_ise(), windowed});
+    if (f.scope == sim::MetricScope::window)
+      EXPECT_NO_THROW(tune::parse_job(with_window, name)) << name;
+    else
+      EXPECT_TRUE(has_error(with_window, "/goals/1/window",
+                            name + " is measured over the whole run; it takes no window"))
+          << name;
+    // A threshold or tail only for the field measured against it.
+    for (const auto& [key, setting] :
+         {std::pair{"threshold", sim::MetricSetting::settling_threshold},
+          std::pair{"tail", sim::MetricSetting::steady_state_tail}}) {
+      json extra = goal;
+      extra[key] = 1;
+      const json j = with_goals({soft_ise(), extra});
+      EXPECT_EQ(has_error(j, std::string("/goals/1/") + key, "is used only with metric"),
+                f.setting != setting)
+          << name << " " << key;
+      if (f.setting == setting)  // and it is needed
+        EXPECT_TRUE(has_error(with_goals({soft_ise(), {{"metric", name}, {"at_most", 1}}}),
+                              std::string("/goals/1/") + key, name + " needs a " + key))
+            << name;
+    }
+    // One soft goal is the objective: only a field that can be.
+    json soft = goal;
+    soft.erase("at_most");
+    soft["minimize"] = true;
+    if (f.objective) {
+      EXPECT_EQ(tune::parse_job(with_goals({soft}), name).objective.metric, &f) << name;
+    } else {
+      EXPECT_TRUE(
+          has_error(with_goals({soft}), "/goals/0/metric",
+                    "a single soft goal is the search's objective: ise, iae or itae (got " + name))
+          << name;
+    }
+  }
+  for (const sim::MetricField& f : sim::kMetricFields) {
+    json j = table1();
+    j["objective"]["metric"] = f.name;
+    if (f.objective)
+      EXPECT_EQ(tune::parse_job(j, "objective").objective.metric, &f) << f.name;
+    else
+      EXPECT_TRUE(has_error(j, "/objective/metric", "must be \"ise\", \"iae\" or") ||
+                  has_error(j, "/objective/metric", "must be one of"))
+          << f.name;
+  }
+  const json schema = tune::job_json_schema();
+  EXPECT_EQ(schema["properties"]["goals"]["items"]["properties"]["metric"]["enum"], goal_names);
+  EXPECT_EQ(schema["properties"]["objective"]["properties"]["metric"]["enum"], objective_names);
 }
 
 TEST(JobGoals, BadGoalsAreRejectedAtTheirPaths) {

@@ -95,7 +95,7 @@ void summary_table(const json& comparison, const Job& job, std::ostringstream& h
     << (first.value("counted", 0) < first.value("scenarios", 0)
             ? ", and the objective leaves them out"
             : "")
-    << ". Values are " << html_escape(sim::to_string(job.objective.metric))
+    << ". Values are " << html_escape(std::string(job.objective.metric->name))
     << " per scenario; quantiles by nearest rank.</p>\n<table><tr><th>controller</th><th>"
     << html_escape(objective_label(job))
     << "</th><th>mean</th><th>median</th><th>p90</th><th>max</th><th>CVaR"

@@ -54,11 +54,6 @@ std::string parameter_unit(const std::string& name, sim::ControllerType type) {
   return "";
 }
 
-// The unit of a metric's value over a window (metrics.hpp).
-const char* metric_unit(sim::Metric m) {
-  return m == sim::Metric::ise ? "rad²·s" : m == sim::Metric::iae ? "rad·s" : "rad·s²";
-}
-
 }  // namespace
 
 LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
@@ -187,7 +182,7 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   // Coloured by the relative excess over the best point, objective/min − 1, on a log scale: a
   // landscape whose objective spans 0.2 % is then as readable as one that spans decades. The
   // best point itself (excess 0) takes the colour of a tenth of the smallest positive excess.
-  const std::string metric = sim::to_string(job.objective.metric);
+  const std::string metric = std::string(job.objective.metric->name);
   double least_excess = std::numeric_limits<double>::infinity();
   for (const CandidateOutcome& o : outcomes) {
     const double x = o.evaluation.objective / r.best_objective - 1;
@@ -212,7 +207,7 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   const std::string title =
       objective_label(job_in) + " of " + job.name + " over " + params[0] + " and " + params[1] +
       "\nlowest on the grid " + detail::format_number(r.best_objective, "%.7g") + " " +
-      metric_unit(job.objective.metric) + " at " + params[0] + " = " +
+      std::string(job.objective.metric->unit) + " at " + params[0] + " = " +
       detail::format_number(r.best[0], "%.5g") + ", " + params[1] + " = " +
       detail::format_number(r.best[1], "%.5g") +
       (fixed_text.empty() ? std::string()

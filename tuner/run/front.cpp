@@ -98,10 +98,10 @@ std::size_t knee_of(const std::vector<std::vector<double>>& p) {
 // The goal named by a metric in a rule.
 std::size_t goal_named(const Job& job, const std::string& metric) {
   for (std::size_t k = 0; k < job.goals.size(); ++k)
-    if (metric == to_string(job.goals[k].metric)) return k;
+    if (metric == job.goals[k].metric->name) return k;
   std::string known;
   for (const GoalConfig& g : job.goals)
-    known += (known.empty() ? "" : ", ") + std::string(to_string(g.metric));
+    known += (known.empty() ? "" : ", ") + std::string(g.metric->name);
   refuse("/rule", "no goal of the job is \"" + metric + "\" (its goals: " + known + ")");
 }
 
@@ -345,7 +345,7 @@ json front_document(const Job& job, const std::string& job_sha256, std::uint64_t
 std::string front_csv(const Job& job, const Front& front) {
   std::string s = "index";
   std::vector<std::string> labels;
-  for (const GoalConfig& g : job.goals) labels.push_back(to_string(g.metric));
+  for (const GoalConfig& g : job.goals) labels.push_back(std::string(g.metric->name));
   // Two goals of one metric (other windows) are told apart by their position.
   for (std::size_t k = 0; k < labels.size(); ++k)
     if (std::count(labels.begin(), labels.end(), labels[k]) > 1)

@@ -1,14 +1,19 @@
 #pragma once
 // The metrics record (Metrics, ftc/sim/metrics.hpp) described once: one entry per metric with
-// its name (the JSON key), its unit, its column label, how it combines over scenarios and where
-// it lives in the record (once per window, once per run, or once per fault onset). Every writer
-// of the record is produced from this table: the MPI wire format below, the pack's copy-out
-// (PackFinal's slots, sim_core/lanes/pack.hpp, read back by plants/lane_host.hpp),
-// metrics_json, comparison.md's tables and footnote (tuner/run/documents.cpp), evaluation.json
-// and evaluation.csv (tuner/run/evaluate.cpp), report.html's tables (tuner/report/html.cpp) and
-// `simulate`'s printed table. A metric added to it (with its member in Metrics and its
-// accumulator in sim_core/lanes/metric_lanes.hpp) travels between ranks and lands in every file
-// without further code.
+// its name (the JSON key), its unit, its column label, how it combines over scenarios, where it
+// lives in the record (once per window, once per run, or once per fault onset) and what a job may
+// do with it (name it in a goal or as the objective, cap on it, the setting it is measured
+// against). Every writer of the record is produced from this table: the MPI wire format below,
+// the pack's copy-out (PackFinal's slots, sim_core/lanes/pack.hpp, read back by
+// plants/lane_host.hpp), metrics_json, comparison.md's tables and footnote
+// (tuner/run/documents.cpp), evaluation.json and evaluation.csv (tuner/run/evaluate.cpp),
+// report.html's tables (tuner/report/html.cpp) and `simulate`'s printed table; and so is every
+// reader of a metric's name: the job's goals and objective (their names, the JSON Schema's enums,
+// the checks of their windows and settings, tuner/job/job.cpp), a goal's value and its capping
+// (tuner/problem/problem.cpp), the units of the figures and the service's GET /v1/metrics. A
+// metric added to it (with its member in ErrorIntegrals or Metrics and its accumulator in
+// sim_core/lanes/metric_lanes.hpp) travels between ranks, lands in every file and, when marked
+// `goal`, can be a job's goal, without further code.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>

@@ -99,11 +99,11 @@ double aggregate_lower_bound(const ObjectiveConfig& objective, std::vector<doubl
 
 // Capping with goals (issue 27): whether a goal's aggregate has a lower bound while members are
 // unknown. Its metric must be defined (not NaN) on every member, so that the aggregate is over a
-// count fixed in advance and aggregate_lower_bound() applies: ise, iae, itae, control_tv,
-// control_energy and peak_command (>= 0, +inf for a diverged run). saturation_fraction,
-// settling_time, steady_state_error and peak_error_after_fault are NaN on some members (no
-// sample, no fault, no tail) unless the member diverges (+inf), so how many values the aggregate
-// takes is unknown until every member ran: such a goal contributes nothing to the bound.
+// count fixed in advance and aggregate_lower_bound() applies: the metrics record marks such a
+// field `partial_lower_bound` (>= 0, +inf for a diverged run). A metric that is NaN on some
+// members (no sample, no fault, no tail) unless the member diverges (+inf) leaves how many values
+// the aggregate takes unknown until every member ran: such a goal contributes nothing to the
+// bound.
 bool goal_has_lower_bound(const GoalConfig& goal);
 
 // Capping with goals: an upper bound of the constrained fitness (constrained_fitness) of a
