@@ -2112,6 +2112,38 @@ TEST(Service, StoredFrontIsListedServedFetchedAndInTheReport) {
   EXPECT_EQ(slurp(out / "run" / "front.json"), front_json);
 }
 
+// GET /v1/metrics tells the dashboard the metrics a run records: the metrics record's fields in
+// its order, each with its name, label (without Markdown's escapes), unit, scope, whether
+// comparison.md tabulates it, and whether a job may name it as a goal or its objective. Behind the
+// token, as the rest of the API.
+TEST(Service, MetricsListsTheMetricsRecord) {
+  tune::ServiceOptions o;
+  o.token = "metrics-token";
+  Service s(o);
+  auto r = s.client->Get("/v1/metrics");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 401);
+  s.client->set_bearer_token_auth("metrics-token");
+  const json list = s.get("/v1/metrics")["metrics"];
+  ASSERT_EQ(list.size(), sim::kMetricFieldCount);
+  const char* scopes[] = {"window", "run", "fault"};
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const sim::MetricField& f = sim::kMetricFields[i];
+    EXPECT_EQ(list[i]["name"], f.name);
+    EXPECT_EQ(list[i]["label"], sim::plain_label(f));
+    EXPECT_EQ(list[i]["unit"], f.unit);
+    EXPECT_EQ(list[i]["scope"], scopes[static_cast<int>(f.scope)]);
+    EXPECT_EQ(list[i]["in_tables"], f.in_tables);
+    EXPECT_EQ(list[i]["goal"], f.goal);
+    EXPECT_EQ(list[i]["objective"], f.objective);
+  }
+  EXPECT_EQ(list[3]["label"], "max |u_d|");  // "max \\|u_d\\|" in Markdown
+  EXPECT_EQ(list[5]["scope"], "fault");
+  r = s.client->Post("/v1/metrics", "{}", "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 405);
+}
+
 // A two-goal job submitted to the service: its front.json and front.csv are those `ftctune run`
 // writes, served with the run's other files.
 TEST(Service, TwoGoalJobServesTheFrontTheRunWrites) {

@@ -160,6 +160,18 @@ def test_submitting_table1_through_the_page(server, browser):
          == str(evaluations))
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table tbody tr"))
     wait(browser, lambda d: "noise" in d.find_element(By.CSS_SELECTOR, ".noise-floor").text)
+    # The comparison's columns are the metrics the service lists as tabulated (GET /v1/metrics),
+    # per scenario, by label and unit; a metric per fault onset shows every onset's value.
+    recorded = [m for m in server.api("/v1/metrics")["metrics"] if m["in_tables"]]
+    comparison = server.api("/v1/jobs/" + job_id + "/comparison")
+    heads = [h.strip() for h in texts(browser, "#comparison-table th")]
+    assert heads == ["controller", "role", "objective", "fitness"] + [
+        "%s: %s [%s]" % (s, m["label"], m["unit"]) for s in comparison["scenarios"]
+        for m in recorded], heads
+    peaks = texts(browser, '#comparison-table td[data-metric="peak_error_after_fault"]')
+    onsets = len(comparison["controllers"][0]["scenarios"][0]["peak_error_after_fault"])
+    assert len(peaks) == len(comparison["controllers"]) and onsets > 1
+    assert all(len(p.split(" / ")) == onsets for p in peaks), peaks
     browser.execute_script("window.scrollTo(0, 0)")
     screenshot(browser, "dashboard-job.png")
     # Sorting by objective puts the lowest first.

@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/job.hpp"
@@ -91,6 +92,24 @@ json job_json_view(const JobRecord& r) {
           {"partial", r.iteration >= 0 &&
                           (r.status == JobStatus::running || r.status == JobStatus::cancelled)},
           {"links", job_links(r.id)}};
+}
+
+// GET /v1/metrics: the metrics record (kMetricFields), what the dashboard names and tabulates a
+// run's metrics by: each field's name (the JSON key of comparison.json), label, unit, scope
+// (window, run or fault: one value per fault onset), whether comparison.md tabulates it, and
+// whether a job may name it as a goal or its objective.
+json metrics_list() {
+  static const char* const kScopes[] = {"window", "run", "fault"};  // MetricScope's order
+  json list = json::array();
+  for (const sim::MetricField& f : sim::kMetricFields)
+    list.push_back({{"name", f.name},
+                    {"label", sim::plain_label(f)},
+                    {"unit", f.unit},
+                    {"scope", kScopes[static_cast<int>(f.scope)]},
+                    {"in_tables", f.in_tables},
+                    {"goal", f.goal},
+                    {"objective", f.objective}});
+  return {{"metrics", list}};
 }
 
 // A stored file's media type, from its name.
@@ -329,6 +348,10 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   if (p.size() == 2 && p[0] == "v1" && p[1] == "events") {
     if (m != "GET") return method_not_allowed(res, "GET");
     return events(req, req.has_param("job") ? req.get_param_value("job") : "", res);
+  }
+  if (p.size() == 2 && p[0] == "v1" && p[1] == "metrics") {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    return send_json(res, 200, metrics_list());
   }
   if (p.size() == 2 && p[0] == "v1" && p[1] == "validate") {
     if (m != "POST") return method_not_allowed(res, "POST");
