@@ -404,19 +404,7 @@ std::map<std::string, std::string> output_files(const TuningOutcome& r) {
     for (std::size_t s = 0; s < r.comparison[c].outcome.trajectories.size(); ++s)
       files[trajectory_file(r, c, s)] = trajectory_csv(r.comparison[c].outcome.trajectories[s]);
   if (r.front) {
-    // The comparison's controllers other than the tuned one, with their goals, for the figures.
-    json compared = json::array();
-    for (const ComparedController& c : r.comparison) {
-      if (c.role == "tuned") continue;
-      json goals = json::array();
-      for (double v : c.outcome.evaluation.goals) goals.push_back(json_number(v));
-      compared.push_back({{"label", c.label},
-                          {"role", c.role},
-                          {"goals", goals},
-                          {"feasible", c.outcome.evaluation.feasible()}});
-    }
-    files["front.json"] =
-        front_document(r.job, r.job_sha256, r.seed, *r.front, compared).dump(2) + "\n";
+    files["front.json"] = front_document(r.job, r.job_sha256, r.seed, *r.front).dump(2) + "\n";
     files["front.csv"] = front_csv(r.job, *r.front);
   }
   return files;

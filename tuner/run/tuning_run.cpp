@@ -216,6 +216,12 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
     r.comparison[i].outcome = std::move(outcomes[i]);
   }
   r.simulations += static_cast<std::int64_t>(controllers.size() * problem.scenarios());
+  // The front's figures mark the comparison's controllers other than the tuned one.
+  if (r.front)
+    for (const ComparedController& c : r.comparison)
+      if (c.role != "tuned")
+        r.front->compared.push_back(
+            {c.label, c.role, c.outcome.evaluation.goals, c.outcome.evaluation.feasible()});
   // The noise floor: the winner (with a front, every point of it) on R copies of the problem
   // whose initial states are nudged.
   NoiseFloor nf;

@@ -688,7 +688,9 @@ function jobView(main, id) {
     const soft = front.goals.map((g, i) => (g.minimize ? i : -1)).filter((i) => i >= 0);
     if (soft.length < 2) return;
     const [a, b] = soft;
-    const name = (g) => g.metric + (g.aggregate ? ' (' + g.aggregate + ')' : '');
+    // A front.json written before the labels and partners (docs/usage.md): the metric's name, no
+    // partners.
+    const name = (g) => (g.label || g.metric) + (g.unit ? ' [' + g.unit + ']' : '');
     const finite = (v) => typeof v === 'number' && Number.isFinite(v);
     const drawable = (g) => finite(g[a]) && finite(g[b]);
     const points = front.points.filter((p) => drawable(p.goals)).map((p) => ({x: p.goals[a], y: p.goals[b]}));
@@ -732,31 +734,16 @@ function jobView(main, id) {
     if (banded)
       datasets.push({label: 'noise floor (band of one relative spread)', data: bands, showLine: true,
                      spanGaps: false, pointRadius: 0, borderColor: '#8c8c8c', borderWidth: 1});
-    // The pairs that are no trade-off, by report.html's rule (within_noise in front.cpp).
-    const floorOf = (x, g) => (finite(x.goals[g]) && finite((x.noise_floor || [])[g])
-      ? x.noise_floor[g] * Math.abs(x.goals[g]) : NaN);
-    const withinNoise = (i, k) => {
-      const p = front.points[i], q = front.points[k];
-      if (p.within_noise_of === k || q.within_noise_of === i) return true;
-      for (const g of soft) {
-        const fu = floorOf(p, g), fv = floorOf(q, g);
-        if (!finite(fu) && !finite(fv)) return false;
-        if (!(Math.abs(p.goals[g] - q.goals[g]) <= Math.max(finite(fu) ? fu : 0, finite(fv) ? fv : 0)))
-          return false;
-      }
-      return true;
-    };
-    const partners = front.points.map(() => []);
+    // The pairs that are no trade-off, as front.json lists each point's partners.
+    const partners = front.points.map((p) => p.within_noise || []);
     const links = [];
-    for (let i = 0; i < front.points.length; ++i)
-      for (let k = i + 1; k < front.points.length; ++k) {
-        if (!withinNoise(i, k)) continue;
-        partners[i].push(k);
-        partners[k].push(i);
-        const p = front.points[i], q = front.points[k];
-        if (drawable(p.goals) && drawable(q.goals))
+    front.points.forEach((p, i) => {
+      for (const k of partners[i]) {
+        const q = front.points[k];
+        if (k > i && q && drawable(p.goals) && drawable(q.goals))
           links.push({x: p.goals[a], y: p.goals[b]}, {x: q.goals[a], y: q.goals[b]}, gap);
       }
+    });
     if (links.length)
       datasets.push({label: "within one's noise floor on every goal: not a trade-off", data: links,
                      showLine: true, spanGaps: false, pointRadius: 0, borderColor: '#4d4d4d',
