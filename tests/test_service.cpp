@@ -1162,6 +1162,7 @@ TEST(Service, DashboardIsServedWithAStrictPolicy) {
   EXPECT_FALSE(api->has_header("Access-Control-Allow-Origin"));
   EXPECT_EQ(api->get_header_value("Cache-Control"), "no-store");  // job data is never cached
   EXPECT_EQ(s.client->Get("/v1/events")->status, 401);
+  EXPECT_EQ(s.client->Get("/v1/metrics")->status, 401);
   EXPECT_EQ(s.client->Get("/ui/other.js")->status, 401);  // only the dashboard's own files
 
   // The list filters by name, for a page of a large store.
@@ -2102,16 +2103,10 @@ TEST(Service, StoredFrontIsListedServedFetchedAndInTheReport) {
 
 // GET /v1/metrics tells the dashboard the metrics a run records: the metrics record's fields in
 // its order, each with its name, label (without Markdown's escapes), unit, scope, whether
-// comparison.md tabulates it, and whether a job may name it as a goal or its objective. Behind the
-// token, as the rest of the API.
+// comparison.md tabulates it, and whether a job may name it as a goal or its objective (behind
+// the token as the rest of the API: DashboardIsServedWithAStrictPolicy).
 TEST(Service, MetricsListsTheMetricsRecord) {
-  tune::ServiceOptions o;
-  o.token = "metrics-token";
-  Service s(o);
-  auto r = s.client->Get("/v1/metrics");
-  ASSERT_TRUE(r);
-  EXPECT_EQ(r->status, 401);
-  s.client->set_bearer_token_auth("metrics-token");
+  Service s;
   const json list = s.get("/v1/metrics")["metrics"];
   ASSERT_EQ(list.size(), sim::kMetricFieldCount);
   const char* scopes[] = {"window", "run", "fault"};
@@ -2127,9 +2122,9 @@ TEST(Service, MetricsListsTheMetricsRecord) {
   }
   EXPECT_EQ(list[3]["label"], "max |u_d|");  // "max \\|u_d\\|" in Markdown
   EXPECT_EQ(list[5]["scope"], "fault");
-  r = s.client->Post("/v1/metrics", "{}", "application/json");
-  ASSERT_TRUE(r);
-  EXPECT_EQ(r->status, 405);
+  const auto post = s.client->Post("/v1/metrics", "{}", "application/json");
+  ASSERT_TRUE(post);
+  EXPECT_EQ(post->status, 405);
 }
 
 // A two-goal job submitted to the service: its front.json and front.csv are those `ftctune run`
