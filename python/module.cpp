@@ -36,9 +36,9 @@
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/run/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
-#include "ftc/tune/run/api.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/run/run_directory.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
@@ -94,7 +94,8 @@ class PythonEvaluator final : public tune::BatchEvaluator {
       const auto t0 = std::chrono::steady_clock::now();
       std::vector<tune::TaskResult> part =
           inner_.run({batch.set, batch.candidates, batch.tasks.subspan(k, n), batch.record_every});
-      const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double dt =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       for (tune::TaskResult& r : part) out.push_back(std::move(r));
       k += n;
       if (n >= slice_) {
@@ -173,16 +174,17 @@ Rows rows_of(const py::array_t<double, py::array::c_style | py::array::forcecast
   if (x.ndim() == 1) {
     r.single = true;
     if (static_cast<std::size_t>(x.shape(0)) != d)
-      throw InputError("X", "",
-                       "has " + std::to_string(x.shape(0)) + " values, the problem " +
-                           std::to_string(d));
+      throw InputError(
+          "X", "",
+          "has " + std::to_string(x.shape(0)) + " values, the problem " + std::to_string(d));
     r.rows.emplace_back(x.data(), x.data() + d);
   } else if (x.ndim() == 2) {
     if (static_cast<std::size_t>(x.shape(1)) != d)
       throw InputError("X", "",
                        "has " + std::to_string(x.shape(1)) + " columns, the problem " +
                            std::to_string(d) + " parameters");
-    for (py::ssize_t i = 0; i < x.shape(0); ++i) r.rows.emplace_back(x.data(i, 0), x.data(i, 0) + d);
+    for (py::ssize_t i = 0; i < x.shape(0); ++i)
+      r.rows.emplace_back(x.data(i, 0), x.data(i, 0) + d);
   } else {
     throw InputError("X", "", "must have shape (n, d) or (d,)");
   }
@@ -241,8 +243,7 @@ struct Problem {
     py::array_t<double> values(static_cast<py::ssize_t>(out.size()));
     auto v = values.mutable_unchecked<1>();
     for (std::size_t i = 0; i < out.size(); ++i) {
-      if (!out[i].error.empty())
-        throw InputError("X", "/" + std::to_string(i), out[i].error);
+      if (!out[i].error.empty()) throw InputError("X", "/" + std::to_string(i), out[i].error);
       v(static_cast<py::ssize_t>(i)) = out[i].evaluation.objective;
     }
     if (r.single) return py::float_(v(0));
@@ -259,7 +260,9 @@ struct Problem {
     for (const auto& o : out)
       for (const sim::Metrics& m : o.evaluation.scenarios) {
         segments = std::max(segments, m.extra.size());
-        faults = std::max(faults, m.peak_error_after_fault.size());
+        for (const sim::MetricField& f : sim::kMetricFields)
+          if (f.scope == sim::MetricScope::fault)
+            faults = std::max(faults, (m.*f.per_fault).size());
       }
     std::map<std::string, std::vector<double>> num;
     std::vector<std::string> order;
@@ -280,7 +283,7 @@ struct Problem {
         candidate.push_back(static_cast<std::int64_t>(i));
         scenario.push_back(problem.scenario(s).name);
         for (std::size_t j = 0; j < names.size(); ++j) column(names[j]).push_back(r.rows[i][j]);
-        column("objective").push_back(m.objective(problem.job().objective.metric));
+        column("objective").push_back(problem.job().objective.value(m));
         for (const sim::MetricField& f : sim::kMetricFields) {
           const std::string name(f.name);
           switch (f.scope) {
@@ -309,8 +312,8 @@ struct Problem {
     d["candidate"] = py::array(py::cast(candidate));
     d["scenario"] = scenario;
     for (const std::string& name : order)
-      d[py::str(name)] = py::array_t<double>(static_cast<py::ssize_t>(num[name].size()),
-                                             num[name].data());
+      d[py::str(name)] =
+          py::array_t<double>(static_cast<py::ssize_t>(num[name].size()), num[name].data());
     d["diverged"] = diverged;
     d["counted"] = counted;
     return d;
@@ -334,8 +337,9 @@ struct Result {
     if (!replace && tune::holds_run(out))
       throw InputError("dir", "", dir + " already holds a run; pass replace=True to write over it");
     if (run.stopped)
-      throw InputError("dir", "", "the callback stopped this run before it finished: it has no "
-                                  "files to write (its gains are in .gains)");
+      throw InputError("dir", "",
+                       "the callback stopped this run before it finished: it has no "
+                       "files to write (its gains are in .gains)");
     tune::write_run(run, out, replace);
     std::vector<std::string> written{"run.json"};
     for (const std::string& f : run.files)
@@ -395,7 +399,8 @@ sim::ControllerConfig chosen_controller(const Job& j, const py::object& gains,
       throw InputError("gains", "", "cannot be combined with controller or set");
     const std::string path = py::module_::import("os").attr("fspath")(gains).cast<std::string>();
     const ftc::runtime::Gains g = ftc::runtime::read_gains(path);
-    for (const sim::Scenario& s : j.job.scenarios) ftc::runtime::check_sample_time(g, s.sample_time);
+    for (const sim::Scenario& s : j.job.scenarios)
+      ftc::runtime::check_sample_time(g, s.sample_time);
     try {
       ftc::runtime::check_job(g, tune::canonical_job_sha256(j.job));
     } catch (const InputError& e) {
@@ -519,7 +524,8 @@ py::dict evaluate(const Job& j, const std::vector<std::pair<std::string, std::st
     if (f.scope != sim::MetricScope::fault)
       columns.emplace_back(f.name);
     else
-      for (std::size_t k = 1; k <= onsets; ++k) columns.push_back(std::string(f.name) + "_fault" + std::to_string(k));
+      for (std::size_t k = 1; k <= onsets; ++k)
+        columns.push_back(std::string(f.name) + "_fault" + std::to_string(k));
   std::vector<std::vector<double>> values(columns.size());
   json summaries = json::array();
   for (const tune::EvaluatedController& c : r.controllers) {
@@ -619,7 +625,8 @@ PYBIND11_MODULE(_core, m) {
   m.def("load_job", &load_job, py::arg("path_or_dict"));
 
   py::class_<Problem>(m, "Problem")
-      .def(py::init<const Job&, std::optional<int>>(), py::arg("job"), py::arg("threads") = py::none())
+      .def(py::init<const Job&, std::optional<int>>(), py::arg("job"),
+           py::arg("threads") = py::none())
       .def_property_readonly("names", [](const Problem& p) { return p.problem.space().names; })
       .def_property_readonly("bounds",
                              [](const Problem& p) {
@@ -650,9 +657,11 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("completed", [](const Result& r) { return r.r().completed(); })
       .def_property_readonly("gains_text", &Result::gains)
       .def_property_readonly("trials_csv", [](const Result& r) { return tune::trials_csv(r.r()); })
-      .def_property_readonly("history_csv", [](const Result& r) { return tune::history_csv(r.r()); })
-      .def_property_readonly("comparison_text",
-                             [](const Result& r) { return tune::comparison_document(r.r()).dump(); })
+      .def_property_readonly("history_csv",
+                             [](const Result& r) { return tune::history_csv(r.r()); })
+      .def_property_readonly(
+          "comparison_text",
+          [](const Result& r) { return tune::comparison_document(r.r()).dump(); })
       .def_property_readonly("warnings", [](const Result& r) { return r.r().warnings; })
       .def_property_readonly("noise_floor",
                              [](const Result& r) { return tune::noise_floor_sentence(r.r()); })

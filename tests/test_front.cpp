@@ -6,16 +6,18 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <random>
 #include <span>
 #include <tuple>
 #include <utility>
-#include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
-#include "ftc/sim/isa.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/isa.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/hypervolume.hpp"
 #include "ftc/tune/optimizers/pareto_bat.hpp"
@@ -83,9 +85,9 @@ TEST(Front, OfHandMadeTrialsWithReferenceKneeAndHypervolumePerIteration) {
   const tune::Job job = tune::parse_job(front_job(), "front");
   // log10 of (ise, tv): (0, 3) (1, 1) (3, 0) on the front; (2, 2) dominated by (1, 1); an
   // infeasible (0.1, 0.1); a repeat of (10, 10) later.
-  const std::vector<tune::Trial> trials = {trial(0, 1, 1000), trial(0, 100, 100),
+  const std::vector<tune::Trial> trials = {trial(0, 1, 1000),       trial(0, 100, 100),
                                            trial(0, 0.1, 0.1, 0.5), trial(1, 10, 10),
-                                           trial(1, 1000, 1), trial(2, 10, 10)};
+                                           trial(1, 1000, 1),       trial(2, 10, 10)};
   EXPECT_EQ(tune::front_trials(job, trials, trials.size()), (std::vector<std::size_t>{0, 3, 4}));
   EXPECT_EQ(tune::front_trials(job, trials, 3), (std::vector<std::size_t>{0, 1}));
   const tune::Front f = tune::make_front(job, trials);
@@ -135,8 +137,7 @@ TEST(Front, IncrementalHypervolumeHistoryIsTheFromScratchOne) {
       bool dominated = false;
       for (std::size_t j : kept) {
         const double *a = trials[j].goals.data(), *b = trials[i].goals.data();
-        dominated = dominated ||
-                    (a[0] <= b[0] && a[1] <= b[1] && (a[0] < b[0] || a[1] < b[1]));
+        dominated = dominated || (a[0] <= b[0] && a[1] <= b[1] && (a[0] < b[0] || a[1] < b[1]));
       }
       if (!dominated) front.push_back(i);
     }
@@ -195,11 +196,15 @@ TEST(Front, PointsWithinTheNoiseFloorOfTheirNeighbourAreFlaggedByEachPointsOwnFl
   EXPECT_EQ(*f.points[0].noise_floor[1], 0.003);
   EXPECT_EQ(*f.points[1].noise_floor[0], 0.004);
   EXPECT_FALSE(f.points[1].noise_floor[2]);
-  const json doc = tune::front_document(job, "sha", 1, f, json::array());
+  const json doc = tune::front_document(job, "sha", 1, f);
   EXPECT_EQ(doc["points"][1]["noise_floor"][1], 0.005);
   EXPECT_TRUE(doc["points"][1]["noise_floor"][2].is_null());
   EXPECT_EQ(doc["points"][1]["within_noise_of"], 0u);
   EXPECT_FALSE(doc["points"][2].contains("within_noise_of"));
+  // Each point lists its partners, both ways; a point without one an empty list.
+  EXPECT_EQ(doc["points"][0]["within_noise"], json::array({1}));
+  EXPECT_EQ(doc["points"][1]["within_noise"], json::array({0}));
+  EXPECT_EQ(doc["points"][2]["within_noise"], json::array());
   EXPECT_NE(tune::front_csv(job, f).find(",0.0040000000000000001,0.0050000000000000001,,"),
             std::string::npos)
       << tune::front_csv(job, f);
@@ -219,12 +224,134 @@ TEST(Front, ARunOfPointsEachWithinItsNeighboursFloorIsNamedByItsFirst) {
   EXPECT_EQ(*f.points[1].within_noise_of, 0u);
   EXPECT_EQ(*f.points[2].within_noise_of, 0u);
   EXPECT_FALSE(f.points[3].within_noise_of);
+  // The partners: #2 is no trade-off with #0 too (its within_noise_of names it), though the two
+  // are not within each other's floor; #3 with none.
+  EXPECT_TRUE(tune::no_trade_off(f, 0, 2));
+  EXPECT_TRUE(tune::no_trade_off(f, 2, 0));
+  EXPECT_FALSE(tune::no_trade_off(f, 2, 3));
+  EXPECT_EQ(f.points[0].within_noise, (std::vector<std::size_t>{1, 2}));
+  EXPECT_EQ(f.points[1].within_noise, (std::vector<std::size_t>{0, 2}));
+  EXPECT_EQ(f.points[2].within_noise, (std::vector<std::size_t>{0, 1}));
+  EXPECT_TRUE(f.points[3].within_noise.empty());
+}
+
+// front.json carries each goal's words (the metric's label, window, aggregate) and unit, each
+// point's partners and the compared controllers; front_from_json reads back the Front the run
+// wrote, field for field.
+TEST(Front, DocumentCarriesLabelsPartnersAndComparedAndReadsBackAsWritten) {
+  json j = front_job();
+  // An aggregate over several scenarios enters the label.
+  j["scenarios"].push_back(j["scenarios"][0]);
+  j["scenarios"][1]["name"] = "again";
+  j["goals"][1]["aggregate"] = "quantile";
+  j["goals"][1]["q"] = 0.5;
+  const tune::Job job = tune::parse_job(j, "front");
+  tune::Front f =
+      tune::make_front(job, {trial(0, 1, 100), trial(0, 1.001, 99.95), trial(0, 2, 50)});
+  const std::optional<double> none;
+  tune::apply_noise_floor(f, {{0.002, 0.002, none}, {0.002, 0.002, none}, {none, none, none}});
+  f.compared.push_back({"Table 1", "compare", {3, 40, 2}, true});
+  f.compared.push_back({"PI-FOSMC (job)", "baseline", {INFINITY, 5, 9}, false});
+  const json doc = tune::front_document(job, "sha", 1, f);
+  const json& goals = doc["goals"];
+  EXPECT_EQ(goals[0]["label"], "mean of ISE[0 s, 5 s] over 2 scenarios");
+  EXPECT_EQ(goals[0]["unit"], "rad²·s");
+  EXPECT_EQ(goals[1]["label"], "quantile0.5 of control TV over 2 scenarios");  // no window
+  EXPECT_EQ(goals[1]["unit"], "command's unit");
+  EXPECT_EQ(goals[2]["label"], "mean of peak command[0 s, end] over 2 scenarios");
+  EXPECT_EQ(goals[2]["metric"], "peak_command");       // the goal's own form beside them
+  EXPECT_EQ(doc["compared"][1]["goals"][0], nullptr);  // a diverged value
+  EXPECT_EQ(doc["compared"][1]["role"], "baseline");
+
+  const tune::Front back = tune::front_from_json(job, json::parse(doc.dump()));
+  ASSERT_EQ(back.goals.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(back.goals[k].label, f.goals[k].label);
+    EXPECT_EQ(back.goals[k].unit, f.goals[k].unit);
+    EXPECT_EQ(back.goals[k].at_most, job.goals[k].at_most);
+  }
+  EXPECT_EQ(back.soft, f.soft);
+  ASSERT_EQ(back.points.size(), f.points.size());
+  for (std::size_t i = 0; i < f.points.size(); ++i) {
+    EXPECT_EQ(back.points[i].parameters, f.points[i].parameters);
+    EXPECT_EQ(back.points[i].goals, f.points[i].goals);
+    EXPECT_EQ(back.points[i].noise_floor, f.points[i].noise_floor);
+    EXPECT_EQ(back.points[i].within_noise_of, f.points[i].within_noise_of);
+    EXPECT_EQ(back.points[i].within_noise, f.points[i].within_noise);
+    EXPECT_EQ(back.points[i].trial, f.points[i].trial);
+  }
+  EXPECT_EQ(back.reference, f.reference);
+  EXPECT_EQ(back.hypervolume, f.hypervolume);
+  EXPECT_EQ(back.picked, f.picked);
+  ASSERT_EQ(back.compared.size(), 2u);
+  EXPECT_EQ(back.compared[1].label, "PI-FOSMC (job)");
+  EXPECT_EQ(back.compared[1].goals, (std::vector<double>{INFINITY, 5, 9}));
+  EXPECT_FALSE(back.compared[1].feasible);
+
+  // Written before the labels and partners (the same schema name): read with the job's words
+  // and the rule's partners, as the run writes them now.
+  json old = json::parse(doc.dump());
+  for (json& g : old["goals"]) {
+    g.erase("label");
+    g.erase("unit");
+  }
+  for (json& p : old["points"]) p.erase("within_noise");
+  const tune::Front filled = tune::front_from_json(job, old);
+  for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(filled.goals[k].label, f.goals[k].label);
+  for (std::size_t i = 0; i < f.points.size(); ++i)
+    EXPECT_EQ(filled.points[i].within_noise, f.points[i].within_noise) << i;
+}
+
+// A damaged front.json is refused at the JSON path of what is wrong with it.
+TEST(Front, ADamagedDocumentIsRefusedAtItsPath) {
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  tune::Front f = tune::make_front(job, {trial(0, 1, 100), trial(0, 2, 50)});
+  tune::apply_noise_floor(f, {{0.002, 0.002, std::nullopt}, {0.002, 0.002, std::nullopt}});
+  const json doc = tune::front_document(job, "sha", 1, f);
+  const auto refused_at = [&](const std::function<void(json&)>& damage, const std::string& path) {
+    json j = doc;
+    damage(j);
+    try {
+      tune::front_from_json(job, j, "run/front.json");
+      ADD_FAILURE() << "accepted, expected a refusal at " << path;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.source(), "run/front.json");
+      ASSERT_FALSE(e.errors().empty());
+      EXPECT_EQ(e.errors()[0].path, path) << e.what();
+    }
+  };
+  refused_at([](json& j) { j["schema"] = "ftctune.front/0"; }, "/schema");
+  refused_at([](json& j) { j["goals"].erase(2); }, "/goals");
+  refused_at([](json& j) { j["goals"][1]["metric"] = "iae"; }, "/goals/1/metric");
+  refused_at([](json& j) { j["goals"][0]["label"] = 3; }, "/goals/0/label");
+  refused_at([](json& j) { j["points"][1]["goals"].erase(2); }, "/points/1/goals");
+  refused_at([](json& j) { j["points"][0]["parameters"].erase("Kp"); }, "/points/0/parameters/Kp");
+  refused_at([](json& j) { j["points"][0]["noise_floor"][1] = "x"; }, "/points/0/noise_floor/1");
+  refused_at([](json& j) { j["points"][1]["within_noise_of"] = 1; }, "/points/1/within_noise_of");
+  refused_at([](json& j) { j["points"][1]["within_noise"] = {0, 7}; }, "/points/1/within_noise/1");
+  refused_at([](json& j) { j["points"][0]["trial"] = -1; }, "/points/0/trial");
+  refused_at([](json& j) { j["reference_point"].erase(1); }, "/reference_point");
+  refused_at([](json& j) { j["reference_point"][1] = "far"; }, "/reference_point/1");
+  refused_at([](json& j) { j["picked"]["index"] = 2; }, "/picked/index");
+  refused_at(
+      [](json& j) {
+        j["compared"] = {{{"label", "x"}, {"goals", {1, 2}}}};
+      },
+      "/compared/0/goals");
+  // A job of one soft goal has no front to read.
+  json one_soft = front_job();
+  one_soft["goals"][1] = {{"metric", "control_tv"}, {"at_most", 1e9}};
+  try {
+    tune::front_from_json(tune::parse_job(one_soft, "one soft goal"), doc);
+    ADD_FAILURE() << "a front of a job with one soft goal was read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.errors().at(0).path, "/goals");
+  }
 }
 
 TEST(Front, PickRules) {
   const tune::Job job = tune::parse_job(front_job(), "front");
-  const std::vector<tune::Trial> trials = {trial(0, 1, 1000), trial(0, 10, 10),
-                                           trial(0, 1000, 1)};
+  const std::vector<tune::Trial> trials = {trial(0, 1, 1000), trial(0, 10, 10), trial(0, 1000, 1)};
   const tune::Front f = tune::make_front(job, trials);
   EXPECT_EQ(tune::pick_point(job, f, "knee"), 1u);
   EXPECT_EQ(tune::pick_point(job, f, "min:ise"), 0u);
@@ -288,6 +415,20 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
       const double v = points[i]["goals"][k];
       EXPECT_EQ(points[i]["noise_floor"][k].is_number(), std::isfinite(v) && v != 0) << i << k;
     }
+  // Each point lists as partners the points the rule joins it with, and each goal its words.
+  const tune::Front read = tune::front_from_json(job, front);
+  for (std::size_t a = 0; a < points.size(); ++a) {
+    const std::vector<std::size_t>& partners = read.points[a].within_noise;
+    for (std::size_t b = 0; b < points.size(); ++b) {
+      if (a == b) continue;
+      EXPECT_EQ(std::count(partners.begin(), partners.end(), b) == 1,
+                tune::no_trade_off(read, a, b))
+          << a << " " << b;
+    }
+  }
+  for (std::size_t k = 0; k < 3; ++k)
+    EXPECT_EQ(front["goals"][k]["label"], tune::front_goal(job, k).label);
+  EXPECT_EQ(front["goals"][1]["label"], "control TV");
   // The picked point's is the tuned controller's alone on SPEC §14's R nudged copies, and so is
   // the run's objective noise floor; every point's re-runs are counted.
   {
@@ -337,9 +478,9 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
   // pick: each rule's gains file loads in the runtime and holds its point.
   const auto dir = fresh_dir("pick");
   tune::write_output_files(files, dir);
-  for (const std::string& rule : std::vector<std::string>{
-           "knee", "min:ise", "min:control_tv", "index:1",
-           "limit:control_tv<=" + points[0]["goals"][1].dump()}) {
+  for (const std::string& rule :
+       std::vector<std::string>{"knee", "min:ise", "min:control_tv", "index:1",
+                                "limit:control_tv<=" + points[0]["goals"][1].dump()}) {
     const json g = tune::pick_gains(dir, rule);
     const std::size_t i = g["goals"]["front"]["index"];
     EXPECT_EQ(g["tuned"]["Kp"], points[i]["parameters"]["Kp"]) << rule;
@@ -349,11 +490,10 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
     EXPECT_NO_THROW(runtime::parse_gains(g, rule)) << rule;
   }
   EXPECT_EQ(tune::pick_gains(dir, "knee"), gains);
-  EXPECT_EQ(tune::pick_gains(dir, "min:control_tv")["goals"]["front"]["index"],
-            points.size() - 1);
+  EXPECT_EQ(tune::pick_gains(dir, "min:control_tv")["goals"]["front"]["index"], points.size() - 1);
   // The CLI: a file written whole, exit 2 for a rule that picks nothing.
-  const CliResult ok = run_cli("pick '" + dir.string() + "' --rule index:0 --out '" +
-                                   (dir / "p0.json").string() + "'", dir);
+  const CliResult ok = run_cli(
+      "pick '" + dir.string() + "' --rule index:0 --out '" + (dir / "p0.json").string() + "'", dir);
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
   EXPECT_EQ(runtime::read_gains(dir / "p0.json").tuned.size(), 2u);
   const CliResult bad = run_cli("pick '" + dir.string() + "' --rule min:iae", dir);

@@ -89,7 +89,7 @@ TEST(JobLoader, FillsDefaultsForOmittedKeys) {
   EXPECT_EQ(job.plant.model, "spacecraft");
   EXPECT_EQ(job.plant.values, (std::vector<double>{20.0, 17.0, 15.0, 1.1e-3}));
   EXPECT_EQ(job.controller.c2, 9.0);
-  EXPECT_EQ(job.objective.metric, sim::Metric::ise);
+  EXPECT_EQ(job.objective.metric->name, "ise");
   EXPECT_FALSE(job.tuning.has_value());
 }
 
@@ -547,16 +547,29 @@ TEST(JobLoader, MetricsBlockGivesTheSettlingThresholdAndTailAtTheirPaths) {
   EXPECT_EQ(o.metrics.settling_threshold, 0.01);
   EXPECT_EQ(o.metrics.steady_state_tail, 5.0);
   j["metrics"] = {{"steady_state_tail", 2}};  // one without the other
-  EXPECT_TRUE(std::isnan(
-      tune::TuningProblem(tune::parse_job(j, "t")).simulation_options(0, 0).metrics.settling_threshold));
+  EXPECT_TRUE(std::isnan(tune::TuningProblem(tune::parse_job(j, "t"))
+                             .simulation_options(0, 0)
+                             .metrics.settling_threshold));
   const std::vector<BadCase> cases = {
-      {"threshold 0", [](json& k) { k["metrics"] = {{"settling_threshold", 0}}; },
+      {"threshold 0",
+       [](json& k) {
+         k["metrics"] = {{"settling_threshold", 0}};
+       },
        "/metrics/settling_threshold", "> 0"},
-      {"negative tail", [](json& k) { k["metrics"] = {{"steady_state_tail", -1}}; },
+      {"negative tail",
+       [](json& k) {
+         k["metrics"] = {{"steady_state_tail", -1}};
+       },
        "/metrics/steady_state_tail", "> 0"},
-      {"unknown key", [](json& k) { k["metrics"] = {{"threshold", 0.1}}; }, "/metrics/threshold",
-       "unknown key"},
-      {"not a number", [](json& k) { k["metrics"] = {{"steady_state_tail", "5"}}; },
+      {"unknown key",
+       [](json& k) {
+         k["metrics"] = {{"threshold", 0.1}};
+       },
+       "/metrics/threshold", "unknown key"},
+      {"not a number",
+       [](json& k) {
+         k["metrics"] = {{"steady_state_tail", "5"}};
+       },
        "/metrics/steady_state_tail", "expected a number"},
   };
   expect_each_case_refused(cases);
@@ -581,27 +594,35 @@ TEST(JobGoals, ParseWriteBackCanonicallyAndGiveTheObjective) {
       {soft_ise(),
        {{"metric", "control_tv"}, {"aggregate", "cvar"}, {"alpha", 0.8}, {"at_most", 4000}},
        {{"metric", "peak_command"}, {"aggregate", "max"}, {"at_most", 17.9}},
-       {{"metric", "settling_time"}, {"window_from", "first_fault"}, {"window", {0, 10}},
-        {"threshold", 0.05}, {"at_most", 5}}});
+       {{"metric", "settling_time"},
+        {"window_from", "first_fault"},
+        {"window", {0, 10}},
+        {"threshold", 0.05},
+        {"at_most", 5}}});
   const tune::Job job = tune::parse_job(with_goals(goals), "t");
   ASSERT_EQ(job.goals.size(), 4u);
   EXPECT_TRUE(job.goals[0].soft());
-  EXPECT_EQ(job.goals[1].metric, tune::GoalMetric::control_tv);
+  EXPECT_EQ(job.goals[1].metric, &sim::kMetricFields[sim::metric_index("control_tv")]);
   EXPECT_EQ(job.goals[1].aggregate, tune::Aggregate::cvar);
   EXPECT_EQ(job.goals[1].alpha, 0.8);
   EXPECT_EQ(job.goals[2].at_most, 17.9);
   EXPECT_EQ(job.goals[3].window_from, tune::WindowFrom::first_fault);
   // The soft goal on ise is the objective the runs score by.
-  EXPECT_EQ(job.objective.metric, sim::Metric::ise);
+  EXPECT_EQ(job.objective.metric, job.goals[0].metric);
+  EXPECT_EQ(job.objective.metric->name, "ise");
   EXPECT_EQ(job.objective.window.t0, 10.0);
   EXPECT_EQ(job.objective.window.t1, 30.0);
   // Written back with every default filled in, without an objective, and stable.
   const json once = tune::to_json(job);
   EXPECT_FALSE(once.contains("objective"));
-  EXPECT_EQ(once["goals"][0], json({{"aggregate", "mean"}, {"metric", "ise"},
-                                    {"minimize", true}, {"window", {10, 30}}}));
-  EXPECT_EQ(once["goals"][1], json({{"aggregate", "cvar"}, {"alpha", 0.8}, {"at_most", 4000},
-                                    {"metric", "control_tv"}, {"window", {0, nullptr}}}));
+  EXPECT_EQ(
+      once["goals"][0],
+      json({{"aggregate", "mean"}, {"metric", "ise"}, {"minimize", true}, {"window", {10, 30}}}));
+  EXPECT_EQ(once["goals"][1], json({{"aggregate", "cvar"},
+                                    {"alpha", 0.8},
+                                    {"at_most", 4000},
+                                    {"metric", "control_tv"},
+                                    {"window", {0, nullptr}}}));
   EXPECT_EQ(once.dump(), tune::to_json(tune::parse_job(once, "resolved")).dump());
   // A job without goals writes none.
   EXPECT_FALSE(tune::to_json(tune::parse_job(table1(), "t")).contains("goals"));
@@ -612,6 +633,85 @@ TEST(JobGoals, ParseWriteBackCanonicallyAndGiveTheObjective) {
   EXPECT_EQ(job.goals[2].violation(std::numeric_limits<double>::infinity()),
             std::numeric_limits<double>::infinity());
   EXPECT_EQ(job.goals[0].violation(1e9), 0.0);  // soft: never violated
+}
+
+// Which metrics a goal and the objective may name, whether a goal takes a window, and which one
+// takes a threshold or a tail: each from the metrics record's traits, for every field, and the
+// JSON Schema's enums are the table's.
+TEST(JobLoader, GoalMetricsAndTheirChecksComeFromTheMetricsRecord) {
+  const auto has_error = [](const json& j, const std::string& path, const std::string& text) {
+    for (const FieldError& e : errors_of(j))
+      if (e.path == path && e.message.find(text) != std::string::npos) return true;
+    return false;
+  };
+  std::vector<std::string> goal_names, objective_names;
+  for (const sim::MetricField& f : sim::kMetricFields) {
+    const std::string name(f.name);
+    if (f.goal) goal_names.push_back(name);
+    if (f.objective) objective_names.push_back(name);
+    // What the field is measured against, given in the goal.
+    json goal = {{"metric", name}, {"at_most", 1}};
+    if (f.setting == sim::MetricSetting::settling_threshold) goal["threshold"] = 0.05;
+    if (f.setting == sim::MetricSetting::steady_state_tail) goal["tail"] = 2;
+    const json limited = with_goals({soft_ise(), goal});
+    if (!f.goal) {
+      EXPECT_TRUE(has_error(limited, "/goals/1/metric", "must be one of")) << name;
+      continue;
+    }
+    const tune::Job job = tune::parse_job(limited, name);
+    EXPECT_EQ(job.goals[1].metric, &f) << name;
+    EXPECT_EQ(job.goals[1].windowed(), f.scope == sim::MetricScope::window) << name;
+    // A window only for a window field.
+    json windowed = goal;
+    windowed["window"] = {1, 2};
+    const json with_window = with_goals({soft_ise(), windowed});
+    if (f.scope == sim::MetricScope::window)
+      EXPECT_NO_THROW(tune::parse_job(with_window, name)) << name;
+    else
+      EXPECT_TRUE(has_error(with_window, "/goals/1/window",
+                            name + " is measured over the whole run; it takes no window"))
+          << name;
+    // A threshold or tail only for the field measured against it.
+    for (const auto& [key, setting] :
+         {std::pair{"threshold", sim::MetricSetting::settling_threshold},
+          std::pair{"tail", sim::MetricSetting::steady_state_tail}}) {
+      json extra = goal;
+      extra[key] = 1;
+      const json j = with_goals({soft_ise(), extra});
+      EXPECT_EQ(has_error(j, std::string("/goals/1/") + key, "is used only with metric"),
+                f.setting != setting)
+          << name << " " << key;
+      if (f.setting == setting)  // and it is needed
+        EXPECT_TRUE(has_error(with_goals({soft_ise(), {{"metric", name}, {"at_most", 1}}}),
+                              std::string("/goals/1/") + key, name + " needs a " + key))
+            << name;
+    }
+    // One soft goal is the objective: only a field that can be.
+    json soft = goal;
+    soft.erase("at_most");
+    soft["minimize"] = true;
+    if (f.objective) {
+      EXPECT_EQ(tune::parse_job(with_goals({soft}), name).objective.metric, &f) << name;
+    } else {
+      EXPECT_TRUE(
+          has_error(with_goals({soft}), "/goals/0/metric",
+                    "a single soft goal is the search's objective: ise, iae or itae (got " + name))
+          << name;
+    }
+  }
+  for (const sim::MetricField& f : sim::kMetricFields) {
+    json j = table1();
+    j["objective"]["metric"] = f.name;
+    if (f.objective)
+      EXPECT_EQ(tune::parse_job(j, "objective").objective.metric, &f) << f.name;
+    else
+      EXPECT_TRUE(has_error(j, "/objective/metric", "must be \"ise\", \"iae\" or") ||
+                  has_error(j, "/objective/metric", "must be one of"))
+          << f.name;
+  }
+  const json schema = tune::job_json_schema();
+  EXPECT_EQ(schema["properties"]["goals"]["items"]["properties"]["metric"]["enum"], goal_names);
+  EXPECT_EQ(schema["properties"]["objective"]["properties"]["metric"]["enum"], objective_names);
 }
 
 TEST(JobGoals, BadGoalsAreRejectedAtTheirPaths) {
@@ -625,16 +725,15 @@ TEST(JobGoals, BadGoalsAreRejectedAtTheirPaths) {
   const std::vector<BadCase> cases = {
       {"unknown metric", goals({{{"metric", "chatter"}, {"at_most", 1}}}), "/goals/1/metric",
        "control_tv"},
-      {"limit 0", goals({{{"metric", "peak_command"}, {"at_most", 0}}}), "/goals/1/at_most",
-       "> 0"},
+      {"limit 0", goals({{{"metric", "peak_command"}, {"at_most", 0}}}), "/goals/1/at_most", "> 0"},
       {"negative limit", goals({{{"metric", "ise"}, {"at_most", -2}}}), "/goals/1/at_most", "> 0"},
       {"window after the run", goals({{{"metric", "iae"}, {"window", {0, 40}}, {"at_most", 1}}}),
        "/goals/1/window/1", "after the end of scenario"},
       {"window backwards", goals({{{"metric", "iae"}, {"window", {5, 2}}, {"at_most", 1}}}),
        "/goals/1/window", "must be after start"},
       {"window on a whole-run metric",
-       goals({{{"metric", "control_tv"}, {"window", {10, 30}}, {"at_most", 1}}}),
-       "/goals/1/window", "whole run"},
+       goals({{{"metric", "control_tv"}, {"window", {10, 30}}, {"at_most", 1}}}), "/goals/1/window",
+       "whole run"},
       {"duplicate", goals(json::array({soft_ise()})), "/goals/1", "same goal as /goals/0"},
       {"settling without threshold", goals({{{"metric", "settling_time"}, {"at_most", 3}}}),
        "/goals/1/threshold", "needs a threshold"},
@@ -644,18 +743,22 @@ TEST(JobGoals, BadGoalsAreRejectedAtTheirPaths) {
        goals({{{"metric", "ise"}, {"threshold", 0.1}, {"at_most", 3}}}), "/goals/1/threshold",
        "only with metric \"settling_time\""},
       {"neither minimize nor at_most", goals({{{"metric", "iae"}}}), "/goals/1", "at_most"},
-      {"both", goals({{{"metric", "iae"}, {"minimize", true}, {"at_most", 2}}}),
-       "/goals/1/at_most", "not both"},
+      {"both", goals({{{"metric", "iae"}, {"minimize", true}, {"at_most", 2}}}), "/goals/1/at_most",
+       "not both"},
       {"minimize false", goals({{{"metric", "iae"}, {"minimize", false}}}), "/goals/1/minimize",
        "must be true"},
       {"alpha without cvar", goals({{{"metric", "iae"}, {"alpha", 0.5}, {"at_most", 2}}}),
        "/goals/1/alpha", "only with aggregate"},
       {"unknown aggregate", goals({{{"metric", "iae"}, {"aggregate", "median"}, {"at_most", 2}}}),
        "/goals/1/aggregate", "mean"},
-      {"objective and goals",
-       [](json& j) { j["goals"] = json::array({soft_ise()}); }, "/goals", "not both"},
-      {"empty goals", [](json& j) { j.erase("objective"); j["goals"] = json::array(); }, "/goals",
-       "at least one goal"},
+      {"objective and goals", [](json& j) { j["goals"] = json::array({soft_ise()}); }, "/goals",
+       "not both"},
+      {"empty goals",
+       [](json& j) {
+         j.erase("objective");
+         j["goals"] = json::array();
+       },
+       "/goals", "at least one goal"},
       {"no soft goal",
        [](json& j) {
          j.erase("objective");
@@ -682,15 +785,15 @@ TEST(JobGoals, ValidationRefusesAFrontTheAlgorithmCannotSearchAndAnObjectiveOfNo
   // One soft goal on an error integral is the objective: the problem is the objective's.
   EXPECT_EQ(refusal(with_goals(json::array({soft_ise()}))), "");
   // Two soft goals of any metric ask for a front: random search samples one...
-  json front = with_goals(json::array(
-      {soft_ise(), {{"metric", "control_tv"}, {"minimize", true}},
-       {{"metric", "saturation_fraction"}, {"minimize", true}}}));
+  json front = with_goals(json::array({soft_ise(),
+                                       {{"metric", "control_tv"}, {"minimize", true}},
+                                       {{"metric", "saturation_fraction"}, {"minimize", true}}}));
   front["tuning"]["algorithm"] = {{"type", "random"}, {"population", 4}, {"iterations", 1}};
   EXPECT_EQ(refusal(front), "");
   EXPECT_NO_THROW(tune::TuningProblem(tune::parse_job(front, "t")));
   // ...an algorithm of one objective does not, and `validate` says so at the algorithm.
-  front["tuning"]["algorithm"] = {{"type", "pagmo"}, {"name", "sade"},
-                                  {"population", 7}, {"generations", 2}};
+  front["tuning"]["algorithm"] = {
+      {"type", "pagmo"}, {"name", "sade"}, {"population", 7}, {"generations", 2}};
   const std::string pareto = refusal(front);
   EXPECT_NE(pareto.find("/tuning/algorithm/type 3 soft goals"), std::string::npos) << pareto;
   EXPECT_NE(pareto.find("Pareto front"), std::string::npos) << pareto;
@@ -710,8 +813,11 @@ TEST(JobGoals, GoalValuesAreTheMetricsInTheirOwnWindows) {
   json j = with_goals(json::array(
       {soft_ise(),
        {{"metric", "peak_command"}, {"window", {2, 8}}, {"at_most", 1e9}},
-       {{"metric", "steady_state_error"}, {"window_from", "first_fault"}, {"window", {0, 5}},
-        {"tail", 2}, {"at_most", 1e9}},
+       {{"metric", "steady_state_error"},
+        {"window_from", "first_fault"},
+        {"window", {0, 5}},
+        {"tail", 2},
+        {"at_most", 1e9}},
        {{"metric", "peak_error_after_fault"}, {"aggregate", "max"}, {"at_most", 1e-9}}}));
   const tune::TuningProblem problem(tune::parse_job(j, "t"));
   const sim::SimulationOptions o = problem.simulation_options(0);
@@ -765,8 +871,7 @@ TEST(JobGoals, FailedCandidatesAndUndefinedGoalsMeetNoLimit) {
   EXPECT_EQ(failed.evaluation.fitness, -1.0);
 
   json calm = with_goals(json::array(
-      {soft_ise(),
-       {{"metric", "settling_time"}, {"threshold", 0.01}, {"at_most", 5}}}));
+      {soft_ise(), {{"metric", "settling_time"}, {"threshold", 0.01}, {"at_most", 5}}}));
   for (json& s : calm["scenarios"]) s["faults"] = json::array();
   const tune::TuningProblem quiet(tune::parse_job(calm, "t"));
   const sim::ControllerConfig c = quiet.job().controller;
@@ -817,14 +922,25 @@ TEST(JobLoader, ActuatorBlockParsesRoundTripsAndIsCheckedAtItsPaths) {
   const std::vector<BadCase> cases = {
       {"empty", [](json& k) { k["scenarios"][0]["actuator"] = json::object(); },
        "/scenarios/0/actuator", "time_constant, rate_limit or both"},
-      {"zero time constant", [](json& k) { k["scenarios"][0]["actuator"] = {{"time_constant", 0}}; },
+      {"zero time constant",
+       [](json& k) {
+         k["scenarios"][0]["actuator"] = {{"time_constant", 0}};
+       },
        "/scenarios/0/actuator/time_constant", "> 0"},
       {"time constant under two steps",
-       [](json& k) { k["scenarios"][0]["actuator"] = {{"time_constant", 0.0015}}; },
+       [](json& k) {
+         k["scenarios"][0]["actuator"] = {{"time_constant", 0.0015}};
+       },
        "/scenarios/0/actuator/time_constant", "at least 2 integration steps"},
-      {"negative rate limit", [](json& k) { k["scenarios"][0]["actuator"] = {{"rate_limit", -1}}; },
+      {"negative rate limit",
+       [](json& k) {
+         k["scenarios"][0]["actuator"] = {{"rate_limit", -1}};
+       },
        "/scenarios/0/actuator/rate_limit", "> 0"},
-      {"unknown key", [](json& k) { k["scenarios"][0]["actuator"] = {{"tau", 0.1}}; },
+      {"unknown key",
+       [](json& k) {
+         k["scenarios"][0]["actuator"] = {{"tau", 0.1}};
+       },
        "/scenarios/0/actuator/tau", "unknown key"},
   };
   expect_each_case_refused(cases);

@@ -742,7 +742,27 @@ namespace {
 
 // In the file's order: the parameters' order is the table's.
 nlohmann::ordered_json front_fixture() {
-  return nlohmann::ordered_json::parse(slurp(std::string(FTC_SOURCE_DIR) + "/tests/data/front-two-goals.json"));
+  return nlohmann::ordered_json::parse(
+      slurp(std::string(FTC_SOURCE_DIR) + "/tests/data/front-two-goals.json"));
+}
+
+// The job a front of `front`'s goals belongs to: the shortened Table 1 job (one scenario, Kp and
+// Ki tuned) with those goals.
+nlohmann::json front_job_json(const nlohmann::ordered_json& front) {
+  json j = short_table1_job();
+  j.erase("objective");
+  j["goals"] = json::parse(front["goals"].dump());
+  for (json& g : j["goals"]) {
+    g.erase("label");
+    g.erase("unit");
+  }
+  return j;
+}
+
+// front.json's text read as the report reads it, against its job.
+tune::Front front_of(const nlohmann::ordered_json& front) {
+  return tune::front_from_json(tune::parse_job(front_job_json(front), "front job"),
+                               json::parse(front.dump()), "front.json");
 }
 
 void write_text(const std::filesystem::path& p, const std::string& text) {
@@ -769,16 +789,18 @@ void add_hypervolume_column(const std::filesystem::path& history) {
 }  // namespace
 
 // The scatter marks the front, its noise bands, the picked point, the job's gains and the
-// compared controllers, each where front.json puts it, on log axes labelled with metric,
-// window, aggregate and unit; the hypervolume figure states its reference point.
+// compared controllers, each where front.json puts it, on log axes labelled with the goals'
+// labels and units as front.json words them (metric, window, aggregate: here of a run of 7
+// scenarios); the hypervolume figure states its reference point.
 TEST(FrontReport, ScatterMarksPickedBaselineComparedAndNoiseAndHypervolumeStatesItsReference) {
   const auto dir = fresh_dir("front-figures");
-  const tune::report_detail::Front front =
-      tune::report_detail::parse_front(front_fixture().dump(), "front.json", 7);
+  nlohmann::ordered_json j = front_fixture();
+  j["goals"][0]["label"] = "CVaR0.9 of ISE[first fault, +4 s] over 7 scenarios";
+  j["goals"][1]["label"] = "quantile0.5 of control TV over 7 scenarios";
+  const tune::Front front = front_of(j);
   write_text(dir / "history.csv", kFrontHistory);
   std::filesystem::create_directories(dir / "figures");
-  const auto figures =
-      tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::png);
+  const auto figures = tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::png);
   ASSERT_EQ(figures.size(), 2u);
   EXPECT_EQ(figures[0].file, "figures/front-pareto.png");
   EXPECT_EQ(figures[1].file, "figures/front-hypervolume.png");
@@ -807,7 +829,7 @@ TEST(FrontReport, ScatterMarksPickedBaselineComparedAndNoiseAndHypervolumeStates
   for (const char* row : {"0.125,9000\n", "0.13,8950\n", "8,400\n",
                           "2,1077,1.94,2.06,1071.615,1082.385\n", "8,400,8,8,400,400\n"})
     EXPECT_NE(gp.find(row), std::string::npos) << row;
-  // #0 and #1 differ by less than the noise floor on both soft goals: linked, not a trade-off.
+  // #0 and #1 are partners in front.json (within each other's floor on both soft goals): linked.
   EXPECT_NE(gp.find("0.125,9000\n0.13,8950\n\n"), std::string::npos);
   EXPECT_NE(gp.find("not a trade-off"), std::string::npos);
   EXPECT_NE(figures[0].caption.find("not a proven optimum"), std::string::npos);
@@ -820,12 +842,20 @@ TEST(FrontReport, ScatterMarksPickedBaselineComparedAndNoiseAndHypervolumeStates
   EXPECT_NE(figures[1].caption.find("Final front: 2.375."), std::string::npos);
 }
 
-// Three soft goals: a panel per pair. A goal with a zero value gets a linear axis.
+// Three soft goals: a panel per pair. A goal with a zero value gets a linear axis. The links are
+// front.json's partners, whatever the floors say; a front.json without labels (written before
+// them) is labelled with the job's words.
 TEST(FrontReport, PanelPerPairOfSoftGoalsAndLinearAxisForZeroValues) {
   const auto dir = fresh_dir("front-pairs");
   nlohmann::ordered_json j = front_fixture();
-  j["goals"].push_back({{"metric", "saturation_fraction"}, {"window", {0, nullptr}},
-                        {"aggregate", "mean"}, {"minimize", true}});
+  j["goals"].push_back({{"metric", "saturation_fraction"},
+                        {"window", {0, nullptr}},
+                        {"aggregate", "mean"},
+                        {"minimize", true}});
+  for (auto& g : j["goals"]) {
+    g.erase("label");
+    g.erase("unit");
+  }
   j["reference_point"].push_back(0.5);
   double v = 0;
   for (auto& p : j["points"]) {
@@ -835,19 +865,20 @@ TEST(FrontReport, PanelPerPairOfSoftGoalsAndLinearAxisForZeroValues) {
   }
   for (auto& c : j["compared"]) c["goals"].push_back(0.25);
   j["compared"][0]["goals"][0] = 1000;  // ISE more than a decade beyond the front's 0.125..8
-  // The run's own verdict that #4 lies within #3's noise floor (front.json's within_noise_of).
-  j["points"][4]["within_noise_of"] = 3;
-  const auto front = tune::report_detail::parse_front(j.dump(), "front.json", 1);
+  // The run's verdict that #3 and #4 are no trade-off, and none for #0 and #1.
+  j["points"][3]["within_noise"] = {4};
+  j["points"][4]["within_noise"] = {3};
+  j["points"][0]["within_noise"] = nlohmann::ordered_json::array();
+  j["points"][1]["within_noise"] = nlohmann::ordered_json::array();
+  const tune::Front front = front_of(j);
   ASSERT_EQ(front.soft, (std::vector<std::size_t>{0, 1, 3}));
-  EXPECT_TRUE(tune::report_detail::within_noise(front, 3, 4));
-  EXPECT_TRUE(tune::report_detail::within_noise(front, 4, 3));
-  EXPECT_FALSE(tune::report_detail::within_noise(front, 2, 3));
   write_text(dir / "history.csv", kFrontHistory);
   const auto figures = tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::svg);
   EXPECT_TRUE(tune::figure_is_whole(dir / "figures/front-pareto.svg"));
   const std::string gp = slurp(dir / "figures" / "front.gp");
   EXPECT_NE(gp.find("set multiplot layout 1,3"), std::string::npos);
-  EXPECT_NE(gp.find("2,1077\n8,400\n\n"), std::string::npos);  // #3 and #4 linked
+  EXPECT_NE(gp.find("2,1077\n8,400\n\n"), std::string::npos);          // #3 and #4 linked
+  EXPECT_EQ(gp.find("0.125,9000\n0.13,8950\n\n"), std::string::npos);  // #0 and #1 not
   // Table 1 off the ISE axis: at its right edge, labelled with its values.
   EXPECT_NE(gp.find("set label 'Table 1 (off scale: 1000, 1200)' at "), std::string::npos) << gp;
   EXPECT_NE(gp.find("set label 'Table 1 (off scale: 1000, 0.25)' at "), std::string::npos);
@@ -859,51 +890,29 @@ TEST(FrontReport, PanelPerPairOfSoftGoalsAndLinearAxisForZeroValues) {
   EXPECT_NE(gp.find("reference point (1.25, 4.5, 0.5)"), std::string::npos);
 }
 
-// A damaged front.json is refused at its JSON path; a front of another job (stale beside a
-// re-run) is not this run's; a front without its history column is an error, not an empty plot.
+// A front of another job (stale beside a re-run) is not this run's; a damaged front.json is
+// refused by `report` at its JSON path (front_from_json's checks: test_front.cpp); a front without
+// its history column is an error, not an empty plot.
 TEST(FrontReport, BadOrStaleFrontsAreRefusedAtTheirPaths) {
-  const auto refused_at = [](const nlohmann::ordered_json& j, const std::string& path) {
-    try {
-      tune::report_detail::parse_front(j.dump(), "front.json", 1);
-    } catch (const InputError& e) {
-      ASSERT_FALSE(e.errors().empty());
-      EXPECT_EQ(e.errors()[0].path, path) << e.what();
-      return;
-    }
-    ADD_FAILURE() << "accepted, expected a refusal at " << path;
-  };
-  nlohmann::ordered_json j = front_fixture();
-  j["schema"] = "ftctune.front/0";
-  refused_at(j, "/schema");
-  j = front_fixture();
-  j["picked"]["index"] = 5;
-  refused_at(j, "/picked/index");
-  j = front_fixture();
-  j["points"][3]["goals"].erase(2);
-  refused_at(j, "/points/3/goals");
-  j = front_fixture();
-  j["goals"][1].erase("minimize");
-  refused_at(j, "/goals/1/at_most");
-  j = front_fixture();
-  j["goals"][1]["at_most"] = 10;
-  j["goals"][1].erase("minimize");
-  j["reference_point"].erase(1);
-  refused_at(j, "/goals");
-  j = front_fixture();
-  j["reference_point"][1] = "far";
-  refused_at(j, "/reference_point/1");
-  j = front_fixture();
-  j["points"][2]["within_noise_of"] = 2;
-  refused_at(j, "/points/2/within_noise_of");
-
   const auto dir = fresh_dir("front-stale");
-  j = front_fixture();
+  nlohmann::ordered_json j = front_fixture();
   j["job_sha256"] = "abc";
   write_text(dir / "front.json", j.dump());
-  EXPECT_FALSE(tune::report_detail::read_front(dir, json{{"job", {{"sha256", "def"}}}}, 1));
-  ASSERT_TRUE(tune::report_detail::read_front(dir, json{{"job", {{"sha256", "abc"}}}}, 1));
+  const tune::Job job = tune::parse_job(front_job_json(j), "front job");
+  EXPECT_FALSE(tune::read_front(dir, job, std::string("def")));
+  ASSERT_TRUE(tune::read_front(dir, job, std::string("abc")));
+  j["picked"]["index"] = 5;
+  write_text(dir / "front.json", j.dump());
+  try {
+    tune::read_front(dir, job, std::string("abc"));
+    ADD_FAILURE() << "a picked point the front does not have was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.source(), (dir / "front.json").string());
+    ASSERT_FALSE(e.errors().empty());
+    EXPECT_EQ(e.errors()[0].path, "/picked/index");
+  }
   write_text(dir / "history.csv", "iteration,best_fitness,evaluations\n0,1,10\n");
-  const auto front = tune::report_detail::parse_front(j.dump(), "front.json", 1);
+  const tune::Front front = front_of(front_fixture());
   EXPECT_THROW(tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::png),
                InputError);
   EXPECT_FALSE(std::filesystem::exists(dir / "figures" / "front-pareto.png"));
@@ -920,6 +929,8 @@ TEST(FrontReport, PageHoldsTheFrontTableAndBothFigures) {
   nlohmann::ordered_json j = front_fixture();
   j["job_sha256"] = gains["job"]["sha256"].get<std::string>();
   write_text(run / "front.json", j.dump(2));
+  // The front's job: the run's, with the fixture's goals.
+  write_text(run / "job.json", front_job_json(j).dump(2));
   add_hypervolume_column(run / "history.csv");
   const tune::ReportResult r = tune::render_report(run);
   EXPECT_EQ(r.figures.size(), 7u);
@@ -962,8 +973,8 @@ TEST(FrontReport, RunWithTwoSoftGoalsGetsItsFrontDrawn) {
   j["goals"] = {{{"metric", "ise"}, {"window", {2, 5}}, {"minimize", true}},
                 {{"metric", "control_tv"}, {"minimize", true}},
                 {{"metric", "peak_command"}, {"at_most", 1e6}}};
-  j["tuning"]["algorithm"] = {{"type", "pagmo"}, {"name", "nsga2"}, {"population", 8},
-                              {"generations", 2}};
+  j["tuning"]["algorithm"] = {
+      {"type", "pagmo"}, {"name", "nsga2"}, {"population", 8}, {"generations", 2}};
   tune::TbbEvaluator evaluator(2);
   tune::write_outputs(tune::tune(tune::parse_job(j, "front"), evaluator), dir / "run");
   const tune::ReportResult r = tune::render_report(dir / "run");

@@ -26,7 +26,6 @@
 #include <thread>
 
 #include "cli_runner.hpp"
-#include "service/events.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/run/api.hpp"
@@ -35,6 +34,7 @@
 #include "ftc/tune/service/job_store.hpp"
 #include "ftc/tune/service/service.hpp"
 #include "server_process.hpp"
+#include "service/events.hpp"
 #include "service/httplib.hpp"
 #include "short_job.hpp"
 
@@ -320,9 +320,10 @@ TEST(Service, RequestWithoutContentLengthHasAnEmptyBody) {
   const std::string running = s.submit(long_job())["id"];
   const std::string queued = s.submit(tiny_job())["id"];
   const auto t0 = std::chrono::steady_clock::now();
-  std::string reply = raw_request("127.0.0.1", s.port,
-                                  "POST /v1/jobs/" + queued +
-                                      "/cancel HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
+  std::string reply =
+      raw_request("127.0.0.1", s.port,
+                  "POST /v1/jobs/" + queued +
+                      "/cancel HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
   EXPECT_EQ(status_of(reply), 202) << reply;
   EXPECT_NE(reply.find("\"cancelled\""), std::string::npos) << reply;
   EXPECT_LT(std::chrono::steady_clock::now() - t0, 5s);  // not waiting for a body
@@ -471,7 +472,8 @@ TEST(Service, RejectsBadRequestsWithJsonErrors) {
 
   // A client that disconnects in the middle of a request leaves the server serving.
   for (const char* partial :
-       {"POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 5000\r\n\r\n{\"sche", "GET /v1/jo"}) {
+       {"POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 5000\r\n\r\n{\"sche",
+        "GET /v1/jo"}) {
     const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
     sockaddr_in a{};
     a.sin_family = AF_INET;
@@ -787,8 +789,7 @@ TEST(Service, SoakOfSigkillsLosesAndRepeatsNoJob) {
   const auto all = c.Get("/v1/jobs");
   ASSERT_TRUE(all);
   EXPECT_EQ(json::parse(all->body)["total"], n_jobs);
-  EXPECT_EQ(std::set<std::string>(ids.begin(), ids.end()).size(),
-            static_cast<std::size_t>(n_jobs));
+  EXPECT_EQ(std::set<std::string>(ids.begin(), ids.end()).size(), static_cast<std::size_t>(n_jobs));
 }
 
 TEST(Service, SigtermCheckpointsTheRunningJobAndExits) {
@@ -972,9 +973,8 @@ TEST(Service, RunningAndCancelledJobsServeTheirPartialResults) {
   expect_error(s.client->Get(("/v1/jobs/" + id + "/files/nothing.csv").c_str()), 404, "not_found");
   const auto dir = fresh_dir("partial-fetch");
   const std::string server = " --server http://127.0.0.1:" + std::to_string(s.port);
-  CliResult r =
-      run_cli("fetch " + id + " --all -o '" + (dir / "run" / "gains.json").string() + "'" + server,
-              dir);
+  CliResult r = run_cli(
+      "fetch " + id + " --all -o '" + (dir / "run" / "gains.json").string() + "'" + server, dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("optimizer.completed false"), std::string::npos) << r.err;
   for (const std::string& f : names) EXPECT_TRUE(std::filesystem::exists(dir / "run" / f)) << f;
@@ -1050,12 +1050,11 @@ TEST(Service, EventsStreamEachChangeToEveryOpenPage) {
   o.max_connections_per_client = 7;
   Service s(o);
   std::vector<std::unique_ptr<EventClient>> pages;
-  for (int i = 0; i < 2; ++i)
-    pages.push_back(std::make_unique<EventClient>(s.port, "/v1/events"));
+  for (int i = 0; i < 2; ++i) pages.push_back(std::make_unique<EventClient>(s.port, "/v1/events"));
   for (auto& p : pages)
-    ASSERT_TRUE(p->wait_for([](EventClient& c) { return c.received().find(": ftctune events") !=
-                                                        std::string::npos; },
-                            10s));
+    ASSERT_TRUE(p->wait_for(
+        [](EventClient& c) { return c.received().find(": ftctune events") != std::string::npos; },
+        10s));
   const std::string other = s.submit(tiny_job("other"))["id"];
   s.wait_done(other);
   // The store commits a job's end before the hub tells it: wait until the pages were told, or
@@ -1163,6 +1162,7 @@ TEST(Service, DashboardIsServedWithAStrictPolicy) {
   EXPECT_FALSE(api->has_header("Access-Control-Allow-Origin"));
   EXPECT_EQ(api->get_header_value("Cache-Control"), "no-store");  // job data is never cached
   EXPECT_EQ(s.client->Get("/v1/events")->status, 401);
+  EXPECT_EQ(s.client->Get("/v1/metrics")->status, 401);
   EXPECT_EQ(s.client->Get("/ui/other.js")->status, 401);  // only the dashboard's own files
 
   // The list filters by name, for a page of a large store.
@@ -1445,8 +1445,8 @@ TEST(Service, JobAboveTheMemoryBudgetIsRefusedWith413) {
   auto r = s.client->Post("/v1/jobs", j.dump(), "application/json");
   expect_error(r, 413, "job_too_large");
   EXPECT_NE(r->body.find("the job would need about 235 MB of memory (1 listed scenario and its "
-                          "comparison at about 0.0679 MB, 1000000 ensemble "
-                          "members at about 168 bytes each)"),
+                         "comparison at about 0.0679 MB, 1000000 ensemble "
+                         "members at about 168 bytes each)"),
             std::string::npos)
       << r->body;
   EXPECT_NE(r->body.find("above the server's limit of 134 MB per job"), std::string::npos)
@@ -1641,9 +1641,10 @@ TEST(Service, SlowClientsAreCutOffAndHealthStaysAnswered) {
   const int fd = connect_from("127.0.0.2", s.port);
   ASSERT_GE(fd, 0);
   const auto start = Clock::now();
-  ASSERT_TRUE(send_all(fd,
-                       "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
-                       "Content-Length: 1000\r\n\r\n"));
+  ASSERT_TRUE(
+      send_all(fd,
+               "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+               "Content-Length: 1000\r\n\r\n"));
   std::string reply;
   bool closed = false;
   for (int i = 0; i < 40 && !closed; ++i) {
@@ -1740,7 +1741,7 @@ TEST(Service, PartialResultsCostOneComparisonPerCheckpoint) {
       if (i == 0) trials[id] = t->body;
       EXPECT_EQ(t->body, trials[id]);
     }
-  EXPECT_EQ(made.load(), 2 + 2);  // one comparison per job's checkpoint
+  EXPECT_EQ(made.load(), 2 + 2);                           // one comparison per job's checkpoint
   EXPECT_EQ(json::parse(gains[a])["history"].size(), 2u);  // iterations 0 and 1
   EXPECT_EQ(json::parse(gains[a])["optimizer"]["completed"], false);
   gate->release();
@@ -1839,9 +1840,9 @@ TEST(Service, WithoutATokenForeignHostsAndCrossOriginChangesAreRefused) {
                            "Content-Length: " +
                            std::to_string(body.size()) + "\r\n\r\n" + body);
   };
-  for (const std::string& host : std::vector<std::string>{"evil.example:" + port, "evil.example",
-                                                         "localhost.evil.example",
-                                                         "10.0.0.1:" + port, "[::2]:" + port}) {
+  for (const std::string& host :
+       std::vector<std::string>{"evil.example:" + port, "evil.example", "localhost.evil.example",
+                                "10.0.0.1:" + port, "[::2]:" + port}) {
     for (const char* path : {"/v1/jobs", "/", "/healthz"}) {
       const std::string reply = request("GET", path, "Host: " + host + "\r\n");
       EXPECT_EQ(status_of(reply), 403) << host << " " << path << "\n" << reply;
@@ -1868,26 +1869,29 @@ TEST(Service, WithoutATokenForeignHostsAndCrossOriginChangesAreRefused) {
   // A read from another origin is served (the browser does not let that page see it: no CORS).
   EXPECT_EQ(status_of(request("GET", "/v1/jobs", here + "Origin: http://evil.example\r\n")), 200);
   // The dashboard's own origin, and a script's request without one, may submit.
-  EXPECT_EQ(status_of(request("POST", "/v1/jobs", here + "Origin: http://127.0.0.1:" + port +
-                                                      "\r\nSec-Fetch-Site: same-origin\r\n",
-                              job)),
-            201);
+  EXPECT_EQ(
+      status_of(request(
+          "POST", "/v1/jobs",
+          here + "Origin: http://127.0.0.1:" + port + "\r\nSec-Fetch-Site: same-origin\r\n", job)),
+      201);
   const std::string reply = request("POST", "/v1/jobs", here, job);
   ASSERT_EQ(status_of(reply), 201) << reply;
   const std::string id = json::parse(reply.substr(reply.find("\r\n\r\n") + 4))["id"];
   s.wait_done(id);
-  EXPECT_EQ(status_of(request("DELETE", "/v1/jobs/" + id, here + "Origin: http://evil.example\r\n")),
-            403);
+  EXPECT_EQ(
+      status_of(request("DELETE", "/v1/jobs/" + id, here + "Origin: http://evil.example\r\n")),
+      403);
   EXPECT_EQ(s.get("/v1/jobs")["total"], 2);
 
   // With a token, the token is the check (a page of another site cannot send it).
   tune::ServiceOptions o;
   o.token = "secret-token";
   Service t(o);
-  EXPECT_EQ(status_of(raw_request("127.0.0.1", t.port,
-                                  "GET /v1/jobs HTTP/1.1\r\nHost: tuning.example.org\r\n"
-                                  "Authorization: Bearer secret-token\r\nConnection: close\r\n\r\n")),
-            200);
+  EXPECT_EQ(
+      status_of(raw_request("127.0.0.1", t.port,
+                            "GET /v1/jobs HTTP/1.1\r\nHost: tuning.example.org\r\n"
+                            "Authorization: Bearer secret-token\r\nConnection: close\r\n\r\n")),
+      200);
 }
 
 // One client address other than loopback holds at most --max-event-streams-per-client streams
@@ -1939,10 +1943,9 @@ TEST(Service, EventStreamsOfAForeignOriginAreRefused) {
   for (const std::string foreign :
        {"Origin: http://evil.example\r\n", "Origin: null\r\n", "Sec-Fetch-Site: cross-site\r\n"})
     for (const char* path : {"/v1/events", "/v1/events?job=0123456789abcdef"}) {
-      const std::string reply =
-          raw_request("127.0.0.1", s.port,
-                      std::string("GET ") + path + " HTTP/1.1\r\n" + here + foreign +
-                          "Connection: close\r\n\r\n");
+      const std::string reply = raw_request("127.0.0.1", s.port,
+                                            std::string("GET ") + path + " HTTP/1.1\r\n" + here +
+                                                foreign + "Connection: close\r\n\r\n");
       EXPECT_EQ(status_of(reply), 403) << foreign << path << "\n" << reply;
       EXPECT_NE(reply.find("cross_origin"), std::string::npos) << reply;
     }
@@ -1966,9 +1969,10 @@ TEST(Cli, FetchAllRefusesAListingWithoutAStringName) {
   ASSERT_GT(port, 0);
   std::thread serving([&] { fake.listen_after_bind(); });
   const auto dir = fresh_dir("fetch-bad-listing");
-  const CliResult r = run_cli("fetch " + id + " --all -o '" + (dir / "run" / "gains.json").string() +
-                                  "' --server http://127.0.0.1:" + std::to_string(port),
-                              dir);
+  const CliResult r =
+      run_cli("fetch " + id + " --all -o '" + (dir / "run" / "gains.json").string() +
+                  "' --server http://127.0.0.1:" + std::to_string(port),
+              dir);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("/files/1/name"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "run"));
@@ -2046,10 +2050,13 @@ TEST(Cli, FetchKeepsTheServersJobNameOutOfItsPaths) {
 // A job whose run wrote a front (two or more soft goals): the store keeps front.json and
 // front.csv with the run's other files, /files lists and serves them, `fetch --all` brings them,
 // and the report drawn from the stored files shows the front. The job runner stores every file of
-// output_files(); the front's files stand in here for a two-goal run's (tests/data fixture).
+// output_files(), as here.
 TEST(Service, StoredFrontIsListedServedFetchedAndInTheReport) {
   const auto dir = fresh_dir("service-front");
-  const json job = tiny_job("front");
+  json job = tiny_job("front");
+  job.erase("objective");
+  job["goals"] = {{{"metric", "ise"}, {"window", {0, 0.05}}, {"minimize", true}},
+                  {{"metric", "control_tv"}, {"minimize", true}}};
   std::string id, front_json, front_csv;
   {
     tune::JobStore store(dir / "store");
@@ -2061,23 +2068,10 @@ TEST(Service, StoredFrontIsListedServedFetchedAndInTheReport) {
     id = store.submit(sub).record.id;
     ASSERT_EQ(store.claim_next()->id, id);
     tune::TbbEvaluator evaluator(2);
-    std::map<std::string, std::string> files =
+    const std::map<std::string, std::string> files =
         tune::output_files(tune::tune(tune::parse_job(job, "front"), evaluator));
-    json front =
-        json::parse(slurp(std::string(FTC_SOURCE_DIR) + "/tests/data/front-two-goals.json"));
-    front["job_sha256"] = json::parse(files.at("gains.json"))["job"]["sha256"];
-    front_json = front.dump(2) + "\n";
-    front_csv = "index,Kp,Ki,ise,control_tv,peak_command,feasible,violation,trial\n"
-                "0,40,2.5,0.125,9000,17.5,true,0,17\n";
-    files["front.json"] = front_json;
-    files["front.csv"] = front_csv;
-    // A front run's history has the hypervolume of each iteration.
-    std::istringstream in(files.at("history.csv"));
-    std::string line, history;
-    std::getline(in, line);
-    history = line + ",hypervolume\n";
-    for (int k = 0; std::getline(in, line); ++k) history += line + "," + std::to_string(k + 1) + "\n";
-    files["history.csv"] = history;
+    front_json = files.at("front.json");
+    front_csv = files.at("front.csv");
     store.finish_succeeded(id, files);
   }
   tune::ServiceOptions o;
@@ -2099,11 +2093,38 @@ TEST(Service, StoredFrontIsListedServedFetchedAndInTheReport) {
   EXPECT_NE(report->body.find("<h2>Pareto front</h2>"), std::string::npos);
   EXPECT_NE(report->body.find("alt=\"Hypervolume\""), std::string::npos);
   const auto out = fresh_dir("service-front-fetch");
-  const CliResult r = run_cli("fetch " + id + " --all -o '" + (out / "run" / "gains.json").string() +
-                                  "' --server http://127.0.0.1:" + std::to_string(s.port),
-                              out);
+  const CliResult r =
+      run_cli("fetch " + id + " --all -o '" + (out / "run" / "gains.json").string() +
+                  "' --server http://127.0.0.1:" + std::to_string(s.port),
+              out);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(slurp(out / "run" / "front.json"), front_json);
+}
+
+// GET /v1/metrics tells the dashboard the metrics a run records: the metrics record's fields in
+// its order, each with its name, label (without Markdown's escapes), unit, scope, whether
+// comparison.md tabulates it, and whether a job may name it as a goal or its objective (behind
+// the token as the rest of the API: DashboardIsServedWithAStrictPolicy).
+TEST(Service, MetricsListsTheMetricsRecord) {
+  Service s;
+  const json list = s.get("/v1/metrics")["metrics"];
+  ASSERT_EQ(list.size(), sim::kMetricFieldCount);
+  const char* scopes[] = {"window", "run", "fault"};
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const sim::MetricField& f = sim::kMetricFields[i];
+    EXPECT_EQ(list[i]["name"], f.name);
+    EXPECT_EQ(list[i]["label"], sim::plain_label(f));
+    EXPECT_EQ(list[i]["unit"], f.unit);
+    EXPECT_EQ(list[i]["scope"], scopes[static_cast<int>(f.scope)]);
+    EXPECT_EQ(list[i]["in_tables"], f.in_tables);
+    EXPECT_EQ(list[i]["goal"], f.goal);
+    EXPECT_EQ(list[i]["objective"], f.objective);
+  }
+  EXPECT_EQ(list[3]["label"], "max |u_d|");  // "max \\|u_d\\|" in Markdown
+  EXPECT_EQ(list[5]["scope"], "fault");
+  const auto post = s.client->Post("/v1/metrics", "{}", "application/json");
+  ASSERT_TRUE(post);
+  EXPECT_EQ(post->status, 405);
 }
 
 // A two-goal job submitted to the service: its front.json and front.csv are those `ftctune run`

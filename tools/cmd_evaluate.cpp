@@ -106,8 +106,8 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   const tune::Summary& s0 = r.controllers.front().aggregates;
   std::printf(
       "%s of each scenario over the window; %d scenario%s, %d counted, %d unrecoverable%s\n",
-      sim::to_string(job.objective.metric), s0.scenarios, s0.scenarios == 1 ? "" : "s", s0.counted,
-      s0.unrecoverable, s0.counted < s0.scenarios ? " (left out)" : "");
+      std::string(job.objective.metric->name).c_str(), s0.scenarios, s0.scenarios == 1 ? "" : "s",
+      s0.counted, s0.unrecoverable, s0.counted < s0.scenarios ? " (left out)" : "");
   std::fputs(tune::evaluation_table(r).c_str(), stdout);
   std::printf("  %lld simulations on %d thread%s in %.2f s\n",
               static_cast<long long>(r.simulations), result.threads, result.threads == 1 ? "" : "s",

@@ -110,8 +110,8 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
   if (!g.quiet) {
     std::printf(
         "%s on job %s (%s in window [%s, %s) s, %s over %zu scenario%s)\n",
-        sim::to_string(controller.type), job.name.c_str(), sim::to_string(job.objective.metric),
-        fmt(job.objective.window.t0).c_str(),
+        sim::to_string(controller.type), job.name.c_str(),
+        std::string(job.objective.metric->name).c_str(), fmt(job.objective.window.t0).c_str(),
         std::isfinite(job.objective.window.t1) ? fmt(job.objective.window.t1).c_str() : "end",
         tune::to_string(job.objective.aggregate), e.scenarios.size(),
         e.scenarios.size() == 1 ? "" : "s");
@@ -126,7 +126,8 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
       const sim::MetricValues m = sim::MetricValues::of(e.scenarios[i]);
       std::printf("  %-16s", job.scenarios[i].name.c_str());
       for (std::size_t f = 0; f < sim::kMetricFieldCount; ++f)
-        if (sim::kMetricFields[f].in_tables && sim::kMetricFields[f].scope != sim::MetricScope::fault)
+        if (sim::kMetricFields[f].in_tables &&
+            sim::kMetricFields[f].scope != sim::MetricScope::fault)
           std::printf(" %12s", fmt(m.field(f)[0]).c_str());
       std::printf("  %s\n", e.scenarios[i].diverged ? "yes" : "no");
     }

@@ -160,6 +160,18 @@ def test_submitting_table1_through_the_page(server, browser):
          == str(evaluations))
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table tbody tr"))
     wait(browser, lambda d: "noise" in d.find_element(By.CSS_SELECTOR, ".noise-floor").text)
+    # The comparison's columns are the metrics the service lists as tabulated (GET /v1/metrics),
+    # per scenario, by label and unit; a metric per fault onset shows every onset's value.
+    recorded = [m for m in server.api("/v1/metrics")["metrics"] if m["in_tables"]]
+    comparison = server.api("/v1/jobs/" + job_id + "/comparison")
+    heads = [h.strip() for h in texts(browser, "#comparison-table th")]
+    assert heads == ["controller", "role", "objective", "fitness"] + [
+        "%s: %s [%s]" % (s, m["label"], m["unit"]) for s in comparison["scenarios"]
+        for m in recorded], heads
+    peaks = texts(browser, '#comparison-table td[data-metric="peak_error_after_fault"]')
+    onsets = len(comparison["controllers"][0]["scenarios"][0]["peak_error_after_fault"])
+    assert len(peaks) == len(comparison["controllers"]) and onsets > 1
+    assert all(len(p.split(" / ")) == onsets for p in peaks), peaks
     browser.execute_script("window.scrollTo(0, 0)")
     screenshot(browser, "dashboard-job.png")
     # Sorting by objective puts the lowest first.
@@ -200,29 +212,17 @@ def test_a_two_goal_job_shows_its_front(server, browser):
     wait(browser, lambda d: d.find_element(By.ID, "live").text == "live"
          and d.execute_script("return document.body.dataset.loading") == "0")
     # Each point's noise floor: a band on the chart and a cell of the table, as front.json has it;
-    # the pairs that are no trade-off by report.html's rule (docs/usage.md): on every soft goal
-    # |a - b| <= the larger of the two floors f·|v|, or front.json's within_noise_of.
+    # the pairs that are no trade-off as front.json lists each point's partners (the run's rule,
+    # docs/usage.md), and the goals by front.json's labels and units.
     points = front["points"]
     finite = [p for p in points if any(isinstance(f, float) for f in p["noise_floor"][:2])]
     assert finite, "the test job's front has measured floors"
-
-    def floor(p, g):
-        f = p["noise_floor"][g]
-        return f * abs(p["goals"][g]) if isinstance(f, float) else None
-
-    def within(i, k):
-        p, q = points[i], points[k]
-        if p.get("within_noise_of") == k or q.get("within_noise_of") == i:
-            return True
-        for g in range(2):
-            fu, fv = floor(p, g), floor(q, g)
-            if fu is None and fv is None:
-                return False
-            if not abs(p["goals"][g] - q["goals"][g]) <= max(fu or 0, fv or 0):
-                return False
-        return True
-    partners = [[k for k in range(len(points)) if k != i and within(min(i, k), max(i, k))]
-                for i in range(len(points))]
+    partners = [p["within_noise"] for p in points]
+    assert all(i in partners[k] for i in range(len(points)) for k in partners[i]), partners
+    heads = [h.strip() for h in texts(browser, "#front-points th")]
+    labels = ["%s [%s]" % (g["label"], g["unit"]) for g in front["goals"]]
+    assert heads[2] == labels[0] and heads[4] == labels[1], (heads, labels)
+    assert labels[1] == "control TV [command's unit]", labels
     chart = browser.find_element(By.ID, "front-chart")
     assert chart.get_attribute("data-noise-bands") == str(len(finite))
     assert chart.get_attribute("data-noise-links") == str(sum(map(len, partners)) // 2)

@@ -132,22 +132,8 @@ class Reader {
   std::size_t pos_ = 0;
 };
 
-// Metrics in the record's wire form (ftc/sim/metrics_record.hpp: produced from kMetricFields).
-// The mirror below has Metrics' members in order: a member added to Metrics changes its size,
-// and this stops compiling until the member is in the record (a kMetricFields entry) or sent
-// by append_metrics_wire.
-struct MetricsMirror {
-  sim::Window window;
-  sim::ErrorIntegrals errors;
-  std::vector<sim::Window> extra_windows;
-  std::vector<sim::ErrorIntegrals> extra;
-  double max_abs_u, control_tv;
-  std::vector<double> fault_onsets, peak_error_after_fault;
-  bool diverged;
-  double diverged_at;
-};
-static_assert(sizeof(MetricsMirror) == sizeof(sim::Metrics), "send every member of Metrics");
-
+// Metrics in the record's wire form (ftc/sim/metrics_record.hpp: produced from kMetricFields,
+// which checks at compile time that it lists every member of the record).
 void put_metrics(Writer& w, const sim::Metrics& m) { w.put_metrics(m); }
 
 sim::Metrics get_metrics(Reader& r) { return r.get_metrics(); }
@@ -421,9 +407,9 @@ struct MpiEvaluator::Impl {
   MpiOptions options;
   int size = 1;
   tbb::task_arena arena;
-  std::vector<int> threads;        // per rank
-  std::vector<std::string> host;   // per rank
-  std::uint64_t set_sent = 0;      // identity of the simulation set the workers hold
+  std::vector<int> threads;       // per rank
+  std::vector<std::string> host;  // per rank
+  std::uint64_t set_sent = 0;     // identity of the simulation set the workers hold
 
   Impl(const Session& s, MpiOptions o)
       : options(o),

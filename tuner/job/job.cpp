@@ -191,13 +191,13 @@ Ptr<sim::Scenario> make_scenario_shape() {
              schema::annotate(k.declared->range, item);
              if (!k.declared->unit.empty()) unit = " (" + k.declared->unit + ")";
            }
-           return json{{"type", "array"},
-                       {"items", item},
-                       {"description", "the true " + k.parameter + " of the simulated plant" +
-                                           unit + ", for a plant that declares it uncertain (" +
-                                           k.models +
-                                           "); the controller keeps the job's plant as its "
-                                           "model. Absent: the plant's"}};
+           return json{
+               {"type", "array"},
+               {"items", item},
+               {"description", "the true " + k.parameter + " of the simulated plant" + unit +
+                                   ", for a plant that declares it uncertain (" + k.models +
+                                   "); the controller keeps the job's plant as its "
+                                   "model. Absent: the plant's"}};
          }});
   }
   return o;
@@ -307,43 +307,85 @@ void check_aggregate_keys(const O& obj, const std::string& path, Errors& e) {
     e.push_back({path + "/alpha", "is used only with aggregate \"cvar\""});
 }
 
+// --- metrics: names, scopes and settings, all from the metrics record (kMetricFields) --------
+
+// The fields `can` marks (goal, objective), by name, in the table's order.
+std::vector<std::pair<std::string, MetricRef>> metric_choices(bool sim::MetricField::*can) {
+  std::vector<std::pair<std::string, MetricRef>> out;
+  for (const sim::MetricField& f : sim::kMetricFields)
+    if (f.*can) out.emplace_back(std::string(f.name), &f);
+  return out;
+}
+
+// Names in words: "a", "a or b", "a, b or c" (`last`: "or", "and").
+std::string in_words(const std::vector<std::string>& names, const char* last) {
+  std::string s;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    s += (i == 0 ? "" : i + 1 == names.size() ? std::string(" ") + last + " " : ", ") + names[i];
+  return s;
+}
+
+// The names of the fields that `keep` keeps, in the table's order.
+template <class Keep>
+std::vector<std::string> metric_names(Keep keep, const char* quote = "") {
+  std::vector<std::string> out;
+  for (const sim::MetricField& f : sim::kMetricFields)
+    if (keep(f)) out.push_back(quote + std::string(f.name) + quote);
+  return out;
+}
+
+// A setting a metric is measured against (MetricField::setting): its key in a goal, its key in
+// the job's metrics block, and where each is held.
+struct SettingKeys {
+  sim::MetricSetting setting;
+  const char* key;
+  const char* job_key;
+  std::optional<double> GoalConfig::*own;
+  std::optional<double> MetricsConfig::*from_job;
+};
+constexpr SettingKeys kSettingKeys[] = {
+    {sim::MetricSetting::settling_threshold, "threshold", "settling_threshold",
+     &GoalConfig::threshold, &MetricsConfig::settling_threshold},
+    {sim::MetricSetting::steady_state_tail, "tail", "steady_state_tail", &GoalConfig::tail,
+     &MetricsConfig::steady_state_tail}};
+
+// The metrics measured against setting `s`, quoted or not, in words ("settling_time").
+std::string metrics_using(sim::MetricSetting s, const char* quote = "") {
+  return in_words(
+      metric_names([s](const sim::MetricField& f) { return f.goal && f.setting == s; }, quote),
+      "or");
+}
+
+// The metrics that can be the objective, in words ("ise, iae or itae").
+std::string objective_metrics() {
+  return in_words(metric_names([](const sim::MetricField& f) { return f.objective; }), "or");
+}
+
 Ptr<ObjectiveConfig> make_objective_shape() {
   using O = ObjectiveConfig;
   auto o = std::make_shared<Obj<O>>("What a candidate is scored by");
-  o->choice("metric", &O::metric,
-            {{"ise", sim::Metric::ise}, {"iae", sim::Metric::iae}, {"itae", sim::Metric::itae}},
-            "ise = ∫‖e‖² dt, iae = ∫Σ|e_i| dt, itae = ∫t Σ|e_i| dt over the window");
+  o->choice("metric", &O::metric, metric_choices(&sim::MetricField::objective),
+            "the metric measured over the window: " + objective_metrics());
   add_window_field(*o);
   add_aggregate_fields(*o);
-  o->rule([](const O& obj, const std::string& path, Errors& e) {
-    check_aggregate_keys(obj, path, e);
-  });
+  o->rule(
+      [](const O& obj, const std::string& path, Errors& e) { check_aggregate_keys(obj, path, e); });
   return o;
 }
-
-constexpr GoalMetric kGoalMetrics[] = {
-    GoalMetric::ise,
-    GoalMetric::iae,
-    GoalMetric::itae,
-    GoalMetric::control_tv,
-    GoalMetric::control_energy,
-    GoalMetric::peak_command,
-    GoalMetric::saturation_fraction,
-    GoalMetric::peak_error_after_fault,
-    GoalMetric::settling_time,
-    GoalMetric::steady_state_error};
 
 Ptr<GoalConfig> make_goal_shape() {
   using G = GoalConfig;
   auto o = std::make_shared<Obj<G>>(
       "A goal: a metric in a window aggregated over the scenarios, minimised (\"minimize\": "
       "true, a soft goal) or kept at most a limit (\"at_most\", a hard goal)");
-  std::vector<std::pair<std::string, GoalMetric>> names;
-  for (GoalMetric m : kGoalMetrics) names.emplace_back(to_string(m), m);
-  o->choice("metric", &G::metric, std::move(names),
-            "ise, iae, itae, control_energy, peak_command, saturation_fraction, settling_time, "
-            "steady_state_error in the window; control_tv and peak_error_after_fault over the "
-            "whole run",
+  const auto goal_in = [](bool windowed) {
+    return [windowed](const sim::MetricField& f) {
+      return f.goal && (f.scope == sim::MetricScope::window) == windowed;
+    };
+  };
+  o->choice("metric", &G::metric, metric_choices(&sim::MetricField::goal),
+            in_words(metric_names(goal_in(true)), "and") + " in the window; " +
+                in_words(metric_names(goal_in(false)), "and") + " over the whole run",
             kRequired);
   add_window_field(*o);
   add_aggregate_fields(*o);
@@ -361,32 +403,35 @@ Ptr<GoalConfig> make_goal_shape() {
               if (g.minimize) out["minimize"] = true;
             },
             [] {
-              return json{{"const", true},
-                          {"description", "a soft goal: the search minimises it"}};
+              return json{{"const", true}, {"description", "a soft goal: the search minimises it"}};
             }});
   o->optional_number("at_most", &G::at_most, schema::Range::positive(),
                      "a hard goal: the limit the aggregate must not exceed (> 0)");
   o->optional_number("threshold", &G::threshold, schema::Range::positive(),
-                     "settling_time only: rad, ‖e‖ below it counts as settled (default: the "
-                     "job's metrics.settling_threshold)");
+                     metrics_using(sim::MetricSetting::settling_threshold) +
+                         " only: rad, ‖e‖ below it counts as settled (default: the job's "
+                         "metrics.settling_threshold)");
   o->optional_number("tail", &G::tail, schema::Range::positive(),
-                     "steady_state_error only: s, the tail of the window it averages (default: "
-                     "the job's metrics.steady_state_tail)");
+                     metrics_using(sim::MetricSetting::steady_state_tail) +
+                         " only: s, the tail of the window it averages (default: the job's "
+                         "metrics.steady_state_tail)");
   o->rule([](const G& g, const std::string& path, Errors& e) {
     check_aggregate_keys(g, path, e);
     if (!g.minimize && !g.at_most)
-      e.push_back({path, "needs \"minimize\": true (a soft goal) or \"at_most\": a limit (a "
-                         "hard goal)"});
+      e.push_back({path,
+                   "needs \"minimize\": true (a soft goal) or \"at_most\": a limit (a "
+                   "hard goal)"});
     else if (g.minimize && g.at_most)
-      e.push_back({path + "/at_most", "a goal is minimised or limited, not both; give the limit "
-                                      "as a second goal"});
-    if (g.threshold && g.metric != GoalMetric::settling_time)
-      e.push_back({path + "/threshold", "is used only with metric \"settling_time\""});
-    if (g.tail && g.metric != GoalMetric::steady_state_error)
-      e.push_back({path + "/tail", "is used only with metric \"steady_state_error\""});
-    if (!windowed(g.metric) &&
+      e.push_back({path + "/at_most",
+                   "a goal is minimised or limited, not both; give the limit "
+                   "as a second goal"});
+    for (const SettingKeys& k : kSettingKeys)
+      if (g.*k.own && g.metric->setting != k.setting)
+        e.push_back(
+            {path + "/" + k.key, "is used only with metric " + metrics_using(k.setting, "\"")});
+    if (!g.windowed() &&
         (g.window.t0 != 0.0 || std::isfinite(g.window.t1) || g.window_from != WindowFrom::start))
-      e.push_back({path + "/window", std::string(to_string(g.metric)) +
+      e.push_back({path + "/window", std::string(g.metric->name) +
                                          " is measured over the whole run; it takes no window"});
   });
   return o;
@@ -709,21 +754,19 @@ namespace {
 // from each run's start, not after any scenario's end.
 void check_window(const Job& job, const sim::Window& w, WindowFrom from, const std::string& path,
                   Errors& errs) {
-    if (!std::isfinite(w.t0) || w.t0 < 0)
-    errs.push_back(
-        {path + "/0", "must be >= 0 (got " + json_io::number_text(w.t0) + ")"});
+  if (!std::isfinite(w.t0) || w.t0 < 0)
+    errs.push_back({path + "/0", "must be >= 0 (got " + json_io::number_text(w.t0) + ")"});
   else if (!(w.t1 > w.t0))
-    errs.push_back({path, "end " + json_io::number_text(w.t1) +
-                                             " must be after start " + json_io::number_text(w.t0)});
+    errs.push_back({path, "end " + json_io::number_text(w.t1) + " must be after start " +
+                              json_io::number_text(w.t0)});
   else if (std::isfinite(w.t1) && from == WindowFrom::start)
     for (const sim::Scenario& s : job.scenarios)
       if (std::isfinite(s.duration) && w.t1 > s.duration + 1e-12) {
-        errs.push_back({path + "/1",
-                        "end " + json_io::number_text(w.t1) + " is after the end of scenario \"" +
-                            s.name + "\" (" + json_io::number_text(s.duration) + " s)"});
+        errs.push_back({path + "/1", "end " + json_io::number_text(w.t1) +
+                                         " is after the end of scenario \"" + s.name + "\" (" +
+                                         json_io::number_text(s.duration) + " s)"});
         break;
       }
-
 }
 
 // pagmo's multi-objective algorithms search fronts only: a job of one objective (or of one soft
@@ -736,14 +779,15 @@ void validate_front_only(const Job& job, Errors& errs) {
   const std::string name = job.tuning->algorithm->to_json().value("name", "");
   if (const PagmoAlgorithmInfo* info = find_pagmo_algorithm(name); info && info->front)
     errs.push_back({"/tuning/algorithm/name",
-                    "pagmo's " + name + " searches a Pareto front: give the job two or more soft "
-                    "goals (\"minimize\": true), or name an algorithm of one objective"});
+                    "pagmo's " + name +
+                        " searches a Pareto front: give the job two or more soft "
+                        "goals (\"minimize\": true), or name an algorithm of one objective"});
 }
 
 // The goals against the job: a soft goal among them, windows inside the scenarios, the settling
 // threshold and tail their metrics need, no goal twice. One soft goal is the search's objective,
-// so it is an error integral; two or more ask for a Pareto front (any metric), which the
-// algorithm must search for.
+// so its metric is one that can be (MetricField::objective); two or more ask for a Pareto front
+// (any metric), which the algorithm must search for.
 void validate_goals(const Job& job, Errors& errs) {
   if (job.goals.empty()) return;
   bool soft = false;
@@ -751,43 +795,41 @@ void validate_goals(const Job& job, Errors& errs) {
                                         [](const GoalConfig& g) { return g.soft(); });
   if (soft_goals == 1)
     for (std::size_t i = 0; i < job.goals.size(); ++i)
-      if (job.goals[i].soft() && job.goals[i].metric > GoalMetric::itae)
+      if (job.goals[i].soft() && !job.goals[i].metric->objective)
         errs.push_back({"/goals/" + std::to_string(i) + "/metric",
-                        "a single soft goal is the search's objective: ise, iae or itae (got " +
-                            std::string(to_string(job.goals[i].metric)) +
+                        "a single soft goal is the search's objective: " + objective_metrics() +
+                            " (got " + std::string(job.goals[i].metric->name) +
                             "; make it a limit with at_most, or add a second soft goal for a "
                             "Pareto front)"});
   if (soft_goals >= 2 && job.tuning && job.tuning->algorithm &&
       !job.tuning->algorithm->searches_front())
     errs.push_back({"/tuning/algorithm/type",
-                    std::to_string(soft_goals) + " soft goals (\"minimize\": true) ask for a "
-                    "Pareto front, which algorithm " + job.tuning->algorithm->type() +
-                    " does not search for (bat and random do); or keep one soft goal and make "
-                    "the others limits (\"at_most\")"});
+                    std::to_string(soft_goals) +
+                        " soft goals (\"minimize\": true) ask for a "
+                        "Pareto front, which algorithm " +
+                        job.tuning->algorithm->type() +
+                        " does not search for (bat and random do); or keep one soft goal and make "
+                        "the others limits (\"at_most\")"});
   std::vector<json> seen;
   for (std::size_t i = 0; i < job.goals.size(); ++i) {
     const GoalConfig& g = job.goals[i];
     const std::string p = "/goals/" + std::to_string(i);
     soft = soft || g.soft();
-    if (windowed(g.metric)) check_window(job, g.window, g.window_from, p + "/window", errs);
-    const auto settings = [&](const std::optional<double>& own, GoalMetric m, const char* key,
-                              const char* job_key, std::optional<double> MetricsConfig::*member) {
-      if (g.metric != m) return;
+    if (g.windowed()) check_window(job, g.window, g.window_from, p + "/window", errs);
+    // The setting the goal's metric is measured against: its own or the job's, not both apart.
+    for (const SettingKeys& k : kSettingKeys) {
+      if (g.metric->setting != k.setting) continue;
+      const std::optional<double>& own = g.*k.own;
       const std::optional<double> from_job =
-          job.metrics ? (*job.metrics).*member : std::optional<double>{};
+          job.metrics ? (*job.metrics).*k.from_job : std::optional<double>{};
       if (!own && !from_job)
-        errs.push_back({p + "/" + key, std::string(to_string(m)) + " needs a " + key +
-                                           ": give it here or as /metrics/" + job_key});
+        errs.push_back({p + "/" + k.key, std::string(g.metric->name) + " needs a " + k.key +
+                                             ": give it here or as /metrics/" + k.job_key});
       else if (own && from_job && *own != *from_job)
-        errs.push_back({p + "/" + key,
-                        json_io::number_text(*own) + " differs from /metrics/" + job_key + " " +
-                            json_io::number_text(*from_job) +
-                            " (a run measures one; give it in one place)"});
-    };
-    settings(g.threshold, GoalMetric::settling_time, "threshold", "settling_threshold",
-             &MetricsConfig::settling_threshold);
-    settings(g.tail, GoalMetric::steady_state_error, "tail", "steady_state_tail",
-             &MetricsConfig::steady_state_tail);
+        errs.push_back({p + "/" + k.key, json_io::number_text(*own) + " differs from /metrics/" +
+                                             k.job_key + " " + json_io::number_text(*from_job) +
+                                             " (a run measures one; give it in one place)"});
+    }
     // A run measures one threshold and one tail: two goals may not ask for different ones.
     const auto agrees = [&](const std::optional<double>& own, const char* key,
                             std::optional<double> GoalConfig::*member) {
@@ -812,8 +854,9 @@ void validate_goals(const Job& job, Errors& errs) {
     seen.push_back(std::move(canonical));
   }
   if (!soft)
-    errs.push_back({"/goals", "needs one goal with \"minimize\": true (the search's objective); "
-                              "every goal here is a limit"});
+    errs.push_back({"/goals",
+                    "needs one goal with \"minimize\": true (the search's objective); "
+                    "every goal here is a limit"});
 }
 
 // The checks that span the job's parts: names, the scenarios against the plant's shape, the
@@ -840,8 +883,8 @@ void validate_job(const Job& job, Errors& errs) {
       errs.push_back({p + "/name", "duplicate scenario name \"" + s.name + "\""});
   }
 
-  if (job.goals.empty()) check_window(job, job.objective.window, job.objective.window_from,
-                                      "/objective/window", errs);
+  if (job.goals.empty())
+    check_window(job, job.objective.window, job.objective.window_from, "/objective/window", errs);
   validate_goals(job, errs);
   validate_front_only(job, errs);
 
@@ -947,9 +990,10 @@ std::shared_ptr<const Obj<Job>> make_job_shape() {
             },
             [] {
               json s = objective_shape()->json_schema();
-              s["description"] =
-                  "What a candidate is scored by (default: ise over the whole run, mean); a job "
-                  "gives objective or goals, not both";
+              s["description"] = "What a candidate is scored by (default: " +
+                                 std::string(ObjectiveConfig{}.metric->name) +
+                                 " over the whole run, mean); a job gives objective or goals, "
+                                 "not both";
               return s;
             }});
   o->array("goals", &Job::goals, goal_shape(),
@@ -999,36 +1043,6 @@ const char* to_string(Aggregate a) {
   return "?";
 }
 
-const char* to_string(GoalMetric m) {
-  switch (m) {
-    case GoalMetric::ise:
-      return "ise";
-    case GoalMetric::iae:
-      return "iae";
-    case GoalMetric::itae:
-      return "itae";
-    case GoalMetric::control_tv:
-      return "control_tv";
-    case GoalMetric::control_energy:
-      return "control_energy";
-    case GoalMetric::peak_command:
-      return "peak_command";
-    case GoalMetric::saturation_fraction:
-      return "saturation_fraction";
-    case GoalMetric::peak_error_after_fault:
-      return "peak_error_after_fault";
-    case GoalMetric::settling_time:
-      return "settling_time";
-    case GoalMetric::steady_state_error:
-      return "steady_state_error";
-  }
-  return "?";
-}
-
-bool windowed(GoalMetric m) {
-  return m != GoalMetric::control_tv && m != GoalMetric::peak_error_after_fault;
-}
-
 ObjectiveConfig GoalConfig::measure() const {
   ObjectiveConfig o;
   o.window = window;
@@ -1041,7 +1055,8 @@ ObjectiveConfig GoalConfig::measure() const {
 
 double GoalConfig::violation(double value) const {
   if (!at_most) return 0.0;
-  if (!(value <= std::numeric_limits<double>::max())) return std::numeric_limits<double>::infinity();
+  if (!(value <= std::numeric_limits<double>::max()))
+    return std::numeric_limits<double>::infinity();
   return std::max(0.0, value / *at_most - 1.0);
 }
 
@@ -1180,8 +1195,9 @@ Job parse_job(const json& j_in, const std::string& source,
   // that is an error integral), which is what the runs score by.
   const bool has_goals = j.is_object() && j.contains("goals");
   if (has_goals && j.contains("objective"))
-    errs.push_back({"/goals", "a job gives \"objective\" or \"goals\", not both (the objective "
-                              "is a single soft goal)"});
+    errs.push_back({"/goals",
+                    "a job gives \"objective\" or \"goals\", not both (the objective "
+                    "is a single soft goal)"});
   if (has_goals && j["goals"].is_array() && j["goals"].empty())
     errs.push_back({"/goals", "must hold at least one goal"});
   Job job;
@@ -1204,11 +1220,9 @@ Job parse_job(const json& j_in, const std::string& source,
     errs.insert(at, entry_errs.begin(), entry_errs.end());
   }
   for (const GoalConfig& g : job.goals)
-    if (g.soft() && g.metric <= GoalMetric::itae) {
+    if (g.soft() && g.metric->objective) {
       job.objective = g.measure();
-      job.objective.metric = g.metric == GoalMetric::ise   ? sim::Metric::ise
-                             : g.metric == GoalMetric::iae ? sim::Metric::iae
-                                                           : sim::Metric::itae;
+      job.objective.metric = g.metric;
       break;
     }
   // Every default filled in: the plant's parameters, and a scenario without an initial state

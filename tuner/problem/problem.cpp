@@ -46,7 +46,7 @@ sim::SimulationOptions options_of(const Job& job, const sim::Scenario& s) {
   o.extra_windows.push_back({start, s.duration});
   // Each goal's window, after the segments, unless it is one of them.
   for (const GoalConfig& g : job.goals) {
-    if (!windowed(g.metric)) continue;
+    if (!g.windowed()) continue;
     const sim::Window w = g.measure().window_of(s);
     if (same_window(w, o.window) ||
         std::any_of(o.extra_windows.begin(), o.extra_windows.end(),
@@ -70,43 +70,26 @@ bool has_limits(const Job& job) {
                      [](const GoalConfig& g) { return g.at_most.has_value(); });
 }
 
-// A goal's value on a scenario's metrics (TuningProblem::goal_value).
+// A goal's value on a scenario's metrics (TuningProblem::goal_value), where the metrics record
+// keeps its field: in the goal's window; once per run (+inf for a diverged run); or once per
+// fault onset, the onsets combined as the field's values over scenarios are (+inf for a diverged
+// run).
 double goal_value_on(const GoalConfig& g, const sim::Metrics& m, const sim::Scenario& s) {
   constexpr double inf = std::numeric_limits<double>::infinity();
-  if (g.metric == GoalMetric::control_tv) return m.diverged ? inf : m.control_tv;
-  if (g.metric == GoalMetric::peak_error_after_fault) {
-    if (m.diverged) return inf;
-    double peak = std::numeric_limits<double>::quiet_NaN();
-    for (double p : m.peak_error_after_fault)
-      if (!std::isnan(p)) peak = std::isnan(peak) ? p : std::max(peak, p);
-    return peak;
-  }
-  const sim::Window w = g.measure().window_of(s);
-  const sim::ErrorIntegrals* in = same_window(w, m.window) ? &m.errors : nullptr;
-  for (std::size_t k = 0; !in && k < m.extra_windows.size(); ++k)
-    if (same_window(w, m.extra_windows[k])) in = &m.extra[k];
-  if (!in) throw std::logic_error("a goal's window was not simulated");
-  switch (g.metric) {
-    case GoalMetric::ise:
-      return in->ise;
-    case GoalMetric::iae:
-      return in->iae;
-    case GoalMetric::itae:
-      return in->itae;
-    case GoalMetric::control_energy:
-      return in->control_energy;
-    case GoalMetric::peak_command:
-      return in->peak_command;
-    case GoalMetric::saturation_fraction:
-      return in->saturation_fraction;
-    case GoalMetric::settling_time:
-      return in->settling_time;
-    case GoalMetric::steady_state_error:
-      return in->steady_state_error;
-    default:
+  const sim::MetricField& f = *g.metric;
+  switch (f.scope) {
+    case sim::MetricScope::run:
+      return m.diverged ? inf : m.*f.per_run;
+    case sim::MetricScope::fault:
+      return m.diverged ? inf : sim::over_scenarios(f, m.*f.per_fault);
+    case sim::MetricScope::window:
       break;
   }
-  throw std::logic_error("a goal metric without a value");
+  const sim::Window w = g.measure().window_of(s);
+  if (same_window(w, m.window)) return m.errors.*f.in_window;
+  for (std::size_t k = 0; k < m.extra_windows.size(); ++k)
+    if (same_window(w, m.extra_windows[k])) return m.extra[k].*f.in_window;
+  throw std::logic_error("a goal's window was not simulated");
 }
 
 }  // namespace
@@ -135,19 +118,7 @@ double aggregate_lower_bound(const ObjectiveConfig& objective, std::vector<doubl
   return objective.aggregate_of(std::move(values));
 }
 
-bool goal_has_lower_bound(const GoalConfig& goal) {
-  switch (goal.metric) {
-    case GoalMetric::ise:
-    case GoalMetric::iae:
-    case GoalMetric::itae:
-    case GoalMetric::control_tv:
-    case GoalMetric::control_energy:
-    case GoalMetric::peak_command:
-      return true;
-    default:  // NaN on some members: the count the aggregate takes is not known in advance
-      return false;
-  }
-}
+bool goal_has_lower_bound(const GoalConfig& goal) { return goal.metric->partial_lower_bound; }
 
 double fitness_upper_bound(double objective, double violation) {
   if (!(violation > 0)) return fitness_of(objective);
@@ -216,8 +187,7 @@ sim::Scenario TuningProblem::member(std::size_t i) const {
 sim::Scenario TuningProblem::scenario(std::size_t i) const {
   if (i < set_->size()) return set_->scenario(i);
   if (i < scenarios()) return member(i);
-  throw std::out_of_range("scenario " + std::to_string(i) + " of " +
-                          std::to_string(scenarios()));
+  throw std::out_of_range("scenario " + std::to_string(i) + " of " + std::to_string(scenarios()));
 }
 
 TuningProblem::TuningProblem(Job job, std::vector<sim::Scenario> scenarios, std::size_t listed)
@@ -306,7 +276,7 @@ TuningProblem::Tally TuningProblem::new_tally(std::size_t keep, std::size_t n) c
 void TuningProblem::take(Tally& t, std::size_t s, TaskResult&& r,
                          const sim::Scenario* scenario) const {
   const sim::Metrics& m = r.metrics;
-  t.values[s] = m.objective(job_->objective.metric);  // +inf if diverged
+  t.values[s] = job_->objective.value(m);  // +inf if diverged
   t.diverged[s] = m.diverged ? 1 : 0;
   // A task that failed holds no windows to read; its candidate meets no goal anyway.
   if (r.error.empty() && counted_[s])
@@ -640,8 +610,8 @@ double TuningProblem::objective(std::span<const double> x, const ObjectiveOption
 }
 
 std::size_t front_objectives(const Job& job) {
-  const auto soft = static_cast<std::size_t>(
-      std::count_if(job.goals.begin(), job.goals.end(), [](const GoalConfig& g) { return g.soft(); }));
+  const auto soft = static_cast<std::size_t>(std::count_if(
+      job.goals.begin(), job.goals.end(), [](const GoalConfig& g) { return g.soft(); }));
   return soft >= 2 ? soft : 0;
 }
 
@@ -656,8 +626,7 @@ ObjectiveVector objective_vector(const Job& job, const Evaluation& e) {
 }
 
 std::unique_ptr<Optimizer> make_optimizer(const TuningProblem& problem,
-                                          const AlgorithmSettings& algorithm,
-                                          std::uint64_t seed) {
+                                          const AlgorithmSettings& algorithm, std::uint64_t seed) {
   if (const std::size_t n = front_objectives(problem.job())) {
     if (!algorithm.searches_front())  // Job::validate refuses this; a program may not ask it
       throw InputError("job " + problem.job().name, "/tuning/algorithm/type",
@@ -702,8 +671,8 @@ std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>&
       if (t.accepted && !t.capped) best = &t;
     if (best) {
       const sim::ControllerConfig c = problem_.controller_with(best->parameters);
-      const CandidateOutcome o = problem_.evaluate(std::span<const sim::ControllerConfig>(&c, 1),
-                                                   evaluator_, 0, false)[0];
+      const CandidateOutcome o =
+          problem_.evaluate(std::span<const sim::ControllerConfig>(&c, 1), evaluator_, 0, false)[0];
       simulations_ += static_cast<std::int64_t>(problem_.scenarios());
       incumbent_ = o.evaluation.values;
     }

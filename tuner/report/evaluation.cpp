@@ -70,13 +70,9 @@ fs::path draw_evaluation(const EvaluationResult& r, const fs::path& dir, FigureF
     diverged_counts.push_back(diverged);
     zero_counts.push_back(zero);
   }
-  const sim::Metric metric = r.job.objective.metric;
-  const char* unit = metric == sim::Metric::ise   ? "rad²·s"
-                     : metric == sim::Metric::iae ? "rad·s"
-                                                  : "rad·s²";
-  std::string metric_name = sim::to_string(metric);
-  for (char& ch : metric_name) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
-  const std::string what = metric_name + " of a member [" + unit + "] (log scale)";
+  const sim::MetricField& metric = *r.job.objective.metric;
+  const std::string what =
+      sim::plain_label(metric) + " of a member [" + std::string(metric.unit) + "] (log scale)";
   g << "set multiplot layout 1,2 title "
     << plot::gp("Out of sample: " + r.job.name + ", " + std::to_string(r.job.scenarios.size()) +
                 (r.job.scenarios.size() == 1 ? " listed scenario + " : " listed scenarios + ") +

@@ -6,9 +6,7 @@
 #include <limits>
 #include <sstream>
 
-#include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "io/decimal.hpp"
 #include "io/text.hpp"
@@ -17,247 +15,14 @@
 namespace ftc::tune::report_detail {
 
 namespace fs = std::filesystem;
-using json_io::json_number_or;
-using nlohmann::json;
 using plot::gp;
 
 namespace {
 
 constexpr auto num = &detail::g9_string;  // %.9g, as every number of the gnuplot scripts
 
-const sim::MetricField* metric_field(const std::string& name) {
-  for (const sim::MetricField& f : sim::kMetricFields)
-    if (f.name == name) return &f;
-  return nullptr;
-}
-
-// Measured over the whole run, not in a window (GoalConfig's windowed()).
-bool whole_run(const std::string& metric) {
-  return metric == "control_tv" || metric == "peak_error_after_fault";
-}
-
-// Checks of front.json, each failure an InputError at its JSON path.
-struct Reader {
-  const std::string& file;
-
-  [[noreturn]] void fail(const std::string& path, const std::string& message) const {
-    throw InputError(file, path, message);
-  }
-  const json& member(const json& o, const char* key, const std::string& path) const {
-    if (!o.is_object()) fail(path, "expected an object");
-    if (!o.contains(key)) fail(path + "/" + key, "is missing");
-    return o[key];
-  }
-  const json& array(const json& o, const char* key, const std::string& path) const {
-    const json& a = member(o, key, path);
-    if (!a.is_array()) fail(path + "/" + key, "expected an array");
-    return a;
-  }
-  // A number; null is a value that does not exist or a diverged run's, read as `if_null`.
-  double number(const json& v, const std::string& path, double if_null) const {
-    if (v.is_null()) return if_null;
-    if (!v.is_number()) fail(path, "expected a number or null");
-    return v.get<double>();
-  }
-  std::vector<double> numbers(const json& a, const std::string& path, std::size_t count,
-                              double if_null) const {
-    if (!a.is_array()) fail(path, "expected an array");
-    if (a.size() != count)
-      fail(path, "has " + std::to_string(a.size()) + " values; expected " + std::to_string(count));
-    std::vector<double> v;
-    for (std::size_t i = 0; i < a.size(); ++i)
-      v.push_back(number(a[i], path + "/" + std::to_string(i), if_null));
-    return v;
-  }
-  bool boolean(const json& o, const char* key, const std::string& path) const {
-    const json& b = member(o, key, path);
-    if (!b.is_boolean()) fail(path + "/" + key, "expected true or false");
-    return b.get<bool>();
-  }
-};
-
-}  // namespace
-
-std::string goal_label(const json& goal, std::size_t scenarios) {
-  const std::string metric = goal.value("metric", "");
-  const sim::MetricField* f = metric_field(metric);
-  std::string value = f ? sim::plain_label(*f) : metric;
-  if (!whole_run(metric)) {
-    const auto seconds = [](double t) { return detail::format_number(t, "%.6g") + " s"; };
-    const json w = goal.value("window", json::array({0, nullptr}));
-    const double t0 = w.is_array() && w.size() == 2 ? json_number_or(w[0], 0) : 0;
-    const double t1 =
-        w.is_array() && w.size() == 2 ? json_number_or(w[1], INFINITY) : INFINITY;
-    std::string window;
-    if (goal.value("window_from", "start") == "first_fault")
-      window = (t0 == 0 ? std::string("first fault") : "first fault + " + seconds(t0)) + ", " +
-               (std::isfinite(t1) ? "+" + seconds(t1) : std::string("end"));
-    else
-      window = seconds(t0) + ", " + (std::isfinite(t1) ? seconds(t1) : std::string("end"));
-    value += "[" + window + "]";
-  }
-  if (scenarios <= 1) return value;
-  const std::string a = goal.value("aggregate", "mean");
-  std::string aggregate = a;
-  if (a == "quantile")
-    aggregate = "quantile" + detail::format_number(json_number_or(goal.value("q", json(0.9)), 0.9),
-                                                   "%.3g");
-  else if (a == "cvar")
-    aggregate = "CVaR" + detail::format_number(
-                             json_number_or(goal.value("alpha", json(0.9)), 0.9), "%.3g");
-  return aggregate + " of " + value + " over " + std::to_string(scenarios) + " scenarios";
-}
-
-Front parse_front(const std::string& text, const std::string& file, std::size_t scenarios) {
-  const Reader r{file};
-  const json j = json::parse(text, nullptr, false);
-  if (j.is_discarded() || !j.is_object()) r.fail("", "is not a JSON object (damaged output?)");
-  if (j.value("schema", json()) != kFrontSchema)
-    r.fail("/schema", std::string("expected \"") + kFrontSchema + "\"");
-  Front front;
-  const json& goals = r.array(j, "goals", "");
-  for (std::size_t i = 0; i < goals.size(); ++i) {
-    const std::string p = "/goals/" + std::to_string(i);
-    const json& g = goals[i];
-    const json& metric = r.member(g, "metric", p);
-    if (!metric.is_string() || !metric_field(metric.get<std::string>()))
-      r.fail(p + "/metric", "is not a metric of the metrics record");
-    FrontGoal goal;
-    goal.metric = metric.get<std::string>();
-    goal.soft = g.value("minimize", false) == true;
-    if (!goal.soft) {
-      goal.at_most = r.number(r.member(g, "at_most", p), p + "/at_most", NAN);
-      if (!(goal.at_most > 0)) r.fail(p + "/at_most", "expected a limit > 0");
-    } else {
-      front.soft.push_back(i);
-    }
-    goal.label = goal_label(g, scenarios);
-    std::string unit(metric_field(goal.metric)->unit);
-    if (unit.rfind("the ", 0) == 0) unit.erase(0, 4);  // "the command's unit" -> "command's unit"
-    goal.unit = unit;
-    front.goals.push_back(std::move(goal));
-  }
-  const std::size_t G = front.goals.size(), S = front.soft.size();
-  if (S < 2) r.fail("/goals", "a front needs two or more soft goals");
-  // A run with no feasible trial has an empty front, and no reference point to measure it by.
-  const json& reference = r.member(j, "reference_point", "");
-  if (!(reference.is_array() && reference.empty())) {
-    front.reference_point = r.numbers(reference, "/reference_point", S, NAN);
-    for (std::size_t k = 0; k < S; ++k)
-      if (!std::isfinite(front.reference_point[k]))
-        r.fail("/reference_point/" + std::to_string(k), "expected a number");
-  }
-  front.hypervolume = r.number(r.member(j, "hypervolume", ""), "/hypervolume", NAN);
-
-  const json& points = r.array(j, "points", "");
-  const nlohmann::ordered_json ordered = nlohmann::ordered_json::parse(text, nullptr, false);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const std::string p = "/points/" + std::to_string(i);
-    const json& pt = points[i];
-    FrontPoint point;
-    const json& params = r.member(pt, "parameters", p);
-    if (!params.is_object()) r.fail(p + "/parameters", "expected an object");
-    // In the file's order (the job's), which json's sorted keys would lose.
-    for (const auto& [key, v] : ordered["points"][i]["parameters"].items())
-      point.parameters.emplace_back(key, r.number(params[key], p + "/parameters/" + key, NAN));
-    point.goals = r.numbers(r.member(pt, "goals", p), p + "/goals", G, INFINITY);
-    point.feasible = r.boolean(pt, "feasible", p);
-    point.violation = pt.contains("violation")
-                          ? r.number(pt["violation"], p + "/violation", INFINITY)
-                          : 0.0;
-    point.noise_floor = pt.contains("noise_floor")
-                            ? r.numbers(pt["noise_floor"], p + "/noise_floor", G, NAN)
-                            : std::vector<double>(G, NAN);
-    if (pt.contains("within_noise_of")) {
-      long long k = -1;
-      if (!json_io::json_to_int(pt["within_noise_of"], k) || k < 0 ||
-          static_cast<std::size_t>(k) >= points.size() || static_cast<std::size_t>(k) == i)
-        r.fail(p + "/within_noise_of", "is not the index of another point");
-      point.within_noise_of = static_cast<std::size_t>(k);
-    }
-    if (pt.contains("trial")) {
-      long long t = 0;
-      if (!json_io::json_to_int(pt["trial"], t) || t < 0)
-        r.fail(p + "/trial", "expected a row index ≥ 0");
-      point.trial = t;
-    }
-    front.points.push_back(std::move(point));
-  }
-  if (!front.points.empty() && front.reference_point.empty())
-    r.fail("/reference_point", "is empty, but the front has points");
-  // null: no point was picked (an empty front).
-  if (j.contains("picked") && !(j["picked"].is_null() && front.points.empty())) {
-    const json& picked = j["picked"];
-    long long index = -1;
-    if (!json_io::json_to_int(r.member(picked, "index", "/picked"), index) || index < 0 ||
-        static_cast<std::size_t>(index) >= front.points.size())
-      r.fail("/picked/index", "is not the index of a point");
-    front.picked = static_cast<std::size_t>(index);
-    const json& rule = r.member(picked, "rule", "/picked");
-    if (!rule.is_string()) r.fail("/picked/rule", "expected a string");
-    front.rule = rule.get<std::string>();
-  }
-  if (j.contains("compared")) {
-    if (!j["compared"].is_array()) r.fail("/compared", "expected an array");
-    for (std::size_t i = 0; i < j["compared"].size(); ++i) {
-      const std::string p = "/compared/" + std::to_string(i);
-      const json& c = j["compared"][i];
-      FrontCompared compared;
-      const json& label = r.member(c, "label", p);
-      if (!label.is_string()) r.fail(p + "/label", "expected a string");
-      compared.label = label.get<std::string>();
-      compared.role = c.value("role", "compare");
-      compared.goals = r.numbers(r.member(c, "goals", p), p + "/goals", G, INFINITY);
-      compared.feasible = r.boolean(c, "feasible", p);
-      front.compared.push_back(std::move(compared));
-    }
-  }
-  return front;
-}
-
-std::optional<Front> read_front(const fs::path& run_dir, const json& gains, std::size_t scenarios,
-                                const std::vector<std::string>& parameter_order) {
-  const fs::path file = run_dir / "front.json";
-  std::error_code ec;
-  if (!fs::is_regular_file(file, ec)) return std::nullopt;
-  const std::optional<std::string> text = read_file(file);
-  if (!text) throw InputError(file.string(), "", "cannot be read");
-  const json j = json::parse(*text, nullptr, false);
-  const std::string own = gains.value(json::json_pointer("/job/sha256"), json("")).is_string()
-                              ? gains.value(json::json_pointer("/job/sha256"), json("")).get<std::string>()
-                              : "";
-  if (j.is_object() && j.value("job_sha256", json("")) != own) return std::nullopt;
-  Front front = parse_front(*text, file.string(), scenarios);
-  for (FrontPoint& p : front.points)
-    std::stable_sort(p.parameters.begin(), p.parameters.end(), [&](const auto& a, const auto& b) {
-      const auto rank = [&](const std::string& name) {
-        return static_cast<std::size_t>(
-            std::find(parameter_order.begin(), parameter_order.end(), name) -
-            parameter_order.begin());
-      };
-      return rank(a.first) < rank(b.first);
-    });
-  return front;
-}
-
-bool within_noise(const Front& front, std::size_t a, std::size_t b) {
-  const FrontPoint& p = front.points.at(a);
-  const FrontPoint& q = front.points.at(b);
-  if (p.within_noise_of == b || q.within_noise_of == a) return true;
-  for (std::size_t g : front.soft) {
-    const double u = p.goals[g], v = q.goals[g];
-    const auto floor = [g](const FrontPoint& x) {  // NaN where the run measured none
-      return std::isfinite(x.goals[g]) ? x.noise_floor[g] * std::fabs(x.goals[g]) : NAN;
-    };
-    const double fu = floor(p), fv = floor(q);
-    if (!std::isfinite(fu) && !std::isfinite(fv)) return false;
-    if (!(std::fabs(u - v) <= std::max(std::isfinite(fu) ? fu : 0.0, std::isfinite(fv) ? fv : 0.0)))
-      return false;
-  }
-  return true;
-}
-
-namespace {
+// A goal's noise floor at a point, relative; NaN where the run measured none.
+double floor_at(const FrontPoint& p, std::size_t g) { return p.noise_floor[g].value_or(NAN); }
 
 // A goal's column of the points and the compared controllers, and whether a log axis can show it.
 bool log_axis(const Front& front, std::size_t g) {
@@ -308,9 +73,9 @@ std::vector<std::pair<double, double>> hypervolume_history(const fs::path& file)
       from = comma + 1;
     }
     if (cells.size() != header.size())
-      throw InputError(file.string(), "", "has a row of " + std::to_string(cells.size()) +
-                                              " cells under a header of " +
-                                              std::to_string(header.size()));
+      throw InputError(file.string(), "",
+                       "has a row of " + std::to_string(cells.size()) +
+                           " cells under a header of " + std::to_string(header.size()));
     const auto parse = [&](const std::string& c) {
       double v = NAN;
       if (c.empty()) return v;
@@ -398,8 +163,8 @@ std::string reference_text(const Front& front) {
   std::string s;
   for (std::size_t k = 0; k < front.soft.size(); ++k) {
     const FrontGoal& g = front.goals[front.soft[k]];
-    s += (k ? "; " : "") + g.label + " = 10^" + detail::format_number(front.reference_point[k]) +
-         " = " + detail::format_number(std::pow(10.0, front.reference_point[k])) + " " + g.unit;
+    s += (k ? "; " : "") + g.label + " = 10^" + detail::format_number(front.reference[k]) + " = " +
+         detail::format_number(std::pow(10.0, front.reference[k])) + " " + g.unit;
   }
   return s;
 }
@@ -436,13 +201,14 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
   static const int kComparedMarks[] = {5, 9, 13, 11, 15};
   bool any_noise = false, any_infeasible = false, any_noise_pair = false;
   for (const FrontPoint& p : front.points) {
-    for (std::size_t s : front.soft) any_noise = any_noise || std::isfinite(p.noise_floor[s]);
-    any_infeasible = any_infeasible || !p.feasible;
+    for (std::size_t s : front.soft) any_noise = any_noise || std::isfinite(floor_at(p, s));
+    any_infeasible = any_infeasible || !p.feasible();
   }
+  // The pairs that are no trade-off, as front.json lists each point's partners.
   std::vector<std::pair<std::size_t, std::size_t>> noise_pairs;
   for (std::size_t a = 0; a < front.points.size(); ++a)
-    for (std::size_t b = a + 1; b < front.points.size(); ++b)
-      if (within_noise(front, a, b)) noise_pairs.emplace_back(a, b);
+    for (std::size_t b : front.points[a].within_noise)
+      if (a < b) noise_pairs.emplace_back(a, b);
   any_noise_pair = !noise_pairs.empty();
 
   g << plot::terminal(fmt, width, height) << "set output " << gp(scatter) << "\n"
@@ -461,9 +227,9 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
         ++undrawn;
         continue;
       }
-      (p.feasible ? pts : infeasible) += num(vx) + "," + num(vy) + "\n";
-      const auto [x0, x1] = band(vx, p.noise_floor[x], log_x);
-      const auto [y0, y1] = band(vy, p.noise_floor[y], log_y);
+      (p.feasible() ? pts : infeasible) += num(vx) + "," + num(vy) + "\n";
+      const auto [x0, x1] = band(vx, floor_at(p, x), log_x);
+      const auto [y0, y1] = band(vy, floor_at(p, y), log_y);
       bars += num(vx) + "," + num(vy) + "," + num(x0) + "," + num(x1) + "," + num(y0) + "," +
               num(y1) + "\n";
     }
@@ -495,10 +261,10 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
     if (!infeasible.empty())
       cmd += block(infeasible) + " using 1:2 with points pt 2 ps 1.1 lc rgb '" + front_colour +
              "' title 'infeasible point', ";
-    if (front.picked) {
-      const FrontPoint& p = front.points[*front.picked];
+    {  // the points are not empty: one of them is picked
+      const FrontPoint& p = front.points[front.picked];
       if (std::isfinite(p.goals[x]) && std::isfinite(p.goals[y])) {
-        const std::string text = "picked (" + front.rule + "), #" + std::to_string(*front.picked);
+        const std::string text = "picked (" + front.rule + "), #" + std::to_string(front.picked);
         cmd += block(num(p.goals[x]) + "," + num(p.goals[y]) + "\n") +
                " using 1:2 with points pt 6 ps 3 lw 2.5 lc rgb '" + picked_colour + "' title " +
                gp(text) + ", ";
@@ -512,15 +278,14 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       const std::string name = (k.role == "baseline" ? "job's gains: " : "") + k.label +
                                (k.feasible ? "" : " (infeasible)");
       if (!std::isfinite(vx) || !std::isfinite(vy)) continue;
-      const std::string colour = plot::viridis(0.25 + 0.6 * static_cast<double>(c) /
-                                                          std::max<std::size_t>(1, front.compared.size()));
+      const std::string colour = plot::viridis(
+          0.25 + 0.6 * static_cast<double>(c) / std::max<std::size_t>(1, front.compared.size()));
       // Off the panel's scale: at its edge, with its values in the label.
       const bool off = !ax.inside(vx) || !ay.inside(vy);
       const double px = off ? ax.clamp(vx) : vx, py = off ? ay.clamp(vy) : vy;
-      const std::string text =
-          off ? name + " (off scale: " + detail::format_number(vx) + ", " +
-                    detail::format_number(vy) + ")"
-              : name;
+      const std::string text = off ? name + " (off scale: " + detail::format_number(vx) + ", " +
+                                         detail::format_number(vy) + ")"
+                                   : name;
       cmd += block(num(px) + "," + num(py) + "\n") + " using 1:2 with points pt " +
              std::to_string(kComparedMarks[c % 5] - (off ? 1 : 0)) + " ps 1.8 lc rgb '" + colour +
              "' title " + gp(name) + ", ";
@@ -529,8 +294,8 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       static const double kRaise[] = {0.9, -1.3, 2.0};
       const bool right = off && ax.to(px) >= ax.hi, top = off && ay.to(py) >= ay.hi;
       g << "set label " << gp(text) << " at " << num(px) << "," << num(py)
-        << (right ? " right offset -1," : " offset 1,")
-        << num(top ? -1.3 : kRaise[c % 3]) << " noenhanced front\n";
+        << (right ? " right offset -1," : " offset 1,") << num(top ? -1.3 : kRaise[c % 3])
+        << " noenhanced front\n";
     }
     g << cmd.substr(0, cmd.size() - 2) << "\n";
   }
@@ -549,8 +314,9 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
                               "them on every soft goal.";
   if (!any_noise) caption += " No point's noise floor was measured.";
   if (any_infeasible) caption += " Crosses are points that violate a hard goal.";
-  caption += " A compared controller far off the front's scale is drawn at the panel's edge "
-             "(open marker), its values in its label.";
+  caption +=
+      " A compared controller far off the front's scale is drawn at the panel's edge "
+      "(open marker), its values in its label.";
   if (undrawn)
     caption += " " + std::to_string(undrawn) +
                " point-panel(s) with a diverged or missing goal value are not drawn.";
@@ -561,13 +327,13 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
   std::string rows_text;
   for (const auto& [it, v] : hv) rows_text += num(it) + "," + num(v) + "\n";
   std::string ref = "(";
-  for (std::size_t k = 0; k < S; ++k) ref += (k ? ", " : "") + num(front.reference_point[k]);
+  for (std::size_t k = 0; k < S; ++k) ref += (k ? ", " : "") + num(front.reference[k]);
   ref += ")";
   const std::string hv_file = "figures/front-hypervolume" + ext;
   // The unit: decades to the power of the soft goals' count.
   static const char* const kPowers[] = {"", "", "²", "³", "⁴", "⁵", "⁶", "⁷", "⁸", "⁹"};
-  const std::string decades = S < 10 ? std::string("decade") + kPowers[S]
-                                     : "decade^{" + std::to_string(S) + "}";
+  const std::string decades =
+      S < 10 ? std::string("decade") + kPowers[S] : "decade^{" + std::to_string(S) + "}";
   // Whole iterations on the x axis, about ten tics.
   const double last = hv.back().first;
   const std::string xstep = num(std::max(1.0, std::ceil(last / 10)));

@@ -95,7 +95,7 @@ void summary_table(const json& comparison, const Job& job, std::ostringstream& h
     << (first.value("counted", 0) < first.value("scenarios", 0)
             ? ", and the objective leaves them out"
             : "")
-    << ". Values are " << html_escape(sim::to_string(job.objective.metric))
+    << ". Values are " << html_escape(std::string(job.objective.metric->name))
     << " per scenario; quantiles by nearest rank.</p>\n<table><tr><th>controller</th><th>"
     << html_escape(objective_label(job))
     << "</th><th>mean</th><th>median</th><th>p90</th><th>max</th><th>CVaR"
@@ -185,7 +185,7 @@ void evaluation_section(const fs::path& run_dir, const Job& job, std::ostringstr
 
 // The Pareto front (front.json): what it is, a table of its points with the picked one marked
 // and the compared controllers under them, and its figures.
-void front_section(const fs::path& run_dir, const Front& front,
+void front_section(const fs::path& run_dir, const Job& job, const Front& front,
                    const std::vector<Figure>& figures, std::ostringstream& h) {
   const std::size_t G = front.goals.size();
   const auto value = [](double v) { return detail::format_number(v, "%.6g"); };
@@ -197,65 +197,57 @@ void front_section(const fs::path& run_dir, const Front& front,
     return;
   }
   std::vector<std::string> param_names;
-  for (const auto& [name, v] : front.points.front().parameters) param_names.push_back(name);
-  // Per point, the other points it cannot be told apart from.
-  std::vector<std::vector<std::size_t>> twins(front.points.size());
+  if (job.tuning)
+    for (const ParameterBounds& b : job.tuning->parameters) param_names.push_back(b.name);
+  // The points that another point cannot be told apart from (front.json's partners).
   std::size_t twinned = 0;
-  for (std::size_t a = 0; a < front.points.size(); ++a)
-    for (std::size_t b = 0; b < front.points.size(); ++b)
-      if (a != b && within_noise(front, a, b)) twins[a].push_back(b);
-  for (const auto& t : twins) twinned += t.empty() ? 0 : 1;
+  for (const FrontPoint& p : front.points) twinned += p.within_noise.empty() ? 0 : 1;
   h << "<h2>Pareto front</h2>\n<p class=\"front\">The run kept " << front.points.size()
     << " tuned point(s) that no other candidate it evaluated beats on every soft goal: the "
        "trade-offs this search found, not a proven optimum. Its hypervolume, on log10 of each "
        "soft goal against the reference point (";
-  for (std::size_t k = 0; k < front.reference_point.size(); ++k)
-    h << (k ? ", " : "") << value(front.reference_point[k]);
+  for (std::size_t k = 0; k < front.reference.size(); ++k)
+    h << (k ? ", " : "") << value(front.reference[k]);
   h << "), is " << value(front.hypervolume) << ".";
-  if (front.picked)
-    h << " gains.json holds point #" << *front.picked << ", picked by the rule <code>"
-      << html_escape(front.rule) << "</code>; <code>ftctune pick</code> writes another.";
+  h << " gains.json holds point #" << front.picked << ", picked by the rule <code>"
+    << html_escape(front.rule) << "</code>; <code>ftctune pick</code> writes another.";
   h << " The noise floor is each goal's relative spread over a point's perturbed re-runs, where "
        "the run measured it (\u2013 elsewhere); ";
   if (twinned)
-    h << twinned << " point(s) differ from another by no more than the noise floor of one of "
-                    "the two on every soft goal (marked below): their differences are noise, "
-                    "not a trade-off.";
+    h << twinned
+      << " point(s) differ from another by no more than the noise floor of one of "
+         "the two on every soft goal (marked below): their differences are noise, "
+         "not a trade-off.";
   else
     h << "no two points differ by less than the noise floor of one of them on every soft goal.";
   h << "</p>\n<table class=\"front\"><tr><th>#</th>";
   for (const std::string& n : param_names) h << "<th>" << html_escape(n) << "</th>";
   for (const FrontGoal& g : front.goals)
     h << "<th>" << html_escape(g.label) << " [" << html_escape(g.unit) << "]"
-      << (g.soft ? " (min)" : " ≤ " + value(g.at_most)) << "</th>";
+      << (g.soft() ? " (min)" : " ≤ " + value(*g.at_most)) << "</th>";
   h << "<th>feasible</th><th>violation</th>";
-  for (const FrontGoal& g : front.goals)
-    h << "<th>noise floor " << html_escape(g.label) << "</th>";
+  for (const FrontGoal& g : front.goals) h << "<th>noise floor " << html_escape(g.label) << "</th>";
   h << "<th>trial</th><th>note</th></tr>\n";
   for (std::size_t i = 0; i < front.points.size(); ++i) {
     const FrontPoint& p = front.points[i];
-    const bool picked = front.picked && *front.picked == i;
+    const bool picked = front.picked == i;
     h << "<tr" << (picked ? " class=\"picked\"" : "") << "><td>" << i << (picked ? " ★" : "")
       << "</td>";
-    for (const std::string& n : param_names) {
-      double v = NAN;
-      for (const auto& [name, x] : p.parameters)
-        if (name == n) v = x;
-      h << "<td>" << value(v) << "</td>";
-    }
+    for (std::size_t k = 0; k < param_names.size(); ++k)
+      h << "<td>" << value(k < p.parameters.size() ? p.parameters[k] : NAN) << "</td>";
     for (std::size_t g = 0; g < G; ++g) h << "<td>" << value(p.goals[g]) << "</td>";
-    h << "<td>" << (p.feasible ? "yes" : "no") << "</td><td>" << value(p.violation) << "</td>";
-    for (std::size_t g = 0; g < G; ++g)
+    h << "<td>" << (p.feasible() ? "yes" : "no") << "</td><td>" << value(p.violation) << "</td>";
+    for (std::size_t g = 0; g < G; ++g) {
+      const double f = p.noise_floor[g].value_or(NAN);
       h << "<td>"
-        << (std::isfinite(p.noise_floor[g])
-                ? detail::format_number(100 * p.noise_floor[g], "%.2g") + " %"
-                : std::string("–"))
+        << (std::isfinite(f) ? detail::format_number(100 * f, "%.2g") + " %" : std::string("–"))
         << "</td>";
-    h << "<td>" << (p.trial >= 0 ? std::to_string(p.trial) : std::string("–")) << "</td><td>";
+    }
+    h << "<td>" << p.trial << "</td><td>";
     std::string note = picked ? "picked (" + front.rule + ")" : "";
-    if (!twins[i].empty()) {
+    if (!p.within_noise.empty()) {
       std::string list;
-      for (std::size_t t : twins[i]) list += (list.empty() ? "#" : ", #") + std::to_string(t);
+      for (std::size_t t : p.within_noise) list += (list.empty() ? "#" : ", #") + std::to_string(t);
       note += (note.empty() ? "" : "; ") + std::string("within the noise floor of ") + list;
     }
     h << html_escape(note) << "</td></tr>\n";
@@ -322,7 +314,7 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
     h << "</ul>\n";
   }
 
-  if (front) front_section(run_dir, *front, front_figures, h);
+  if (front) front_section(run_dir, job, *front, front_figures, h);
 
   // comparison.md's noise-floor sentence and, for an ensemble job, its robust table.
   if (comparison.contains("noise_floor") && comparison["noise_floor"].is_string())
@@ -346,8 +338,7 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
     };
     // A window field's null is a diverged run (+inf), another's a value never reached.
     const auto cell = [&](const sim::MetricField& f, const json& v) {
-      h << "<td>"
-        << detail::format_number(f.scope == MetricScope::window ? integral(v) : num_or(v))
+      h << "<td>" << detail::format_number(f.scope == MetricScope::window ? integral(v) : num_or(v))
         << "</td>";
     };
     for (const sim::MetricField& f : sim::kMetricFields)

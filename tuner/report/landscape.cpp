@@ -41,8 +41,7 @@ std::string parameter_unit(const std::string& name, sim::ControllerType type) {
   if (name == "Kp" || name == "alpha" || name == "alpha1" || name == "alpha2")
     return "dimensionless";
   if (name == "Ki") return "1/s";
-  if (name == "switching_gain")
-    return type == sim::ControllerType::nftsmc ? "rad/s²" : "rad/s³";
+  if (name == "switching_gain") return type == sim::ControllerType::nftsmc ? "rad/s²" : "rad/s³";
   if (name == "zeta" || name == "ka0") return "rad/s³";
   if (name == "theta") return type == sim::ControllerType::nftsmc ? "1/rad" : "s²/rad";
   if (name == "c1") return "rad^(1−α1)/s²";
@@ -53,11 +52,6 @@ std::string parameter_unit(const std::string& name, sim::ControllerType type) {
   if (name == "weight_rate") return "1/s²";
   if (name == "width") return "rad and rad/s, as the state";
   return "";
-}
-
-// The unit of a metric's value over a window (metrics.hpp).
-const char* metric_unit(sim::Metric m) {
-  return m == sim::Metric::ise ? "rad²·s" : m == sim::Metric::iae ? "rad·s" : "rad·s²";
 }
 
 }  // namespace
@@ -180,16 +174,15 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   // Each axis names its unit (a log-scale parameter: the unit of the value under the log).
   const auto label = [&](int k) {
     const std::string unit = parameter_unit(params[k], job.controller.type);
-    const std::string with_unit =
-        unit.empty() ? params[k]
-        : unit == "dimensionless" ? params[k] + " (dimensionless)"
-                                  : params[k] + " [" + unit + "]";
+    const std::string with_unit = unit.empty()              ? params[k]
+                                  : unit == "dimensionless" ? params[k] + " (dimensionless)"
+                                                            : params[k] + " [" + unit + "]";
     return bounds[k].scale == Scale::log ? "log10 of " + with_unit : with_unit;
   };
   // Coloured by the relative excess over the best point, objective/min − 1, on a log scale: a
   // landscape whose objective spans 0.2 % is then as readable as one that spans decades. The
   // best point itself (excess 0) takes the colour of a tenth of the smallest positive excess.
-  const std::string metric = sim::to_string(job.objective.metric);
+  const std::string metric = std::string(job.objective.metric->name);
   double least_excess = std::numeric_limits<double>::infinity();
   for (const CandidateOutcome& o : outcomes) {
     const double x = o.evaluation.objective / r.best_objective - 1;
@@ -214,8 +207,8 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   const std::string title =
       objective_label(job_in) + " of " + job.name + " over " + params[0] + " and " + params[1] +
       "\nlowest on the grid " + detail::format_number(r.best_objective, "%.7g") + " " +
-      metric_unit(job.objective.metric) + " at " +
-      params[0] + " = " + detail::format_number(r.best[0], "%.5g") + ", " + params[1] + " = " +
+      std::string(job.objective.metric->unit) + " at " + params[0] + " = " +
+      detail::format_number(r.best[0], "%.5g") + ", " + params[1] + " = " +
       detail::format_number(r.best[1], "%.5g") +
       (fixed_text.empty() ? std::string()
                           : "\n" + fixed_text + " held fixed (" + r.fixed_source + ")");

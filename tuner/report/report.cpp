@@ -72,13 +72,10 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
   const std::vector<report_detail::Figure> figures =
       report_detail::draw_run_figures(run_dir, job, gains, series[0], format);
   // A run with two or more soft goals: its front's scatter and hypervolume.
-  const std::optional<report_detail::Front> front =
-      report_detail::read_front(run_dir, gains, job.scenario_count(), [&] {
-        std::vector<std::string> names;
-        if (job.tuning)
-          for (const ParameterBounds& b : job.tuning->parameters) names.push_back(b.name);
-        return names;
-      }());
+  // Only this run's: a front.json left by an earlier run of another job is ignored.
+  const json sha = gains.value(json::json_pointer("/job/sha256"), json(""));
+  const std::optional<Front> front =
+      read_front(run_dir, job, sha.is_string() ? sha.get<std::string>() : std::string());
   std::vector<report_detail::Figure> front_figures;
   if (front) front_figures = report_detail::draw_front_figures(run_dir, *front, format);
   if (front_figures.empty()) {  // no front, or an empty one
@@ -97,14 +94,12 @@ ReportResult render_report(const fs::path& run_dir, const ReportOptions& options
       fs::remove(e.path());
   ReportResult result;
   for (const report_detail::Figure& f : figures) result.figures.push_back(run_dir / f.file);
-  for (const report_detail::Figure& f : front_figures)
-    result.figures.push_back(run_dir / f.file);
+  for (const report_detail::Figure& f : front_figures) result.figures.push_back(run_dir / f.file);
   if (!options.html) return result;
   result.html = run_dir / "report.html";
-  write_file_atomic(result.html, report_detail::report_html(run_dir, job, job_text, gains,
-                                                            comparison, run, figures,
-                                                            front ? &*front : nullptr,
-                                                            front_figures));
+  write_file_atomic(result.html,
+                    report_detail::report_html(run_dir, job, job_text, gains, comparison, run,
+                                               figures, front ? &*front : nullptr, front_figures));
   return result;
 }
 

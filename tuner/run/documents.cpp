@@ -38,11 +38,10 @@ json named(const std::vector<std::string>& names, const Decision& x) {
   return j;
 }
 
-// A metric measured as `o` says (its window when `windowed`), aggregated over the job's
-// scenarios.
-std::string measure_label(std::size_t n, std::string metric, const ObjectiveConfig& o,
+}  // namespace
+
+std::string measure_label(std::size_t n, const std::string& metric, const ObjectiveConfig& o,
                           bool windowed) {
-  for (char& c : metric) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   const auto seconds = [](double t) { return detail::format_number(t, "%.6g") + " s"; };
   std::string window;
   if (o.window_from == WindowFrom::first_fault)
@@ -72,17 +71,19 @@ std::string measure_label(std::size_t n, std::string metric, const ObjectiveConf
   return aggregate + " of " + value + " over " + std::to_string(n) + " scenarios";
 }
 
-}  // namespace
-
 std::string objective_label(const Job& job) {
-  return measure_label(job.scenario_count(), sim::to_string(job.objective.metric), job.objective,
+  return measure_label(job.scenario_count(), sim::plain_label(*job.objective.metric), job.objective,
                        true);
 }
 
 std::string goal_label(const Job& job, std::size_t k, std::size_t scenarios) {
   const GoalConfig& g = job.goals.at(k);
-  return measure_label(scenarios ? scenarios : job.scenario_count(), to_string(g.metric),
-                       g.measure(), windowed(g.metric)) +
+  // The name in capitals, as comparison.md has always worded a goal's column (its bytes are
+  // kept); the front words it by the label (front_goal_label).
+  std::string name(g.metric->name);
+  for (char& c : name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return measure_label(scenarios ? scenarios : job.scenario_count(), name, g.measure(),
+                       g.windowed()) +
          (g.at_most ? " <= " + detail::format_number(*g.at_most, "%.6g") : ", minimized");
 }
 
@@ -214,7 +215,7 @@ std::string trials_csv(const TuningOutcome& r) {
   if (!r.job.ensemble)
     for (const sim::Scenario& sc : r.job.scenarios) s.append(",objective_").append(sc.name);
   for (std::size_t k = 0; k < r.job.goals.size(); ++k)
-    s.append(",goal" + std::to_string(k) + "_" + to_string(r.job.goals[k].metric));
+    s.append(",goal" + std::to_string(k) + "_" + std::string(r.job.goals[k].metric->name));
   if (!r.job.goals.empty()) s += ",violation,feasible";
   s += '\n';
   const auto num = [&](double v) { s.append(",").append(detail::format_number(v, "%.17g")); };
@@ -367,7 +368,7 @@ std::string comparison_markdown(const TuningOutcome& r) {
       << ")\n\n"
       << r.unrecoverable << " cannot be controlled by any gains once their faults have started"
       << (r.left_out > 0 ? ", and the objective leaves them out" : "") << ". Values are "
-      << sim::to_string(job.objective.metric) << " per scenario; quantiles by nearest rank.\n\n"
+      << job.objective.metric->name << " per scenario; quantiles by nearest rank.\n\n"
       << "| controller | " << objective_label(job) << " | mean | median | p90 | max | CVaR"
       << detail::format_number(job.objective.alpha, "%.3g") << " | diverged |\n"
       << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -403,19 +404,7 @@ std::map<std::string, std::string> output_files(const TuningOutcome& r) {
     for (std::size_t s = 0; s < r.comparison[c].outcome.trajectories.size(); ++s)
       files[trajectory_file(r, c, s)] = trajectory_csv(r.comparison[c].outcome.trajectories[s]);
   if (r.front) {
-    // The comparison's controllers other than the tuned one, with their goals, for the figures.
-    json compared = json::array();
-    for (const ComparedController& c : r.comparison) {
-      if (c.role == "tuned") continue;
-      json goals = json::array();
-      for (double v : c.outcome.evaluation.goals) goals.push_back(json_number(v));
-      compared.push_back({{"label", c.label},
-                          {"role", c.role},
-                          {"goals", goals},
-                          {"feasible", c.outcome.evaluation.feasible()}});
-    }
-    files["front.json"] =
-        front_document(r.job, r.job_sha256, r.seed, *r.front, compared).dump(2) + "\n";
+    files["front.json"] = front_document(r.job, r.job_sha256, r.seed, *r.front).dump(2) + "\n";
     files["front.csv"] = front_csv(r.job, *r.front);
   }
   return files;

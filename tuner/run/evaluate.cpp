@@ -61,7 +61,7 @@ MemberResult member_result(const TuningProblem& p, std::size_t i, const sim::Met
   MemberResult r;
   r.scenario = p.scenario(i).name;
   r.recoverable = p.recoverable(i);
-  r.objective = m.objective(p.job().objective.metric);
+  r.objective = p.job().objective.value(m);
   r.metrics = sim::MetricValues::of(m);
   r.diverged = m.diverged;
   for (const GoalConfig& g : p.job().goals) r.goals.push_back(p.goal_value(g, m, i));
@@ -300,7 +300,7 @@ void write_evaluation_csv(const EvaluationResult& r, const ChunkSink& sink) {
   out << ",diverged";
   // A job with goals: each goal's metric in its own window, named as trials.csv names them.
   for (std::size_t k = 0; k < r.job.goals.size(); ++k)
-    out << ",goal" << std::to_string(k) << "_" << to_string(r.job.goals[k].metric);
+    out << ",goal" << std::to_string(k) << "_" << r.job.goals[k].metric->name;
   out << "\n";
   for (const EvaluatedController& c : r.controllers) {
     const std::string label = csv_field(c.label);

@@ -1,10 +1,10 @@
 #include "ftc/tune/run/front.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <cmath>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -13,8 +13,10 @@
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/optimizers/hypervolume.hpp"
 #include "ftc/tune/optimizers/pareto_bat.hpp"
+#include "ftc/tune/run/documents.hpp"
 
 namespace ftc::tune {
 
@@ -98,9 +100,10 @@ std::size_t knee_of(const std::vector<std::vector<double>>& p) {
 // The goal named by a metric in a rule.
 std::size_t goal_named(const Job& job, const std::string& metric) {
   for (std::size_t k = 0; k < job.goals.size(); ++k)
-    if (metric == to_string(job.goals[k].metric)) return k;
+    if (metric == job.goals[k].metric->name) return k;
   std::string known;
-  for (const GoalConfig& g : job.goals) known += (known.empty() ? "" : ", ") + std::string(to_string(g.metric));
+  for (const GoalConfig& g : job.goals)
+    known += (known.empty() ? "" : ", ") + std::string(g.metric->name);
   refuse("/rule", "no goal of the job is \"" + metric + "\" (its goals: " + known + ")");
 }
 
@@ -118,6 +121,17 @@ double parse_number(const std::string& text, const std::string& what) {
 }
 
 }  // namespace
+
+FrontGoal front_goal(const Job& job, std::size_t k) {
+  const GoalConfig& g = job.goals.at(k);
+  FrontGoal out;
+  out.label =
+      measure_label(job.scenario_count(), sim::plain_label(*g.metric), g.measure(), g.windowed());
+  out.unit = g.metric->unit;
+  if (out.unit.rfind("the ", 0) == 0) out.unit.erase(0, 4);  // "the command's unit"
+  out.at_most = g.at_most;
+  return out;
+}
 
 std::vector<double> log_soft_goals(const std::vector<double>& goals,
                                    const std::vector<std::size_t>& soft) {
@@ -199,6 +213,7 @@ std::vector<double> hypervolume_history(const Job& job, const std::vector<Trial>
 
 Front make_front(const Job& job, const std::vector<Trial>& trials) {
   Front f;
+  for (std::size_t k = 0; k < job.goals.size(); ++k) f.goals.push_back(front_goal(job, k));
   f.soft = soft_goals(job);
   for (std::size_t i : front_trials(job, trials, trials.size())) {
     FrontPoint p;
@@ -232,6 +247,24 @@ bool within_noise_floor(const Front& front, std::size_t a, std::size_t b) {
   return true;
 }
 
+bool no_trade_off(const Front& front, std::size_t a, std::size_t b) {
+  const FrontPoint &p = front.points.at(a), &q = front.points.at(b);
+  return p.within_noise_of == b || q.within_noise_of == a || within_noise_floor(front, a, b);
+}
+
+namespace {
+
+// Each point's partners by the rule (no_trade_off), from its floors and within_noise_of.
+void list_partners(Front& front) {
+  for (std::size_t a = 0; a < front.points.size(); ++a) {
+    front.points[a].within_noise.clear();
+    for (std::size_t b = 0; b < front.points.size(); ++b)
+      if (b != a && no_trade_off(front, a, b)) front.points[a].within_noise.push_back(b);
+  }
+}
+
+}  // namespace
+
 void apply_noise_floor(Front& front,
                        const std::vector<std::vector<std::optional<double>>>& spreads) {
   for (std::size_t i = 0; i < front.points.size() && i < spreads.size(); ++i)
@@ -241,6 +274,7 @@ void apply_noise_floor(Front& front,
         i > 0 && within_noise_floor(front, i - 1, i)
             ? std::optional<std::size_t>(front.points[i - 1].within_noise_of.value_or(i - 1))
             : std::nullopt;
+  list_partners(front);
 }
 
 std::size_t pick_point(const Job& job, const Front& front, const std::string& rule) {
@@ -248,7 +282,8 @@ std::size_t pick_point(const Job& job, const Front& front, const std::string& ru
   const std::vector<FrontPoint>& p = front.points;
   if (rule == "knee") return knee_of(log_points(front));
   const auto colon = rule.find(':');
-  const std::string kind = rule.substr(0, colon), arg = colon == std::string::npos ? "" : rule.substr(colon + 1);
+  const std::string kind = rule.substr(0, colon),
+                    arg = colon == std::string::npos ? "" : rule.substr(colon + 1);
   if (colon != std::string::npos && kind == "index") {
     const double n = parse_number(arg, "index");
     if (n != std::floor(n) || n < 0 || n >= static_cast<double>(p.size()))
@@ -279,8 +314,8 @@ std::size_t pick_point(const Job& job, const Front& front, const std::string& ru
     for (std::size_t i = 0; i < p.size(); ++i)
       if (p[i].goals[g] <= x && (!best || p[i].goals[by] < p[*best].goals[by])) best = i;
     if (!best)
-      refuse("/rule", "no point of the front has " + arg.substr(0, le) + " <= " +
-                          json_io::number_text(x));
+      refuse("/rule",
+             "no point of the front has " + arg.substr(0, le) + " <= " + json_io::number_text(x));
     return *best;
   }
   refuse("/rule", "expected knee, min:METRIC, limit:METRIC<=X or index:N, got \"" + rule + "\"");
@@ -298,9 +333,21 @@ std::string front_rule_text(const Front& front) {
 }
 
 json front_document(const Job& job, const std::string& job_sha256, std::uint64_t seed,
-                    const Front& front, const json& compared) {
+                    const Front& front) {
   json goals = json::array();
-  for (const GoalConfig& g : job.goals) goals.push_back(to_json(g));
+  for (std::size_t k = 0; k < job.goals.size(); ++k) {
+    json g = to_json(job.goals[k]);
+    g["label"] = front.goals.at(k).label;
+    g["unit"] = front.goals.at(k).unit;
+    goals.push_back(std::move(g));
+  }
+  json compared = json::array();
+  for (const FrontCompared& c : front.compared) {
+    json values = json::array();
+    for (double v : c.goals) values.push_back(json_number(v));
+    compared.push_back(
+        {{"label", c.label}, {"role", c.role}, {"goals", values}, {"feasible", c.feasible}});
+  }
   json reference = json::array();
   for (double r : front.reference) reference.push_back(json_number(r));
   json points = json::array();
@@ -319,9 +366,10 @@ json front_document(const Job& job, const std::string& job_sha256, std::uint64_t
     for (double v : p.goals) values.push_back(json_number(v));
     for (const std::optional<double>& n : p.noise_floor)
       noise.push_back(n ? json_number(*n) : json());
-    json point = {{"parameters", parameters}, {"goals", values},
-                  {"feasible", !(p.violation > 0)}, {"violation", json_number(p.violation)},
-                  {"noise_floor", noise}, {"trial", p.trial}};
+    json point = {{"parameters", parameters},      {"goals", values},
+                  {"feasible", p.feasible()},      {"violation", json_number(p.violation)},
+                  {"noise_floor", noise},          {"trial", p.trial},
+                  {"within_noise", p.within_noise}};
     if (p.within_noise_of) point["within_noise_of"] = *p.within_noise_of;
     points.push_back(std::move(point));
   }
@@ -343,7 +391,7 @@ json front_document(const Job& job, const std::string& job_sha256, std::uint64_t
 std::string front_csv(const Job& job, const Front& front) {
   std::string s = "index";
   std::vector<std::string> labels;
-  for (const GoalConfig& g : job.goals) labels.push_back(to_string(g.metric));
+  for (const GoalConfig& g : job.goals) labels.push_back(std::string(g.metric->name));
   // Two goals of one metric (other windows) are told apart by their position.
   for (std::size_t k = 0; k < labels.size(); ++k)
     if (std::count(labels.begin(), labels.end(), labels[k]) > 1)
@@ -373,59 +421,163 @@ std::string front_csv(const Job& job, const Front& front) {
   return s;
 }
 
-Front front_from_json(const Job& job, const json& j) {
-  const auto fail = [](const std::string& path, const std::string& m) -> void {
-    throw InputError("front.json", path, m);
+Front front_from_json(const Job& job, const json& j, const std::string& source) {
+  const auto fail = [&](const std::string& path, const std::string& m) {
+    throw InputError(source, path, m);
   };
-  const auto number = [&](const json& v, const std::string& path) {
-    if (v.is_null()) return std::numeric_limits<double>::infinity();
-    if (!v.is_number()) fail(path, "expected a number");
+  // A value that may be null: one that does not exist, or a diverged run's (`if_null`).
+  const auto number = [&](const json& v, const std::string& path, double if_null) {
+    if (v.is_null()) return if_null;
+    if (!v.is_number()) fail(path, "expected a number or null");
     return v.get<double>();
   };
-  if (!j.is_object() || j.value("schema", "") != kFrontSchema)
+  const auto member = [&](const json& o, const char* key, const std::string& path) -> const json& {
+    if (!o.is_object()) fail(path, "expected an object");
+    if (!o.contains(key)) fail(path + "/" + key, "is missing");
+    return o[key];
+  };
+  const auto boolean = [&](const json& o, const char* key, const std::string& path) {
+    const json& b = member(o, key, path);
+    if (!b.is_boolean()) fail(path + "/" + key, "expected true or false");
+    return b.get<bool>();
+  };
+  const std::size_t G = job.goals.size();
+  // The job's count of goal values (null: +inf).
+  const auto goal_values = [&](const json& o, const std::string& path) {
+    const json& a = member(o, "goals", path);
+    if (!a.is_array() || a.size() != G)
+      fail(path + "/goals", "expected " + std::to_string(G) + " values");
+    std::vector<double> v;
+    for (std::size_t k = 0; k < G; ++k)
+      v.push_back(number(a[k], path + "/goals/" + std::to_string(k), INFINITY));
+    return v;
+  };
+  // An index: an integral number >= 0 (none: not one).
+  const auto index_of = [](const json& v) -> std::optional<std::size_t> {
+    long long k = -1;
+    if (!json_io::json_to_int(v, k) || k < 0) return std::nullopt;
+    return static_cast<std::size_t>(k);
+  };
+  // An index of another point than `self` among `count`.
+  const auto other_point = [&](const json& v, const std::string& path, std::size_t self,
+                               std::size_t count) {
+    const std::optional<std::size_t> k = index_of(v);
+    if (!k || *k >= count || *k == self) fail(path, "is not the index of another point");
+    return *k;
+  };
+
+  if (!j.is_object()) fail("", "is not a JSON object (damaged output?)");
+  if (j.value("schema", json()) != kFrontSchema)
     fail("/schema", std::string("expected \"") + kFrontSchema + "\"");
   Front f;
   f.soft = soft_goals(job);
-  if (!j.contains("points") || !j["points"].is_array()) fail("/points", "expected an array");
-  for (std::size_t i = 0; i < j["points"].size(); ++i) {
-    const json& p = j["points"][i];
+  if (f.soft.size() < 2)
+    fail("/goals",
+         "a front needs two or more soft goals; the job has " + std::to_string(f.soft.size()));
+  const json& goals = member(j, "goals", "");
+  if (!goals.is_array() || goals.size() != G)
+    fail("/goals", "expected the job's " + std::to_string(G) + " goals");
+  for (std::size_t k = 0; k < G; ++k) {
+    const std::string at = "/goals/" + std::to_string(k);
+    const json& metric = member(goals[k], "metric", at);
+    if (!metric.is_string() || metric.get<std::string>() != job.goals[k].metric->name)
+      fail(at + "/metric", "is not the job's goal " + std::to_string(k) + ", " +
+                               std::string(job.goals[k].metric->name));
+    FrontGoal g = front_goal(job, k);  // the words, unless the file has its own
+    for (auto [key, text] : {std::pair{"label", &g.label}, std::pair{"unit", &g.unit}})
+      if (goals[k].contains(key)) {
+        if (!goals[k][key].is_string()) fail(at + "/" + key, "expected a string");
+        *text = goals[k][key].get<std::string>();
+      }
+    f.goals.push_back(std::move(g));
+  }
+
+  const json& points = member(j, "points", "");
+  if (!points.is_array()) fail("/points", "expected an array");
+  const std::vector<std::string> names = [&] {
+    std::vector<std::string> n;
+    if (job.tuning)
+      for (const ParameterBounds& b : job.tuning->parameters) n.push_back(b.name);
+    return n;
+  }();
+  bool partners_given = true;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const json& p = points[i];
     const std::string at = "/points/" + std::to_string(i);
-    if (!p.is_object()) fail(at, "expected an object");
     FrontPoint x;
-    const json& params = p.value("parameters", json::object());
-    for (const ParameterBounds& b : job.tuning->parameters) {
-      if (!params.contains(b.name)) fail(at + "/parameters/" + b.name, "is missing");
-      x.parameters.push_back(number(params[b.name], at + "/parameters/" + b.name));
+    const json& params = member(p, "parameters", at);
+    for (const std::string& name : names)
+      x.parameters.push_back(number(member(params, name.c_str(), at + "/parameters"),
+                                    at + "/parameters/" + name, NAN));
+    x.goals = goal_values(p, at);
+    boolean(p, "feasible", at);  // written beside the violation, which it follows from
+    x.violation =
+        p.contains("violation") ? number(p["violation"], at + "/violation", INFINITY) : 0.0;
+    const std::optional<std::size_t> trial = index_of(member(p, "trial", at));
+    if (!trial) fail(at + "/trial", "expected a row of trials.csv");
+    x.trial = *trial;
+    x.noise_floor.assign(G, std::nullopt);
+    if (p.contains("noise_floor")) {
+      const json& noise = p["noise_floor"];
+      if (!noise.is_array() || noise.size() != G)
+        fail(at + "/noise_floor", "expected " + std::to_string(G) + " values");
+      for (std::size_t k = 0; k < G; ++k)
+        if (!noise[k].is_null())
+          x.noise_floor[k] = number(noise[k], at + "/noise_floor/" + std::to_string(k), NAN);
     }
-    const json& goals = p.value("goals", json());
-    if (!goals.is_array() || goals.size() != job.goals.size())
-      fail(at + "/goals", "expected " + std::to_string(job.goals.size()) + " values");
-    for (std::size_t k = 0; k < goals.size(); ++k)
-      x.goals.push_back(number(goals[k], at + "/goals/" + std::to_string(k)));
-    x.violation = number(p.value("violation", json(0.0)), at + "/violation");
-    if (!p.contains("trial") || !p["trial"].is_number_unsigned())
-      fail(at + "/trial", "expected a row of trials.csv");
-    x.trial = p["trial"].get<std::size_t>();
-    x.noise_floor.assign(job.goals.size(), std::nullopt);
-    const json& noise = p.value("noise_floor", json::array());
-    if (!noise.is_array()) fail(at + "/noise_floor", "expected an array");
-    for (std::size_t k = 0; k < noise.size() && k < x.noise_floor.size(); ++k)
-      if (noise[k].is_number()) x.noise_floor[k] = noise[k].get<double>();
-    if (p.contains("within_noise_of") && p["within_noise_of"].is_number_unsigned())
-      x.within_noise_of = p["within_noise_of"].get<std::size_t>();
+    if (p.contains("within_noise_of"))
+      x.within_noise_of =
+          other_point(p["within_noise_of"], at + "/within_noise_of", i, points.size());
+    if (!p.contains("within_noise")) {
+      partners_given = false;
+    } else {
+      const json& partners = p["within_noise"];
+      if (!partners.is_array()) fail(at + "/within_noise", "expected an array");
+      for (std::size_t k = 0; k < partners.size(); ++k)
+        x.within_noise.push_back(
+            other_point(partners[k], at + "/within_noise/" + std::to_string(k), i, points.size()));
+    }
     f.points.push_back(std::move(x));
   }
-  if (j.contains("reference_point") && j["reference_point"].is_array())
-    for (const json& r : j["reference_point"]) f.reference.push_back(number(r, "/reference_point"));
-  f.hypervolume = number(j.value("hypervolume", json(0.0)), "/hypervolume");
-  if (j.contains("picked") && j["picked"].is_object()) {
-    const json& index = j["picked"].value("index", json());
-    if (!index.is_number_unsigned() || index.get<std::size_t>() >= f.points.size())
-      fail("/picked/index", "expected a point of the front");
-    f.picked = index.get<std::size_t>();
-    const json& rule = j["picked"].value("rule", json("knee"));
+  if (!partners_given) list_partners(f);  // a file from before the partners were written
+
+  // A run with no feasible trial has an empty front, and no reference point to measure it by.
+  const json& reference = member(j, "reference_point", "");
+  if (!reference.is_array() ||
+      (reference.empty() ? !f.points.empty() : reference.size() != f.soft.size()))
+    fail("/reference_point", "expected " + std::to_string(f.soft.size()) +
+                                 " numbers, one per soft goal (none for an empty front)");
+  for (std::size_t k = 0; k < reference.size(); ++k) {
+    f.reference.push_back(number(reference[k], "/reference_point/" + std::to_string(k), NAN));
+    if (!std::isfinite(f.reference.back()))
+      fail("/reference_point/" + std::to_string(k), "expected a number");
+  }
+  f.hypervolume = number(member(j, "hypervolume", ""), "/hypervolume", NAN);
+  // null: no point was picked (an empty front).
+  if (j.contains("picked") && !(j["picked"].is_null() && f.points.empty())) {
+    const std::optional<std::size_t> index = index_of(member(j["picked"], "index", "/picked"));
+    if (!index || *index >= f.points.size()) fail("/picked/index", "is not the index of a point");
+    f.picked = *index;
+    const json& rule = member(j["picked"], "rule", "/picked");
     if (!rule.is_string()) fail("/picked/rule", "expected a string");
     f.rule = rule.get<std::string>();
+  }
+  if (j.contains("compared")) {
+    if (!j["compared"].is_array()) fail("/compared", "expected an array");
+    for (std::size_t i = 0; i < j["compared"].size(); ++i) {
+      const std::string at = "/compared/" + std::to_string(i);
+      const json& c = j["compared"][i];
+      FrontCompared x;
+      const json& label = member(c, "label", at);
+      if (!label.is_string()) fail(at + "/label", "expected a string");
+      x.label = label.get<std::string>();
+      const json role = c.value("role", json("compare"));
+      if (!role.is_string()) fail(at + "/role", "expected a string");
+      x.role = role.get<std::string>();
+      x.goals = goal_values(c, at);
+      x.feasible = boolean(c, "feasible", at);
+      f.compared.push_back(std::move(x));
+    }
   }
   return f;
 }
@@ -434,8 +586,10 @@ namespace {
 
 json read_json_file(const std::filesystem::path& file) {
   std::ifstream in(file);
-  if (!in) throw InputError(file.string(), "", "cannot be read (is this a run directory of a job "
-                                               "with two or more soft goals?)");
+  if (!in)
+    throw InputError(file.string(), "",
+                     "cannot be read (is this a run directory of a job "
+                     "with two or more soft goals?)");
   try {
     return json::parse(in);
   } catch (const json::exception& e) {
@@ -465,9 +619,9 @@ std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t r
   const std::vector<std::string> header = split(line);
   for (std::size_t i = 0; i <= row; ++i)
     if (!std::getline(in, line))
-      throw InputError(source, path,
-                       "is trial " + std::to_string(row) + ", a row " + file.string() +
-                           " does not have");
+      throw InputError(
+          source, path,
+          "is trial " + std::to_string(row) + ", a row " + file.string() + " does not have");
   const std::vector<std::string> cells = split(line);
   std::vector<double> out;
   for (const std::string& n : names) {
@@ -476,7 +630,7 @@ std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t r
     if (it == header.end() || k >= cells.size())
       throw InputError(file.string(), "", "has no column " + n);
     const std::string& c = cells[k];
-    out.push_back(c == "inf" ? std::numeric_limits<double>::infinity()
+    out.push_back(c == "inf"  ? std::numeric_limits<double>::infinity()
                   : c.empty() ? std::numeric_limits<double>::quiet_NaN()
                               : std::strtod(c.c_str(), nullptr));
   }
@@ -485,12 +639,28 @@ std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t r
 
 }  // namespace
 
+std::optional<Front> read_front(const std::filesystem::path& run, const Job& job,
+                                const std::optional<std::string>& job_sha256) {
+  const std::filesystem::path file = run / "front.json";
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec)) return std::nullopt;
+  const json j = read_json_file(file);
+  if (job_sha256 && j.is_object() && j.value("job_sha256", json("")) != *job_sha256)
+    return std::nullopt;
+  return front_from_json(job, j, file.string());
+}
+
 json pick_gains(const std::filesystem::path& run, const std::string& rule) {
   const Job job = load_job(run / "job.json");
   if (front_objectives(job) < 2 || !job.tuning)
     throw InputError((run / "job.json").string(), "/goals",
                      "the run's job has fewer than two soft goals: it has no front to pick from");
-  Front front = front_from_json(job, read_json_file(run / "front.json"));
+  std::optional<Front> read = read_front(run, job);
+  if (!read)
+    throw InputError((run / "front.json").string(), "",
+                     "cannot be read (is this a run directory of a job with two or more soft "
+                     "goals?)");
+  Front front = std::move(*read);
   const std::size_t i = pick_point(job, front, rule);
   const std::string gains_file = (run / "gains.json").string();
   json g = read_json_file(run / "gains.json");
@@ -499,9 +669,9 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
     throw InputError(gains_file, "/goals", "expected an object (the run's goals)");
   if (!g["goals"].contains("goals") || !g["goals"]["goals"].is_array() ||
       g["goals"]["goals"].size() != job.goals.size())
-    throw InputError(gains_file, "/goals/goals",
-                     "expected an array of the job's " + std::to_string(job.goals.size()) +
-                         " goals");
+    throw InputError(
+        gains_file, "/goals/goals",
+        "expected an array of the job's " + std::to_string(job.goals.size()) + " goals");
   for (std::size_t k = 0; k < job.goals.size(); ++k)
     if (!g["goals"]["goals"][k].is_object())
       throw InputError(gains_file, "/goals/goals/" + std::to_string(k), "expected an object");
@@ -514,15 +684,16 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
     g["controller"][name] = p.parameters[j];
     g["tuned"][name] = p.parameters[j];
   }
-  const std::vector<double> cells = trial_cells(run / "trials.csv", p.trial, {"objective", "fitness"},
-                                             (run / "front.json").string(),
-                                             "/points/" + std::to_string(i) + "/trial");
+  const std::vector<double> cells =
+      trial_cells(run / "trials.csv", p.trial, {"objective", "fitness"},
+                  (run / "front.json").string(), "/points/" + std::to_string(i) + "/trial");
   g["objective"]["value"] = json_number(cells[0]);
   g["fitness"] = json_number(cells[1]);
   json& goals = g["goals"];
   for (std::size_t k = 0; k < job.goals.size(); ++k) {
     goals["goals"][k]["value"] = json_number(p.goals[k]);
-    if (job.goals[k].at_most) goals["goals"][k]["violation"] = json_number(job.goals[k].violation(p.goals[k]));
+    if (job.goals[k].at_most)
+      goals["goals"][k]["violation"] = json_number(job.goals[k].violation(p.goals[k]));
   }
   goals["total_violation"] = json_number(p.violation);
   goals["feasible"] = !(p.violation > 0);
@@ -530,7 +701,8 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
   front.picked = i;
   front.rule = rule;
   goals["rule"] = front_rule_text(front);
-  goals["front"] = {{"index", i}, {"rule", rule}, {"points", front.points.size()}, {"trial", p.trial}};
+  goals["front"] = {
+      {"index", i}, {"rule", rule}, {"points", front.points.size()}, {"trial", p.trial}};
   if (i != measured) g.erase("noise_floor");  // measured at the run's own point
   return g;
 }

@@ -278,7 +278,7 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
         params += (j ? ", " : "") + space.names[j] + " = " + num(run.best[j], "%.5g");
       say(o.log, "[" + std::to_string(runs.size() + 1) + "/" + std::to_string(total) + "] " +
                      run.algorithm + " seed " + std::to_string(seed) + ": " +
-                     sim::to_string(job.objective.metric) + " = " + num(run.objective) + " (" +
+                     std::string(job.objective.metric->name) + " = " + num(run.objective) + " (" +
                      params + "), " + std::to_string(run.evaluations) + " evaluations, " +
                      num(run.wall, "%.2f") + " s");
       runs.push_back(std::move(run));
@@ -353,7 +353,7 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
       !o.command.empty() ? o.command
                          : "ftctune study " + o.job_file + " --algorithms " + algorithms_text +
                                " --seeds " + seeds_text + " --budget " + std::to_string(o.budget);
-  const std::string metric = sim::to_string(job.objective.metric);
+  const std::string metric(job.objective.metric->name);
   std::string md = "# Study of job " + job.name + "\n\n" + std::to_string(names.size()) +
                    " algorithms × " + std::to_string(seeds.size()) + " seeds (" + seeds_text +
                    "), " + std::to_string(o.budget) +
@@ -375,9 +375,7 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
       if (r.algorithm == s.algorithm) ss.objectives.push_back(r.objective);
     series.push_back(std::move(ss));
   }
-  const char* unit = job.objective.metric == sim::Metric::ise   ? "rad²·s"
-                     : job.objective.metric == sim::Metric::iae ? "rad·s"
-                                                                : "rad·s²";
+  const std::string unit(job.objective.metric->unit);
   result.csv = out / "study.csv";
   result.markdown = out / "study.md";
   result.figure = draw_study(

@@ -209,13 +209,19 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
   r.comparison.push_back({"tuned " + name, "tuned", r.tuned_controller, {}, {}});
   controllers.push_back(r.tuned_controller);
 
-  std::vector<CandidateOutcome> outcomes = problem.evaluate(
-      controllers, evaluator, comparison_record_every(job, max_trajectory_rows));
+  std::vector<CandidateOutcome> outcomes =
+      problem.evaluate(controllers, evaluator, comparison_record_every(job, max_trajectory_rows));
   for (std::size_t i = 0; i < outcomes.size(); ++i) {
     r.comparison[i].summary = problem.summarize(outcomes[i].evaluation);
     r.comparison[i].outcome = std::move(outcomes[i]);
   }
   r.simulations += static_cast<std::int64_t>(controllers.size() * problem.scenarios());
+  // The front's figures mark the comparison's controllers other than the tuned one.
+  if (r.front)
+    for (const ComparedController& c : r.comparison)
+      if (c.role != "tuned")
+        r.front->compared.push_back(
+            {c.label, c.role, c.outcome.evaluation.goals, c.outcome.evaluation.feasible()});
   // The noise floor: the winner (with a front, every point of it) on R copies of the problem
   // whose initial states are nudged.
   NoiseFloor nf;
@@ -308,11 +314,12 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
     const nlohmann::json& ev = optimizer_state->is_object()
                                    ? optimizer_state->value("evaluations", nlohmann::json())
                                    : nlohmann::json();
-    if (ev.is_number_unsigned() && ev.get<std::uint64_t>() <= static_cast<std::uint64_t>(
-                                                                 r.algorithm->evaluations()) &&
+    if (ev.is_number_unsigned() &&
+        ev.get<std::uint64_t>() <= static_cast<std::uint64_t>(r.algorithm->evaluations()) &&
         ev.get<std::uint64_t>() != trials.size())
       throw InputError("checkpoint", "/trials",
-                       "holds " + std::to_string(trials.size()) + " trials, the optimiser's state " +
+                       "holds " + std::to_string(trials.size()) +
+                           " trials, the optimiser's state " +
                            std::to_string(ev.get<std::uint64_t>()) + " evaluations");
     fitness.resume_trials(std::move(trials));
   }

@@ -17,10 +17,11 @@
 #include <nlohmann/json.hpp>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/metrics_record.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/report.hpp"
-#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
@@ -88,9 +89,27 @@ json job_json_view(const JobRecord& r) {
           {"error", nullable(r.error)},
           // Results so far (gains, history, trials) of a job that ran an iteration but did not
           // finish it all: running, or cancelled.
-          {"partial", r.iteration >= 0 && (r.status == JobStatus::running ||
-                                           r.status == JobStatus::cancelled)},
+          {"partial", r.iteration >= 0 &&
+                          (r.status == JobStatus::running || r.status == JobStatus::cancelled)},
           {"links", job_links(r.id)}};
+}
+
+// GET /v1/metrics: the metrics record (kMetricFields), what the dashboard names and tabulates a
+// run's metrics by: each field's name (the JSON key of comparison.json), label, unit, scope
+// (window, run or fault: one value per fault onset), whether comparison.md tabulates it, and
+// whether a job may name it as a goal or its objective.
+json metrics_list() {
+  static const char* const kScopes[] = {"window", "run", "fault"};  // MetricScope's order
+  json list = json::array();
+  for (const sim::MetricField& f : sim::kMetricFields)
+    list.push_back({{"name", f.name},
+                    {"label", sim::plain_label(f)},
+                    {"unit", f.unit},
+                    {"scope", kScopes[static_cast<int>(f.scope)]},
+                    {"in_tables", f.in_tables},
+                    {"goal", f.goal},
+                    {"objective", f.objective}});
+  return {{"metrics", list}};
 }
 
 // A stored file's media type, from its name.
@@ -249,9 +268,9 @@ bool loopback_host(const std::string& name, const std::string& bind) {
 // A request a page of another origin sent: its Origin is not this service's (http://<Host>), or,
 // without an Origin, the browser says it is cross-site.
 bool cross_origin(const httplib::Request& req) {
-  return req.has_header("Origin")
-             ? lower(req.get_header_value("Origin")) != "http://" + lower(req.get_header_value("Host"))
-             : lower(req.get_header_value("Sec-Fetch-Site")) == "cross-site";
+  return req.has_header("Origin") ? lower(req.get_header_value("Origin")) !=
+                                        "http://" + lower(req.get_header_value("Host"))
+                                  : lower(req.get_header_value("Sec-Fetch-Site")) == "cross-site";
 }
 
 // A peer address of this machine's loopback: 127.0.0.0/8, ::1 or an IPv4-mapped 127.x.
@@ -329,6 +348,10 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   if (p.size() == 2 && p[0] == "v1" && p[1] == "events") {
     if (m != "GET") return method_not_allowed(res, "GET");
     return events(req, req.has_param("job") ? req.get_param_value("job") : "", res);
+  }
+  if (p.size() == 2 && p[0] == "v1" && p[1] == "metrics") {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    return send_json(res, 200, metrics_list());
   }
   if (p.size() == 2 && p[0] == "v1" && p[1] == "validate") {
     if (m != "POST") return method_not_allowed(res, "POST");
@@ -430,16 +453,16 @@ std::optional<Job> Api::check_job(const httplib::Request& req, httplib::Response
   // Memory by design: what the run would hold, estimated before it is queued.
   if (const double need = estimated_run_bytes(job);
       need > static_cast<double>(opt_.max_job_memory_bytes)) {
-    send_error(res, 413, "job_too_large",
-               "the job would need about " + bytes_text(need) + " of memory (" +
-                   memory_need_text(job, job.tuning ? static_cast<double>(
-                                                          job.tuning->algorithm->evaluations())
-                                                    : 1.0) +
-                   "), above the server's limit of " +
-                   bytes_text(static_cast<double>(opt_.max_job_memory_bytes)) +
-                   " per job: ask for fewer ensemble members, scenarios or evaluations, or a "
-                   "smaller population",
-               json{{"bytes", need}, {"limit", opt_.max_job_memory_bytes}});
+    send_error(
+        res, 413, "job_too_large",
+        "the job would need about " + bytes_text(need) + " of memory (" +
+            memory_need_text(
+                job, job.tuning ? static_cast<double>(job.tuning->algorithm->evaluations()) : 1.0) +
+            "), above the server's limit of " +
+            bytes_text(static_cast<double>(opt_.max_job_memory_bytes)) +
+            " per job: ask for fewer ensemble members, scenarios or evaluations, or a "
+            "smaller population",
+        json{{"bytes", need}, {"limit", opt_.max_job_memory_bytes}});
     return std::nullopt;
   }
   if (const double bytes = estimated_result_bytes(job, opt_.trajectory_rows);
@@ -606,9 +629,10 @@ void Api::changed(const std::string& id) noexcept {
 
 // Server-sent events: `job` with a job's view each time it changes (queued, started, each
 // iteration, finished, cancelled), `deleted` when it is gone; a comment after 15 s without one
-// keeps the connection alive; a closed page's stream ends within a quarter of a second. With `job` (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each
-// stream holds one of the server's connection threads, so at most --max-event-streams are open
-// at once; more are answered 503. One client address other than loopback may hold at most
+// keeps the connection alive; a closed page's stream ends within a quarter of a second. With `job`
+// (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each stream holds one of the server's
+// connection threads, so at most --max-event-streams are open at once; more are answered 503. One
+// client address other than loopback may hold at most
 // --max-event-streams-per-client of them (429 past that), so that one client cannot take them
 // all; without a token the service is on loopback, where every local page shares one address,
 // so there only the global cap applies, and a page of another origin gets no stream (403
@@ -679,8 +703,8 @@ void Api::events(const httplib::Request& req, const std::string& job, httplib::R
 // request at a time per job (the others of that job wait for it, then take what it made; other
 // jobs' requests do not), and dropped once the job stops running. N requests cost one comparison
 // per job and checkpoint, however they interleave across jobs.
-void Api::running_result(const httplib::Request& req, httplib::Response& res,
-                         const JobRecord& job, const std::string& what) {
+void Api::running_result(const httplib::Request& req, httplib::Response& res, const JobRecord& job,
+                         const std::string& what) {
   const std::string& id = job.id;
   const std::string format = req.has_param("format") ? req.get_param_value("format") : "";
   if (what == "comparison" || what == "report")
@@ -804,7 +828,8 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
     return running_result(req, res, *job, what);
   }
   // A cancelled job that ran an iteration keeps its results so far, marked partial.
-  const bool partial = job->status == JobStatus::cancelled && store_.artifact_sizes(id).count("gains.json");
+  const bool partial =
+      job->status == JobStatus::cancelled && store_.artifact_sizes(id).count("gains.json");
   if (job->status != JobStatus::succeeded && !partial)
     return send_error(res, 409, "not_ready",
                       "job " + id + " is " + to_string(job->status) +
@@ -840,7 +865,8 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
   }
 }
 
-// report.html of a succeeded (or cancelled, partial) job: drawn from its stored files on first request, then kept.
+// report.html of a succeeded (or cancelled, partial) job: drawn from its stored files on first
+// request, then kept.
 std::string Api::report(const std::string& id) {
   if (auto cached = store_.artifact(id, "report.html")) return *cached;
   namespace fs = std::filesystem;

@@ -36,10 +36,6 @@
 
 namespace ftc::sim {
 
-enum class Metric { ise, iae, itae };
-const char* to_string(Metric m);
-std::optional<Metric> metric_from_string(std::string_view s);
-
 struct Window {
   double t0 = 0.0;
   double t1 = std::numeric_limits<double>::infinity();
@@ -56,7 +52,6 @@ struct ErrorIntegrals {
   double saturation_fraction = std::numeric_limits<double>::quiet_NaN();
   double settling_time = std::numeric_limits<double>::quiet_NaN();       // s
   double steady_state_error = std::numeric_limits<double>::quiet_NaN();  // rad
-  double get(Metric m) const;
 };
 
 // What two window metrics are measured against (SimulationOptions): NaN leaves them NaN.
@@ -83,7 +78,6 @@ struct Metrics {
   bool diverged = false;
   double diverged_at = std::numeric_limits<double>::quiet_NaN();  // s
 
-  double objective(Metric m) const { return errors.get(m); }
   // Marks the run diverged at time t: every window metric becomes +inf.
   void mark_diverged(double t);
 };

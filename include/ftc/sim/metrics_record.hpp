@@ -1,22 +1,27 @@
 #pragma once
 // The metrics record (Metrics, ftc/sim/metrics.hpp) described once: one entry per metric with
-// its name (the JSON key), its unit, its column label, how it combines over scenarios and where
-// it lives in the record (once per window, once per run, or once per fault onset). Every writer
-// of the record is produced from this table: the MPI wire format below, the pack's copy-out
-// (PackFinal's slots, sim_core/lanes/pack.hpp, read back by plants/lane_host.hpp),
-// metrics_json, comparison.md's tables and footnote (tuner/run/documents.cpp), evaluation.json
-// and evaluation.csv (tuner/run/evaluate.cpp), report.html's tables (tuner/report/html.cpp) and
-// `simulate`'s printed table. A metric added to it (with its member in Metrics and its
-// accumulator in sim_core/lanes/metric_lanes.hpp) travels between ranks and lands in every file
-// without further code.
+// its name (the JSON key), its unit, its column label, how it combines over scenarios, where it
+// lives in the record (once per window, once per run, or once per fault onset) and what a job may
+// do with it (name it in a goal or as the objective, cap on it, the setting it is measured
+// against). Every writer of the record is produced from this table: the MPI wire format below,
+// the pack's copy-out (PackFinal's slots, sim_core/lanes/pack.hpp, read back by
+// plants/lane_host.hpp), metrics_json, comparison.md's tables and footnote
+// (tuner/run/documents.cpp), evaluation.json and evaluation.csv (tuner/run/evaluate.cpp),
+// report.html's tables (tuner/report/html.cpp) and `simulate`'s printed table; and so is every
+// reader of a metric's name: the job's goals and objective (their names, the JSON Schema's enums,
+// the checks of their windows and settings, tuner/job/job.cpp), a goal's value and its capping
+// (tuner/problem/problem.cpp), the units of the figures and the service's GET /v1/metrics. A
+// metric added to it (with its member in ErrorIntegrals or Metrics and its accumulator in
+// sim_core/lanes/metric_lanes.hpp) travels between ranks, lands in every file and, when marked
+// `goal`, can be a job's goal, without further code.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <iterator>
-#include <stdexcept>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -38,6 +43,10 @@ enum class MetricScope {
 // a fraction or an average.
 enum class OverScenarios { sum, max, mean };
 
+// The job setting a metric is measured against (MetricSettings; a job's "metrics" block or the
+// goal's own key): none, the settling threshold or the steady-state tail.
+enum class MetricSetting { none, settling_threshold, steady_state_tail };
+
 struct MetricField {
   std::string_view name;
   std::string_view unit;
@@ -52,6 +61,17 @@ struct MetricField {
   // A window field with a column per extra window in comparison.md too (else the objective
   // window's only).
   bool column_per_extra_window = false;
+  // A job may name it in a goal (issue 26): minimised or kept at most a limit.
+  bool goal = false;
+  // It may be the objective: what one soft goal is minimised by, and what trials.csv's objective
+  // column holds (a window field).
+  bool objective = false;
+  // Every run has a value (never NaN; >= 0, +inf when diverged), so the aggregate over the members
+  // known so far, the others counted 0, is a lower bound of the aggregate over all: capping may
+  // stop a candidate on it (TuningProblem::evaluate_capped). A metric that is NaN on some runs
+  // (no sample, no fault, no tail) does not know the count its aggregate will take.
+  bool partial_lower_bound = false;
+  MetricSetting setting = MetricSetting::none;
   double ErrorIntegrals::*in_window = nullptr;
   double Metrics::*per_run = nullptr;
   std::vector<double> Metrics::*per_fault = nullptr;
@@ -65,18 +85,27 @@ inline constexpr MetricField kMetricFields[] = {
      .scope = MetricScope::window,
      .over_scenarios = OverScenarios::sum,
      .column_per_extra_window = true,
+     .goal = true,
+     .objective = true,
+     .partial_lower_bound = true,
      .in_window = &ErrorIntegrals::ise},
     {.name = "iae",
      .unit = "rad·s",
      .label = "IAE",
      .scope = MetricScope::window,
      .over_scenarios = OverScenarios::sum,
+     .goal = true,
+     .objective = true,
+     .partial_lower_bound = true,
      .in_window = &ErrorIntegrals::iae},
     {.name = "itae",
      .unit = "rad·s²",
      .label = "ITAE",
      .scope = MetricScope::window,
      .over_scenarios = OverScenarios::sum,
+     .goal = true,
+     .objective = true,
+     .partial_lower_bound = true,
      .in_window = &ErrorIntegrals::itae},
     {.name = "max_abs_u",
      .unit = "the command's unit",
@@ -90,12 +119,15 @@ inline constexpr MetricField kMetricFields[] = {
      .scope = MetricScope::run,
      .over_scenarios = OverScenarios::sum,
      .definition = "Σ‖u_k − u_{k−1}‖ (chattering)",
+     .goal = true,
+     .partial_lower_bound = true,
      .per_run = &Metrics::control_tv},
     {.name = "peak_error_after_fault",
      .unit = "rad",
      .label = "peak ‖e‖ after fault",
      .scope = MetricScope::fault,
      .over_scenarios = OverScenarios::max,
+     .goal = true,
      .per_fault = &Metrics::peak_error_after_fault},
     {.name = "control_energy",
      .unit = "the command's unit²·s",
@@ -104,6 +136,8 @@ inline constexpr MetricField kMetricFields[] = {
      .over_scenarios = OverScenarios::sum,
      .definition = "Σ Ts ‖u_d‖²",
      .in_tables = false,
+     .goal = true,
+     .partial_lower_bound = true,
      .in_window = &ErrorIntegrals::control_energy},
     {.name = "peak_command",
      .unit = "the command's unit",
@@ -112,6 +146,8 @@ inline constexpr MetricField kMetricFields[] = {
      .over_scenarios = OverScenarios::max,
      .definition = "max |u_d,j| in the window",
      .in_tables = false,
+     .goal = true,
+     .partial_lower_bound = true,
      .in_window = &ErrorIntegrals::peak_command},
     {.name = "saturation_fraction",
      .unit = "1",
@@ -120,6 +156,7 @@ inline constexpr MetricField kMetricFields[] = {
      .over_scenarios = OverScenarios::mean,
      .definition = "the share of samples with a command at or beyond its limit",
      .in_tables = false,
+     .goal = true,
      .in_window = &ErrorIntegrals::saturation_fraction},
     {.name = "settling_time",
      .unit = "s",
@@ -128,6 +165,8 @@ inline constexpr MetricField kMetricFields[] = {
      .over_scenarios = OverScenarios::max,
      .definition = "from the first fault until ‖e‖ stays below the job's threshold",
      .in_tables = false,
+     .goal = true,
+     .setting = MetricSetting::settling_threshold,
      .in_window = &ErrorIntegrals::settling_time},
     {.name = "steady_state_error",
      .unit = "rad",
@@ -136,9 +175,20 @@ inline constexpr MetricField kMetricFields[] = {
      .over_scenarios = OverScenarios::mean,
      .definition = "the mean ‖e‖ over the window's last tail seconds",
      .in_tables = false,
+     .goal = true,
+     .setting = MetricSetting::steady_state_tail,
      .in_window = &ErrorIntegrals::steady_state_error},
 };
 inline constexpr std::size_t kMetricFieldCount = std::size(kMetricFields);
+
+// The index of the field named `name` in kMetricFields: compile-time only (a name the table does
+// not have is a compile error), for the few places that need one field by name, such as the
+// objective's default.
+consteval std::size_t metric_index(std::string_view name) {
+  for (std::size_t i = 0; i < kMetricFieldCount; ++i)
+    if (kMetricFields[i].name == name) return i;
+  throw std::logic_error("no such metric");  // not a constant expression: a compile error
+}
 
 // The fields of one scope, and a field's slot among them (its index in PackFinal's arrays of
 // that scope): compile-time only, so that a kernel compiled per instruction set emits no code of
@@ -253,6 +303,50 @@ inline double over_scenarios(const MetricField& f, std::span<const double> value
     if (!std::isnan(v) && !(m >= v)) m = v;
   return m;
 }
+
+// The record's members against the table. The wire format below, the kernel's copy-out and the
+// writers move a record field by field of the table, so a member of ErrorIntegrals or Metrics that
+// it does not list would silently stay behind (on its rank, in the kernel). These stop compiling
+// until a new member has its entry: each entry names one member of its scope's kind, none twice,
+// and the structs hold nothing else (Metrics beside its fixed members: the window, the extra
+// windows, the onsets, diverged and diverged_at).
+namespace record_check {
+consteval bool each_entry_names_one_member_of_its_scope() {
+  for (std::size_t i = 0; i < kMetricFieldCount; ++i) {
+    const MetricField& f = kMetricFields[i];
+    const bool w = f.in_window != nullptr, r = f.per_run != nullptr, x = f.per_fault != nullptr;
+    if (w + r + x != 1 || w != (f.scope == MetricScope::window) ||
+        r != (f.scope == MetricScope::run) || x != (f.scope == MetricScope::fault))
+      return false;
+    for (std::size_t k = 0; k < i; ++k) {
+      const MetricField& g = kMetricFields[k];
+      if ((w && g.in_window == f.in_window) || (r && g.per_run == f.per_run) ||
+          (x && g.per_fault == f.per_fault))
+        return false;
+    }
+  }
+  return true;
+}
+// Metrics as the table lays it out: its fixed members, a double per run field, a vector per fault
+// field.
+struct MetricsLayout {
+  Window window;
+  ErrorIntegrals errors;
+  std::vector<Window> extra_windows;
+  std::vector<ErrorIntegrals> extra;
+  double per_run[metric_count(MetricScope::run)];
+  std::vector<double> fault_onsets;
+  std::vector<double> per_fault[metric_count(MetricScope::fault)];
+  bool diverged;
+  double diverged_at;
+};
+}  // namespace record_check
+static_assert(record_check::each_entry_names_one_member_of_its_scope(),
+              "a kMetricFields entry names no member of its scope, or one another entry names");
+static_assert(sizeof(ErrorIntegrals) == metric_count(MetricScope::window) * sizeof(double),
+              "every member of ErrorIntegrals needs its window entry in kMetricFields");
+static_assert(sizeof(record_check::MetricsLayout) == sizeof(Metrics),
+              "every member of Metrics needs its run or fault entry in kMetricFields");
 
 // The record's wire form (MPI messages: every rank runs the same binary, so doubles travel in
 // their memory form): the objective window, its window fields, the extra windows (a count, then

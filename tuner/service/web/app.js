@@ -289,6 +289,17 @@ function chartJs() {
   return chartLib;
 }
 
+// The metrics a run records (GET /v1/metrics: the service's metrics record), asked once: the
+// comparison's columns are those comparison.md tabulates, named and united as the service says.
+let metricList = null;
+function metrics() {
+  if (!metricList) metricList = apiJson('/v1/metrics').then((m) => m.metrics).catch((e) => {
+    metricList = null;  // asked again next time (a token entered meanwhile)
+    throw e;
+  });
+  return metricList;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Views. Each returns a cleanup function (unsubscribes, destroys charts).
 
@@ -634,7 +645,7 @@ function jobView(main, id) {
     }
   }
 
-  function renderComparison(c, gains) {
+  function renderComparison(c, gains, recorded) {
     clear(comparison);
     clear(notes);
     if (job.partial)
@@ -648,25 +659,28 @@ function jobView(main, id) {
     for (const w of (gains && gains.warnings) || [])
       notes.appendChild(el('div', {class: 'note bound-warning', text: w}));
     const scenarios = c.scenarios || [];
-    const metrics = ['ise', 'iae', 'itae', 'max_abs_u', 'control_tv'];
+    // One column per tabled metric and scenario; a fault metric's cell holds one value per onset.
+    const columns = recorded.filter((m) => m.in_tables);
+    const cell = (v) => (Array.isArray(v) ? v.map((x) => fmt(x)).join(' / ') : fmt(v));
     const head = ['controller', 'role', 'objective', 'fitness'];
-    for (const s of scenarios) for (const m of metrics) head.push(s + ': ' + m);
+    for (const s of scenarios)
+      for (const m of columns) head.push(s + ': ' + m.label + ' [' + m.unit + ']');
     comparison.appendChild(el('div', {class: 'scroll'}, el('table', {id: 'comparison-table'},
       el('thead', null, el('tr', null, head.map((h) => el('th', {text: h})))),
       el('tbody', null, (c.controllers || []).map((k) => el('tr', null,
         el('td', {class: 'label', text: k.label}), el('td', {text: k.role}),
         el('td', {class: 'num', text: fmt(k.objective)}), el('td', {class: 'num', text: fmt(k.fitness)}),
-        scenarios.map((s, i) => metrics.map((m) => el('td', {class: 'num',
-          text: fmt(k.scenarios && k.scenarios[i] ? k.scenarios[i][m] : null)})))))))));
+        scenarios.map((s, i) => columns.map((m) => el('td', {class: 'num', 'data-metric': m.name,
+          text: cell(k.scenarios && k.scenarios[i] ? k.scenarios[i][m.name] : null)})))))))));
   }
 
   // The Pareto front of a job with two or more soft goals (front.json): its first two soft goals,
   // the picked point circled, the compared controllers marked, and as report.html draws them
   // (tuner/report/front.cpp): each point's noise floor f (SPEC 14, the relative spread of its
   // nudged copies) as a band of width f·|v| centred on the value on each axis, and a dashed link
-  // between two points that are no trade-off (on every soft goal |a - b| <= the larger of their
-  // floors f·|v|, or front.json's within_noise_of). A table lists every point with its floors and
-  // those links. Log axes where every value is positive.
+  // between two points that are no trade-off (each point's within_noise partners, by the run's
+  // rule). A table lists every point with its floors and partners. The goals are named by
+  // front.json's labels and units. Log axes where every value is positive.
   let frontChart = null;
   function renderFront(front) {
     clear(frontBox);
@@ -674,7 +688,9 @@ function jobView(main, id) {
     const soft = front.goals.map((g, i) => (g.minimize ? i : -1)).filter((i) => i >= 0);
     if (soft.length < 2) return;
     const [a, b] = soft;
-    const name = (g) => g.metric + (g.aggregate ? ' (' + g.aggregate + ')' : '');
+    // A front.json written before the labels and partners (docs/usage.md): the metric's name, no
+    // partners.
+    const name = (g) => (g.label || g.metric) + (g.unit ? ' [' + g.unit + ']' : '');
     const finite = (v) => typeof v === 'number' && Number.isFinite(v);
     const drawable = (g) => finite(g[a]) && finite(g[b]);
     const points = front.points.filter((p) => drawable(p.goals)).map((p) => ({x: p.goals[a], y: p.goals[b]}));
@@ -718,31 +734,16 @@ function jobView(main, id) {
     if (banded)
       datasets.push({label: 'noise floor (band of one relative spread)', data: bands, showLine: true,
                      spanGaps: false, pointRadius: 0, borderColor: '#8c8c8c', borderWidth: 1});
-    // The pairs that are no trade-off, by report.html's rule (within_noise in front.cpp).
-    const floorOf = (x, g) => (finite(x.goals[g]) && finite((x.noise_floor || [])[g])
-      ? x.noise_floor[g] * Math.abs(x.goals[g]) : NaN);
-    const withinNoise = (i, k) => {
-      const p = front.points[i], q = front.points[k];
-      if (p.within_noise_of === k || q.within_noise_of === i) return true;
-      for (const g of soft) {
-        const fu = floorOf(p, g), fv = floorOf(q, g);
-        if (!finite(fu) && !finite(fv)) return false;
-        if (!(Math.abs(p.goals[g] - q.goals[g]) <= Math.max(finite(fu) ? fu : 0, finite(fv) ? fv : 0)))
-          return false;
-      }
-      return true;
-    };
-    const partners = front.points.map(() => []);
+    // The pairs that are no trade-off, as front.json lists each point's partners.
+    const partners = front.points.map((p) => p.within_noise || []);
     const links = [];
-    for (let i = 0; i < front.points.length; ++i)
-      for (let k = i + 1; k < front.points.length; ++k) {
-        if (!withinNoise(i, k)) continue;
-        partners[i].push(k);
-        partners[k].push(i);
-        const p = front.points[i], q = front.points[k];
-        if (drawable(p.goals) && drawable(q.goals))
+    front.points.forEach((p, i) => {
+      for (const k of partners[i]) {
+        const q = front.points[k];
+        if (k > i && q && drawable(p.goals) && drawable(q.goals))
           links.push({x: p.goals[a], y: p.goals[b]}, {x: q.goals[a], y: q.goals[b]}, gap);
       }
+    });
     if (links.length)
       datasets.push({label: "within one's noise floor on every goal: not a trade-off", data: links,
                      showLine: true, spanGaps: false, pointRadius: 0, borderColor: '#4d4d4d',
@@ -792,10 +793,11 @@ function jobView(main, id) {
     const run = ++resultsRun;
     const stale = () => run !== resultsRun;
     const finished = isFinished(job.status);
-    let c = null, gains = null;
+    let c = null, gains = null, recorded = [];
     try {
       if (finished) c = await apiJson('/v1/jobs/' + id + '/comparison');
       if (finished) gains = await apiJson('/v1/jobs/' + id + '/gains');
+      if (c) recorded = await metrics();
     } catch (e) {
       if (!(e instanceof ApiError && e.status === 409)) showError(message, e);
     }
@@ -803,7 +805,7 @@ function jobView(main, id) {
     clear(figures);
     clear(frontBox);
     clear(downloads);
-    renderComparison(c, gains);
+    renderComparison(c, gains, recorded);
     const items = [['gains.json', '/gains'], ['trials.csv', '/trials'], ['history.csv', '/history']];
     if (c) items.push(['comparison.md', '/comparison?format=md'], ['report.html', '/report']);
     if (job.progress.iteration !== null && (c || job.status === 'running'))

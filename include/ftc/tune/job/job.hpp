@@ -14,7 +14,7 @@
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/sim/metrics.hpp"
+#include "ftc/sim/metrics_record.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/scenario.hpp"
 #include "ftc/tune/optimizers/optimizer.hpp"
@@ -41,8 +41,13 @@ const char* to_string(Aggregate a);
 // fault onset (so members with random onsets are all scored on their recovery).
 enum class WindowFrom { start, first_fault };
 
+// A metric of the job: a field of the metrics record, the table every property of it comes from
+// (its scope, unit, label, whether it can be a goal or the objective, ...). Never null.
+using MetricRef = const sim::MetricField*;
+
 struct ObjectiveConfig {
-  sim::Metric metric = sim::Metric::ise;
+  // A field marked `objective` (a window field).
+  MetricRef metric = &sim::kMetricFields[sim::metric_index("ise")];
   sim::Window window;  // default: the whole run
   Aggregate aggregate = Aggregate::mean;
   double q = 0.9;      // quantile
@@ -54,6 +59,8 @@ struct ObjectiveConfig {
   sim::Window window_of(const sim::Scenario& s) const;
   // The aggregate of values (+inf for a diverged run); 0 values give 0.
   double aggregate_of(std::vector<double> values) const;
+  // The metric's value on one run, in its objective window (+inf for a diverged run).
+  double value(const sim::Metrics& m) const { return m.errors.*metric->in_window; }
 };
 
 // What two of the window metrics are measured against (ftc/sim/metrics.hpp): a job without
@@ -66,35 +73,25 @@ struct MetricsConfig {
 // A goal of the job (issue 26): a metric in a window, aggregated over the scenarios as the
 // objective's are, either minimised (a soft goal) or kept at most a limit (a hard goal, its
 // normalised violation max(0, value/at_most - 1)). A job gives "objective" or "goals".
-enum class GoalMetric {
-  ise,
-  iae,
-  itae,
-  control_tv,
-  control_energy,
-  peak_command,
-  saturation_fraction,
-  peak_error_after_fault,
-  settling_time,
-  steady_state_error
-};
-const char* to_string(GoalMetric m);
-// Whether the metric is measured in a window (the others over the whole run).
-bool windowed(GoalMetric m);
-
 struct GoalConfig {
-  GoalMetric metric = GoalMetric::ise;
+  // A field marked `goal`; measured in the window when its scope is a window, else over the whole
+  // run.
+  MetricRef metric = &sim::kMetricFields[sim::metric_index("ise")];
   sim::Window window;  // default: the whole run
   WindowFrom window_from = WindowFrom::start;
   Aggregate aggregate = Aggregate::mean;
   double q = 0.9;
   double alpha = 0.9;
-  bool minimize = false;            // a soft goal
-  std::optional<double> at_most;    // a hard goal's limit, > 0
-  std::optional<double> threshold;  // settling_time: rad (else the job's metrics block's)
-  std::optional<double> tail;       // steady_state_error: s (else the job's metrics block's)
+  bool minimize = false;          // a soft goal
+  std::optional<double> at_most;  // a hard goal's limit, > 0
+  // The settings of a metric measured against one (MetricField::setting): the settling
+  // threshold, rad, and the steady-state tail, s (else the job's metrics block's).
+  std::optional<double> threshold;
+  std::optional<double> tail;
 
   bool soft() const { return minimize; }
+  // Whether it is measured in a window (a window field), not over the whole run.
+  bool windowed() const { return metric->scope == sim::MetricScope::window; }
   // The goal's window and aggregate as an objective's (its metric field is left at ise).
   ObjectiveConfig measure() const;
   // The normalised violation max(0, value/at_most - 1) of a hard goal (0 for a soft one); a
@@ -134,7 +131,7 @@ struct Job {
   std::shared_ptr<const EnsembleConfig> ensemble;
   sim::ControllerConfig controller;
   std::vector<CompareEntry> compare;
-  // With goals: the soft goal's measure (when it is ise, iae or itae).
+  // With goals: the first soft goal's measure whose metric can be the objective.
   ObjectiveConfig objective;
   std::vector<GoalConfig> goals;  // empty: the job is scored by its objective
   std::optional<MetricsConfig> metrics;

@@ -43,11 +43,11 @@ struct Evaluation {
   // The job's metric on every scenario (listed, then members), +inf for a diverged run: what
   // the summaries and the capping order read, 8 bytes a member.
   std::vector<double> values;
-  double objective = 0.0;               // the aggregate; +inf when it takes a diverged run
-  double fitness = 0.0;                 // 1/objective; 0 when the objective is +inf
-  bool diverged = false;                // some scenario diverged
-  int diverged_count = 0;               // how many (counted or not)
-  int diverged_counted = 0;             // how many of the counted ones
+  double objective = 0.0;    // the aggregate; +inf when it takes a diverged run
+  double fitness = 0.0;      // 1/objective; 0 when the objective is +inf
+  bool diverged = false;     // some scenario diverged
+  int diverged_count = 0;    // how many (counted or not)
+  int diverged_counted = 0;  // how many of the counted ones
   // A job with goals: each goal's aggregate, in the job's order, and the total normalised
   // violation of its hard goals (fitness is then constrained_fitness(1/objective, violation)).
   std::vector<double> goals;
@@ -99,11 +99,11 @@ double aggregate_lower_bound(const ObjectiveConfig& objective, std::vector<doubl
 
 // Capping with goals (issue 27): whether a goal's aggregate has a lower bound while members are
 // unknown. Its metric must be defined (not NaN) on every member, so that the aggregate is over a
-// count fixed in advance and aggregate_lower_bound() applies: ise, iae, itae, control_tv,
-// control_energy and peak_command (>= 0, +inf for a diverged run). saturation_fraction,
-// settling_time, steady_state_error and peak_error_after_fault are NaN on some members (no
-// sample, no fault, no tail) unless the member diverges (+inf), so how many values the aggregate
-// takes is unknown until every member ran: such a goal contributes nothing to the bound.
+// count fixed in advance and aggregate_lower_bound() applies: the metrics record marks such a
+// field `partial_lower_bound` (>= 0, +inf for a diverged run). A metric that is NaN on some
+// members (no sample, no fault, no tail) unless the member diverges (+inf) leaves how many values
+// the aggregate takes unknown until every member ran: such a goal contributes nothing to the
+// bound.
 bool goal_has_lower_bound(const GoalConfig& goal);
 
 // Capping with goals: an upper bound of the constrained fitness (constrained_fitness) of a

@@ -17,14 +17,19 @@ namespace ftc::tune {
 
 inline constexpr const char* kGainsSchema = "ftctune.gains/1";
 
-// What the objective's value is, in words: the metric, the window and the aggregate, e.g.
+// A metric measured as `measure` says, in words: `metric` as the caller words it, its window when
+// `windowed`, and over n > 1 scenarios the aggregate ("CVaR0.9 of ISE[first fault, +8 s] over 101
+// scenarios"). The one wording of the objective's, the goals' and the front's labels.
+std::string measure_label(std::size_t n, const std::string& metric, const ObjectiveConfig& measure,
+                          bool windowed);
+// What the objective's value is, in words: the metric's label, the window and the aggregate, e.g.
 // "CVaR0.9 of ISE[first fault, +8 s] over 101 scenarios" or "ISE[0 s, 30 s]" (one scenario).
 // Every place that shows the value labels it with this (run's summary, comparison.md,
 // report.html, the figures).
 std::string objective_label(const Job& job);
-// Goal k of the job in words, as objective_label (the metric in capitals, its window when it has
-// one, the aggregate over several scenarios: `scenarios` of them, default the job's), then
-// "minimized" or "<= limit".
+// Goal k of the job in words, as comparison.md's goals table heads it: measure_label with the
+// metric's name in capitals, its window when it has one, the aggregate over several scenarios
+// (`scenarios` of them, default the job's), then "minimized" or "<= limit".
 std::string goal_label(const Job& job, std::size_t k, std::size_t scenarios = 0);
 // A candidate's goals as gains.json, comparison.json and evaluation.json give them: "goals" (each
 // goal of the job with its "value" and, for a hard goal, its "violation"), "total_violation" and

@@ -1,8 +1,10 @@
 #pragma once
 // The Pareto front of a run with two or more soft goals (issue 26): the non-dominated feasible
 // candidates among all the run's trials, whatever algorithm found them; its hypervolume; the
-// point the run's gains file holds, and the rules `ftctune pick` chooses another by. The
-// documents front.json and front.csv follow /work/s34/front-format.md (docs/usage.md).
+// point the run's gains file holds, and the rules `ftctune pick` chooses another by. One type for
+// the run that makes it, the document it writes (front.json, front.csv: docs/usage.md, "Fronts")
+// and every reader of that document (`ftctune pick`, report.html and its figures); the dashboard
+// shows front.json as it is.
 //
 // Hypervolume: on log10 of each soft goal (values at or below 1e-300 count as 1e-300), against
 // the reference point 0.1 decade beyond the worst value of each soft goal on the run's FINAL
@@ -19,21 +21,23 @@
 // states are nudged (SPEC §14's noise floor, the same copies for every point, all points in one
 // batch per copy); a goal's noise floor at a point is its relative spread over those runs,
 // (max - min)/|value at the point|, none where that is undefined (a zero or non-finite value).
-// Two neighbouring points a and b of the front (in its order: by the first soft goal) are not a
-// trade-off when on every soft goal |a - b| <= max(f_a·|a|, f_b·|b|), each point with its OWN
-// floor f (a point without a floor on that goal does not count; neither with one: they are told
-// apart). The later one is then flagged "within_noise_of" the first point of the run of such
-// neighbours it ends (a chain a~b~c flags b and c with a's index, though c may be farther from a
-// than its own floor: the chain is one design region, named by its first point). The flag is
+// Two points a and b of the front lie within the noise floor when on every soft goal
+// |a - b| <= max(f_a·|a|, f_b·|b|), each point with its OWN floor f (a point without a floor on
+// that goal does not count; neither with one: they are told apart). Of neighbouring points (in
+// the front's order: by the first soft goal) the later one is flagged "within_noise_of" the first
+// point of the run of such neighbours it ends (a chain a~b~c flags b and c with a's index, though
+// c may be farther from a than its own floor: the chain is one design region, named by its first
+// point). A point's "within_noise" partners are every other point it is no trade-off with: one
+// whose within_noise_of names the other, or the two within the noise floor. This is the one rule
+// (no_trade_off); report.html and the dashboard show the partners front.json lists. The flags are
 // information only: flagged points stay in the front and its hypervolume, and every rule (the
 // knee, min, limit, index) may pick one.
 #include <cstddef>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/problem/problem.hpp"
@@ -43,24 +47,50 @@ namespace ftc::tune {
 inline constexpr const char* kFrontSchema = "ftctune.front/1";
 inline constexpr double kReferenceMarginDecades = 0.1;
 
+// A goal of the job as the front shows it (front.json's goals carry the label and unit).
+struct FrontGoal {
+  std::string label;              // front_goal(): the metric's label, window and aggregate
+  std::string unit;               // the metric's unit ("rad²·s", "command's unit")
+  std::optional<double> at_most;  // a hard goal's limit; none: a soft goal
+  bool soft() const { return !at_most; }
+};
+
 struct FrontPoint {
-  Decision parameters;       // natural units, in the space's order
-  std::vector<double> goals;  // every goal's value, in the job's goal order
+  Decision parameters;        // natural units, in the space's order
+  std::vector<double> goals;  // every goal's value, in the job's goal order (+inf: diverged)
   double violation = 0.0;     // 0: on the front every point is feasible
   std::size_t trial = 0;      // row of trials.csv
   // Each goal's relative spread at this point under the noise-floor probe (none: undefined).
   std::vector<std::optional<double>> noise_floor;
   std::optional<std::size_t> within_noise_of;  // an earlier point it is not told apart from
+  std::vector<std::size_t> within_noise;       // every point it is no trade-off with, ascending
+  bool feasible() const { return !(violation > 0); }
+};
+
+// A controller of the run's comparison other than the tuned one (a compare entry, or the job's
+// own), with its goal values: the figures mark it beside the front.
+struct FrontCompared {
+  std::string label;
+  std::string role;  // "compare" or "baseline" (the job's own controller)
+  std::vector<double> goals;
+  bool feasible = true;
 };
 
 struct Front {
-  std::vector<std::size_t> soft;  // the soft goals' indices in the job's goals
+  std::vector<FrontGoal> goals;    // one per goal of the job, in its order
+  std::vector<std::size_t> soft;   // the soft goals' indices in the job's goals
   std::vector<FrontPoint> points;  // sorted by the first soft goal, ascending
   std::vector<double> reference;   // log10, one per soft goal
   double hypervolume = 0.0;
-  std::size_t picked = 0;
+  std::size_t picked = 0;  // an index of points, unless there is none
   std::string rule = "knee";
+  std::vector<FrontCompared> compared;
 };
+
+// Goal k of the job as the front shows it: the metric's label in the metrics record, its window
+// when it has one and, over several scenarios, the aggregate ("CVaR0.9 of ISE[first fault, +4 s]
+// over 7 scenarios"); its unit without a leading "the " ("command's unit"); its limit.
+FrontGoal front_goal(const Job& job, std::size_t k);
 
 // The soft goals' log10 values of a goal vector (log_value of pareto_bat.hpp).
 std::vector<double> log_soft_goals(const std::vector<double>& goals,
@@ -80,8 +110,12 @@ Front make_front(const Job& job, const std::vector<Trial>& trials);
 // Whether points a and b lie within the noise floor of one of them on every soft goal (rule
 // above).
 bool within_noise_floor(const Front& front, std::size_t a, std::size_t b);
-// Records each point's noise floor (`spreads[i]`: point i's, per goal, relative) and flags the
-// points within the noise floor of their predecessor (rule above).
+// Whether points a and b are no trade-off: one's within_noise_of names the other, or they lie
+// within the noise floor (the one rule, above).
+bool no_trade_off(const Front& front, std::size_t a, std::size_t b);
+// Records each point's noise floor (`spreads[i]`: point i's, per goal, relative), flags the
+// points within the noise floor of their predecessor and lists each point's partners (rule
+// above).
 void apply_noise_floor(Front& front,
                        const std::vector<std::vector<std::optional<double>>>& spreads);
 
@@ -93,9 +127,9 @@ std::string front_rule_text(const Front& front);
 // (source "pick", path "/rule") for a rule that names no goal or that no point meets.
 std::size_t pick_point(const Job& job, const Front& front, const std::string& rule);
 
-// front.json and front.csv of a run (front-format.md); `compared` is the comparison's part.
+// front.json and front.csv of a run (docs/usage.md, "Fronts").
 nlohmann::json front_document(const Job& job, const std::string& job_sha256, std::uint64_t seed,
-                              const Front& front, const nlohmann::json& compared);
+                              const Front& front);
 std::string front_csv(const Job& job, const Front& front);
 // `ftctune pick`: the gains file of the point `rule` chooses on the front of the run in
 // directory `run` (its job.json, front.json, gains.json and trials.csv), without simulating:
@@ -105,7 +139,17 @@ std::string front_csv(const Job& job, const Front& front);
 // or a rule that picks nothing.
 nlohmann::json pick_gains(const std::filesystem::path& run, const std::string& rule);
 
-// The front back from front.json (InputError naming the field for a damaged one).
-Front front_from_json(const Job& job, const nlohmann::json& j);
+// The front back from front.json, the one reader of it: checked against the job (its goals and
+// tuned parameters) and the format, an InputError (`source`, the JSON path) for a damaged one. A
+// file written before the goals' label and unit and the points' within_noise partners (the same
+// schema) is read with them made from the job by front_goal() and from its floors by the rule
+// (no_trade_off), so it reads as the run would write it now.
+Front front_from_json(const Job& job, const nlohmann::json& j,
+                      const std::string& source = "front.json");
+// RUN/front.json through front_from_json: none when there is no such file, or when `job_sha256`
+// is given and the file's is another (a front left beside a re-run of another job); InputError
+// naming the file when it cannot be read or is not JSON.
+std::optional<Front> read_front(const std::filesystem::path& run, const Job& job,
+                                const std::optional<std::string>& job_sha256 = std::nullopt);
 
 }  // namespace ftc::tune
