@@ -40,7 +40,7 @@
 
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
-#include "ftc/tune/job/job.hpp"
+#include "ftc/runtime/scenario_json.hpp"
 
 namespace ftc::tune::mpi {
 namespace {
@@ -255,7 +255,7 @@ std::vector<char> set_message(const SimulationSet& set) {
   w.put_string(set.plant_spec().model);
   w.put_vector(set.plant_spec().values);
   json scenarios = json::array();
-  for (std::size_t i = 0; i < set.size(); ++i) scenarios.push_back(to_json(set.scenario(i)));
+  for (std::size_t i = 0; i < set.size(); ++i) scenarios.push_back(runtime::to_json(set.scenario(i)));
   w.put_string(scenarios.dump());
   for (std::size_t i = 0; i < set.size(); ++i) {
     const sim::SimulationOptions& o = set.options(i);
@@ -276,7 +276,7 @@ SimulationSet set_from_message(const std::vector<char>& bytes) {
   std::vector<sim::Scenario> scenarios;
   std::vector<sim::SimulationOptions> options(list.size());
   for (std::size_t i = 0; i < list.size(); ++i) {
-    scenarios.push_back(scenario_from_json(list[i], "scenario from rank 0"));
+    scenarios.push_back(runtime::scenario_from_json(list[i], "scenario from rank 0"));
     options[i].window = r.get<sim::Window>();
     options[i].extra_windows = r.get_vector<sim::Window>();
     options[i].record_every = r.get<std::int64_t>();

@@ -463,7 +463,7 @@ std::shared_ptr<const Obj<EnsembleConfig>> make_ensemble_shape() {
   o->string("base", &E::base, "the scenario members copy (default the first)");
   // One scale per uncertain parameter of the registered plants (the job's plant must declare it,
   // job.cpp's validate_ensemble), on the first 3 draws of a member's stream.
-  for (const job_detail::UncertainKey& k : job_detail::uncertain_keys()) {
+  for (const runtime::UncertainKey& k : runtime::uncertain_keys()) {
     const std::string key = k.parameter + "_scale";
     const std::string parameter = k.parameter;
     auto shape = std::make_shared<const DistributionShape>(
@@ -515,28 +515,6 @@ const Distribution* EnsembleConfig::parameter_scale(std::string_view parameter) 
 }
 
 namespace job_detail {
-
-const std::vector<UncertainKey>& uncertain_keys() {
-  static const std::vector<UncertainKey> keys = [] {
-    std::vector<UncertainKey> out;
-    for (const sim::PlantKind& kind : sim::plant_kinds())
-      for (const sim::UncertainParameter& u : kind.uncertain) {
-        const auto known = std::find_if(out.begin(), out.end(), [&](const UncertainKey& k) {
-          return k.parameter == u.parameter;
-        });
-        if (known != out.end()) {
-          known->models += ", " + kind.model;
-          continue;
-        }
-        const sim::PlantParameter* declared = nullptr;
-        for (const sim::PlantParameter& p : kind.parameters)
-          if (p.name == u.parameter) declared = &p;
-        out.push_back({u.parameter, kind.model, u.meaning, declared});
-      }
-    return out;
-  }();
-  return keys;
-}
 
 std::shared_ptr<const schema::Shape<EnsembleConfig>> ensemble_shape() {
   static const std::shared_ptr<const Obj<EnsembleConfig>> shape = make_ensemble_shape();

@@ -10,6 +10,7 @@
 #include "ftc/runtime/controller_json.hpp"
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/runtime/plant_json.hpp"
+#include "ftc/runtime/scenario_json.hpp"
 #include "ftc/runtime/schema.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/ensemble.hpp"
@@ -41,172 +42,8 @@ bool safe_name(const std::string& s) {
       return false;
   return true;
 }
-constexpr const char* kNamePattern = "^[A-Za-z0-9_-][A-Za-z0-9_.-]{0,99}$";
-
-std::string field_doc(const char* description, const char* unit) {
-  return *unit ? std::string(description) + " (" + unit + ")" : std::string(description);
-}
-
-// A numeric field of a sim struct from its table; checked by the struct's validate().
-template <class T>
-void add_number(Obj<T>& o, const sim::NumberField<T>& f, schema::Presence p = schema::kOptional) {
-  o.number(f.name, f.member, f.range, field_doc(f.description, f.unit), p, false);
-}
-template <class T>
-void add_integer(Obj<T>& o, const sim::IntegerField<T>& f, schema::Presence p = schema::kOptional) {
-  o.integer(f.name, f.member, {f.min, f.max}, f.description, p, false);
-}
-
-// --- scenarios --------------------------------------------------------------------------------
-
-Ptr<sim::DisturbanceTerm> make_disturbance_shape() {
-  using D = sim::DisturbanceTerm;
-  auto o = std::make_shared<Obj<D>>("One sinusoid of Δ on one axis: amplitude · shape(ω t + φ)");
-  add_integer(*o, D::axis_field(), kRequired);
-  o->choice("shape", &D::shape, {{"sin", sim::Shape::sin}, {"cos", sim::Shape::cos}}, "sin or cos");
-  for (const sim::NumberField<D>& f : D::number_fields())
-    add_number(*o, f, std::string_view(f.name) == "phase" ? schema::kOptional : kRequired);
-  return o;
-}
-
-Ptr<sim::DisturbanceTerm> disturbance_shape() {
-  static const Ptr<sim::DisturbanceTerm> shape = make_disturbance_shape();
-  return shape;
-}
-
-Ptr<sim::FaultProfile> make_profile_shape() {
-  using P = sim::FaultProfile;
-  auto v = std::make_shared<schema::Variant<P>>(
-      "type", [](const P& p) { return std::string(sim::to_string(p.type)); },
-      [](P& p, const std::string& name) {
-        p.type =
-            name == "abrupt" ? sim::FaultProfileType::abrupt : sim::FaultProfileType::incipient;
-      },
-      "How the fault grows after its onset: abrupt (ρ = 1) or incipient (ρ = 1 - exp(-β τ))");
-  v->add("abrupt", std::make_shared<Obj<P>>());
-  auto incipient = std::make_shared<Obj<P>>();
-  add_number(*incipient, P::rate_field(), kRequired);
-  v->add("incipient", std::move(incipient));
-  return v;
-}
-
-Ptr<sim::FaultProfile> profile_shape() {
-  static const Ptr<sim::FaultProfile> shape = make_profile_shape();
-  return shape;
-}
-
-Ptr<sim::Fault> make_fault_shape() {
-  using F = sim::Fault;
-  const Ptr<sim::FaultProfile> profile = profile_shape();
-  auto v = std::make_shared<schema::Variant<F>>(
-      "type", [](const F& f) { return std::string(sim::to_string(f.type)); },
-      [](F& f, const std::string& name) {
-        for (sim::FaultType t :
-             {sim::FaultType::bias, sim::FaultType::loss_of_effectiveness, sim::FaultType::stuck})
-          if (name == sim::to_string(t)) f.type = t;
-      },
-      "An actuator fault: u_j = u_d,j + ρ(t - onset) δu_j");
-  const std::pair<sim::FaultType, const char*> cases[] = {
-      {sim::FaultType::bias, "a bias offset + amplitude cos(frequency t + phase)"},
-      {sim::FaultType::loss_of_effectiveness, "the actuator loses a fraction of its command"},
-      {sim::FaultType::stuck, "the actuator's output is frozen at value"}};
-  for (const auto& [type, what] : cases) {
-    auto o = std::make_shared<Obj<F>>(what);
-    add_integer(*o, F::actuator_field(), kRequired);
-    for (const sim::NumberField<F>& f : F::common_fields()) add_number(*o, f, kRequired);
-    o->object("profile", &F::profile, profile, "");
-    for (const sim::NumberField<F>& f : F::type_fields(type))
-      add_number(*o, f, type == sim::FaultType::bias ? schema::kOptional : kRequired);
-    v->add(sim::to_string(type), std::move(o));
-  }
-  return v;
-}
-
-Ptr<sim::Fault> fault_shape() {
-  static const Ptr<sim::Fault> shape = make_fault_shape();
-  return shape;
-}
-
-Ptr<sim::ActuatorModel> make_actuator_shape() {
-  using A = sim::ActuatorModel;
-  auto o = std::make_shared<Obj<A>>(
-      "The actuators' dynamics (docs/model.md): each actuator's output follows its command, "
-      "clamped to the actuator's range, with a first-order lag and a rate limit; the faults and "
-      "the saturation act on that output. Give one or both; absent: the command drives the plant");
-  o->optional_number("time_constant", &A::time_constant, A::kTimeConstantRange,
-                     "τ of the lag τ du_a/dt = u_c - u_a (s), at least 2 · sample_time / "
-                     "substeps; absent: no lag",
-                     false);
-  o->optional_number("rate_limit", &A::rate_limit, A::kRateLimitRange,
-                     "|du_a/dt| <= rate_limit (units of u per s); absent: no limit", false);
-  return o;
-}
-
-Ptr<sim::ActuatorModel> actuator_shape() {
-  static const Ptr<sim::ActuatorModel> shape = make_actuator_shape();
-  return shape;
-}
-
-Ptr<sim::Scenario> make_scenario_shape() {
-  using S = sim::Scenario;
-  auto o = std::make_shared<Obj<S>>(
-      "A closed-loop fault scenario: run length, sampling, initial state, disturbance, faults");
-  o->string("name", &S::name, "unique within the job; names output files", kRequired, {},
-            kNamePattern);
-  for (const sim::NumberField<S>& f : S::number_fields())
-    add_number(*o, f, std::string_view(f.name) == "duration" ? kRequired : schema::kOptional);
-  add_integer(*o, S::substeps_field());
-  o->number_list("initial_state", &S::initial_state, schema::Range::any(),
-                 "X(0) = (X1, X2), 2n numbers; default the plant's", schema::kOptional, false);
-  o->array("disturbance", &S::disturbance, disturbance_shape(), "Δ(t), a sum of sinusoids");
-  o->array("faults", &S::faults, fault_shape(), "actuator faults; they add up");
-  o->optional_number("saturation", &S::saturation, S::kSaturationRange,
-                     "|u_j| <= saturation after the faults; absent: none", false);
-  o->optional_object("actuator", &S::actuator, actuator_shape(), "");
-  // Model mismatch: the true values of each parameter a registered plant declares uncertain,
-  // under the parameter's name (the job's plant must declare it: validate_job).
-  for (const job_detail::UncertainKey& k : job_detail::uncertain_keys()) {
-    const std::string key = k.parameter;
-    o->field(
-        {key, false,
-         [key](const json& v, const std::string& path, S& s, Errors& e) {
-           if (!v.is_array()) {
-             e.push_back({path, "expected an array of numbers, got " + json_io::json_type_name(v)});
-             return;
-           }
-           std::vector<double> x(v.size());
-           for (std::size_t i = 0; i < v.size(); ++i)
-             if (!schema::detail::read_number(v[i], path + "/" + std::to_string(i), x[i], e))
-               return;
-           s.set_true_value(key, std::move(x));
-         },
-         [](const S&, const std::string&, Errors&) {},  // against the plant: job rule
-         [key](const S& s, json& obj) {
-           if (const std::vector<double>* v = s.true_value(key)) obj[key] = *v;
-         },
-         [k] {
-           json item = {{"type", "number"}};
-           std::string unit;
-           if (k.declared) {
-             schema::annotate(k.declared->range, item);
-             if (!k.declared->unit.empty()) unit = " (" + k.declared->unit + ")";
-           }
-           return json{
-               {"type", "array"},
-               {"items", item},
-               {"description", "the true " + k.parameter + " of the simulated plant" + unit +
-                                   ", for a plant that declares it uncertain (" + k.models +
-                                   "); the controller keeps the job's plant as its "
-                                   "model. Absent: the plant's"}};
-         }});
-  }
-  return o;
-}
-
-Ptr<sim::Scenario> scenario_shape() {
-  static const Ptr<sim::Scenario> shape = make_scenario_shape();
-  return shape;
-}
+using runtime::kNamePattern;
+using runtime::scenario_shape;
 
 // --- objective and tuning ---------------------------------------------------------------------
 
@@ -1289,14 +1126,5 @@ json to_json(const Job& job) { return job_shape().write(job); }
 json to_json(const PlantConfig& p) { return runtime::plant_shape()->write(p); }
 json to_json(const ObjectiveConfig& o) { return objective_shape()->write(o); }
 json to_json(const GoalConfig& g) { return goal_shape()->write(g); }
-json to_json(const sim::Scenario& s) { return scenario_shape()->write(s); }
-
-sim::Scenario scenario_from_json(const json& j, const std::string& source) {
-  sim::Scenario s;
-  Errors errs;
-  schema::read(*scenario_shape(), j, "", s, errs);
-  throw_if_errors(source, std::move(errs));
-  return s;
-}
 
 }  // namespace ftc::tune

@@ -13,15 +13,5 @@ namespace ftc::tune::job_detail {
 
 std::shared_ptr<const schema::Shape<EnsembleConfig>> ensemble_shape();
 
-// The uncertain parameters of the registered plants (sim::PlantKind::uncertain), each once in
-// registry order: the scenario keys of model mismatch's true values and, with "_scale", the
-// ensemble's keys. A job may use only its own plant's (checked against the plant).
-struct UncertainKey {
-  std::string parameter;
-  std::string models;                      // the plants that declare it: "spacecraft, hexarotor"
-  std::string meaning;                     // the first declaring plant's words
-  const sim::PlantParameter* declared{};  // the first declaring plant's parameter (unit, range)
-};
-const std::vector<UncertainKey>& uncertain_keys();
 
 }  // namespace ftc::tune::job_detail

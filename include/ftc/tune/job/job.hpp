@@ -12,6 +12,7 @@
 
 #include "ftc/runtime/controller_json.hpp"
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/runtime/scenario_json.hpp"
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/metrics_record.hpp"
@@ -167,9 +168,7 @@ nlohmann::json to_json(const Job& job);
 nlohmann::json to_json(const PlantConfig& p);
 nlohmann::json to_json(const ObjectiveConfig& o);
 nlohmann::json to_json(const GoalConfig& g);
-nlohmann::json to_json(const sim::Scenario& s);
-// A scenario from its JSON form (strict, as in a job; not checked against a plant): throws
-// InputError(source, every error).
-sim::Scenario scenario_from_json(const nlohmann::json& j, const std::string& source);
+// A scenario's JSON form and back: the runtime's (ftc/runtime/scenario_json.hpp).
+using runtime::scenario_from_json;
 
 }  // namespace ftc::tune
