@@ -36,11 +36,11 @@
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/problem/problem.hpp"
-#include "ftc/tune/run/api.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
-#include "ftc/tune/run/run_directory.hpp"
+#include "ftc/tune/api/run_directory.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
 namespace py = pybind11;

@@ -5,13 +5,13 @@
 
 #include "cli_runner.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
-#include "ftc/tune/report/landscape.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/report/report.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "io/text.hpp"
-#include "report/front.hpp"
+#include "report/front_figures.hpp"
 #include "report/gnuplot.hpp"
 #include "short_job.hpp"
 

@@ -1,4 +1,4 @@
-// The run API (run/api.hpp) that the command line, the service and Python share: run_job writes
+// The run API (api/api.hpp) that the command line, the service and Python share: run_job writes
 // the files `ftctune run` writes, byte for byte; a given directory holding a run is refused
 // unless forced; the iteration callback may stop a run, which then writes nothing; the study
 // refuses lists it cannot run.
@@ -10,7 +10,7 @@
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
-#include "ftc/tune/run/api.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "short_job.hpp"
 
 using nlohmann::json;

@@ -28,7 +28,7 @@
 #include "cli_runner.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
-#include "ftc/tune/run/api.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/tune/service/job_store.hpp"

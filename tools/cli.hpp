@@ -11,7 +11,7 @@
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/tune/evaluators/batch_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
-#include "ftc/tune/run/api.hpp"
+#include "ftc/tune/api/api.hpp"
 
 namespace ftc::cli {
 
@@ -34,7 +34,7 @@ void add_ensemble_command(CLI::App& app, const Globals& g, Action& action);
 void add_evaluate_command(CLI::App& app, const Globals& g, Action& action);
 void add_pick_command(CLI::App& app, const Globals& g, Action& action);
 
-// The MPI ranks and the evaluator of a command's simulations: the run API's (run/api.hpp).
+// The MPI ranks and the evaluator of a command's simulations: the run API's (api/api.hpp).
 using tune::make_evaluator;
 using tune::mpi_ranks;
 using tune::Ranks;
@@ -61,7 +61,7 @@ CLI::Validator output_file();
 std::filesystem::path default_out_dir(const tune::Job& job);
 std::filesystem::path default_out_dir_for(const std::string& job_name);
 
-// The latest finished run of a job (run/run_directory.hpp).
+// The latest finished run of a job (api/run_directory.hpp).
 using tune::latest_run_dir;
 
 }  // namespace ftc::cli

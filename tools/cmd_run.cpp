@@ -1,6 +1,6 @@
 // ftctune run JOB: tune the job's controller and write the gains file and its companions.
 // The run itself (output directory, lock, staging, checkpoints, files) is the run API's
-// (run/api.hpp); this prints what it did.
+// (api/api.hpp); this prints what it did.
 #include <spdlog/spdlog.h>
 
 #include <cmath>
@@ -9,7 +9,7 @@
 
 #include "cli.hpp"
 #include "ftc/runtime/json_reader.hpp"
-#include "ftc/tune/run/api.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "progress.hpp"
 

@@ -2,12 +2,12 @@
 // evaluations, so that algorithms are compared at equal cost. Writes study.csv (one row per run),
 // study.md (per algorithm: median, best and worst objective, parameters ended on a bound,
 // median wall time) and study.png.
-// The study itself is the run API's (run/api.hpp); this prints what it did.
+// The study itself is the run API's (api/api.hpp); this prints what it did.
 #include <cstdio>
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
-#include "ftc/tune/run/api.hpp"
+#include "ftc/tune/api/api.hpp"
 
 namespace ftc::cli {
 namespace {

@@ -1,5 +1,5 @@
-// The run API (run/api.hpp): run, resume, evaluate and landscape, as the command line runs them.
-#include "ftc/tune/run/api.hpp"
+// The run API (api/api.hpp): run, resume, evaluate and landscape, as the command line runs them.
+#include "ftc/tune/api/api.hpp"
 
 #include <unistd.h>
 
@@ -363,6 +363,26 @@ EvaluateJobResult evaluate_job(const Job& job, const EvaluateJobOptions& o) {
   write_evaluation(result.evaluation, result.out);
   if (o.figure) result.figure = draw_evaluation(result.evaluation, result.out);
   return result;
+}
+
+LandscapeResult compute_landscape(const Job& job, const fs::path& out_dir,
+                                  const LandscapeOptions& options, BatchEvaluator& evaluator) {
+  const Landscape l = evaluate_landscape(job, options, evaluator);
+  LandscapeResult r;
+  fs::create_directories(out_dir);
+  r.csv = out_dir / "landscape.csv";
+  write_file_atomic(r.csv, landscape_csv(l));
+  const LandscapeFigure figure = draw_landscape(job, l, out_dir, options);
+  r.figure = figure.figure;
+  r.params = l.params;
+  r.simulations = l.simulations;
+  r.best_objective = l.best_objective;
+  r.best = l.best;
+  r.fixed = l.fixed;
+  r.fixed_source = l.fixed_source;
+  r.path_points = figure.path_points;
+  r.path_on_map = figure.path_on_map;
+  return r;
 }
 
 LandscapeJobResult landscape_job(const Job& job, const LandscapeJobOptions& o) {

@@ -10,7 +10,7 @@
 
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
-#include "ftc/tune/run/api.hpp"
+#include "ftc/tune/api/api.hpp"
 #if FTC_WITH_MPI
 #include "ftc/tune/evaluators/mpi_evaluator.hpp"
 #endif

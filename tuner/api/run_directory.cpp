@@ -1,5 +1,5 @@
 // The output directory of a run: default place, lock, staging and the move into place.
-#include "ftc/tune/run/run_directory.hpp"
+#include "ftc/tune/api/run_directory.hpp"
 
 #include <fcntl.h>
 #include <sys/file.h>

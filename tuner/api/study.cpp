@@ -1,8 +1,8 @@
-// The run API's study (run/api.hpp): the job's tuning with several algorithms and seeds at one
+// The run API's study (api/api.hpp): the job's tuning with several algorithms and seeds at one
 // budget of evaluations, so that algorithms are compared at equal cost. Writes study.csv (one row
 // per run), study.md (per algorithm: median, best and worst objective, parameters ended on a
 // bound, median wall time) and study.png.
-#include "ftc/tune/report/study.hpp"
+#include "ftc/tune/report/study_figure.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -15,7 +15,7 @@
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/pagmo.hpp"
-#include "ftc/tune/run/api.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
 

@@ -1,4 +1,4 @@
-#include "report/front.hpp"
+#include "report/front_figures.hpp"
 
 #include <algorithm>
 #include <charconv>

@@ -9,7 +9,7 @@
 
 #include "ftc/tune/job/job.hpp"
 #include "report/figures.hpp"
-#include "report/front.hpp"
+#include "report/front_figures.hpp"
 
 namespace ftc::tune::report_detail {
 

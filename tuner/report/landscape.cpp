@@ -1,3 +1,4 @@
+// The landscape figure (report/landscape.hpp).
 #include "ftc/tune/report/landscape.hpp"
 
 #include <algorithm>
@@ -8,7 +9,6 @@
 
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/tune/io/files.hpp"
-#include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "io/text.hpp"
 #include "report/gnuplot.hpp"
@@ -56,106 +56,12 @@ std::string parameter_unit(const std::string& name, sim::ControllerType type) {
 
 }  // namespace
 
-LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
-                                  const LandscapeOptions& options, BatchEvaluator& evaluator) {
-  if (!job_in.tuning)
-    throw InputError(job_in.name, "/tuning", "is required: it gives the parameters' bounds");
-  std::vector<std::string> params = options.params;
-  if (params.empty())
-    for (const ParameterBounds& b : job_in.tuning->parameters)
-      if (params.size() < 2) params.push_back(b.name);
-  if (params.size() != 2 || params[0] == params[1])
-    throw InputError("--params", "",
-                     "needs two different tuned parameters (the job tunes " +
-                         std::to_string(job_in.tuning->parameters.size()) + ")");
-  if (options.n1 < 2 || options.n2 < 2 || options.n1 > 1000 || options.n2 > 1000)
-    throw InputError("--grid", "", "needs 2..1000 points per parameter");
-
-  // A job tuning exactly the two parameters, everything else at the job's values.
-  Job job = job_in;
-  std::vector<ParameterBounds> bounds;
-  for (const std::string& p : params) {
-    auto it = std::find_if(job_in.tuning->parameters.begin(), job_in.tuning->parameters.end(),
-                           [&](const ParameterBounds& b) { return b.name == p; });
-    if (it == job_in.tuning->parameters.end())
-      throw InputError("--params", "", p + " is not under tuning.parameters of the job");
-    bounds.push_back(*it);
-  }
-  // The unplotted tuned parameters held at the given values (the tuned ones, by default in the
-  // CLI), else at the job's.
-  LandscapeResult r;
-  for (const ParameterBounds& b : job_in.tuning->parameters) {
-    if (b.name == params[0] || b.name == params[1]) continue;
-    const sim::ControllerField* f = sim::find_controller_field(b.name);
-    if (!f) continue;
-    double v = job.controller.*(f->member);
-    for (const auto& [name, value] : options.fixed)
-      if (name == b.name) v = value;
-    job.controller.*(f->member) = v;
-    r.fixed.emplace_back(b.name, v);
-  }
-  r.fixed_source = options.fixed_source;
-  job.tuning->parameters = bounds;
-  const TuningProblem problem(job);
-  const std::size_t i0 = problem.space().names[0] == params[0] ? 0 : 1;  // problem orders by field
-
-  // Evenly spaced in the coordinate the optimiser searches: the value, or its log.
-  const auto at = [](const ParameterBounds& b, int i, int n) {
-    const double f = static_cast<double>(i) / (n - 1);
-    if (i == n - 1) return b.upper;  // exactly, whatever the rounding on the way
-    return b.scale == Scale::log ? b.lower * std::pow(b.upper / b.lower, f)
-                                 : b.lower + (b.upper - b.lower) * f;
-  };
-  std::vector<Decision> grid;
-  for (int a = 0; a < options.n1; ++a)
-    for (int b = 0; b < options.n2; ++b) {
-      const double v0 = at(bounds[0], a, options.n1);
-      const double v1 = at(bounds[1], b, options.n2);
-      grid.push_back(i0 == 0 ? Decision{v0, v1} : Decision{v1, v0});
-    }
-  std::vector<sim::ControllerConfig> controllers;
-  controllers.reserve(grid.size());
-  for (const Decision& x : grid) controllers.push_back(problem.controller_with(x));
-  // A block at a time (each still one parallel batch, large enough to keep every core busy),
-  // so that a long landscape shows its progress; results are placed by index as before.
-  std::vector<CandidateOutcome> outcomes;
-  outcomes.reserve(controllers.size());
-  const std::size_t block =
-      std::max<std::size_t>(64, 16 * static_cast<std::size_t>(evaluator.concurrency()));
-  for (std::size_t begin = 0; begin < controllers.size(); begin += block) {
-    const std::size_t n = std::min(block, controllers.size() - begin);
-    std::vector<CandidateOutcome> part = problem.evaluate(
-        std::span<const sim::ControllerConfig>(controllers.data() + begin, n), evaluator);
-    for (CandidateOutcome& c : part) outcomes.push_back(std::move(c));
-    if (options.progress)
-      options.progress(static_cast<std::int64_t>(begin + n),
-                       static_cast<std::int64_t>(controllers.size()));
-  }
-
-  r.params = params;
-  r.simulations = static_cast<std::int64_t>(controllers.size() * problem.scenarios());
-  r.best_objective = std::numeric_limits<double>::infinity();
-  double worst_objective = 0.0;
-  std::string csv = params[0] + "," + params[1] + ",objective,fitness,diverged\n";
-  char buf[160];
-  for (std::size_t k = 0; k < grid.size(); ++k) {
-    const Evaluation& e = outcomes[k].evaluation;
-    const double p0 = grid[k][i0], p1 = grid[k][1 - i0];
-    std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g,%.9g,%d\n", p0, p1,
-                  std::isfinite(e.objective) ? e.objective : NAN, e.fitness, e.diverged ? 1 : 0);
-    csv += buf;
-    if ((k + 1) % static_cast<std::size_t>(options.n2) == 0) csv += "\n";  // gnuplot grid rows
-    if (e.objective < r.best_objective) {
-      r.best_objective = e.objective;
-      r.best = {p0, p1};
-    }
-    if (std::isfinite(e.objective)) worst_objective = std::max(worst_objective, e.objective);
-  }
-  fs::create_directories(out_dir);
-  r.csv = out_dir / "landscape.csv";
-  write_file_atomic(r.csv, csv);
-
+LandscapeFigure draw_landscape(const Job& job, const Landscape& l, const fs::path& out_dir,
+                               const LandscapeFigureOptions& options) {
+  LandscapeFigure r;
   r.figure = out_dir / (std::string("landscape") + plot::extension(options.format));
+  const std::vector<std::string>& params = l.params;
+  const std::vector<ParameterBounds>& bounds = l.bounds;
   // A log-scale parameter is drawn against log10 of its value, where the grid is even (gnuplot
   // draws an image on a log axis as if the axis were linear).
   const auto coord = [&](int k, const std::string& column) {
@@ -183,11 +89,7 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   // landscape whose objective spans 0.2 % is then as readable as one that spans decades. The
   // best point itself (excess 0) takes the colour of a tenth of the smallest positive excess.
   const std::string metric = std::string(job.objective.metric->name);
-  double least_excess = std::numeric_limits<double>::infinity();
-  for (const CandidateOutcome& o : outcomes) {
-    const double x = o.evaluation.objective / r.best_objective - 1;
-    if (std::isfinite(x) && x > 0) least_excess = std::min(least_excess, x);
-  }
+  const double least_excess = l.least_excess;
   // Values within the run's noise floor of the lowest are not told apart: they share the
   // colour of the floor. Without a noise floor, the lowest point takes the colour of a tenth of
   // the smallest positive excess.
@@ -195,23 +97,23 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   const double floor_excess = have_noise                    ? options.noise_floor
                               : std::isfinite(least_excess) ? least_excess / 10
                                                             : 1e-12;
-  const double most_excess = std::max(worst_objective / r.best_objective - 1, 10 * floor_excess);
-  const std::string best_text = detail::format_number(r.best_objective, "%.17g");
+  const double most_excess = std::max(l.worst_objective / l.best_objective - 1, 10 * floor_excess);
+  const std::string best_text = detail::format_number(l.best_objective, "%.17g");
   const std::string excess = "(($3/" + best_text + " - 1) > " +
                              detail::format_number(floor_excess, "%.17g") + " ? ($3/" + best_text +
                              " - 1) : " + detail::format_number(floor_excess, "%.17g") + ")";
   std::string fixed_text;
-  for (const auto& [name, value] : r.fixed)
+  for (const auto& [name, value] : l.fixed)
     fixed_text +=
         (fixed_text.empty() ? "" : ", ") + name + " = " + detail::format_number(value, "%.5g");
   const std::string title =
-      objective_label(job_in) + " of " + job.name + " over " + params[0] + " and " + params[1] +
-      "\nlowest on the grid " + detail::format_number(r.best_objective, "%.7g") + " " +
+      objective_label(job) + " of " + job.name + " over " + params[0] + " and " + params[1] +
+      "\nlowest on the grid " + detail::format_number(l.best_objective, "%.7g") + " " +
       std::string(job.objective.metric->unit) + " at " + params[0] + " = " +
-      detail::format_number(r.best[0], "%.5g") + ", " + params[1] + " = " +
-      detail::format_number(r.best[1], "%.5g") +
+      detail::format_number(l.best[0], "%.5g") + ", " + params[1] + " = " +
+      detail::format_number(l.best[1], "%.5g") +
       (fixed_text.empty() ? std::string()
-                          : "\n" + fixed_text + " held fixed (" + r.fixed_source + ")");
+                          : "\n" + fixed_text + " held fixed (" + l.fixed_source + ")");
   std::ostringstream g;
   g << plot::styles() << plot::terminal(options.format, 1000, 800) << "set output "
     << plot::gp(r.figure.filename().string()) << "\nset title " << double_quoted(title)
@@ -224,8 +126,8 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
                 (have_noise ? "; within the noise floor: one colour)" : ")"))
     << " noenhanced offset -3,0\n"
     << plot::palette() << "set xlabel " << plot::gp(label(0)) << " noenhanced\nset ylabel "
-    << plot::gp(label(1)) << " noenhanced\nset xrange [" << range(0, options.n1)
-    << "]\nset yrange [" << range(1, options.n2)
+    << plot::gp(label(1)) << " noenhanced\nset xrange [" << range(0, l.n1)
+    << "]\nset yrange [" << range(1, l.n2)
     << "]\nset rmargin 24\nset key outside top center horizontal\n"
     << "plot 'landscape.csv' skip 1 using " << coord(0, "1") << ":" << coord(1, "2") << ":"
     << excess << " with image notitle";
@@ -262,11 +164,12 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
                    : NAN;
       };
       bool on = true;
-      for (const auto& [name, value] : r.fixed) {
+      for (const auto& [name, value] : l.fixed) {
         const int k = col(name);
         const double v = k <= static_cast<int>(cols.size()) ? cell(k) : NAN;
         on = on && std::abs(v - value) <= 1e-9 * std::max(1.0, std::abs(value));
       }
+      char buf[160];
       std::snprintf(buf, sizeof buf, "%.17g,%.17g,%d\n", cell(c0), cell(c1), on ? 1 : 0);
       path += buf;
       ++r.path_points;
@@ -288,7 +191,7 @@ LandscapeResult compute_landscape(const Job& job_in, const fs::path& out_dir,
   }
   g << ", \\\n     '-' using 1:2 with points pt 6 ps 3 lw 3 lc rgb 'black' title 'best grid "
        "point'\n"
-    << axis_end(0, r.best[0]) << "," << axis_end(1, r.best[1]) << "\ne\n";
+    << axis_end(0, l.best[0]) << "," << axis_end(1, l.best[1]) << "\ne\n";
   write_file_atomic(out_dir / "landscape.gp", g.str());
   run_gnuplot(out_dir, "landscape.gp");
   return r;

@@ -6,7 +6,7 @@
 
 #include "ftc/tune/io/files.hpp"
 #include "report/figures.hpp"
-#include "report/front.hpp"
+#include "report/front_figures.hpp"
 #include "report/html.hpp"
 
 namespace ftc::tune {

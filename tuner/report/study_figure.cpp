@@ -1,4 +1,4 @@
-#include "ftc/tune/report/study.hpp"
+#include "ftc/tune/report/study_figure.hpp"
 
 #include <algorithm>
 #include <cmath>

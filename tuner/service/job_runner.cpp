@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ftc/tune/job/job.hpp"
-#include "ftc/tune/run/api.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
@@ -23,7 +23,7 @@ std::string megabytes(std::uint64_t bytes) {
   return buf;
 }
 
-// The job store as a run's storage (run/api.hpp): the run API's run_job() tunes the job as
+// The job store as a run's storage (api/api.hpp): the run API's run_job() tunes the job as
 // `ftctune run` does and hands its checkpoints and files here. A checkpoint is the optimiser's
 // state with only the iteration's new trials (record_progress, O(trials) in all), refused past
 // the job's byte limit (which stops the run); the files are kept for the runner, which stores

@@ -18,10 +18,11 @@
 #include "ftc/tune/evaluators/batch_evaluator.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/landscape.hpp"
+#include "ftc/tune/run/landscape.hpp"
 #include "ftc/tune/report/report.hpp"
 #include "ftc/tune/run/checkpoint.hpp"
 #include "ftc/tune/run/evaluate.hpp"
-#include "ftc/tune/run/run_directory.hpp"
+#include "ftc/tune/api/run_directory.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::tune {
@@ -249,6 +250,28 @@ std::filesystem::path evaluation_dir(const Job& job, const RunLog& log = {});
 EvaluateJobResult evaluate_job(const Job& job, const EvaluateJobOptions& options);
 
 // ---- landscape -------------------------------------------------------------------------------
+
+// The grid (ftc/tune/run/landscape.hpp) and its figure (ftc/tune/report/landscape.hpp).
+struct LandscapeOptions : LandscapeGrid, LandscapeFigureOptions {};
+
+struct LandscapeResult {
+  std::filesystem::path csv, figure;
+  std::vector<std::string> params;
+  std::int64_t simulations = 0;
+  double best_objective = 0.0;
+  std::vector<double> best;  // grid point with the lowest objective
+  // The unplotted tuned parameters and the values they were held at.
+  std::vector<std::pair<std::string, double>> fixed;
+  std::string fixed_source;
+  // History rows drawn, and those of them that lie on the map (their unplotted parameters at
+  // the fixed values); the others are drawn projected.
+  int path_points = 0, path_on_map = 0;
+};
+
+// Evaluates the job's objective on the grid (evaluate_landscape), writes
+// `out_dir`/landscape.csv and draws the figure beside it (draw_landscape).
+LandscapeResult compute_landscape(const Job& job, const std::filesystem::path& out_dir,
+                                  const LandscapeOptions& options, BatchEvaluator& evaluator);
 
 struct LandscapeJobOptions {
   int n1 = 41, n2 = 41;             // grid points per parameter

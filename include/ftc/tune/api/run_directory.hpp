@@ -1,5 +1,5 @@
 #pragma once
-// The output directory of a run (`ftctune run`, and the run API in run/api.hpp): where a run
+// The output directory of a run (`ftctune run`, and the run API in api/api.hpp): where a run
 // writes by default, the lock that keeps two runs out of one directory, the staging directory its
 // files are written into first, and the move that puts them in place of an earlier run (undone
 // on failure). Also the latest run of a job, which evaluate, landscape and report go beside.
