@@ -691,10 +691,11 @@ TEST(JobLoader, GoalMetricsAndTheirChecksComeFromTheMetricsRecord) {
     soft.erase("at_most");
     soft["minimize"] = true;
     if (f.objective) {
-      EXPECT_EQ(tune::parse_job(with_goals({soft}), name).objective.metric, &f) << name;
+      EXPECT_EQ(tune::parse_job(with_goals(json::array({soft})), name).objective.metric, &f)
+          << name;
     } else {
       EXPECT_TRUE(
-          has_error(with_goals({soft}), "/goals/0/metric",
+          has_error(with_goals(json::array({soft})), "/goals/0/metric",
                     "a single soft goal is the search's objective: ise, iae or itae (got " + name))
           << name;
     }
