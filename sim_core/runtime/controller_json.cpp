@@ -14,15 +14,15 @@ using sim::ControllerType;
 
 namespace {
 
-std::string field_doc(const ControllerField& f) {
+std::string field_doc(const ControllerField& f, ControllerType t) {
   std::string d = f.description;
-  if (*f.unit) d += " (" + std::string(f.unit) + ")";
+  if (*f.unit_for(t)) d += " (" + std::string(f.unit_for(t)) + ")";
   if (*f.rule) d += "; " + std::string(f.rule);
   return d;
 }
 
 // One table field of a controller: a number, or an integer held in a double (p, q, nodes).
-schema::Object<ControllerConfig>::Field table_field(const ControllerField& f) {
+schema::Object<ControllerConfig>::Field table_field(const ControllerField& f, ControllerType t) {
   const ControllerConfig dflt;
   return {f.name, false,
           [&f](const json& v, const std::string& path, ControllerConfig& c, schema::Errors& e) {
@@ -45,8 +45,9 @@ schema::Object<ControllerConfig>::Field table_field(const ControllerField& f) {
             else
               o[f.name] = v;
           },
-          [&f, dflt] {
-            json s = {{"type", f.integer ? "integer" : "number"}, {"description", field_doc(f)}};
+          [&f, t, dflt] {
+            json s = {{"type", f.integer ? "integer" : "number"},
+                      {"description", field_doc(f, t)}};
             schema::annotate(f.range, s);
             const double d = dflt.*f.member;
             if (std::isfinite(d)) s["default"] = d;
@@ -82,7 +83,7 @@ std::shared_ptr<const schema::Variant<ControllerConfig>> make_shape() {
     const ControllerType t = info.type;
     auto o = std::make_shared<schema::Object<ControllerConfig>>(case_description(info));
     for (const ControllerField& f : sim::controller_fields())
-      if (f.applies_to(t)) o->field(table_field(f));
+      if (f.applies_to(t)) o->field(table_field(f, t));
     if (info.adaptive)
       o->numbers("centre_range", &ControllerConfig::centre_range, 2, schema::Range::any(),
                  "[lower, upper] of the node centres on the diagonal");

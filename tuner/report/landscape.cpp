@@ -33,25 +33,10 @@ std::string double_quoted(const std::string& text) {
   return s + "\"";
 }
 
-// The unit of a tunable controller field, as the controllers' headers give them (laws.hpp):
-// X1 in rad, X2 in rad/s, the surfaces sF and sPI in rad/s² (NFTSMC's s in rad), K in rad/s³.
-// The plants' states are angles in rad for the spacecraft, the arm and the hexarotor alike.
-// Gains that multiply a fractional power carry its exponent.
+// The unit of a tunable controller field: the controller table's (controller_config.hpp).
 std::string parameter_unit(const std::string& name, sim::ControllerType type) {
-  if (name == "Kp" || name == "alpha" || name == "alpha1" || name == "alpha2")
-    return "dimensionless";
-  if (name == "Ki") return "1/s";
-  if (name == "switching_gain") return type == sim::ControllerType::nftsmc ? "rad/s²" : "rad/s³";
-  if (name == "zeta" || name == "ka0") return "rad/s³";
-  if (name == "theta") return type == sim::ControllerType::nftsmc ? "1/rad" : "s²/rad";
-  if (name == "c1") return "rad^(1−α1)/s²";
-  if (name == "c2") return "rad^(1−α2)·s^(α2−2)";
-  if (name == "sigma1") return "rad^(1−α)";
-  if (name == "sigma2") return "rad^(1−p/q)·s^(p/q)";
-  if (name == "lambda") return "s²";
-  if (name == "weight_rate") return "1/s²";
-  if (name == "width") return "rad and rad/s, as the state";
-  return "";
+  const sim::ControllerField* f = sim::find_controller_field(name);
+  return f ? f->unit_for(type) : "";
 }
 
 }  // namespace

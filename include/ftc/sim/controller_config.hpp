@@ -64,11 +64,19 @@ struct ControllerField {
   bool integer;        // integer-valued: validated as such and not tunable
   bool optional;       // may be absent (alpha1)
   Range range;         // valid values; p, q and alpha have further rules (rule below)
+  // The unit of the value for a state in rad and time in s (laws.hpp derives them); a gain of a
+  // fractional power carries its exponent; "dimensionless", or "" for a count (p, q, nodes).
   const char* unit;
   const char* description;
   const char* rule = "";  // a condition beyond the range, in words ("" = none)
+  // NFTSMC's unit where its surface gives the field another one (its s is in rad, not rad/s²).
+  const char* nftsmc_unit = nullptr;
 
   bool applies_to(ControllerType t) const { return (types >> static_cast<int>(t)) & 1U; }
+  // The one unit table: validation's descriptions, the schemas, the landscape's axes.
+  const char* unit_for(ControllerType t) const {
+    return t == ControllerType::nftsmc && nftsmc_unit ? nftsmc_unit : unit;
+  }
   bool tunable() const { return !integer; }
 };
 
