@@ -18,6 +18,7 @@
 #include "eta.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/run/documents.hpp"
 #include "service/httplib.hpp"
 
 namespace ftc::cli {
@@ -252,79 +253,14 @@ std::string resolve_id(Api& api, const std::string& id) {
 
 // What `ftctune run` prints at its end, for a job the service ran: its warnings, the tuned
 // values, the objective against the job's own controller's, the noise floor and the cost.
-void print_summary(Api& api, const std::string& id, const json& job_file) {
+void print_summary(Api& api, const std::string& id) {
   const json gains = json::parse(api.get("/v1/jobs/" + id + "/gains"));
   const json comparison = json::parse(api.get("/v1/jobs/" + id + "/comparison"));
   const json run = json::parse(api.get("/v1/jobs/" + id + "/files/run.json"));
   for (const json& w : gains.value("warnings", json::array()))
     std::fprintf(stderr, "warning: %s\n", w.get<std::string>().c_str());
-  std::string tuned = "tuned", values;
-  for (const json& c : comparison["controllers"])
-    if (c.value("role", "") == "tuned") tuned = c.value("label", tuned);
-  if (tuned.rfind("optimal ", 0) == 0) tuned = "tuned " + tuned.substr(8);
-  char buf[160];
-  // In the job's order, as `run` prints them.
-  const json parameters = job_file.is_object()
-                              ? job_file.value("/tuning/parameters"_json_pointer, json::array())
-                              : json::array();
-  for (const json& p : parameters) {
-    if (!p.is_object()) continue;
-    const std::string n = p.value("name", "");
-    if (!gains["tuned"].contains(n)) continue;
-    std::snprintf(buf, sizeof buf, "%s%s = %.5g", values.empty() ? "" : ", ", n.c_str(),
-                  gains["tuned"][n].get<double>());
-    values += buf;
-  }
-  std::printf("%s: %s\n", tuned.c_str(), values.c_str());
-  const auto number = [](const json& v) {
-    return v.is_number() ? v.get<double>() : std::numeric_limits<double>::infinity();
-  };
-  const double best = number(gains["objective"]["value"]);
-  const double base = number(gains["baseline"]["objective"]);
-  std::printf("  %s = %.6e (job's own controller: %.6e",
-              // The label run prints (metric, window, aggregate: "CVaR0.9 of ISE[...] over N
-              // scenarios"), which comparison.json carries; the bare metric for an older store.
-              comparison["objective"].value("label", gains["objective"].value("metric", "objective"))
-                  .c_str(),
-              best, base);
-  if (std::isfinite(best) && std::isfinite(base) && base > 0)
-    std::printf(", %.3g %% %s", 100 * std::abs(base - best) / base,
-                best <= base ? "lower" : "higher");
-  std::printf("); fitness J = %.6g\n", number(gains["fitness"]));
-  if (gains["objective"].contains("scenarios")) {
-    const json& sc = gains["objective"]["scenarios"];
-    std::printf("  over %lld scenarios: %lld listed, %lld ensemble members; %lld unrecoverable%s\n",
-                sc.value("listed", 0LL) + sc.value("members", 0LL), sc.value("listed", 0LL),
-                sc.value("members", 0LL), sc.value("unrecoverable", 0LL),
-                sc.value("left_out", 0LL) > 0 ? ", left out of the objective" : "");
-  }
-  if (comparison.contains("noise_floor"))
-    std::printf("  %s\n", comparison["noise_floor"].get<std::string>().c_str());
-  const int threads = run.value("threads", 0);
-  std::printf("  %lld simulations on %d thread%s in %.2f s on the server\n",
-              run.value("simulations", 0LL), threads, threads == 1 ? "" : "s",
-              run.value("wall_seconds", 0.0));
+  std::fputs(tune::run_summary(gains, comparison, run, " on the server").c_str(), stdout);
 }
-
-// "ETA 12.3 s" from the evaluations done since the client first saw the job's progress.
-struct Eta {
-  std::chrono::steady_clock::time_point t0;
-  long long e0 = -1;
-  std::string text(long long evaluations, long long total) {
-    const auto now = std::chrono::steady_clock::now();
-    if (e0 < 0 || evaluations < e0) {
-      t0 = now;
-      e0 = evaluations;
-    }
-    const double elapsed = std::chrono::duration<double>(now - t0).count();
-    if (evaluations <= e0 || elapsed <= 0) return "ETA -";
-    char buf[48];
-    std::snprintf(buf, sizeof buf, "ETA %.1f s",
-                  elapsed * static_cast<double>(total - evaluations) /
-                      static_cast<double>(evaluations - e0));
-    return buf;
-  }
-};
 
 }  // namespace
 
@@ -368,24 +304,20 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
           std::fflush(stdout);
           if (!*wait) return 0;
           int last_iteration = -2;
-          Eta eta;
           while (true) {
             const json j = json::parse(api.get("/v1/jobs/" + id));
             const std::string status = j["status"];
             const int it =
                 j["progress"]["iteration"].is_null() ? -1 : j["progress"]["iteration"].get<int>();
-            const std::string remaining =
-                eta.text(j["progress"]["evaluations"].get<long long>(),
-                         j["progress"]["total_evaluations"].get<long long>());
             if (it != last_iteration && !g.quiet) {
-              std::fprintf(stderr, "%s%s\n", describe(j).c_str(),
-                           status == "running" ? ("  " + remaining).c_str() : "");
+              // describe() carries the running job's ETA (eta.hpp), as `status` shows it.
+              std::fprintf(stderr, "%s\n", describe(j).c_str());
               last_iteration = it;
             }
             if (status == "succeeded") {
               const int rc = fetch_gains(api, id, *out, j["name"], g.quiet, *force);
               if (rc == 0 && !g.quiet)
-                print_summary(api, id, json::parse(*text, nullptr, false));
+                print_summary(api, id);
               return rc;
             }
             if (status == "failed" || status == "cancelled") {

@@ -104,28 +104,12 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   bar.clear();
   const tune::TuningOutcome& r = result.outcome;
   const std::filesystem::path& out = result.out;
-  const double wall = result.wall_seconds;
   if (!quiet) {
-    std::printf("tuned %s: %s\n", tune::display_name(job.controller.type).c_str(),
-                tune::parameters_text(names, r.optimization.best).c_str());
-    // The objective with seven digits and the change in %: J to six digits can read the same
-    // while the gains and the objective move.
-    const double best = r.best().outcome.evaluation.objective;
-    const double base = r.baseline().outcome.evaluation.objective;
-    std::printf("  %s = %.6e (job's own controller: %.6e", tune::objective_label(job).c_str(), best,
-                base);
-    if (std::isfinite(best) && std::isfinite(base) && base > 0)
-      std::printf(", %.3g %% %s", 100 * std::abs(base - best) / base,
-                  best <= base ? "lower" : "higher");
-    std::printf("); fitness J = %.6g\n", r.optimization.best_fitness);
-    if (r.scenarios > r.listed_scenarios)
-      std::printf("  over %zu scenarios: %zu listed, %zu ensemble members; %d unrecoverable%s\n",
-                  r.scenarios, r.listed_scenarios, r.scenarios - r.listed_scenarios,
-                  r.unrecoverable, r.left_out > 0 ? ", left out of the objective" : "");
-    if (const std::string nf = tune::noise_floor_sentence(r); !nf.empty())
-      std::printf("  %s\n", nf.c_str());
-    std::printf("  %lld simulations on %d thread%s in %.2f s\n",
-                static_cast<long long>(r.simulations), r.threads, r.threads == 1 ? "" : "s", wall);
+    // The documents' summary, as `submit --wait` prints a run of the service.
+    std::fputs(tune::run_summary(tune::gains_document(r), tune::comparison_document(r),
+                                 nlohmann::json::parse(result.run_json))
+                   .c_str(),
+               stdout);
     std::printf(
         "  wrote %s/{gains.json, history.csv, trials.csv, comparison.json, comparison.md, "
         "job.json, run.json%s} and trajectories/\n",

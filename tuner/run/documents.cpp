@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "ftc/runtime/controller_json.hpp"
+#include "ftc/sim/controllers.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/ensemble.hpp"
@@ -408,6 +409,63 @@ std::map<std::string, std::string> output_files(const TuningOutcome& r) {
     files["front.csv"] = front_csv(r.job, *r.front);
   }
   return files;
+}
+
+std::string run_summary(const json& gains, const json& comparison, const json& run,
+                        const std::string& where) {
+  std::string out;
+  char buf[256];
+  const auto number = [](const json& v) {  // null: a diverged value (json_number's inf)
+    return v.is_number() ? v.get<double>() : std::numeric_limits<double>::infinity();
+  };
+  // A job lists its tuned parameters in the controller table's order (parse_job).
+  std::string values;
+  const json& tuned = gains.at("tuned");
+  for (const sim::ControllerField& f : sim::controller_fields())
+    if (tuned.contains(f.name)) {
+      std::snprintf(buf, sizeof buf, "%s%s = %.5g", values.empty() ? "" : ", ", f.name,
+                    number(tuned[f.name]));
+      values += buf;
+    }
+  const auto type = sim::controller_type_from_string(gains["controller"].value("type", ""));
+  out += "tuned " + (type ? display_name(*type) : std::string("controller")) + ": " + values +
+         "\n";
+  // The objective with seven digits and the change in %: J to six digits can read the same
+  // while the gains and the objective move.
+  const double best = number(gains["objective"]["value"]);
+  const double base = number(gains["baseline"]["objective"]);
+  const std::string label =
+      comparison.contains("objective")
+          ? comparison["objective"].value("label", std::string("objective"))
+          : gains["objective"].value("metric", std::string("objective"));
+  std::snprintf(buf, sizeof buf, "  %s = %.6e (job's own controller: %.6e", label.c_str(), best,
+                base);
+  out += buf;
+  if (std::isfinite(best) && std::isfinite(base) && base > 0) {
+    std::snprintf(buf, sizeof buf, ", %.3g %% %s", 100 * std::abs(base - best) / base,
+                  best <= base ? "lower" : "higher");
+    out += buf;
+  }
+  std::snprintf(buf, sizeof buf, "); fitness J = %.6g\n", number(gains["fitness"]));
+  out += buf;
+  if (gains["objective"].contains("scenarios")) {
+    const json& sc = gains["objective"]["scenarios"];
+    std::snprintf(buf, sizeof buf,
+                  "  over %lld scenarios: %lld listed, %lld ensemble members; %lld "
+                  "unrecoverable%s\n",
+                  sc.value("listed", 0LL) + sc.value("members", 0LL), sc.value("listed", 0LL),
+                  sc.value("members", 0LL), sc.value("unrecoverable", 0LL),
+                  sc.value("left_out", 0LL) > 0 ? ", left out of the objective" : "");
+    out += buf;
+  }
+  if (comparison.contains("noise_floor"))
+    out += "  " + comparison["noise_floor"].get<std::string>() + "\n";
+  const int threads = run.value("threads", 0);
+  std::snprintf(buf, sizeof buf, "  %lld simulations on %d thread%s in %.2f s%s\n",
+                run.value("simulations", 0LL), threads, threads == 1 ? "" : "s",
+                run.value("wall_seconds", 0.0), where.c_str());
+  out += buf;
+  return out;
 }
 
 json run_metadata(const TuningOutcome& r, double wall_seconds) {

@@ -70,6 +70,12 @@ std::map<std::string, std::string> output_files(const TuningOutcome& r);
 // The run.json fields both `ftctune run` and the service write: threads, wall seconds,
 // simulations, peak memory of the process, seed, generator. Callers add where and when.
 nlohmann::json run_metadata(const TuningOutcome& r, double wall_seconds);
+// What `ftctune run` prints at the end of a run, from its documents (gains.json,
+// comparison.json, run.json): the tuned values in the job's order (the controller table's), the
+// objective against the job's own controller's, the scenarios, the noise floor and the cost.
+// `submit --wait` prints the same for a run of the service (`where`: " on the server").
+std::string run_summary(const nlohmann::json& gains, const nlohmann::json& comparison,
+                        const nlohmann::json& run, const std::string& where = "");
 
 // Writes output_files() into `dir`, each atomically, gains.json last (so a directory with a
 // gains.json holds the rest of its run); returns their names in the order written.
