@@ -28,6 +28,7 @@
 #include "ftc/runtime/controller_json.hpp"
 #include "ftc/runtime/gains.hpp"
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/controllers.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/sim/plants.hpp"
@@ -414,8 +415,8 @@ sim::ControllerConfig chosen_controller(const Job& j, const py::object& gains,
     const auto t = sim::controller_type_from_string(type);
     if (!t)
       throw InputError("controller", "",
-                       "unknown controller type \"" + type +
-                           "\" (known: nftsmc, fosmc, pi_fosmc, adaptive_neural_pi_fosmc)");
+                       "unknown controller type \"" + type + "\" (known: " +
+                           std::string(sim::controller_type_list()) + ")");
     base = sim::ControllerConfig::table1(*t);
   }
   if (set.is_none()) return base;
@@ -443,39 +444,23 @@ py::dict simulate(const Job& j, const py::object& gains, const py::object& contr
                   const py::object& set, const py::object& record_every) {
   std::string warning;
   const sim::ControllerConfig c = chosen_controller(j, gains, controller, set, warning);
-  const double interval = record_every.is_none() ? 0.01 : record_every.cast<double>();
-  if (!(interval > 0)) throw InputError("record_every", "", "must be > 0 seconds");
-  const tune::TuningProblem problem(j.job);
-  std::vector<sim::SimulationResult> results(j.job.scenarios.size());
-  without_gil([&] {
-    for (std::size_t i = 0; i < j.job.scenarios.size(); ++i) {
-      const auto every =
-          std::max<std::int64_t>(1, std::llround(interval / j.job.scenarios[i].sample_time));
-      results[i] = problem.simulate(c, i, every);
-      check_signals();
-    }
-    return 0;
-  });
-  json scenarios = json::array();
-  std::vector<sim::Metrics> metrics;
+  tune::SimulateJobOptions o;
+  o.record_every = record_every.is_none() ? 0.01 : record_every.cast<double>();
+  o.write = false;
+  o.after_scenario = check_signals;
+  // The command's own call: the same metrics.json document and trajectories, not written.
+  const tune::SimulateJobResult r =
+      without_gil([&] { return tune::simulate_job(j.job, c, o); });
   py::list trajectories;
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    json m = tune::metrics_json(results[i].metrics);
-    m["name"] = j.job.scenarios[i].name;
-    scenarios.push_back(m);
-    metrics.push_back(results[i].metrics);
-    trajectories.append(tune::trajectory_csv(results[i].trajectory));
-  }
-  const tune::Evaluation e = problem.score(std::move(metrics));
-  json doc;
-  doc["controller"] = tune::to_json(c);
-  doc["objective"] = tune::json_number(e.objective);
-  doc["fitness"] = e.fitness;
-  doc["scenarios"] = scenarios;
+  for (const auto& t : r.trajectories) trajectories.append(t.second);
+  const json& doc = r.document;
   py::dict d;
   d["document"] = doc.dump();
   d["trajectories"] = trajectories;
   d["warning"] = warning;
+  py::list notes;
+  for (const std::string& w : r.warnings) notes.append(w);
+  d["notes"] = notes;
   return d;
 }
 

@@ -44,6 +44,23 @@ TEST(CliJson, ValidatePrintsTheCostAsOneDocumentAndReadsStandardInput) {
   EXPECT_EQ(j["ensemble_members"], 6);
   EXPECT_EQ(j["scenarios"], 7);
   EXPECT_GT(j["steps_per_evaluation"].get<std::int64_t>(), 0);
+  EXPECT_EQ(j["unrecoverable_scenarios"], json::array());
+
+  // A listed scenario no gains can control is valid, and named: a warning at its path, and in
+  // the document.
+  json stuck = short_ensemble_job();
+  stuck["scenarios"][0]["faults"] = json::parse(
+      R"([{"actuator": 1, "type": "stuck", "onset": 3, "value": 0},
+          {"actuator": 2, "type": "stuck", "onset": 3, "value": 0}])");
+  tune::write_file_atomic(dir / "stuck.json", stuck.dump());
+  const CliResult w = run_cli("validate '" + (dir / "stuck.json").string() + "'", dir);
+  EXPECT_EQ(w.exit_code, 0) << w.err;
+  const std::string name = stuck["scenarios"][0]["name"];
+  EXPECT_NE(w.err.find("warning: /scenarios/0: scenario \"" + name + "\" is unrecoverable"),
+            std::string::npos)
+      << w.err;
+  const CliResult wj = run_cli("validate --json '" + (dir / "stuck.json").string() + "'", dir);
+  EXPECT_EQ(document(wj)["unrecoverable_scenarios"], json::array({name}));
 
   // The same job from standard input: the same sentence, naming "(stdin)".
   const CliResult plain = run_cli("validate '" + file.string() + "'", dir);

@@ -240,6 +240,18 @@ TEST(TuningRun, RefusesAJobWhoseEveryScenarioIsUnrecoverable) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.errors().at(0).path, "/ensemble/unrecoverable");
   }
+  // Without an ensemble there is no policy to point at: the refusal names the scenario.
+  j.erase("ensemble");
+  try {
+    tune::tune(tune::parse_job(j, "x"), serial);
+    FAIL() << "tuned a job with nothing to improve";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.errors().at(0).path, "/scenarios/0");
+    const std::string name = j["scenarios"][0]["name"];
+    EXPECT_NE(e.errors().at(0).message.find("the only scenario (\"" + name + "\") is unrecoverable"),
+              std::string::npos)
+        << e.errors().at(0).message;
+  }
 }
 
 TEST(TuningRun, WarnsOfTunedValuesAtABound) {

@@ -12,7 +12,7 @@
 #include "ftc/sim/controllers.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/metrics_record.hpp"
-#include "ftc/tune/io/files.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
@@ -41,7 +41,6 @@ std::string fmt(double v, const char* f = "%.4g") {
 }
 
 int run_simulate(const SimulateOptions& o, const Globals& g) {
-  namespace fs = std::filesystem;
   const tune::Job job = tune::load_job(o.job);
   sim::ControllerConfig controller;
   if (!o.gains.empty()) {
@@ -60,46 +59,19 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
   } else {
     controller = select_controller(job, o.controller, o.sets);
   }
-  if (!(o.record_interval > 0)) throw InputError("--record-every", "", "must be > 0 seconds");
-  const tune::TuningProblem problem(job);
-  // A folder of its own: beside a run's files, never over them.
-  const fs::path out = o.out.empty() ? default_out_dir(job) / "simulate" : fs::path(o.out);
-
-  json scenarios = json::array();
-  json files = json::array();
-  std::vector<sim::Metrics> metrics;
-  for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
-    const sim::Scenario& s = job.scenarios[i];
-    const auto every = std::max<std::int64_t>(1, std::llround(o.record_interval / s.sample_time));
-    sim::SimulationResult r = problem.simulate(controller, i, every);
-    json m = tune::metrics_json(r.metrics);
-    m["name"] = s.name;
-    scenarios.push_back(m);
-    metrics.push_back(r.metrics);
-    const std::string file = i == 0 ? "trajectory.csv" : "trajectory-" + s.name + ".csv";
-    tune::write_file_atomic(out / file, tune::trajectory_csv(r.trajectory));
-    files.push_back(file);
-    if (r.metrics.diverged)
-      spdlog::warn("scenario {} diverged at t = {:.3f} s", s.name, r.metrics.diverged_at);
-  }
-
-  const tune::Evaluation e = problem.score(std::move(metrics));
-  const double objective = e.objective, fitness = e.fitness;
-  json doc;
-  doc["generator"] = {{"name", kToolName}, {"version", kVersion}};
-  doc["job"] = job.name;
-  doc["plant"] = tune::to_json(job.plant);
-  doc["controller"] = tune::to_json(controller);
-  doc["objective_definition"] = tune::to_json(job.objective);
-  doc["objective"] = tune::json_number(objective);
-  doc["fitness"] = fitness;
-  doc["scenarios"] = scenarios;
-  tune::write_file_atomic(out / "metrics.json", doc.dump(2) + "\n");
+  tune::SimulateJobOptions so;
+  so.record_every = o.record_interval;
+  so.out = o.out;  // empty: a folder of its own, beside a run's files, never over them
+  const tune::SimulateJobResult r = tune::simulate_job(job, controller, so);
+  for (const std::string& w : r.warnings) spdlog::warn("{}", w);
+  const tune::Evaluation& e = r.evaluation;
   if (o.json_output) {
     // metrics.json's content, with where it and the trajectories went.
-    json printed = doc;
+    json printed = r.document;
     printed["command"] = "simulate";
-    printed["out"] = out.string();
+    printed["out"] = r.out.string();
+    json files = json::array();
+    for (const auto& t : r.trajectories) files.push_back(t.first);
     files.push_back("metrics.json");
     printed["files"] = files;
     printed["objective_label"] = tune::objective_label(job);
@@ -129,11 +101,16 @@ int run_simulate(const SimulateOptions& o, const Globals& g) {
         if (sim::kMetricFields[f].in_tables &&
             sim::kMetricFields[f].scope != sim::MetricScope::fault)
           std::printf(" %12s", fmt(m.field(f)[0]).c_str());
-      std::printf("  %s\n", e.scenarios[i].diverged ? "yes" : "no");
+      std::printf("  %s%s\n", e.scenarios[i].diverged ? "yes" : "no",
+                  r.document["scenarios"][i]["recoverable"].get<bool>() ? "" : "  unrecoverable");
     }
-    std::printf("  objective %s, fitness J = %s\n", fmt(objective, "%.6g").c_str(),
-                fmt(fitness, "%.6g").c_str());
-    std::printf("  wrote %s and trajectory CSV\n", (out / "metrics.json").c_str());
+    if (r.counted > 0)
+      std::printf("  objective %s, fitness J = %s\n", fmt(e.objective, "%.6g").c_str(),
+                  fmt(e.fitness, "%.6g").c_str());
+    else
+      std::printf("  no objective: every scenario is unrecoverable, and the objective leaves "
+                  "those out\n");
+    std::printf("  wrote %s and trajectory CSV\n", (r.out / "metrics.json").c_str());
   }
   return 0;
 }

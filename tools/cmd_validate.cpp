@@ -7,6 +7,7 @@
 
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/plants.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 
 namespace ftc::cli {
@@ -42,6 +43,22 @@ int run_validate(const ValidateCli& o, const Globals& g) {
                                     ? " (" + std::to_string(job.scenarios.size()) + " listed + " +
                                           std::to_string(job.ensemble->count) + " ensemble members)"
                                     : "";
+    // A listed scenario no gains can control once its faults start is valid, but the objective
+    // leaves it out (a run refuses a job of nothing else): say so before anyone runs it.
+    json unrecoverable = json::array();
+    {
+      const std::unique_ptr<sim::AnyPlant> plant = sim::make_plant(job.plant);
+      for (std::size_t i = 0; i < job.scenarios.size(); ++i)
+        if (!plant->recoverable(job.scenarios[i])) {
+          unrecoverable.push_back(job.scenarios[i].name);
+          if (!o.json_output)
+            std::fprintf(stderr,
+                         "ftctune: warning: /scenarios/%zu: scenario \"%s\" is unrecoverable: no "
+                         "gains can control it once its faults start, so the objective leaves it "
+                         "out\n",
+                         i, job.scenarios[i].name.c_str());
+        }
+    }
     if (o.json_output) {
       const json doc = {{"command", "validate"},
                         {"file", name},
@@ -52,6 +69,7 @@ int run_validate(const ValidateCli& o, const Globals& g) {
                         {"scenarios", job.scenario_count()},
                         {"listed_scenarios", job.scenarios.size()},
                         {"ensemble_members", job.ensemble ? job.ensemble->count : 0},
+                        {"unrecoverable_scenarios", unrecoverable},
                         {"steps_per_evaluation", steps},
                         {"steps", static_cast<double>(evals) * static_cast<double>(steps)}};
       std::printf("%s\n", doc.dump(2).c_str());

@@ -202,7 +202,8 @@ def simulate(job, gains=None, controller=None, set=None, record_every=None):
     over the job's (or that type's) controller; record_every: trajectory interval in seconds
     (default 0.01). Returns a dict: "metrics" (a DataFrame, one row per scenario),
     "trajectories" ({scenario: DataFrame}), "objective", "fitness", "controller",
-    "scenarios" (the metrics as metrics.json lists them).
+    "scenarios" (the metrics as metrics.json lists them, with "recoverable" and "counted").
+    "objective" is None when no scenario counts (every one is unrecoverable).
     """
     if gains is not None and not isinstance(gains, (str, os.PathLike)):
         with tempfile.TemporaryDirectory() as d:
@@ -211,6 +212,8 @@ def simulate(job, gains=None, controller=None, set=None, record_every=None):
     out = _core.simulate(native, gains, controller, set, record_every)
     if out["warning"]:
         warnings.warn(out["warning"], stacklevel=2)
+    for note in out["notes"]:  # diverged and unrecoverable scenarios, as the command warns
+        warnings.warn(note, stacklevel=2)
     doc = json.loads(out["document"])
     rows = []
     for s in doc["scenarios"]:
@@ -218,8 +221,10 @@ def simulate(job, gains=None, controller=None, set=None, record_every=None):
                     {k: v for k, v in s.items() if k not in ("name", "window", "segments")})
     frames = {s["name"]: _csv_frame(t) for s, t in zip(doc["scenarios"], out["trajectories"])}
     objective = doc["objective"]
+    if objective is None and any(s["counted"] for s in doc["scenarios"]):
+        objective = float("inf")  # a diverged run; None: no scenario counts (unrecoverable)
     return {"metrics": pd.DataFrame(rows), "trajectories": frames,
-            "objective": float("inf") if objective is None else objective,
+            "objective": objective,
             "fitness": doc["fitness"], "controller": doc["controller"],
             "scenarios": doc["scenarios"]}
 

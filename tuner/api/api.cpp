@@ -18,6 +18,8 @@
 #include "ftc/tune/run/checkpoint.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
+#include "ftc/tune/problem/problem.hpp"
+#include "ftc/version.hpp"
 
 namespace ftc::tune {
 
@@ -443,6 +445,69 @@ LandscapeJobResult landscape_job(const Job& job, const LandscapeJobOptions& o) {
   EvaluatorFor evaluator(o.evaluator, o.threads);
   result.landscape = compute_landscape(job, out, lo, *evaluator.use);
   return result;
+}
+
+// ---- simulate --------------------------------------------------------------------------------
+
+SimulateJobResult simulate_job(const Job& job, const sim::ControllerConfig& controller,
+                               const SimulateJobOptions& o) {
+  if (!(o.record_every > 0)) throw InputError("--record-every", "", "must be > 0 seconds");
+  const TuningProblem problem(job);
+  SimulateJobResult r;
+  r.controller = controller;
+  r.out = o.out.empty() ? default_out_dir(job.name) / "simulate" : o.out;
+  const std::size_t n = job.scenarios.size();
+  r.results.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const sim::Scenario& s = job.scenarios[i];
+    const auto every = std::max<std::int64_t>(1, std::llround(o.record_every / s.sample_time));
+    r.results.push_back(problem.simulate(controller, i, every));
+    if (o.after_scenario) o.after_scenario();
+  }
+  std::vector<sim::Metrics> metrics;
+  json scenarios = json::array();
+  for (std::size_t i = 0; i < n; ++i) {
+    const sim::Scenario& s = job.scenarios[i];
+    const sim::SimulationResult& res = r.results[i];
+    json m = metrics_json(res.metrics);
+    m["name"] = s.name;
+    // An unrecoverable scenario is one no gains can control once its faults start (the
+    // plant's rule): its metrics are what happened, and the objective leaves it out.
+    m["recoverable"] = problem.recoverable(i);
+    m["counted"] = problem.counted(i);
+    scenarios.push_back(std::move(m));
+    metrics.push_back(res.metrics);
+    r.counted += problem.counted(i) ? 1 : 0;
+    r.trajectories.emplace_back(i == 0 ? "trajectory.csv" : "trajectory-" + s.name + ".csv",
+                                trajectory_csv(res.trajectory));
+    if (res.metrics.diverged)
+    {
+      char at[32];
+      std::snprintf(at, sizeof at, "%.3f", res.metrics.diverged_at);
+      r.warnings.push_back("scenario " + s.name + " diverged at t = " + at + " s");
+    }
+    if (!problem.recoverable(i))
+      r.warnings.push_back("scenario " + s.name +
+                           " is unrecoverable: no gains can control it once its faults start, so "
+                           "the objective leaves it out");
+  }
+  r.evaluation = problem.score(std::move(metrics));
+  const bool any = r.counted > 0;
+  json& doc = r.document;
+  doc["generator"] = {{"name", kToolName}, {"version", kVersion}};
+  doc["job"] = job.name;
+  doc["plant"] = to_json(job.plant);
+  doc["controller"] = to_json(controller);
+  doc["objective_definition"] = to_json(job.objective);
+  // With no scenario counted there is no objective (the score's 0 would read as perfect).
+  doc["objective"] = any ? json_number(r.evaluation.objective) : json(nullptr);
+  doc["fitness"] = any ? json(r.evaluation.fitness) : json(nullptr);
+  doc["scenarios"] = std::move(scenarios);
+  if (o.write) {
+    for (const auto& [file, csv] : r.trajectories) write_file_atomic(r.out / file, csv);
+    write_file_atomic(r.out / "metrics.json", doc.dump(2) + "\n");
+  }
+  return r;
 }
 
 }  // namespace ftc::tune

@@ -274,10 +274,22 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   const Job& job = problem.job();
   if (!job.tuning) throw InputError("job " + job.name, "/tuning", "is required to tune");
   // With nothing counted the objective would be 0 for every candidate: any gains would "win".
-  if (problem.scenarios() > 0 && problem.left_out() == static_cast<int>(problem.scenarios()))
-    throw InputError("job " + job.name, "/ensemble/unrecoverable",
-                     "every scenario is unrecoverable, so no gains can improve the objective; "
-                     "give recoverable scenarios or set \"include\" to tune on them anyway");
+  if (problem.scenarios() > 0 && problem.left_out() == static_cast<int>(problem.scenarios())) {
+    if (job.ensemble)
+      throw InputError("job " + job.name, "/ensemble/unrecoverable",
+                       "every scenario is unrecoverable, so no gains can improve the objective; "
+                       "give recoverable scenarios or set \"include\" to tune on them anyway");
+    // Listed scenarios only: name them (the first one's path), and say what would help.
+    std::string names;
+    for (std::size_t i = 0; i < job.scenarios.size() && i < 3; ++i)
+      names += (i ? ", " : "") + ("\"" + job.scenarios[i].name + "\"");
+    if (job.scenarios.size() > 3) names += ", ...";
+    throw InputError("job " + job.name, "/scenarios/0",
+                     std::string(job.scenarios.size() == 1 ? "the only scenario (" : "every scenario (") +
+                         names +
+                         ") is unrecoverable: no gains can control it once its faults start, and "
+                         "the objective leaves such scenarios out; give a recoverable scenario");
+  }
   TuningOutcome r;
   r.job = job;
   r.job_sha256 = canonical_job_sha256(job);

@@ -1,5 +1,5 @@
 #pragma once
-// The run API: what `ftctune run`, `study`, `evaluate` and `landscape` do, as library calls that
+// The run API: what `ftctune run`, `study`, `evaluate`, `landscape` and `simulate` do, as library calls that
 // the command line, the service and the Python module share. Each takes a loaded job and an
 // options struct whose defaults are those of the command line; each chooses the evaluator (all
 // ranks' threads under mpirun, else this machine's threads) unless given one, handles its output
@@ -299,5 +299,36 @@ struct LandscapeJobResult {
 // `ftctune landscape`: the objective on a grid over two tuned parameters, beside the job's
 // latest run (its tuned values and noise floor, its best-so-far path drawn on top).
 LandscapeJobResult landscape_job(const Job& job, const LandscapeJobOptions& options = {});
+
+// ---- simulate --------------------------------------------------------------------------------
+
+struct SimulateJobOptions {
+  double record_every = 0.01;  // seconds between the trajectory's rows (> 0)
+  // Empty: out/<job name>/simulate. The files land there only when `write`.
+  std::filesystem::path out;
+  bool write = true;
+  std::function<void()> after_scenario;  // called between scenarios (Python's signal check)
+};
+
+struct SimulateJobResult {
+  sim::ControllerConfig controller;
+  // Each listed scenario's metrics and trajectory, in the job's order.
+  std::vector<sim::SimulationResult> results;
+  Evaluation evaluation;
+  int counted = 0;  // scenarios the objective counts (unrecoverable ones are left out)
+  // metrics.json: the controller, the objective and fitness (null when no scenario counts), and
+  // per scenario its metrics, whether it is recoverable and whether it counts.
+  nlohmann::json document;
+  // The trajectory files, name -> CSV: trajectory.csv for the first scenario, then
+  // trajectory-<name>.csv.
+  std::vector<std::pair<std::string, std::string>> trajectories;
+  std::filesystem::path out;  // where the files went (when written)
+  std::vector<std::string> warnings;  // diverged and unrecoverable scenarios, for people
+};
+
+// `ftctune simulate`: the controller on every listed scenario of the job, scored by the job's
+// objective; metrics.json and the trajectories into the output directory.
+SimulateJobResult simulate_job(const Job& job, const sim::ControllerConfig& controller,
+                               const SimulateJobOptions& options = {});
 
 }  // namespace ftc::tune
