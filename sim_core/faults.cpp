@@ -75,7 +75,7 @@ std::vector<FieldError> Fault::validate(const std::string& path, int actuators) 
   return errs;
 }
 
-FaultSet::FaultSet(std::vector<Fault> faults, std::optional<double> saturation)
-    : faults_(std::move(faults)), saturation_(saturation) {}
+FaultSet::FaultSet(std::vector<Fault> faults, Saturation saturation)
+    : faults_(std::move(faults)), saturation_(std::move(saturation)) {}
 
 }  // namespace ftc::sim

@@ -58,7 +58,18 @@ std::vector<FieldError> Scenario::validate(const std::string& path, int axes, in
     auto e = faults[i].validate(path + "/faults/" + std::to_string(i), actuators);
     errs.insert(errs.end(), e.begin(), e.end());
   }
-  if (saturation) check(errs, path + "/saturation", kSaturationRange, *saturation);
+  if (saturation.values.size() == 1) {
+    check(errs, path + "/saturation", kSaturationRange, saturation.values[0]);
+  } else if (saturation.per_actuator()) {
+    if (saturation.values.size() != static_cast<std::size_t>(actuators))
+      errs.push_back({path + "/saturation",
+                      "expected one number for every actuator or " + std::to_string(actuators) +
+                          " (one per actuator of the plant's " + std::to_string(actuators) +
+                          "), got " + std::to_string(saturation.values.size())});
+    for (std::size_t j = 0; j < saturation.values.size(); ++j)
+      check(errs, path + "/saturation/" + std::to_string(j), kSaturationRange,
+            saturation.values[j]);
+  }
   if (actuator) {
     const std::string a = path + "/actuator";
     if (!actuator->time_constant && !actuator->rate_limit)

@@ -191,3 +191,50 @@ TEST(ClosedLoop, StepIsOneSampleOfTheSampledDataLoop) {
   EXPECT_EQ(r.metrics.control_tv, 0.0);
   EXPECT_EQ(r.metrics.max_abs_u, 9.0);
 }
+
+// The limits and the faults in the loop (SPEC §17.1, every plant): the command is limited, the
+// faults act on what is left, and the result is limited again. On the double integrator the
+// acceleration the controller reads is the applied output itself: a 50 % loss on actuator 2,
+// commanded at −2 with a limit of 1.5, delivers −0.75 (limiting only after the loss gave −1); a
+// bias of 2 on actuator 3, commanded at 1, is held at the limit.
+TEST(ClosedLoop, TheLimitActsBeforeAndAfterTheFaults) {
+  const DoubleIntegrator plant;
+  Scenario s;
+  s.name = "limited";
+  s.duration = 0.1;
+  s.sample_time = 0.01;
+  s.initial_state = {0, 0, 0, 0, 0, 0};
+  Fault loss;
+  loss.type = FaultType::loss_of_effectiveness;
+  loss.actuator = 2;
+  loss.fraction = 0.5;
+  Fault bias;
+  bias.type = FaultType::bias;
+  bias.actuator = 3;
+  bias.offset = 2.0;
+  s.faults = {loss, bias};
+  s.saturation = 1.5;
+  Recorder c(Vec4(0.5, -2.0, 1.0, 9.0));
+  SimulationOptions o;
+  o.record_every = 1;
+  const SimulationResult r = simulate(plant, c, s, o);
+  ASSERT_EQ(c.seen.size(), 10u);
+  for (std::size_t k = 1; k < c.seen.size(); ++k) {
+    EXPECT_EQ(c.seen[k].a[0], 0.5) << k;
+    EXPECT_EQ(c.seen[k].a[1], -0.75) << k;
+    EXPECT_EQ(c.seen[k].a[2], 1.5) << k;
+  }
+  // The trajectory's applied outputs, the fourth actuator at its limit; the command as given.
+  ASSERT_GT(r.trajectory.rows(), 1u);
+  const std::size_t last = r.trajectory.rows() - 1;
+  EXPECT_EQ(std::vector<double>(r.trajectory.u(last).begin(), r.trajectory.u(last).end()),
+            (std::vector<double>{0.5, -0.75, 1.5, 1.5}));
+  EXPECT_EQ(r.trajectory.u_d(last)[3], 9.0);
+  // Per actuator: limits of 0.25, 4, 4, 4 hold actuator 1 at 0.25 and leave the loss's −1.
+  s.saturation = std::vector<double>{0.25, 4.0, 4.0, 4.0};
+  Recorder each(Vec4(0.5, -2.0, 1.0, 9.0));
+  simulate(plant, each, s, o);
+  EXPECT_EQ(each.seen.back().a[0], 0.25);
+  EXPECT_EQ(each.seen.back().a[1], -1.0);
+  EXPECT_EQ(each.seen.back().a[2], 3.0);
+}

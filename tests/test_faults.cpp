@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <string>
 #include <vector>
 
 #include "ftc/sim/disturbance.hpp"
@@ -94,6 +96,52 @@ TEST(Faults, SaturationIsAppliedAfterFaults) {
   const FaultSet set({bias}, 3.0);
   const Vec4 u = set.apply(1.0, kCommand);
   EXPECT_EQ(u, Vec4(3.0, -3.0, 3.0, -3.0));
+}
+
+// SPEC §17.1's order for every plant: the command is limited, the faults act on what is left,
+// and the result is limited again. A weakened actuator then delivers at most (1 − ρ) of its
+// limit however hard it is commanded (limiting only after the faults gave min(L, (1 − ρ) u_d)).
+TEST(Faults, LimitsActOnTheCommandBeforeAndAfterTheFaults) {
+  Fault loss = make(FaultType::loss_of_effectiveness, 2, 0.0);
+  loss.fraction = 0.5;
+  Fault bias = make(FaultType::bias, 1, 0.0);
+  bias.offset = 50.0;
+  Fault stuck = make(FaultType::stuck, 3, 0.0);
+  stuck.value = 40.0;
+  const FaultSet set({loss, bias, stuck}, 30.0);
+  const Vec4 u = set.apply(1.0, Vec4(-100.0, 100.0, 0.0, 45.0));
+  EXPECT_EQ(u[0], 20.0);   // clamp(−30 + 50): the bias acts on the limited command
+  EXPECT_EQ(u[1], 15.0);   // 0.5 · clamp(100), not clamp(0.5 · 100) = 30
+  EXPECT_EQ(u[2], 30.0);   // a stuck value beyond the limit is held at it
+  EXPECT_EQ(u[3], 30.0);   // no fault: the limit
+  // One limit per actuator.
+  const FaultSet each({loss}, std::vector<double>{1.0, 8.0, 2.0, 3.0});
+  EXPECT_EQ(each.apply(1.0, Vec4(5.0, 100.0, -5.0, 2.5)), Vec4(1.0, 4.0, -2.0, 2.5));
+  EXPECT_EQ(each.saturation().limit(1), 8.0);
+  EXPECT_EQ(FaultSet({loss}, std::nullopt).saturation().limit(3),
+            std::numeric_limits<double>::infinity());
+}
+
+// A scenario's saturation: one number, or one per actuator, each at its path.
+TEST(Faults, PerActuatorSaturationIsValidatedAtItsPath) {
+  Scenario s;
+  s.name = "x";
+  s.saturation = std::vector<double>{1.0, -2.0, 3.0, 4.0};
+  auto has = [](const std::vector<ftc::FieldError>& errs, const std::string& path,
+                const std::string& text) {
+    for (const auto& e : errs)
+      if (e.path == path && e.message.find(text) != std::string::npos) return true;
+    return false;
+  };
+  std::vector<ftc::FieldError> errs = s.validate("/scenarios/0", 3, 4);
+  EXPECT_TRUE(has(errs, "/scenarios/0/saturation/1", "> 0"));
+  s.saturation = std::vector<double>{1.0, 2.0, 3.0};
+  errs = s.validate("/scenarios/0", 3, 4);
+  EXPECT_TRUE(has(errs, "/scenarios/0/saturation",
+                  "expected one number for every actuator or 4 (one per actuator of the plant's "
+                  "4), got 3"));
+  s.saturation = std::vector<double>{1.0, 2.0, 3.0, 4.0};
+  EXPECT_FALSE(has(s.validate("/scenarios/0", 3, 4), "/scenarios/0/saturation", ""));
 }
 
 TEST(Faults, ValidationNamesFields) {

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ftc/sim/controller.hpp"
@@ -218,6 +219,32 @@ TEST(Hexarotor, RecoverabilityOfRotorFaultsCheckedByHand) {
   stuck.value = h.hover_thrust();  // stuck at its hover thrust: the others can still balance
   s.faults = {stuck};
   EXPECT_TRUE(plant->recoverable(s));
+}
+
+// A rotor stuck at T1: hover with zero torque needs the opposite rotor at T1 too and leaves the
+// other four m g / 2 − T1 to share (docs/model.md), so it is recoverable for 0 < T1 < m g / 2
+// only; and with a scenario's saturation the rotors' range narrows to T_h ± L.
+TEST(Hexarotor, StuckRotorIsRecoverableOnlyBelowHalfTheWeight) {
+  const auto plant = make_plant(hexarotor_spec());
+  const double half_weight = 2.02 * 9.81 / 2.0;
+  Scenario s = hover_scenario();
+  Fault stuck;
+  stuck.actuator = 1;
+  stuck.type = FaultType::stuck;
+  for (const auto& [value, recoverable] :
+       {std::pair{0.0, false}, std::pair{1e-3, true}, std::pair{0.999 * half_weight, true},
+        std::pair{1.001 * half_weight, false}, std::pair{12.0, false}}) {
+    stuck.value = value;
+    s.faults = {stuck};
+    EXPECT_EQ(plant->recoverable(s), recoverable) << "stuck at " << value << " N";
+  }
+  // The opposite rotor must match a rotor stuck at 6 N, so a limit of 2 N about hover (3.30 N)
+  // leaves it short: 6 N is out of its range [1.30, 5.30] N.
+  stuck.value = 6.0;
+  s.faults = {stuck};
+  EXPECT_TRUE(plant->recoverable(s));
+  s.saturation = 2.0;
+  EXPECT_FALSE(plant->recoverable(s));
 }
 
 TEST(Hexarotor, RejectsAFaultOnRotorSeven) {

@@ -635,6 +635,35 @@ TEST(JobGoals, ParseWriteBackCanonicallyAndGiveTheObjective) {
   EXPECT_EQ(job.goals[0].violation(1e9), 0.0);  // soft: never violated
 }
 
+// A scenario's saturation: one number for every actuator, or one per actuator; written back as
+// it was given; anything else refused at its path, saying what is accepted.
+TEST(JobLoader, SaturationIsOneNumberOrOnePerActuator) {
+  const auto has_error = [](const json& j, const std::string& path, const std::string& text) {
+    for (const FieldError& e : errors_of(j))
+      if (e.path == path && e.message.find(text) != std::string::npos) return true;
+    return false;
+  };
+  json j = table1();
+  j["scenarios"][0]["saturation"] = 30;
+  tune::Job job = tune::parse_job(j, "one");
+  EXPECT_EQ(job.scenarios[0].saturation.values, std::vector<double>{30.0});
+  EXPECT_EQ(tune::to_json(job)["scenarios"][0]["saturation"], 30);
+  j["scenarios"][0]["saturation"] = {10, 20, 30, 40};
+  job = tune::parse_job(j, "each");
+  EXPECT_EQ(job.scenarios[0].saturation.limit(2), 30.0);
+  EXPECT_EQ(tune::to_json(job)["scenarios"][0]["saturation"], json({10, 20, 30, 40}));
+  EXPECT_EQ(tune::to_json(tune::parse_job(tune::to_json(job), "again")), tune::to_json(job));
+  j["scenarios"][0]["saturation"] = {10, 20, 30};
+  EXPECT_TRUE(has_error(j, "/scenarios/0/saturation", "one per actuator of the plant's 4"));
+  j["scenarios"][0]["saturation"] = {10, "x", 30, 40};
+  EXPECT_TRUE(has_error(j, "/scenarios/0/saturation/1", "expected a number"));
+  j["scenarios"][0]["saturation"] = {10, 0, 30, 40};
+  EXPECT_TRUE(has_error(j, "/scenarios/0/saturation/1", "> 0"));
+  j["scenarios"][0]["saturation"] = "high";
+  EXPECT_TRUE(has_error(j, "/scenarios/0/saturation",
+                        "expected a number or an array of numbers (one per actuator)"));
+}
+
 // Which metrics a goal and the objective may name, whether a goal takes a window, and which one
 // takes a threshold or a tail: each from the metrics record's traits, for every field, and the
 // JSON Schema's enums are the table's.

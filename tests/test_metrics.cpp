@@ -82,7 +82,7 @@ Metrics measure(const Scenario& s, const SimulationOptions& o,
   detail::LaneTask* lanes[1] = {&lane};
   detail::MetricSetup<2> setup;
   detail::MetricRows<2> rows;
-  rows.set(lanes, 1, limits.has_value(), setup);
+  rows.set(lanes, 1, setup);
   detail::MetricLanes<double, 2, 2> acc(setup);
   std::array<double, 2> u_prev{};
   for (std::size_t k = 0; k < samples.size(); ++k) {

@@ -77,7 +77,6 @@ class ClosedLoop {
         plant_(plant),
         law_(law),
         metrics_(metrics),
-        sat_(row(su.saturation)),
         Ts_(su.Ts),
         hv_(su.Ts / su.substeps),
         h2_(0.5 * (su.Ts / su.substeps)),
@@ -88,11 +87,7 @@ class ClosedLoop {
         act_step_(row(su.act_step)),
         act_neg_(-act_step_) {
     if constexpr (kTrimmed)
-      for (int j = 0; j < M; ++j) {
-        u0_[j] = row(su.u0[j]);
-        lo_u_[j] = row(su.lo[j]);
-        hi_u_[j] = row(su.hi[j]);
-      }
+      for (int j = 0; j < M; ++j) u0_[j] = row(su.u0[j]);
     for (int i = 0; i < S2; ++i) x0_[i] = row(su.x0[i]);
     if constexpr (kConstantInput)
       for (int i = 0; i < N * M; ++i) G_[i] = T(su.G[i]);
@@ -206,9 +201,10 @@ class ClosedLoop {
       return lane::load_lanes<T>(e + r * kStride);
   }
 
-  // dX2/dt = f(X) + G u + Δ(t), u the command u_d after the faults and saturation at one
-  // instant. The applied u (and with a constant G the forcing G u) and Δ depend on the instant
-  // and the held command only, so the two midpoint stages share them.
+  // dX2/dt = f(X) + G u + Δ(t), u the command u_d within its limits, then the faults, then the
+  // limits again (ftc/sim/faults.hpp, SPEC §17.1), at one instant: a weakened actuator delivers at
+  // most (1 − ρ) of its limit. The applied u (and with a constant G the forcing G u) and Δ depend
+  // on the instant and the held command only, so the two midpoint stages share them.
   struct NoGu {};
   struct Forcing {
     [[no_unique_address]] std::conditional_t<kConstantInput, VN, NoGu> Gu;
@@ -218,19 +214,16 @@ class ClosedLoop {
   FTC_HOT_INLINE Forcing forcing(const double* e, const VM& u_d) const {
     Forcing F;
     for (int j = 0; j < M; ++j) {
-      if constexpr (kTrimmed) {
-        // The faults act on the physical output u0 + u_d; then the saturation and the limits.
-        const T v =
-            (input(e, Exo::kGain + j) * (u0_[j] + u_d[j]) + input(e, Exo::kOffset + j)) - u0_[j];
-        const T lo = lane::select(v < -sat_, -sat_, v);
-        const T s = lane::select(lo > sat_, sat_, lo);
-        const T l = lane::select(s < lo_u_[j], lo_u_[j], s);
-        F.u[j] = lane::select(l > hi_u_[j], hi_u_[j], l);
-      } else {
-        const T v = input(e, Exo::kGain + j) * u_d[j] + input(e, Exo::kOffset + j);
-        const T lo = lane::select(v < -sat_, -sat_, v);
-        F.u[j] = lane::select(lo > sat_, sat_, lo);
-      }
+      const T lo = limit_lo_[j], hi = limit_hi_[j];
+      const T c0 = lane::select(u_d[j] < lo, lo, u_d[j]);
+      const T c = lane::select(c0 > hi, hi, c0);
+      T v;
+      if constexpr (kTrimmed)  // the faults act on the physical output u0 + u
+        v = (input(e, Exo::kGain + j) * (u0_[j] + c) + input(e, Exo::kOffset + j)) - u0_[j];
+      else
+        v = input(e, Exo::kGain + j) * c + input(e, Exo::kOffset + j);
+      const T w = lane::select(v < lo, lo, v);
+      F.u[j] = lane::select(w > hi, hi, w);
     }
     for (int i = 0; i < N; ++i) {
       if constexpr (kConstantInput) {
@@ -325,9 +318,8 @@ class ClosedLoop {
   Plant& plant_;
   Law& law_;
   MetricLanes<T, N, M>& metrics_;
-  T sat_;
-  std::array<T, M> u0_, lo_u_, hi_u_;  // kTrimmed: the operating point and the deviation's range
-  std::array<T, M> limit_lo_, limit_hi_;
+  std::array<T, M> u0_;  // kTrimmed: the operating point
+  std::array<T, M> limit_lo_, limit_hi_;  // the command's limits (MetricSetup's)
   T G_[N * M];  // kConstantInput
   const double Ts_, hv_, h2_, h6_;
   const int S_;

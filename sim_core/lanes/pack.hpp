@@ -61,9 +61,11 @@ struct MetricSetup {
   const double* tail_start = nullptr;  // [windows][kMaxLanes]: the steady-state tail, NaN: none
   int onsets = 0;
   const double* onset = nullptr;  // [onsets][kMaxLanes]: each fault's onset, inf: unused
-  // The command limits of saturation_fraction per actuator, the earliest fault onset (+inf:
-  // none) and the settling threshold squared (NaN: no settling time), per lane; whether any lane
-  // has a threshold or a tail.
+  // The command's limits per actuator [limit_lo, limit_hi] (the plant's own range, within ± the
+  // scenario's saturation): the loop holds the command and the faulted output within them and
+  // saturation_fraction counts the samples at them. Then the earliest fault onset (+inf: none) and
+  // the settling threshold squared (NaN: no settling time), per lane; whether any lane has a
+  // threshold or a tail.
   double limit_lo[M][kMaxLanes] = {};
   double limit_hi[M][kMaxLanes] = {};
   double first_onset[kMaxLanes] = {};
@@ -101,7 +103,6 @@ struct PackSetup {
   double G[N * M] = {};
   double G_pinv[M * N] = {};
   double x0[2 * N][kMaxLanes] = {};
-  double saturation[kMaxLanes] = {};  // u_max; +inf for none
   // The lanes' actuator model (ftc/sim/scenario.hpp's ActuatorModel; every lane of a pack has
   // one or none): the half step's gain and largest step per lane (ActuatorSteps). The command is
   // clamped to [limit_lo, limit_hi] (MetricSetup) before the model follows it.
@@ -109,12 +110,10 @@ struct PackSetup {
   double act_gain[kMaxLanes] = {};
   double act_step[kMaxLanes] = {};
   // For a plant whose actuators work about an operating point (PlantLanes' kTrimmed: a rotor's
-  // hover thrust), per actuator and lane: u is a deviation from u0, the faults act on the
-  // physical output u0 + u (a loss of effectiveness scales it, a stuck actuator holds it), and
-  // the deviation is held within [lo, hi] (the rotor's 0 .. max thrust, less u0) after them.
+  // hover thrust), per actuator and lane: u is a deviation from u0, and the faults act on the
+  // physical output u0 + u (a loss of effectiveness scales it, a stuck actuator holds it). The
+  // deviation's range (the rotor's 0 .. max thrust, less u0) is in MetricSetup's limits.
   double u0[M][kMaxLanes] = {};
-  double lo[M][kMaxLanes] = {};
-  double hi[M][kMaxLanes] = {};
   double Ts = 0.0;
   int substeps = 1;
   std::int64_t samples = 0;

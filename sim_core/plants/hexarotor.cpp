@@ -73,24 +73,32 @@ Hexarotor::InputMatrix Hexarotor::torque_matrix() const {
   return A;
 }
 
+Hexarotor::ThrustRange Hexarotor::thrust_range() const {
+  ThrustRange r;
+  r.floor.fill(0.0);
+  r.cap.fill(params_.max_thrust);
+  return r;
+}
+
 double Hexarotor::trim_margin(const std::array<bool, 6>& stuck,
                               const std::array<double, 6>& stuck_at,
-                              const std::array<double, 6>& lost) const {
+                              const std::array<double, 6>& lost, const ThrustRange& range) const {
   constexpr double kInfeasible = -std::numeric_limits<double>::infinity();
   const InputMatrix A = torque_matrix();
   const double Tmax = params_.max_thrust;
   // The rotors that still act, their upper limits, and what the others leave to them:
   // E T = c with E = [A; 1 … 1] over the acting rotors, c = (0, 0, 0, m g) less the others.
   std::vector<int> acting;
-  std::vector<double> cap;
+  std::vector<double> floor, cap;
   Eigen::Vector4d c(0.0, 0.0, 0.0, params_.mass * params_.gravity);
   for (int j = 0; j < 6; ++j) {
     double fixed = 0.0;
     if (stuck[j]) {
-      fixed = std::clamp(stuck_at[j], 0.0, Tmax);
+      fixed = std::clamp(stuck_at[j], range.floor[j], range.cap[j]);
     } else if (lost[j] < 1.0) {
       acting.push_back(j);
-      cap.push_back((1.0 - lost[j]) * Tmax);
+      floor.push_back(range.floor[j]);
+      cap.push_back(std::max(range.floor[j], (1.0 - lost[j]) * range.cap[j]));
       continue;
     }
     c.head<3>() -= A.col(j) * fixed;
@@ -108,7 +116,8 @@ double Hexarotor::trim_margin(const std::array<bool, 6>& stuck,
   const Eigen::VectorXd Tp = lu.solve(c);
   if ((E * Tp - c).norm() > 1e-9 * (1.0 + c.norm())) return kInfeasible;
   const int d = k - static_cast<int>(lu.rank());
-  // The thrusts Tp + Z z; maximise t subject to t ≤ T_i ≤ cap_i − t: rows a·(z, t) ≤ b.
+  // The thrusts Tp + Z z; maximise t subject to floor_i + t ≤ T_i ≤ cap_i − t: rows
+  // a·(z, t) ≤ b.
   const Eigen::MatrixXd Z = d > 0 ? Eigen::MatrixXd(lu.kernel()) : Eigen::MatrixXd(k, 0);
   const int rows = 2 * k, vars = d + 1;
   Eigen::MatrixXd a(rows, vars);
@@ -116,7 +125,7 @@ double Hexarotor::trim_margin(const std::array<bool, 6>& stuck,
   for (int i = 0; i < k; ++i) {
     a.block(i, 0, 1, d) = -Z.row(i);
     a(i, d) = 1.0;
-    b[i] = Tp[i];
+    b[i] = Tp[i] - floor[static_cast<std::size_t>(i)];
     a.block(k + i, 0, 1, d) = Z.row(i);
     a(k + i, d) = 1.0;
     b[k + i] = cap[static_cast<std::size_t>(i)] - Tp[i];
@@ -150,8 +159,8 @@ double Hexarotor::trim_margin(const std::array<bool, 6>& stuck,
 
 bool Hexarotor::trim_feasible(const std::array<bool, 6>& stuck,
                               const std::array<double, 6>& stuck_at,
-                              const std::array<double, 6>& lost) const {
-  return trim_margin(stuck, stuck_at, lost) > 1e-9 * params_.max_thrust;
+                              const std::array<double, 6>& lost, const ThrustRange& range) const {
+  return trim_margin(stuck, stuck_at, lost, range) > 1e-9 * params_.max_thrust;
 }
 
 }  // namespace ftc::sim

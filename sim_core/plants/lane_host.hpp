@@ -32,6 +32,12 @@
 
 namespace ftc::sim::detail {
 
+constexpr std::array<double, kMaxActuators> filled(double v) {
+  std::array<double, kMaxActuators> a{};
+  for (double& x : a) x = v;
+  return a;
+}
+
 // One validated simulation: its controller (checked, α1 resolved), scenario and options, the
 // constants of the simulated plant and of the controller's model (the plant's f_constants()).
 struct LaneTask {
@@ -39,14 +45,18 @@ struct LaneTask {
   const Scenario* scenario = nullptr;
   const SimulationOptions* options = nullptr;
   std::array<double, kMaxPlantConstants> truth{}, model{};
-  // The simulated plant's operating point and limits per actuator (PackSetup::u0, lo, hi), for
-  // a plant that has them.
-  std::array<double, kMaxActuators> u0{}, lo{}, hi{};
+  // The simulated plant's operating point (PackSetup::u0, for a plant that has one) and its own
+  // range of each actuator's command (a rotor's 0 .. max thrust less u0; unbounded for a plant
+  // without limits): the scenario's saturation narrows it (MetricSetup's limits).
+  std::array<double, kMaxActuators> u0{};
+  std::array<double, kMaxActuators> lo = filled(-std::numeric_limits<double>::infinity());
+  std::array<double, kMaxActuators> hi = filled(std::numeric_limits<double>::infinity());
   SimulationResult* result = nullptr;
 };
 
-// The limits saturation_fraction measures the command against: ±u_max, and for a plant with an
-// operating point the deviation's [lo, hi] within them (the loop applies both).
+// A command's limits: the plant's own range [lo, hi] within ±u_max, the scenario's saturation
+// (the loop holds the command and the faulted output within them; saturation_fraction counts the
+// samples at them).
 struct CommandLimits {
   double lo, hi;
 };
@@ -54,20 +64,20 @@ inline CommandLimits command_limits(double u_max, double lo, double hi) {
   return {lo > -u_max ? lo : -u_max, hi < u_max ? hi : u_max};
 }
 
-// The command after the faults, the saturation and the limits for a plant whose actuators work
-// about an operating point (actuator_trim(), as Hexarotor's): the faults act on u0 + u_d. The
-// operations of the loop's (lanes/closed_loop.hpp), for the recorded rows.
-template <int M, class Trim>
-Vec<M> apply_trimmed(const Trim& t, const FaultSet& faults, const FaultEffect<M>& e,
-                     const Vec<M>& u_d) {
-  const double m = faults.saturation().value_or(std::numeric_limits<double>::infinity());
+// The applied output: the command within its limits [lo, hi], the faults (on the physical output
+// u0 + u for a plant with an operating point, `u0` non-null), the limits again. The operations of
+// the loop's forcing (lanes/closed_loop.hpp), for the recorded rows.
+template <int M>
+Vec<M> applied_output(const FaultEffect<M>& e, const Vec<M>& u_d, const double* u0,
+                      const double* lo, const double* hi) {
   Vec<M> u;
   for (int j = 0; j < M; ++j) {
-    double v = (e.gain[j] * (t.u0[j] + u_d[j]) + e.offset[j]) - t.u0[j];
-    v = v < -m ? -m : v;
-    v = v > m ? m : v;
-    v = v < t.lo[j] ? t.lo[j] : v;
-    u[j] = v > t.hi[j] ? t.hi[j] : v;
+    double c = u_d[j] < lo[j] ? lo[j] : u_d[j];
+    c = c > hi[j] ? hi[j] : c;
+    const double v =
+        u0 ? (e.gain[j] * (u0[j] + c) + e.offset[j]) - u0[j] : e.gain[j] * c + e.offset[j];
+    const double w = v < lo[j] ? lo[j] : v;
+    u[j] = w > hi[j] ? hi[j] : w;
   }
   return u;
 }
@@ -94,8 +104,9 @@ class MetricRows {
  public:
   // The rows of `lanes` (lanes past them up to `width` repeat lane 0), as many windows and onsets
   // as the lane with the most has; a lane with fewer has [inf, inf) windows and onsets at inf,
-  // which count no sample. `trimmed`: the limits are the deviation's [lo, hi] within ±u_max.
-  void set(std::span<LaneTask* const> lanes, int width, bool trimmed, MetricSetup<M>& ms) {
+  // which count no sample.
+  void set(std::span<LaneTask* const> lanes, int width, MetricSetup<M>& ms) {
+    static_assert(M <= kMaxActuators);
     constexpr double inf = std::numeric_limits<double>::infinity();
     std::size_t windows = 0, onsets = 0;
     for (const LaneTask* l : lanes) {
@@ -124,12 +135,9 @@ class MetricRows {
         ms.first_onset[l] =
             s.faults[f].onset < ms.first_onset[l] ? s.faults[f].onset : ms.first_onset[l];
       }
-      // What saturation_fraction measures the command against (the actuator model clamps the
-      // command to it too).
-      const double u_max = s.saturation.value_or(inf);
+      // The command's limits: the plant's range within ± the scenario's saturation.
       for (int j = 0; j < M; ++j) {
-        const CommandLimits c = trimmed ? command_limits(u_max, lane.lo[j], lane.hi[j])
-                                        : command_limits(u_max, -inf, inf);
+        const CommandLimits c = command_limits(s.saturation.limit(j), lane.lo[j], lane.hi[j]);
         ms.limit_lo[j][l] = c.lo;
         ms.limit_hi[j][l] = c.hi;
       }
@@ -287,7 +295,7 @@ class Host final : public PackHost<N, M> {
     done_.assign(lanes_.size(), false);
     buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3 * Exo::kCount *
                    Exo::stride(setup.shared_inputs, width));
-    metrics_.set(lanes, width, trimmed, setup.metrics);
+    metrics_.set(lanes, width, setup.metrics);
   }
 
   const double* inputs(std::int64_t k0, int n) override {
@@ -343,12 +351,15 @@ class Host final : public PackHost<N, M> {
     }
   }
 
-  // The command after the faults, the saturation and (for a plant with an operating point) the
-  // limits, as the loop forms it (lanes/closed_loop.hpp).
+  // The command within its limits, after the faults and within the limits again, as the loop
+  // forms it (lanes/closed_loop.hpp).
   Vec<M> applied(std::size_t l, const FaultEffect<M>& e, const Vec<M>& u_d) const {
-    const FaultSet& faults = groups_[group_of_[l]].faults;
-    if (!trimmed_) return faults.apply(e, u_d);
-    return apply_trimmed<M>(*lanes_[l], faults, e, u_d);
+    double lo[M], hi[M];
+    for (int j = 0; j < M; ++j) {
+      lo[j] = setup_.metrics.limit_lo[j][l];
+      hi[j] = setup_.metrics.limit_hi[j][l];
+    }
+    return applied_output<M>(e, u_d, trimmed_ ? lanes_[l]->u0.data() : nullptr, lo, hi);
   }
 
   // Where the kernel writes the metrics.
@@ -455,12 +466,7 @@ PackSetup<N, M> pack_setup(std::span<LaneTask* const> lanes, const Mat<N, M>* G,
       su.mismatch = su.mismatch || lane.truth[i] != lane.model[i];
     }
     for (int i = 0; i < 2 * N; ++i) su.x0[i][l] = lane.scenario->initial_state[i];
-    for (int j = 0; trimmed && j < M; ++j) {  // M ≤ kMaxActuators then (PlantAdapter)
-      su.u0[j][l] = lane.u0[j];
-      su.lo[j][l] = lane.lo[j];
-      su.hi[j][l] = lane.hi[j];
-    }
-    su.saturation[l] = lane.scenario->saturation.value_or(std::numeric_limits<double>::infinity());
+    for (int j = 0; trimmed && j < M; ++j) su.u0[j][l] = lane.u0[j];
     if (const std::optional<ActuatorModel>& a = lane.scenario->actuator) {
       su.actuator = true;
       const ActuatorSteps st = actuator_steps(*a, 0.5 * (su.Ts / su.substeps));

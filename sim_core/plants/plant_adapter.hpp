@@ -64,6 +64,9 @@ class PlantAdapter final : public AnyPlant {
 
   bool recoverable(const Scenario& scenario) const override {
     constexpr int N = P::kAxes, M = P::kActuators;
+    if (scenario.saturation.per_actuator() &&
+        scenario.saturation.values.size() != static_cast<std::size_t>(M))
+      return false;  // reported by validation
     std::array<bool, M> stuck{};
     std::array<double, M> stuck_at{}, lost{};
     for (const Fault& f : scenario.faults) {
@@ -89,9 +92,18 @@ class PlantAdapter final : public AnyPlant {
     lu.setThreshold(1e-9);
     if (lu.rank() != N) return false;
     // A plant with an operating point (a rotor's hover thrust) must also be able to hold it
-    // with what is left, within its limits (Hexarotor::trim_feasible).
-    if constexpr (requires { plant_.trim_feasible(stuck, stuck_at, lost); })
-      return plant_.trim_feasible(stuck, stuck_at, lost);
+    // with what is left, within the limits the loop holds it to: its own range within the
+    // scenario's saturation (Hexarotor::trim_feasible).
+    if constexpr (requires { plant_.trim_feasible(stuck, stuck_at, lost); }) {
+      auto range = plant_.thrust_range();
+      const auto t = plant_.actuator_trim();
+      for (int j = 0; j < M; ++j) {
+        const double u_max = scenario.saturation.limit(j);
+        range.floor[j] = std::max(range.floor[j], t.u0[j] - u_max);
+        range.cap[j] = std::min(range.cap[j], t.u0[j] + u_max);
+      }
+      return plant_.trim_feasible(stuck, stuck_at, lost, range);
+    }
     return true;
   }
 

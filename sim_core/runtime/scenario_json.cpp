@@ -138,8 +138,44 @@ Ptr<sim::Scenario> make_scenario_shape() {
                  "X(0) = (X1, X2), 2n numbers; default the plant's", schema::kOptional, false);
   o->array("disturbance", &S::disturbance, disturbance_shape(), "Δ(t), a sum of sinusoids");
   o->array("faults", &S::faults, fault_shape(), "actuator faults; they add up");
-  o->optional_number("saturation", &S::saturation, S::kSaturationRange,
-                     "|u_j| <= saturation after the faults; absent: none", false);
+  // A number (every actuator's limit) or one per actuator; checked by Scenario::validate.
+  o->field({"saturation", false,
+            [](const json& v, const std::string& path, S& s, Errors& e) {
+              if (v.is_number()) {
+                double x = 0.0;
+                if (schema::detail::read_number(v, path, x, e)) s.saturation = x;
+                return;
+              }
+              if (!v.is_array() || v.empty()) {
+                e.push_back({path, "expected a number or an array of numbers (one per actuator), "
+                                   "got " + json_io::json_type_name(v)});
+                return;
+              }
+              std::vector<double> x(v.size());
+              for (std::size_t i = 0; i < v.size(); ++i)
+                if (!schema::detail::read_number(v[i], path + "/" + std::to_string(i), x[i], e))
+                  return;
+              s.saturation = std::move(x);
+            },
+            [](const S&, const std::string&, Errors&) {},  // against the plant: validate()
+            [](const S& s, json& obj) {
+              if (s.saturation.values.size() == 1)
+                obj["saturation"] = s.saturation.values[0];
+              else if (s.saturation.per_actuator())
+                obj["saturation"] = s.saturation.values;
+            },
+            [] {
+              json limit = {{"type", "number"}};
+              schema::annotate(S::kSaturationRange, limit);
+              return json{{"description",
+                           "|u_j| <= the actuator's limit, applied to the command and again "
+                           "after the faults (so a weakened actuator delivers at most (1 - "
+                           "fraction) times it): one number for every actuator or one per "
+                           "actuator; absent: the plant's own limits only"},
+                          {"oneOf", json::array({limit, {{"type", "array"},
+                                                         {"items", limit},
+                                                         {"minItems", 1}}})}};
+            }});
   o->optional_object("actuator", &S::actuator, actuator_shape(), "");
   // Model mismatch: the true values of each parameter a registered plant declares uncertain,
   // under the parameter's name (the job's plant must declare it: validate_job).

@@ -1,15 +1,22 @@
 #pragma once
-// Actuator faults (paper eqs. 2–4, SPEC §3).
+// Actuator faults (paper eqs. 2–4, SPEC §3) and the actuators' limits (SPEC §17.1).
 //
-//     u_j(t) = u_d,j + Σ_{faults on j} ρ(t - t_f) δu_j(t),    then optional |u_j| ≤ u_max
+//     c_j = clamp(u_d,j, −L_j, L_j)                          the command within its limit
+//     u_j(t) = c_j + Σ_{faults on j} ρ(t - t_f) δu_j(t)      then the faults act on it
+//     u_j ← clamp(u_j, −L_j, L_j)                             and the limit again
+//
+// so a weakened actuator (a loss ρ) delivers at most (1 − ρ) L_j, whatever it is commanded, and
+// a bias or a stuck value never drives it past its limit. L_j = +inf without a limit.
 //
 // Profiles: abrupt ρ(τ) = 1 for τ ≥ 0; incipient ρ(τ) = 1 - exp(-β τ); ρ = 0 before onset.
 // Types: bias δu = offset + amplitude cos(frequency t + phase);
 //        loss_of_effectiveness δu = -fraction u_d;  stuck δu = value - u_d.
 //
 // Every fault is affine in the command, so a fault set at time t reduces to
-// u = sat(gain(t) ⊙ u_d + offset(t)); the simulator evaluates (gain, offset) once per stage time.
+// u = sat(gain(t) ⊙ sat(u_d) + offset(t)); the simulator evaluates (gain, offset) once per stage
+// time.
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -22,6 +29,29 @@
 #include "ftc/sim/types.hpp"
 
 namespace ftc::sim {
+
+// The limit of each actuator's command, |u_j| ≤ limit(j) (a scenario's `saturation`): one value
+// for every actuator, one per actuator, or none (+inf).
+struct Saturation {
+  std::vector<double> values;  // empty: none; one: every actuator's; else actuator j's at j
+
+  Saturation() = default;
+  Saturation(double limit) : values{limit} {}  // NOLINT: a number is one limit for all
+  Saturation(std::optional<double> limit) {    // NOLINT
+    if (limit) values = {*limit};
+  }
+  Saturation(std::vector<double> limits) : values(std::move(limits)) {}  // NOLINT
+  Saturation(std::nullopt_t) {}                                          // NOLINT
+
+  bool has_value() const { return !values.empty(); }
+  explicit operator bool() const { return has_value(); }
+  bool per_actuator() const { return values.size() > 1; }
+  // Actuator j's limit (0-based), +inf without one.
+  double limit(int j) const {
+    if (values.empty()) return std::numeric_limits<double>::infinity();
+    return values.size() == 1 ? values[0] : values[static_cast<std::size_t>(j)];
+  }
+};
 
 enum class FaultType { bias, loss_of_effectiveness, stuck };
 enum class FaultProfileType { abrupt, incipient };
@@ -66,8 +96,8 @@ struct Fault {
   static const IntegerField<Fault>& actuator_field();
 };
 
-// The faults' effect at one instant on the m actuators: u = gain ⊙ u_d + offset (before
-// saturation).
+// The faults' effect at one instant on the m actuators: u = gain ⊙ u_d + offset (between the
+// limits).
 template <int M>
 struct FaultEffect {
   Vec<M> gain = Vec<M>::Ones();
@@ -77,7 +107,7 @@ struct FaultEffect {
 class FaultSet {
  public:
   FaultSet() = default;
-  FaultSet(std::vector<Fault> faults, std::optional<double> saturation);
+  FaultSet(std::vector<Fault> faults, Saturation saturation);
 
   template <int M>
   FaultEffect<M> effect(double t) const;
@@ -88,19 +118,19 @@ class FaultSet {
   // directly.
   template <class Cos, class Out>
   void evaluate(std::span<const double> t, Cos&& cosine, Out&& out) const;
-  // Applied actuator output for a held command: sat(gain ⊙ u_d + offset).
+  // Applied actuator output for a held command: sat(gain ⊙ sat(u_d) + offset), the limits of
+  // the set's saturation. (The closed loop clamps with the same comparisons, in the same order:
+  // lanes/closed_loop.hpp's forcing.)
   template <int M>
-  // (The batch kernels clamp with the same comparisons, in the same order.)
   FTC_HOT_INLINE Vec<M> apply(const FaultEffect<M>& e, const Vec<M>& u_d) const {
     Vec<M> u;
     for (int j = 0; j < M; ++j) {
-      double v = e.gain[j] * u_d[j] + e.offset[j];
-      if (saturation_) {
-        const double m = *saturation_;
-        v = v < -m ? -m : v;
-        v = v > m ? m : v;
-      }
-      u[j] = v;
+      const double m = saturation_.limit(j), lo = -m;
+      double c = u_d[j] < lo ? lo : u_d[j];
+      c = c > m ? m : c;
+      double v = e.gain[j] * c + e.offset[j];
+      v = v < lo ? lo : v;
+      u[j] = v > m ? m : v;
     }
     return u;
   }
@@ -110,11 +140,11 @@ class FaultSet {
   }
 
   const std::vector<Fault>& faults() const { return faults_; }
-  const std::optional<double>& saturation() const { return saturation_; }
+  const Saturation& saturation() const { return saturation_; }
 
  private:
   std::vector<Fault> faults_;
-  std::optional<double> saturation_;  // u_max, absent = no saturation
+  Saturation saturation_;
 };
 
 // Σ over the faults of ρ δu, in affine form. Faults are taken in order at every instant, so

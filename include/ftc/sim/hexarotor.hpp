@@ -21,9 +21,12 @@
 // The command u_i is the deviation of rotor i's thrust from hover, T_i = T_h + u_i with
 // T_h = m g / 6, so u = 0 holds the hexarotor level; the rotor's thrust lies in [0, T_max], so
 // u_i ∈ [−T_h, T_max − T_h], limits that are not symmetric (actuator_trim()). Faults act on
-// the rotor's thrust: a loss of effectiveness ρ gives (1 − ρ)(T_h + u_i), so a rotor that has
-// failed (ρ = 1) gives no thrust at all, u_i = −T_h, and loses its share of the hover thrust
-// too; a stuck rotor holds the thrust `value` (N); a bias adds to the thrust.
+// the rotor's thrust, after it is held within [0, T_max] (SPEC §17.1's order: limits, faults,
+// limits): a loss of effectiveness ρ gives (1 − ρ)(T_h + u_i), so a rotor at 50 % loss gives at
+// most T_max / 2 however hard it is commanded, and a rotor that has failed (ρ = 1) gives no
+// thrust at all, u_i = −T_h, and loses its share of the hover thrust too; a stuck rotor holds the
+// thrust `value` (N, within [0, T_max]); a bias adds to the thrust. A loss on a rotor also
+// unbalances the yaw torque, as every rotor's thrust carries its drag torque σ_i κ T_i.
 //
 // G⁺: for this layout A Aᵀ = diag(3 l², 3 l², 6 κ²), so G⁺ = Gᵀ(GGᵀ)⁻¹ = A⁺ J with
 // A⁺ = Aᵀ diag(1/(3 l²), 1/(3 l²), 1/(6 κ²)): no matrix is inverted.
@@ -70,16 +73,31 @@ class Hexarotor final : public Plant<3, 6> {
   };
   Trim actuator_trim() const;
 
+  // The thrust each rotor can give, in N: [floor_i, cap_i], by default [0, T_max]; a scenario's
+  // saturation narrows it to T_h ± its limit.
+  struct ThrustRange {
+    std::array<double, 6> floor, cap;
+  };
+  ThrustRange thrust_range() const;
+
   // Whether the rotors can still hold hover with zero torque (Σ T_i = m g, A T = 0) with every
-  // rotor that still acts strictly inside its range [0, (1 − lost_i) T_max], the stuck ones at
-  // their thrust and the failed ones (lost_i ≥ 1) at zero: only then can the controller push
-  // every axis both ways. Found by maximising the smallest margin to a limit (a linear program,
-  // solved over the vertices of the few free directions).
+  // rotor that still acts strictly inside its range [floor_i, (1 − lost_i) cap_i], the stuck
+  // ones at their thrust (within their range) and the failed ones (lost_i ≥ 1) at zero: only then
+  // can the controller push every axis both ways. Found by maximising the smallest margin to a
+  // limit (a linear program, solved over the vertices of the few free directions).
   bool trim_feasible(const std::array<bool, 6>& stuck, const std::array<double, 6>& stuck_at,
-                     const std::array<double, 6>& lost) const;
+                     const std::array<double, 6>& lost, const ThrustRange& range) const;
+  bool trim_feasible(const std::array<bool, 6>& stuck, const std::array<double, 6>& stuck_at,
+                     const std::array<double, 6>& lost) const {
+    return trim_feasible(stuck, stuck_at, lost, thrust_range());
+  }
   // The smallest margin of that program in N (negative or zero when infeasible).
   double trim_margin(const std::array<bool, 6>& stuck, const std::array<double, 6>& stuck_at,
-                     const std::array<double, 6>& lost) const;
+                     const std::array<double, 6>& lost, const ThrustRange& range) const;
+  double trim_margin(const std::array<bool, 6>& stuck, const std::array<double, 6>& stuck_at,
+                     const std::array<double, 6>& lost) const {
+    return trim_margin(stuck, stuck_at, lost, thrust_range());
+  }
 
   // A: torque (N·m) per newton of each rotor's thrust.
   InputMatrix torque_matrix() const;

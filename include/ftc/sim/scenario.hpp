@@ -53,7 +53,9 @@ struct Scenario {
   std::vector<double> initial_state;
   std::vector<DisturbanceTerm> disturbance;
   std::vector<Fault> faults;
-  std::optional<double> saturation;  // |u_j| ≤ u_max after the faults; absent = none
+  // |u_j| ≤ the actuator's limit, before and after the faults (ftc/sim/faults.hpp): one for every
+  // actuator or one per actuator; none = no limit but the plant's own.
+  Saturation saturation;
   std::optional<ActuatorModel> actuator;  // absent: the command drives the plant directly
   // The true values of plant parameters the plant declares uncertain (PlantKind::uncertain),
   // when the simulated plant differs from the model the controller is given (model mismatch);
