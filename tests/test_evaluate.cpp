@@ -411,7 +411,7 @@ TEST(Evaluate, ReportsEveryGoalAggregatedPerController) {
             std::string::npos)
       << header;
   const std::string table = tune::evaluation_table(r);
-  EXPECT_NE(table.find("goal2: mean of PEAK_COMMAND[0 s, end] over 5 scenarios <= 1"),
+  EXPECT_NE(table.find("goal2: mean of peak command[0 s, end] over 5 scenarios <= 1"),
             std::string::npos)
       << table;
   EXPECT_NE(table.find("feasible"), std::string::npos);

@@ -694,8 +694,8 @@ TEST(Report, ComparisonAndPageShowEveryGoalPerController) {
   const json doc = json::parse(slurp(dir / "run" / "comparison.json"));
   const std::string md = slurp(dir / "run" / "comparison.md");
   ASSERT_EQ(doc["controllers"].size(), r.comparison.size());
-  EXPECT_NE(md.find("| controller | ISE[0 s, 5 s], minimized | CONTROL_TV <= 1e+09 | "
-                    "PEAK_COMMAND[0 s, end] <= 1 | total violation | feasible |"),
+  EXPECT_NE(md.find("| controller | ISE[0 s, 5 s], minimized | control TV <= 1e+09 | "
+                    "peak command[0 s, end] <= 1 | total violation | feasible |"),
             std::string::npos)
       << md;
   for (std::size_t c = 0; c < r.comparison.size(); ++c) {
@@ -718,7 +718,7 @@ TEST(Report, ComparisonAndPageShowEveryGoalPerController) {
   }
   const std::string html = slurp(tune::render_report(dir / "run").html);
   EXPECT_NE(html.find("<h2>Goals</h2>"), std::string::npos);
-  EXPECT_NE(html.find("<th>PEAK_COMMAND[0 s, end] &lt;= 1</th>"), std::string::npos);
+  EXPECT_NE(html.find("<th>peak command[0 s, end] &lt;= 1</th>"), std::string::npos);
   const tune::ComparedController& first = r.comparison[0];
   const std::string cells =
       "<tr><td>" + first.label + "</td><td>" +

@@ -79,12 +79,10 @@ std::string objective_label(const Job& job) {
 
 std::string goal_label(const Job& job, std::size_t k, std::size_t scenarios) {
   const GoalConfig& g = job.goals.at(k);
-  // The name in capitals, as comparison.md has always worded a goal's column (its bytes are
-  // kept); the front words it by the label (front_goal_label).
-  std::string name(g.metric->name);
-  for (char& c : name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return measure_label(scenarios ? scenarios : job.scenario_count(), name, g.measure(),
-                       g.windowed()) +
+  // The metric's label, as the front and the objective word it ("control TV", "peak command
+  // [0 s, end]"), where comparison.md once had the name in capitals.
+  return measure_label(scenarios ? scenarios : job.scenario_count(), sim::plain_label(*g.metric),
+                       g.measure(), g.windowed()) +
          (g.at_most ? " <= " + detail::format_number(*g.at_most, "%.6g") : ", minimized");
 }
 
