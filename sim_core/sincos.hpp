@@ -26,8 +26,8 @@ class SinCosTracker {
   static constexpr double kReach = 0.02;
 
   // The same operations as the batch simulator's AngleTracker (lanes/angle_tracker.hpp),
-  // so that the generic loop and the kernels give the same bits: after re-anchoring, the
-  // series runs with δ = 0.
+  // so that a plant's f(x, ws) (plants/<plant>_dynamics.hpp) and its lane code give the same
+  // bits: after re-anchoring, the series runs with δ = 0.
   FTC_HOT_INLINE void eval(double x, double& s, double& c) {
     if (!(std::abs(x - anchor_) <= kReach)) {  // also true for the NaN anchor of a fresh tracker
       anchor_ = x;

@@ -82,7 +82,8 @@ struct Metrics {
   void mark_diverged(double t);
 };
 
-// MetricsAccumulator (sim_core/metrics_accumulator.hpp) accumulates them sample by sample, with
-// the per-metric accumulators the batch kernel runs in its lanes (sim_core/lanes/metric_lanes.hpp).
+// The closed loop accumulates them sample by sample in its lanes (MetricLanes,
+// sim_core/lanes/metric_lanes.hpp), and the host reads each lane's record back field by field of
+// the metrics record (MetricRows, sim_core/plants/lane_host.hpp; ftc/sim/metrics_record.hpp).
 
 }  // namespace ftc::sim

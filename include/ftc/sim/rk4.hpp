@@ -1,7 +1,7 @@
 #pragma once
-// The classical fourth-order Runge–Kutta step for dX/dt = F(t, X), written once for every loop:
-// the Controller loop's Eigen state (integrator.hpp) and the closed-loop kernel's state of SIMD
-// lanes (sim_core/lanes/closed_loop.hpp).
+// The classical fourth-order Runge–Kutta step for dX/dt = F(t, X), written once: the closed
+// loop's state of lanes (sim_core/lanes/closed_loop.hpp) and, through rk4_step, an Eigen state
+// (integrator.hpp).
 //
 //   k1 = F(t, X), k2 = F(t + h/2, X + h/2 k1), k3 = F(t + h/2, X + h/2 k2), k4 = F(t + h, X + h k3)
 //   X(t + h) = X + h/6 (k1 + 2 k2 + 2 k3 + k4)

@@ -676,10 +676,10 @@ function jobView(main, id) {
 
   // The Pareto front of a job with two or more soft goals (front.json): its first two soft goals,
   // the picked point circled, the compared controllers marked, and as report.html draws them
-  // (tuner/report/front.cpp): each point's noise floor f (SPEC 14, the relative spread of its
-  // nudged copies) as a band of width f·|v| centred on the value on each axis, and a dashed link
-  // between two points that are no trade-off (each point's within_noise partners, by the run's
-  // rule). A table lists every point with its floors and partners. The goals are named by
+  // (tuner/report/front_figures.cpp): each point's noise floor f (SPEC 14, the relative spread of
+  // its nudged copies) as a band of width f·|v| centred on the value on each axis, and a dashed
+  // link between two points that are no trade-off (each point's within_noise partners, by the
+  // run's rule). A table lists every point with its floors and partners. The goals are named by
   // front.json's labels and units. Log axes where every value is positive.
   let frontChart = null;
   function renderFront(front) {
