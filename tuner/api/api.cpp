@@ -456,19 +456,14 @@ SimulateJobResult simulate_job(const Job& job, const sim::ControllerConfig& cont
   SimulateJobResult r;
   r.controller = controller;
   r.out = o.out.empty() ? default_out_dir(job.name) / "simulate" : o.out;
-  const std::size_t n = job.scenarios.size();
-  r.results.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const sim::Scenario& s = job.scenarios[i];
-    const auto every = std::max<std::int64_t>(1, std::llround(o.record_every / s.sample_time));
-    r.results.push_back(problem.simulate(controller, i, every));
-    if (o.after_scenario) o.after_scenario();
-  }
+  // One scenario at a time: its trajectory is written (or, for Python, kept as CSV) and dropped,
+  // so a job of many listed scenarios holds their metrics, not their trajectories.
   std::vector<sim::Metrics> metrics;
   json scenarios = json::array();
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
     const sim::Scenario& s = job.scenarios[i];
-    const sim::SimulationResult& res = r.results[i];
+    const auto every = std::max<std::int64_t>(1, std::llround(o.record_every / s.sample_time));
+    const sim::SimulationResult res = problem.simulate(controller, i, every);
     json m = metrics_json(res.metrics);
     m["name"] = s.name;
     // An unrecoverable scenario is one no gains can control once its faults start (the
@@ -478,10 +473,14 @@ SimulateJobResult simulate_job(const Job& job, const sim::ControllerConfig& cont
     scenarios.push_back(std::move(m));
     metrics.push_back(res.metrics);
     r.counted += problem.counted(i) ? 1 : 0;
-    r.trajectories.emplace_back(i == 0 ? "trajectory.csv" : "trajectory-" + s.name + ".csv",
-                                trajectory_csv(res.trajectory));
-    if (res.metrics.diverged)
-    {
+    const std::string file = i == 0 ? "trajectory.csv" : "trajectory-" + s.name + ".csv";
+    if (o.write) {
+      write_file_atomic(r.out / file, trajectory_csv(res.trajectory));
+      r.trajectories.emplace_back(file, std::string());
+    } else {
+      r.trajectories.emplace_back(file, trajectory_csv(res.trajectory));
+    }
+    if (res.metrics.diverged) {
       char at[32];
       std::snprintf(at, sizeof at, "%.3f", res.metrics.diverged_at);
       r.warnings.push_back("scenario " + s.name + " diverged at t = " + at + " s");
@@ -490,6 +489,7 @@ SimulateJobResult simulate_job(const Job& job, const sim::ControllerConfig& cont
       r.warnings.push_back("scenario " + s.name +
                            " is unrecoverable: no gains can control it once its faults start, so "
                            "the objective leaves it out");
+    if (o.after_scenario) o.after_scenario();
   }
   r.evaluation = problem.score(std::move(metrics));
   const bool any = r.counted > 0;
@@ -503,10 +503,7 @@ SimulateJobResult simulate_job(const Job& job, const sim::ControllerConfig& cont
   doc["objective"] = any ? json_number(r.evaluation.objective) : json(nullptr);
   doc["fitness"] = any ? json(r.evaluation.fitness) : json(nullptr);
   doc["scenarios"] = std::move(scenarios);
-  if (o.write) {
-    for (const auto& [file, csv] : r.trajectories) write_file_atomic(r.out / file, csv);
-    write_file_atomic(r.out / "metrics.json", doc.dump(2) + "\n");
-  }
+  if (o.write) write_file_atomic(r.out / "metrics.json", doc.dump(2) + "\n");  // the last file
   return r;
 }
 

@@ -312,15 +312,14 @@ struct SimulateJobOptions {
 
 struct SimulateJobResult {
   sim::ControllerConfig controller;
-  // Each listed scenario's metrics and trajectory, in the job's order.
-  std::vector<sim::SimulationResult> results;
-  Evaluation evaluation;
+  Evaluation evaluation;  // its scenarios: each listed scenario's metrics, in the job's order
   int counted = 0;  // scenarios the objective counts (unrecoverable ones are left out)
   // metrics.json: the controller, the objective and fitness (null when no scenario counts), and
   // per scenario its metrics, whether it is recoverable and whether it counts.
   nlohmann::json document;
   // The trajectory files, name -> CSV: trajectory.csv for the first scenario, then
-  // trajectory-<name>.csv.
+  // trajectory-<name>.csv. The CSV is empty when the file was written (`write`): a scenario's
+  // trajectory is written as soon as it is simulated, and not kept.
   std::vector<std::pair<std::string, std::string>> trajectories;
   std::filesystem::path out;  // where the files went (when written)
   std::vector<std::string> warnings;  // diverged and unrecoverable scenarios, for people
