@@ -296,6 +296,23 @@ def test_simulate_takes_tuned_gains(table1_path, tmp_path):
     assert best["role"] == "tuned"
 
 
+def test_simulate_says_when_no_scenario_counts(table1_path):
+    # Two wheels stuck from 1 s: no gains can control the spacecraft, so the objective counts
+    # nothing and says so (None), while the metrics are what happened.
+    job = json.loads(pathlib.Path(table1_path).read_text())
+    job["scenarios"][0]["duration"] = 3
+    job["scenarios"][0]["faults"] = [
+        {"actuator": 1, "type": "stuck", "onset": 1, "value": 0},
+        {"actuator": 2, "type": "stuck", "onset": 1, "value": 0}]
+    job["objective"]["window"] = [0, 3]
+    with pytest.warns(UserWarning, match="is unrecoverable"):
+        s = ftctune.simulate(job)
+    assert s["objective"] is None and s["fitness"] is None
+    assert s["scenarios"][0]["recoverable"] is False and s["scenarios"][0]["counted"] is False
+    assert s["metrics"]["ise"][0] > 0
+    assert not s["metrics"]["recoverable"][0]
+
+
 def test_ensemble_lists_the_members_of_ftctune_ensemble(cli, robust_dict, tmp_path):
     job_file = tmp_path / "job.json"
     job_file.write_text(json.dumps(robust_dict))
