@@ -438,8 +438,12 @@ TEST(BatchKernel, InstructionSetsAreNamedAndOrdered) {
   const std::vector<Isa> isas = supported_isas();
   ASSERT_FALSE(isas.empty());
   EXPECT_EQ(isas.front(), Isa::scalar);
+  // Widest last (the one active_isa() chooses), whichever vector copies the build has
+  // (FTC_VECTOR_KERNELS: the sanitizer build has avx2 alone).
   for (std::size_t i = 1; i < isas.size(); ++i)
-    EXPECT_EQ(lane_width(isas[i]), 2 * lane_width(isas[i - 1]));
+    EXPECT_GT(lane_width(isas[i]), lane_width(isas[i - 1]));
+  EXPECT_EQ(lane_width(Isa::sse2), 2);
+  EXPECT_EQ(lane_width(Isa::avx512), 8);
   EXPECT_STREQ(to_string(Isa::avx512), "avx512");
   EXPECT_EQ(lane_width(Isa::avx2), 4);
 }

@@ -37,12 +37,19 @@ int lane_width(Isa isa) {
 
 std::vector<Isa> supported_isas() {
   std::vector<Isa> v{Isa::scalar};
-#if defined(FTC_X86_KERNELS)
-  // SSE2 is part of x86-64. __builtin_cpu_supports also asks the OS whether it saves the
-  // AVX and AVX-512 registers (XGETBV).
+  // The vector kernels this build has (FTC_VECTOR_KERNELS) that the CPU can run. SSE2 is part of
+  // x86-64. __builtin_cpu_supports also asks the OS whether it saves the AVX and AVX-512
+  // registers (XGETBV).
+#if defined(FTC_KERNEL_SSE2)
   v.push_back(Isa::sse2);
+#endif
+#if defined(FTC_KERNEL_AVX2) || defined(FTC_KERNEL_AVX512)
   __builtin_cpu_init();
+#endif
+#if defined(FTC_KERNEL_AVX2)
   if (__builtin_cpu_supports("avx2")) v.push_back(Isa::avx2);
+#endif
+#if defined(FTC_KERNEL_AVX512)
   if (__builtin_cpu_supports("avx512f")) v.push_back(Isa::avx512);
 #endif
   return v;

@@ -207,11 +207,15 @@ namespace lane_host {
 template <class P, int N, int M>
 PackKernel<N, M> kernel_for(Isa isa) {
   switch (isa) {
-#if defined(FTC_X86_KERNELS)
+#if defined(FTC_KERNEL_SSE2)
     case Isa::sse2:
       return &isa_sse2::pack_kernel<P, N, M>;
+#endif
+#if defined(FTC_KERNEL_AVX2)
     case Isa::avx2:
       return &isa_avx2::pack_kernel<P, N, M>;
+#endif
+#if defined(FTC_KERNEL_AVX512)
     case Isa::avx512:
       return &isa_avx512::pack_kernel<P, N, M>;
 #endif
