@@ -106,7 +106,9 @@ Scenario hexarotor_scenario() {
 TEST_P(AllocationFree, KernelsAllocateNothingPerSample) {
   const std::pair<const char*, Scenario> plants[] = {{"spacecraft", Scenario::paper()},
                                                      {"manipulator", arm_scenario()},
-                                                     {"hexarotor", hexarotor_scenario()}};
+                                                     {"hexarotor", hexarotor_scenario()},
+                                                     {"rigid_body", hexarotor_scenario()},
+                                                     {"multirotor", hexarotor_scenario()}};
   for (const auto& [model, s] : plants) {
     kernel_allocations_for(model, s, GetParam(), 0.1);  // first use: sig^a tables, ISA choice
     const long short_run = kernel_allocations_for(model, s, GetParam(), 1.0);

@@ -937,6 +937,34 @@ TEST(Cli, GainsAreTheSameBytesUnderEveryInstructionSet) {
   }
 }
 
+// The shipped vehicle jobs (SPEC §17: a full tensor with Euler kinematics and per-wheel limits;
+// a quad_x multirotor) tune to the same gains.json under every instruction set and on 1 or 2
+// threads, and their plants are what the jobs say.
+TEST(Cli, VehicleJobsGiveTheSameBytesUnderEveryInstructionSetAndThreadCount) {
+  const auto dir = fresh_dir("cli-vehicles");
+  for (const std::string job : {"jobs/smallsat-pyramid.json", "jobs/quad-x.json"}) {
+    std::string first;
+    for (const ftc::sim::Isa isa : ftc::sim::supported_isas())
+      for (const char* threads : {"1", "2"}) {
+        const std::string name = ftc::sim::to_string(isa);
+        const auto out = dir / (name + threads + std::to_string(job.size()));
+        const CliResult r = run_cli_with_isa(
+            name, "run -q " + job + " --threads " + threads + " --out '" + out.string() + "'", dir);
+        ASSERT_EQ(r.exit_code, 0) << job << " " << name << ": " << r.err;
+        const std::string gains = slurp(out / "gains.json");
+        ASSERT_FALSE(gains.empty());
+        if (first.empty()) {
+          first = gains;
+          const nlohmann::json g = nlohmann::json::parse(gains);
+          EXPECT_EQ(g["plant"]["model"], job == "jobs/quad-x.json" ? "multirotor" : "rigid_body");
+        } else {
+          EXPECT_EQ(gains, first) << job << ": gains.json under FTCTUNE_ISA=" << name << ", "
+                                  << threads << " threads";
+        }
+      }
+  }
+}
+
 TEST(Cli, UnknownInstructionSetExitsTwoAndVersionNamesTheOneInUse) {
   const auto dir = fresh_dir("cli-isa-bad");
   const CliResult bad = run_cli_with_isa("avx1024", "validate jobs/table1.json", dir);

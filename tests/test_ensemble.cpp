@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -486,9 +487,11 @@ TEST(Ensemble, MembersScaleThePlantsDeclaredUncertainParameters) {
     for (const sim::UncertainParameter& u : kind.uncertain) {
       SCOPED_TRACE(kind.model + " " + u.parameter);
       ASSERT_NE(kind.offset(u.parameter), std::string_view::npos) << "not a parameter";
-      EXPECT_LE(kind.parameter_values(kind.defaults(), u.parameter).size(),
-                tune::kParameterFactors)
-          << "more values than an ensemble draws factors";
+      const std::size_t values = kind.parameter_values(kind.defaults(), u.parameter).size();
+      if (u.scaling == sim::Scaling::elementwise)
+        EXPECT_LE(values, tune::kParameterFactors) << "more values than an ensemble draws factors";
+      else  // a 3×3 tensor, one factor per axis
+        EXPECT_EQ(values, tune::kParameterFactors * tune::kParameterFactors);
     }
   EXPECT_EQ(sim::find_plant_kind("manipulator")->uncertain_names(), "none");
   EXPECT_EQ(sim::find_plant_kind("spacecraft")->uncertain_names(), "inertia");
@@ -519,4 +522,26 @@ TEST(Ensemble, MembersScaleThePlantsDeclaredUncertainParameters) {
   std::vector<double> v{2, 3, 4};
   sim::PlantKind::scale(kind.uncertain[0], v, std::array<double, 3>{0.5, 2, 1});
   EXPECT_EQ(v, (std::vector<double>{1, 6, 4}));
+
+  // A full tensor (rigid_body) is scaled as S J S, S = diag(√s_i), by the same 3 draws: the
+  // diagonal by s_i, the products of inertia by √(s_i s_k), so the member's tensor stays
+  // symmetric.
+  std::ifstream sat_in(std::string(FTC_SOURCE_DIR) + "/jobs/smallsat-pyramid.json");
+  json sat = json::parse(sat_in);
+  sat["ensemble"] = {{"count", 3}, {"seed", 5}, {"inertia_scale", {{"uniform", {0.5, 1.5}}}}};
+  const tune::Job body = parse(sat);
+  const std::vector<double> J =
+      sim::find_plant_kind("rigid_body")->parameter_values(body.plant.values, "inertia");
+  const sim::Scenario b = tune::ensemble_member(body, 5, 1);
+  ASSERT_NE(b.true_value("inertia"), nullptr);
+  const std::vector<double>& T = *b.true_value("inertia");
+  ASSERT_EQ(T.size(), 9u);
+  SplitMix64 q = SplitMix64::member(5, 1);
+  double f[3];
+  for (double& x : f) x = 0.5 + q.uniform();
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t k = 0; k < 3; ++k) {
+      EXPECT_EQ(T[3 * i + k], T[3 * k + i]) << i << k;
+      EXPECT_EQ(T[3 * i + k], J[3 * i + k] * (i == k ? f[i] : std::sqrt(f[i] * f[k]))) << i << k;
+    }
 }

@@ -11,5 +11,7 @@ template std::unique_ptr<Controller<2, 3>> make_controller<2, 3>(const Controlle
                                                                  const Plant<2, 3>&, double);
 template std::unique_ptr<Controller<3, 6>> make_controller<3, 6>(const ControllerConfig&,
                                                                  const Plant<3, 6>&, double);
+template std::unique_ptr<Controller<3, 8>> make_controller<3, 8>(const ControllerConfig&,
+                                                                 const Plant<3, 8>&, double);
 
 }  // namespace ftc::sim

@@ -21,6 +21,10 @@
 //   void input(const V<M>& u, V<N>& Gu)  G(X) u at the X of the last drift() call, summed
 //                                        G(i,0) u0 + G(i,1) u1 + ... in that order
 //   void pinv(const V<2N>& x, T* out)    the model's G⁺(X), row-major m×n, as Plant::G_pinv
+// and optionally, for a model valid only in part of the state space (the rigid body's Euler
+// angles),
+//   void observe(const V<2N>& x, Mask counting)   X at each sample, in the lanes still counting
+//   bool model_invalid(int lane)                  whether X left the model's validity
 #include <array>
 #include <cstdint>
 #include <limits>
@@ -127,6 +131,7 @@ class ClosedLoop {
   FTC_HOT_INLINE void step(std::int64_t k, const double* e, SampleLanes<N, M>& o) {
     VN f, f_model;
     plant_.drift(x_, f, su_.mismatch ? &f_model : nullptr);
+    if constexpr (requires { plant_.observe(x_, counting_); }) plant_.observe(x_, counting_);
     // The plant's input now: the actuators' output, or the command held since t_{k-1}.
     const VN a = accel(f, forcing(e, act_ ? ua_ : u_prev_));
     law::Sample<T, N> m;
@@ -186,6 +191,8 @@ class ClosedLoop {
       fin.samples[l] = samples_[l];
       fin.diverged[l] = diverged_[l];
       fin.diverged_at[l] = diverged_at_[l];
+      if constexpr (requires { plant_.model_invalid(l); })
+        fin.model_invalid[l] = plant_.model_invalid(l);
       for (int r = 0; r < S2; ++r)
         fin.x[r][l] = live_[l] || l >= su_.lanes ? lane::lane_of(x_[r], l) : x_end_[r][l];
       if (l < su_.lanes) metrics_.write(l, su_.metrics.first_onset[l], fin.metrics);

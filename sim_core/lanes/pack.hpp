@@ -21,7 +21,7 @@ namespace ftc::sim::detail {
 
 inline constexpr int kMaxLanes = 8;  // AVX-512: 8 doubles
 // The constants a plant's f and G are built from, per lane (Spacecraft::f_constants()).
-inline constexpr int kMaxPlantConstants = 8;
+inline constexpr int kMaxPlantConstants = 64;
 // Actuators of a plant with an operating point (PackSetup::trimmed).
 inline constexpr int kMaxActuators = 8;
 
@@ -143,6 +143,7 @@ struct PackFinal {
   std::int64_t samples[kMaxLanes];  // samples simulated per lane
   bool diverged[kMaxLanes];
   double diverged_at[kMaxLanes];  // s
+  bool model_invalid[kMaxLanes] = {};  // the plant's lane code says X left its model's validity
   MetricsOut metrics;
 };
 

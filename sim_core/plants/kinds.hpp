@@ -7,5 +7,7 @@ namespace ftc::sim::detail {
 PlantKind spacecraft_kind();
 PlantKind manipulator_kind();
 PlantKind hexarotor_kind();
+PlantKind rigid_body_kind();
+PlantKind multirotor_kind();
 
 }  // namespace ftc::sim::detail

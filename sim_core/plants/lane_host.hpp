@@ -51,6 +51,12 @@ struct LaneTask {
   std::array<double, kMaxActuators> u0{};
   std::array<double, kMaxActuators> lo = filled(-std::numeric_limits<double>::infinity());
   std::array<double, kMaxActuators> hi = filled(std::numeric_limits<double>::infinity());
+  // The plant's own m when it is fewer than the kernel's M (a rigid body's columns past m are
+  // zero): results and trajectories carry m. 0: M.
+  int actuators = 0;
+  // The plant's lane code reports whether X left its model's validity (SimulationResult's
+  // model_invalid).
+  bool reports_validity = false;
   SimulationResult* result = nullptr;
 };
 
@@ -87,10 +93,11 @@ template <int N, int M>
 [[gnu::noinline]] void append_row(Trajectory& tr, double t, const StateOf<N>& x, const Vec<M>& u_d,
                                   const Vec<M>& u) {
   std::vector<double>& v = tr.values;
+  const int m = tr.actuators;  // ≤ M
   v.push_back(t);
   v.insert(v.end(), x.data(), x.data() + 2 * N);
-  v.insert(v.end(), u_d.data(), u_d.data() + M);
-  v.insert(v.end(), u.data(), u.data() + M);
+  v.insert(v.end(), u_d.data(), u_d.data() + m);
+  v.insert(v.end(), u.data(), u.data() + m);
 }
 
 // The metrics' side of a pack on the host: what each lane measures against (MetricSetup: its
@@ -275,7 +282,7 @@ class Host final : public PackHost<N, M> {
       SimulationResult& r = *lanes_[l]->result;
       r = SimulationResult{};
       r.trajectory.axes = N;
-      r.trajectory.actuators = M;
+      r.trajectory.actuators = lanes_[l]->actuators > 0 ? lanes_[l]->actuators : M;
       if (o.record_every > 0)
         r.trajectory.values.reserve((setup.samples / o.record_every + 1) * r.trajectory.width());
     }
@@ -379,6 +386,7 @@ class Host final : public PackHost<N, M> {
       r.metrics =
           metrics_.read(l, fin.metrics, *lanes_[l]->options, *lanes_[l]->scenario,
                         fin.diverged[l] ? std::optional<double>(fin.diverged_at[l]) : std::nullopt);
+      if (lanes_[l]->reports_validity) r.model_invalid = fin.model_invalid[l];
     }
   }
 
@@ -594,6 +602,15 @@ ObjectPlant object_plant(const Plant<N, M>& plant) {
   return o;
 }
 
+// A plant's own actuator count (when it has fewer than its class's M) and whether it reports
+// its model's validity, for a lane of it.
+template <class P>
+void plant_extent(const P& plant, LaneTask& lane) {
+  if constexpr (requires { plant.actuator_count(); }) lane.actuators = plant.actuator_count();
+  if constexpr (requires { plant.reports_validity(); })
+    lane.reports_validity = plant.reports_validity();
+}
+
 // The runtime's sim::simulate: `controller` in closed loop with `plant`, in one lane of the
 // scalar kernel's loop with the controller as its law, so that it replays a tuning run's lane to
 // the last bit. P is a registered plant class (its lanes file's controller_kernel runs its lane
@@ -615,6 +632,7 @@ SimulationResult run_controller(const P& plant, Controller<P::kAxes, P::kActuato
     const auto k = plant.f_constants();
     std::copy(k.begin(), k.end(), lane.truth.begin());
     lane.model = lane.truth;
+    plant_extent(plant, lane);
     if constexpr (requires { plant.actuator_trim(); }) {
       trimmed = true;
       const auto t = plant.actuator_trim();

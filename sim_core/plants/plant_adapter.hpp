@@ -28,6 +28,7 @@ class PlantAdapter final : public AnyPlant {
       : values_(std::move(values)), build_(std::move(build)), plant_(build_(values_)) {}
 
   const PlantKind& kind() const override { return *find_plant_kind(plant_.model()); }
+  int actuators() const override { return actuator_count(); }
   const P& plant() const { return plant_; }
 
   // One lane of the plant's batch kernel: the code the SIMD lanes run, so that a simulation
@@ -64,13 +65,14 @@ class PlantAdapter final : public AnyPlant {
 
   bool recoverable(const Scenario& scenario) const override {
     constexpr int N = P::kAxes, M = P::kActuators;
+    const int m = actuator_count();
     if (scenario.saturation.per_actuator() &&
-        scenario.saturation.values.size() != static_cast<std::size_t>(M))
+        scenario.saturation.values.size() != static_cast<std::size_t>(m))
       return false;  // reported by validation
     std::array<bool, M> stuck{};
     std::array<double, M> stuck_at{}, lost{};
     for (const Fault& f : scenario.faults) {
-      if (f.actuator < 1 || f.actuator > M) continue;  // reported by validation
+      if (f.actuator < 1 || f.actuator > m) continue;  // reported by validation
       if (f.type == FaultType::stuck) {
         stuck[f.actuator - 1] = true;
         stuck_at[f.actuator - 1] = f.value;
@@ -82,7 +84,7 @@ class PlantAdapter final : public AnyPlant {
       x0 = Eigen::Map<const typename P::State>(scenario.initial_state.data());
     const Mat<N, M> G = plant_.G(x0);
     Eigen::Matrix<double, N, Eigen::Dynamic, 0, N, M> acting(N, 0);
-    for (int j = 0; j < M; ++j)
+    for (int j = 0; j < m; ++j)
       if (!stuck[j] && lost[j] < 1.0) {
         acting.conservativeResize(Eigen::NoChange, acting.cols() + 1);
         acting.col(acting.cols() - 1) = G.col(j);
@@ -97,7 +99,7 @@ class PlantAdapter final : public AnyPlant {
     if constexpr (requires { plant_.trim_feasible(stuck, stuck_at, lost); }) {
       auto range = plant_.thrust_range();
       const auto t = plant_.actuator_trim();
-      for (int j = 0; j < M; ++j) {
+      for (int j = 0; j < m; ++j) {
         const double u_max = scenario.saturation.limit(j);
         range.floor[j] = std::max(range.floor[j], t.u0[j] - u_max);
         range.cap[j] = std::min(range.cap[j], t.u0[j] + u_max);
@@ -121,8 +123,10 @@ class PlantAdapter final : public AnyPlant {
                      const SimulationOptions& options) const {
     LaneTask lane;
     lane.config = checked_config(controller, scenario.sample_time);
-    throw_if_errors("scenario " + scenario.name, scenario.validate("", P::kAxes, P::kActuators));
+    throw_if_errors("scenario " + scenario.name,
+                    scenario.validate("", P::kAxes, actuator_count()));
     lane.scenario = &scenario;
+    plant_extent(plant_, lane);
     lane.options = &options;
     const auto model = plant_.f_constants();
     static_assert(model.size() <= kMaxPlantConstants);
@@ -137,6 +141,14 @@ class PlantAdapter final : public AnyPlant {
       trim(plant_, lane);
     }
     return lane;
+  }
+
+  // The plant's own m: fewer than P's M for a rigid body with fewer actuators.
+  int actuator_count() const {
+    if constexpr (requires { plant_.actuator_count(); })
+      return plant_.actuator_count();
+    else
+      return P::kActuators;
   }
 
   // A plant whose actuators work about an operating point gives actuator_trim(): u0 and the

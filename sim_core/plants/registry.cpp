@@ -2,12 +2,14 @@
 // dynamics and lane code: docs/architecture.md, "Plant seam") plus the lines marked below: the
 // list of kinds, the list of classes for the runtime's simulate() with a Controller object,
 // and, for a new shape (n, m), the three instantiations.
+#include <cmath>
 #include <stdexcept>
 #include <tuple>
 
 #include "ftc/sim/hexarotor.hpp"
 #include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/plants.hpp"
+#include "ftc/sim/rigid_body.hpp"
 #include "ftc/sim/spacecraft.hpp"
 #include "lanes/closed_loop.hpp"
 #include "plants/kinds.hpp"
@@ -18,13 +20,15 @@ namespace ftc::sim {
 const std::vector<PlantKind>& plant_kinds() {
   static const std::vector<PlantKind> kinds = {detail::spacecraft_kind(),
                                                detail::manipulator_kind(),
-                                               detail::hexarotor_kind()};  // <- add here
+                                               detail::hexarotor_kind(),
+                                               detail::rigid_body_kind(),
+                                               detail::multirotor_kind()};  // <- add here
   return kinds;
 }
 
 namespace {
 
-using RegisteredPlants = std::tuple<Spacecraft, Manipulator, Hexarotor>;  // <- and here
+using RegisteredPlants = std::tuple<Spacecraft, Manipulator, Hexarotor, RigidBody>;  // <- and here
 
 // The one loop with the controller for its law: with the lane code of the registered class the
 // plant is (found by dynamic_cast), or through the Plant<N, M> interface when it is none of them.
@@ -70,6 +74,7 @@ void object_plant_kernel(const PackSetup<N, M>& su, PackHost<N, M>& host, PackFi
 FTC_SHAPE(3, 4)
 FTC_SHAPE(2, 3)
 FTC_SHAPE(3, 6)
+FTC_SHAPE(3, 8)
 #undef FTC_SHAPE
 
 const PlantKind* find_plant_kind(std::string_view model) {
@@ -119,6 +124,11 @@ std::vector<double> PlantKind::defaults() const {
   return v;
 }
 
+int PlantKind::actuators_of(const std::vector<double>& values) const {
+  if (!count_actuators) return actuators;
+  return count_actuators(values.empty() ? defaults() : values);
+}
+
 std::size_t PlantKind::value_count() const {
   std::size_t n = 0;
   for (const PlantParameter& p : parameters) n += p.size();
@@ -166,12 +176,25 @@ std::vector<double> PlantKind::with_true_values(std::vector<double> values,
                        "the " + model + " plant does not declare " + t.parameter +
                            " uncertain (its uncertain parameters: " + uncertain_names() + ")");
     const std::size_t at = offset(t.parameter);
+    const UncertainParameter& u = *find_uncertain(t.parameter);
     for (const PlantParameter& p : parameters)
       if (p.name == t.parameter) {
+        if (u.scaling == Scaling::congruence && p.size() == 9 && t.values.size() == 3) {
+          // A tensor given by its principal moments: the diagonal one.
+          const std::vector<double>& d = t.values;
+          const double J[9] = {d[0], 0.0, 0.0, 0.0, d[1], 0.0, 0.0, 0.0, d[2]};
+          std::copy(J, J + 9, values.begin() + static_cast<long>(at));
+          continue;
+        }
         if (t.values.size() != p.size())
           throw InputError("plant", where,
-                           "expected " + std::to_string(p.size()) + " numbers (the " + model +
-                               "'s " + p.name + "), got " + std::to_string(t.values.size()));
+                           u.scaling == Scaling::congruence
+                               ? "expected 3 principal moments or a 3×3 tensor (the " + model +
+                                     "'s " + p.name + "), got " + std::to_string(t.values.size()) +
+                                     " numbers"
+                               : "expected " + std::to_string(p.size()) + " numbers (the " +
+                                     model + "'s " + p.name + "), got " +
+                                     std::to_string(t.values.size()));
         std::copy(t.values.begin(), t.values.end(), values.begin() + static_cast<long>(at));
       }
   }
@@ -204,6 +227,13 @@ void PlantKind::scale(const UncertainParameter& u, std::vector<double>& values,
     case Scaling::elementwise:
       for (std::size_t i = 0; i < values.size() && i < factors.size(); ++i) values[i] *= factors[i];
       return;
+    case Scaling::congruence:
+      // (S J S)_ik = √(s_i s_k) J_ik; on the diagonal s_i J_ii, as elementwise scales a diagonal.
+      if (values.size() != 9 || factors.size() < 3) return;
+      for (std::size_t i = 0; i < 3; ++i)
+        for (std::size_t k = 0; k < 3; ++k)
+          values[3 * i + k] *= i == k ? factors[i] : std::sqrt(factors[i] * factors[k]);
+      return;
   }
 }
 
@@ -215,6 +245,7 @@ std::vector<FieldError> PlantKind::validate(const std::vector<double>& values,
                               model + ", got " + std::to_string(values.size())});
     return errs;
   }
+  if (check_values) return check_values(values, path);
   std::size_t i = 0;
   for (const PlantParameter& p : parameters)
     for (std::size_t j = 0; j < p.size(); ++j, ++i) {

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "vehicle_json.hpp"
 
 namespace ftc::runtime {
 
@@ -20,8 +21,8 @@ schema::Object<sim::PlantSpec>::Field plant_field(const sim::PlantParameter& p, 
   const std::string doc = p.description + (p.unit.empty() ? "" : " (" + p.unit + ")");
   return {p.name,
           false,
-          [n = p.size(), offset](const json& v, const std::string& path, sim::PlantSpec& out,
-                                 Errors& e) {
+          [n = p.size(), offset, name = p.name](const json& v, const std::string& path,
+                                                sim::PlantSpec& out, Errors& e) {
             if (n == 1) {
               schema::detail::read_number(v, path, out.values[offset], e);
               return;
@@ -32,9 +33,16 @@ schema::Object<sim::PlantSpec>::Field plant_field(const sim::PlantParameter& p, 
                                                    : json_io::json_type_name(v))});
               return;
             }
-            for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t i = 0; i < n; ++i) {
+              if (name == "inertia" && v[i].is_array()) {
+                e.push_back({path, "this plant takes the 3 principal moments [Ix, Iy, Iz] only; "
+                                   "for a full inertia tensor use the rigid_body or multirotor "
+                                   "plant"});
+                return;
+              }
               schema::detail::read_number(v[i], path + "/" + std::to_string(i),
                                           out.values[offset + i], e);
+            }
           },
           [](const sim::PlantSpec&, const std::string&, Errors&) {},  // the kind's rule checks
           [name = p.name, n = p.size(), offset, defaults](const sim::PlantSpec& c, json& o) {
@@ -69,7 +77,17 @@ Ptr<sim::PlantSpec> make_plant_shape() {
         return "unknown plant model '" + model + "' (known: " + sim::plant_model_names() + ")";
       });
   for (const sim::PlantKind& k : sim::plant_kinds()) {
-    auto o = std::make_shared<schema::Object<sim::PlantSpec>>(k.description);
+    std::shared_ptr<schema::Object<sim::PlantSpec>> o;
+    if (k.model == "rigid_body" || k.model == "multirotor") {
+      o = k.model == "rigid_body" ? detail::rigid_body_object(k) : detail::multirotor_object(k);
+      o->rule([&k](const sim::PlantSpec& c, const std::string& path, Errors& e) {
+        if (c.values.empty()) return;
+        for (FieldError& err : k.validate(c.values, path)) e.push_back(std::move(err));
+      });
+      v->add(k.model, std::move(o));
+      continue;
+    }
+    o = std::make_shared<schema::Object<sim::PlantSpec>>(k.description);
     std::size_t offset = 0;
     for (const sim::PlantParameter& p : k.parameters) {
       o->field(plant_field(p, offset, k.defaults()));

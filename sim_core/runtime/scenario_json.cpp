@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "vehicle_json.hpp"
 #include "ftc/sim/input_error.hpp"
 
 namespace ftc::runtime {
@@ -184,6 +185,11 @@ Ptr<sim::Scenario> make_scenario_shape() {
     o->field(
         {key, false,
          [key](const json& v, const std::string& path, S& s, Errors& e) {
+           std::vector<double> tensor;  // a 3×3 true inertia (rigid_body, multirotor)
+           if (detail::read_tensor_values(v, path, tensor, e)) {
+             if (!tensor.empty()) s.set_true_value(key, std::move(tensor));
+             return;
+           }
            if (!v.is_array()) {
              e.push_back({path, "expected an array of numbers, got " + json_io::json_type_name(v)});
              return;

@@ -470,6 +470,9 @@ SimulateJobResult simulate_job(const Job& job, const sim::ControllerConfig& cont
     // plant's rule): its metrics are what happened, and the objective leaves it out.
     m["recoverable"] = problem.recoverable(i);
     m["counted"] = problem.counted(i);
+    // A model valid only in part of the state space (rigid_body's Euler angles) says whether the
+    // run left it; its metrics still count.
+    if (res.model_invalid) m["model_invalid"] = *res.model_invalid;
     scenarios.push_back(std::move(m));
     metrics.push_back(res.metrics);
     r.counted += problem.counted(i) ? 1 : 0;
@@ -485,6 +488,11 @@ SimulateJobResult simulate_job(const Job& job, const sim::ControllerConfig& cont
       std::snprintf(at, sizeof at, "%.3f", res.metrics.diverged_at);
       r.warnings.push_back("scenario " + s.name + " diverged at t = " + at + " s");
     }
+    if (res.model_invalid.value_or(false))
+      r.warnings.push_back("scenario " + s.name +
+                           ": the pitch angle passed ±85°, near the singularity of the 3-2-1 "
+                           "Euler angles, where the rigid_body model is not valid "
+                           "(model_invalid; its metrics still count)");
     if (!problem.recoverable(i))
       r.warnings.push_back("scenario " + s.name +
                            " is unrecoverable: no gains can control it once its faults start, so "

@@ -139,7 +139,7 @@ sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k
       std::min(fd.count_hi, fd.count_lo + static_cast<int>(std::floor(r.uniform() * span)));
   std::vector<int> available = fd.actuators;
   if (available.empty())
-    for (int j = 1; j <= kind.actuators; ++j) available.push_back(j);
+    for (int j = 1; j <= kind.actuators_of(job.plant.values); ++j) available.push_back(j);
   s.faults.clear();
   for (int slot = 0; slot < fd.count_hi; ++slot) {
     // The slot's 11 draws, in the normative order, all consumed.

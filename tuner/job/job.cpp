@@ -479,7 +479,7 @@ void validate_scale_ends(const Job& job, const sim::PlantKind& kind, Errors& err
       e.base.empty() && !job.scenarios.empty() ? job.scenarios.front().name : e.base;
   const auto base = std::find_if(job.scenarios.begin(), job.scenarios.end(),
                                  [&](const sim::Scenario& s) { return s.name == base_name; });
-  if (base == job.scenarios.end() || !base->validate("", kind.axes, kind.actuators).empty())
+  if (base == job.scenarios.end() || !base->validate("", kind.axes, kind.actuators_of(job.plant.values)).empty())
     return;  // its own errors say what is wrong
   const std::vector<double> ones(std::max<std::size_t>(6, base->initial_state.size()), 1.0);
   // Each scale: a parameter's (empty for the others), its key and its distribution.
@@ -499,7 +499,7 @@ void validate_scale_ends(const Job& job, const sim::PlantKind& kind, Errors& err
       if (name == "initial_state_scale") state.assign(state.size(), f);
       if (name == "disturbance_scale") disturbance = f;
       const sim::Scenario m = scaled_base(job, parameter_factors, state, disturbance);
-      Errors wrong = m.validate("", kind.axes, kind.actuators);
+      Errors wrong = m.validate("", kind.axes, kind.actuators_of(job.plant.values));
       append(wrong, kind.check_true_values(job.plant.values, m.true_values, ""));
       if (!wrong.empty()) {
         errs.push_back({"/ensemble/" + std::string(name),
@@ -532,17 +532,18 @@ void validate_ensemble(const Job& job, const sim::PlantKind& kind, Errors& errs)
                                 ")"});
   if (e.faults) {
     const FaultDistribution& f = *e.faults;
+    const int actuators = kind.actuators_of(job.plant.values);
     std::set<int> seen;
     for (std::size_t i = 0; i < f.actuators.size(); ++i) {
       const int a = f.actuators[i];
       const std::string p = "/ensemble/faults/actuators/" + std::to_string(i);
-      if (a < 1 || a > kind.actuators)
+      if (a < 1 || a > actuators)
         errs.push_back({p, "actuator " + std::to_string(a) + " does not exist: the " + kind.model +
-                               " has actuators 1.." + std::to_string(kind.actuators)});
+                               " has actuators 1.." + std::to_string(actuators)});
       else if (!seen.insert(a).second)
         errs.push_back({p, "actuator " + std::to_string(a) + " is listed twice"});
     }
-    const int listed = f.actuators.empty() ? kind.actuators : static_cast<int>(f.actuators.size());
+    const int listed = f.actuators.empty() ? actuators : static_cast<int>(f.actuators.size());
     if (f.count_hi > listed && f.count_lo >= 0 && f.count_hi >= f.count_lo)
       errs.push_back({"/ensemble/faults/count", "upper bound " + std::to_string(f.count_hi) +
                                                     " exceeds the " + std::to_string(listed) +
@@ -705,7 +706,7 @@ void validate_job(const Job& job, Errors& errs) {
                     "(it names the output directory); got \"" +
                         job.name + "\""});
   const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
-  const int n = kind ? kind->axes : sim::kMaxAxes, m = kind ? kind->actuators : sim::kMaxActuators;
+  const int n = kind ? kind->axes : sim::kMaxAxes, m = kind ? kind->actuators_of(job.plant.values) : sim::kMaxActuators;
 
   if (job.scenarios.empty()) errs.push_back({"/scenarios", "must hold at least one scenario"});
   std::set<std::string> names;

@@ -224,7 +224,7 @@ std::vector<int> style_ranks(const std::vector<Series>& series) {
 std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, const json& gains,
                                      const std::vector<Series>& series, FigureFormat fmt) {
   const sim::PlantKind& kind = *sim::find_plant_kind(job.plant.model);
-  const int n = kind.axes, m = kind.actuators;
+  const int n = kind.axes, m = kind.actuators_of(job.plant.values);
   // Trajectory columns: time, x1..x2n, ud1..udm, u1..um.
   const int first_position = 1, first_rate = 1 + n, first_command = 1 + 2 * n,
             first_applied = 1 + 2 * n + m;

@@ -31,7 +31,7 @@ double listed_scenario_bytes(const Job& job) {
   // The comparison's trajectories: a row of one time and 2(n + m) numbers every
   // comparison_record_every samples, per compared controller (its entries, the job's, the tuned).
   const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
-  const double width = kind ? 1.0 + 2.0 * (kind->axes + kind->actuators) : 1.0;
+  const double width = kind ? 1.0 + 2.0 * (kind->axes + kind->actuators_of(job.plant.values)) : 1.0;
   const std::int64_t every = comparison_record_every(job);
   double rows = 0;
   for (const sim::Scenario& s : job.scenarios)

@@ -186,7 +186,7 @@ std::string megabytes(double bytes) {
 double estimated_result_bytes(const Job& job, std::int64_t trajectory_rows) {
   constexpr double kBytesPerNumber = 8;
   const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
-  const double width = kind ? 1 + 2.0 * (kind->axes + kind->actuators) : 1;
+  const double width = kind ? 1 + 2.0 * (kind->axes + kind->actuators_of(job.plant.values)) : 1;
   const std::int64_t every = comparison_record_every(job, trajectory_rows);
   double rows = 0;
   for (const sim::Scenario& s : job.scenarios)

@@ -38,6 +38,7 @@ struct PlantParameter {
 // How an ensemble's factors act on an uncertain parameter's values.
 enum class Scaling : std::uint8_t {
   elementwise,  // value i times factor i (a diagonal inertia: one factor per axis)
+  congruence,   // a 3×3 tensor J (row-major) to S J S, S = diag(√s_i): factor i scales axis i
 };
 
 // A parameter a plant declares uncertain, in its own PlantKind. A scenario may give the
@@ -72,7 +73,15 @@ struct PlantKind {
   std::string model;
   std::string description;
   int axes = 0;       // n
-  int actuators = 0;  // m
+  int actuators = 0;  // m; for a kind whose count its values give, the most it allows
+  // A kind whose actuator count depends on its values (rigid_body, multirotor): that count.
+  std::function<int(const std::vector<double>& values)> count_actuators;
+  // A kind whose values are checked as a whole (their JSON paths are not those of the flattened
+  // parameters): every error, named under `path`. Replaces the per-value range checks.
+  std::function<std::vector<FieldError>(const std::vector<double>& values,
+                                        const std::string& path)>
+      check_values;
+
   std::vector<PlantParameter> parameters;
   std::vector<UncertainParameter> uncertain;  // of `parameters`; none: no mismatch, no scaling
   std::vector<double> default_initial_state;  // 2n values, for scenarios that give none
@@ -86,6 +95,8 @@ struct PlantKind {
   std::function<std::unique_ptr<AnyPlant>(const std::vector<double>& values)> make;
 
   std::vector<double> defaults() const;
+  // m for these values (the defaults when empty).
+  int actuators_of(const std::vector<double>& values) const;
   std::size_t value_count() const;
   // Index of a parameter's first value in the flattened values; npos when unknown.
   std::size_t offset(std::string_view parameter) const;
@@ -122,7 +133,8 @@ class AnyPlant {
   virtual ~AnyPlant() = default;
   virtual const PlantKind& kind() const = 0;
   int axes() const { return kind().axes; }
-  int actuators() const { return kind().actuators; }
+  // m: this plant's actuators (a kind with a variable count: its spec's, PlantKind::actuators_of).
+  virtual int actuators() const { return kind().actuators; }
 
   // One scenario with a fresh controller of the given configuration. The controller is given
   // this plant as its model; the simulated plant is the same unless the scenario names a true

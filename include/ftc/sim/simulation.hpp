@@ -12,6 +12,7 @@
 // A diverging run is a result (metrics.diverged), never an exception.
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -58,6 +59,10 @@ struct SimulationResult {
   std::int64_t samples = 0;         // samples simulated (fewer than N when diverged)
   std::vector<double> final_state;  // X at t = samples · Ts
   Trajectory trajectory;
+  // For a plant whose model holds only in part of the state space (rigid_body: |θ| < 85°, away
+  // from the Euler angles' singularity), whether the run left it at some sample; absent for the
+  // others. The metrics still count.
+  std::optional<bool> model_invalid;
 };
 
 // Runs one scenario. The controller is reset first. Throws InputError only for an invalid

@@ -1,0 +1,172 @@
+#pragma once
+// The rigid body's f(X), G(X) u and G⁺(X) over the lane type T (ftc/sim/rigid_body.hpp gives
+// the equations): the class (T = double, sines from math::sincos) and its lanes
+// (plants/rigid_body_lanes.cpp, sines from angle trackers) evaluate the same operations.
+// Private to sim_core.
+#include "ftc/sim/rigid_body.hpp"
+#include "lanes/lane.hpp"
+
+namespace ftc::sim {
+inline namespace FTC_ISA_NS {
+
+// One side of the plant (the simulated truth or the controller's model) as its constants give
+// it (RigidBodyConstants), for T lanes.
+template <class T>
+struct BodyTerms {
+  static constexpr int MA = kMaxBodyActuators;
+  bool euler = true, diagonal = true;
+  int m = 0;
+  T J[9], Ji[9];  // J and J⁻¹, row-major
+  T k[3];         // kx, ky, kz when J is diagonal
+  T D[3 * MA];    // row-major 3×8
+  T G0[3 * MA];   // J⁻¹ D, row-major 3×8: G itself with body rates
+  T P[MA * 3];    // D⁺, row-major 8×3
+
+  // `c(i)`: constant i of every lane. `diagonal`: J is diagonal in every lane of the pack.
+  template <class C>
+  void load(const C& c, bool all_diagonal) {
+    using K = RigidBodyConstants;
+    euler = lane_value(c(K::kEuler)) != 0.0;
+    diagonal = all_diagonal;
+    m = static_cast<int>(lane_value(c(K::kM)));
+    const T xx = c(K::kJ), yy = c(K::kJ + 1), zz = c(K::kJ + 2);
+    const T xy = c(K::kJ + 3), xz = c(K::kJ + 4), yz = c(K::kJ + 5);
+    const T full[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+    for (int i = 0; i < 9; ++i) J[i] = full[i];
+    k[0] = (yy - zz) / xx;
+    k[1] = (zz - xx) / yy;
+    k[2] = (xx - yy) / zz;
+    // J⁻¹ by its adjugate (symmetric), over the determinant by the first row.
+    const T a00 = yy * zz - yz * yz, a01 = xz * yz - xy * zz, a02 = xy * yz - xz * yy;
+    const T a11 = xx * zz - xz * xz, a12 = xy * xz - xx * yz, a22 = xx * yy - xy * xy;
+    const T det = (xx * a00 + xy * a01) + xz * a02;
+    const T adj[9] = {a00, a01, a02, a01, a11, a12, a02, a12, a22};
+    for (int i = 0; i < 9; ++i) Ji[i] = adj[i] / det;
+    for (int i = 0; i < 3 * MA; ++i) D[i] = c(K::kD + i);
+    for (int i = 0; i < MA * 3; ++i) P[i] = c(K::kDpinv + i);
+    // With J diagonal, A(k, j) / I_k: the hexarotor's G.
+    for (int r = 0; r < 3; ++r)
+      for (int j = 0; j < MA; ++j)
+        G0[r * MA + j] = diagonal ? D[r * MA + j] / J[4 * r]
+                                  : (Ji[3 * r] * D[j] + Ji[3 * r + 1] * D[MA + j]) +
+                                        Ji[3 * r + 2] * D[2 * MA + j];
+  }
+
+  static double lane_value(const T& v) { return lane::lane_of(v, 0); }
+
+  // h = J⁻¹ (−ω × J ω) = J⁻¹ (J ω × ω).
+  FTC_HOT_INLINE void gyro(const T (&w)[3], T (&h)[3]) const {
+    if (diagonal) {
+      h[0] = k[0] * (w[1] * w[2]);
+      h[1] = k[1] * (w[0] * w[2]);
+      h[2] = k[2] * (w[0] * w[1]);
+      return;
+    }
+    const T Jw[3] = {(J[0] * w[0] + J[1] * w[1]) + J[2] * w[2],
+                     (J[3] * w[0] + J[4] * w[1]) + J[5] * w[2],
+                     (J[6] * w[0] + J[7] * w[1]) + J[8] * w[2]};
+    const T c[3] = {Jw[1] * w[2] - Jw[2] * w[1], Jw[2] * w[0] - Jw[0] * w[2],
+                    Jw[0] * w[1] - Jw[1] * w[0]};
+    for (int r = 0; r < 3; ++r) h[r] = (Ji[3 * r] * c[0] + Ji[3 * r + 1] * c[1]) + Ji[3 * r + 2] * c[2];
+  }
+
+  // J⁻¹ y.
+  FTC_HOT_INLINE void solve(const T (&y)[3], T (&z)[3]) const {
+    if (diagonal) {
+      z[0] = y[0] / J[0];
+      z[1] = y[1] / J[4];
+      z[2] = y[2] / J[8];
+      return;
+    }
+    for (int r = 0; r < 3; ++r) z[r] = (Ji[3 * r] * y[0] + Ji[3 * r + 1] * y[1]) + Ji[3 * r + 2] * y[2];
+  }
+};
+
+// sin and cos of roll and pitch, and 1 / cos pitch, at one state.
+template <class T>
+struct BodyTrig {
+  T sf, cf, st, ct, ict;
+};
+
+// W y (body rates from Euler rates).
+template <class T>
+FTC_HOT_INLINE void euler_W(const BodyTrig<T>& g, const T (&y)[3], T (&w)[3]) {
+  w[0] = y[0] - g.st * y[2];
+  w[1] = g.cf * y[1] + (g.sf * g.ct) * y[2];
+  w[2] = (g.cf * g.ct) * y[2] - g.sf * y[1];
+}
+
+// W⁻¹ y.
+template <class T>
+FTC_HOT_INLINE void euler_W_inv(const BodyTrig<T>& g, const T (&y)[3], T (&z)[3]) {
+  const T s = (g.sf * y[1] + g.cf * y[2]) * g.ict;
+  z[0] = y[0] + g.st * s;
+  z[1] = g.cf * y[1] - g.sf * y[2];
+  z[2] = s;
+}
+
+// f(X), x = (φ, θ, ψ, φ̇, θ̇, ψ̇); `g` the trigonometry of x (unused with body rates).
+template <class T>
+FTC_HOT_INLINE void body_f(const BodyTerms<T>& b, const BodyTrig<T>& g, const T* x, T (&f)[3]) {
+  const T r[3] = {x[3], x[4], x[5]};
+  if (!b.euler) {
+    b.gyro(r, f);
+    return;
+  }
+  T w[3], h[3];
+  euler_W(g, r, w);
+  b.gyro(w, h);
+  // Ẇ Ẋ1.
+  const T pd = r[0], td = r[1], yd = r[2];
+  const T v[3] = {-(g.ct * td) * yd,  //
+                  (g.cf * g.ct * pd - g.sf * g.st * td) * yd - (g.sf * pd) * td,
+                  -((g.cf * pd) * td) - (g.sf * g.ct * pd + g.cf * g.st * td) * yd};
+  const T y[3] = {h[0] - v[0], h[1] - v[1], h[2] - v[2]};
+  euler_W_inv(g, y, f);
+}
+
+// G(X) u = W⁻¹ (J⁻¹ D) u, (J⁻¹ D) u summed over the first m columns in order.
+template <class T>
+FTC_HOT_INLINE void body_input(const BodyTerms<T>& b, const BodyTrig<T>& g, const T* u,
+                               T (&Gu)[3]) {
+  constexpr int MA = kMaxBodyActuators;
+  T a[3];
+  for (int r = 0; r < 3; ++r) {
+    T s = b.G0[r * MA] * u[0];
+    for (int j = 1; j < b.m; ++j) s = s + b.G0[r * MA + j] * u[j];
+    a[r] = s;
+  }
+  if (!b.euler) {
+    for (int r = 0; r < 3; ++r) Gu[r] = a[r];
+    return;
+  }
+  euler_W_inv(g, a, Gu);
+}
+
+// G⁺(X) = D⁺ J W, row-major 8×3 (rows past m zero).
+template <class T>
+FTC_HOT_INLINE void body_pinv(const BodyTerms<T>& b, const BodyTrig<T>& g, T* out) {
+  constexpr int MA = kMaxBodyActuators;
+  if (!b.euler && b.diagonal) {  // D⁺(j, k) I_k: the hexarotor's A⁺ J
+    for (int j = 0; j < MA; ++j)
+      for (int k = 0; k < 3; ++k) out[j * 3 + k] = b.P[j * 3 + k] * b.J[4 * k];
+    return;
+  }
+  T JW[9];
+  if (b.euler) {
+    const T W[9] = {T(1.0), T(0.0), -g.st, T(0.0), g.cf, g.sf * g.ct, T(0.0), -g.sf, g.cf * g.ct};
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        JW[3 * r + c] = b.diagonal ? b.J[4 * r] * W[3 * r + c]
+                                   : (b.J[3 * r] * W[c] + b.J[3 * r + 1] * W[3 + c]) +
+                                         b.J[3 * r + 2] * W[6 + c];
+  } else {
+    for (int i = 0; i < 9; ++i) JW[i] = b.J[i];
+  }
+  for (int j = 0; j < MA; ++j)
+    for (int c = 0; c < 3; ++c)
+      out[j * 3 + c] = (b.P[j * 3] * JW[c] + b.P[j * 3 + 1] * JW[3 + c]) + b.P[j * 3 + 2] * JW[6 + c];
+}
+
+}  // namespace FTC_ISA_NS
+}  // namespace ftc::sim
