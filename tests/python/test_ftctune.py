@@ -313,6 +313,33 @@ def test_simulate_says_when_no_scenario_counts(table1_path):
     assert not s["metrics"]["recoverable"][0]
 
 
+def test_vehicle_plants_load_simulate_and_refuse_at_the_path(table1_path):
+    # Your vehicle (SPEC §17): a rigid body with a full tensor and four pyramid wheels, and a
+    # quad_x multirotor, through the same calls as the shipped plants.
+    jobs = pathlib.Path(table1_path).parent
+    sat = json.loads((jobs / "smallsat-pyramid.json").read_text())
+    s = ftctune.simulate(ftctune.load_job(sat))
+    assert [x["model_invalid"] for x in s["scenarios"]] == [False, False]
+    traj = s["trajectories"]["stuck-wheel"]
+    assert [c for c in traj.columns if c.startswith("u")] == [
+        "ud1", "ud2", "ud3", "ud4", "u1", "u2", "u3", "u4"]
+    assert (traj[["u1", "u2", "u3"]].abs().max() <= 0.01).all() and traj["u4"].abs().max() <= 0.006
+    # Pitching up through 85 degrees: flagged and warned about, the metrics still there.
+    steep = json.loads(json.dumps(sat))
+    steep["scenarios"] = [dict(sat["scenarios"][1], duration=0.6,
+                               initial_state=[0, 1.2, 0, 0, 0.6, 0], faults=[])]
+    steep["objective"]["window"] = [0, 0.6]
+    with pytest.warns(UserWarning, match="85"):
+        t = ftctune.simulate(steep)
+    assert t["scenarios"][0]["model_invalid"] is True and t["objective"] > 0
+    quad = ftctune.load_job(str(jobs / "quad-x.json"))
+    assert np.isfinite(ftctune.Problem(quad).objective([[1, 8, 4]])).all()
+    bad = json.loads(json.dumps(sat))
+    bad["plant"]["inertia"][0][1] = 0.02
+    with pytest.raises(ftctune.InputError, match="/plant/inertia/1/0"):
+        ftctune.load_job(bad)
+
+
 def test_ensemble_lists_the_members_of_ftctune_ensemble(cli, robust_dict, tmp_path):
     job_file = tmp_path / "job.json"
     job_file.write_text(json.dumps(robust_dict))
