@@ -151,12 +151,14 @@ TEST(RigidBody, AtRestNoDriftAtAnyAttitude) {
 // G G⁺ = I for tensors and geometries: the presets, 5 skewed axes, a multirotor's rotors.
 TEST(RigidBody, PseudoInverseIsARightInverse) {
   const std::vector<RigidBody> plants = {
-      body(kTensor, "pyramid"), body(kTensor, "nasa"), body({1, 0, 0, 0, 2, 0, 0, 0, 3}, "orthogonal"),
+      body(kTensor, "pyramid"), body(kTensor, "nasa"),
+      body({1, 0, 0, 0, 2, 0, 0, 0, 3}, "orthogonal"),
       body(kTensor, "", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}, {0.2, -0.5, 1}}),
       RigidBody(multirotor_params(MultirotorSpec{}))};
   for (const RigidBody& p : plants)
     for (const RigidBody::State& x :
-         {state(0, 0, 0, 0, 0, 0), state(0.4, -0.9, 2.0, 0.3, 0.1, -0.2), state(-1.2, 1.3, -0.5, 1, 2, 3)}) {
+         {state(0, 0, 0, 0, 0, 0), state(0.4, -0.9, 2.0, 0.3, 0.1, -0.2),
+          state(-1.2, 1.3, -0.5, 1, 2, 3)}) {
       const Mat<3, 3> I = p.G(x) * p.G_pinv(x);
       EXPECT_LT((I - Mat<3, 3>::Identity()).norm(), 1e-12) << p.model() << "\n" << I;
     }
@@ -167,7 +169,8 @@ TEST(RigidBody, PseudoInverseIsARightInverse) {
 // equation. 20 s of RK4 at 1 ms from a tumbling start, with a full tensor.
 TEST(RigidBody, ConservesEnergyAndAngularMomentumWithoutControl) {
   const RigidBody p = body(kTensor, "pyramid");
-  const Mat<3, 3> J = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(kTensor.data());
+  const Mat<3, 3> J =
+      Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(kTensor.data());
   const RigidBody::State x0 = state(0.3, -0.4, 0.2, 0.2, -0.3, 0.25);
   const auto energy = [&](const RigidBody::State& x) {
     const Vec3 w = body_rates(x);
@@ -236,8 +239,10 @@ TEST(Multirotor, HoverTrimIsTheMinimumNormSolution) {
   EXPECT_NEAR(T[3], 14.715 / 2 * 4 / 9, 1e-12);
   const RigidBody p(multirotor_params(own));
   for (int i = 0; i < 4; ++i) {
-    EXPECT_NEAR(p.actuator_trim().u0[static_cast<std::size_t>(i)], T[static_cast<std::size_t>(i)], 0);
-    EXPECT_EQ(p.actuator_trim().hi[static_cast<std::size_t>(i)], 10 - T[static_cast<std::size_t>(i)]);
+    EXPECT_NEAR(p.actuator_trim().u0[static_cast<std::size_t>(i)], T[static_cast<std::size_t>(i)],
+                0);
+    EXPECT_EQ(p.actuator_trim().hi[static_cast<std::size_t>(i)],
+              10 - T[static_cast<std::size_t>(i)]);
   }
   own.rotors[1].max_thrust = 4.0;  // rotor 2 must give 4.0875 N
   EXPECT_TRUE(has(validate(own, ""), "/rotors/1", "cannot hover")) << listed(validate(own, ""));
@@ -333,6 +338,7 @@ TEST(RigidBody, EveryLaneGivesTheScalarBits) {
           J[0] *= 1.0 + 0.05 * l;
           scenarios[l].set_true_value("inertia", J);
         }
+        if (l % 3 == 2) scenarios[l].saturation = std::vector<double>{0.03, 0.02, 0.03, 0.04};
         options[l].record_every = l == 0 ? 0 : 9;
         tasks.push_back({&configs[l], &scenarios[l], &options[l]});
       }
@@ -340,8 +346,8 @@ TEST(RigidBody, EveryLaneGivesTheScalarBits) {
       std::vector<std::string> errors(n);
       plant->simulate_pack(tasks, got, errors, isa);
       for (int l = 0; l < n; ++l) {
-        const std::string what = std::string(to_string(type)) + " on " + to_string(isa) +
-                                 ", lane " + std::to_string(l);
+        const std::string what =
+            std::string(to_string(type)) + " on " + to_string(isa) + ", lane " + std::to_string(l);
         ASSERT_EQ(errors[l], "") << what;
         const SimulationResult want = plant->simulate(configs[l], scenarios[l], options[l]);
         for (std::size_t i = 0; i < want.final_state.size(); ++i)
@@ -351,6 +357,7 @@ TEST(RigidBody, EveryLaneGivesTheScalarBits) {
         for (std::size_t i = 0; i < want.trajectory.values.size(); ++i)
           ASSERT_TRUE(same_bits(got[l].trajectory.values[i], want.trajectory.values[i])) << what;
         EXPECT_EQ(got[l].model_invalid, std::optional<bool>(false)) << what;
+
         if (options[l].record_every > 0) {
           EXPECT_EQ(got[l].trajectory.actuators, 4) << what;
         }
@@ -393,10 +400,12 @@ TEST(RigidBody, FlagsARunPastEightyFiveDegreesOfPitch) {
 // actuator; each bad form at its JSON path with what was wrong, and a written plant reads back
 // to the same values.
 TEST(RigidBodyJob, ReadsWritesAndRefusesAtThePath) {
-  const json good = {{"model", "rigid_body"},
-                     {"inertia", {{0.25, 0.01, -0.005}, {0.01, 0.30, 0.008}, {-0.005, 0.008, 0.18}}},
-                     {"actuators", {{"axes", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}, {1, -1, 0}}},
-                                    {"max", {0.1, 0.1, 0.1, 0.2, 0.2}}}}};
+  const json good = {
+      {"model", "rigid_body"},
+      {"inertia", {{0.25, 0.01, -0.005}, {0.01, 0.30, 0.008}, {-0.005, 0.008, 0.18}}},
+      {"actuators",
+       {{"axes", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}, {1, -1, 0}}},
+        {"max", {0.1, 0.1, 0.1, 0.2, 0.2}}}}};
   EXPECT_TRUE(errors_of(good).empty()) << listed(errors_of(good));
   PlantSpec spec;
   schema::Errors errs;
@@ -415,7 +424,8 @@ TEST(RigidBodyJob, ReadsWritesAndRefusesAtThePath) {
   EXPECT_TRUE(has(errors_of(j), "/plant/inertia/1/0", "must be symmetric")) << listed(errors_of(j));
   j = good;
   j["inertia"] = {{1, 2, 0}, {2, 1, 0}, {0, 0, 1}};
-  EXPECT_TRUE(has(errors_of(j), "/plant/inertia", "leading 2×2 minor is -3")) << listed(errors_of(j));
+  EXPECT_TRUE(has(errors_of(j), "/plant/inertia", "leading 2×2 minor is -3"))
+      << listed(errors_of(j));
   j = good;
   j["inertia"] = {1, -2, 3};
   EXPECT_TRUE(has(errors_of(j), "/plant/inertia/1", "must be > 0")) << listed(errors_of(j));
@@ -437,21 +447,26 @@ TEST(RigidBodyJob, ReadsWritesAndRefusesAtThePath) {
   j["actuators"] = {{"preset", "pyramid"}, {"beta_deg", 0}};
   EXPECT_TRUE(has(errors_of(j), "/plant/actuators/beta_deg", "strictly between 0 and 90"));
   // The principal-moment plants say what they take.
-  EXPECT_TRUE(has(errors_of({{"model", "spacecraft"}, {"inertia", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}}),
-                  "/plant/inertia", "use the rigid_body or multirotor plant"));
+  EXPECT_TRUE(
+      has(errors_of({{"model", "spacecraft"}, {"inertia", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}}),
+          "/plant/inertia", "use the rigid_body or multirotor plant"));
 }
 
 TEST(MultirotorJob, ReadsAListOrAPresetAndRefusesAtThePath) {
   const json quad = {{"model", "multirotor"}, {"rotors", {{"preset", "quad_x"}}}};
   EXPECT_TRUE(errors_of(quad).empty()) << listed(errors_of(quad));
-  json list = {{"model", "multirotor"},
-               {"mass", 1.2},
-               {"rotors",
-                {{{"position", {0.2, 0.2}}, {"spin", "cw"}, {"max_thrust", 7}, {"moment_constant", 0.015}},
-                 {{"position", {-0.2, 0.2}}, {"spin", "ccw"}, {"max_thrust", 7}, {"moment_constant", 0.015}},
-                 {{"position", {-0.2, -0.2}}, {"spin", "cw"}, {"max_thrust", 7}, {"moment_constant", 0.015}},
-                 {{"position", {0.2, -0.2}}, {"spin", "ccw"}, {"max_thrust", 7}, {"moment_constant", 0.015}},
-                 {{"position", {0.0, 0.3}}, {"spin", "cw"}, {"max_thrust", 7}, {"moment_constant", 0.015}}}}};
+  json list = {
+      {"model", "multirotor"},
+      {"mass", 1.2},
+      {"rotors",
+       {{{"position", {0.2, 0.2}}, {"spin", "cw"}, {"max_thrust", 7}, {"moment_constant", 0.015}},
+        {{"position", {-0.2, 0.2}}, {"spin", "ccw"}, {"max_thrust", 7}, {"moment_constant", 0.015}},
+        {{"position", {-0.2, -0.2}}, {"spin", "cw"}, {"max_thrust", 7}, {"moment_constant", 0.015}},
+        {{"position", {0.2, -0.2}}, {"spin", "ccw"}, {"max_thrust", 7}, {"moment_constant", 0.015}},
+        {{"position", {0.0, 0.3}},
+         {"spin", "cw"},
+         {"max_thrust", 7},
+         {"moment_constant", 0.015}}}}};
   EXPECT_TRUE(errors_of(list).empty()) << listed(errors_of(list));
   PlantSpec spec;
   schema::Errors errs;
@@ -483,7 +498,7 @@ TEST(RigidBody, TrueTensorAndItsEnsembleScaling) {
   std::vector<double> t(kTensor.begin(), kTensor.end());
   PlantKind::scale(*k.find_uncertain("inertia"), t, std::vector<double>{4.0, 1.0, 0.25});
   EXPECT_DOUBLE_EQ(t[0], 1.0);
-  EXPECT_DOUBLE_EQ(t[1], 0.02);   // √(4·1) · 0.01
+  EXPECT_DOUBLE_EQ(t[1], 0.02);  // √(4·1) · 0.01
   EXPECT_DOUBLE_EQ(t[3], 0.02);
   EXPECT_DOUBLE_EQ(t[2], -0.005);  // √(4·0.25) · −0.005
   EXPECT_DOUBLE_EQ(t[8], 0.045);
@@ -525,14 +540,16 @@ TEST(RigidBody, RecoverabilityOfWheelFaultsCheckedByHand) {
   const auto pyramid = make("pyramid"), orthogonal = make("orthogonal"), nasa = make("nasa");
   for (int j = 1; j <= 4; ++j) {
     EXPECT_TRUE(recoverable_with(*pyramid, {wheel_fault(j, FaultType::stuck, 0.002)})) << j;
-    EXPECT_TRUE(recoverable_with(*pyramid, {wheel_fault(j, FaultType::loss_of_effectiveness, 1.0)}));
+    EXPECT_TRUE(
+        recoverable_with(*pyramid, {wheel_fault(j, FaultType::loss_of_effectiveness, 1.0)}));
     EXPECT_TRUE(recoverable_with(*nasa, {wheel_fault(j, FaultType::loss_of_effectiveness, 1.0)}));
   }
   EXPECT_FALSE(recoverable_with(*pyramid, {wheel_fault(1, FaultType::stuck, 0.0),
                                            wheel_fault(3, FaultType::loss_of_effectiveness, 1.0)}));
   for (int j = 1; j <= 3; ++j) {
     EXPECT_FALSE(recoverable_with(*orthogonal, {wheel_fault(j, FaultType::stuck, 0.0)})) << j;
-    EXPECT_TRUE(recoverable_with(*orthogonal, {wheel_fault(j, FaultType::loss_of_effectiveness, 0.5)}));
+    EXPECT_TRUE(
+        recoverable_with(*orthogonal, {wheel_fault(j, FaultType::loss_of_effectiveness, 0.5)}));
   }
 }
 
@@ -554,4 +571,33 @@ TEST(Multirotor, RecoverabilityOfQuadRotorFaultsCheckedByHand) {
     EXPECT_TRUE(recoverable_with(*quad, {wheel_fault(i, FaultType::stuck, Th)})) << i;
     EXPECT_FALSE(recoverable_with(*quad, {wheel_fault(i, FaultType::stuck, 3.0)})) << i;
   }
+}
+
+// A scenario's per-actuator saturation names the plant's m limits; the kernel's columns past m
+// have none (Saturation::limit past the list), so a limit never reached counts no sample and an
+// active one holds each wheel to its own.
+TEST(RigidBody, PerActuatorSaturationNamesTheRealActuatorsOnly) {
+  RigidBodySpec spec;
+  spec.preset = "nasa";
+  PlantSpec ps;
+  ps.model = "rigid_body";
+  ps.values = to_values(spec);
+  const auto plant = make_plant(ps);
+  ControllerConfig c = ControllerConfig::table1(ControllerType::fosmc);
+  c.switching_gain = 0.01;
+  Scenario s = scenario(2.0);
+  s.saturation = std::vector<double>{100, 100, 100, 100};
+  SimulationOptions o;
+  o.record_every = 1;
+  EXPECT_EQ(plant->simulate(c, s, o).metrics.errors.saturation_fraction, 0.0);
+  s.saturation = std::vector<double>{0.02, 0.03, 0.04, 0.05};
+  const SimulationResult r = plant->simulate(c, s, o);
+  EXPECT_GT(r.metrics.errors.saturation_fraction, 0.0);
+  for (std::size_t i = 0; i < r.trajectory.rows(); ++i) {
+    ASSERT_EQ(r.trajectory.u(i).size(), 4u);
+    for (std::size_t j = 0; j < 4; ++j)
+      EXPECT_LE(std::abs(r.trajectory.u(i)[j]), s.saturation.values[j]) << i << " " << j;
+  }
+  s.saturation = std::vector<double>{0.02, 0.03};  // two limits for four wheels
+  EXPECT_THROW(plant->simulate(c, s, o), InputError);
 }

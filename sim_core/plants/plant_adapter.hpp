@@ -123,8 +123,7 @@ class PlantAdapter final : public AnyPlant {
                      const SimulationOptions& options) const {
     LaneTask lane;
     lane.config = checked_config(controller, scenario.sample_time);
-    throw_if_errors("scenario " + scenario.name,
-                    scenario.validate("", P::kAxes, actuator_count()));
+    throw_if_errors("scenario " + scenario.name, scenario.validate("", P::kAxes, actuator_count()));
     lane.scenario = &scenario;
     plant_extent(plant_, lane);
     lane.options = &options;

@@ -18,11 +18,9 @@
 namespace ftc::sim {
 
 const std::vector<PlantKind>& plant_kinds() {
-  static const std::vector<PlantKind> kinds = {detail::spacecraft_kind(),
-                                               detail::manipulator_kind(),
-                                               detail::hexarotor_kind(),
-                                               detail::rigid_body_kind(),
-                                               detail::multirotor_kind()};  // <- add here
+  static const std::vector<PlantKind> kinds = {
+      detail::spacecraft_kind(), detail::manipulator_kind(), detail::hexarotor_kind(),
+      detail::rigid_body_kind(), detail::multirotor_kind()};  // <- add here
   return kinds;
 }
 
@@ -192,9 +190,8 @@ std::vector<double> PlantKind::with_true_values(std::vector<double> values,
                                ? "expected 3 principal moments or a 3×3 tensor (the " + model +
                                      "'s " + p.name + "), got " + std::to_string(t.values.size()) +
                                      " numbers"
-                               : "expected " + std::to_string(p.size()) + " numbers (the " +
-                                     model + "'s " + p.name + "), got " +
-                                     std::to_string(t.values.size()));
+                               : "expected " + std::to_string(p.size()) + " numbers (the " + model +
+                                     "'s " + p.name + "), got " + std::to_string(t.values.size()));
         std::copy(t.values.begin(), t.values.end(), values.begin() + static_cast<long>(at));
       }
   }

@@ -60,15 +60,25 @@ RigidBody::RigidBody(const RigidBodyParams& params) : params_(params) {
   }
 }
 
-RigidBody::Vector RigidBody::f(const State& x) const {
+// The class's side of the lane code (plants/rigid_body_dynamics.hpp): its constants as the lanes
+// read them, and the trigonometry of x (none with body rates).
+struct RigidBody::Terms {
   BodyTerms<double> b;
+  BodyTrig<double> g{0.0, 1.0, 0.0, 1.0, 1.0};
+};
+
+RigidBody::Terms RigidBody::terms(const State& x) const {
+  Terms t;
   const auto k = f_constants();
-  b.load([&](int i) { return k[static_cast<std::size_t>(i)]; }, diagonal_);
-  const BodyTrig<double> g = params_.kinematics == BodyKinematics::euler_321
-                                 ? trig_of(x)
-                                 : BodyTrig<double>{0.0, 1.0, 0.0, 1.0, 1.0};
+  t.b.load([&](int i) { return k[static_cast<std::size_t>(i)]; }, diagonal_);
+  if (params_.kinematics == BodyKinematics::euler_321) t.g = trig_of(x);
+  return t;
+}
+
+RigidBody::Vector RigidBody::f(const State& x) const {
+  const Terms t = terms(x);
   double out[3];
-  body_f<double>(b, g, x.data(), out);
+  body_f<double>(t.b, t.g, x.data(), out);
   return Vector(out[0], out[1], out[2]);
 }
 
@@ -86,14 +96,9 @@ RigidBody::InputMatrix RigidBody::G(const State& x) const {
 }
 
 RigidBody::InputInverse RigidBody::G_pinv(const State& x) const {
-  BodyTerms<double> b;
-  const auto k = f_constants();
-  b.load([&](int i) { return k[static_cast<std::size_t>(i)]; }, diagonal_);
-  const BodyTrig<double> g = params_.kinematics == BodyKinematics::euler_321
-                                 ? trig_of(x)
-                                 : BodyTrig<double>{0.0, 1.0, 0.0, 1.0, 1.0};
+  const Terms t = terms(x);
   double out[MA * 3];
-  body_pinv<double>(b, g, out);
+  body_pinv<double>(t.b, t.g, out);
   InputInverse P;
   for (int j = 0; j < MA; ++j)
     for (int c = 0; c < 3; ++c) P(j, c) = out[j * 3 + c];
@@ -128,13 +133,13 @@ RigidBody::ThrustRange RigidBody::thrust_range() const {
 
 bool RigidBody::trim_feasible(const std::array<bool, MA>& stuck,
                               const std::array<double, MA>& stuck_at,
-                              const std::array<double, MA>& lost,
-                              const ThrustRange& range) const {
+                              const std::array<double, MA>& lost, const ThrustRange& range) const {
   if (params_.weight <= 0.0) return true;  // no operating point: zero torque, which any hold
   const int m = params_.actuators;
   const Eigen::MatrixXd A = D_.leftCols(m);
   const auto span = [m](const auto& a) { return std::span(a.data(), static_cast<std::size_t>(m)); };
-  const double scale = *std::max_element(params_.max_thrust.begin(), params_.max_thrust.begin() + m);
+  const double scale =
+      *std::max_element(params_.max_thrust.begin(), params_.max_thrust.begin() + m);
   return detail::hover_margin(A, params_.weight, span(stuck), span(stuck_at), span(lost),
                               span(range.floor), span(range.cap), scale) > 1e-9 * scale;
 }

@@ -67,7 +67,8 @@ struct BodyTerms {
                      (J[6] * w[0] + J[7] * w[1]) + J[8] * w[2]};
     const T c[3] = {Jw[1] * w[2] - Jw[2] * w[1], Jw[2] * w[0] - Jw[0] * w[2],
                     Jw[0] * w[1] - Jw[1] * w[0]};
-    for (int r = 0; r < 3; ++r) h[r] = (Ji[3 * r] * c[0] + Ji[3 * r + 1] * c[1]) + Ji[3 * r + 2] * c[2];
+    for (int r = 0; r < 3; ++r)
+      h[r] = (Ji[3 * r] * c[0] + Ji[3 * r + 1] * c[1]) + Ji[3 * r + 2] * c[2];
   }
 
   // J⁻¹ y.
@@ -78,7 +79,8 @@ struct BodyTerms {
       z[2] = y[2] / J[8];
       return;
     }
-    for (int r = 0; r < 3; ++r) z[r] = (Ji[3 * r] * y[0] + Ji[3 * r + 1] * y[1]) + Ji[3 * r + 2] * y[2];
+    for (int r = 0; r < 3; ++r)
+      z[r] = (Ji[3 * r] * y[0] + Ji[3 * r + 1] * y[1]) + Ji[3 * r + 2] * y[2];
   }
 };
 
@@ -165,7 +167,8 @@ FTC_HOT_INLINE void body_pinv(const BodyTerms<T>& b, const BodyTrig<T>& g, T* ou
   }
   for (int j = 0; j < MA; ++j)
     for (int c = 0; c < 3; ++c)
-      out[j * 3 + c] = (b.P[j * 3] * JW[c] + b.P[j * 3 + 1] * JW[3 + c]) + b.P[j * 3 + 2] * JW[6 + c];
+      out[j * 3 + c] =
+          (b.P[j * 3] * JW[c] + b.P[j * 3 + 1] * JW[3 + c]) + b.P[j * 3 + 2] * JW[6 + c];
 }
 
 }  // namespace FTC_ISA_NS

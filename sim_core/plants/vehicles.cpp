@@ -131,8 +131,9 @@ std::vector<FieldError> inertia_errors(const std::array<double, 9>& J, const std
       if (J[static_cast<std::size_t>(3 * r + c)] != J[static_cast<std::size_t>(3 * c + r)])
         errs.push_back({path + "/" + std::to_string(c) + "/" + std::to_string(r),
                         "the inertia tensor must be symmetric: [" + std::to_string(r) + "][" +
-                            std::to_string(c) + "] is " + num(J[static_cast<std::size_t>(3 * r + c)]) +
-                            " but [" + std::to_string(c) + "][" + std::to_string(r) + "] is " +
+                            std::to_string(c) + "] is " +
+                            num(J[static_cast<std::size_t>(3 * r + c)]) + " but [" +
+                            std::to_string(c) + "][" + std::to_string(r) + "] is " +
                             num(J[static_cast<std::size_t>(3 * c + r)])});
   if (!errs.empty()) return errs;
   // Sylvester's criterion: every leading minor positive.
@@ -143,9 +144,9 @@ std::vector<FieldError> inertia_errors(const std::array<double, 9>& J, const std
   if (diagonal) {
     for (int i = 0; i < 3; ++i)
       if (!(J[static_cast<std::size_t>(4 * i)] > 0.0))
-        errs.push_back({path + "/" + std::to_string(i),
-                        "a principal moment of inertia must be > 0 (got " +
-                            num(J[static_cast<std::size_t>(4 * i)]) + ")"});
+        errs.push_back(
+            {path + "/" + std::to_string(i), "a principal moment of inertia must be > 0 (got " +
+                                                 num(J[static_cast<std::size_t>(4 * i)]) + ")"});
     return errs;
   }
   const char* test = !(m1 > 0.0)   ? "its [0][0] entry"
@@ -153,8 +154,11 @@ std::vector<FieldError> inertia_errors(const std::array<double, 9>& J, const std
                      : !(m3 > 0.0) ? "its determinant"
                                    : nullptr;
   if (test)
-    errs.push_back({path, std::string("the inertia tensor must be positive definite, but ") +
-                              test + " is " + num(!(m1 > 0.0) ? m1 : !(m2 > 0.0) ? m2 : m3) +
+    errs.push_back({path, std::string("the inertia tensor must be positive definite, but ") + test +
+                              " is " +
+                              num(!(m1 > 0.0)   ? m1
+                                  : !(m2 > 0.0) ? m2
+                                                : m3) +
                               " (Sylvester's test: every leading minor > 0)"});
   return errs;
 }
@@ -163,12 +167,13 @@ std::vector<FieldError> validate(const RigidBodySpec& s, const std::string& path
   std::vector<FieldError> errs = inertia_errors(s.inertia, path + "/inertia");
   const std::string a = path + "/actuators";
   if (!s.preset.empty() && code_of(body_presets(), s.preset) == 0)
-    errs.push_back({a + "/preset", "unknown preset \"" + s.preset +
-                                       "\" (supported: orthogonal, pyramid, nasa)"});
+    errs.push_back({a + "/preset",
+                    "unknown preset \"" + s.preset + "\" (supported: orthogonal, pyramid, nasa)"});
   if (s.preset == "pyramid" && !(std::abs(s.beta_deg) > 0.0 && std::abs(s.beta_deg) < 90.0))
-    errs.push_back({a + "/beta_deg", "the wheels' elevation must be strictly between 0 and 90 "
-                                     "degrees, or they cannot span all three axes (got " +
-                                         num(s.beta_deg) + ")"});
+    errs.push_back({a + "/beta_deg",
+                    "the wheels' elevation must be strictly between 0 and 90 "
+                    "degrees, or they cannot span all three axes (got " +
+                        num(s.beta_deg) + ")"});
   const int m = actuator_count(s);
   if (s.preset.empty()) {
     if (m < 3 || m > MA)
@@ -243,14 +248,15 @@ std::vector<FieldError> validate(const MultirotorSpec& s, const std::string& pat
   } else {
     const int m = actuator_count(s);
     if (m < 4 || m > MA)
-      errs.push_back({rp, "expected 4 to " + std::to_string(MA) + " rotors, got " +
-                              std::to_string(m)});
+      errs.push_back(
+          {rp, "expected 4 to " + std::to_string(MA) + " rotors, got " + std::to_string(m)});
     for (std::size_t i = 0; i < s.rotors.size(); ++i) {
       const std::string p = rp + "/" + std::to_string(i);
       const RotorSpec& q = s.rotors[i];
-      for (int k = 0; k < 2; ++k) detail::check_finite(errs, p + "/position/" + std::to_string(k), q.position[static_cast<std::size_t>(k)]);
-      if (q.spin != 1 && q.spin != -1)
-        errs.push_back({p + "/spin", "must be \"cw\" or \"ccw\""});
+      for (int k = 0; k < 2; ++k)
+        detail::check_finite(errs, p + "/position/" + std::to_string(k),
+                             q.position[static_cast<std::size_t>(k)]);
+      if (q.spin != 1 && q.spin != -1) errs.push_back({p + "/spin", "must be \"cw\" or \"ccw\""});
       detail::check_positive(errs, p + "/max_thrust", q.max_thrust);
       detail::check_positive(errs, p + "/moment_constant", q.moment_constant);
     }
@@ -264,21 +270,26 @@ std::vector<FieldError> validate(const MultirotorSpec& s, const std::string& pat
   Eigen::FullPivLU<Eigen::MatrixXd> lu(A);
   lu.setThreshold(1e-9);
   if (lu.rank() < 3) {
-    errs.push_back({rp, "the rotors cannot make a torque about every axis (their torques per "
-                        "newton span " + std::to_string(lu.rank()) +
-                            " dimensions of 3: rotors on a line, or every spin the same)"});
+    errs.push_back({rp,
+                    "the rotors cannot make a torque about every axis (their torques per "
+                    "newton span " +
+                        std::to_string(lu.rank()) +
+                        " dimensions of 3: rotors on a line, or every spin the same)"});
     return errs;
   }
   const std::vector<double> T = hover_thrusts(s);
   for (std::size_t i = 0; i < r.size(); ++i)
     if (!(T[i] > 0.0 && T[i] < r[i].max_thrust)) {
       errs.push_back(
-          {std::isnan(T[i]) ? rp : s.preset.empty() ? rp + "/" + std::to_string(i) : rp + "/max_thrust",
+          {std::isnan(T[i])   ? rp
+           : s.preset.empty() ? rp + "/" + std::to_string(i)
+                              : rp + "/max_thrust",
            std::isnan(T[i])
                ? std::string("the rotors cannot hold hover: no thrusts give zero torque and carry "
                              "the weight")
                : "the layout cannot hover: rotor " + std::to_string(i + 1) +
-                     "'s hover thrust (the minimum-norm thrusts with zero torque that carry m g = " +
+                     "'s hover thrust (the minimum-norm thrusts with zero torque that carry m g "
+                     "= " +
                      num(s.mass * s.gravity) + " N) is " + num(T[i]) +
                      " N, not strictly between 0 and its max_thrust " + num(r[i].max_thrust) +
                      " N"});
@@ -447,7 +458,10 @@ namespace ftc::sim::detail {
 namespace {
 
 std::vector<PlantParameter> inertia_parameter(const std::array<double, 9>& J) {
-  return {{"inertia", {J.begin(), J.end()}, Range::any(), "kg·m²",
+  return {{"inertia",
+           {J.begin(), J.end()},
+           Range::any(),
+           "kg·m²",
            "the inertia tensor J (3 principal moments, or the symmetric 3×3 tensor)"}};
 }
 
@@ -471,8 +485,8 @@ PlantKind rigid_body_kind() {
   };
   k.parameters.push_back({"actuator_preset", part(9, 1), Range::any(), "",
                           "0: the axes given; 1 orthogonal, 2 pyramid, 3 nasa"});
-  k.parameters.push_back({"beta_deg", part(10, 1), Range::any(), "deg",
-                          "the pyramid wheels' elevation β"});
+  k.parameters.push_back(
+      {"beta_deg", part(10, 1), Range::any(), "deg", "the pyramid wheels' elevation β"});
   k.parameters.push_back({"actuator_count", part(11, 1), Range::any(), "", "m"});
   k.parameters.push_back({"axes", part(12, 24), Range::any(), "", "each actuator's axis"});
   k.parameters.push_back({"max", part(36, 8), Range::any(), "N·m", "each actuator's limit"});
@@ -481,13 +495,16 @@ PlantKind rigid_body_kind() {
   k.positions = "attitude angles";
   k.rates = "Euler angle rates";
   k.axis_names = {"roll", "pitch", "yaw"};
-  k.count_actuators = [](const std::vector<double>& v) { return actuator_count(rigid_body_spec(v)); };
+  k.count_actuators = [](const std::vector<double>& v) {
+    return actuator_count(rigid_body_spec(v));
+  };
   k.check_values = [](const std::vector<double>& v, const std::string& path) {
     return validate(rigid_body_spec(v), path);
   };
   k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
-    return std::make_unique<PlantAdapter<RigidBody>>(
-        v, [](const std::vector<double>& w) { return RigidBody(rigid_body_params(rigid_body_spec(w))); });
+    return std::make_unique<PlantAdapter<RigidBody>>(v, [](const std::vector<double>& w) {
+      return RigidBody(rigid_body_params(rigid_body_spec(w)));
+    });
   };
   return k;
 }
@@ -514,7 +531,8 @@ PlantKind multirotor_kind() {
                           "0: the rotors given; 1 quad_x, 2 quad_plus, 3 hexa_x, 4 octa_x"});
   k.parameters.push_back({"arm_length", part(12, 1), Range::any(), "m", "a preset's arm length"});
   k.parameters.push_back({"preset_max_thrust", part(13, 1), Range::any(), "N", "a preset's T_max"});
-  k.parameters.push_back({"preset_moment_constant", part(14, 1), Range::any(), "m", "a preset's κ"});
+  k.parameters.push_back(
+      {"preset_moment_constant", part(14, 1), Range::any(), "m", "a preset's κ"});
   k.parameters.push_back({"rotor_count", part(15, 1), Range::any(), "", "m"});
   k.parameters.push_back({"rotor_x", part(16, 8), Range::any(), "m", "each rotor's x"});
   k.parameters.push_back({"rotor_y", part(24, 8), Range::any(), "m", "each rotor's y"});
@@ -526,13 +544,16 @@ PlantKind multirotor_kind() {
   k.positions = "attitude angles";
   k.rates = "angular rates";
   k.axis_names = {"roll", "pitch", "yaw"};
-  k.count_actuators = [](const std::vector<double>& v) { return actuator_count(multirotor_spec(v)); };
+  k.count_actuators = [](const std::vector<double>& v) {
+    return actuator_count(multirotor_spec(v));
+  };
   k.check_values = [](const std::vector<double>& v, const std::string& path) {
     return validate(multirotor_spec(v), path);
   };
   k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
-    return std::make_unique<PlantAdapter<RigidBody>>(
-        v, [](const std::vector<double>& w) { return RigidBody(multirotor_params(multirotor_spec(w))); });
+    return std::make_unique<PlantAdapter<RigidBody>>(v, [](const std::vector<double>& w) {
+      return RigidBody(multirotor_params(multirotor_spec(w)));
+    });
   };
   return k;
 }

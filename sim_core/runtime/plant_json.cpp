@@ -35,9 +35,10 @@ schema::Object<sim::PlantSpec>::Field plant_field(const sim::PlantParameter& p, 
             }
             for (std::size_t i = 0; i < n; ++i) {
               if (name == "inertia" && v[i].is_array()) {
-                e.push_back({path, "this plant takes the 3 principal moments [Ix, Iy, Iz] only; "
-                                   "for a full inertia tensor use the rigid_body or multirotor "
-                                   "plant"});
+                e.push_back({path,
+                             "this plant takes the 3 principal moments [Ix, Iy, Iz] only; "
+                             "for a full inertia tensor use the rigid_body or multirotor "
+                             "plant"});
                 return;
               }
               schema::detail::read_number(v[i], path + "/" + std::to_string(i),

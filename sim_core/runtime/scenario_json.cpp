@@ -6,8 +6,8 @@
 #include <string_view>
 
 #include "ftc/runtime/json_reader.hpp"
-#include "vehicle_json.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "vehicle_json.hpp"
 
 namespace ftc::runtime {
 

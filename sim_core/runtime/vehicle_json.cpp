@@ -40,7 +40,8 @@ bool read_inertia(const json& v, const std::string& path, std::array<double, 9>&
   if (v.is_array() && v.size() == 3 && std::none_of(v.begin(), v.end(), is_row)) {
     std::array<double, 9> d{};
     bool ok = true;
-    for (std::size_t i = 0; i < 3; ++i) ok = read_num(v[i], path + "/" + std::to_string(i), d[4 * i], e) && ok;
+    for (std::size_t i = 0; i < 3; ++i)
+      ok = read_num(v[i], path + "/" + std::to_string(i), d[4 * i], e) && ok;
     if (ok) J = d;
     return ok;
   }
@@ -60,10 +61,11 @@ bool read_inertia(const json& v, const std::string& path, std::array<double, 9>&
     if (ok) J = d;
     return ok;
   }
-  e.push_back({path, "expected 3 principal moments [Ix, Iy, Iz] or a symmetric 3×3 tensor "
-                     "[[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]] in kg·m², got " +
-                         (v.is_array() ? "an array of " + std::to_string(v.size())
-                                       : json_io::json_type_name(v))});
+  e.push_back({path,
+               "expected 3 principal moments [Ix, Iy, Iz] or a symmetric 3×3 tensor "
+               "[[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]] in kg·m², got " +
+                   (v.is_array() ? "an array of " + std::to_string(v.size())
+                                 : json_io::json_type_name(v))});
   return false;
 }
 
@@ -79,11 +81,13 @@ json inertia_schema() {
   return {{"description",
            "the inertia tensor J in kg·m²: 3 principal moments, or the symmetric positive-definite "
            "3×3 tensor"},
-          {"oneOf", json::array({{{"type", "array"}, {"items", num}, {"minItems", 3}, {"maxItems", 3}},
-                                 {{"type", "array"},
-                                  {"items", {{"type", "array"}, {"items", num}, {"minItems", 3}, {"maxItems", 3}}},
-                                  {"minItems", 3},
-                                  {"maxItems", 3}}})}};
+          {"oneOf",
+           json::array(
+               {{{"type", "array"}, {"items", num}, {"minItems", 3}, {"maxItems", 3}},
+                {{"type", "array"},
+                 {"items", {{"type", "array"}, {"items", num}, {"minItems", 3}, {"maxItems", 3}}},
+                 {"minItems", 3},
+                 {"maxItems", 3}}})}};
 }
 
 bool read_preset(const json& v, const std::string& path, const std::vector<std::string>& names,
@@ -111,8 +115,9 @@ bool read_numbers(const json& v, const std::string& path, std::vector<double>& o
     return true;
   }
   if (!v.is_array() || v.empty()) {
-    e.push_back({path, "expected a number (every actuator's) or an array of one per actuator, got " +
-                           json_io::json_type_name(v)});
+    e.push_back(
+        {path, "expected a number (every actuator's) or an array of one per actuator, got " +
+                   json_io::json_type_name(v)});
     return false;
   }
   std::vector<double> x(v.size());
@@ -210,12 +215,13 @@ json write_actuators(const sim::RigidBodySpec& s) {
 json actuators_schema() {
   const json num = {{"type", "number"}};
   const json axis = {{"type", "array"}, {"items", num}, {"minItems", 3}, {"maxItems", 3}};
-  const json max = {{"description",
-                     "each actuator's limit |u_j| <= max_j in N·m (> 0): one number for every "
-                     "actuator or one per actuator; absent: no limit"},
-                    {"oneOf", json::array({{{"type", "number"}, {"exclusiveMinimum", 0}},
-                                           {{"type", "array"},
-                                            {"items", {{"type", "number"}, {"exclusiveMinimum", 0}}}}})}};
+  const json max = {
+      {"description",
+       "each actuator's limit |u_j| <= max_j in N·m (> 0): one number for every "
+       "actuator or one per actuator; absent: no limit"},
+      {"oneOf", json::array({{{"type", "number"}, {"exclusiveMinimum", 0}},
+                             {{"type", "array"},
+                              {"items", {{"type", "number"}, {"exclusiveMinimum", 0}}}}})}};
   return {{"type", "object"},
           {"description",
            "the actuators: actuator j applies u_j along its unit axis. Either \"axes\" (3 to 8 "
@@ -235,9 +241,10 @@ json actuators_schema() {
 
 void read_rotor(const json& v, const std::string& path, sim::RotorSpec& r, Errors& e) {
   if (!v.is_object()) {
-    e.push_back({path, "expected a rotor {\"position\": [x, y], \"spin\": \"cw\" or \"ccw\", "
-                       "\"max_thrust\": N, \"moment_constant\": m}, got " +
-                           json_io::json_type_name(v)});
+    e.push_back({path,
+                 "expected a rotor {\"position\": [x, y], \"spin\": \"cw\" or \"ccw\", "
+                 "\"max_thrust\": N, \"moment_constant\": m}, got " +
+                     json_io::json_type_name(v)});
     return;
   }
   unknown_keys(v, path, {"position", "spin", "max_thrust", "moment_constant"}, e);
@@ -262,7 +269,7 @@ void read_rotor(const json& v, const std::string& path, sim::RotorSpec& r, Error
       r.spin = -1;
     else
       e.push_back({path + "/spin", s.is_string() ? schema::detail::choice_error({"cw", "ccw"}, got)
-                                                  : schema::detail::type_error("a string", s)});
+                                                 : schema::detail::type_error("a string", s)});
   }
   if (v.contains("max_thrust")) read_num(v["max_thrust"], path + "/max_thrust", r.max_thrust, e);
   if (v.contains("moment_constant"))
@@ -287,14 +294,16 @@ void read_rotors(const json& v, const std::string& path, sim::MultirotorSpec& s,
   }
   if (!v.is_object()) {
     e.push_back({path, "expected a list of rotors or a preset {\"preset\": " +
-                           names_of(sim::rotor_presets()) + ", \"arm_length\", \"max_thrust\", "
-                           "\"moment_constant\"}, got " + json_io::json_type_name(v)});
+                           names_of(sim::rotor_presets()) +
+                           ", \"arm_length\", \"max_thrust\", "
+                           "\"moment_constant\"}, got " +
+                           json_io::json_type_name(v)});
     return;
   }
   unknown_keys(v, path, {"preset", "arm_length", "max_thrust", "moment_constant"}, e);
   if (!v.contains("preset")) {
-    e.push_back({path + "/preset", "is required (" + names_of(sim::rotor_presets()) +
-                                       "), or give a list of rotors"});
+    e.push_back({path + "/preset",
+                 "is required (" + names_of(sim::rotor_presets()) + "), or give a list of rotors"});
     return;
   }
   std::string p;
@@ -341,24 +350,35 @@ json rotors_schema() {
           {"exclusiveMinimum", 0},
           {"description", "m: N·m of drag torque per N of thrust"}}}}},
       {"additionalProperties", false}};
-  const json preset = {
-      {"type", "object"},
-      {"required", json::array({"preset"})},
-      {"properties",
-       {{"preset", {{"enum", sim::rotor_presets()}}},
-        {"arm_length", {{"type", "number"}, {"exclusiveMinimum", 0}, {"default", d.arm_length}, {"description", "m"}}},
-        {"max_thrust", {{"type", "number"}, {"exclusiveMinimum", 0}, {"default", d.max_thrust}, {"description", "N"}}},
-        {"moment_constant",
-         {{"type", "number"}, {"exclusiveMinimum", 0}, {"default", d.moment_constant}, {"description", "m"}}}}},
-      {"additionalProperties", false}};
+  const json preset = {{"type", "object"},
+                       {"required", json::array({"preset"})},
+                       {"properties",
+                        {{"preset", {{"enum", sim::rotor_presets()}}},
+                         {"arm_length",
+                          {{"type", "number"},
+                           {"exclusiveMinimum", 0},
+                           {"default", d.arm_length},
+                           {"description", "m"}}},
+                         {"max_thrust",
+                          {{"type", "number"},
+                           {"exclusiveMinimum", 0},
+                           {"default", d.max_thrust},
+                           {"description", "N"}}},
+                         {"moment_constant",
+                          {{"type", "number"},
+                           {"exclusiveMinimum", 0},
+                           {"default", d.moment_constant},
+                           {"description", "m"}}}}},
+                       {"additionalProperties", false}};
   return {{"description",
            "the rotors: a list of 4 to 8, or a preset layout (quad_x: rotors at 45° + 90°(i − 1), "
            "quad_plus: 0° + 90°(i − 1), hexa_x: 30° + 60°(i − 1), the hexarotor's, octa_x: "
            "22.5° + 45°(i − 1); odd rotors clockwise); every rotor's hover thrust (the "
            "minimum-norm thrusts with zero torque that carry m g) must lie strictly inside "
            "(0, max_thrust)"},
-          {"oneOf", json::array({{{"type", "array"}, {"items", rotor}, {"minItems", 4}, {"maxItems", 8}},
-                                 preset})}};
+          {"oneOf",
+           json::array(
+               {{{"type", "array"}, {"items", rotor}, {"minItems", 4}, {"maxItems", 8}}, preset})}};
 }
 
 using Field = schema::Object<sim::PlantSpec>::Field;
@@ -368,7 +388,8 @@ Field spec_field(std::string key, ToSpec to_spec,
                  std::function<void(const json&, const std::string&, Spec&, Errors&)> read,
                  std::function<json(const Spec&)> write, std::function<json()> schema_of,
                  std::vector<double> defaults) {
-  return {key, false,
+  return {key,
+          false,
           [to_spec, read](const json& v, const std::string& path, sim::PlantSpec& out, Errors& e) {
             Spec s = to_spec(out.values);
             const std::size_t before = e.size();
@@ -430,8 +451,8 @@ std::shared_ptr<schema::Object<sim::PlantSpec>> multirotor_object(const sim::Pla
       },
       [](const sim::MultirotorSpec& s) { return write_inertia(s.inertia); }, inertia_schema, d));
   o->field(spec_field<sim::MultirotorSpec>(
-      "rotors", to_spec, read_rotors,
-      [](const sim::MultirotorSpec& s) { return write_rotors(s); }, rotors_schema, d));
+      "rotors", to_spec, read_rotors, [](const sim::MultirotorSpec& s) { return write_rotors(s); },
+      rotors_schema, d));
   return o;
 }
 

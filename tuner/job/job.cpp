@@ -479,7 +479,8 @@ void validate_scale_ends(const Job& job, const sim::PlantKind& kind, Errors& err
       e.base.empty() && !job.scenarios.empty() ? job.scenarios.front().name : e.base;
   const auto base = std::find_if(job.scenarios.begin(), job.scenarios.end(),
                                  [&](const sim::Scenario& s) { return s.name == base_name; });
-  if (base == job.scenarios.end() || !base->validate("", kind.axes, kind.actuators_of(job.plant.values)).empty())
+  if (base == job.scenarios.end() ||
+      !base->validate("", kind.axes, kind.actuators_of(job.plant.values)).empty())
     return;  // its own errors say what is wrong
   const std::vector<double> ones(std::max<std::size_t>(6, base->initial_state.size()), 1.0);
   // Each scale: a parameter's (empty for the others), its key and its distribution.
@@ -706,7 +707,8 @@ void validate_job(const Job& job, Errors& errs) {
                     "(it names the output directory); got \"" +
                         job.name + "\""});
   const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
-  const int n = kind ? kind->axes : sim::kMaxAxes, m = kind ? kind->actuators_of(job.plant.values) : sim::kMaxActuators;
+  const int n = kind ? kind->axes : sim::kMaxAxes,
+            m = kind ? kind->actuators_of(job.plant.values) : sim::kMaxActuators;
 
   if (job.scenarios.empty()) errs.push_back({"/scenarios", "must hold at least one scenario"});
   std::set<std::string> names;

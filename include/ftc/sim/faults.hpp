@@ -46,10 +46,13 @@ struct Saturation {
   bool has_value() const { return !values.empty(); }
   explicit operator bool() const { return has_value(); }
   bool per_actuator() const { return values.size() > 1; }
-  // Actuator j's limit (0-based), +inf without one.
+  // Actuator j's limit (0-based), +inf without one (and past the list: a rigid body's kernel
+  // columns past its m).
   double limit(int j) const {
     if (values.empty()) return std::numeric_limits<double>::infinity();
-    return values.size() == 1 ? values[0] : values[static_cast<std::size_t>(j)];
+    if (values.size() == 1) return values[0];
+    const auto i = static_cast<std::size_t>(j);
+    return i < values.size() ? values[i] : std::numeric_limits<double>::infinity();
   }
 };
 

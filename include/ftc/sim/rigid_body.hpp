@@ -127,6 +127,9 @@ class RigidBody final : public Plant<3, kMaxBodyActuators> {
   const InputInverse& torque_inverse() const { return Dp_; }
 
  private:
+  struct Terms;
+  Terms terms(const State& x) const;
+
   RigidBodyParams params_;
   bool diagonal_ = false;
   Mat<3, 3> J_, J_inv_;

@@ -23,7 +23,7 @@ struct RigidBodySpec {
   // "orthogonal" (the body axes: 3 wheels), "pyramid" (4 wheels at azimuths 45° + 90°(j − 1),
   // elevation beta_deg), "nasa" (the body axes and (1, 1, 1)/√3), or "" for `axes`.
   std::string preset = "pyramid";
-  double beta_deg = kPyramidBetaDeg;  // pyramid only
+  double beta_deg = kPyramidBetaDeg;        // pyramid only
   std::vector<std::array<double, 3>> axes;  // without a preset: 3 to 8 axes (any length ≠ 0)
   std::vector<double> max;  // N·m, > 0: none (no limit), one for all, or one per actuator
 };
@@ -36,17 +36,17 @@ struct RotorSpec {
 };
 
 struct MultirotorSpec {
-  double mass = 1.5;     // kg
-  double gravity = 9.81;  // m/s²
+  double mass = 1.5;                                                                 // kg
+  double gravity = 9.81;                                                             // m/s²
   std::array<double, 9> inertia{0.015, 0.0, 0.0, 0.0, 0.015, 0.0, 0.0, 0.0, 0.027};  // kg·m²
   // "quad_x" (rotors at 45° + 90°(i − 1)), "quad_plus" (0° + 90°(i − 1)), "hexa_x"
   // (30° + 60°(i − 1): the hexarotor's), "octa_x" (22.5° + 45°(i − 1)), odd rotors clockwise,
   // at arm_length with max_thrust and moment_constant; or "" for `rotors`.
   std::string preset = "quad_x";
-  double arm_length = 0.25;  // m
-  double max_thrust = 8.0;   // N
+  double arm_length = 0.25;        // m
+  double max_thrust = 8.0;         // N
   double moment_constant = 0.016;  // m
-  std::vector<RotorSpec> rotors;  // without a preset: 4 to 8 rotors
+  std::vector<RotorSpec> rotors;   // without a preset: 4 to 8 rotors
 };
 
 // The preset names, for messages and the JSON Schema.
