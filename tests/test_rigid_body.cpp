@@ -308,7 +308,8 @@ TEST(Multirotor, HexaXGivesTheHexarotorsBits) {
 }
 
 // Every lane of a pack on every instruction set gives the bits of the simulation alone, for a
-// full tensor with Euler kinematics and per-wheel limits, lanes with their own true tensor.
+// full tensor with Euler kinematics and per-wheel limits, lanes with their own true tensor (full
+// or diagonal).
 TEST(RigidBody, EveryLaneGivesTheScalarBits) {
   RigidBodySpec spec;
   spec.inertia = kTensor;
@@ -339,6 +340,9 @@ TEST(RigidBody, EveryLaneGivesTheScalarBits) {
           scenarios[l].set_true_value("inertia", J);
         }
         if (l % 3 == 2) scenarios[l].saturation = std::vector<double>{0.03, 0.02, 0.03, 0.04};
+        // A diagonal true tensor among full ones: each lane takes the form of its own J, so it
+        // gives its bits whatever the pack holds beside it.
+        if (l % 4 == 3) scenarios[l].set_true_value("inertia", {0.25, 0.30, 0.18});
         options[l].record_every = l == 0 ? 0 : 9;
         tasks.push_back({&configs[l], &scenarios[l], &options[l]});
       }

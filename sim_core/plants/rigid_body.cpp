@@ -1,8 +1,6 @@
 #include "ftc/sim/rigid_body.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
-#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -40,9 +38,8 @@ RigidBody::RigidBody(const RigidBodyParams& params) : params_(params) {
                                       std::to_string(params.actuators)});
   throw_if_errors("plant", std::move(errs));
   const int m = params.actuators;
-  J_ = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(params.inertia.data());
-  diagonal_ = J_(0, 1) == 0.0 && J_(0, 2) == 0.0 && J_(1, 2) == 0.0;
-  J_inv_ = J_.inverse();
+  const auto& J = params.inertia;
+  diagonal_ = J[1] == 0.0 && J[2] == 0.0 && J[5] == 0.0;
   D_.setZero();
   for (int k = 0; k < 3; ++k)
     for (int j = 0; j < m; ++j) D_(k, j) = params.torque[static_cast<std::size_t>(k * MA + j)];
@@ -58,6 +55,7 @@ RigidBody::RigidBody(const RigidBodyParams& params) : params_(params) {
       throw InputError("plant", "/actuators", "the actuators' torques do not span R³");
     Dp_ = D_.transpose() * DDt.inverse();
   }
+  constants_ = constants();
 }
 
 // The class's side of the lane code (plants/rigid_body_dynamics.hpp): its constants as the lanes
@@ -69,8 +67,7 @@ struct RigidBody::Terms {
 
 RigidBody::Terms RigidBody::terms(const State& x) const {
   Terms t;
-  const auto k = f_constants();
-  t.b.load([&](int i) { return k[static_cast<std::size_t>(i)]; }, diagonal_);
+  t.b.load([&](int i) { return constants_[static_cast<std::size_t>(i)]; });
   if (params_.kinematics == BodyKinematics::euler_321) t.g = trig_of(x);
   return t;
 }
@@ -83,13 +80,12 @@ RigidBody::Vector RigidBody::f(const State& x) const {
 }
 
 RigidBody::InputMatrix RigidBody::G(const State& x) const {
-  InputMatrix G = J_inv_ * D_;
-  if (params_.kinematics == BodyKinematics::body_rates) return G;
-  const BodyTrig<double> g = trig_of(x);
+  const Terms t = terms(x);
+  InputMatrix G;
   for (int j = 0; j < MA; ++j) {
-    const double y[3] = {G(0, j), G(1, j), G(2, j)};
-    double z[3];
-    euler_W_inv<double>(g, y, z);
+    const double a[3] = {t.b.G0[j], t.b.G0[MA + j], t.b.G0[2 * MA + j]};
+    double z[3] = {a[0], a[1], a[2]};
+    if (params_.kinematics == BodyKinematics::euler_321) euler_W_inv<double>(t.g, a, z);
     for (int k = 0; k < 3; ++k) G(k, j) = z[k];
   }
   return G;
@@ -105,7 +101,7 @@ RigidBody::InputInverse RigidBody::G_pinv(const State& x) const {
   return P;
 }
 
-std::array<double, RigidBodyConstants::kCount> RigidBody::f_constants() const {
+std::array<double, RigidBodyConstants::kCount> RigidBody::constants() const {
   using K = RigidBodyConstants;
   std::array<double, K::kCount> c{};
   c[K::kEuler] = params_.kinematics == BodyKinematics::euler_321 ? 1.0 : 0.0;

@@ -14,21 +14,28 @@ inline namespace FTC_ISA_NS {
 template <class T>
 struct BodyTerms {
   static constexpr int MA = kMaxBodyActuators;
-  bool euler = true, diagonal = true;
+  bool euler = true;
   int m = 0;
+  // Each lane's own J decides between the diagonal operations (the hexarotor's) and the full
+  // ones, never the pack's mix of lanes: a lane gives the same bits in any pack, on any SIMD
+  // width. `all_diagonal` and `any_diagonal` skip the form no lane needs.
+  lane::Mask<T> diagonal;
+  bool all_diagonal = true, any_diagonal = true;
   T J[9], Ji[9];  // J and J⁻¹, row-major
-  T k[3];         // kx, ky, kz when J is diagonal
+  T k[3];         // kx, ky, kz (the diagonal form)
   T D[3 * MA];    // row-major 3×8
   T G0[3 * MA];   // J⁻¹ D, row-major 3×8: G itself with body rates
   T P[MA * 3];    // D⁺, row-major 8×3
 
-  // `c(i)`: constant i of every lane. `diagonal`: J is diagonal in every lane of the pack.
+  // `c(i)`: constant i (RigidBodyConstants) of every lane.
   template <class C>
-  void load(const C& c, bool all_diagonal) {
+  void load(const C& c) {
     using K = RigidBodyConstants;
-    euler = lane_value(c(K::kEuler)) != 0.0;
-    diagonal = all_diagonal;
-    m = static_cast<int>(lane_value(c(K::kM)));
+    euler = lane::lane_of(c(K::kEuler), 0) != 0.0;
+    m = static_cast<int>(lane::lane_of(c(K::kM), 0));
+    diagonal = c(K::kDiagonal) != T(0.0);
+    all_diagonal = lane::all(diagonal);
+    any_diagonal = lane::any(diagonal);
     const T xx = c(K::kJ), yy = c(K::kJ + 1), zz = c(K::kJ + 2);
     const T xy = c(K::kJ + 3), xz = c(K::kJ + 4), yz = c(K::kJ + 5);
     const T full[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
@@ -47,40 +54,35 @@ struct BodyTerms {
     // With J diagonal, A(k, j) / I_k: the hexarotor's G.
     for (int r = 0; r < 3; ++r)
       for (int j = 0; j < MA; ++j)
-        G0[r * MA + j] = diagonal ? D[r * MA + j] / J[4 * r]
-                                  : (Ji[3 * r] * D[j] + Ji[3 * r + 1] * D[MA + j]) +
-                                        Ji[3 * r + 2] * D[2 * MA + j];
+        G0[r * MA + j] = lane::select(diagonal, D[r * MA + j] / J[4 * r],
+                                      (Ji[3 * r] * D[j] + Ji[3 * r + 1] * D[MA + j]) +
+                                          Ji[3 * r + 2] * D[2 * MA + j]);
   }
 
-  static double lane_value(const T& v) { return lane::lane_of(v, 0); }
+  // The diagonal form in the lanes whose J is diagonal, the full form in the others; each form
+  // is evaluated only when some lane needs it.
+  template <class Diag, class Full>
+  FTC_HOT_INLINE T per_lane(Diag&& d, Full&& f) const {
+    if (all_diagonal) return d();
+    if (!any_diagonal) return f();
+    return lane::select(diagonal, d(), f());
+  }
 
   // h = J⁻¹ (−ω × J ω) = J⁻¹ (J ω × ω).
   FTC_HOT_INLINE void gyro(const T (&w)[3], T (&h)[3]) const {
-    if (diagonal) {
-      h[0] = k[0] * (w[1] * w[2]);
-      h[1] = k[1] * (w[0] * w[2]);
-      h[2] = k[2] * (w[0] * w[1]);
-      return;
+    T full[3] = {T(0.0), T(0.0), T(0.0)};
+    if (!all_diagonal) {
+      const T Jw[3] = {(J[0] * w[0] + J[1] * w[1]) + J[2] * w[2],
+                       (J[3] * w[0] + J[4] * w[1]) + J[5] * w[2],
+                       (J[6] * w[0] + J[7] * w[1]) + J[8] * w[2]};
+      const T c[3] = {Jw[1] * w[2] - Jw[2] * w[1], Jw[2] * w[0] - Jw[0] * w[2],
+                      Jw[0] * w[1] - Jw[1] * w[0]};
+      for (int r = 0; r < 3; ++r)
+        full[r] = (Ji[3 * r] * c[0] + Ji[3 * r + 1] * c[1]) + Ji[3 * r + 2] * c[2];
     }
-    const T Jw[3] = {(J[0] * w[0] + J[1] * w[1]) + J[2] * w[2],
-                     (J[3] * w[0] + J[4] * w[1]) + J[5] * w[2],
-                     (J[6] * w[0] + J[7] * w[1]) + J[8] * w[2]};
-    const T c[3] = {Jw[1] * w[2] - Jw[2] * w[1], Jw[2] * w[0] - Jw[0] * w[2],
-                    Jw[0] * w[1] - Jw[1] * w[0]};
+    const T wp[3] = {w[1] * w[2], w[0] * w[2], w[0] * w[1]};
     for (int r = 0; r < 3; ++r)
-      h[r] = (Ji[3 * r] * c[0] + Ji[3 * r + 1] * c[1]) + Ji[3 * r + 2] * c[2];
-  }
-
-  // J⁻¹ y.
-  FTC_HOT_INLINE void solve(const T (&y)[3], T (&z)[3]) const {
-    if (diagonal) {
-      z[0] = y[0] / J[0];
-      z[1] = y[1] / J[4];
-      z[2] = y[2] / J[8];
-      return;
-    }
-    for (int r = 0; r < 3; ++r)
-      z[r] = (Ji[3 * r] * y[0] + Ji[3 * r + 1] * y[1]) + Ji[3 * r + 2] * y[2];
+      h[r] = per_lane([&] { return k[r] * wp[r]; }, [&] { return full[r]; });
   }
 };
 
@@ -145,30 +147,32 @@ FTC_HOT_INLINE void body_input(const BodyTerms<T>& b, const BodyTrig<T>& g, cons
   euler_W_inv(g, a, Gu);
 }
 
-// G⁺(X) = D⁺ J W, row-major 8×3 (rows past m zero).
+// G⁺(X) = D⁺ J W, row-major 8×3 (rows past m zero). With a diagonal J, J W's row k is I_k times
+// W's, and with body rates (W = I) G⁺(j, k) = D⁺(j, k) I_k: the hexarotor's A⁺ J.
 template <class T>
 FTC_HOT_INLINE void body_pinv(const BodyTerms<T>& b, const BodyTrig<T>& g, T* out) {
   constexpr int MA = kMaxBodyActuators;
-  if (!b.euler && b.diagonal) {  // D⁺(j, k) I_k: the hexarotor's A⁺ J
-    for (int j = 0; j < MA; ++j)
-      for (int k = 0; k < 3; ++k) out[j * 3 + k] = b.P[j * 3 + k] * b.J[4 * k];
-    return;
-  }
+  const T I3[9] = {T(1.0), T(0.0), T(0.0), T(0.0), T(1.0), T(0.0), T(0.0), T(0.0), T(1.0)};
+  const T Wx[9] = {T(1.0), T(0.0), -g.st, T(0.0), g.cf, g.sf * g.ct, T(0.0), -g.sf, g.cf * g.ct};
+  const T* W = b.euler ? Wx : I3;
   T JW[9];
-  if (b.euler) {
-    const T W[9] = {T(1.0), T(0.0), -g.st, T(0.0), g.cf, g.sf * g.ct, T(0.0), -g.sf, g.cf * g.ct};
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        JW[3 * r + c] = b.diagonal ? b.J[4 * r] * W[3 * r + c]
-                                   : (b.J[3 * r] * W[c] + b.J[3 * r + 1] * W[3 + c]) +
-                                         b.J[3 * r + 2] * W[6 + c];
-  } else {
-    for (int i = 0; i < 9; ++i) JW[i] = b.J[i];
-  }
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      JW[3 * r + c] = b.per_lane(
+          [&] { return b.J[4 * r] * W[3 * r + c]; },
+          [&] {
+            return (b.J[3 * r] * W[c] + b.J[3 * r + 1] * W[3 + c]) + b.J[3 * r + 2] * W[6 + c];
+          });
   for (int j = 0; j < MA; ++j)
     for (int c = 0; c < 3; ++c)
-      out[j * 3 + c] =
-          (b.P[j * 3] * JW[c] + b.P[j * 3 + 1] * JW[3 + c]) + b.P[j * 3 + 2] * JW[6 + c];
+      out[j * 3 + c] = b.euler ? (b.P[j * 3] * JW[c] + b.P[j * 3 + 1] * JW[3 + c]) +
+                                     b.P[j * 3 + 2] * JW[6 + c]
+                               : b.per_lane([&] { return b.P[j * 3 + c] * b.J[4 * c]; },
+                                            [&] {
+                                              return (b.P[j * 3] * JW[c] +
+                                                      b.P[j * 3 + 1] * JW[3 + c]) +
+                                                     b.P[j * 3 + 2] * JW[6 + c];
+                                            });
 }
 
 }  // namespace FTC_ISA_NS

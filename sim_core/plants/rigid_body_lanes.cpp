@@ -4,8 +4,8 @@
 //
 // Per lane: J, D, D⁺ and m of the simulated plant and of the controller's model
 // (RigidBody::f_constants()): J may differ lane by lane (model mismatch), so J⁻¹ D is formed once
-// per pack per lane. Every lane of a pack is the same plant, so the kinematics, m and whether J
-// is diagonal in every lane are the pack's. With Euler kinematics the sines of roll and pitch
+// per pack per lane, in the diagonal or the full form by that lane's own J (BodyTerms). Every lane
+// of a pack is the same plant, so the kinematics and m are the pack's. With Euler kinematics the sines of roll and pitch
 // come from angle trackers, set by each drift() and read by the input() and pinv() that follow
 // it; with body rates G and G⁺ are constant and nothing trigonometric is evaluated.
 #include "lanes/angle_tracker.hpp"
@@ -21,18 +21,13 @@ struct PlantLanes<RigidBody> {
 
   template <class T>
   class Lanes {
-    using K = RigidBodyConstants;
-
    public:
     static constexpr bool kTrimmed = true;
     static constexpr bool kConstantInput = false;
 
     explicit Lanes(const PackSetup<N, M>& su) {
-      bool diagonal = true;
-      for (int l = 0; l < su.lanes; ++l)
-        diagonal = diagonal && su.truth[K::kDiagonal][l] != 0.0 && su.model[K::kDiagonal][l] != 0.0;
-      truth_.load([&](int i) { return row(su.truth[i]); }, diagonal);
-      model_.load([&](int i) { return row(su.model[i]); }, diagonal);
+      truth_.load([&](int i) { return row(su.truth[i]); });
+      model_.load([&](int i) { return row(su.model[i]); });
       euler_ = truth_.euler;
       if (!euler_) body_pinv<T>(model_, trig_, G_pinv_);
     }

@@ -78,9 +78,8 @@ Ptr<sim::PlantSpec> make_plant_shape() {
         return "unknown plant model '" + model + "' (known: " + sim::plant_model_names() + ")";
       });
   for (const sim::PlantKind& k : sim::plant_kinds()) {
-    std::shared_ptr<schema::Object<sim::PlantSpec>> o;
-    if (k.model == "rigid_body" || k.model == "multirotor") {
-      o = k.model == "rigid_body" ? detail::rigid_body_object(k) : detail::multirotor_object(k);
+    std::shared_ptr<schema::Object<sim::PlantSpec>> o = detail::structured_plant_object(k);
+    if (o) {
       o->rule([&k](const sim::PlantSpec& c, const std::string& path, Errors& e) {
         if (c.values.empty()) return;
         for (FieldError& err : k.validate(c.values, path)) e.push_back(std::move(err));

@@ -405,6 +405,8 @@ Field spec_field(std::string key, ToSpec to_spec,
 
 }  // namespace
 
+namespace {
+
 std::shared_ptr<schema::Object<sim::PlantSpec>> rigid_body_object(const sim::PlantKind& k) {
   auto o = std::make_shared<schema::Object<sim::PlantSpec>>(k.description);
   const auto to_spec = [](const std::vector<double>& v) { return sim::rigid_body_spec(v); };
@@ -454,6 +456,14 @@ std::shared_ptr<schema::Object<sim::PlantSpec>> multirotor_object(const sim::Pla
       "rotors", to_spec, read_rotors, [](const sim::MultirotorSpec& s) { return write_rotors(s); },
       rotors_schema, d));
   return o;
+}
+
+}  // namespace
+
+std::shared_ptr<schema::Object<sim::PlantSpec>> structured_plant_object(const sim::PlantKind& k) {
+  if (k.model == "rigid_body") return rigid_body_object(k);
+  if (k.model == "multirotor") return multirotor_object(k);
+  return nullptr;
 }
 
 bool read_tensor_values(const json& v, const std::string& path, std::vector<double>& out,

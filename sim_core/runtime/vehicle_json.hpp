@@ -10,8 +10,9 @@
 
 namespace ftc::runtime::detail {
 
-std::shared_ptr<schema::Object<sim::PlantSpec>> rigid_body_object(const sim::PlantKind& kind);
-std::shared_ptr<schema::Object<sim::PlantSpec>> multirotor_object(const sim::PlantKind& kind);
+// The shape of a kind whose job form is structured (rigid_body, multirotor); null for the
+// others, whose parameters are each a number or an array (plant_json.cpp's plant_field).
+std::shared_ptr<schema::Object<sim::PlantSpec>> structured_plant_object(const sim::PlantKind& kind);
 
 // A scenario's true inertia given as a 3×3 tensor: its 9 values, row-major, into `out` (errors
 // at `path`); false when `v` is not a nested array (then it is read as a flat one).

@@ -97,7 +97,7 @@ class RigidBody final : public Plant<3, kMaxBodyActuators> {
   int actuator_count() const { return params_.actuators; }
   // With Euler angles, whether a run left |θ| < 85° is reported (SimulationResult).
   bool reports_validity() const { return params_.kinematics == BodyKinematics::euler_321; }
-  std::array<double, RigidBodyConstants::kCount> f_constants() const;
+  const std::array<double, RigidBodyConstants::kCount>& f_constants() const { return constants_; }
 
   struct Trim {
     std::array<double, kMaxBodyActuators> u0, lo, hi;
@@ -129,12 +129,13 @@ class RigidBody final : public Plant<3, kMaxBodyActuators> {
  private:
   struct Terms;
   Terms terms(const State& x) const;
+  std::array<double, RigidBodyConstants::kCount> constants() const;  // f_constants(), formed once
 
   RigidBodyParams params_;
   bool diagonal_ = false;
-  Mat<3, 3> J_, J_inv_;
   InputMatrix D_;
   InputInverse Dp_;
+  std::array<double, RigidBodyConstants::kCount> constants_{};
 };
 
 }  // namespace ftc::sim
