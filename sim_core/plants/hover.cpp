@@ -50,10 +50,14 @@ double hover_margin(const Eigen::Ref<const Eigen::MatrixXd>& A, double weight,
   Eigen::MatrixXd a(rows, vars);
   Eigen::VectorXd b(rows);
   for (int i = 0; i < k; ++i) {
-    a.block(i, 0, 1, d) = -Z.row(i);
+    // With no free direction (d = 0) Z has no columns, and no row of it may be taken: an empty
+    // Eigen matrix has no storage, and a row of it offsets a null pointer.
+    if (d > 0) {
+      a.block(i, 0, 1, d) = -Z.row(i);
+      a.block(k + i, 0, 1, d) = Z.row(i);
+    }
     a(i, d) = 1.0;
     b[i] = Tp[i] - floor[static_cast<std::size_t>(i)];
-    a.block(k + i, 0, 1, d) = Z.row(i);
     a(k + i, d) = 1.0;
     b[k + i] = cap[static_cast<std::size_t>(i)] - Tp[i];
   }

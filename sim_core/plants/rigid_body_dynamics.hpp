@@ -3,6 +3,12 @@
 // the equations): the class (T = double, sines from math::sincos) and its lanes
 // (plants/rigid_body_lanes.cpp, sines from angle trackers) evaluate the same operations.
 // Private to sim_core.
+//
+// body_f, body_input and body_pinv are calls, not inlined into the loop as the other plants' are:
+// with up to 8 actuators and each lane's choice of form they are large, and inlined into the
+// eight loops of a kernel file (4 controller types, shared inputs or not) they made GCC spend
+// 88 s on the AVX2 copy alone (463 s for the four copies); as calls, 35 s (133 s). The loop's
+// cost per sample did not move beyond the noise of BM_RigidBodyLanes and BM_QuadXLanes.
 #include "ftc/sim/rigid_body.hpp"
 #include "lanes/lane.hpp"
 
@@ -111,7 +117,7 @@ FTC_HOT_INLINE void euler_W_inv(const BodyTrig<T>& g, const T (&y)[3], T (&z)[3]
 
 // f(X), x = (φ, θ, ψ, φ̇, θ̇, ψ̇); `g` the trigonometry of x (unused with body rates).
 template <class T>
-FTC_HOT_INLINE void body_f(const BodyTerms<T>& b, const BodyTrig<T>& g, const T* x, T (&f)[3]) {
+[[gnu::noinline]] void body_f(const BodyTerms<T>& b, const BodyTrig<T>& g, const T* x, T (&f)[3]) {
   const T r[3] = {x[3], x[4], x[5]};
   if (!b.euler) {
     b.gyro(r, f);
@@ -131,7 +137,7 @@ FTC_HOT_INLINE void body_f(const BodyTerms<T>& b, const BodyTrig<T>& g, const T*
 
 // G(X) u = W⁻¹ (J⁻¹ D) u, (J⁻¹ D) u summed over the first m columns in order.
 template <class T>
-FTC_HOT_INLINE void body_input(const BodyTerms<T>& b, const BodyTrig<T>& g, const T* u,
+[[gnu::noinline]] void body_input(const BodyTerms<T>& b, const BodyTrig<T>& g, const T* u,
                                T (&Gu)[3]) {
   constexpr int MA = kMaxBodyActuators;
   T a[3];
@@ -150,7 +156,7 @@ FTC_HOT_INLINE void body_input(const BodyTerms<T>& b, const BodyTrig<T>& g, cons
 // G⁺(X) = D⁺ J W, row-major 8×3 (rows past m zero). With a diagonal J, J W's row k is I_k times
 // W's, and with body rates (W = I) G⁺(j, k) = D⁺(j, k) I_k: the hexarotor's A⁺ J.
 template <class T>
-FTC_HOT_INLINE void body_pinv(const BodyTerms<T>& b, const BodyTrig<T>& g, T* out) {
+[[gnu::noinline]] void body_pinv(const BodyTerms<T>& b, const BodyTrig<T>& g, T* out) {
   constexpr int MA = kMaxBodyActuators;
   const T I3[9] = {T(1.0), T(0.0), T(0.0), T(0.0), T(1.0), T(0.0), T(0.0), T(0.0), T(1.0)};
   const T Wx[9] = {T(1.0), T(0.0), -g.st, T(0.0), g.cf, g.sf * g.ct, T(0.0), -g.sf, g.cf * g.ct};
