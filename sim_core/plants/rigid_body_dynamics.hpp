@@ -138,7 +138,7 @@ template <class T>
 // G(X) u = W⁻¹ (J⁻¹ D) u, (J⁻¹ D) u summed over the first m columns in order.
 template <class T>
 [[gnu::noinline]] void body_input(const BodyTerms<T>& b, const BodyTrig<T>& g, const T* u,
-                               T (&Gu)[3]) {
+                                  T (&Gu)[3]) {
   constexpr int MA = kMaxBodyActuators;
   T a[3];
   for (int r = 0; r < 3; ++r) {
