@@ -6,9 +6,12 @@
 //
 // body_f, body_input and body_pinv are calls, not inlined into the loop as the other plants' are:
 // with up to 8 actuators and each lane's choice of form they are large, and inlined into the
-// eight loops of a kernel file (4 controller types, shared inputs or not) they made GCC spend
-// 88 s on the AVX2 copy alone (463 s for the four copies); as calls, 35 s (133 s). The loop's
-// cost per sample did not move beyond the noise of BM_RigidBodyLanes and BM_QuadXLanes.
+// eight loops of a kernel file (4 controller types, shared inputs or not) they made GCC 12 spend
+// 88 s on the AVX2 copy alone (463 s for the four copies); as calls, 35 s (133 s), on the 2-core
+// VM. The price, in BM_RigidBodyLanes and BM_QuadXLanes interleaved 5 times against the inlined
+// build there: AVX-512 unchanged (medians 0.99 to 1.01 of before), but the rigid body's AVX2
+// copy 1.05 to 1.26 times slower in its medians, within overlapping ranges; inlining back only
+// the cheap body_input is the first thing to try if that matters.
 #include "ftc/sim/rigid_body.hpp"
 #include "lanes/lane.hpp"
 

@@ -4,10 +4,11 @@
 //
 // Per lane: J, D, D⁺ and m of the simulated plant and of the controller's model
 // (RigidBody::f_constants()): J may differ lane by lane (model mismatch), so J⁻¹ D is formed once
-// per pack per lane, in the diagonal or the full form by that lane's own J (BodyTerms). Every lane
-// of a pack is the same plant, so the kinematics and m are the pack's. With Euler kinematics the sines of roll and pitch
-// come from angle trackers, set by each drift() and read by the input() and pinv() that follow
-// it; with body rates G and G⁺ are constant and nothing trigonometric is evaluated.
+// per pack per lane, in the diagonal or the full form by that lane's own J (BodyTerms). Every
+// lane of a pack is the same plant, so the kinematics and m are the pack's. With Euler
+// kinematics the sines of roll and pitch come from angle trackers, set by each drift() and read
+// by the input() and pinv() that follow it; with body rates G and G⁺ are constant and nothing
+// trigonometric is evaluated.
 #include "lanes/angle_tracker.hpp"
 #include "lanes/closed_loop.hpp"
 #include "plants/rigid_body_dynamics.hpp"
