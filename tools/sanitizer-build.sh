@@ -1,5 +1,5 @@
-# Sourced by tools/test --sanitize and tools/fuzz: the one sanitizer build both use, so that CI
-# compiles the project with the sanitizers once, not twice.
+# Sourced by tools/test --sanitize and tools/fuzz: the one sanitizer build both use, so that the
+# project is compiled with the sanitizers once, not twice, when both are run.
 #
 # build-asan/ is a clang build with AddressSanitizer, UndefinedBehaviorSanitizer (every report
 # fatal) and libFuzzer's coverage instrumentation (FTC_FUZZ=ON), at -O1 with line tables only
