@@ -254,6 +254,45 @@ TEST(TuningRun, RefusesAJobWhoseEveryScenarioIsUnrecoverable) {
   }
 }
 
+// A rigid body's run that leaves the Euler angles' validity is reported as such by `run` too:
+// comparison.json flags the listed scenario for every controller whose run left it, and the
+// tuned gains' warnings (gains.json, the log, report.html) say so. A run that stays within it is
+// flagged false, and a plant whose model holds everywhere has no flag at all.
+TEST(TuningRun, SaysWhichRunsLeftTheModelsValidity) {
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/smallsat-pyramid.json");
+  json j = json::parse(in);
+  j["name"] = "steep";
+  // Pitching up at 0.6 rad/s from 1.2 rad, which the wheels cannot stop before 85° (about
+  // 0.5 s in; RigidBody.FlagsARunPastEightyFiveDegreesOfPitch); the second scenario stays level.
+  j["scenarios"] = json::parse(R"([
+    {"name": "steep", "duration": 0.6, "sample_time": 0.01,
+     "initial_state": [0, 1.2, 0, 0, 0.6, 0]},
+    {"name": "level", "duration": 0.6, "sample_time": 0.01,
+     "initial_state": [0.02, -0.015, 0.01, 0, 0, 0]}])");
+  j["objective"]["window"] = {0, 0.6};
+  j["tuning"]["algorithm"] = {{"type", "random"}, {"population", 2}, {"iterations", 1}};
+  tune::SerialEvaluator serial;
+  const tune::TuningOutcome r = tune::tune(tune::parse_job(j, "x"), serial);
+  const json doc = tune::comparison_document(r);
+  ASSERT_EQ(doc["controllers"].size(), 3u) << doc.dump();
+  for (const json& c : doc["controllers"]) {
+    EXPECT_EQ(c["scenarios"][0].value("model_invalid", false), true) << c.dump();
+    EXPECT_EQ(c["scenarios"][1].value("model_invalid", true), false) << c.dump();
+  }
+  const auto warned = std::count_if(r.warnings.begin(), r.warnings.end(), [](const auto& w) {
+    return w.find("scenario steep: with the") != std::string::npos &&
+           w.find("the pitch angle passed ±85°") != std::string::npos;
+  });
+  EXPECT_EQ(warned, 1) << ::testing::PrintToString(r.warnings);
+  for (const std::string& w : r.warnings) EXPECT_EQ(w.find("scenario level"), std::string::npos);
+
+  json sc = short_table1_job();
+  sc["tuning"]["algorithm"]["iterations"] = 1;
+  const tune::TuningOutcome plain = tune::tune(tune::parse_job(sc, "x"), serial);
+  for (const json& c : tune::comparison_document(plain)["controllers"])
+    EXPECT_FALSE(c["scenarios"][0].contains("model_invalid")) << c.dump();
+}
+
 TEST(TuningRun, WarnsOfTunedValuesAtABound) {
   json j = short_table1_job();
   j["tuning"]["parameters"] = {{"Kp", {1, 50}},

@@ -55,6 +55,7 @@ TaskResult run_task(const SimulationBatch& batch, std::size_t k) {
                                    batch.set.scenario(task.scenario), task_options(batch, k));
     r.metrics = std::move(s.metrics);
     r.trajectory = std::move(s.trajectory);
+    r.model_invalid = s.model_invalid;
   } catch (const std::exception& e) {
     r.error = e.what();
   } catch (...) {
@@ -83,6 +84,7 @@ void run_pack(const SimulationBatch& batch, std::span<const std::size_t> pack,
       if (!r.error.empty()) continue;
       r.metrics = std::move(out[i].metrics);
       r.trajectory = std::move(out[i].trajectory);
+      r.model_invalid = out[i].model_invalid;
     }
   } catch (const std::exception& e) {  // out of memory: every task of the pack fails
     for (std::size_t k : pack) results[k].error = e.what();

@@ -328,7 +328,7 @@ Evaluation TuningProblem::score(std::vector<sim::Metrics> per_scenario) const {
   for (std::size_t i = 0; i < n; ++i) {
     std::optional<sim::Scenario> sc;  // for the goals' windows
     if (!job_->goals.empty() && counted_[i]) sc = scenario(i);
-    take(t, i, TaskResult{std::move(per_scenario[i]), {}, {}}, sc ? &*sc : nullptr);
+    take(t, i, TaskResult{std::move(per_scenario[i]), {}, {}, {}}, sc ? &*sc : nullptr);
   }
   return finish(std::move(t));
 }
@@ -459,7 +459,10 @@ std::vector<CandidateOutcome> TuningProblem::evaluate(
     std::vector<TaskResult> results = evaluator.run({*b.set, controllers, b.tasks, record_every});
     for (std::size_t k = 0; k < t.size(); ++k) {
       const std::size_t c = t[k].candidate;
-      if (t[k].record) out[c].trajectories.push_back(std::move(results[k].trajectory));
+      if (t[k].record) {
+        out[c].trajectories.push_back(std::move(results[k].trajectory));
+        out[c].model_invalid.push_back(results[k].model_invalid);
+      }
       take(tally[c], t[k].scenario, std::move(results[k]), &b.set->scenario(b.tasks[k].scenario));
     }
   }

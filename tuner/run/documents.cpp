@@ -309,6 +309,10 @@ json comparison_document(const TuningOutcome& r) {
       m["name"] = r.job.scenarios[i].name;
       if (i < r.listed_recoverable.size())
         m["recoverable"] = static_cast<bool>(r.listed_recoverable[i]);
+      // A model valid only in part of the state space says whether this run left it; its
+      // metrics still count (the same field as `simulate`'s metrics.json).
+      if (i < c.outcome.model_invalid.size() && c.outcome.model_invalid[i])
+        m["model_invalid"] = *c.outcome.model_invalid[i];
       if (i < c.outcome.trajectories.size())
         m["trajectory"] = trajectory_file(r, static_cast<std::size_t>(&c - r.comparison.data()), i);
       cj["scenarios"].push_back(m);

@@ -361,8 +361,17 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
 
 std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   std::vector<std::string> out;
-  if (r.comparison.size() < 2) return out;
+  if (r.comparison.empty()) return out;
   const ComparedController& tuned = r.best();
+  // The tuned gains' runs of the listed scenarios that left the model's validity: their figures
+  // are those of a model that no longer describes the vehicle there.
+  for (std::size_t i = 0; i < r.listed_scenarios && i < tuned.outcome.model_invalid.size(); ++i)
+    if (tuned.outcome.model_invalid[i].value_or(false))
+      out.push_back("scenario " + r.job.scenarios[i].name + ": with the " + tuned.label +
+                    " gains the pitch angle passed ±85°, near the singularity of the 3-2-1 Euler "
+                    "angles, where the rigid_body model is not valid (model_invalid in "
+                    "comparison.json; its metrics still count)");
+  if (r.comparison.size() < 2) return out;
   const double best = tuned.outcome.evaluation.objective;
   const double spread = r.noise_floor ? r.noise_floor->relative_spread : 0.0;
   const std::string label = objective_label(r.job);  // metric, window and aggregate

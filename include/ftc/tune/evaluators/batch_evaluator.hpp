@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -73,6 +74,9 @@ struct TaskResult {
   sim::Metrics metrics;
   sim::Trajectory trajectory;  // when recorded
   std::string error;           // non-empty when the simulation could not run
+  // For a plant whose model holds only in part of the state space (SimulationResult): whether
+  // the run left it. Kept for recorded tasks, which run on the coordinating process under MPI.
+  std::optional<bool> model_invalid;
 };
 
 class BatchEvaluator {

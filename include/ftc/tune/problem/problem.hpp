@@ -84,6 +84,9 @@ struct CandidateOutcome {
   Evaluation evaluation;
   std::string error;  // non-empty when a simulation could not run (fitness is then 0)
   std::vector<sim::Trajectory> trajectories;  // per scenario, when recorded
+  // Beside each recorded trajectory: whether that run left its model's validity (rigid_body's
+  // Euler angles past ±85°); absent for a plant whose model holds everywhere.
+  std::vector<std::optional<bool>> model_invalid;
 };
 
 double fitness_of(double objective);  // 1/objective; 0 for inf/NaN; +inf for 0
