@@ -130,3 +130,25 @@ TEST(Schema, GainsFilesOfARunValidate) {
   EXPECT_EQ(check("docs/gains.schema.json", {dir / "broken.json"}, dir).exit_code, 1);
   EXPECT_THROW(runtime::parse_gains(broken, "broken.json"), InputError);
 }
+
+// Merging the validation's errors into the reader's keeps the first error of each path, in
+// order, and is linear: 100 000 errors merged with 100 000 more, half of them at known paths,
+// compared each path with every earlier one before (quadratic; 57 s for a job of 100 000 empty
+// scenarios). Here the merge is some milliseconds.
+TEST(Schema, MergedErrorsKeepTheFirstOfEachPathInOrder) {
+  schema::Errors to, from;
+  for (int i = 0; i < 100000; ++i) to.push_back({"/s/" + std::to_string(i), "read"});
+  for (int i = 50000; i < 150000; ++i) from.push_back({"/s/" + std::to_string(i), "range"});
+  from.push_back({"/s/149999", "range again"});
+  schema::detail::dedupe_append(to, std::move(from));
+  ASSERT_EQ(to.size(), 150000u);
+  EXPECT_EQ(to[49999].path, "/s/49999");
+  EXPECT_EQ(to[50000].message, "read");  // known: the reader's error stays
+  EXPECT_EQ(to[100000].path, "/s/100000");
+  EXPECT_EQ(to[100000].message, "range");
+  EXPECT_EQ(to.back().path, "/s/149999");
+  EXPECT_EQ(to.back().message, "range");
+  schema::Errors none;
+  schema::detail::dedupe_append(to, std::move(none));
+  EXPECT_EQ(to.size(), 150000u);
+}

@@ -1,6 +1,9 @@
 #include "ftc/runtime/schema.hpp"
 
 #include <cmath>
+#include <string_view>
+#include <unordered_set>
+#include <vector>
 
 namespace ftc::schema {
 
@@ -56,12 +59,19 @@ json number_schema(const std::string& doc, const Range& r) {
   return s;
 }
 
+// Linear in the errors: with a path compared against every earlier one, validating a list of
+// n empty scenarios took quadratic time (57 s for 100 000, and as long in the service).
 void dedupe_append(Errors& to, Errors from) {
-  for (FieldError& e : from) {
-    bool known = false;
-    for (const FieldError& p : to) known = known || p.path == e.path;
-    if (!known) to.push_back(std::move(e));
-  }
+  if (from.empty()) return;
+  // The views are taken after the reserve and dropped before anything moves.
+  to.reserve(to.size() + from.size());
+  std::unordered_set<std::string_view> known;
+  known.reserve(to.size() + from.size());
+  for (const FieldError& p : to) known.insert(p.path);
+  std::vector<std::size_t> keep;
+  for (std::size_t i = 0; i < from.size(); ++i)
+    if (known.insert(from[i].path).second) keep.push_back(i);
+  for (std::size_t i : keep) to.push_back(std::move(from[i]));
 }
 
 }  // namespace detail
