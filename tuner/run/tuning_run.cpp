@@ -363,6 +363,7 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   std::vector<std::string> out;
   if (r.comparison.empty()) return out;
   const ComparedController& tuned = r.best();
+  char buf[600];
   // The tuned gains' runs of the listed scenarios that left the model's validity: their figures
   // are those of a model that no longer describes the vehicle there.
   for (std::size_t i = 0; i < r.listed_scenarios && i < tuned.outcome.model_invalid.size(); ++i)
@@ -371,11 +372,53 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
                     " gains the pitch angle passed ±85°, near the singularity of the 3-2-1 Euler "
                     "angles, where the rigid_body model is not valid (model_invalid in "
                     "comparison.json; its metrics still count)");
+  // Outcome checks of the tuned loop on each listed scenario (docs/usage.md, "Warnings"): a
+  // score is no success when the loop diverged or when it ended farther from the reference than
+  // it started, by more than kDriftWarningFloor. (Saturation alone is no failure: a controller
+  // that keeps commanding a stuck wheel beyond its limit, as smallsat-pyramid's does, counts
+  // as saturated on every sample while holding the attitude to about 2e-7 rad.)
+  const std::vector<sim::Metrics>& per = tuned.outcome.evaluation.scenarios;
+  for (std::size_t i = 0; i < r.listed_scenarios && i < per.size(); ++i) {
+    const sim::Metrics& m = per[i];
+    const sim::Scenario& sc = r.job.scenarios[i];
+    if (m.diverged) {
+      std::snprintf(buf, sizeof buf, "scenario %s: the %s loop diverged at t = %.3f s",
+                    sc.name.c_str(), tuned.label.c_str(), m.diverged_at);
+      out.emplace_back(buf);
+      continue;
+    }
+    if (i >= tuned.outcome.trajectories.size() || tuned.outcome.trajectories[i].rows() == 0)
+      continue;
+    const sim::Trajectory& tr = tuned.outcome.trajectories[i];
+    const std::size_t n = static_cast<std::size_t>(tr.axes), last = tr.rows() - 1;
+    double start = 0.0, end = 0.0;
+    for (std::size_t k = 0; k < n && k < sc.initial_state.size(); ++k) {
+      start += sc.initial_state[k] * sc.initial_state[k];
+      end += tr.x(last)[k] * tr.x(last)[k];
+    }
+    start = std::sqrt(start);
+    end = std::sqrt(end);
+    if (!(end > std::max(start, kDriftWarningFloor))) continue;
+    const sim::PlantKind* kind = sim::find_plant_kind(r.job.plant.model);
+    const double sat = m.errors.saturation_fraction;
+    char why[200] = "";
+    if (sat > 0)
+      std::snprintf(why, sizeof why,
+                    "; its commands were at or beyond their limits on %.0f %% of the samples of "
+                    "the objective window",
+                    100 * sat);
+    std::snprintf(buf, sizeof buf,
+                  "scenario %s: the %s loop ends farther from the reference than it started "
+                  "(|X1| = %.3g %s at t = %.3f s against %.3g at t = 0%s): it does not hold the "
+                  "vehicle there, whatever its score",
+                  sc.name.c_str(), tuned.label.c_str(), end,
+                  kind ? kind->position_unit.c_str() : "", tr.t(last), start, why);
+    out.emplace_back(buf);
+  }
   if (r.comparison.size() < 2) return out;
   const double best = tuned.outcome.evaluation.objective;
   const double spread = r.noise_floor ? r.noise_floor->relative_spread : 0.0;
   const std::string label = objective_label(r.job);  // metric, window and aggregate
-  char buf[600];
   // "Tuned" is the best of one controller type within the search bounds, not the best
   // controller: a compared controller that scores lower says so.
   for (const ComparedController& c : r.comparison) {
