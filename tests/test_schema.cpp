@@ -132,9 +132,8 @@ TEST(Schema, GainsFilesOfARunValidate) {
 }
 
 // Merging the validation's errors into the reader's keeps the first error of each path, in
-// order, and is linear: 100 000 errors merged with 100 000 more, half of them at known paths,
-// compared each path with every earlier one before (quadratic; 57 s for a job of 100 000 empty
-// scenarios). Here the merge is some milliseconds.
+// order, and is linear: 100 000 errors merged with 100 000 more, half of them at known paths
+// (the merge compared each path with every earlier one before: 10^10 comparisons here).
 TEST(Schema, MergedErrorsKeepTheFirstOfEachPathInOrder) {
   schema::Errors to, from;
   for (int i = 0; i < 100000; ++i) to.push_back({"/s/" + std::to_string(i), "read"});

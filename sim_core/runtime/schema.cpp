@@ -59,8 +59,8 @@ json number_schema(const std::string& doc, const Range& r) {
   return s;
 }
 
-// Linear in the errors: with a path compared against every earlier one, validating a list of
-// n empty scenarios took quadratic time (57 s for 100 000, and as long in the service).
+// Linear in the errors. With each path compared against every earlier one it was quadratic:
+// `validate` of a job of 30 000 empty scenarios took 4.1 s (0.37 s now; 100 000 take 1.1 s).
 void dedupe_append(Errors& to, Errors from) {
   if (from.empty()) return;
   // The views are taken after the reserve and dropped before anything moves.

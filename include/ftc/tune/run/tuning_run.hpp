@@ -149,9 +149,9 @@ std::optional<double> inward_value(const ParameterBounds& bounds, double x);
 
 // The warnings of a finished comparison. Of the tuned loop on each listed scenario: it left the
 // model's validity, diverged, or ended farther from the reference than it started (|X1| at its
-// last recorded sample above |X1(0)| and kDriftWarningFloor). Then a compared controller whose objective is lower than
-// the tuned one's, and tuned gains whose control TV on the listed scenarios exceeds
-// kControlTvWarningRatio times the job's own gains'.
+// last recorded sample above |X1(0)| and kDriftWarningFloor). Then a compared controller whose
+// objective is lower than the tuned one's, and tuned gains whose control TV on the listed
+// scenarios exceeds kControlTvWarningRatio times the job's own gains'.
 inline constexpr double kControlTvWarningRatio = 3.0;
 // A tuned loop that ends a listed scenario farther from the reference than it started, and
 // farther than this (in the plant's position unit, rad for every shipped plant), is warned of.
