@@ -292,7 +292,9 @@ TEST(TuningRun, SaysWhichRunsLeftTheModelsValidity) {
   json sc = short_table1_job();
   sc["tuning"]["algorithm"]["iterations"] = 1;
   const tune::TuningOutcome plain = tune::tune(tune::parse_job(sc, "x"), serial);
-  for (const json& c : tune::comparison_document(plain)["controllers"])
+  // (The document is kept: a range over a member of a temporary reads freed memory.)
+  const json plain_doc = tune::comparison_document(plain);
+  for (const json& c : plain_doc["controllers"])
     EXPECT_FALSE(c["scenarios"][0].contains("model_invalid")) << c.dump();
 }
 
