@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <random>
+#include <sys/stat.h>
 #include <span>
 #include <tuple>
 #include <utility>
@@ -349,6 +350,80 @@ TEST(Front, ADamagedDocumentIsRefusedAtItsPath) {
   }
 }
 
+// front.json carries authority (pick's output is deployable): a front of another job, gains of
+// another job, a point outside the bounds, infeasible, or not the trial trials.csv recorded, and
+// files that are not regular files are each refused at their path, never turned into gains.
+TEST(Front, PickChecksEveryPointAgainstTheRunsOwnFiles) {
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  const auto files = tune::output_files(tuned(job, 1));
+  const json front = json::parse(files.at("front.json"));
+  const json gains = json::parse(files.at("gains.json"));
+  ASSERT_GE(front["points"].size(), 2u);
+  const auto forged = [&](const std::function<void(json&)>& change) {
+    json f = front;
+    change(f);
+    return f;
+  };
+  json other_gains = gains;
+  other_gains["job"]["sha256"] = std::string(64, 'a');
+  const double kp1 = front["points"][1]["parameters"]["Kp"].get<double>();
+  const double ise0 = front["points"][0]["goals"][0].get<double>();
+  // file, text, path of the error, words it must hold
+  const std::vector<std::tuple<std::string, std::string, std::string, std::string>> cases = {
+      {"front.json", forged([](json& f) { f["job_sha256"] = std::string(64, 'b'); }).dump(),
+       "/job_sha256", "a front of another job"},
+      {"gains.json", other_gains.dump(), "/job/sha256", "gains of another job"},
+      {"front.json", forged([](json& f) { f["points"][0]["parameters"]["Kp"] = 1e300; }).dump(),
+       "/points/0/parameters/Kp", "outside the job's bounds [1, 50]"},
+      {"front.json",
+       forged([&](json& f) { f["points"][0]["parameters"]["Kp"] = kp1; }).dump(),
+       "/points/0/parameters/Kp", ", but trial "},
+      {"front.json",
+       forged([&](json& f) { f["points"][0]["goals"][0] = std::nextafter(ise0, 1.0); }).dump(),
+       "/points/0/goals/0", "trials.csv has"},
+      {"front.json", forged([](json& f) { f["points"][0]["violation"] = 5; }).dump(),
+       "/points/0/violation", "meets every hard goal"},
+      {"front.json", forged([](json& f) { f["points"][0]["goals"][2] = 2e6; }).dump(),
+       "/points/0/goals/2", "meets every hard goal"},
+      {"front.json", "{\"schema\": \"ftctune.front/1\", \"schema\": 1}", "/schema",
+       "duplicate key"},
+  };
+  for (const auto& [file, text, path, words] : cases) {
+    const auto dir = fresh_dir("pick-forged");
+    tune::write_output_files(files, dir);
+    tune::write_file_atomic(dir / file, text);
+    try {
+      tune::pick_gains(dir, "index:0");
+      ADD_FAILURE() << path << " was not refused";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.source(), (dir / file).string()) << path;
+      ASSERT_FALSE(e.errors().empty()) << path;
+      EXPECT_EQ(e.errors().at(0).path, path) << e.what();
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+    const CliResult refused = run_cli("pick '" + dir.string() + "' --rule index:0", dir);
+    EXPECT_EQ(refused.exit_code, 2) << path << ": " << refused.err;
+  }
+  // Not regular files: a directory and a FIFO (which is not waited for) in front.json's place.
+  for (const bool fifo : {false, true}) {
+    const auto dir = fresh_dir("pick-not-a-file");
+    tune::write_output_files(files, dir);
+    std::filesystem::remove(dir / "front.json");
+    if (fifo)
+      ASSERT_EQ(::mkfifo((dir / "front.json").c_str(), 0600), 0);
+    else
+      std::filesystem::create_directory(dir / "front.json");
+    const CliResult r = run_cli("pick '" + dir.string() + "' --rule index:0", dir);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("front.json"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+  }
+  // The untouched files still pick.
+  const auto dir = fresh_dir("pick-whole");
+  tune::write_output_files(files, dir);
+  EXPECT_EQ(tune::pick_gains(dir, "knee"), gains);
+}
+
 TEST(Front, PickRules) {
   const tune::Job job = tune::parse_job(front_job(), "front");
   const std::vector<tune::Trial> trials = {trial(0, 1, 1000), trial(0, 10, 10), trial(0, 1000, 1)};
@@ -360,8 +435,10 @@ TEST(Front, PickRules) {
   // The least ISE among the points whose control TV is at most 10 (10 and 1): ISE 10.
   EXPECT_EQ(tune::pick_point(job, f, "limit:control_tv<=10"), 1u);
   EXPECT_EQ(tune::pick_point(job, f, "limit:control_tv<=1e9"), 0u);
-  for (const char* bad : {"index:3", "index:1.5", "min:iae", "limit:control_tv<=0.5",
-                          "limit:control_tv", "limit:control_tv<=x", "best"}) {
+  for (const char* bad :
+       {"index:3", "index:1.5", "index:0x2", "index: 1", "index:", "min:iae",
+        "limit:control_tv<=0.5", "limit:control_tv", "limit:control_tv<=x",
+        "limit:control_tv<=0x10", "limit:control_tv<=inf", "best"}) {
     try {
       tune::pick_point(job, f, bad);
       ADD_FAILURE() << bad << " was not refused";
@@ -387,13 +464,17 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
     EXPECT_EQ(points[i]["feasible"], true);
     EXPECT_TRUE(points[i]["parameters"].contains("Kp"));
     EXPECT_TRUE(points[i]["parameters"].contains("switching_gain"));
-    if (i > 0) EXPECT_LT(points[i - 1]["goals"][0], points[i]["goals"][0]);
+    if (i > 0) {
+      EXPECT_LT(points[i - 1]["goals"][0], points[i]["goals"][0]);
+    }
     const auto vec = [&](std::size_t k) {
       return tune::ObjectiveVector{
           {points[k]["goals"][0].get<double>(), points[k]["goals"][1].get<double>()}, 0.0};
     };
     for (std::size_t k = 0; k < points.size(); ++k) {
-      if (k != i) EXPECT_FALSE(tune::pareto::dominates(vec(k), vec(i))) << i << " " << k;
+      if (k != i) {
+        EXPECT_FALSE(tune::pareto::dominates(vec(k), vec(i))) << i << " " << k;
+      }
     }
   }
   // The gains are the picked point's, with the rule recorded.
@@ -581,6 +662,37 @@ TEST(Front, RunWithTheRandomSearchBaselineWritesEveryFile) {
   // Its history: the header and the same two iterations as the run's.
   const std::string random = slurp(dir / "out" / "history-random.csv");
   EXPECT_EQ(std::count(random.begin(), random.end(), '\n'), 3) << random;
+}
+
+// A two-goal `run` lists the files it wrote, front.json and front.csv among them, and sums up
+// the front: its size, its hypervolume, the point gains.json holds, and how to pick another.
+TEST(Front, RunListsItsFrontFilesAndSumsUpTheFront) {
+  const auto dir = fresh_dir("front-summary");
+  json j = front_job();
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  tune::write_file_atomic(dir / "job.json", j.dump());
+  const std::string out = (dir / "out").string();
+  const CliResult r = run_cli("run --no-checkpoint --threads 1 '" + (dir / "job.json").string() +
+                                  "' --out '" + out + "'",
+                              dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("wrote " + out + "/{comparison.json, comparison.md, front.csv, front.json, "
+                       "gains.json, history.csv, job.json, trials.csv, run.json} and "
+                       "trajectories/"),
+            std::string::npos)
+      << r.out;
+  const json front = json::parse(slurp(dir / "out" / "front.json"));
+  const std::size_t picked = front["picked"]["index"];
+  EXPECT_NE(r.out.find("front: " + std::to_string(front["points"].size()) +
+                       " points, hypervolume "),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("gains.json holds point " + std::to_string(picked) + " (the knee): ISE["),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("another point: ftctune pick " + out + " --rule min:control_tv"),
+            std::string::npos)
+      << r.out;
 }
 
 TEST(Front, OneSoftGoalRunsWriteNoFront) {

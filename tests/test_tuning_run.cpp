@@ -397,7 +397,14 @@ TEST(Cli, Table1RunWarnsThatKiEndsOnItsBound) {
       << r.err;
   // Seven digits, not J alone, labelled with the metric and its window.
   EXPECT_NE(r.out.find("ISE[0 s, 30 s] = 1.33"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("% lower"), std::string::npos) << r.out;
+  // The job's own controller against the tuned one, relative to the tuned objective as the
+  // noise-floor sentence gives it: the two figures are one.
+  const std::size_t above = r.out.find(" % above the tuned)");
+  ASSERT_NE(above, std::string::npos) << r.out;
+  const std::string percent = r.out.substr(r.out.rfind(", ", above) + 2,
+                                           above - r.out.rfind(", ", above) - 2);
+  EXPECT_NE(r.out.find("objective is " + percent + " % above the tuned one's"), std::string::npos)
+      << r.out;
   // NFTSMC's ISE is lower than the tuned PI-FOSMC's: the run says so rather than call its gains
   // optimal.
   EXPECT_NE(r.err.find("[warning] NFTSMC (compared) scores ISE[0 s, 30 s] = 0.902"), std::string::npos)
@@ -875,4 +882,29 @@ TEST(TuningRun, CheckpointTrialsKeepAnInfiniteGoalApartFromNaN) {
                                            0.5})}),
                                       3),
                InputError);
+}
+
+// The summary gives the job's own controller's objective against the tuned one relative to the
+// tuned objective, as the noise-floor sentence does, and as a ratio from a factor of two on:
+// a 9 020-fold reduction read "100 % lower".
+TEST(TuningRun, SummaryGivesAManyfoldChangeAsARatio) {
+  const auto summary = [](double tuned, double own) {
+    const json gains = {{"tuned", {{"Kp", 1.0}}},
+                        {"controller", {{"type", "pi_fosmc"}, {"Kp", 1.0}}},
+                        {"objective", {{"value", tuned}, {"metric", "ise"}}},
+                        {"baseline", {{"objective", own}}},
+                        {"fitness", 1 / tuned}};
+    return tune::run_summary(gains, json::object(), {{"threads", 1}});
+  };
+  EXPECT_NE(summary(1e-3, 9.02).find("(job's own controller: 9.020000e+00, 9.02e+03 times the "
+                                     "tuned)"),
+            std::string::npos)
+      << summary(1e-3, 9.02);
+  EXPECT_NE(summary(1.0, 1.228).find(", 22.8 % above the tuned)"), std::string::npos)
+      << summary(1.0, 1.228);
+  EXPECT_NE(summary(1.0, 0.75).find(", 25 % below the tuned)"), std::string::npos)
+      << summary(1.0, 0.75);
+  EXPECT_NE(summary(1.0, 0.25).find(", 0.25 times the tuned)"), std::string::npos)
+      << summary(1.0, 0.25);
+  EXPECT_EQ(summary(1.0, 1.0).find("lower"), std::string::npos);
 }

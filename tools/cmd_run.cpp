@@ -110,10 +110,20 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
                                  nlohmann::json::parse(result.run_json))
                    .c_str(),
                stdout);
-    std::printf(
-        "  wrote %s/{gains.json, history.csv, trials.csv, comparison.json, comparison.md, "
-        "job.json, run.json%s} and trajectories/\n",
-        out.c_str(), o.baseline ? ", history-random.csv" : "");
+    // The files as run.json lists them (front.json and front.csv for a front), the
+    // trajectories as their folder.
+    std::string listed;
+    bool trajectories = false;
+    for (const std::string& f : result.files) {
+      if (f.rfind("trajectories/", 0) == 0) {
+        trajectories = true;
+        continue;
+      }
+      listed += (listed.empty() ? "" : ", ") + f;
+    }
+    std::printf("  wrote %s/{%s}%s\n", out.c_str(), listed.c_str(),
+                trajectories ? " and trajectories/" : "");
+    if (r.front) std::fputs(tune::front_summary(r.job, *r.front, out).c_str(), stdout);
   }
   const int report_status = o.report ? render_run_report(out.string(), "html", quiet) : 0;
   if (o.json_output)

@@ -17,6 +17,7 @@
 #include "ftc/tune/optimizers/hypervolume.hpp"
 #include "ftc/tune/optimizers/pareto_bat.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::tune {
 
@@ -108,6 +109,9 @@ std::size_t goal_named(const Job& job, const std::string& metric) {
 }
 
 double parse_number(const std::string& text, const std::string& what) {
+  // A decimal number as a user types it: std::stod alone would also take "0x2", " 2" and "inf".
+  const bool decimal =
+      !text.empty() && text.find_first_not_of("0123456789+-.eE") == std::string::npos;
   std::size_t used = 0;
   double v = 0;
   try {
@@ -115,7 +119,7 @@ double parse_number(const std::string& text, const std::string& what) {
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used != text.size() || text.empty() || !std::isfinite(v))
+  if (!decimal || used != text.size() || !std::isfinite(v))
     refuse("/rule", what + " \"" + text + "\" is not a number");
   return v;
 }
@@ -330,6 +334,32 @@ std::string front_rule_text(const Front& front) {
   return "point " + std::to_string(front.picked) + " of the Pareto front of " +
          std::to_string(front.points.size()) +
          " feasible non-dominated trials (front.json), chosen by " + rule;
+}
+
+std::string front_summary(const Job& job, const Front& front, const std::filesystem::path& out) {
+  const auto value = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.4g", v);
+    return std::string(buf);
+  };
+  std::string s;
+  if (front.points.empty()) {
+    bool hard = false;
+    for (const GoalConfig& g : job.goals) hard = hard || !g.soft();
+    return std::string("  front: empty: no trial ") +
+           (hard ? "met the hard goals with" : "had") +
+           " a finite value of every soft goal, so no point was picked (front.json)\n";
+  }
+  const FrontPoint& p = front.points[front.picked];
+  s += "  front: " + std::to_string(front.points.size()) + " point" +
+       (front.points.size() == 1 ? "" : "s") + ", hypervolume " + value(front.hypervolume) +
+       " (log10 of the soft goals); gains.json holds point " + std::to_string(front.picked) +
+       " (" + (front.rule == "knee" ? std::string("the knee") : front.rule) + "):";
+  for (std::size_t k : front.soft)
+    s += (k == front.soft.front() ? " " : ", ") + front.goals[k].label + " = " + value(p.goals[k]);
+  s += "\n  another point: ftctune pick " + out.string() + " --rule min:" +
+       std::string(job.goals[front.soft.back()].metric->name) + " (or limit:METRIC<=X, index:N)\n";
+  return s;
 }
 
 json front_document(const Job& job, const std::string& job_sha256, std::uint64_t seed,
@@ -585,26 +615,38 @@ Front front_from_json(const Job& job, const json& j, const std::string& source) 
 namespace {
 
 json read_json_file(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  if (!in)
+  // The strict reader: a regular file only (a FIFO is not waited for, a directory is named), at
+  // most kMaxInputFileBytes, duplicate keys and numbers beyond a double refused.
+  const std::optional<std::string> text = json_io::read_file(file);
+  if (!text)
     throw InputError(file.string(), "",
                      "cannot be read (is this a run directory of a job "
                      "with two or more soft goals?)");
-  try {
-    return json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(file.string(), "", std::string("is not JSON: ") + e.what());
-  }
+  return json_io::parse_json_text(*text, file.string());
 }
 
-// The cells of row `row` (0: the first after the header) of trials.csv under `names`.
-// The cells `names` of row `row` of trials.csv; a row it does not have is an error of the
-// document that named it (`source` at `path`).
-std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t row,
-                                const std::vector<std::string>& names, const std::string& source,
-                                const std::string& path) {
+// A row of trials.csv as pick checks a front point against it.
+struct TrialRow {
+  std::vector<double> parameters, goals;
+  double objective = 0, fitness = 0, violation = 0;
+  bool capped = false, feasible = false;
+};
+
+// The longest line of trials.csv read: a row holds a few dozen numbers of at most 24 characters
+// each, and one per scenario of a listed job; a longer line is not a row ftctune wrote.
+constexpr std::size_t kMaxTrialsLine = std::size_t{16} << 20;
+
+// The rows `wanted` of trials.csv (0: the first after the header), read in one pass; a row it
+// does not have is an error of the front point that named it (front.json at
+// /points/<point>/trial, `point_of` gives the point of each wanted row).
+std::map<std::size_t, TrialRow> trial_rows(const std::filesystem::path& file, const Job& job,
+                                           const std::map<std::size_t, std::size_t>& point_of,
+                                           const std::string& front_source) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    throw InputError(file.string(), "", "is not a regular file (is this a run directory?)");
   std::ifstream in(file);
-  std::string line;
+  if (!in) throw InputError(file.string(), "", "cannot be read");
   const auto split = [](const std::string& l) {
     std::vector<std::string> cells;
     std::size_t start = 0;
@@ -615,26 +657,131 @@ std::vector<double> trial_cells(const std::filesystem::path& file, std::size_t r
       }
     return cells;
   };
-  if (!std::getline(in, line)) throw InputError(file.string(), "", "has no header");
+  std::string line;
+  const auto next_line = [&] {
+    line.clear();
+    for (char c; in.get(c) && c != '\n';) {
+      line += c;
+      if (line.size() > kMaxTrialsLine)
+        throw InputError(file.string(), "",
+                         "has a line longer than " + std::to_string(kMaxTrialsLine) +
+                             " bytes: not a trials.csv ftctune wrote");
+    }
+    return !line.empty() || in.good();
+  };
+  if (!next_line()) throw InputError(file.string(), "", "has no header");
   const std::vector<std::string> header = split(line);
-  for (std::size_t i = 0; i <= row; ++i)
-    if (!std::getline(in, line))
-      throw InputError(
-          source, path,
-          "is trial " + std::to_string(row) + ", a row " + file.string() + " does not have");
-  const std::vector<std::string> cells = split(line);
-  std::vector<double> out;
-  for (const std::string& n : names) {
+  const auto column = [&](const std::string& n) {
     const auto it = std::find(header.begin(), header.end(), n);
-    const auto k = static_cast<std::size_t>(it - header.begin());
-    if (it == header.end() || k >= cells.size())
-      throw InputError(file.string(), "", "has no column " + n);
-    const std::string& c = cells[k];
-    out.push_back(c == "inf"  ? std::numeric_limits<double>::infinity()
-                  : c.empty() ? std::numeric_limits<double>::quiet_NaN()
-                              : std::strtod(c.c_str(), nullptr));
+    if (it == header.end()) throw InputError(file.string(), "", "has no column " + n);
+    return static_cast<std::size_t>(it - header.begin());
+  };
+  std::vector<std::size_t> parameter_columns, goal_columns;
+  for (const ParameterBounds& b : job.tuning->parameters)
+    parameter_columns.push_back(column(b.name));
+  for (std::size_t k = 0; k < job.goals.size(); ++k)
+    goal_columns.push_back(
+        column("goal" + std::to_string(k) + "_" + std::string(job.goals[k].metric->name)));
+  const std::size_t objective = column("objective"), fitness = column("fitness"),
+                    capped = column("capped"), violation = column("violation"),
+                    feasible = column("feasible");
+  std::map<std::size_t, TrialRow> rows;
+  std::size_t row = 0;
+  for (const auto& [wanted, point] : point_of) {
+    for (; row <= wanted; ++row)
+      if (!next_line())
+        throw InputError(front_source, "/points/" + std::to_string(point) + "/trial",
+                         "is trial " + std::to_string(wanted) + ", a row " + file.string() +
+                             " does not have");
+    const std::vector<std::string> cells = split(line);
+    const auto cell = [&](std::size_t k) {
+      if (k >= cells.size())
+        throw InputError(file.string(), "",
+                         "row " + std::to_string(wanted) + " has " +
+                             std::to_string(cells.size()) + " cells, the header " +
+                             std::to_string(header.size()));
+      const std::string& c = cells[k];
+      if (c == "inf") return std::numeric_limits<double>::infinity();
+      char* end = nullptr;
+      const double v = c.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                 : std::strtod(c.c_str(), &end);
+      if (!c.empty() && (end != c.c_str() + c.size()))
+        throw InputError(file.string(), "",
+                         "row " + std::to_string(wanted) + ", column " + header[k] + ": \"" +
+                             c + "\" is not a number");
+      return v;
+    };
+    TrialRow r;
+    for (std::size_t k : parameter_columns) r.parameters.push_back(cell(k));
+    for (std::size_t k : goal_columns) r.goals.push_back(cell(k));
+    r.objective = cell(objective);
+    r.fitness = cell(fitness);
+    r.violation = cell(violation);
+    r.capped = cell(capped) == 1;
+    r.feasible = cell(feasible) == 1;
+    rows.emplace(wanted, std::move(r));
   }
-  return out;
+  return rows;
+}
+
+// Whether two numbers of the run's files are the same double (both NaN: the same).
+bool same(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+
+// front.json carries authority: the gains pick writes are deployable. So every point must be a
+// trial of this run, as trials.csv recorded it (its parameters and goal values bit for bit),
+// within the job's bounds and feasible, and the file must be this job's (its job_sha256). A
+// point that fails is an InputError at its path in front.json.
+std::map<std::size_t, TrialRow> check_front_against_run(const std::filesystem::path& run,
+                                                        const Job& job, const Front& front) {
+  const std::string source = (run / "front.json").string();
+  const auto fail = [&](const std::string& path, const std::string& m) {
+    throw InputError(source, path, m);
+  };
+  const std::vector<ParameterBounds>& bounds = job.tuning->parameters;
+  std::map<std::size_t, std::size_t> point_of;  // trial row -> first point naming it
+  for (std::size_t i = 0; i < front.points.size(); ++i) {
+    const FrontPoint& p = front.points[i];
+    const std::string at = "/points/" + std::to_string(i);
+    for (std::size_t k = 0; k < bounds.size(); ++k)
+      if (!(p.parameters[k] >= bounds[k].lower && p.parameters[k] <= bounds[k].upper))
+        fail(at + "/parameters/" + bounds[k].name,
+             "is " + json_io::number_text(p.parameters[k]) + ", outside the job's bounds [" +
+                 json_io::number_text(bounds[k].lower) + ", " +
+                 json_io::number_text(bounds[k].upper) + "]");
+    if (!(p.violation == 0))
+      fail(at + "/violation", "is " + json_io::number_text(p.violation) +
+                                  ", but a point of the front meets every hard goal");
+    for (std::size_t k = 0; k < job.goals.size(); ++k)
+      if (!(job.goals[k].violation(p.goals[k]) == 0))
+        fail(at + "/goals/" + std::to_string(k),
+             "is " + json_io::number_text(p.goals[k]) + ", above the hard goal's limit " +
+                 json_io::number_text(*job.goals[k].at_most) +
+                 ", but a point of the front meets every hard goal");
+    if (!point_of.count(p.trial)) point_of[p.trial] = i;
+  }
+  std::map<std::size_t, TrialRow> rows = trial_rows(run / "trials.csv", job, point_of, source);
+  const std::string trials = (run / "trials.csv").string();
+  for (std::size_t i = 0; i < front.points.size(); ++i) {
+    const FrontPoint& p = front.points[i];
+    const TrialRow& r = rows.at(p.trial);
+    const std::string at = "/points/" + std::to_string(i);
+    const std::string row = "trial " + std::to_string(p.trial) + " of " + trials;
+    for (std::size_t k = 0; k < bounds.size(); ++k)
+      if (!same(p.parameters[k], r.parameters[k]))
+        fail(at + "/parameters/" + bounds[k].name,
+             "is " + json_io::number_text(p.parameters[k]) + ", but " + row + " has " +
+                 json_io::number_text(r.parameters[k]));
+    for (std::size_t k = 0; k < job.goals.size(); ++k)
+      if (!same(p.goals[k], r.goals[k]))
+        fail(at + "/goals/" + std::to_string(k),
+             "is " + json_io::number_text(p.goals[k]) + ", but " + row + " has " +
+                 json_io::number_text(r.goals[k]));
+    if (r.capped || !r.feasible || r.violation > 0)
+      fail(at + "/trial", "is " + row + ", which is " +
+                              (r.capped ? "capped (its goals are bounds)" : "infeasible") +
+                              ": not a point of a front");
+  }
+  return rows;
 }
 
 }  // namespace
@@ -655,16 +802,28 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
   if (front_objectives(job) < 2 || !job.tuning)
     throw InputError((run / "job.json").string(), "/goals",
                      "the run's job has fewer than two soft goals: it has no front to pick from");
-  std::optional<Front> read = read_front(run, job);
-  if (!read)
-    throw InputError((run / "front.json").string(), "",
-                     "cannot be read (is this a run directory of a job with two or more soft "
+  const std::string sha = canonical_job_sha256(job);
+  const std::filesystem::path front_file = run / "front.json";
+  std::error_code ec;
+  if (!std::filesystem::exists(front_file, ec))
+    throw InputError(front_file.string(), "",
+                     "does not exist (is this a run directory of a job with two or more soft "
                      "goals?)");
-  Front front = std::move(*read);
+  const json fj = read_json_file(front_file);
+  if (fj.is_object() && fj.contains("job_sha256") && fj["job_sha256"] != sha)
+    throw InputError(front_file.string(), "/job_sha256",
+                     "is " + fj["job_sha256"].dump() + ", not the sha256 of this run's job.json (" +
+                         sha + "): a front of another job");
+  Front front = front_from_json(job, fj, front_file.string());
+  const std::map<std::size_t, TrialRow> rows = check_front_against_run(run, job, front);
   const std::size_t i = pick_point(job, front, rule);
   const std::string gains_file = (run / "gains.json").string();
   json g = read_json_file(run / "gains.json");
   if (!g.is_object()) throw InputError(gains_file, "", "expected an object");
+  if (!g.contains("job") || !g["job"].is_object() || g["job"].value("sha256", json()) != sha)
+    throw InputError(gains_file, "/job/sha256",
+                     "is not the sha256 of this run's job.json (" + sha +
+                         "): gains of another job");
   if (!g.contains("goals") || !g["goals"].is_object())
     throw InputError(gains_file, "/goals", "expected an object (the run's goals)");
   if (!g["goals"].contains("goals") || !g["goals"]["goals"].is_array() ||
@@ -684,11 +843,9 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
     g["controller"][name] = p.parameters[j];
     g["tuned"][name] = p.parameters[j];
   }
-  const std::vector<double> cells =
-      trial_cells(run / "trials.csv", p.trial, {"objective", "fitness"},
-                  (run / "front.json").string(), "/points/" + std::to_string(i) + "/trial");
-  g["objective"]["value"] = json_number(cells[0]);
-  g["fitness"] = json_number(cells[1]);
+  const TrialRow& row = rows.at(p.trial);
+  g["objective"]["value"] = json_number(row.objective);
+  g["fitness"] = json_number(row.fitness);
   json& goals = g["goals"];
   for (std::size_t k = 0; k < job.goals.size(); ++k) {
     goals["goals"][k]["value"] = json_number(p.goals[k]);

@@ -131,6 +131,10 @@ std::size_t pick_point(const Job& job, const Front& front, const std::string& ru
 nlohmann::json front_document(const Job& job, const std::string& job_sha256, std::uint64_t seed,
                               const Front& front);
 std::string front_csv(const Job& job, const Front& front);
+// What `ftctune run` prints about a run's front (`out`: its directory): the number of points,
+// the hypervolume, the point gains.json holds with its soft goals' values, and how to pick
+// another; for an empty front, why it is empty.
+std::string front_summary(const Job& job, const Front& front, const std::filesystem::path& out);
 // `ftctune pick`: the gains file of the point `rule` chooses on the front of the run in
 // directory `run` (its job.json, front.json, gains.json and trials.csv), without simulating:
 // the run's gains.json with that point's controller, tuned values, goals, objective and fitness
