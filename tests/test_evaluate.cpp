@@ -166,9 +166,11 @@ TEST(Evaluate, CommandWritesItsFilesAndTheWorstMembersReplay) {
   tune::write_file_atomic(dir / "job.json", short_ensemble_job().dump(2));
   const std::string out = (dir / "ev").string();
   const CliResult r = run_cli("evaluate '" + (dir / "job.json").string() + "' --gains 'tuned=" +
-                                  gains_files().a.string() + "' --threads 2 --out '" + out + "'",
+                                  gains_files().a.string() + "' --threads 1 --out '" + out + "'",
                               dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // --threads reaches the evaluator (it said "on 2 threads" on a 2-core machine).
+  EXPECT_NE(r.out.find(" simulations on 1 thread in "), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("held-out seed 8 (the job's seed + 1)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("controller"), std::string::npos);
   EXPECT_NE(r.out.find("CVaR"), std::string::npos);

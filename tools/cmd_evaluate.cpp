@@ -46,6 +46,7 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   options.seed = o.seed;
   options.count = o.count;
   options.figure = !o.no_figure;
+  options.threads = o.threads;
   options.log = spdlog_log();
   // Beside the job's latest run (out/<name>, or -2, -3, ... where `run` moved on), whose report
   // then shows it.
