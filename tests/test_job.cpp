@@ -975,3 +975,45 @@ TEST(JobLoader, ActuatorBlockParsesRoundTripsAndIsCheckedAtItsPaths) {
   };
   expect_each_case_refused(cases);
 }
+
+// A window that holds no sample measures nothing (#44 item 5): `validate` passed it, and `run`
+// then searched blind (every candidate 0, J = inf). Samples are at k·Ts, 0 <= k < duration/Ts.
+TEST(JobLoader, AWindowThatHoldsNoSampleIsRefused) {
+  const auto first = [](const json& j) {
+    const std::vector<FieldError> errs = errors_of(j);
+    return errs.empty() ? std::string() : to_string(errs[0]);
+  };
+  json j = table1();  // 30 s at 1 ms, faults at 10 s and 20 s
+  j["objective"]["window"] = {30, nullptr};
+  EXPECT_EQ(first(j),
+            "/objective/window: holds no sample of scenario \"paper\" (samples at k·0.001 s "
+            "before its end at 30 s)");
+  j["objective"]["window"] = {29.9995, 30};
+  EXPECT_NE(first(j).find("/objective/window: holds no sample"), std::string::npos) << first(j);
+  j["objective"]["window"] = {29.999, 30};  // the last sample, 29.999 s
+  EXPECT_EQ(first(j), "");
+  // Counted from the first fault (10 s): 20 s on is the end.
+  j["objective"]["window"] = {20, 25};
+  j["objective"]["window_from"] = "first_fault";
+  EXPECT_EQ(first(j),
+            "/objective/window: holds no sample of scenario \"paper\" counted from its first "
+            "fault at 10 s (samples at k·0.001 s before its end at 30 s)");
+  j["objective"]["window"] = {19.5, 25};
+  EXPECT_EQ(first(j), "");
+  // A goal's window is checked alike.
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"window", {31, nullptr}}, {"minimize", true}}};
+  EXPECT_NE(first(j).find("/goals/0/window"), std::string::npos) << first(j);
+  // Ensemble members whose first fault the draws put at up to 17 s of an 18 s run leave
+  // [2, 8) s after it empty: such a member counted 0.
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/robust-faults.json");
+  json e = json::parse(in);
+  e["ensemble"]["faults"]["onset"] = {{"uniform", {5, 17}}};
+  e["objective"]["window"] = {2, 8};
+  EXPECT_EQ(first(e),
+            "/objective/window: holds no sample of an ensemble member whose first fault is at "
+            "17 s, the latest ensemble.faults.onset draws (samples at k·0.001 s before its end "
+            "at 18 s): shorten the window's start or the onsets");
+  e["objective"]["window"] = {0, 8};
+  EXPECT_EQ(first(e), "");
+}

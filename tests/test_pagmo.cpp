@@ -605,6 +605,58 @@ TEST(PagmoFront, ResumeFromSavedStateContinuesExactlyForEveryAlgorithm) {
   }
 }
 
+// MOEA/D's grid weights: with three or more soft goals the population must be a size the grid
+// has (C(H + M - 1, M - 1)); validate said yes to 22 for three goals and the run refused it.
+// The rule is pagmo's: the sizes it refuses, pagmo refuses, and those it takes, pagmo runs.
+TEST(PagmoFront, MoeadsGridWeightsNeedAPopulationTheGridHasAndValidateSaysSo) {
+  const json settings = {{"neighbours", 4}};
+  const auto errors = [&](int population, std::size_t objectives, const json& s) {
+    std::string text;
+    for (const FieldError& f :
+         pagmo("moead", population, 1, s)->validate_front(objectives, "/tuning/algorithm"))
+      text += to_string(f) + "\n";
+    return text;
+  };
+  EXPECT_EQ(errors(22, 3, settings),
+            "/tuning/algorithm/population: must be C(H + 2, 2) for some H with moead's grid "
+            "weights and 3 soft goals, such as 21 or 28 (got 22); or set "
+            "settings.weight_generation to \"low discrepancy\"\n");
+  EXPECT_EQ(errors(21, 3, settings), "");
+  EXPECT_EQ(errors(22, 2, settings), "");  // two goals: any size
+  EXPECT_NE(errors(16, 4, settings).find("such as 10 or 20 (got 16)"), std::string::npos);
+  EXPECT_EQ(errors(20, 4, settings), "");
+  json low = settings;
+  low["weight_generation"] = "low discrepancy";
+  EXPECT_EQ(errors(22, 3, low), "");
+  // pagmo agrees, on a problem of three objectives.
+  for (const int population : {21, 22}) {
+    FunctionObjectives fitness(3, [](const Decision& x) {
+      return ObjectiveVector{{x[0], x[1], 2 - x[0] - x[1]}, 0.0};
+    });
+    const auto o = pagmo("moead", population, 1, settings)->make_front(3, box(2, 0, 1), 3);
+    if (population == 21)
+      EXPECT_NO_THROW(run_optimizer(*o, fitness));
+    else
+      EXPECT_ANY_THROW(run_optimizer(*o, fitness));
+  }
+  // The job: validate refuses it at the population's path, before any run.
+  json j = short_table1_job();
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"minimize", true}},
+                {{"metric", "control_tv"}, {"minimize", true}},
+                {{"metric", "peak_command"}, {"minimize", true}}};
+  j["tuning"]["algorithm"] = {{"type", "pagmo"}, {"name", "moead"},     {"population", 22},
+                              {"generations", 1}, {"settings", settings}};
+  try {
+    parse_job(j, "moead-22");
+    ADD_FAILURE() << "a population of 22 was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.errors().at(0).path, "/tuning/algorithm/population") << e.what();
+  }
+  j["tuning"]["algorithm"]["population"] = 21;
+  EXPECT_NO_THROW(parse_job(j, "moead-21"));
+}
+
 TEST(PagmoFront, SettingsAndSizesAreCheckedAtTheirPaths) {
   const auto errors = [](const json& algorithm) {
     std::vector<FieldError> e;

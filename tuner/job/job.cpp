@@ -589,8 +589,22 @@ std::vector<FieldError> member_name_errors(const Job& job, std::int64_t count) {
 
 namespace {
 
+// Whether [t0, t1) holds a sample time k·Ts, 0 <= k < samples(), as the metrics count them.
+bool holds_a_sample(const sim::Window& w, const sim::Scenario& s) {
+  const double ts = s.sample_time;
+  const std::int64_t n = s.samples();
+  if (!(w.t0 < w.t1) || n <= 0) return false;
+  double first = std::max(0.0, std::ceil(w.t0 / ts));
+  if (!(first < static_cast<double>(n))) return false;
+  auto k = static_cast<std::int64_t>(first);
+  while (k > 0 && static_cast<double>(k - 1) * ts >= w.t0) --k;  // k·Ts as the loop rounds it
+  while (k < n && static_cast<double>(k) * ts < w.t0) ++k;
+  return k < n && static_cast<double>(k) * ts < w.t1;
+}
+
 // A window against the job's scenarios: its start >= 0, its end after its start and, measured
-// from each run's start, not after any scenario's end.
+// from each run's start, not after any scenario's end; it holds a sample of every listed
+// scenario (from its first fault when the window is) and of every ensemble member.
 void check_window(const Job& job, const sim::Window& w, WindowFrom from, const std::string& path,
                   Errors& errs) {
   if (!std::isfinite(w.t0) || w.t0 < 0)
@@ -604,8 +618,58 @@ void check_window(const Job& job, const sim::Window& w, WindowFrom from, const s
         errs.push_back({path + "/1", "end " + json_io::number_text(w.t1) +
                                          " is after the end of scenario \"" + s.name + "\" (" +
                                          json_io::number_text(s.duration) + " s)"});
-        break;
+        return;
       }
+  if (!errs.empty() && errs.back().path.rfind(path, 0) == 0) return;
+  // A window without a sample measures nothing: every candidate would score 0 (a blind search,
+  // whose gains the loader then refuses), and in an ensemble such a member would count as 0.
+  const auto empty_in = [&](const sim::Scenario& s, double onset) {
+    sim::Window at = w;
+    at.t0 += onset;
+    at.t1 = std::min(at.t1 + onset, s.duration);
+    return !holds_a_sample(at, s);
+  };
+  const auto first_onset = [](const sim::Scenario& s) {
+    double first = std::numeric_limits<double>::infinity();
+    for (const sim::Fault& f : s.faults) first = std::min(first, f.onset);
+    return first;
+  };
+  const auto where = [&](const sim::Scenario& s) {
+    return " (samples at k·" + json_io::number_text(s.sample_time) + " s before its end at " +
+           json_io::number_text(s.duration) + " s)";
+  };
+  for (const sim::Scenario& s : job.scenarios) {
+    if (!(s.sample_time > 0) || !std::isfinite(s.duration)) continue;  // reported elsewhere
+    const bool from_fault = from == WindowFrom::first_fault && !s.faults.empty();
+    const double onset = from_fault ? first_onset(s) : 0.0;
+    if (empty_in(s, onset)) {
+      errs.push_back({path, "holds no sample of scenario \"" + s.name + "\"" +
+                                (from_fault ? " counted from its first fault at " +
+                                                  json_io::number_text(onset) + " s"
+                                            : std::string()) +
+                                where(s)});
+      return;
+    }
+  }
+  // Ensemble members draw their faults: the window must hold a sample after the latest first
+  // fault the draws can give (the onset's upper end, or half the duration when not drawn).
+  if (job.ensemble && job.ensemble->faults && from == WindowFrom::first_fault &&
+      job.ensemble->faults->count_hi > 0) {
+    const sim::Scenario* base = job.scenarios.empty() ? nullptr : &job.scenarios.front();
+    if (!job.ensemble->base.empty()) {
+      base = nullptr;  // a base no scenario names is reported at /ensemble/base
+      for (const sim::Scenario& s : job.scenarios)
+        if (s.name == job.ensemble->base) base = &s;
+    }
+    if (!base || !(base->sample_time > 0) || !std::isfinite(base->duration)) return;
+    const std::optional<Distribution>& onset = job.ensemble->faults->onset;
+    const double latest = onset ? std::max(onset->a, onset->b) : 0.5 * base->duration;
+    if (empty_in(*base, latest))
+      errs.push_back({path, "holds no sample of an ensemble member whose first fault is at " +
+                                json_io::number_text(latest) +
+                                " s, the latest ensemble.faults.onset draws" + where(*base) +
+                                ": shorten the window's start or the onsets"});
+  }
 }
 
 // pagmo's multi-objective algorithms search fronts only: a job of one objective (or of one soft
@@ -614,7 +678,11 @@ void validate_front_only(const Job& job, Errors& errs) {
   if (!job.tuning || !job.tuning->algorithm || job.tuning->algorithm->type() != "pagmo") return;
   const auto soft = std::count_if(job.goals.begin(), job.goals.end(),
                                   [](const GoalConfig& g) { return g.soft(); });
-  if (soft >= 2) return;
+  if (soft >= 2) {
+    append(errs, job.tuning->algorithm->validate_front(static_cast<std::size_t>(soft),
+                                                       "/tuning/algorithm"));
+    return;
+  }
   const std::string name = job.tuning->algorithm->to_json().value("name", "");
   if (const PagmoAlgorithmInfo* info = find_pagmo_algorithm(name); info && info->front)
     errs.push_back({"/tuning/algorithm/name",

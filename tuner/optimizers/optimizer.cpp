@@ -146,6 +146,10 @@ class FrontSettings final : public AlgorithmSettings {
     return inner_->make(seed, space);
   }
   bool searches_front() const override { return true; }
+  std::vector<FieldError> validate_front(std::size_t objectives,
+                                         const std::string& path) const override {
+    return inner_->validate_front(objectives, path);
+  }
   std::unique_ptr<Optimizer> make_front(std::uint64_t seed, const SearchSpace& space,
                                         std::size_t objectives) const override {
     return make_front_(*inner_, seed, space, objectives);

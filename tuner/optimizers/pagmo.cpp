@@ -439,6 +439,9 @@ class Entry {
                      Errors& errs) const = 0;
   virtual pagmo::algorithm make(const json& resolved, int generations, unsigned seed) const = 0;
   virtual json settings_schema() const = 0;
+  // What the settings need of a front of `objectives` soft goals (after check() passed).
+  virtual void check_front(const json& /*resolved*/, Sizes /*sizes*/, std::size_t /*objectives*/,
+                           const std::string& /*path*/, Errors& /*errs*/) const {}
 
  protected:
   PagmoAlgorithmInfo info_;
@@ -449,6 +452,8 @@ class TypedEntry final : public Entry {
  public:
   using Build = std::function<pagmo::algorithm(const S&, unsigned gen, unsigned seed)>;
   using SizeRule = std::function<void(const S&, Sizes, const std::string& path, Errors&)>;
+  using FrontRule =
+      std::function<void(const S&, Sizes, std::size_t objectives, const std::string&, Errors&)>;
 
   TypedEntry(PagmoAlgorithmInfo info, std::shared_ptr<const schema::Object<S>> shape,
              SizeRule size_rule, Build build)
@@ -489,6 +494,11 @@ class TypedEntry final : public Entry {
     return build_(from(resolved), static_cast<unsigned>(generations), seed);
   }
   json settings_schema() const override { return shape_->json_schema(); }
+  void check_front(const json& resolved, Sizes sizes, std::size_t objectives,
+                   const std::string& path, Errors& errs) const override {
+    if (front_rule_) front_rule_(from(resolved), sizes, objectives, path, errs);
+  }
+  void set_front_rule(FrontRule rule) { front_rule_ = std::move(rule); }
 
  private:
   S from(const json& resolved) const {
@@ -502,6 +512,7 @@ class TypedEntry final : public Entry {
   std::shared_ptr<const schema::Object<S>> shape_;
   SizeRule size_rule_;
   Build build_;
+  FrontRule front_rule_;
 };
 
 template <class S>
@@ -921,8 +932,8 @@ std::unique_ptr<Entry> moead_entry() {
                "whether realb and limit keep the population diverse");
   PagmoAlgorithmInfo info{"moead", "MOEA/D, multi-objective by decomposition", false, 1, 1, 0};
   info.front = true;
-  return entry<S>(
-      std::move(info), std::move(o),
+  auto moead = std::make_unique<TypedEntry<S>>(
+      std::move(info), std::make_shared<const schema::Object<S>>(std::move(o)),
       [](const S& s, Sizes sizes, const std::string& path, Errors& e) {
         if (sizes.population < s.neighbours + 1)
           e.push_back({path + "/population",
@@ -936,6 +947,36 @@ std::unique_ptr<Entry> moead_entry() {
                          static_cast<pagmo::population::size_type>(s.neighbours), s.CR, s.F,
                          s.eta_m, s.realb, u(s.limit), s.preserve_diversity, seed));
       });
+  // pagmo's decomposition_weights: a weight per member, at least one per objective; on a grid
+  // (M objectives, H steps) exactly C(H + M - 1, M - 1) of them, any count for M = 2.
+  moead->set_front_rule([](const S& s, Sizes sizes, std::size_t objectives, const std::string& path,
+                       Errors& errs) {
+    const auto m = static_cast<long long>(objectives);
+    const long long n = sizes.population;
+    if (n < m) {
+      errs.push_back({path + "/population", population_text(static_cast<int>(m),
+                                                            " for moead with " + std::to_string(m) +
+                                                                " soft goals (a weight each)",
+                                                            sizes.population)});
+      return;
+    }
+    if (s.weight_generation != "grid" || m < 3) return;
+    const auto grid = [m](long long h) {  // C(h + m - 1, m - 1), exact in a long long here
+      long long c = 1;
+      for (long long k = 1; k <= m - 1; ++k) c = c * (h + k) / k;
+      return c;
+    };
+    long long h = 1;
+    while (grid(h) < n) ++h;
+    if (grid(h) == n) return;
+    errs.push_back({path + "/population",
+                    "must be C(H + " + std::to_string(m - 1) + ", " + std::to_string(m - 1) +
+                        ") for some H with moead's grid weights and " + std::to_string(m) +
+                        " soft goals, such as " + std::to_string(grid(h - 1)) + " or " +
+                        std::to_string(grid(h)) + " (got " + std::to_string(n) +
+                        "); or set settings.weight_generation to \"low discrepancy\""});
+  });
+  return moead;
 }
 
 std::unique_ptr<Entry> nspso_entry() {
@@ -1252,6 +1293,12 @@ class PagmoSettings final : public AlgorithmSettings {
     return std::make_unique<PagmoOptimizer<double>>(*entry_, settings_, sizes_, seed, space);
   }
   bool searches_front() const override { return entry_->info().front; }
+  std::vector<FieldError> validate_front(std::size_t objectives,
+                                         const std::string& path) const override {
+    Errors errs;
+    if (entry_->info().front) entry_->check_front(settings_, sizes_, objectives, path, errs);
+    return errs;
+  }
   std::unique_ptr<Optimizer> make_front(std::uint64_t seed, const SearchSpace& space,
                                         std::size_t objectives) const override {
     if (!entry_->info().front) return AlgorithmSettings::make_front(seed, space, objectives);

@@ -175,6 +175,13 @@ class AlgorithmSettings {
   // Whether the algorithm searches for a Pareto front: a job with two or more soft goals needs
   // one (Job::validate refuses the others), and runs the optimiser make_front() gives.
   virtual bool searches_front() const { return false; }
+  // What the settings need of a front of `objectives` soft goals, each problem at `path`/...
+  // (MOEA/D's grid weights need a population of C(H + M - 1, M - 1)): Job::validate asks, so
+  // that `validate` refuses what the run would.
+  virtual std::vector<FieldError> validate_front(std::size_t /*objectives*/,
+                                                 const std::string& /*path*/) const {
+    return {};
+  }
   // The optimiser of the front of `objectives` (>= 2) soft goals: it calls
   // BatchFitness::objective_vectors. Only when searches_front().
   virtual std::unique_ptr<Optimizer> make_front(std::uint64_t /*seed*/, const SearchSpace& /*space*/,
