@@ -25,6 +25,7 @@ struct ServeOptions {
   std::size_t max_body_kib = 1024;
   std::uint64_t max_stored_mib = 256;
   std::uint64_t max_job_mib = 1024;
+  bool event_streams_given = false;  // --max-event-streams on the command line
 };
 
 std::string read_token(const std::string& file) {
@@ -72,6 +73,15 @@ void refuse_port_in_use(const std::string& bind, int port) {
 
 int run_serve(ServeOptions o) {
   if (!o.token_file.empty()) o.service.token = read_token(o.token_file);
+  // The service keeps half its connection threads for the API: a larger number asked for is
+  // refused rather than quietly cut (the default follows --max-connections).
+  if (o.event_streams_given && o.service.max_event_streams > o.service.max_connections / 2)
+    throw InputError("--max-event-streams", "",
+                     "must be at most half of --max-connections (" +
+                         std::to_string(o.service.max_connections / 2) +
+                         " with --max-connections " +
+                         std::to_string(o.service.max_connections) +
+                         "): each stream holds a connection thread");
   o.service.max_body_bytes = o.max_body_kib * 1024;
   o.service.max_stored_bytes = o.max_stored_mib << 20;
   o.service.max_job_memory_bytes = o.max_job_mib << 20;
@@ -177,7 +187,10 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
                   "Live-update streams one address may hold at once; more get 429 (default 8, "
                   "0: no limit)")
       ->check(CLI::Range(0, 1023));
-  sub->callback([&action, o] { action = [o] { return run_serve(*o); }; });
+  sub->callback([&action, o, sub] {
+    o->event_streams_given = sub->count("--max-event-streams") > 0;
+    action = [o] { return run_serve(*o); };
+  });
 }
 
 }  // namespace ftc::cli

@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 #include <sys/socket.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -87,6 +88,14 @@ std::vector<FieldError> ServiceOptions::validate() const {
   if (concurrent_jobs < 1 || concurrent_jobs > 64)
     errs.push_back({"--concurrent-jobs", "must be in 1..64"});
   if (token && token->empty()) errs.push_back({"--token-file", "the token is empty"});
+  // A client sends it as "Authorization: Bearer TOKEN": a token with a space, a line break or
+  // a control character could never match, and every request would be 401.
+  if (token && std::any_of(token->begin(), token->end(), [](char c) {
+        return static_cast<unsigned char>(c) <= ' ' || c == '\x7f';
+      }))
+    errs.push_back({"--token-file",
+                    "the token holds a space, a line break or a control character inside it; "
+                    "give one line of printable characters"});
   if (max_body_bytes < 1024) errs.push_back({"--max-body-kib", "must be at least 1 KiB"});
   if (max_attempts < 1) errs.push_back({"--max-attempts", "must be at least 1"});
   if (!(max_steps > 0)) errs.push_back({"--max-steps", "must be > 0"});

@@ -53,7 +53,7 @@ struct ServiceOptions {
   int max_connections_per_client = 16;
   // Live-update streams (GET /v1/events) open at once: each holds one of the max_connections
   // threads for as long as its page is open, so at most half of them are streams whatever this
-  // says (the API keeps the other half).
+  // says (the API keeps the other half; `serve` refuses a --max-event-streams above that).
   int max_event_streams = 32;
   // ... and at most this many from one client address (0: no such limit); more are answered 429.
   int max_event_streams_per_client = 8;
