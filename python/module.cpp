@@ -12,6 +12,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -43,6 +45,7 @@
 #include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/api/run_directory.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
+#include "ftc/version.hpp"
 
 namespace py = pybind11;
 using nlohmann::json;
@@ -62,11 +65,50 @@ struct PythonErrorPending {};
 // Raises the pending Python exception (the GIL is held).
 [[noreturn]] void raise_pending() { throw py::error_already_set(); }
 
+// The interpreter exiting while a call still runs in a daemon thread: Python ends such a thread
+// when it next takes the GIL by unwinding its stack, which through the library's C++ frames
+// aborted the process (SIGABRT, exit 134). An atexit hook (registered at import, run before
+// the interpreter starts to finalise) marks the exit; from then on a call that would take the
+// GIL parks its thread instead, and the process's exit ends it without unwinding. The hook
+// waits, with the GIL released, until every running call has parked or returned: a call looks
+// between slices of about 0.4 s, so this takes under a second.
+std::atomic<bool> g_exiting{false};
+std::atomic<int> g_running{0};  // calls inside without_gil
+std::atomic<int> g_parked{0};
+constexpr double kExitWaitSeconds = 5.0;
+
+[[noreturn]] void park() {
+  ++g_parked;
+  for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
+}
+
+// Before a call's thread takes the GIL.
+void park_if_exiting() {
+  if (g_exiting.load()) park();
+}
+
+void on_interpreter_exit() {  // atexit, with the GIL
+  g_exiting = true;
+  py::gil_scoped_release release;
+  const auto end = std::chrono::steady_clock::now() +
+                   std::chrono::duration<double>(kExitWaitSeconds);
+  while (g_running.load() > g_parked.load() && std::chrono::steady_clock::now() < end)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+}
+
 // Runs f with the GIL released; a PythonErrorPending thrown inside is raised as its exception.
 template <class F>
 auto without_gil(F&& f) -> decltype(f()) {
+  struct Running {
+    Running() { ++g_running; }
+    ~Running() { --g_running; }
+  } running;
   try {
     py::gil_scoped_release release;
+    // Destroyed before `release` takes the GIL back, also when f throws.
+    struct ParkAtExit {
+      ~ParkAtExit() { park_if_exiting(); }
+    } park_at_exit;
     return f();
   } catch (const PythonErrorPending&) {
     raise_pending();
@@ -75,6 +117,7 @@ auto without_gil(F&& f) -> decltype(f()) {
 
 // From a thread without the GIL: stops the call when a signal handler raised (Ctrl-C).
 void check_signals() {
+  park_if_exiting();
   py::gil_scoped_acquire gil;
   if (PyErr_CheckSignals() != 0) throw PythonErrorPending{};
 }
@@ -362,6 +405,7 @@ Result tune_job(const Job& j, std::optional<int> threads, std::optional<std::uin
   const auto& params = j.job.tuning->parameters;
   o.on_iteration = [&](const tune::IterationReport& report) {
     const tune::HistoryRow& h = report.row;
+    park_if_exiting();
     py::gil_scoped_acquire gil;
     if (PyErr_CheckSignals() != 0) throw PythonErrorPending{};
     if (callback.is_none()) return true;
@@ -601,6 +645,9 @@ PYBIND11_MODULE(_core, m) {
       PyErr_SetObject(type.ptr(), error.ptr());
     }
   });
+
+  m.attr("version") = ftc::kVersion;  // ftctune --version's; the package's __version__
+  py::module_::import("atexit").attr("register")(py::cpp_function(&on_interpreter_exit));
 
   py::class_<Job>(m, "Job")
       .def_property_readonly("name", [](const Job& j) { return j.job.name; })

@@ -11,24 +11,33 @@ Ctrl-C stops a long call with KeyboardInterrupt. Bad input raises ftctune.InputE
 message names the input and the JSON path of each error. docs/python.md has the whole API.
 """
 
-import io
-import json
-import os
-import tempfile
-import warnings
+# The module's namespace is its API: what it imports is kept under private names.
+import io as _io
+import json as _json
+import os as _os
+import tempfile as _tempfile
+import warnings as _warnings
 
-import numpy as np
-import pandas as pd
+import numpy as _np
+import pandas as _pd
 
 from . import _core
 
-__all__ = ["InputError", "Job", "Problem", "Result", "load_job", "tune", "simulate", "ensemble",
-           "evaluate", "load_gains"]
+__all__ = ["InputError", "RunWarning", "Job", "Problem", "Result", "load_job", "tune", "simulate",
+           "ensemble", "evaluate", "load_gains"]
+
+__version__ = _core.version  # the C++ library's, as `ftctune --version` prints it
 
 InputError = _core.InputError
 InputError.__module__ = __name__
 InputError.__doc__ = ("Bad input (a job, a gains file, an argument): the message names the input "
                       "and the JSON path of each error.")
+
+
+class RunWarning(UserWarning):
+    """A warning of a tuning run (a parameter on its bound, a compared controller that scores
+    lower, a loop that diverged or left its model's validity): tune() issues each through
+    warnings.warn, as `ftctune run` logs it; Result.warnings keeps them as text."""
 
 
 class Job:
@@ -48,7 +57,7 @@ class Job:
 
     def to_dict(self):
         """The resolved job as a dict: what `ftctune run` writes to job.json."""
-        return json.loads(self._native.to_json())
+        return _json.loads(self._native.to_json())
 
     def __repr__(self):
         return f"ftctune.Job({self.name!r} from {self.source!r})"
@@ -75,7 +84,37 @@ class Problem:
     """
 
     def __init__(self, job, threads=None):
-        self._native = _core.Problem(_job(job), threads)
+        job = load_job(job)
+        self._name = job.name
+        self._native = _core.Problem(job._native, threads)
+
+    def __repr__(self):
+        space = ", ".join(f"{n} in [{lo:g}, {hi:g}]{' (log)' if s == 'log' else ''}"
+                          for n, (lo, hi), s in zip(self.names, self.bounds, self.scales))
+        n, t = len(self.scenarios), self.threads
+        return (f"ftctune.Problem({self._name!r}: {space}; {n} scenario{'s' * (n != 1)}, "
+                f"{t} thread{'s' * (t != 1)})")
+
+    def __call__(self, x):
+        """The objective of one candidate as a float, so that the problem is a function
+        scipy.optimize takes: minimize(problem, x0, bounds=problem.bounds)."""
+        return float(self._native.objective(_np.asarray(x, dtype=float).reshape(1, -1))[0])
+
+    # pygmo's user-defined problem protocol: pygmo.problem(ftctune.Problem(job)) is a problem of
+    # one objective (minimised) over the tuned parameters' bounds.
+    def fitness(self, x):
+        """[objective] of one candidate (pygmo's fitness)."""
+        return [self(x)]
+
+    def get_bounds(self):
+        """(lower bounds, upper bounds), natural units (pygmo's get_bounds)."""
+        return tuple(list(side) for side in zip(*self.bounds))
+
+    def get_nobj(self):
+        return 1
+
+    def get_name(self):
+        return f"ftctune {self._name}"
 
     @property
     def names(self):
@@ -110,12 +149,12 @@ class Problem:
         of the job's metric ("objective"), every metric of the metrics record (per fault
         segment: <metric>_segment<k>; per fault: <metric>_fault<k>), diverged and whether the
         scenario counts in the objective."""
-        return pd.DataFrame(self._native.metrics(X))
+        return _pd.DataFrame(self._native.metrics(X))
 
 
 def _csv_frame(text):
     # round_trip: the 17 digits of the files give back the very doubles.
-    return pd.read_csv(io.StringIO(text), float_precision="round_trip")
+    return _pd.read_csv(_io.StringIO(text), float_precision="round_trip")
 
 
 class Result:
@@ -132,7 +171,7 @@ class Result:
     @property
     def gains(self):
         """The gains file's content (ftctune.gains/1) as a dict."""
-        return json.loads(self._native.gains_text)
+        return _json.loads(self._native.gains_text)
 
     @property
     def trials(self):
@@ -147,10 +186,11 @@ class Result:
     @property
     def comparison(self):
         """comparison.json as a dict: the compared controllers, the job's own and the tuned."""
-        return json.loads(self._native.comparison_text)
+        return _json.loads(self._native.comparison_text)
 
     @property
     def warnings(self):
+        """The run's warnings as text (tune() also issued each as a RunWarning)."""
         return list(self._native.warnings)
 
     @property
@@ -178,7 +218,7 @@ class Result:
         """Writes the files of `ftctune run` into dir, byte for byte the same (run.json's time,
         host and memory are this process's); returns their names. A directory holding a run is
         refused unless replace=True."""
-        return self._native.write(os.fspath(dir), replace)
+        return self._native.write(_os.fspath(dir), replace)
 
     def __repr__(self):
         tuned = self.gains.get("tuned", {})
@@ -192,7 +232,10 @@ def tune(job, threads=None, seed=None, callback=None):
     after each iteration with a dict (iteration, evaluations, best_fitness, best: parameter
     values); returning False stops the run (Result.completed is then False).
     """
-    return Result(_core.tune(_job(job), threads, seed, callback))
+    result = Result(_core.tune(_job(job), threads, seed, callback))
+    for text in result.warnings:
+        _warnings.warn(text, RunWarning, stacklevel=2)
+    return result
 
 
 def simulate(job, gains=None, controller=None, set=None, record_every=None):
@@ -205,16 +248,16 @@ def simulate(job, gains=None, controller=None, set=None, record_every=None):
     "scenarios" (the metrics as metrics.json lists them, with "recoverable" and "counted").
     "objective" is None when no scenario counts (every one is unrecoverable).
     """
-    if gains is not None and not isinstance(gains, (str, os.PathLike)):
-        with tempfile.TemporaryDirectory() as d:
+    if gains is not None and not isinstance(gains, (str, _os.PathLike)):
+        with _tempfile.TemporaryDirectory() as d:
             return simulate(job, _gains_file(gains, d, "gains.json"), controller, set, record_every)
     native = _job(job)
     out = _core.simulate(native, gains, controller, set, record_every)
     if out["warning"]:
-        warnings.warn(out["warning"], stacklevel=2)
+        _warnings.warn(out["warning"], stacklevel=2)
     for note in out["notes"]:  # diverged and unrecoverable scenarios, as the command warns
-        warnings.warn(note, stacklevel=2)
-    doc = json.loads(out["document"])
+        _warnings.warn(note, stacklevel=2)
+    doc = _json.loads(out["document"])
     rows = []
     for s in doc["scenarios"]:
         rows.append({"scenario": s["name"]} |
@@ -223,7 +266,7 @@ def simulate(job, gains=None, controller=None, set=None, record_every=None):
     objective = doc["objective"]
     if objective is None and any(s["counted"] for s in doc["scenarios"]):
         objective = float("inf")  # a diverged run; None: no scenario counts (unrecoverable)
-    return {"metrics": pd.DataFrame(rows), "trajectories": frames,
+    return {"metrics": _pd.DataFrame(rows), "trajectories": frames,
             "objective": objective,
             "fitness": doc["fitness"], "controller": doc["controller"],
             "scenarios": doc["scenarios"]}
@@ -232,19 +275,19 @@ def simulate(job, gains=None, controller=None, set=None, record_every=None):
 def ensemble(job, seed=None, count=None):
     """The members of the job's ensemble as `ftctune ensemble` lists them: a list of scenario
     dicts with their faults as structured fields, and "recoverable"."""
-    return json.loads(_core.ensemble(_job(job), seed, count))
+    return _json.loads(_core.ensemble(_job(job), seed, count))
 
 
 def _gains_file(gains, directory, name):
     """A path for gains given as a path, a Result or a gains dict."""
-    if isinstance(gains, (str, os.PathLike)):
-        return os.fspath(gains)
+    if isinstance(gains, (str, _os.PathLike)):
+        return _os.fspath(gains)
     doc = gains.gains if isinstance(gains, Result) else gains
     if not isinstance(doc, dict):
         raise TypeError("gains must be a path, a Result or a gains dict")
-    path = os.path.join(directory, name)
+    path = _os.path.join(directory, name)
     with open(path, "w") as f:
-        json.dump(doc, f, indent=2)
+        _json.dump(doc, f, indent=2)
     return path
 
 
@@ -292,26 +335,26 @@ def evaluate(job, gains=(), seed=None, count=None, threads=None):
     the held-out seed, the member count and each controller's aggregates.
     """
     items = list(gains.items()) if isinstance(gains, dict) else [
-        (os.fspath(g) if isinstance(g, (str, os.PathLike)) else f"gains{k + 1}", g)
+        (_os.fspath(g) if isinstance(g, (str, _os.PathLike)) else f"gains{k + 1}", g)
         for k, g in enumerate(gains)]
-    with tempfile.TemporaryDirectory() as d:
+    with _tempfile.TemporaryDirectory() as d:
         pairs = [(label, _gains_file(g, d, f"{k}.json")) for k, (label, g) in enumerate(items)]
         out = _core.evaluate(_job(job), pairs, seed, count, threads)
-    faults = json.loads(out["faults"])
+    faults = _json.loads(out["faults"])
     index = out["scenario_index"]
     per_scenario = _fault_columns(faults)
     columns = ["controller", "source", "scenario", "recoverable", "objective",
                *out["metric_columns"], "diverged"]
-    frame = pd.DataFrame({k: out[k] for k in columns})
+    frame = _pd.DataFrame({k: out[k] for k in columns})
     for name, values in per_scenario.items():
         frame[name] = [values[i] for i in index]
     frame.attrs["seed"] = out["seed"]
     frame.attrs["count"] = out["count"]
     frame.attrs["simulations"] = out["simulations"]
-    frame.attrs["controllers"] = json.loads(out["summaries"])
+    frame.attrs["controllers"] = _json.loads(out["summaries"])
     return frame
 
 
 def load_gains(path):
     """A gains file (ftctune.gains/1), checked as the runtime loader checks it, as a dict."""
-    return json.loads(_core.load_gains(path))
+    return _json.loads(_core.load_gains(path))

@@ -9,6 +9,12 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
+def pytest_configure(config):
+    # The runs' own warnings (a parameter on its bound, ...) are the tuning's, not the tests';
+    # pytest.warns still sees them where a test asks.
+    config.addinivalue_line("filterwarnings", "ignore::ftctune.RunWarning")
+
+
 def pytest_addoption(parser):
     parser.addoption("--ftctune", default=str(ROOT / "build" / "tools" / "ftctune"),
                      help="the ftctune executable of the same build")

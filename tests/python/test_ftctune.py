@@ -263,6 +263,32 @@ def test_ctrl_c_stops_a_tuning_run_within_a_second(table1_path):
     assert stopped - sent < 2.0
 
 
+DAEMON_SCRIPT = """
+import sys, threading, time, ftctune
+job = ftctune.load_job(sys.argv[1]).to_dict()
+job["tuning"]["algorithm"]["iterations"] = 100000
+job["tuning"]["algorithm"]["population"] = 200
+problem = ftctune.Problem(sys.argv[1], threads=1)
+threading.Thread(target=ftctune.tune, args=(job,), kwargs={"threads": 1}, daemon=True).start()
+threading.Thread(target=lambda: [problem.objective([[10.0, 20.0]] * 2000) for _ in range(100)],
+                 daemon=True).start()
+time.sleep(1.0)  # both inside their simulations
+print("exiting", time.monotonic(), flush=True)
+"""
+
+
+def test_the_interpreter_exits_cleanly_while_daemon_threads_tune(table1_path):
+    # It aborted (SIGABRT, exit 134): Python ends a daemon thread by unwinding it through the
+    # library's C++ frames when it next takes the GIL after the interpreter began to exit.
+    p = subprocess.run([sys.executable, "-c", DAEMON_SCRIPT, table1_path], capture_output=True,
+                       text=True, timeout=60)
+    ended = time.monotonic()
+    assert p.returncode == 0, (p.returncode, p.stderr)
+    assert p.stdout.startswith("exiting")
+    assert ended - float(p.stdout.split()[1]) < 5.0  # the exit waits a slice, not the run
+
+
+# --- simulate, ensemble, evaluate, load_gains ------------------------------------------------
 # --- simulate, ensemble, evaluate, load_gains ------------------------------------------------
 
 def test_simulate_gives_the_metrics_and_trajectories_of_ftctune_simulate(cli, table1_path,
@@ -441,3 +467,40 @@ def test_cmake_install_installs_a_module_that_finds_its_pagmo_adapter(cli, table
     assert p.returncode == 0, p.stderr
     module_file, completed = p.stdout.split()
     assert module_file == str(site / "ftctune" / "__init__.py") and completed == "True"
+
+
+# --- the package itself (#41 item 7) ---------------------------------------------------------
+
+def test_version_is_the_commands_and_the_namespace_is_the_api(cli):
+    p = subprocess.run([cli, "--version"], capture_output=True, text=True)
+    assert p.stdout.splitlines()[0] == "ftctune " + ftctune.__version__
+    public = {n for n in dir(ftctune) if not n.startswith("_")}
+    # What the module imports (numpy, pandas, os, json, io, tempfile, warnings) is not its API.
+    assert public == set(ftctune.__all__)
+    for name in ("np", "pd", "os", "json", "io", "tempfile", "warnings"):
+        assert not hasattr(ftctune, name), name
+
+
+def test_problem_is_a_function_for_scipy_and_a_pygmo_problem(table1_path):
+    from scipy.optimize import minimize
+    problem = ftctune.Problem(table1_path, threads=1)
+    assert repr(problem) == ("ftctune.Problem('table1': Kp in [1, 50], Ki in [0, 50]; "
+                             "1 scenario, 1 thread)")
+    x = [10.0, 20.0]
+    assert problem(x) == problem.objective(np.array(x))
+    assert problem.fitness(x) == [problem(x)]
+    assert problem.get_bounds() == ([1.0, 0.0], [50.0, 50.0])
+    assert problem.get_nobj() == 1
+    assert problem.get_name() == "ftctune table1"
+    # scipy takes it as it is: a bounded search that ends no worse than where it started.
+    r = minimize(problem, x0=x, bounds=problem.bounds, method="Powell",
+                 options={"maxfev": 20})
+    assert r.fun <= problem(x)
+    assert all(lo <= v <= hi for v, (lo, hi) in zip(r.x, problem.bounds))
+
+
+def test_tune_issues_its_warnings_as_run_warnings(table1_path):
+    with pytest.warns(ftctune.RunWarning) as caught:
+        result = ftctune.tune(table1_path, threads=1)
+    assert [str(w.message) for w in caught if w.category is ftctune.RunWarning] == result.warnings
+    assert any("Ki = 50 ended at its upper bound 50" in w for w in result.warnings)
