@@ -70,6 +70,25 @@ TEST(Cli, SimulateOtherControllerWithOverrides) {
   EXPECT_EQ(m["controller"]["sigma2"], 5.0);  // Table 1 default
 }
 
+// A recording interval longer than the run keeps its first sample only: 1e16 s / 1 ms
+// overflowed llround, and every one of the 30 000 samples was written. Not a finite number of
+// seconds: exit 2.
+TEST(Cli, SimulateWithARecordingIntervalLongerThanTheRunRecordsOneSample) {
+  const auto dir = fresh_dir("simulate-record-every");
+  const CliResult r = run_cli(
+      "simulate jobs/table1.json --record-every 1e16 --out '" + dir.string() + "'", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string csv = slurp(dir / "trajectory.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 2) << csv.substr(0, 400);  // header, t = 0
+  const CliResult inf = run_cli("simulate jobs/table1.json --record-every inf --out '" +
+                                    (dir / "inf").string() + "'",
+                                dir);
+  EXPECT_EQ(inf.exit_code, 2) << inf.err;
+  EXPECT_NE(inf.err.find("--record-every: must be a finite number of seconds > 0"),
+            std::string::npos)
+      << inf.err;
+}
+
 TEST(Cli, InvalidJobExitsTwoNamingFileAndPath) {
   const auto dir = fresh_dir("invalid");
   {

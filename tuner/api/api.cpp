@@ -451,7 +451,8 @@ LandscapeJobResult landscape_job(const Job& job, const LandscapeJobOptions& o) {
 
 SimulateJobResult simulate_job(const Job& job, const sim::ControllerConfig& controller,
                                const SimulateJobOptions& o) {
-  if (!(o.record_every > 0)) throw InputError("--record-every", "", "must be > 0 seconds");
+  if (!(o.record_every > 0) || !std::isfinite(o.record_every))
+    throw InputError("--record-every", "", "must be a finite number of seconds > 0");
   const TuningProblem problem(job);
   SimulateJobResult r;
   r.controller = controller;
@@ -462,7 +463,12 @@ SimulateJobResult simulate_job(const Job& job, const sim::ControllerConfig& cont
   json scenarios = json::array();
   for (std::size_t i = 0; i < job.scenarios.size(); ++i) {
     const sim::Scenario& s = job.scenarios[i];
-    const auto every = std::max<std::int64_t>(1, std::llround(o.record_every / s.sample_time));
+    // An interval longer than the run records its first sample only (llround of 1e16 s / 1 ms
+    // overflowed, and every sample was written).
+    const double ratio = o.record_every / s.sample_time;
+    const std::int64_t last = std::max<std::int64_t>(1, s.samples());
+    const std::int64_t every =
+        ratio >= static_cast<double>(last) ? last : std::max<std::int64_t>(1, std::llround(ratio));
     const sim::SimulationResult res = problem.simulate(controller, i, every);
     json m = metrics_json(res.metrics);
     m["name"] = s.name;
