@@ -442,9 +442,9 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   const sim::MetricField& tv = sim::metric_field("control_tv");
   const auto listed_tv = [&](const ComparedController& c) {
     std::vector<double> v;
-    const std::vector<sim::Metrics>& per = c.outcome.evaluation.scenarios;
-    for (std::size_t i = 0; i < r.listed_scenarios && i < per.size(); ++i)
-      v.push_back(per[i].*tv.per_run);
+    const std::vector<sim::Metrics>& runs = c.outcome.evaluation.scenarios;
+    for (std::size_t i = 0; i < r.listed_scenarios && i < runs.size(); ++i)
+      v.push_back(runs[i].*tv.per_run);
     return sim::over_scenarios(tv, v);
   };
   const double tv_tuned = listed_tv(tuned), tv_base = listed_tv(base);
