@@ -94,6 +94,21 @@ TEST(CliJson, ValidatePrintsTheCostAsOneDocumentAndReadsStandardInput) {
     EXPECT_NE(b.err.find(x["message"].get<std::string>()), std::string::npos) << x;
   }
   EXPECT_TRUE(named) << e.dump(2);
+  // Thousands of errors: the first 100 listed, one line each, and the rest counted.
+  json many = short_ensemble_job();
+  many["scenarios"] = json::array();
+  for (int i = 0; i < 3000; ++i) many["scenarios"].push_back(json::object());
+  tune::write_file_atomic(dir / "many.json", many.dump());
+  const CliResult m = run_cli("validate --json '" + (dir / "many.json").string() + "'", dir);
+  EXPECT_EQ(m.exit_code, 2);
+  const json capped = document(m);
+  ASSERT_EQ(capped["errors"].size(), tune::kMaxReportedErrors);
+  const std::size_t omitted = capped["errors_omitted"];
+  EXPECT_GT(omitted, 3000u);
+  EXPECT_NE(m.err.find("  ... and " + std::to_string(omitted) + " more (the first 100 are listed)"),
+            std::string::npos)
+      << m.err.substr(0, 300);
+  EXPECT_EQ(std::count(m.err.begin(), m.err.end(), '\n'), 102) << m.err.substr(0, 300);
   // Not JSON at all, from standard input.
   const CliResult junk = run_cli("validate - < /dev/null", dir);
   EXPECT_EQ(junk.exit_code, 2);

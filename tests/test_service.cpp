@@ -1212,6 +1212,25 @@ TEST(Service, ValidateChecksAJobWithoutSubmittingIt) {
   expect_error(s.client->Post("/v1/validate", "{", "application/json"), 400, "invalid_json");
   expect_error(s.client->Get("/v1/validate"), 405, "method_not_allowed");
   EXPECT_EQ(s.get("/v1/jobs")["total"], 0);  // nothing was submitted
+
+  // 30 000 broken scenarios (a 90 KB body): the first 100 errors listed, the rest counted. It
+  // answered every one, 11.8 MB for a 300 KB body.
+  json many = short_table1_job();
+  many["scenarios"] = json::array();
+  for (int i = 0; i < 30000; ++i) many["scenarios"].push_back(json::object());
+  r = s.client->Post("/v1/validate", many.dump(), "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  const json capped = json::parse(r->body);
+  ASSERT_EQ(capped["error"]["details"].size(), tune::kMaxReportedErrors);
+  EXPECT_GT(capped["error"]["details_omitted"].get<std::size_t>(), 30000u);
+  EXPECT_LT(r->body.size(), 20000u);
+  EXPECT_NE(capped["error"]["message"].get<std::string>().find(
+                "(and " +
+                std::to_string(capped["error"]["details_omitted"].get<std::size_t>() + 99) +
+                " more)"),
+            std::string::npos)
+      << capped["error"]["message"];
 }
 
 // DELETE removes a finished job with its results; a queued or running one is refused.

@@ -1,5 +1,6 @@
 // ftctune validate JOB: check a job file and say what running it would cost. `-` reads the job
 // from standard input; --json prints what was found as one JSON document.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <iterator>
@@ -86,16 +87,23 @@ int run_validate(const ValidateCli& o, const Globals& g) {
   } catch (const InputError& e) {
     std::fprintf(stderr, "ftctune: error: %s: %zu problem%s\n", e.source().c_str(),
                  e.errors().size(), e.errors().size() == 1 ? "" : "s");
-    for (const FieldError& fe : e.errors()) std::fprintf(stderr, "  %s\n", to_string(fe).c_str());
+    // The first kMaxReportedErrors, the rest counted.
+    const std::size_t listed = std::min(e.errors().size(), tune::kMaxReportedErrors);
+    for (std::size_t i = 0; i < listed; ++i)
+      std::fprintf(stderr, "  %s\n", to_string(e.errors()[i]).c_str());
+    if (listed < e.errors().size())
+      std::fprintf(stderr, "  ... and %zu more (the first %zu are listed)\n",
+                   e.errors().size() - listed, listed);
     if (o.json_output) {
       json errors = json::array();
-      for (const FieldError& fe : e.errors())
-        errors.push_back({{"path", fe.path}, {"message", fe.message}});
-      const json doc = {{"command", "validate"},
-                        {"file", name},
-                        {"valid", false},
-                        {"source", e.source()},
-                        {"errors", errors}};
+      for (std::size_t i = 0; i < listed; ++i)
+        errors.push_back({{"path", e.errors()[i].path}, {"message", e.errors()[i].message}});
+      json doc = {{"command", "validate"},
+                  {"file", name},
+                  {"valid", false},
+                  {"source", e.source()},
+                  {"errors", errors}};
+      if (listed < e.errors().size()) doc["errors_omitted"] = e.errors().size() - listed;
       std::printf("%s\n", doc.dump(2).c_str());
     }
     return 2;

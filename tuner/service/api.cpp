@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
@@ -414,9 +415,13 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
 std::optional<Job> Api::check_job(const httplib::Request& req, httplib::Response& res) {
   const auto bad_request = [&](const char* code, const InputError& e) {
     json details = json::array();
-    for (const FieldError& fe : e.errors())
-      details.push_back({{"path", fe.path}, {"message", fe.message}});
-    send_error(res, 400, code, e.what(), details);
+    const std::size_t listed = std::min(e.errors().size(), kMaxReportedErrors);
+    for (std::size_t i = 0; i < listed; ++i)
+      details.push_back({{"path", e.errors()[i].path}, {"message", e.errors()[i].message}});
+    json error = {{"code", code}, {"message", e.what()}, {"details", details}};
+    // The rest counted, not listed (the message says how many there are in all).
+    if (listed < e.errors().size()) error["details_omitted"] = e.errors().size() - listed;
+    send_json(res, 400, {{"error", error}});
   };
   json body;
   try {

@@ -24,6 +24,9 @@ namespace ftc::tune {
 
 inline constexpr const char* kJobSchema = "ftctune.job/1";
 inline constexpr const char* kScenariosSchema = "ftctune.scenarios/1";
+// The most errors `validate` and the service list for one input; the rest are counted ("and N
+// more"), so that a file of 10^5 broken entries gives an answer of kilobytes, not megabytes.
+inline constexpr std::size_t kMaxReportedErrors = 100;
 
 using runtime::parse_controller;
 using runtime::to_json;
