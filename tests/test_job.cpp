@@ -710,10 +710,11 @@ TEST(JobLoader, GoalMetricsAndTheirChecksComeFromTheMetricsRecord) {
       EXPECT_EQ(has_error(j, std::string("/goals/1/") + key, "is used only with metric"),
                 f.setting != setting)
           << name << " " << key;
-      if (f.setting == setting)  // and it is needed
+      if (f.setting == setting) {  // and it is needed
         EXPECT_TRUE(has_error(with_goals({soft_ise(), {{"metric", name}, {"at_most", 1}}}),
                               std::string("/goals/1/") + key, name + " needs a " + key))
             << name;
+      }
     }
     // One soft goal is the objective: only a field that can be.
     json soft = goal;
@@ -1016,4 +1017,22 @@ TEST(JobLoader, AWindowThatHoldsNoSampleIsRefused) {
             "at 18 s): shorten the window's start or the onsets");
   e["objective"]["window"] = {0, 8};
   EXPECT_EQ(first(e), "");
+}
+
+// A goal measured after a fault (settling_time, peak_error_after_fault) in a job without any:
+// every candidate scored NaN, the front was empty, and `run` exited 0 (#44 item 6).
+TEST(JobLoader, AGoalMeasuredAfterAFaultNeedsAScenarioWithOne) {
+  json j = table1();
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"minimize", true}},
+                {{"metric", "settling_time"}, {"threshold", 0.01}, {"minimize", true}},
+                {{"metric", "peak_error_after_fault"}, {"at_most", 1}}};
+  EXPECT_TRUE(errors_of(j).empty()) << to_string(errors_of(j).at(0));  // the paper's faults
+  j["scenarios"][0]["faults"] = json::array();
+  const std::vector<FieldError> errs = errors_of(j);
+  ASSERT_EQ(errs.size(), 2u);
+  EXPECT_EQ(to_string(errs[0]),
+            "/goals/1/metric: settling_time is measured after a fault, and no scenario of the job "
+            "has one: give a scenario faults, or goal another metric");
+  EXPECT_EQ(errs[1].path, "/goals/2/metric");
 }

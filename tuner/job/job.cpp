@@ -717,11 +717,23 @@ void validate_goals(const Job& job, Errors& errs) {
                         job.tuning->algorithm->type() +
                         " does not search for (bat and random do); or keep one soft goal and make "
                         "the others limits (\"at_most\")"});
+  // Whether any run of the job can have a fault: a listed scenario with one, or ensemble
+  // members that draw some.
+  const bool faults =
+      std::any_of(job.scenarios.begin(), job.scenarios.end(),
+                  [](const sim::Scenario& s) { return !s.faults.empty(); }) ||
+      (job.ensemble && job.ensemble->faults && job.ensemble->faults->count_hi > 0);
   std::vector<json> seen;
   for (std::size_t i = 0; i < job.goals.size(); ++i) {
     const GoalConfig& g = job.goals[i];
     const std::string p = "/goals/" + std::to_string(i);
     soft = soft || g.soft();
+    // Measured from the first fault (settling_time) or per fault: undefined on every run of a
+    // job without faults, so every candidate would score NaN and the front would be empty.
+    if (!faults && (g.metric->per_fault || g.metric->setting == sim::MetricSetting::settling_threshold))
+      errs.push_back({p + "/metric", std::string(g.metric->name) +
+                                         " is measured after a fault, and no scenario of the job "
+                                         "has one: give a scenario faults, or goal another metric"});
     if (g.windowed()) check_window(job, g.window, g.window_from, p + "/window", errs);
     // The setting the goal's metric is measured against: its own or the job's, not both apart.
     for (const SettingKeys& k : kSettingKeys) {

@@ -158,11 +158,16 @@ json gains_document(const TuningOutcome& r) {
     g["goals"]["rule"] =
         "feasible beats infeasible; between feasible candidates the soft goal decides, between "
         "infeasible ones the lesser total violation";
+    const bool hard = std::any_of(job.goals.begin(), job.goals.end(),
+                                  [](const GoalConfig& goal) { return !goal.soft(); });
     if (r.front && r.front->points.empty())
       g["goals"]["rule"] =
-          "no trial met the hard goals, so the Pareto front (front.json) is empty and no point "
-          "was picked: these are the gains of the trial with the least total violation of the "
-          "hard goals";
+          hard ? "no trial met the hard goals, so the Pareto front (front.json) is empty and no "
+                 "point was picked: these are the gains of the trial with the least total "
+                 "violation of the hard goals"
+               : "no trial had a finite value of every soft goal (each diverged, or a goal is "
+                 "undefined on these scenarios), so the Pareto front (front.json) is empty and no "
+                 "point was picked: these are the gains of the run's best trial by its fitness";
     if (r.front && !r.front->points.empty()) {
       g["goals"]["rule"] = front_rule_text(*r.front);
       g["goals"]["front"] = {{"index", r.front->picked},
