@@ -94,7 +94,9 @@ TEST(RunApi, ARunComputedWithoutADirectoryIsWrittenLaterWithTheSameBytes) {
   const auto a = files_under(dir / "now"), b = files_under(dir / "later");
   ASSERT_EQ(a.size(), b.size());
   for (const auto& [name, content] : a)
-    if (name != "run.json") EXPECT_EQ(b.at(name), content) << name;
+    if (name != "run.json") {
+      EXPECT_EQ(b.at(name), content) << name;
+    }
   EXPECT_EQ(b.at("run.json"), later.run_json);
   // Like run_job, it never writes over a run unless forced.
   try {

@@ -726,12 +726,16 @@ CappingComparison compare_capping(const json& j, const std::string& algorithm) {
       EXPECT_LE(a.violation, b.violation) << i;
       EXPECT_EQ(a.goals.size(), b.goals.size());
       for (std::size_t k = 0; k < a.goals.size() && k < b.goals.size(); ++k)
-        if (!std::isnan(a.goals[k])) EXPECT_LE(a.goals[k], b.goals[k]) << i << " " << k;
+        if (!std::isnan(a.goals[k])) {
+          EXPECT_LE(a.goals[k], b.goals[k]) << i << " " << k;
+        }
       EXPECT_FALSE(b.accepted) << "a capped candidate became the best: " << i;
       EXPECT_EQ(a.parameters, b.parameters);
     }
     const std::string csv = tune::trials_csv(on);
-    if (threads == 2) EXPECT_EQ(csv, one_thread) << algorithm << ": where stops depend on threads";
+    if (threads == 2) {
+      EXPECT_EQ(csv, one_thread) << algorithm << ": where stops depend on threads";
+    }
     one_thread = csv;
     r.csv = csv;
   }
@@ -907,4 +911,36 @@ TEST(TuningRun, SummaryGivesAManyfoldChangeAsARatio) {
   EXPECT_NE(summary(1.0, 0.25).find(", 0.25 times the tuned)"), std::string::npos)
       << summary(1.0, 0.25);
   EXPECT_EQ(summary(1.0, 1.0).find("lower"), std::string::npos);
+}
+
+// A tuned objective that beats the job's own only inside the noise floor is no improvement:
+// the run says so (#41 item 1), and `run --strict` exits 4 on any warning, files written.
+TEST(TuningRun, WarnsWhenTheTunedGainsWinOnlyInsideTheNoiseFloor) {
+  tune::TuningOutcome r = tuned(short_job(), 2);
+  ASSERT_EQ(r.comparison.size(), 4u);  // NFTSMC, FOSMC, the job's, the tuned
+  for (tune::ComparedController& c : r.comparison) {
+    c.outcome.evaluation.objective = 2.0;
+    c.outcome.evaluation.scenarios.at(0).control_tv = 100;
+  }
+  r.comparison[3].outcome.evaluation.objective = 1.0;
+  r.noise_floor->relative_spread = 0.01;
+  r.comparison[2].outcome.evaluation.objective = 1.02;  // 2 % apart: beyond a floor of 1 %
+  EXPECT_TRUE(tune::comparison_warnings(r).empty());
+  r.comparison[2].outcome.evaluation.objective = 1.005;  // 0.5 %: inside it
+  const std::vector<std::string> w = tune::comparison_warnings(r);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0],
+            "The tuned gains beat the job's own on ISE[0 s, 5 s] only inside the noise floor: 1 "
+            "against 1.005, 0.5 % apart, where nudging the initial state moves the tuned "
+            "objective by up to 1 %; this is no improvement to claim, so keep the job's gains or "
+            "widen the search.");
+
+  const auto dir = fresh_dir("run-strict");
+  const CliResult strict =
+      run_cli("run --strict -q jobs/table1.json --out '" + (dir / "t").string() + "'", dir);
+  EXPECT_EQ(strict.exit_code, 4) << strict.err;
+  EXPECT_NE(strict.err.find("ftctune: error: --strict: the run gave 2 warnings"),
+            std::string::npos)
+      << strict.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "t" / "gains.json"));
 }

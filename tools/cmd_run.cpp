@@ -29,6 +29,7 @@ struct RunCliOptions {
   bool no_checkpoint = false;  // never (else: once the run looks like taking over a minute)
   bool resume = false;
   bool json_output = false;  // --json: one JSON document of what the run did on stdout
+  bool strict = false;       // --strict: a run with warnings exits 4
 };
 
 // What `run --json` prints: where the files went and what the run found.
@@ -150,6 +151,14 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
                  out.c_str());
     return 3;
   }
+  // The files are written and may be fine to use; a script that wants no doubt asks --strict.
+  if (o.strict && !r.warnings.empty()) {
+    std::fprintf(stderr,
+                 "ftctune: error: --strict: the run gave %zu warning%s (gains.json lists them): "
+                 "check them before using %s/gains.json\n",
+                 r.warnings.size(), r.warnings.size() == 1 ? "" : "s", out.c_str());
+    return 4;
+  }
   return report_status;
 }
 
@@ -172,6 +181,9 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
                 "Simulate every candidate on every scenario (default: stop a candidate once it "
                 "cannot change the search; the same gains and history, trials.csv marks it)");
   sub->add_flag("--report", opts->report, "Then draw the figures and report.html (ftctune report)");
+  sub->add_flag("--strict", opts->strict,
+                "Exit 4 when the run gives warnings (a failed or drifting loop, a parameter on its "
+                "bound, a win inside the noise floor, ...); the files are written all the same");
   sub->add_flag("--force", opts->force, "Replace the run in an output directory that holds one");
   CLI::Option* checkpoint = sub->add_flag(
       "--checkpoint", opts->checkpoint,

@@ -435,6 +435,19 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
                   display_name(r.job.controller.type).c_str());
     out.emplace_back(buf);
   }
+  // A tuned objective that beats the job's own controller's only within the noise floor is no
+  // improvement the run can claim (SPEC §14): the two cannot be told apart.
+  const double own = r.baseline().outcome.evaluation.objective;
+  if (!r.front && r.noise_floor && std::isfinite(best) && best > 0 && own > best &&
+      (own - best) / best <= spread) {
+    std::snprintf(buf, sizeof buf,
+                  "The tuned gains beat the job's own on %s only inside the noise floor: %.6g "
+                  "against %.6g, %.3g %% apart, where nudging the initial state moves the tuned "
+                  "objective by up to %.2g %%; this is no improvement to claim, so keep the "
+                  "job's gains or widen the search.",
+                  label.c_str(), best, own, 100 * (own - best) / best, 100 * spread);
+    out.emplace_back(buf);
+  }
   // Until the objective can price control activity: gains that buy their score with much more
   // chattering than the job's own are named (on the listed scenarios, summed).
   // (Over scenarios as the metrics record says the control TV combines: summed.)
