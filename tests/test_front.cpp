@@ -19,7 +19,9 @@
 #include "ftc/runtime/gains.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/isa.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/optimizers/hypervolume.hpp"
 #include "ftc/tune/optimizers/pareto_bat.hpp"
 #include "ftc/tune/run/documents.hpp"
@@ -422,6 +424,128 @@ TEST(Front, PickChecksEveryPointAgainstTheRunsOwnFiles) {
   const auto dir = fresh_dir("pick-whole");
   tune::write_output_files(files, dir);
   EXPECT_EQ(tune::pick_gains(dir, "knee"), gains);
+}
+
+// The held-out front of a job without an ensemble is the run's own front: the same scenarios,
+// the same simulations, so every point's held-out goals are its run values to the bit, and
+// pick on it gives the run's gains (issue 42 item 1).
+TEST(Front, HeldOutFrontOfAJobWithoutAnEnsembleIsTheRunsOwnToTheBit) {
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  const auto dir = fresh_dir("held-out-same");
+  tune::write_output_files(tune::output_files(tuned(job, 1)), dir / "run");
+  tune::EvaluateJobOptions o;
+  o.front = dir / "run";
+  o.out = dir / "held";
+  o.figure = false;
+  o.threads = 1;
+  const tune::EvaluateJobResult r = tune::evaluate_job(job, o);
+  ASSERT_TRUE(r.front && r.front->held_out);
+  const tune::Front& f = *r.front;
+  EXPECT_EQ(f.held_out->seed, 0u);
+  EXPECT_EQ(f.held_out->count, 0);
+  ASSERT_GE(f.points.size(), 2u);
+  for (const tune::FrontPoint& p : f.points) {
+    EXPECT_EQ(p.goals, p.in_sample);
+    EXPECT_FALSE(p.dominated);
+  }
+  EXPECT_EQ(f.hypervolume, f.held_out->in_sample_hypervolume);
+  // Written whole, read back as written.
+  const json doc = json::parse(slurp(dir / "held" / "front.json"));
+  EXPECT_EQ(doc["held_out"]["run"], std::filesystem::weakly_canonical(dir / "run").string());
+  EXPECT_EQ(tune::front_document(job, doc["job_sha256"], doc["seed"],
+                                 tune::front_from_json(job, doc)),
+            doc);
+  // pick on it: the run's gains for the same point, with the held-out values beside them.
+  json held = tune::pick_gains(dir / "held", "index:1");
+  json own = tune::pick_gains(dir / "run", "index:1");
+  EXPECT_EQ(held["goals"]["front"]["held_out"]["goals"], doc["points"][1]["goals"]);
+  EXPECT_EQ(held["goals"]["front"]["held_out"]["warnings"], json::array());
+  held["goals"]["front"].erase("held_out");
+  own.erase("noise_floor");
+  EXPECT_EQ(held, own);
+}
+
+// With an ensemble the held-out members differ: the points keep their run values in in_sample,
+// the held-out front keeps the points its values do not dominate, pick picks on it and names
+// each soft goal a point does not hold beyond its noise floor; the run's files stay the
+// authority (a forged in_sample is refused); a front of another job is no --front.
+TEST(Front, HeldOutFrontPicksOnHeldOutValuesAndSaysWhereAPointDoesNotHold) {
+  json j = short_ensemble_job();
+  j["name"] = "held-out-short";
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"},
+                 {"window", {0, 4}},
+                 {"window_from", "first_fault"},
+                 {"aggregate", "cvar"},
+                 {"alpha", 0.9},
+                 {"minimize", true}},
+                {{"metric", "control_tv"}, {"minimize", true}}};
+  j["tuning"]["parameters"] = {{"Kp", {1, 50}},
+                               {"switching_gain", {{"bounds", {2, 200}}, {"scale", "log"}}}};
+  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 2}};
+  const tune::Job job = tune::parse_job(j, "held-out");
+  const auto dir = fresh_dir("held-out-ensemble");
+  tune::write_output_files(tune::output_files(tuned(job, 2)), dir / "run");
+  const json run_front = json::parse(slurp(dir / "run" / "front.json"));
+  tune::write_file_atomic(dir / "job.json", j.dump());
+  const CliResult cli = run_cli("evaluate '" + (dir / "job.json").string() + "' --front '" +
+                                    (dir / "run").string() + "' --count 12 --no-figure --out '" +
+                                    (dir / "held").string() + "'",
+                                dir);
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  EXPECT_NE(cli.out.find("held-out front: "), std::string::npos) << cli.out;
+  const json doc = json::parse(slurp(dir / "held" / "front.json"));
+  EXPECT_EQ(doc["held_out"]["seed"], job.ensemble->seed + 1);
+  EXPECT_EQ(doc["held_out"]["count"], 12);
+  EXPECT_EQ(doc["held_out"]["in_sample_hypervolume"], run_front["hypervolume"]);
+  ASSERT_EQ(doc["points"].size(), run_front["points"].size());
+  EXPECT_NE(doc["goals"][0]["label"].get<std::string>().find("over 13 scenarios"),
+            std::string::npos);
+  std::size_t on = 0;
+  for (std::size_t i = 0; i < doc["points"].size(); ++i) {
+    EXPECT_EQ(doc["points"][i]["in_sample"], run_front["points"][i]["goals"]) << i;
+    EXPECT_EQ(doc["points"][i]["parameters"], run_front["points"][i]["parameters"]) << i;
+    on += doc["points"][i]["dominated"].get<bool>() ? 0 : 1;
+  }
+  ASSERT_GT(on, 0u);
+  // pick on the held-out knee: the point's parameters, its run values, its held-out values,
+  // and a warning for each soft goal worse held out than in the run beyond its floor.
+  const json g = tune::pick_gains(dir / "held", "knee");
+  const std::size_t k = g["goals"]["front"]["index"];
+  EXPECT_EQ(k, doc["picked"]["index"].get<std::size_t>());
+  const json& point = doc["points"][k];
+  EXPECT_FALSE(point["dominated"].get<bool>());
+  EXPECT_EQ(g["tuned"]["Kp"], point["parameters"]["Kp"]);
+  EXPECT_EQ(g["goals"]["goals"][0]["value"], point["in_sample"][0]);
+  EXPECT_EQ(g["goals"]["front"]["held_out"]["goals"], point["goals"]);
+  std::size_t worse = 0;
+  for (std::size_t s = 0; s < 2; ++s) {
+    const double in = point["in_sample"][s], out = point["goals"][s];
+    const double floor = point["noise_floor"][s].is_null() ? 0.0 : point["noise_floor"][s].get<double>();
+    worse += (out - in) / std::abs(in) > floor ? 1 : 0;
+  }
+  EXPECT_EQ(g["goals"]["front"]["held_out"]["warnings"].size(), worse);
+  EXPECT_NO_THROW(runtime::parse_gains(g, "held-out knee"));
+  // The run's values are checked against its trials.csv.
+  json forged = doc;
+  forged["points"][0]["in_sample"][0] = 1e-30;
+  tune::write_file_atomic(dir / "held" / "front.json", forged.dump());
+  try {
+    tune::pick_gains(dir / "held", "index:0");
+    ADD_FAILURE() << "a forged in_sample was taken";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.errors().at(0).path, "/points/0/in_sample/0") << e.what();
+  }
+  // A run of another job is no --front.
+  json other = j;
+  other["name"] = "another";
+  tune::write_file_atomic(dir / "other.json", other.dump());
+  const CliResult refused =
+      run_cli("evaluate '" + (dir / "other.json").string() + "' --front '" +
+                  (dir / "run").string() + "' --no-figure --out '" + (dir / "x").string() + "'",
+              dir);
+  EXPECT_EQ(refused.exit_code, 2) << refused.err;
+  EXPECT_NE(refused.err.find("--front: "), std::string::npos) << refused.err;
 }
 
 TEST(Front, PickRules) {

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli.hpp"
+#include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/report/evaluation.hpp"
@@ -21,6 +22,7 @@ namespace {
 struct EvaluateCliOptions {
   std::string job;
   std::vector<std::string> gains;
+  std::string front;  // --front RUN_DIR
   std::optional<std::uint64_t> seed;
   std::optional<std::int64_t> count;
   std::string out;
@@ -47,6 +49,7 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   options.count = o.count;
   options.figure = !o.no_figure;
   options.threads = o.threads;
+  options.front = o.front;
   options.log = spdlog_log();
   // Beside the job's latest run (out/<name>, or -2, -3, ... where `run` moved on), whose report
   // then shows it.
@@ -82,6 +85,7 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
       files.push_back(figure.filename().string());
     }
     files.push_back("worst");
+    if (result.front) files.push_back("front.json");
     json controllers = json::array();
     for (const tune::EvaluatedController& c : r.controllers)
       controllers.push_back({{"label", c.label},
@@ -100,7 +104,19 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
                       {"simulations", r.simulations},
                       {"threads", result.threads},
                       {"wall_seconds", elapsed()}};
-    std::printf("%s\n", doc.dump(2).c_str());
+    json with_front = doc;
+    if (result.front) {
+      std::size_t on = 0;
+      for (const tune::FrontPoint& p : result.front->points) on += p.dominated ? 0 : 1;
+      with_front["front"] = {
+          {"points", result.front->points.size()},
+          {"on_front", on},
+          {"hypervolume", json_io::json_number(result.front->hypervolume)},
+          {"in_sample_hypervolume",
+           json_io::json_number(result.front->held_out->in_sample_hypervolume)},
+          {"knee", on > 0 ? json(result.front->picked) : json()}};
+    }
+    std::printf("%s\n", with_front.dump(2).c_str());
     return 0;
   }
   if (g.quiet) return 0;
@@ -113,8 +129,10 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   std::printf("  %lld simulations on %d thread%s in %.2f s\n",
               static_cast<long long>(r.simulations), result.threads, result.threads == 1 ? "" : "s",
               elapsed());
-  std::printf("  wrote %s/{evaluation.json, evaluation.csv%s, worst/}\n", out.c_str(),
-              figure.empty() ? "" : (", " + figure.filename().string()).c_str());
+  std::printf("  wrote %s/{evaluation.json, evaluation.csv%s%s, worst/}\n", out.c_str(),
+              figure.empty() ? "" : (", " + figure.filename().string()).c_str(),
+              result.front ? ", front.json" : "");
+  if (result.front) std::fputs(tune::front_summary(job, *result.front, out).c_str(), stdout);
   return 0;
 }
 
@@ -140,6 +158,11 @@ void add_evaluate_command(CLI::App& app, const Globals& g, Action& action) {
       ->check(output_directory());
   sub->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 4096));
+  sub->add_option("--front", opts->front,
+                  "A run directory of the job with a front (front.json): evaluate every point "
+                  "too, and write the held-out front to OUT/front.json (ftctune pick OUT picks "
+                  "on it)")
+      ->check(CLI::ExistingDirectory);
   // A plain flag: CLI11 shows a negated one's default in the help ("--no-figure{false}").
   sub->add_flag("--no-figure", opts->no_figure, "Skip the figure (no gnuplot needed)");
   sub->add_flag("--json", opts->json_output,

@@ -17,7 +17,9 @@ void add_pick_command(CLI::App& app, const Globals& g, Action& action) {
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand(
       "pick", "Write the gains file of another point of a run's Pareto front (front.json)");
-  sub->add_option("run", o->run, "the run directory (out/<job>/...)")->required()
+  sub->add_option("run", o->run,
+                  "the run directory (out/<job>/...), or the output of evaluate --front")
+      ->required()
       ->check(CLI::ExistingDirectory);
   sub->add_option("--rule", o->rule,
                   "knee | min:METRIC | limit:METRIC<=X (the least first other soft goal among "
@@ -30,6 +32,12 @@ void add_pick_command(CLI::App& app, const Globals& g, Action& action) {
   sub->callback([&action, &g, o] {
     action = [o, &g] {
       const nlohmann::json gains = tune::pick_gains(o->run, o->rule);
+      // On a held-out front: each soft goal on which the point does not hold out of sample.
+      const nlohmann::json* held = nullptr;
+      if (gains["goals"]["front"].contains("held_out")) held = &gains["goals"]["front"]["held_out"];
+      if (held && !g.quiet)
+        for (const nlohmann::json& w : (*held)["warnings"])
+          std::fprintf(stderr, "[warning] %s\n", w.get<std::string>().c_str());
       const std::string text = gains.dump(2) + "\n";
       if (o->out.empty()) {
         std::fputs(text.c_str(), stdout);

@@ -359,10 +359,63 @@ EvaluateJobResult evaluate_job(const Job& job, const EvaluateJobOptions& o) {
   options.seed = o.seed;
   options.count = o.count;
   options.progress = o.progress;
+  // A run's front: every point joins the controllers, labelled "point <i>" (its index).
+  std::optional<Front> run_front;
+  std::uint64_t run_seed = 0;
+  if (!o.front.empty()) {
+    if (!job.tuning)
+      throw InputError("--front", "", "the job has no tuning section: it has no front");
+    const std::string sha = canonical_job_sha256(job);
+    run_front = read_front(o.front, job, sha);
+    if (!run_front)
+      throw InputError("--front", "",
+                       (o.front / "front.json").string() +
+                           " is not this job's front: no such file, or one of another job "
+                           "(its job_sha256 is not " + sha.substr(0, 12) +
+                           "...); name the directory of a run of this job with two or more "
+                           "soft goals");
+    if (run_front->points.empty())
+      throw InputError("--front", "", (o.front / "front.json").string() + " has no point");
+    // The run's seed, as its front.json gives it (read_front has checked the file).
+    const std::optional<std::string> text = read_file(o.front / "front.json");
+    const json doc = text ? json::parse(*text, nullptr, false) : json();
+    run_seed = doc.is_object() && doc.contains("seed") && doc["seed"].is_number_unsigned()
+                   ? doc["seed"].get<std::uint64_t>()
+                   : job.tuning->seed;
+    const TuningProblem problem(job);
+    for (std::size_t i = 0; i < run_front->points.size(); ++i)
+      options.controllers.emplace_back("point " + std::to_string(i),
+                                       problem.controller_with(run_front->points[i].parameters));
+  }
   EvaluatorFor evaluator(o.evaluator, o.threads);
   result.threads = evaluator.use->concurrency();
   result.evaluation = evaluate_out_of_sample(job, options, *evaluator.use);
   write_evaluation(result.evaluation, result.out);
+  if (run_front) {
+    const EvaluationResult& ev = result.evaluation;
+    const std::size_t first = ev.controllers.size() - run_front->points.size();
+    std::vector<std::vector<double>> goals;
+    for (std::size_t i = first; i < ev.controllers.size(); ++i)
+      goals.push_back(ev.controllers[i].goals);
+    // The job's compare entries and its own controller, held out alike (no gains files).
+    std::vector<FrontCompared> compared;
+    for (const EvaluatedController& c : ev.controllers)
+      if (c.source == "compare" || c.source == "job")
+        compared.push_back({c.label, c.source == "job" ? "baseline" : "compare", c.goals,
+                            !(c.violation > 0)});
+    FrontHeldOut where;
+    std::error_code ec;
+    const fs::path absolute = fs::weakly_canonical(fs::absolute(o.front), ec);
+    where.run = (ec ? o.front : absolute).string();
+    where.seed = ev.seed;
+    where.count = ev.count;
+    result.front =
+        held_out_front(job, std::move(*run_front), where, goals, std::move(compared));
+    write_file_atomic(result.out / "front.json",
+                      front_document(job, canonical_job_sha256(job), run_seed, *result.front)
+                              .dump(2) +
+                          "\n");
+  }
   if (o.figure) result.figure = draw_evaluation(result.evaluation, result.out);
   return result;
 }

@@ -137,6 +137,8 @@ EvaluationResult evaluate_out_of_sample(const Job& job_in, const EvaluateOptions
                              {},
                              0.0});
   }
+  for (const auto& [label, controller] : options.controllers)
+    r.controllers.push_back({label, "front", controller, {}, {}, {}, 0.0});
   for (std::size_t i = 0; i < r.controllers.size(); ++i)
     for (std::size_t j = 0; j < i; ++j)
       if (r.controllers[i].label == r.controllers[j].label)

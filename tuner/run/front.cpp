@@ -14,6 +14,7 @@
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/metrics_record.hpp"
+#include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/optimizers/hypervolume.hpp"
 #include "ftc/tune/optimizers/pareto_bat.hpp"
 #include "ftc/tune/run/documents.hpp"
@@ -281,10 +282,29 @@ void apply_noise_floor(Front& front,
   list_partners(front);
 }
 
+// The points the knee, min and limit choose among: all, but on a held-out front those its
+// held-out values keep on it.
+std::vector<std::size_t> on_front(const Front& front) {
+  std::vector<std::size_t> on;
+  for (std::size_t i = 0; i < front.points.size(); ++i)
+    if (!front.points[i].dominated) on.push_back(i);
+  return on;
+}
+
+std::size_t knee_among(const Front& front, const std::vector<std::size_t>& on) {
+  std::vector<std::vector<double>> lp;
+  for (std::size_t i : on) lp.push_back(log_soft_goals(front.points[i].goals, front.soft));
+  return on.at(knee_of(lp));
+}
+
 std::size_t pick_point(const Job& job, const Front& front, const std::string& rule) {
   if (front.points.empty()) refuse("/rule", "the front has no point");
   const std::vector<FrontPoint>& p = front.points;
-  if (rule == "knee") return knee_of(log_points(front));
+  const std::vector<std::size_t> on = on_front(front);
+  if (on.empty() && rule.rfind("index:", 0) != 0)
+    refuse("/rule", "no point stays on the held-out front (each is infeasible or dominated "
+                    "there): only index:N picks one");
+  if (rule == "knee") return knee_among(front, on);
   const auto colon = rule.find(':');
   const std::string kind = rule.substr(0, colon),
                     arg = colon == std::string::npos ? "" : rule.substr(colon + 1);
@@ -297,8 +317,8 @@ std::size_t pick_point(const Job& job, const Front& front, const std::string& ru
   }
   if (colon != std::string::npos && kind == "min") {
     const std::size_t g = goal_named(job, arg);
-    std::size_t best = 0;
-    for (std::size_t i = 1; i < p.size(); ++i)
+    std::size_t best = on.front();
+    for (std::size_t i : on)
       if (p[i].goals[g] < p[best].goals[g]) best = i;
     return best;
   }
@@ -315,7 +335,7 @@ std::size_t pick_point(const Job& job, const Front& front, const std::string& ru
         break;
       }
     std::optional<std::size_t> best;
-    for (std::size_t i = 0; i < p.size(); ++i)
+    for (std::size_t i : on)
       if (p[i].goals[g] <= x && (!best || p[i].goals[by] < p[*best].goals[by])) best = i;
     if (!best)
       refuse("/rule",
@@ -323,6 +343,58 @@ std::size_t pick_point(const Job& job, const Front& front, const std::string& ru
     return *best;
   }
   refuse("/rule", "expected knee, min:METRIC, limit:METRIC<=X or index:N, got \"" + rule + "\"");
+}
+
+Front held_out_front(const Job& job, Front f, FrontHeldOut where,
+                     const std::vector<std::vector<double>>& goals,
+                     std::vector<FrontCompared> compared) {
+  where.in_sample_hypervolume = f.hypervolume;
+  // The goals' labels count the held-out scenarios ("CVaR0.9 of ISE[...] over 1001 scenarios").
+  Job held = job;
+  if (held.ensemble) {
+    auto members = std::make_shared<EnsembleConfig>(*held.ensemble);
+    members->count = where.count;
+    held.ensemble = std::move(members);
+  }
+  for (std::size_t k = 0; k < f.goals.size() && k < job.goals.size(); ++k)
+    f.goals[k].label = front_goal(held, k).label;
+  std::vector<ObjectiveVector> o;
+  for (std::size_t i = 0; i < f.points.size(); ++i) {
+    FrontPoint& p = f.points[i];
+    p.in_sample = p.goals;
+    p.goals = goals.at(i);
+    p.violation = 0.0;
+    for (std::size_t k = 0; k < job.goals.size(); ++k)
+      p.violation += job.goals[k].violation(p.goals[k]);
+    ObjectiveVector v;
+    for (std::size_t k : f.soft) v.values.push_back(p.goals[k]);
+    v.violation = p.violation;
+    o.push_back(std::move(v));
+  }
+  std::vector<std::vector<double>> kept;
+  for (std::size_t i = 0; i < f.points.size(); ++i) {
+    FrontPoint& p = f.points[i];
+    bool finite = true;
+    for (double x : o[i].values) finite = finite && std::isfinite(x);
+    p.dominated = !p.feasible() || !finite;
+    for (std::size_t j = 0; j < f.points.size() && !p.dominated; ++j)
+      p.dominated = j != i && pareto::dominates(o[j], o[i]);
+    if (!p.dominated) kept.push_back(log_soft_goals(p.goals, f.soft));
+  }
+  // Against the run's reference point, so that the two hypervolumes compare (a point beyond it
+  // adds nothing).
+  f.hypervolume = kept.empty() ? 0.0 : hypervolume(kept, f.reference);
+  const std::vector<std::size_t> on = on_front(f);
+  f.picked = on.empty() ? 0 : knee_among(f, on);
+  f.rule = "knee";
+  // The run's floors, the held-out values: which points the held-out values cannot tell apart
+  // (neighbours in the run's order).
+  std::vector<std::vector<std::optional<double>>> floors;
+  for (const FrontPoint& p : f.points) floors.push_back(p.noise_floor);
+  apply_noise_floor(f, floors);
+  f.compared = std::move(compared);
+  f.held_out = std::move(where);
+  return f;
 }
 
 std::string front_rule_text(const Front& front) {
@@ -349,6 +421,23 @@ std::string front_summary(const Job& job, const Front& front, const std::filesys
     return std::string("  front: empty: no trial ") +
            (hard ? "met the hard goals with" : "had") +
            " a finite value of every soft goal, so no point was picked (front.json)\n";
+  }
+  if (front.held_out) {
+    const std::vector<std::size_t> on = on_front(front);
+    s += "  held-out front: " + std::to_string(on.size()) + " of the run's " +
+         std::to_string(front.points.size()) +
+         " points stay on it (feasible, not dominated), hypervolume " +
+         value(front.hypervolume) + " against the run's reference point (in the run: " +
+         value(front.held_out->in_sample_hypervolume) + ")";
+    if (on.empty()) return s + "\n";
+    const FrontPoint& k = front.points[front.picked];
+    s += "; its knee is point " + std::to_string(front.picked) + ":";
+    for (std::size_t g : front.soft)
+      s += (g == front.soft.front() ? " " : ", ") + front.goals[g].label + " = " +
+           value(k.goals[g]) + " (run: " + value(k.in_sample[g]) + ")";
+    s += "\n  its gains: ftctune pick " + out.string() + " --rule knee (or min:METRIC, "
+         "limit:METRIC<=X, index:N)\n";
+    return s;
   }
   const FrontPoint& p = front.points[front.picked];
   s += "  front: " + std::to_string(front.points.size()) + " point" +
@@ -401,9 +490,15 @@ json front_document(const Job& job, const std::string& job_sha256, std::uint64_t
                   {"noise_floor", noise},          {"trial", p.trial},
                   {"within_noise", p.within_noise}};
     if (p.within_noise_of) point["within_noise_of"] = *p.within_noise_of;
+    if (front.held_out) {
+      json in_sample = json::array();
+      for (double v : p.in_sample) in_sample.push_back(json_number(v));
+      point["in_sample"] = std::move(in_sample);
+      point["dominated"] = p.dominated;
+    }
     points.push_back(std::move(point));
   }
-  return {{"schema", kFrontSchema},
+  json doc = {{"schema", kFrontSchema},
           {"job", job.name},
           {"job_sha256", job_sha256},
           {"seed", seed},
@@ -411,11 +506,17 @@ json front_document(const Job& job, const std::string& job_sha256, std::uint64_t
           {"space", "log10"},
           {"reference_point", reference},
           {"hypervolume", json_number(front.hypervolume)},
-          {"picked", front.points.empty()  // no feasible trial: nothing to pick
-                         ? json()
+          {"picked", front.points.empty() || (front.held_out && on_front(front).empty())
+                         ? json()  // no feasible trial (or none held out): nothing to pick
                          : json{{"index", front.picked}, {"rule", front.rule}}},
           {"compared", compared},
           {"points", points}};
+  if (front.held_out)
+    doc["held_out"] = {{"run", front.held_out->run},
+                       {"seed", front.held_out->seed},
+                       {"count", front.held_out->count},
+                       {"in_sample_hypervolume", json_number(front.held_out->in_sample_hypervolume)}};
+  return doc;
 }
 
 std::string front_csv(const Job& job, const Front& front) {
@@ -558,6 +659,14 @@ Front front_from_json(const Job& job, const json& j, const std::string& source) 
     if (p.contains("within_noise_of"))
       x.within_noise_of =
           other_point(p["within_noise_of"], at + "/within_noise_of", i, points.size());
+    if (j.contains("held_out")) {
+      const json& in_sample = member(p, "in_sample", at);
+      if (!in_sample.is_array() || in_sample.size() != G)
+        fail(at + "/in_sample", "expected " + std::to_string(G) + " values");
+      for (std::size_t k = 0; k < G; ++k)
+        x.in_sample.push_back(number(in_sample[k], at + "/in_sample/" + std::to_string(k), INFINITY));
+      x.dominated = boolean(p, "dominated", at);
+    }
     if (!p.contains("within_noise")) {
       partners_given = false;
     } else {
@@ -583,8 +692,27 @@ Front front_from_json(const Job& job, const json& j, const std::string& source) 
       fail("/reference_point/" + std::to_string(k), "expected a number");
   }
   f.hypervolume = number(member(j, "hypervolume", ""), "/hypervolume", NAN);
-  // null: no point was picked (an empty front).
-  if (j.contains("picked") && !(j["picked"].is_null() && f.points.empty())) {
+  if (j.contains("held_out")) {
+    const json& h = j["held_out"];
+    FrontHeldOut where;
+    const json& run = member(h, "run", "/held_out");
+    if (!run.is_string() || run.get<std::string>().empty())
+      fail("/held_out/run", "expected the run directory");
+    where.run = run.get<std::string>();
+    const json& seed = member(h, "seed", "/held_out");
+    if (!seed.is_number_unsigned()) fail("/held_out/seed", "expected an integer >= 0");
+    long long count = -1;
+    if (!json_io::json_to_int(member(h, "count", "/held_out"), count) || count < 0)
+      fail("/held_out/count", "expected an integer >= 0");
+    where.seed = seed.get<std::uint64_t>();
+    where.count = count;
+    where.in_sample_hypervolume = number(member(h, "in_sample_hypervolume", "/held_out"),
+                                         "/held_out/in_sample_hypervolume", NAN);
+    f.held_out = std::move(where);
+  }
+  // null: no point was picked (an empty front, or a held-out one that keeps no point).
+  const bool none_on = f.held_out && on_front(f).empty();
+  if (j.contains("picked") && !(j["picked"].is_null() && (f.points.empty() || none_on))) {
     const std::optional<std::size_t> index = index_of(member(j["picked"], "index", "/picked"));
     if (!index || *index >= f.points.size()) fail("/picked/index", "is not the index of a point");
     f.picked = *index;
@@ -687,7 +815,8 @@ std::map<std::size_t, TrialRow> trial_rows(const std::filesystem::path& file, co
                     feasible = column("feasible");
   std::map<std::size_t, TrialRow> rows;
   std::size_t row = 0;
-  for (const auto& [wanted, point] : point_of) {
+  for (const auto& [row_wanted, point] : point_of) {
+    const std::size_t wanted = row_wanted;  // a lambda below captures it (not a binding)
     for (; row <= wanted; ++row)
       if (!next_line())
         throw InputError(front_source, "/points/" + std::to_string(point) + "/trial",
@@ -731,9 +860,11 @@ bool same(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)
 // trial of this run, as trials.csv recorded it (its parameters and goal values bit for bit),
 // within the job's bounds and feasible, and the file must be this job's (its job_sha256). A
 // point that fails is an InputError at its path in front.json.
+// `source`: the front.json checked (the run's, or a held-out front's, whose points' in_sample
+// values are the ones the run recorded).
 std::map<std::size_t, TrialRow> check_front_against_run(const std::filesystem::path& run,
-                                                        const Job& job, const Front& front) {
-  const std::string source = (run / "front.json").string();
+                                                        const Job& job, const Front& front,
+                                                        const std::string& source) {
   const auto fail = [&](const std::string& path, const std::string& m) {
     throw InputError(source, path, m);
   };
@@ -748,13 +879,17 @@ std::map<std::size_t, TrialRow> check_front_against_run(const std::filesystem::p
              "is " + json_io::number_text(p.parameters[k]) + ", outside the job's bounds [" +
                  json_io::number_text(bounds[k].lower) + ", " +
                  json_io::number_text(bounds[k].upper) + "]");
-    if (!(p.violation == 0))
+    // A held-out point may break a hard goal on the held-out members; in the run it met them.
+    const bool held = front.held_out.has_value();
+    const std::vector<double>& recorded = held ? p.in_sample : p.goals;
+    const std::string values = held ? "/in_sample/" : "/goals/";
+    if (!held && !(p.violation == 0))
       fail(at + "/violation", "is " + json_io::number_text(p.violation) +
                                   ", but a point of the front meets every hard goal");
     for (std::size_t k = 0; k < job.goals.size(); ++k)
-      if (!(job.goals[k].violation(p.goals[k]) == 0))
-        fail(at + "/goals/" + std::to_string(k),
-             "is " + json_io::number_text(p.goals[k]) + ", above the hard goal's limit " +
+      if (!(job.goals[k].violation(recorded[k]) == 0))
+        fail(at + values + std::to_string(k),
+             "is " + json_io::number_text(recorded[k]) + ", above the hard goal's limit " +
                  json_io::number_text(*job.goals[k].at_most) +
                  ", but a point of the front meets every hard goal");
     if (!point_of.count(p.trial)) point_of[p.trial] = i;
@@ -771,10 +906,11 @@ std::map<std::size_t, TrialRow> check_front_against_run(const std::filesystem::p
         fail(at + "/parameters/" + bounds[k].name,
              "is " + json_io::number_text(p.parameters[k]) + ", but " + row + " has " +
                  json_io::number_text(r.parameters[k]));
+    const std::vector<double>& recorded = front.held_out ? p.in_sample : p.goals;
     for (std::size_t k = 0; k < job.goals.size(); ++k)
-      if (!same(p.goals[k], r.goals[k]))
-        fail(at + "/goals/" + std::to_string(k),
-             "is " + json_io::number_text(p.goals[k]) + ", but " + row + " has " +
+      if (!same(recorded[k], r.goals[k]))
+        fail(at + (front.held_out ? "/in_sample/" : "/goals/") + std::to_string(k),
+             "is " + json_io::number_text(recorded[k]) + ", but " + row + " has " +
                  json_io::number_text(r.goals[k]));
     if (r.capped || !r.feasible || r.violation > 0)
       fail(at + "/trial", "is " + row + ", which is " +
@@ -797,32 +933,38 @@ std::optional<Front> read_front(const std::filesystem::path& run, const Job& job
   return front_from_json(job, j, file.string());
 }
 
-json pick_gains(const std::filesystem::path& run, const std::string& rule) {
+json pick_gains(const std::filesystem::path& dir, const std::string& rule) {
+  const std::filesystem::path front_file = dir / "front.json";
+  std::error_code ec;
+  if (!std::filesystem::exists(front_file, ec))
+    throw InputError(front_file.string(), "",
+                     "does not exist (is this a run directory of a job with two or more soft "
+                     "goals, or the output of evaluate --front?)");
+  const json fj = read_json_file(front_file);
+  // A held-out front (evaluate --front) names its run: that run's files give the gains.
+  std::filesystem::path run = dir;
+  if (fj.is_object() && fj.contains("held_out") && fj["held_out"].is_object() &&
+      fj["held_out"].contains("run") && fj["held_out"]["run"].is_string())
+    run = fj["held_out"]["run"].get<std::string>();
   const Job job = load_job(run / "job.json");
   if (front_objectives(job) < 2 || !job.tuning)
     throw InputError((run / "job.json").string(), "/goals",
                      "the run's job has fewer than two soft goals: it has no front to pick from");
   const std::string sha = canonical_job_sha256(job);
-  const std::filesystem::path front_file = run / "front.json";
-  std::error_code ec;
-  if (!std::filesystem::exists(front_file, ec))
-    throw InputError(front_file.string(), "",
-                     "does not exist (is this a run directory of a job with two or more soft "
-                     "goals?)");
-  const json fj = read_json_file(front_file);
   if (fj.is_object() && fj.contains("job_sha256") && fj["job_sha256"] != sha)
     throw InputError(front_file.string(), "/job_sha256",
-                     "is " + fj["job_sha256"].dump() + ", not the sha256 of this run's job.json (" +
+                     "is " + fj["job_sha256"].dump() + ", not the sha256 of the run's job.json (" +
                          sha + "): a front of another job");
   Front front = front_from_json(job, fj, front_file.string());
-  const std::map<std::size_t, TrialRow> rows = check_front_against_run(run, job, front);
+  const std::map<std::size_t, TrialRow> rows =
+      check_front_against_run(run, job, front, front_file.string());
   const std::size_t i = pick_point(job, front, rule);
   const std::string gains_file = (run / "gains.json").string();
   json g = read_json_file(run / "gains.json");
   if (!g.is_object()) throw InputError(gains_file, "", "expected an object");
   if (!g.contains("job") || !g["job"].is_object() || g["job"].value("sha256", json()) != sha)
     throw InputError(gains_file, "/job/sha256",
-                     "is not the sha256 of this run's job.json (" + sha +
+                     "is not the sha256 of the run's job.json (" + sha +
                          "): gains of another job");
   if (!g.contains("goals") || !g["goals"].is_object())
     throw InputError(gains_file, "/goals", "expected an object (the run's goals)");
@@ -837,6 +979,8 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
   for (const char* key : {"controller", "tuned", "objective"})
     if (g.contains(key) && !g[key].is_object())
       throw InputError(gains_file, std::string("/") + key, "expected an object");
+  if (g.contains("warnings") && !g["warnings"].is_array())
+    throw InputError(gains_file, "/warnings", "expected an array");
   const FrontPoint& p = front.points[i];
   for (std::size_t j = 0; j < job.tuning->parameters.size(); ++j) {
     const std::string& name = job.tuning->parameters[j].name;
@@ -846,21 +990,61 @@ json pick_gains(const std::filesystem::path& run, const std::string& rule) {
   const TrialRow& row = rows.at(p.trial);
   g["objective"]["value"] = json_number(row.objective);
   g["fitness"] = json_number(row.fitness);
+  // The run's values of the point (its trials.csv row); a held-out front's go beside them.
+  const std::vector<double>& recorded = front.held_out ? p.in_sample : p.goals;
   json& goals = g["goals"];
+  double violation = 0.0;
   for (std::size_t k = 0; k < job.goals.size(); ++k) {
-    goals["goals"][k]["value"] = json_number(p.goals[k]);
+    goals["goals"][k]["value"] = json_number(recorded[k]);
+    violation += job.goals[k].violation(recorded[k]);
     if (job.goals[k].at_most)
-      goals["goals"][k]["violation"] = json_number(job.goals[k].violation(p.goals[k]));
+      goals["goals"][k]["violation"] = json_number(job.goals[k].violation(recorded[k]));
   }
-  goals["total_violation"] = json_number(p.violation);
-  goals["feasible"] = !(p.violation > 0);
+  goals["total_violation"] = json_number(violation);
+  goals["feasible"] = !(violation > 0);
   const std::size_t measured = front.picked;
   front.picked = i;
   front.rule = rule;
   goals["rule"] = front_rule_text(front);
   goals["front"] = {
       {"index", i}, {"rule", rule}, {"points", front.points.size()}, {"trial", p.trial}};
-  if (i != measured) g.erase("noise_floor");  // measured at the run's own point
+  if (front.held_out) {
+    // Each soft goal whose held-out value is worse than the run's by more than the point's
+    // noise floor (relative, as the floor is): the point does not hold out of sample there.
+    json warnings = json::array(), values = json::array();
+    for (double v : p.goals) values.push_back(json_number(v));
+    for (std::size_t k : front.soft) {
+      const double in = p.in_sample[k], out = p.goals[k];
+      const double worse = (out - in) / std::abs(in);
+      const std::optional<double>& floor = p.noise_floor[k];
+      if (std::isfinite(out) && !(worse > floor.value_or(0.0))) continue;
+      const std::string percent =
+          std::to_string(static_cast<long long>(std::llround(100 * worse))) + " % worse";
+      const std::string how =
+          !std::isfinite(out)
+              ? std::string("not finite")
+              : floor ? percent + ", beyond its noise floor of " + [&] {
+                          char f[32];
+                          std::snprintf(f, sizeof f, "%.2g %%", 100 * *floor);
+                          return std::string(f);
+                        }()
+                      : percent + " (no noise floor measured there)";
+      char buf[400];
+      std::snprintf(buf, sizeof buf,
+                    "point %zu: %s is %.4g on the held-out scenarios against %.4g in the run, "
+                    "%s: the point does not hold on members it was not tuned on",
+                    i, front.goals[k].label.c_str(), out, in, how.c_str());
+      warnings.push_back(buf);
+      g["warnings"].push_back(buf);
+    }
+    goals["front"]["held_out"] = {{"seed", front.held_out->seed},
+                                  {"count", front.held_out->count},
+                                  {"front", front_file.string()},
+                                  {"goals", values},
+                                  {"total_violation", json_number(p.violation)},
+                                  {"warnings", warnings}};
+  }
+  if (i != measured || front.held_out) g.erase("noise_floor");  // measured at the run's own point
   return g;
 }
 

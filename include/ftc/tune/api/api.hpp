@@ -22,6 +22,7 @@
 #include "ftc/tune/report/report.hpp"
 #include "ftc/tune/run/checkpoint.hpp"
 #include "ftc/tune/run/evaluate.hpp"
+#include "ftc/tune/run/front.hpp"
 #include "ftc/tune/api/run_directory.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
@@ -232,6 +233,9 @@ struct EvaluateJobOptions {
   std::filesystem::path out;
   int threads = 0;
   bool figure = true;  // draw the figure (gnuplot)
+  // A run directory of the job with a front (front.json): every point of it is evaluated too,
+  // and the held-out front goes to out/front.json (run/front.hpp's held_out_front).
+  std::filesystem::path front;
   BatchEvaluator* evaluator = nullptr;
   std::function<void(std::int64_t, std::int64_t)> progress;  // members done, total
   RunLog log;
@@ -241,6 +245,7 @@ struct EvaluateJobResult {
   EvaluationResult evaluation;
   std::filesystem::path out, figure;  // figure: empty without one
   int threads = 0;                    // the evaluator's concurrency
+  std::optional<Front> front;         // with EvaluateJobOptions::front: the held-out front
 };
 
 // The directory `ftctune evaluate` writes into when none is given (logs which run it chose).

@@ -30,6 +30,9 @@ struct EvaluateOptions {
     std::string label;  // empty: the path
   };
   std::vector<GainsFile> gains;       // gains files to evaluate beside the job's controllers
+  // Controllers given as they are (label, controller; source "front"), after the gains files:
+  // the points of a run's front (`evaluate --front`).
+  std::vector<std::pair<std::string, sim::ControllerConfig>> controllers;
   std::optional<std::uint64_t> seed;  // the ensemble's seed; default its own + 1
   std::optional<std::int64_t> count;  // members; default the ensemble's count
   // Called after each slice with the members done so far and the total.

@@ -64,7 +64,21 @@ struct FrontPoint {
   std::vector<std::optional<double>> noise_floor;
   std::optional<std::size_t> within_noise_of;  // an earlier point it is not told apart from
   std::vector<std::size_t> within_noise;       // every point it is no trade-off with, ascending
+  // A held-out front only (Front::held_out): the run's goal values of the point (`goals` are
+  // the held-out ones), and whether the held-out values leave it off the front (infeasible, a
+  // soft goal not finite, or dominated by another point's held-out values).
+  std::vector<double> in_sample;
+  bool dominated = false;
   bool feasible() const { return !(violation > 0); }
+};
+
+// Where a held-out front's values come from: `ftctune evaluate JOB --front RUN` simulates every
+// point of RUN's front on the job's listed scenarios and its ensemble drawn with another seed.
+struct FrontHeldOut {
+  std::string run;          // the run directory whose front it is (its trials.csv, gains.json)
+  std::uint64_t seed = 0;   // the held-out ensemble seed (0: a job without an ensemble)
+  std::int64_t count = 0;   // held-out members
+  double in_sample_hypervolume = 0.0;  // the run's
 };
 
 // A controller of the run's comparison other than the tuned one (a compare entry, or the job's
@@ -85,6 +99,10 @@ struct Front {
   std::size_t picked = 0;  // an index of points, unless there is none
   std::string rule = "knee";
   std::vector<FrontCompared> compared;
+  // A held-out front: the run's points in the run's order (so an index names the same point in
+  // both), each point's goals the held-out values; the hypervolume is of the points still on
+  // the front, against the run's reference point, and the knee is picked among them.
+  std::optional<FrontHeldOut> held_out;
 };
 
 // Goal k of the job as the front shows it: the metric's label in the metrics record, its window
@@ -119,12 +137,19 @@ bool no_trade_off(const Front& front, std::size_t a, std::size_t b);
 void apply_noise_floor(Front& front,
                        const std::vector<std::vector<std::optional<double>>>& spreads);
 
+// The held-out front of a run's front: `goals[i]` are point i's goal values on the held-out
+// scenarios; `compared` the job's compare entries and its own controller, held out alike.
+Front held_out_front(const Job& job, Front run, FrontHeldOut where,
+                     const std::vector<std::vector<double>>& goals,
+                     std::vector<FrontCompared> compared);
+
 // The sentence gains.json records as the rule that chose its point.
 std::string front_rule_text(const Front& front);
 
 // A rule of `ftctune pick`: knee | min:METRIC | limit:METRIC<=X | index:N. METRIC names a goal
 // by its metric (the first goal of that metric). Returns the chosen point's index; InputError
-// (source "pick", path "/rule") for a rule that names no goal or that no point meets.
+// (source "pick", path "/rule") for a rule that names no goal or that no point meets. On a
+// held-out front the knee, min and limit choose among the points not `dominated`.
 std::size_t pick_point(const Job& job, const Front& front, const std::string& rule);
 
 // front.json and front.csv of a run (docs/usage.md, "Fronts").
@@ -133,10 +158,15 @@ nlohmann::json front_document(const Job& job, const std::string& job_sha256, std
 std::string front_csv(const Job& job, const Front& front);
 // What `ftctune run` prints about a run's front (`out`: its directory): the number of points,
 // the hypervolume, the point gains.json holds with its soft goals' values, and how to pick
-// another; for an empty front, why it is empty.
+// another; for an empty front, why it is empty. For a held-out front (`evaluate --front`): how
+// many points stay on it, both hypervolumes, its knee's held-out and run values.
 std::string front_summary(const Job& job, const Front& front, const std::filesystem::path& out);
 // `ftctune pick`: the gains file of the point `rule` chooses on the front of the run in
-// directory `run` (its job.json, front.json, gains.json and trials.csv), without simulating:
+// directory `run` (its job.json, front.json, gains.json and trials.csv), without simulating; or,
+// for a directory holding a held-out front (`evaluate --front`), on the held-out values, with
+// the gains from the run it names (its in-sample values checked against that run's trials.csv),
+// the held-out values under goals.front.held_out, and a warning for each soft goal whose
+// held-out value is worse than the in-sample one by more than the point's noise floor:
 // the run's gains.json with that point's controller, tuned values, goals, objective and fitness
 // (its trials.csv row), and the rule recorded under goals (rule, front). The run's noise floor is
 // kept only when the point is the one it was measured at. InputError for a run without a front
