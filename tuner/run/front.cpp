@@ -301,9 +301,14 @@ std::size_t pick_point(const Job& job, const Front& front, const std::string& ru
   if (front.points.empty()) refuse("/rule", "the front has no point");
   const std::vector<FrontPoint>& p = front.points;
   const std::vector<std::size_t> on = on_front(front);
-  if (on.empty() && rule.rfind("index:", 0) != 0)
-    refuse("/rule", "no point stays on the held-out front (each is infeasible or dominated "
-                    "there): only index:N picks one");
+  if (on.empty() && rule.rfind("index:", 0) != 0) {
+    std::size_t infeasible = 0;
+    for (const FrontPoint& x : p) infeasible += x.feasible() ? 0 : 1;
+    refuse("/rule", "no point stays on the held-out front (" + std::to_string(infeasible) +
+                        " of " + std::to_string(p.size()) +
+                        " break a hard goal there, the others are dominated or not finite): "
+                        "only index:N picks one");
+  }
   if (rule == "knee") return knee_among(front, on);
   const auto colon = rule.find(':');
   const std::string kind = rule.substr(0, colon),
@@ -424,9 +429,11 @@ std::string front_summary(const Job& job, const Front& front, const std::filesys
   }
   if (front.held_out) {
     const std::vector<std::size_t> on = on_front(front);
+    std::size_t infeasible = 0;
+    for (const FrontPoint& x : front.points) infeasible += x.feasible() ? 0 : 1;
     s += "  held-out front: " + std::to_string(on.size()) + " of the run's " +
-         std::to_string(front.points.size()) +
-         " points stay on it (feasible, not dominated), hypervolume " +
+         std::to_string(front.points.size()) + " points stay on it (" +
+         std::to_string(infeasible) + " break a hard goal there), hypervolume " +
          value(front.hypervolume) + " against the run's reference point (in the run: " +
          value(front.held_out->in_sample_hypervolume) + ")";
     if (on.empty()) return s + "\n";
@@ -1034,6 +1041,19 @@ json pick_gains(const std::filesystem::path& dir, const std::string& rule) {
                     "point %zu: %s is %.4g on the held-out scenarios against %.4g in the run, "
                     "%s: the point does not hold on members it was not tuned on",
                     i, front.goals[k].label.c_str(), out, in, how.c_str());
+      warnings.push_back(buf);
+      g["warnings"].push_back(buf);
+    }
+    // A hard goal the point meets in the run and breaks held out.
+    for (std::size_t k = 0; k < job.goals.size(); ++k) {
+      if (!job.goals[k].at_most || !(job.goals[k].violation(p.goals[k]) > 0)) continue;
+      char buf[400];
+      std::snprintf(buf, sizeof buf,
+                    "point %zu: %s is %.4g on the held-out scenarios, above its limit %.4g "
+                    "(%.4g in the run): the point breaks this hard goal on members it was not "
+                    "tuned on",
+                    i, front.goals[k].label.c_str(), p.goals[k], *job.goals[k].at_most,
+                    p.in_sample[k]);
       warnings.push_back(buf);
       g["warnings"].push_back(buf);
     }
