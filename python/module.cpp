@@ -418,6 +418,7 @@ Result tune_job(const Job& j, std::optional<int> threads, std::optional<std::uin
       row["evaluations"] = h.evaluations;
       row["best_fitness"] = h.best_fitness;
       row["best"] = best;
+      if (report.front_points) row["front_points"] = *report.front_points;
       const py::object answer = callback(row);
       return answer.is_none() || PyObject_IsTrue(answer.ptr()) == 1;
     } catch (py::error_already_set& e) {

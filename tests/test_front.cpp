@@ -800,6 +800,9 @@ TEST(Front, RunListsItsFrontFilesAndSumsUpTheFront) {
                                   "' --out '" + out + "'",
                               dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The progress log gives the front's size so far, not a "best J" of one corner of it.
+  EXPECT_NE(r.err.find("iteration 1/1: front of "), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("best J"), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("wrote " + out + "/{comparison.json, comparison.md, front.csv, front.json, "
                        "gains.json, history.csv, job.json, trials.csv, run.json} and "
                        "trajectories/"),

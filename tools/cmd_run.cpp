@@ -94,7 +94,15 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   ro.on_iteration = [&](const tune::IterationReport& it) {
     const tune::HistoryRow& h = it.row;
     bar.clear();
-    spdlog::info(
+    // A front has no single best: its size so far, not a J that names one corner of it.
+    if (it.front_points)
+      spdlog::info(
+          "iteration {}/{}: front of {} point{} so far, {}/{} evaluations, {:.1f} s elapsed, ETA "
+          "{:.1f} s",
+          h.iteration, it.iterations, *it.front_points, *it.front_points == 1 ? "" : "s",
+          h.evaluations, it.total_evaluations, it.elapsed, it.eta);
+    else
+      spdlog::info(
         "iteration {}/{}: best J = {:.6g} ({}), {}/{} evaluations, {:.1f} s elapsed, ETA {:.1f} s",
         h.iteration, it.iterations, h.best_fitness, tune::parameters_text(names, h.best),
         h.evaluations, it.total_evaluations, it.elapsed, it.eta);

@@ -504,3 +504,16 @@ def test_tune_issues_its_warnings_as_run_warnings(table1_path):
         result = ftctune.tune(table1_path, threads=1)
     assert [str(w.message) for w in caught if w.category is ftctune.RunWarning] == result.warnings
     assert any("Ki = 50 ended at its upper bound 50" in w for w in result.warnings)
+
+
+def test_a_front_runs_callback_gets_the_fronts_size(table1_path):
+    job = ftctune.load_job(table1_path).to_dict()
+    del job["objective"]
+    job["goals"] = [{"metric": "ise", "minimize": True},
+                    {"metric": "control_tv", "minimize": True}]
+    job["tuning"]["algorithm"].update({"population": 3, "iterations": 1})
+    rows = []
+    result = ftctune.tune(job, threads=1, callback=lambda row: rows.append(row))
+    assert [r["iteration"] for r in rows] == [0, 1]
+    assert all(r["front_points"] >= 1 for r in rows)
+    assert rows[-1]["front_points"] == result.gains["goals"]["front"]["points"]

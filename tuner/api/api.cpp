@@ -233,8 +233,10 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
       return false;
     }
     if (!o.on_iteration) return true;
-    const bool go_on = o.on_iteration(
-        IterationReport{h, total, job.tuning->algorithm->iterations(), elapsed, eta});
+    IterationReport report{h, total, job.tuning->algorithm->iterations(), elapsed, eta, {}};
+    if (front_objectives(job) >= 2)
+      report.front_points = front_trials(job, trials, trials.size()).size();
+    const bool go_on = o.on_iteration(report);
     result.stopped = !go_on;
     return go_on;
   };

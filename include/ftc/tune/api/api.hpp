@@ -72,6 +72,9 @@ struct IterationReport {
   std::int64_t total_evaluations = 0;  // of the whole run
   int iterations = 0;                  // of the whole run
   double elapsed = 0.0, eta = 0.0;     // seconds, of this process
+  // A job with two or more soft goals: the points of the front of the trials so far (row's best
+  // is then only the least first soft goal, not "the best").
+  std::optional<std::size_t> front_points;
 };
 
 struct RunJobResult;
