@@ -68,13 +68,17 @@ struct PythonErrorPending {};
 // The interpreter exiting while a call still runs in a daemon thread: Python ends such a thread
 // when it next takes the GIL by unwinding its stack, which through the library's C++ frames
 // aborted the process (SIGABRT, exit 134). An atexit hook (registered at import, run before
-// the interpreter starts to finalise) marks the exit; from then on a call that would take the
-// GIL parks its thread instead, and the process's exit ends it without unwinding. The hook
-// waits, with the GIL released, until every running call has parked or returned: a call looks
-// between slices of about 0.4 s, so this takes under a second.
+// the interpreter starts to finalise) marks the exit; from then on a call in a daemon thread
+// that would take the GIL parks its thread instead, and the process's exit ends it without
+// unwinding. The hook waits, with the GIL released, until every such call has parked or
+// returned: a call looks between slices of about 0.4 s, so this takes under a second. Only
+// daemon threads park: when atexit hooks run, every other thread has been joined but the one
+// running the hooks, whose calls (an atexit hook may simulate) go on as ever. (An atexit hook
+// that waits for a daemon thread still inside a call waits for ever: it is parked.)
 std::atomic<bool> g_exiting{false};
-std::atomic<int> g_running{0};  // calls inside without_gil
+std::atomic<int> g_running{0};  // calls inside without_gil in daemon threads
 std::atomic<int> g_parked{0};
+thread_local bool t_daemon = false;  // this thread's call runs in a daemon thread
 constexpr double kExitWaitSeconds = 5.0;
 
 [[noreturn]] void park() {
@@ -84,7 +88,7 @@ constexpr double kExitWaitSeconds = 5.0;
 
 // Before a call's thread takes the GIL.
 void park_if_exiting() {
-  if (g_exiting.load()) park();
+  if (t_daemon && g_exiting.load()) park();
 }
 
 void on_interpreter_exit() {  // atexit, with the GIL
@@ -99,10 +103,20 @@ void on_interpreter_exit() {  // atexit, with the GIL
 // Runs f with the GIL released; a PythonErrorPending thrown inside is raised as its exception.
 template <class F>
 auto without_gil(F&& f) -> decltype(f()) {
+  // With the GIL held: whether this thread is a daemon (one the interpreter may exit under).
+  const bool daemon =
+      py::module_::import("threading").attr("current_thread")().attr("daemon").cast<bool>();
   struct Running {
-    Running() { ++g_running; }
-    ~Running() { --g_running; }
-  } running;
+    bool daemon, outer;
+    explicit Running(bool d) : daemon(d), outer(t_daemon) {
+      t_daemon = d;
+      if (daemon) ++g_running;
+    }
+    ~Running() {
+      if (daemon) --g_running;
+      t_daemon = outer;
+    }
+  } running(daemon);
   try {
     py::gil_scoped_release release;
     // Destroyed before `release` takes the GIL back, also when f throws.

@@ -374,6 +374,8 @@ TEST(Front, PickChecksEveryPointAgainstTheRunsOwnFiles) {
   const std::vector<std::tuple<std::string, std::string, std::string, std::string>> cases = {
       {"front.json", forged([](json& f) { f["job_sha256"] = std::string(64, 'b'); }).dump(),
        "/job_sha256", "a front of another job"},
+      {"front.json", forged([](json& f) { f.erase("job_sha256"); }).dump(), "/job_sha256",
+       "is missing: it must be the sha256"},
       {"gains.json", other_gains.dump(), "/job/sha256", "gains of another job"},
       {"front.json", forged([](json& f) { f["points"][0]["parameters"]["Kp"] = 1e300; }).dump(),
        "/points/0/parameters/Kp", "outside the job's bounds [1, 50]"},
@@ -536,6 +538,13 @@ TEST(Front, HeldOutFrontPicksOnHeldOutValuesAndSaysWhereAPointDoesNotHold) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.errors().at(0).path, "/points/0/in_sample/0") << e.what();
   }
+  // Nor is a held-out front: it names its run.
+  const CliResult again = run_cli("evaluate '" + (dir / "job.json").string() + "' --front '" +
+                                      (dir / "held").string() + "' --no-figure --out '" +
+                                      (dir / "y").string() + "'",
+                                  dir);
+  EXPECT_EQ(again.exit_code, 2) << again.err;
+  EXPECT_NE(again.err.find("is a held-out front"), std::string::npos) << again.err;
   // A run of another job is no --front.
   json other = j;
   other["name"] = "another";
@@ -546,6 +555,24 @@ TEST(Front, HeldOutFrontPicksOnHeldOutValuesAndSaysWhereAPointDoesNotHold) {
               dir);
   EXPECT_EQ(refused.exit_code, 2) << refused.err;
   EXPECT_NE(refused.err.find("--front: "), std::string::npos) << refused.err;
+}
+
+// The held-out knee is taken in the held-out values' order: the run's order (A, B, C by the
+// run's values) puts A first, but held out B is the least in the first goal; the line runs
+// from B to C and the knee is A (in the run's order it would have been B).
+TEST(Front, HeldOutKneeFollowsTheHeldOutValuesOrder) {
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  const tune::Front run = tune::make_front(
+      job, {trial(0, 1, 1000), trial(0, 10, 100), trial(0, 100, 10)});  // A, B, C
+  ASSERT_EQ(run.points.size(), 3u);
+  const auto at = [](double x, double y) { return std::vector<double>{std::pow(10.0, x),
+                                                                      std::pow(10.0, y), 1.0}; };
+  const tune::Front held = tune::held_out_front(
+      job, run, {"run", 8, 100, 0.0}, {at(0.4, 0.6), at(0.3, 0.78), at(0.5, 0.0)}, {});
+  for (const tune::FrontPoint& p : held.points) EXPECT_FALSE(p.dominated);
+  EXPECT_EQ(held.picked, 0u);
+  EXPECT_EQ(tune::pick_point(job, held, "knee"), 0u);
+  EXPECT_EQ(tune::pick_point(job, held, "min:ise"), 1u);
 }
 
 TEST(Front, PickRules) {

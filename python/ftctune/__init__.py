@@ -85,8 +85,14 @@ class Problem:
 
     def __init__(self, job, threads=None):
         job = load_job(job)
+        self._job, self._threads = job, threads
         self._name = job.name
         self._native = _core.Problem(job._native, threads)
+
+    def __deepcopy__(self, memo):
+        # pygmo.problem() deep-copies the problem it is given; the native half is not copyable,
+        # so the copy is a Problem of the same job and threads (the same values to the bit).
+        return Problem(self._job, self._threads)
 
     def __repr__(self):
         space = ", ".join(f"{n} in [{lo:g}, {hi:g}]{' (log)' if s == 'log' else ''}"

@@ -492,6 +492,10 @@ def test_problem_is_a_function_for_scipy_and_a_pygmo_problem(table1_path):
     assert problem.get_bounds() == ([1.0, 0.0], [50.0, 50.0])
     assert problem.get_nobj() == 1
     assert problem.get_name() == "ftctune table1"
+    # pygmo.problem() deep-copies what it is given (pygmo itself is not installed here).
+    import copy
+    twin = copy.deepcopy(problem)
+    assert twin is not problem and twin(x) == problem(x) and repr(twin) == repr(problem)
     # scipy takes it as it is: a bounded search that ends no worse than where it started.
     r = minimize(problem, x0=x, bounds=problem.bounds, method="Powell",
                  options={"maxfev": 20})

@@ -378,6 +378,11 @@ EvaluateJobResult evaluate_job(const Job& job, const EvaluateJobOptions& o) {
                            "soft goals");
     if (run_front->points.empty())
       throw InputError("--front", "", (o.front / "front.json").string() + " has no point");
+    if (run_front->held_out)
+      throw InputError("--front", "",
+                       (o.front / "front.json").string() +
+                           " is a held-out front (of " + run_front->held_out->run +
+                           "): name the run's directory");
     // The run's seed, as its front.json gives it (read_front has checked the file).
     const std::optional<std::string> text = read_file(o.front / "front.json");
     const json doc = text ? json::parse(*text, nullptr, false) : json();

@@ -291,10 +291,17 @@ std::vector<std::size_t> on_front(const Front& front) {
   return on;
 }
 
-std::size_t knee_among(const Front& front, const std::vector<std::size_t>& on) {
-  std::vector<std::vector<double>> lp;
-  for (std::size_t i : on) lp.push_back(log_soft_goals(front.points[i].goals, front.soft));
-  return on.at(knee_of(lp));
+// knee_of takes the points in the front's order (by the first soft goal, then the others); a
+// held-out front keeps the run's order, which its held-out values may not follow.
+std::size_t knee_among(const Front& front, std::vector<std::size_t> on) {
+  std::vector<std::vector<double>> lp(front.points.size());
+  for (std::size_t i : on) lp[i] = log_soft_goals(front.points[i].goals, front.soft);
+  if (front.held_out)
+    std::stable_sort(on.begin(), on.end(),
+                     [&](std::size_t a, std::size_t b) { return lp[a] < lp[b]; });
+  std::vector<std::vector<double>> ordered;
+  for (std::size_t i : on) ordered.push_back(lp[i]);
+  return on.at(knee_of(ordered));
 }
 
 std::size_t pick_point(const Job& job, const Front& front, const std::string& rule) {
@@ -389,6 +396,7 @@ Front held_out_front(const Job& job, Front f, FrontHeldOut where,
   // Against the run's reference point, so that the two hypervolumes compare (a point beyond it
   // adds nothing).
   f.hypervolume = kept.empty() ? 0.0 : hypervolume(kept, f.reference);
+  f.held_out = where;  // before the knee, which takes the held-out values' order
   const std::vector<std::size_t> on = on_front(f);
   f.picked = on.empty() ? 0 : knee_among(f, on);
   f.rule = "knee";
@@ -398,7 +406,6 @@ Front held_out_front(const Job& job, Front f, FrontHeldOut where,
   for (const FrontPoint& p : f.points) floors.push_back(p.noise_floor);
   apply_noise_floor(f, floors);
   f.compared = std::move(compared);
-  f.held_out = std::move(where);
   return f;
 }
 
@@ -958,10 +965,12 @@ json pick_gains(const std::filesystem::path& dir, const std::string& rule) {
     throw InputError((run / "job.json").string(), "/goals",
                      "the run's job has fewer than two soft goals: it has no front to pick from");
   const std::string sha = canonical_job_sha256(job);
-  if (fj.is_object() && fj.contains("job_sha256") && fj["job_sha256"] != sha)
+  if (fj.is_object() && fj.value("job_sha256", json()) != sha)
     throw InputError(front_file.string(), "/job_sha256",
-                     "is " + fj["job_sha256"].dump() + ", not the sha256 of the run's job.json (" +
-                         sha + "): a front of another job");
+                     (fj.contains("job_sha256") ? "is " + fj["job_sha256"].dump() + ", not"
+                                                : std::string("is missing: it must be")) +
+                         " the sha256 of the run's job.json (" + sha + ")" +
+                         (fj.contains("job_sha256") ? ": a front of another job" : ""));
   Front front = front_from_json(job, fj, front_file.string());
   const std::map<std::size_t, TrialRow> rows =
       check_front_against_run(run, job, front, front_file.string());
@@ -1025,8 +1034,11 @@ json pick_gains(const std::filesystem::path& dir, const std::string& rule) {
       const double worse = (out - in) / std::abs(in);
       const std::optional<double>& floor = p.noise_floor[k];
       if (std::isfinite(out) && !(worse > floor.value_or(0.0))) continue;
+      // Relative to the run's value; against a run value of 0 there is no percentage.
       const std::string percent =
-          std::to_string(static_cast<long long>(std::llround(100 * worse))) + " % worse";
+          std::isfinite(worse)
+              ? std::to_string(static_cast<long long>(std::llround(100 * worse))) + " % worse"
+              : std::string("worse than 0");
       const std::string how =
           !std::isfinite(out)
               ? std::string("not finite")
