@@ -44,6 +44,22 @@ inline nlohmann::json short_ensemble_job() {
   return j;
 }
 
+// A job of two soft goals (ISE and control TV) and one hard goal, on the short Table 1 job with
+// Kp and the switching gain tuned (the latter on a log scale): 4 bats x 3 iterations. The front
+// tests run it; the front fuzz target reads fronts of its runs.
+inline nlohmann::json front_job() {
+  nlohmann::json j = short_table1_job();
+  j["name"] = "front-short";
+  j.erase("objective");
+  j["goals"] = {{{"metric", "ise"}, {"window", {0, 5}}, {"minimize", true}},
+                {{"metric", "control_tv"}, {"minimize", true}},
+                {{"metric", "peak_command"}, {"at_most", 1e6}}};
+  j["tuning"]["parameters"] = {{"Kp", {1, 50}},
+                               {"switching_gain", {{"bounds", {2, 200}}, {"scale", "log"}}}};
+  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
+  return j;
+}
+
 // Tiny: 2 bats × 1 iteration on 50 ms of simulated time.
 inline nlohmann::json tiny_job(const std::string& name = "tiny") {
   nlohmann::json j = short_table1_job();

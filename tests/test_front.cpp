@@ -35,21 +35,6 @@ using namespace ftc::testing;
 
 namespace {
 
-// A job of two soft goals (ISE and control TV) and one hard goal, on the short Table 1 job with
-// Kp and the switching gain tuned (the latter on a log scale): 4 bats x 3 iterations.
-json front_job() {
-  json j = short_table1_job();
-  j["name"] = "front-short";
-  j.erase("objective");
-  j["goals"] = {{{"metric", "ise"}, {"window", {0, 5}}, {"minimize", true}},
-                {{"metric", "control_tv"}, {"minimize", true}},
-                {{"metric", "peak_command"}, {"at_most", 1e6}}};
-  j["tuning"]["parameters"] = {{"Kp", {1, 50}},
-                               {"switching_gain", {{"bounds", {2, 200}}, {"scale", "log"}}}};
-  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
-  return j;
-}
-
 // Hand-made trials of a job with goals (ise soft, control_tv soft, peak_command hard).
 tune::Trial trial(int iteration, double ise, double tv, double violation = 0.0) {
   tune::Trial t;

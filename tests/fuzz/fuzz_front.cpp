@@ -5,7 +5,6 @@
 // bytes, and every rule of pick must choose a point of it or refuse with an InputError.
 #include <cstddef>
 #include <cstdint>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -13,6 +12,7 @@
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/run/front.hpp"
 #include "fuzz.hpp"
+#include "short_job.hpp"
 #include "json_mutator.hpp"
 
 using namespace ftc;
@@ -21,26 +21,10 @@ using nlohmann::json;
 
 namespace {
 
-// The job of tests/test_front.cpp's front_job(): Table 1, 5 s, goals ISE over [0, 5], control
-// TV, peak command at most 1e6; Kp and the switching gain (log) tuned. The committed seeds are
-// fronts of its runs (a held-out one too).
+// The front tests' job (short_job.hpp): the committed seeds are fronts of its runs (a held-out
+// one too).
 const Job& front_job() {
-  static const Job job = [] {
-    std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/table1.json");
-    json j = json::parse(in);
-    j["name"] = "front-short";
-    j["scenarios"][0]["duration"] = 5;
-    j["scenarios"][0]["faults"][0]["onset"] = 2;
-    j["scenarios"][0]["faults"][1]["onset"] = 3.5;
-    j.erase("objective");
-    j["goals"] = {{{"metric", "ise"}, {"window", {0, 5}}, {"minimize", true}},
-                  {{"metric", "control_tv"}, {"minimize", true}},
-                  {{"metric", "peak_command"}, {"at_most", 1e6}}};
-    j["tuning"]["parameters"] = {{"Kp", {1, 50}},
-                                 {"switching_gain", {{"bounds", {2, 200}}, {"scale", "log"}}}};
-    j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
-    return parse_job(j, "front-short");
-  }();
+  static const Job job = parse_job(testing::front_job(), "front-short");
   return job;
 }
 
