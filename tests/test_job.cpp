@@ -13,6 +13,7 @@
 #include "cli_runner.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/problem/problem.hpp"
+#include "short_job.hpp"
 
 using nlohmann::json;
 using namespace ftc;
@@ -76,6 +77,20 @@ TEST(JobLoader, LoadsTable1WithPaperDefaults) {
   EXPECT_EQ(job.tuning->parameters[0].name, "Kp");
   EXPECT_EQ(job.tuning->parameters[1].upper, 50.0);
   EXPECT_EQ(job.steps_per_evaluation(), 30000);
+  // Its two faults make each step dearer: 30 000 × (1 + 2/32).
+  EXPECT_EQ(job.step_cost_per_evaluation(), 30000 * (1 + 2 * tune::kFaultStepCost));
+}
+
+// The step cost counts every scenario's faults, and an ensemble member's largest fault count:
+// the short robust-faults job is one listed 10 s scenario with 2 faults and 6 members of 1 or 2.
+TEST(JobLoader, StepCostPricesEachScenariosFaults) {
+  tune::Job job = tune::parse_job(ftc::testing::short_ensemble_job(), "ensemble");
+  EXPECT_EQ(job.steps_per_evaluation(), 7 * 10000);
+  EXPECT_EQ(job.step_cost_per_evaluation(), 7 * 10000 * (1 + 2.0 / 32));
+  json j = ftc::testing::short_table1_job();
+  j["scenarios"][0]["faults"] = json::array();
+  job = tune::parse_job(j, "no faults");
+  EXPECT_EQ(job.step_cost_per_evaluation(), static_cast<double>(job.steps_per_evaluation()));
 }
 
 TEST(JobLoader, FillsDefaultsForOmittedKeys) {

@@ -6,6 +6,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <sstream>
 
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
@@ -160,6 +161,73 @@ TEST(Cli, RunWithoutTuningSectionExitsTwo) {
   const CliResult r = run_cli("run '" + (dir / "job.json").string() + "'", dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("/tuning: is required by ftctune run"), std::string::npos) << r.err;
+}
+
+// An interrupt (a cancel, a stopping server) asked between packs ends the run within its
+// iteration, at the iteration before: the same history, trials and optimiser state as a run the
+// observer stopped after that iteration, with the TBB and the serial evaluator alike. Cut short
+// in the first iteration, the run has nothing to keep.
+TEST(TuningRun, AnInterruptEndsTheRunAtItsLastFinishedIteration) {
+  const tune::Job job = short_job();
+  tune::RunOptions stop;
+  stop.observer = [&](const tune::HistoryRow& h, const tune::Optimizer&,
+                      const std::vector<tune::Trial>&) { return h.iteration < 1; };
+  const tune::TuningOutcome stopped = tuned(job, 1, std::nullopt, stop);
+  ASSERT_EQ(stopped.optimization.history.size(), 2u);
+  tune::TbbEvaluator tbb(2);
+  tune::SerialEvaluator serial;
+  for (tune::BatchEvaluator* e : std::initializer_list<tune::BatchEvaluator*>{&tbb, &serial}) {
+    int finished = 0, asked = 0;
+    tune::RunOptions o;
+    o.observer = [&](const tune::HistoryRow&, const tune::Optimizer&,
+                     const std::vector<tune::Trial>&) { return ++finished > 0; };
+    o.interrupt = [&] {
+      ++asked;
+      return finished >= 2;  // during iteration 2, at its first pack
+    };
+    const tune::TuningOutcome r = tune::tune(job, *e, o);
+    EXPECT_TRUE(r.interrupted) << e->name();
+    EXPECT_FALSE(r.completed());
+    EXPECT_TRUE(r.comparison.empty());  // nothing compared: the caller decides
+    EXPECT_GT(asked, 0);
+    EXPECT_EQ(tune::trials_csv(r), tune::trials_csv(stopped)) << e->name();
+    EXPECT_EQ(tune::history_csv(r), tune::history_csv(stopped)) << e->name();
+    EXPECT_EQ(r.optimization.best, stopped.optimization.best);
+    EXPECT_FALSE(e->interrupted());  // the interrupt is the run's only
+  }
+  tune::RunOptions first;
+  first.interrupt = [] { return true; };
+  const tune::TuningOutcome none = tune::tune(job, tbb, first);
+  EXPECT_TRUE(none.interrupted);
+  EXPECT_TRUE(none.optimization.history.empty());
+  EXPECT_TRUE(none.trials.empty());
+}
+
+// A goal a trial could not measure is an empty cell of trials.csv (it was "–", which made a CSV
+// reader take the whole column for text); pick reads it back as the NaN it was.
+TEST(TuningRun, TrialsCsvLeavesAnUndefinedValueEmpty) {
+  tune::TuningOutcome r = tuned(tune::parse_job(front_job(), "front"), 1);
+  ASSERT_FALSE(r.trials.empty());
+  ASSERT_GE(r.trials[0].goals.size(), 2u);
+  r.trials.resize(1);
+  r.trials[0].goals[1] = std::numeric_limits<double>::quiet_NaN();
+  const std::string csv = tune::trials_csv(r);
+  EXPECT_EQ(csv.find("–"), std::string::npos) << csv;
+  std::istringstream in(csv);
+  std::string header, row;
+  std::getline(in, header);
+  std::getline(in, row);
+  std::vector<std::string> names, cells;
+  std::istringstream h(header), c(row);
+  for (std::string x; std::getline(h, x, ',');) names.push_back(x);
+  for (std::string x; std::getline(c, x, ',');) cells.push_back(x);
+  cells.resize(names.size());  // a trailing empty cell
+  const auto at = std::find_if(names.begin(), names.end(),
+                               [](const std::string& n) { return n.rfind("goal1_", 0) == 0; });
+  ASSERT_NE(at, names.end()) << header;
+  EXPECT_EQ(cells[static_cast<std::size_t>(at - names.begin())], "") << row;
+  EXPECT_EQ(std::stod(cells[static_cast<std::size_t>(at - names.begin()) - 1]),
+            r.trials[0].goals[0]);  // goal 0 beside it is a number
 }
 
 TEST(TuningRun, ResumedRunGivesTheSameGainsFileAndTrials) {

@@ -191,6 +191,24 @@ int fetch_gains(Api& api, const std::string& id, const std::string& out, const s
   return 0;
 }
 
+// A name of a run's folder as the service lists it: one or more parts joined by '/', each of
+// letters, digits, '_', '-' and '.' and not starting with '.' (the file names a run writes, and
+// the scenario names, which the job's schema holds to the same characters).
+bool stored_file_name(const std::string& name) {
+  if (name.empty() || name.size() > 1024) return false;
+  std::size_t start = 0;
+  for (std::size_t i = 0; i <= name.size(); ++i) {
+    if (i < name.size() && name[i] != '/') {
+      const unsigned char c = static_cast<unsigned char>(name[i]);
+      if (!(std::isalnum(c) || c == '_' || c == '-' || c == '.') || c >= 0x80) return false;
+      continue;
+    }
+    if (i == start || name[start] == '.') return false;  // an empty part, ".", "..", ".hidden"
+    start = i + 1;
+  }
+  return true;
+}
+
 // Everything a job has, beside the gains file: a finished job's (or a cancelled one's, partial)
 // stored files, the folder `ftctune run` writes, which `ftctune report` takes, and report.html;
 // a running job's gains, history and trials so far.
@@ -213,10 +231,16 @@ int fetch_all(Api& api, const std::string& id, const std::string& out, const std
       if (!f.is_object() || !f.contains("name") || !f["name"].is_string())
         throw InputError(listing, "/files/" + std::to_string(i) + "/name", "expected a string");
       const std::string file = f["name"];
-      // Stored names are the server's: nothing may land outside the folder.
-      if (file == "gains.json" || file.empty() || file.front() == '/' ||
-          file.find("..") != std::string::npos)
-        continue;
+      // Stored names are the server's: only names a run writes (stored_file_name) are taken,
+      // all checked before anything is written, so that nothing lands outside the folder and a
+      // name a path cannot hold (a NUL) does not stop the fetch half-way.
+      if (!stored_file_name(file))
+        throw InputError(listing, "/files/" + std::to_string(i) + "/name",
+                         json(file).dump(-1, ' ', false, json::error_handler_t::replace) +
+                             " is not a file name a run writes (parts of letters, digits, '_', "
+                             "'-' and '.', not starting with '.', joined by '/'): nothing was "
+                             "written");
+      if (file == "gains.json") continue;
       sources.emplace_back("/files/" + file, file);
     }
     if (std::none_of(sources.begin(), sources.end(),

@@ -72,16 +72,28 @@ int run_validate(const ValidateCli& o, const Globals& g) {
                         {"ensemble_members", job.ensemble ? job.ensemble->count : 0},
                         {"unrecoverable_scenarios", unrecoverable},
                         {"steps_per_evaluation", steps},
-                        {"steps", static_cast<double>(evals) * static_cast<double>(steps)}};
+                        {"steps", static_cast<double>(evals) * static_cast<double>(steps)},
+                        {"step_cost_per_evaluation", job.step_cost_per_evaluation()},
+                        {"step_cost", static_cast<double>(evals) * job.step_cost_per_evaluation()}};
       std::printf("%s\n", doc.dump(2).c_str());
     } else if (!g.quiet) {
+      // Faults make a step dearer (tune::kFaultStepCost): the cost the service's budget counts.
+      const double cost = static_cast<double>(evals) * job.step_cost_per_evaluation();
+      std::string priced;
+      if (cost > static_cast<double>(evals) * static_cast<double>(steps)) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      " (with its faults, a step with f faults costing 1 + f/32 steps: %.3g)",
+                      cost);
+        priced = buf;
+      }
       std::printf(
           "%s: valid job \"%s\": %lld evaluation%s x %zu scenario%s%s, %lld simulated steps "
-          "per evaluation, %.3g in all%s\n",
+          "per evaluation, %.3g in all%s%s\n",
           name.c_str(), job.name.c_str(), static_cast<long long>(evals), evals == 1 ? "" : "s",
           job.scenario_count(), job.scenario_count() == 1 ? "" : "s", members.c_str(),
           static_cast<long long>(steps), static_cast<double>(evals) * static_cast<double>(steps),
-          job.tuning ? "" : " (no tuning section: simulate only)");
+          priced.c_str(), job.tuning ? "" : " (no tuning section: simulate only)");
     }
     return 0;
   } catch (const InputError& e) {

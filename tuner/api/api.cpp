@@ -210,6 +210,7 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
   ro.seed = o.seed;
   ro.max_trajectory_rows = o.max_trajectory_rows;
   ro.capping = o.capping;
+  ro.interrupt = o.interrupt;
   if (resumed) ro.resume = &resumed->state;
   // Checkpoints: asked for, continuing one, or once the run looks like taking over a minute.
   const bool never = o.checkpoint == CheckpointPolicy::never || !writes;
@@ -260,6 +261,7 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
       throw InputError(storage.checkpoint_name(), std::move(errors));
     }
   }();
+  if (result.outcome.interrupted) result.stopped = true;
   result.wall_seconds = std::chrono::duration<double>(clock_type::now() - t0).count();
   // run.json: what run_metadata() says, and where, when and from what (the storage's own fields
   // last).

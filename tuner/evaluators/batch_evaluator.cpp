@@ -143,7 +143,10 @@ std::vector<std::vector<std::size_t>> plan_packs(const SimulationBatch& batch, i
 
 std::vector<TaskResult> SerialEvaluator::run(const SimulationBatch& batch) {
   std::vector<TaskResult> results(batch.tasks.size());
-  for (const std::vector<std::size_t>& pack : plan_packs(batch, 1)) run_pack(batch, pack, results);
+  for (const std::vector<std::size_t>& pack : plan_packs(batch, 1)) {
+    if (interrupted()) throw Interrupted();
+    run_pack(batch, pack, results);
+  }
   return results;
 }
 

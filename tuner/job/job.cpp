@@ -1034,6 +1034,23 @@ std::int64_t Job::steps_per_evaluation() const {
   return n;
 }
 
+double Job::step_cost_per_evaluation() const {
+  const auto cost = [](const sim::Scenario& s, std::size_t faults) {
+    return static_cast<double>(s.samples()) * static_cast<double>(s.substeps) *
+           (1.0 + static_cast<double>(faults) * kFaultStepCost);
+  };
+  double n = 0.0;
+  for (const sim::Scenario& s : scenarios) n += cost(s, s.faults.size());
+  if (ensemble) {
+    const sim::Scenario& base = ensemble_base(*this);
+    const std::size_t faults = ensemble->faults
+                                   ? static_cast<std::size_t>(std::max(ensemble->faults->count_hi, 0))
+                                   : base.faults.size();
+    n += static_cast<double>(ensemble->count) * cost(base, faults);
+  }
+  return n;
+}
+
 std::size_t Job::scenario_count() const {
   return scenarios.size() + (ensemble ? static_cast<std::size_t>(ensemble->count) : 0);
 }

@@ -228,7 +228,6 @@ const AlgorithmInfo* find_algorithm(std::string_view type) {
 OptimizationResult run_optimizer(Optimizer& optimizer, BatchFitness& fitness,
                                  const IterationObserver& observer, const json* resume,
                                  const std::string& state_path) {
-  OptimizationResult r;
   bool go = true;
   if (resume) {
     try {
@@ -251,6 +250,11 @@ OptimizationResult run_optimizer(Optimizer& optimizer, BatchFitness& fitness,
     optimizer.iterate(fitness);
     go = !observer || observer(optimizer.history().back(), optimizer);
   }
+  return optimization_result(optimizer);
+}
+
+OptimizationResult optimization_result(const Optimizer& optimizer) {
+  OptimizationResult r;
   const HistoryRow& last = optimizer.history().back();
   r.best = last.best;
   r.best_fitness = last.best_fitness;

@@ -25,6 +25,8 @@ using nlohmann::json;
 
 namespace {
 
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
 // The tuned parameters in decision-vector order.
 std::vector<std::string> parameter_names(const Job& job) {
   std::vector<std::string> names;
@@ -136,15 +138,31 @@ json summary_json(const Summary& s) {
 
 json gains_document(const TuningOutcome& r) {
   const Job& job = r.job;
+  // Without a comparison (a running job's best so far, which the service serves from what the
+  // run stored rather than simulating in the request): the best's values are its trial's, as
+  // the run recorded them. A trial's results are a function of its parameters, so any uncapped
+  // trial with the best's parameters, to the bit, is the best's record.
+  const bool stored = r.comparison.empty();
+  const Trial* record = nullptr;
+  if (stored)
+    for (auto t = r.trials.rbegin(); t != r.trials.rend() && !record; ++t)
+      if (!t->capped && t->parameters == r.optimization.best) record = &*t;
+  const double best_objective = stored ? (record ? record->objective : kNaN)
+                                       : r.best().outcome.evaluation.objective;
   json g;
   g["schema"] = kGainsSchema;
   g["controller"] = to_json(r.tuned_controller);
   g["tuned"] = json::object();
+  if (stored) {
+    const std::vector<std::string> names = parameter_names(job);
+    for (std::size_t k = 0; k < names.size() && k < r.optimization.best.size(); ++k)
+      g["tuned"][names[k]] = r.optimization.best[k];
+  }
   for (const auto& [name, value] : r.tuned) g["tuned"][name] = value;
   g["sample_time"] = job.scenarios.front().sample_time;
   g["plant"] = to_json(job.plant);
   json objective = to_json(job.objective);
-  objective["value"] = json_number(r.best().outcome.evaluation.objective);
+  objective["value"] = json_number(best_objective);
   if (job.ensemble)  // what the value is taken over
     objective["scenarios"] = {{"listed", r.listed_scenarios},
                               {"members", r.scenarios - r.listed_scenarios},
@@ -153,8 +171,13 @@ json gains_document(const TuningOutcome& r) {
   g["objective"] = objective;
   g["fitness"] = json_number(r.optimization.best_fitness);
   if (!job.goals.empty()) {  // the winner's goals, and the rule that chose it
-    const Evaluation& e = r.best().outcome.evaluation;
-    g["goals"] = goals_json(job, e.goals, e.violation);
+    if (!stored) {
+      const Evaluation& e = r.best().outcome.evaluation;
+      g["goals"] = goals_json(job, e.goals, e.violation);
+    } else {
+      g["goals"] = record ? goals_json(job, record->goals, record->violation)
+                          : goals_json(job, std::vector<double>(job.goals.size(), kNaN), kNaN);
+    }
     g["goals"]["rule"] =
         "feasible beats infeasible; between feasible candidates the soft goal decides, between "
         "infeasible ones the lesser total violation";
@@ -176,14 +199,21 @@ json gains_document(const TuningOutcome& r) {
                              {"trial", r.front->points[r.front->picked].trial}};
     }
   }
-  const ComparedController& base = r.baseline();
-  g["baseline"] = {{"controller", to_json(base.controller)},
-                   {"objective", json_number(base.outcome.evaluation.objective)},
-                   {"fitness", json_number(base.outcome.evaluation.fitness)}};
+  if (stored) {
+    g["baseline"] = {{"controller", to_json(job.controller)}, {"objective", nullptr},
+                     {"fitness", nullptr}};
+  } else {
+    const ComparedController& base = r.baseline();
+    g["baseline"] = {{"controller", to_json(base.controller)},
+                     {"objective", json_number(base.outcome.evaluation.objective)},
+                     {"fitness", json_number(base.outcome.evaluation.fitness)}};
+  }
   json optimizer = r.algorithm->to_json();
   optimizer["seed"] = r.seed;
   optimizer["evaluations"] = r.optimization.evaluations;
-  optimizer["completed"] = r.optimization.completed;
+  // A best without its comparison is no run's answer yet, even after the last iteration: the
+  // loader must refuse it as it refuses a stopped run's.
+  optimizer["completed"] = r.optimization.completed && !stored;
   g["optimizer"] = optimizer;
   const std::vector<std::string> names = parameter_names(job);
   g["history"] = json::array();
@@ -205,7 +235,13 @@ json gains_document(const TuningOutcome& r) {
   }
   // Only when there is something to say: a runtime loader from before this key exists would
   // refuse every file that has it.
-  if (!r.warnings.empty()) g["warnings"] = r.warnings;
+  if (stored) {
+    json w = r.warnings;
+    w.push_back(kStoredBestWarning);
+    g["warnings"] = std::move(w);
+  } else if (!r.warnings.empty()) {
+    g["warnings"] = r.warnings;
+  }
   g["job"] = {{"name", job.name}, {"sha256", r.job_sha256}};
   g["generator"] = {{"name", kToolName}, {"version", kVersion}};
   return g;
@@ -222,7 +258,12 @@ std::string trials_csv(const TuningOutcome& r) {
     s.append(",goal" + std::to_string(k) + "_" + std::string(r.job.goals[k].metric->name));
   if (!r.job.goals.empty()) s += ",violation,feasible";
   s += '\n';
-  const auto num = [&](double v) { s.append(",").append(detail::format_number(v, "%.17g")); };
+  // An undefined value (a goal a trial could not measure) is an empty cell, as history.csv's
+  // are, so that a CSV reader sees a number column with a missing value, not a text column.
+  const auto num = [&](double v) {
+    s.append(",");
+    if (!std::isnan(v)) s.append(detail::format_number(v, "%.17g"));
+  };
   for (const Trial& t : r.trials) {
     s.append(std::to_string(t.iteration)).append(",").append(std::to_string(t.index));
     for (double v : t.parameters) num(v);

@@ -309,10 +309,18 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   };
   ProblemFitness fitness(problem, evaluator);
   fitness.set_capping(options.capping);
+  // With an interrupt: the optimiser's state and the trial count after each iteration, to go
+  // back to when an iteration is cut short.
+  std::optional<nlohmann::json> last_state;
+  std::size_t last_trials = 0;
   IterationObserver observer;
-  if (options.observer)
+  if (options.observer || options.interrupt)
     observer = [&](const HistoryRow& h, const Optimizer& o) {
-      return options.observer(in_values(h), o, fitness.trials());
+      if (options.interrupt) {
+        last_state = o.state();
+        last_trials = fitness.trials().size();
+      }
+      return !options.observer || options.observer(in_values(h), o, fitness.trials());
     };
   const nlohmann::json* optimizer_state = options.resume;
   std::string state_path;
@@ -335,9 +343,30 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
                            std::to_string(ev.get<std::uint64_t>()) + " evaluations");
     fitness.resume_trials(std::move(trials));
   }
-  r.optimization = run_optimizer(optimizer, fitness, observer, optimizer_state, state_path);
+  if (options.interrupt && optimizer_state) {
+    last_state = *optimizer_state;
+    last_trials = fitness.trials().size();
+  }
+  {
+    // Only the tuning is interruptible: the comparison below runs whole.
+    struct Interruptible {
+      BatchEvaluator& e;
+      ~Interruptible() { e.set_interrupt({}); }
+    } interruptible{evaluator};
+    evaluator.set_interrupt(options.interrupt);
+    try {
+      r.optimization = run_optimizer(optimizer, fitness, observer, optimizer_state, state_path);
+    } catch (const Interrupted&) {
+      r.interrupted = true;
+      r.simulations = fitness.simulations();
+      if (!last_state) return r;  // cut short in the first iteration: nothing to keep
+      optimizer.restore(*last_state);
+      r.optimization = optimization_result(optimizer);
+    }
+  }
   r.simulations = fitness.simulations();
   r.trials = fitness.trials();
+  if (r.interrupted) r.trials.resize(last_trials);  // the cut iteration's are dropped
   r.tuned_controller = problem.controller_for(r.optimization.best);
   r.optimization.best = problem.to_parameters(r.optimization.best);
   for (HistoryRow& h : r.optimization.history) h = in_values(std::move(h));

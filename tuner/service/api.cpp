@@ -19,7 +19,6 @@
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/metrics_record.hpp"
-#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/report.hpp"
@@ -269,9 +268,11 @@ bool loopback_host(const std::string& name, const std::string& bind) {
 // A request a page of another origin sent: its Origin is not this service's (http://<Host>), or,
 // without an Origin, the browser says it is cross-site.
 bool cross_origin(const httplib::Request& req) {
-  return req.has_header("Origin") ? lower(req.get_header_value("Origin")) !=
-                                        "http://" + lower(req.get_header_value("Host"))
-                                  : lower(req.get_header_value("Sec-Fetch-Site")) == "cross-site";
+  // A browser that says the request is cross-site is believed even when the Origin it sends
+  // matches (the two cannot both be true of one page).
+  if (lower(req.get_header_value("Sec-Fetch-Site")) == "cross-site") return true;
+  return req.has_header("Origin") &&
+         lower(req.get_header_value("Origin")) != "http://" + lower(req.get_header_value("Host"));
 }
 
 // A peer address of this machine's loopback: 127.0.0.0/8, ::1 or an IPv4-mapped 127.x.
@@ -391,7 +392,6 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   }
   if (p.size() == 4 && p[3] == "events") {
     if (m != "GET") return method_not_allowed(res, "GET");
-    if (!store_.get(id)) return send_error(res, 404, "not_found", "no job " + id);
     return events(req, id, res);
   }
   if (p.size() == 4 && p[3] == "cancel") {
@@ -442,13 +442,15 @@ std::optional<Job> Api::check_job(const httplib::Request& req, httplib::Response
                json::array({{{"path", "/tuning"}, {"message", "is required to tune"}}}));
     return std::nullopt;
   }
+  // Priced by what a step costs: a step with f faults is 1 + f/32 fault-free ones (a job of
+  // 15 000 faults was admitted on its plain step count and took 45 s an iteration).
   const double steps = static_cast<double>(job.tuning->algorithm->evaluations()) *
-                       static_cast<double>(job.steps_per_evaluation());
+                       job.step_cost_per_evaluation();
   if (steps > opt_.max_steps) {
     send_error(res, 400, "job_too_large",
                "the job needs " + fmt_g(steps) +
-                   " simulated steps (evaluations x steps per "
-                   "evaluation), " +
+                   " simulated steps (evaluations x steps per evaluation, a step with f faults "
+                   "counting as 1 + f/32), " +
                    fmt_g(steps / opt_.max_steps) + " times the server's budget of " +
                    fmt_g(opt_.max_steps),
                json{{{"steps", steps}, {"budget", opt_.max_steps}}});
@@ -498,7 +500,9 @@ void Api::validate(const httplib::Request& req, httplib::Response& res) {
              {"iterations", job->tuning->algorithm->iterations()},
              {"total_evaluations", job->tuning->algorithm->evaluations()},
              {"steps", static_cast<double>(job->tuning->algorithm->evaluations()) *
-                           static_cast<double>(job->steps_per_evaluation())}});
+                           static_cast<double>(job->steps_per_evaluation())},
+             {"step_cost", static_cast<double>(job->tuning->algorithm->evaluations()) *
+                               job->step_cost_per_evaluation()}});
 }
 
 void Api::submit(const httplib::Request& req, httplib::Response& res) {
@@ -610,6 +614,7 @@ void Api::cancel(const std::string& id, httplib::Response& res) {
     runner_.defer_cancel(id);
     after = before;
   }
+  runner_.interrupt(id);  // a running job stops before its next pack
   spdlog::info("job {}: cancel requested ({})", id, to_string(after->status));
   changed(id);
   send_json(res, 202, view(*after));
@@ -650,6 +655,9 @@ void Api::events(const httplib::Request& req, const std::string& job, httplib::R
                           (origin.empty() ? std::string("a cross-site page") : origin) +
                           ") is refused: only the service's own dashboard may hold one");
   }
+  // A stream for a job that does not exist (?job=) would hold a slot for nothing.
+  if ((req.has_param("job") || !job.empty()) && !store_.get(job))
+    return send_error(res, 404, "not_found", "no job " + job);
   EventHub::Refused why = EventHub::Refused::full;
   std::optional<EventHub::Stream> stream =
       hub_.open(loopback_address(req.remote_addr) ? "" : req.remote_addr, &why);
@@ -692,8 +700,19 @@ void Api::events(const httplib::Request& req, const std::string& job, httplib::R
               sink.done();
               return true;
             }
+            bool gone = false;
             for (const Event& e : *events)
-              if (state->job.empty() || e.job_id == state->job) out += e.text;
+              if (state->job.empty() || e.job_id == state->job) {
+                out += e.text;
+                // A job's own stream ends with its deletion: nothing more will come.
+                gone = gone || (!state->job.empty() && e.text.find("\nevent: deleted\n") !=
+                                                           std::string::npos);
+              }
+            if (gone) {
+              if (!sink.write(out.data(), out.size())) return false;
+              sink.done();
+              return true;
+            }
             if (out.empty() && GuardedServer::peer_closed()) return false;
           }
           if (out.empty()) out = ":\n\n";
@@ -752,12 +771,9 @@ void Api::running_result(const httplib::Request& req, httplib::Response& res, co
         made->trials = trials_csv(r);
         made->history = history_csv(r);
         made->history_rows = encode(history_rows(r));
-        if (gains) {
-          const std::unique_ptr<BatchEvaluator> evaluator =
-              opt_.evaluator ? opt_.evaluator() : std::make_unique<TbbEvaluator>(opt_.threads);
-          compare_best(r, *evaluator, opt_.trajectory_rows);
-          made->gains = gains_document(r).dump(2) + "\n";
-        }
+        // The best so far as the run stored it: nothing is simulated in a request (a
+        // comparison here took seconds per heavy job and held a server thread meanwhile).
+        if (gains) made->gains = gains_document(r).dump(2) + "\n";
       }
       p = made;
       std::lock_guard<std::mutex> lock(partial_mutex_);
@@ -900,6 +916,19 @@ std::string Api::report(const std::string& id) {
 }
 
 bool Api::same_origin(const httplib::Request& req, httplib::Response& res) const {
+  // Headers the checks below read must be unambiguous (RFC 9112 §3.2 and §5.1: a server
+  // answers 400 to more than one Host, and to white space between a field name and its colon).
+  if (req.get_header_value_count("Host") > 1) {
+    send_error(res, 400, "bad_request", "the request has more than one Host header");
+    return false;
+  }
+  for (const auto& [name, value] : req.headers)
+    if (name.empty() || name.find_first_of(" \t") != std::string::npos) {
+      send_error(res, 400, "bad_request",
+                 "a header field name holds white space (\"" + name.substr(0, 64) +
+                     "\"): none may stand before its colon");
+      return false;
+    }
   // With a token, a page of another site cannot send it (it is a header, and no CORS header
   // lets another origin's script add one); the checks are for the service without one, on a
   // loopback address.

@@ -206,6 +206,11 @@ void JobRunner::defer_cancel(const std::string& id) {
   cancels_.insert(id);
 }
 
+void JobRunner::interrupt(const std::string& id) {
+  std::lock_guard<std::mutex> lock(running_mutex_);
+  if (const auto it = running_.find(id); it != running_.end()) it->second->store(true);
+}
+
 bool JobRunner::cancel_deferred(const std::string& id) {
   std::lock_guard<std::mutex> lock(held_mutex_);
   return cancels_.count(id) > 0;
@@ -346,6 +351,25 @@ void JobRunner::run(const JobRecord& rec) {
     ro.checkpoint = CheckpointPolicy::every_iteration;
     ro.max_trajectory_rows = opt_.trajectory_rows;
     ro.on_iteration = [&](const IterationReport&) { return !stopping_ && !cancelled(); };
+    // Within an iteration, a cancel through this server or a stop: before the next pack.
+    const auto flag = std::make_shared<std::atomic<bool>>(false);
+    struct Running {
+      JobRunner& runner;
+      const std::string& id;
+      ~Running() {
+        std::lock_guard<std::mutex> lock(runner.running_mutex_);
+        runner.running_.erase(id);
+      }
+    } running{*this, id};
+    {
+      std::lock_guard<std::mutex> lock(running_mutex_);
+      running_[id] = flag;
+    }
+    // A cancel that came between the claim and now.
+    if (cancelled()) flag->store(true);
+    ro.interrupt = [this, flag] {
+      return stopping_.load(std::memory_order_relaxed) || flag->load(std::memory_order_relaxed);
+    };
     // A cancelled job keeps its results so far (a stopping server's job goes back to the queue).
     ro.keep_partial = [&] { return storage.too_large.empty() && cancelled(); };
     ro.log = [&id](LogLevel level, const std::string& message) {

@@ -84,6 +84,10 @@ class JobRunner {
   // queued one is cancelled when the store writes again (before any job is claimed).
   void defer_cancel(const std::string& id);
   bool cancel_deferred(const std::string& id);
+  // A cancel of a job this runner is running: its run stops before its next pack of
+  // simulations rather than at the end of its iteration (RunJobOptions::interrupt). Nothing for
+  // a job it is not running.
+  void interrupt(const std::string& id);
 
  private:
   struct Held {
@@ -110,6 +114,9 @@ class JobRunner {
   }
   std::vector<std::thread> threads_;
   std::atomic<bool> stopping_{false};
+  // The running jobs' stop flags (interrupt()), read between packs.
+  std::mutex running_mutex_;
+  std::map<std::string, std::shared_ptr<std::atomic<bool>>> running_;
   std::mutex wake_mutex_;
   std::condition_variable wake_;
   std::uint64_t submissions_ = 0;  // bumped under wake_mutex_ on every submission

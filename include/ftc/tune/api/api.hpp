@@ -127,7 +127,11 @@ struct RunJobOptions {
   // Called after every iteration (after the checkpoint is written); false stops the run, which
   // then writes no files (its checkpoint, if it wrote one, stays for a resume).
   std::function<bool(const IterationReport&)> on_iteration;
-  // Asked when the run was stopped (by on_iteration or the storage) after an iteration: true
+  // Asked between packs of simulations (RunOptions::interrupt: cheap and thread-safe): true
+  // stops the run within its iteration, which ends as if on_iteration had stopped it after the
+  // iteration before (that one's checkpoint is the last). Null: a run stops between iterations.
+  std::function<bool()> interrupt;
+  // Asked when the run was stopped (by on_iteration, interrupt or the storage): true
   // keeps its files so far, its best compared as a finished run's best is (compare_best), with
   // gains.json recording optimizer.completed false and run.json "completed": false. Null: none.
   std::function<bool()> keep_partial;
@@ -146,7 +150,7 @@ struct RunJobResult {
   std::vector<std::string> files;                // as run.json lists them
   std::string run_json;                          // run.json's text
   double wall_seconds = 0.0;
-  bool stopped = false;  // on_iteration or the storage stopped it: nothing was written...
+  bool stopped = false;  // on_iteration, interrupt or the storage stopped it: nothing was written...
   bool partial = false;  // ...but what keep_partial kept (the files of a partial run)
   // No candidate met the job's hard goals (fitness < 0, the constraint rule's): gains.json holds
   // the least violating one (the command line exits 3).

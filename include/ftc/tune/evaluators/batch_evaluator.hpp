@@ -10,9 +10,11 @@
 // exception.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -79,16 +81,32 @@ struct TaskResult {
   std::optional<bool> model_invalid;
 };
 
+// What run() throws when its interrupt asks it to stop: the batch has no results.
+struct Interrupted : std::runtime_error {
+  Interrupted() : std::runtime_error("the batch was interrupted") {}
+};
+
 class BatchEvaluator {
  public:
   virtual ~BatchEvaluator() = default;
   // One result per task, in task order.
   virtual std::vector<TaskResult> run(const SimulationBatch& batch) = 0;
+  // A stop asked for while a batch runs (a cancelled job, a stopping server): the TBB and
+  // serial evaluators ask `interrupt` before each pack and, once it says true, start no other
+  // pack and throw Interrupted when the running ones end, so a stop waits for a pack (up to W
+  // simulations in lanes), not a batch. It is asked from worker threads, often: it must be
+  // cheap and thread-safe (an atomic flag). Empty: never asked. An evaluator that cannot stop
+  // within a batch (MPI) finishes it.
+  void set_interrupt(std::function<bool()> interrupt) { interrupt_ = std::move(interrupt); }
+  bool interrupted() const { return interrupt_ && interrupt_(); }
   // Simulations it can run at once (threads); for run.json and progress lines.
   virtual int concurrency() const = 0;
   // Threads on each process taking part (one entry unless the evaluator spans processes).
   virtual std::vector<int> threads_per_rank() const { return {concurrency()}; }
   virtual std::string name() const = 0;
+
+ private:
+  std::function<bool()> interrupt_;
 };
 
 // The options task k runs with: its scenario's, recording when the task asks to.

@@ -312,6 +312,9 @@ AlgorithmInfo with_front(AlgorithmInfo info, MakeFront make_front);
 // passed so that a caller can checkpoint its state().
 using IterationObserver = std::function<bool(const HistoryRow&, const Optimizer&)>;
 
+// Where an optimiser stands: its best, history and whether it ran every iteration.
+OptimizationResult optimization_result(const Optimizer& optimizer);
+
 // Runs to the last iteration or until the observer says stop. With `resume` (a state() saved
 // earlier) it continues from there instead of initialising.
 // A state that restore() refuses is an InputError with source "checkpoint" and the field's

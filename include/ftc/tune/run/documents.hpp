@@ -39,7 +39,15 @@ nlohmann::json goals_json(const Job& job, const std::vector<double>& values, dou
 // The file of a compared controller's trajectory, relative to the run directory.
 std::string trajectory_file(const TuningOutcome& r, std::size_t controller, std::size_t scenario);
 
+// gains.json. Of an outcome without a comparison (a running job's best so far, as the service
+// serves it): the best's objective, fitness and goals as its trial recorded them, the baseline's
+// controller without a score (null), no noise floor, and kStoredBestWarning among the warnings;
+// optimizer.completed is false then, so the gains loader refuses the file.
 nlohmann::json gains_document(const TuningOutcome& r);
+inline constexpr const char* kStoredBestWarning =
+    "the run has not finished: these are the best gains of its iterations so far, with the values "
+    "its trials recorded; the comparison with the job's own controller and the noise floor are "
+    "made when it finishes";
 std::string history_csv(const TuningOutcome& r);
 // trials.csv: one row per evaluated candidate: iteration, index, the tuned parameters, objective,
 // fitness, diverged (scenarios), accepted (became the best so far), and per listed scenario its

@@ -39,6 +39,11 @@ struct RunOptions {
   // Exact capping of hopeless candidates (issue 27, ProblemFitness::evaluate_capped): the same
   // gains, history and checkpointed optimiser state either way; trials.csv marks capped trials.
   bool capping = true;
+  // A stop within an iteration (BatchEvaluator::set_interrupt: asked between packs, from worker
+  // threads, so an atomic flag): the run ends at its last completed iteration, as if the
+  // observer had stopped it there (the optimiser's state and trials as they were then), and the
+  // outcome says interrupted. Only the tuning is interrupted, never the comparison.
+  std::function<bool()> interrupt;
 };
 
 // What a run needs to continue after an iteration: the optimiser's state and every trial so
@@ -104,6 +109,9 @@ struct TuningOutcome {
   std::vector<int> threads_per_rank;     // its threads on each MPI rank (one entry without MPI)
   std::string evaluator;                 // its name
   std::int64_t simulations = 0;
+  // RunOptions::interrupt cut an iteration short: the outcome is of the iterations before it
+  // (none, when it came during the first: optimization.history is empty then).
+  bool interrupted = false;
   bool completed() const { return optimization.completed; }
 
   const ComparedController& baseline() const { return comparison[comparison.size() - 2]; }
