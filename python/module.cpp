@@ -197,6 +197,21 @@ struct Job {
   std::string source;  // the file, or "<dict>"
 };
 
+// The module's types are made only by its functions (load_job, problem, tune), whose results
+// pybind11 builds without the type's __new__. Their __new__ refuses: an object it made has no C++
+// value (no __init__ builds one), and its first method call read raw memory (a crash).
+PyObject* refuse_new(PyTypeObject* type, PyObject*, PyObject*) {
+  PyErr_Format(PyExc_TypeError,
+               "%s objects cannot be made directly: use ftctune.load_job, ftctune.Problem and "
+               "ftctune.tune",
+               type->tp_name);
+  return nullptr;
+}
+template <class T>
+void made_by_functions(py::class_<T>& cls) {
+  reinterpret_cast<PyTypeObject*>(cls.ptr())->tp_new = &refuse_new;
+}
+
 Job load_job(const py::object& from) {
   if (py::isinstance<py::dict>(from)) {
     // As text, so that the keys keep the dict's order (that of tuning.parameters is the
@@ -664,17 +679,23 @@ PYBIND11_MODULE(_core, m) {
   m.attr("version") = ftc::kVersion;  // ftctune --version's; the package's __version__
   py::module_::import("atexit").attr("register")(py::cpp_function(&on_interpreter_exit));
 
-  py::class_<Job>(m, "Job")
-      .def_property_readonly("name", [](const Job& j) { return j.job.name; })
+  py::class_<Job> job_class(m, "Job");
+  made_by_functions(job_class);
+  job_class.def_property_readonly("name", [](const Job& j) { return j.job.name; })
       .def_property_readonly("source", [](const Job& j) { return j.source; })
       .def("to_json", [](const Job& j) { return tune::to_json(j.job).dump(); })
       .def("sha256", [](const Job& j) { return tune::canonical_job_sha256(j.job); });
   m.def("load_job", &load_job, py::arg("path_or_dict"));
 
-  py::class_<Problem>(m, "Problem")
-      .def(py::init<const Job&, std::optional<int>>(), py::arg("job"),
-           py::arg("threads") = py::none())
-      .def_property_readonly("names", [](const Problem& p) { return p.problem.space().names; })
+  py::class_<Problem> problem_class(m, "Problem");
+  made_by_functions(problem_class);
+  m.def(
+      "problem",
+      [](const Job& j, std::optional<int> threads) {
+        return std::make_unique<Problem>(j, threads);
+      },
+      py::arg("job"), py::arg("threads") = py::none());
+  problem_class.def_property_readonly("names", [](const Problem& p) { return p.problem.space().names; })
       .def_property_readonly("bounds",
                              [](const Problem& p) {
                                std::vector<std::pair<double, double>> b;
@@ -700,8 +721,9 @@ PYBIND11_MODULE(_core, m) {
       .def("objective", &Problem::objective, py::arg("X"))
       .def("metrics", &Problem::metrics, py::arg("X"));
 
-  py::class_<Result>(m, "Result")
-      .def_property_readonly("completed", [](const Result& r) { return r.r().completed(); })
+  py::class_<Result> result_class(m, "Result");
+  made_by_functions(result_class);
+  result_class.def_property_readonly("completed", [](const Result& r) { return r.r().completed(); })
       .def_property_readonly("gains_text", &Result::gains)
       .def_property_readonly("trials_csv", [](const Result& r) { return tune::trials_csv(r.r()); })
       .def_property_readonly("history_csv",

@@ -1073,8 +1073,9 @@ struct EventClient {
 // ends them.
 TEST(Service, EventsStreamEachChangeToEveryOpenPage) {
   tune::ServiceOptions o;
-  o.max_connections = 8;  // at most 4 streams
-  o.max_connections_per_client = 7;
+  o.max_connections = 12;
+  o.max_connections_per_client = 11;  // up to 5 streams from one address
+  o.max_event_streams = 4;
   Service s(o);
   std::vector<std::unique_ptr<EventClient>> pages;
   for (int i = 0; i < 2; ++i) pages.push_back(std::make_unique<EventClient>(s.port, "/v1/events"));
@@ -1969,7 +1970,8 @@ TEST(Service, WithoutATokenForeignHostsAndCrossOriginChangesAreRefused) {
 
 // One client address other than loopback holds at most --max-event-streams-per-client streams
 // (the hub's decision, with addresses a test cannot connect from); loopback clients, every local
-// page sharing one address, count only against --max-event-streams.
+// page sharing one address, count only against --max-event-streams and half their address's
+// connections (below).
 TEST(Service, EventStreamsAreCappedPerClientAddress) {
   tune::service_detail::EventHub hub(4, 2);
   using Refused = tune::service_detail::EventHub::Refused;
@@ -2006,6 +2008,40 @@ TEST(Service, EventStreamsAreCappedPerClientAddress) {
   first.reset();
   EXPECT_EQ(wait_health(s, [](const json& h) { return h["event_streams"] == 2; })["event_streams"],
             2);
+  // A limit given to open() is this client's instead of the hub's.
+  std::optional<tune::service_detail::EventHub::Stream> one = hub.open("10.0.0.3", &why, 1);
+  EXPECT_TRUE(one);
+  EXPECT_FALSE(hub.open("10.0.0.3", &why, 1));
+  EXPECT_EQ(why, Refused::client_full);
+}
+
+// Streams hold connections: one address holds at most half of its --max-connections-per-client
+// in streams, loopback too, so /healthz from that address is still answered. Before, 16 local
+// pages took all 16 connections the address may hold, and /healthz got 429.
+TEST(Service, EventStreamsLeaveTheirAddressConnectionsForOtherRequests) {
+  tune::ServiceOptions o;
+  o.max_connections = 64;
+  o.max_connections_per_client = 8;  // at most 4 streams from loopback
+  Service s(o);
+  std::vector<std::unique_ptr<EventClient>> pages;
+  for (int i = 0; i < 6; ++i) pages.push_back(std::make_unique<EventClient>(s.port, "/v1/events"));
+  int opened = 0, refused = 0;
+  for (auto& p : pages) {
+    ASSERT_TRUE(p->wait_for(
+        [](EventClient& c) {
+          return c.ended.load() || c.received().find(": ftctune events") != std::string::npos;
+        },
+        10s));
+    if (p->ended.load()) {
+      EXPECT_EQ(p->status, 429);
+      ++refused;
+    } else {
+      ++opened;
+    }
+  }
+  EXPECT_EQ(opened, 4);
+  EXPECT_EQ(refused, 2);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(s.get("/healthz")["status"], "ok");
 }
 
 // A stream for a job that does not exist is refused (404) without taking a slot (it was 200 and

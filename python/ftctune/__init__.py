@@ -87,7 +87,7 @@ class Problem:
         job = load_job(job)
         self._job, self._threads = job, threads
         self._name = job.name
-        self._native = _core.Problem(job._native, threads)
+        self._native = _core.problem(job._native, threads)
 
     def __deepcopy__(self, memo):
         # pygmo.problem() deep-copies the problem it is given; the native half is not copyable,

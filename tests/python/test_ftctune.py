@@ -481,6 +481,21 @@ def test_version_is_the_commands_and_the_namespace_is_the_api(cli):
         assert not hasattr(ftctune, name), name
 
 
+def test_native_objects_cannot_be_made_without_their_value(table1_path):
+    # An object __new__ made has no C++ value (no __init__ builds one): its first method call read
+    # raw memory and crashed the interpreter. The native types are made only by the functions.
+    import copy
+    from ftctune import _core
+    for cls in (_core.Job, _core.Problem, _core.Result):
+        for make in (lambda: cls.__new__(cls), lambda: object.__new__(cls), lambda: cls()):
+            with pytest.raises(TypeError):
+                make()
+    job = ftctune.load_job(table1_path)
+    with pytest.raises(TypeError):
+        copy.copy(job._native)  # copy goes through __new__ too
+    assert ftctune.Problem(job, threads=1)([20.0, 5.0]) > 0  # the functions still make them
+
+
 def test_problem_is_a_function_for_scipy_and_a_pygmo_problem(table1_path):
     from scipy.optimize import minimize
     problem = ftctune.Problem(table1_path, threads=1)

@@ -658,16 +658,26 @@ void Api::events(const httplib::Request& req, const std::string& job, httplib::R
   // A stream for a job that does not exist (?job=) would hold a slot for nothing.
   if ((req.has_param("job") || !job.empty()) && !store_.get(job))
     return send_error(res, 404, "not_found", "no job " + job);
+  // Each stream holds one of its address's --max-connections-per-client connections: an address
+  // holds at most half of them in streams, so that its other requests (/healthz, the API) still
+  // get through (16 streams from one address locked it out). Loopback, where every local page
+  // shares the address, has only that cap; other addresses also --max-event-streams-per-client.
+  const std::size_t half =
+      static_cast<std::size_t>(std::max(opt_.max_connections_per_client / 2, 1));
+  const bool local = loopback_address(req.remote_addr);
+  const std::size_t cap =
+      local || hub_.max_per_client() == 0 ? half : std::min(half, hub_.max_per_client());
   EventHub::Refused why = EventHub::Refused::full;
-  std::optional<EventHub::Stream> stream =
-      hub_.open(loopback_address(req.remote_addr) ? "" : req.remote_addr, &why);
+  std::optional<EventHub::Stream> stream = hub_.open(req.remote_addr, &why, cap);
   if (!stream && why == EventHub::Refused::client_full) {
     res.set_header("Retry-After", "10");
     return send_error(res, 429, "too_many_streams",
-                      "this client has " + std::to_string(hub_.max_per_client()) +
-                          " event streams open, the most one client address may "
-                          "(--max-event-streams-per-client): close a page, or reload it later",
-                      json{{"limit", hub_.max_per_client()}});
+                      "this client has " + std::to_string(cap) +
+                          " event streams open, the most one client address may (half of "
+                          "--max-connections-per-client" +
+                          (local ? std::string() : ", and --max-event-streams-per-client") +
+                          "): close a page, or reload it later",
+                      json{{"limit", cap}});
   }
   if (!stream) {
     res.set_header("Retry-After", "10");

@@ -32,7 +32,8 @@ std::size_t EventHub::open_streams() {
   return streams_;
 }
 
-std::optional<EventHub::Stream> EventHub::open(const std::string& client, Refused* why) {
+std::optional<EventHub::Stream> EventHub::open(const std::string& client, Refused* why,
+                                               std::size_t limit) {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto refuse = [&](Refused r) {
     if (why) *why = r;
@@ -41,7 +42,8 @@ std::optional<EventHub::Stream> EventHub::open(const std::string& client, Refuse
   if (closed_) return refuse(Refused::closed);
   if (!client.empty()) {
     const auto it = per_client_.find(client);
-    if (max_per_client_ > 0 && it != per_client_.end() && it->second >= max_per_client_)
+    const std::size_t cap = limit > 0 ? limit : max_per_client_;
+    if (cap > 0 && it != per_client_.end() && it->second >= cap)
       return refuse(Refused::client_full);
   }
   if (streams_ >= max_streams_) return refuse(Refused::full);

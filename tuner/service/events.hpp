@@ -64,10 +64,11 @@ class EventHub {
   // Why open() gave no stream.
   enum class Refused { full, client_full, closed };
   // A stream of the events from now on for a client at address `client`; nullopt (and why)
-  // when `max_streams` are open, the client has `max_per_client` open, or the hub closed. A
-  // client "" (the service's own machine, on loopback) is not counted per client: only
+  // when `max_streams` are open, the client has its limit open (`limit` when > 0, else
+  // `max_per_client`), or the hub closed. A client "" is not counted per client: only
   // `max_streams` bounds its streams.
-  std::optional<Stream> open(const std::string& client = "", Refused* why = nullptr);
+  std::optional<Stream> open(const std::string& client = "", Refused* why = nullptr,
+                             std::size_t limit = 0);
 
  private:
   std::mutex mutex_;
