@@ -39,6 +39,7 @@
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/api/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
@@ -291,16 +292,27 @@ tune::TuningProblem holding_every_scenario(const tune::Job& job) {
 }
 
 // A job as a tuning problem, with its evaluator (threads as `ftctune run --threads`).
+// Memory by design, as `ftctune run` checks it: the members held as listed scenarios, and
+// `candidates` scored at once with their metrics.
+void check_memory(const tune::Job& job, double candidates, const std::string& what,
+                  bool metrics = false) {
+  tune::check_memory_need(tune::estimated_scoring_bytes(job, candidates, true, metrics),
+                          tune::memory_budget_bytes(), job.name, what);
+}
+
 struct Problem {
   Problem(const Job& j, std::optional<int> threads)
-      : problem((require_tuning(j, "Problem"), holding_every_scenario(j.job))),
+      : problem((require_tuning(j, "Problem"), check_memory(j.job, 1, "a Problem of this job"),
+                 holding_every_scenario(j.job))),
         evaluator(threads_of(threads)) {}
   tune::TuningProblem problem;
   PythonEvaluator evaluator;
   // One batch at a time through the evaluator: Python threads may share a Problem.
   std::mutex busy;
 
-  std::vector<tune::CandidateOutcome> outcomes(const Rows& r) {
+  std::vector<tune::CandidateOutcome> outcomes(const Rows& r, bool metrics) {
+    check_memory(problem.job(), static_cast<double>(r.rows.size()),
+                 std::to_string(r.rows.size()) + " rows of X at once", metrics);
     std::vector<sim::ControllerConfig> controllers;
     controllers.reserve(r.rows.size());
     for (const auto& x : r.rows) controllers.push_back(problem.controller_with(x));
@@ -312,7 +324,7 @@ struct Problem {
 
   py::object objective(const py::array_t<double, py::array::c_style | py::array::forcecast>& x) {
     const Rows r = rows_of(x, problem);
-    const std::vector<tune::CandidateOutcome> out = outcomes(r);
+    const std::vector<tune::CandidateOutcome> out = outcomes(r, false);
     py::array_t<double> values(static_cast<py::ssize_t>(out.size()));
     auto v = values.mutable_unchecked<1>();
     for (std::size_t i = 0; i < out.size(); ++i) {
@@ -328,7 +340,7 @@ struct Problem {
   // (<metric>_fault<k>), and the scenario's value of the job's metric.
   py::dict metrics(const py::array_t<double, py::array::c_style | py::array::forcecast>& x) {
     const Rows r = rows_of(x, problem);
-    const std::vector<tune::CandidateOutcome> out = outcomes(r);
+    const std::vector<tune::CandidateOutcome> out = outcomes(r, true);
     std::size_t segments = 0, faults = 0;
     for (const auto& o : out)
       for (const sim::Metrics& m : o.evaluation.scenarios) {
@@ -663,11 +675,20 @@ PYBIND11_MODULE(_core, m) {
     } catch (const InputError& e) {
       std::string message = e.source().empty() ? std::string() : e.source() + ": ";
       py::list errors;
+      // The message lists the first kMaxReportedErrors, as `ftctune validate` does (20 000 bad
+      // rows of X made a message of 20 000 lines); `errors` keeps them all.
+      std::size_t k = 0;
       for (const FieldError& f : e.errors()) {
-        if (e.errors().size() > 1) message += "\n  ";
-        message += f.path.empty() ? f.message : f.path + ": " + f.message;
+        if (k++ < tune::kMaxReportedErrors) {
+          if (e.errors().size() > 1) message += "\n  ";
+          message += f.path.empty() ? f.message : f.path + ": " + f.message;
+        }
         errors.append(py::make_tuple(f.path, f.message));
       }
+      if (e.errors().size() > tune::kMaxReportedErrors)
+        message += "\n  ... and " + std::to_string(e.errors().size() - tune::kMaxReportedErrors) +
+                   " more (the first " + std::to_string(tune::kMaxReportedErrors) +
+                   " are listed; .errors has every one)";
       const py::object type = py::module_::import("ftctune._core").attr("InputError");
       const py::object error = type(message);
       error.attr("source") = e.source();

@@ -216,13 +216,26 @@ TEST(Cli, RunAboveTheMemoryBudgetIsRefusedBeforeTheWork) {
               dir);
   ::unsetenv("FTCTUNE_MEMORY_MIB");
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("the job would need about 259 MB of memory (1 listed scenario and its "
-                       "comparison at about 0.306 MB, 1000000 ensemble members "
-                       "at about 192 bytes each)"),
+  EXPECT_NE(r.err.find("the job would need about 260 MB of memory (1 listed scenario and its "
+                       "comparison at about 1.28 MB, 1000000 ensemble members "
+                       "at about 192 bytes each, 9 trials at about 1344 bytes each)"),
             std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("more than the budget of 105 MB"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "gains.json"));
+  // A landscape takes the budget too: every grid point keeps its outcome (issue 44: 865 MB).
+  ftc::tune::write_file_atomic(dir / "table1.json", short_table1_job().dump());
+  ::setenv("FTCTUNE_MEMORY_MIB", "100", 1);
+  const CliResult l = run_cli("landscape '" + (dir / "table1.json").string() +
+                                  "' --grid 1000x1000 --out '" + (dir / "landscape").string() + "'",
+                              dir);
+  ::unsetenv("FTCTUNE_MEMORY_MIB");
+  EXPECT_EQ(l.exit_code, 2) << l.err;
+  EXPECT_NE(l.err.find("--grid: a landscape of 1000000 points would need about 1.6 GB of memory, "
+                       "more than the budget of 105 MB"),
+            std::string::npos)
+      << l.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "landscape"));
   // A budget that is not a positive number is bad input, not silently the default.
   for (const char* bad : {"abc", "0", "-5", "12MB"}) {
     ::setenv("FTCTUNE_MEMORY_MIB", bad, 1);

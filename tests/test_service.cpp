@@ -1492,8 +1492,8 @@ TEST(Service, JobAboveTheMemoryBudgetIsRefusedWith413) {
   auto r = s.client->Post("/v1/jobs", j.dump(), "application/json");
   expect_error(r, 413, "job_too_large");
   EXPECT_NE(r->body.find("the job would need about 235 MB of memory (1 listed scenario and its "
-                         "comparison at about 0.0679 MB, 1000000 ensemble "
-                         "members at about 168 bytes each)"),
+                         "comparison at about 0.0898 MB, 1000000 ensemble "
+                         "members at about 168 bytes each, 4 trials at about 1344 bytes each)"),
             std::string::npos)
       << r->body;
   EXPECT_NE(r->body.find("above the server's limit of 134 MB per job"), std::string::npos)

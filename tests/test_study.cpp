@@ -110,9 +110,9 @@ TEST(Study, StudyAboveTheMemoryBudgetIsRefusedBeforeAnyRun) {
                               dir);
   ::unsetenv("FTCTUNE_MEMORY_MIB");
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("would need about 259 MB of memory (1 listed scenario and its "
-                       "comparison at about 0.306 MB, 1000000 ensemble members "
-                       "at about 192 bytes each)"),
+  EXPECT_NE(r.err.find("would need about 261 MB of memory (1 listed scenario and its "
+                       "comparison at about 1.28 MB, 1000000 ensemble members "
+                       "at about 192 bytes each, 100 trials at about 1344 bytes each)"),
             std::string::npos)
       << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "o"));

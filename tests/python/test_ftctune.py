@@ -233,7 +233,7 @@ def test_tune_releases_the_gil(table1_path):
 CTRL_C_SCRIPT = """
 import json, sys, time, ftctune
 job = ftctune.load_job(sys.argv[1]).to_dict()
-job["tuning"]["algorithm"]["iterations"] = 100000
+job["tuning"]["algorithm"]["iterations"] = 1000  # minutes of work; its trials fit the memory budget
 job["tuning"]["algorithm"]["population"] = 200
 print("tuning", flush=True)
 try:
@@ -266,7 +266,7 @@ def test_ctrl_c_stops_a_tuning_run_within_a_second(table1_path):
 DAEMON_SCRIPT = """
 import sys, threading, time, ftctune
 job = ftctune.load_job(sys.argv[1]).to_dict()
-job["tuning"]["algorithm"]["iterations"] = 100000
+job["tuning"]["algorithm"]["iterations"] = 1000
 job["tuning"]["algorithm"]["population"] = 200
 problem = ftctune.Problem(sys.argv[1], threads=1)
 threading.Thread(target=ftctune.tune, args=(job,), kwargs={"threads": 1}, daemon=True).start()
@@ -494,6 +494,29 @@ def test_native_objects_cannot_be_made_without_their_value(table1_path):
     with pytest.raises(TypeError):
         copy.copy(job._native)  # copy goes through __new__ too
     assert ftctune.Problem(job, threads=1)([20.0, 5.0]) > 0  # the functions still make them
+
+
+def test_problem_and_its_calls_take_the_memory_budget(table1_path, monkeypatch):
+    # As `ftctune run` is: a Problem holds the job's members, and a call keeps an outcome per
+    # row (issue 44: 1.29 GB for one call). Refused before the work, with what it would need.
+    problem = ftctune.Problem(table1_path, threads=1)
+    monkeypatch.setenv("FTCTUNE_MEMORY_MIB", "70")
+    with pytest.raises(ftctune.InputError, match=r"a Problem of this job would need about"):
+        ftctune.Problem(table1_path, threads=1)
+    monkeypatch.setenv("FTCTUNE_MEMORY_MIB", "100")
+    with pytest.raises(ftctune.InputError, match=r"100000 rows of X at once would need about"):
+        problem.objective(np.full((100000, 2), 10.0))
+    assert problem.objective(np.full((2, 2), 10.0)).shape == (2,)
+
+
+def test_an_error_message_lists_the_first_hundred_problems(table1_path):
+    problem = ftctune.Problem(table1_path, threads=1)
+    with pytest.raises(ftctune.InputError) as caught:
+        problem.objective(np.full((500, 2), -1.0))  # every row outside the bounds
+    n = len(caught.value.errors)
+    assert n >= 500
+    assert str(caught.value).count("\n") == 101  # 100 listed and a line for the rest
+    assert "... and %d more" % (n - 100) in str(caught.value)
 
 
 def test_problem_is_a_function_for_scipy_and_a_pygmo_problem(table1_path):

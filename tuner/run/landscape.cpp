@@ -10,8 +10,17 @@
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/problem/problem.hpp"
+#include "ftc/tune/run/memory_budget.hpp"
 
 namespace ftc::tune {
+
+namespace {
+std::string fmt_points(double n) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.15g", n);
+  return buf;
+}
+}  // namespace
 
 Landscape evaluate_landscape(const Job& job_in, const LandscapeGrid& options,
                              BatchEvaluator& evaluator) {
@@ -28,6 +37,10 @@ Landscape evaluate_landscape(const Job& job_in, const LandscapeGrid& options,
   if (options.n1 < 2 || options.n2 < 2 || options.n1 > 1000 || options.n2 > 1000)
     throw InputError("--grid", "", "needs 2..1000 points per parameter");
 
+  // Memory by design: every grid point keeps its outcome until the landscape is drawn.
+  const double points = static_cast<double>(options.n1) * static_cast<double>(options.n2);
+  check_memory_need(estimated_scoring_bytes(job_in, points, false), memory_budget_bytes(),
+                    "--grid", "a landscape of " + fmt_points(points) + " points");
   // A job tuning exactly the two parameters, everything else at the job's values.
   Job job = job_in;
   std::vector<ParameterBounds> bounds;

@@ -37,9 +37,19 @@ double listed_scenario_bytes(const Job& job) {
   for (const sim::Scenario& s : job.scenarios)
     rows += static_cast<double>((s.samples() + every - 1) / every);
   const double controllers = static_cast<double>(job.compare.size()) + 2.0;
+  double faults = 0;
+  for (const sim::Scenario& s : job.scenarios) faults += static_cast<double>(s.faults.size());
   return static_cast<double>(job.scenarios.size()) *
              (kBytesPerScenario + controllers * kBytesPerScenarioController) +
-         rows * width * 8.0 * controllers;
+         faults * (kBytesPerFault + controllers * kBytesPerFaultController) +
+         rows * width * kBytesPerTrajectoryNumber * controllers;
+}
+
+double bytes_per_trial(const Job& job) {
+  const double numbers =
+      static_cast<double>((job.tuning ? job.tuning->parameters.size() : 0) + job.goals.size());
+  return kBytesPerTrial + numbers * kBytesPerTrialNumber +
+         trial_scenarios(job) * kBytesPerTrialObjective;
 }
 
 std::size_t controllers_at_once(const Job& job) {
@@ -54,14 +64,40 @@ double bytes_per_member(const Job& job) {
 }
 
 double estimated_run_bytes(const Job& job, double evaluations) {
-  return kRunBaseBytes + listed_scenario_bytes(job) +
-         members(job) * bytes_per_member(job) +
-         evaluations * trial_scenarios(job) * kBytesPerTrialObjective;
+  return kRunBaseBytes + listed_scenario_bytes(job) + members(job) * bytes_per_member(job) +
+         evaluations * bytes_per_trial(job);
 }
 
 double estimated_run_bytes(const Job& job) {
   return estimated_run_bytes(
       job, job.tuning ? static_cast<double>(job.tuning->algorithm->evaluations()) : 1.0);
+}
+
+double estimated_scoring_bytes(const Job& job, double candidates, bool members_listed,
+                               bool members_metrics) {
+  double listed = static_cast<double>(job.scenarios.size());
+  const double scored = members_listed && !members_metrics ? members(job) : 0.0;
+  double bytes = kRunBaseBytes + listed_scenario_bytes(job) + members(job) * bytes_per_member(job);
+  if (members_listed && job.ensemble) {
+    // A member held is a scenario with its faults (no comparison runs on it).
+    const double faults =
+        job.ensemble->faults ? static_cast<double>(std::max(job.ensemble->faults->count_hi, 0))
+                             : static_cast<double>(ensemble_base(job).faults.size());
+    bytes += members(job) * (kBytesPerScenario + faults * kBytesPerFault - bytes_per_member(job));
+    if (members_metrics) listed += members(job);
+  }
+  // Members scored without their metrics keep a value each (kBytesPerMemberValue).
+  return bytes + candidates * (kBytesPerCandidate + listed * kBytesPerScoredScenario +
+                               scored * kBytesPerMemberValue);
+}
+
+void check_memory_need(double need, double budget, const std::string& source,
+                       const std::string& what) {
+  if (need <= budget) return;
+  throw InputError(source, "",
+                   what + " would need about " + bytes_text(need) +
+                       " of memory, more than the budget of " + bytes_text(budget) +
+                       " (FTCTUNE_MEMORY_MIB sets it)");
 }
 
 double memory_budget_bytes() {
@@ -108,13 +144,11 @@ std::string memory_need_text(const Job& job, double evaluations) {
     char each[64];
     std::snprintf(each, sizeof each, "%.0f bytes each", bytes_per_member(job));
     out += ", " + std::to_string(job.ensemble->count) + " ensemble members at about " + each;
-  } else if (listed > 0) {
-    char evals[32];
-    std::snprintf(evals, sizeof evals, "%.15g", evaluations);
-    out += ", and one objective per scenario for each of its " + std::string(evals) +
-           " evaluations";
   }
-  return out;
+  char trials[96];
+  std::snprintf(trials, sizeof trials, ", %.15g trials at about %.0f bytes each", evaluations,
+                bytes_per_trial(job));
+  return out + trials;
 }
 
 void check_memory_budget(const Job& job, double budget, const std::string& source) {

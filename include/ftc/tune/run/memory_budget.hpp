@@ -19,24 +19,42 @@ inline constexpr double kRunBaseBytes = 64.0 * (1 << 20);
 // A listed scenario: the scenario, its entry in the job's documents (the job read, job.json) and
 // its objectives; and for each controller the comparison runs on it (the job's, each compare
 // entry, the tuned), its metrics, its entries in comparison.json and comparison.md and its
-// trajectory file's buffers, besides the trajectory's rows. Measured on scenarios of 20 ms
+// trajectory file's buffers. Measured on scenarios of 20 ms with 2 faults each
 // (MemoryBudget.AListedScenarioTakesNoMoreThanItIsCharged): 34.6 kB with 2 controllers, 56.0 kB
-// with 4, 76.4 kB with 6, that is about 14 kB and 10.4 kB per controller.
-inline constexpr double kBytesPerScenario = 16384.0;
-inline constexpr double kBytesPerScenarioController = 12288.0;
+// with 4, 76.4 kB with 6; of which the faults' share is charged below.
+inline constexpr double kBytesPerScenario = 12288.0;
+inline constexpr double kBytesPerScenarioController = 8192.0;
+// A fault of a listed scenario: the fault in every copy of the job and its documents, and for
+// each compared controller its per-fault metrics, in comparison.json and comparison.md too.
+// Measured (MemoryBudget.AFaultTakesNoMoreThanItIsCharged, 40 scenarios of 400 faults more):
+// 7.2 kB with 2 controllers, 11.5 kB with 4.
+inline constexpr double kBytesPerFault = 4096.0;
+inline constexpr double kBytesPerFaultController = 3072.0;
 // A member's numbers for one controller scored at once (and one more of each per goal): its
 // value, whether it diverged, the counted values' copy as they are aggregated.
 inline constexpr double kBytesPerMemberValue = 24.0;
 inline constexpr double kBytesPerTrialObjective = 8.0;
-
-// The bytes the job's listed scenarios take in a run: kBytesPerScenario each, and for each
-// controller compared on them kBytesPerScenarioController and the rows of its trajectory
-// (8 bytes a number).
+// A number of a comparison trajectory's row: the double and its text in the trajectory file
+// (MemoryBudget.ALongTrajectoryTakesNoMoreThanItIsCharged: 495 bytes a row of 15 numbers).
+inline constexpr double kBytesPerTrajectoryNumber = 40.0;
+// A trial: its record and its copy in the outcome, its row of trials.csv and its share of the
+// optimiser's history (MemoryBudget.ATrialTakesNoMoreThanItIsCharged: 911 and 1 032 bytes in
+// two runs, with two parameters), and for each parameter and goal value a number more.
+inline constexpr double kBytesPerTrial = 1280.0;
+inline constexpr double kBytesPerTrialNumber = 32.0;
+// The bytes the job's listed scenarios take in a run: kBytesPerScenario each, kBytesPerFault a
+// fault, and for each controller compared on them kBytesPerScenarioController,
+// kBytesPerFaultController a fault and the rows of its trajectory (kBytesPerTrajectoryNumber a
+// number).
 double listed_scenario_bytes(const Job& job);
 // The bytes a member takes in a run of the job: kBytesPerMemberValue for each controller scored
 // at once (its population, the incumbent, its compare entries, the job's and the tuned
 // controller), times one plus its goals.
 double bytes_per_member(const Job& job);
+// The bytes a trial takes: kBytesPerTrial, kBytesPerTrialNumber for each parameter and goal,
+// and kBytesPerTrialObjective for each scenario whose objective a trial keeps (those of a job
+// without an ensemble).
+double bytes_per_trial(const Job& job);
 // How many controllers the run scores at once (and bytes_per_member counts): the population,
 // the incumbent, the compare entries, the job's and the tuned. The noise floor of a front's
 // points is measured in groups of this many, so that a large front stays within the budget.
@@ -57,6 +75,25 @@ void check_memory_budget(const Job& job, double budget, const std::string& sourc
 void check_memory_budget(const Job& job, double evaluations, double budget,
                          const std::string& source);
 
+// A candidate scored outside a run (a landscape's grid point, a Python call's row): its
+// controller, its outcome and its output row, and its metrics of each listed scenario. Measured
+// with `ftctune landscape jobs/table1.json` (one scenario): 61.3 MB peak at 200x200 points,
+// 566 MB at 700x700, 1 147 bytes a point.
+inline constexpr double kBytesPerCandidate = 512.0;
+inline constexpr double kBytesPerScoredScenario = 1024.0;
+// What scoring `candidates` controllers at once on every scenario of the job takes when each
+// keeps its metrics of every listed scenario (a landscape's grid, a Python call's rows): the
+// process, the listed scenarios and the members as a run holds them, and for each candidate
+// kBytesPerCandidate and kBytesPerScoredScenario a listed scenario. With `members_listed` (the Python Problem holds the ensemble's members as
+// listed scenarios, so that metrics() has a row for each), each member is charged
+// kBytesPerScenario and kBytesPerFault for each fault of its distribution's largest count, and
+// for each candidate kBytesPerScoredScenario with `members_metrics` (metrics()), else
+// kBytesPerMemberValue (objective()).
+double estimated_scoring_bytes(const Job& job, double candidates, bool members_listed,
+                               bool members_metrics = false);
+// Throws InputError(source, "", ...) when `need` is above `budget`, naming `what` needs it.
+void check_memory_need(double need, double budget, const std::string& source,
+                       const std::string& what);
 // What the estimate counts, for messages: "1 listed scenario and its comparison at about
 // 0.306 MB, 1000000 ensemble members at about 192 bytes each".
 std::string memory_need_text(const Job& job, double evaluations);
