@@ -14,14 +14,6 @@
 
 namespace ftc::tune {
 
-namespace {
-std::string fmt_points(double n) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.15g", n);
-  return buf;
-}
-}  // namespace
-
 Landscape evaluate_landscape(const Job& job_in, const LandscapeGrid& options,
                              BatchEvaluator& evaluator) {
   if (!job_in.tuning)
@@ -40,7 +32,8 @@ Landscape evaluate_landscape(const Job& job_in, const LandscapeGrid& options,
   // Memory by design: every grid point keeps its outcome until the landscape is drawn.
   const double points = static_cast<double>(options.n1) * static_cast<double>(options.n2);
   check_memory_need(estimated_scoring_bytes(job_in, points, false), memory_budget_bytes(),
-                    "--grid", "a landscape of " + fmt_points(points) + " points");
+                    "--grid", "a landscape of " +
+                        std::to_string(static_cast<long long>(options.n1) * options.n2) + " points");
   // A job tuning exactly the two parameters, everything else at the job's values.
   Job job = job_in;
   std::vector<ParameterBounds> bounds;
