@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -163,10 +164,23 @@ TEST(Cli, RunWithoutTuningSectionExitsTwo) {
   EXPECT_NE(r.err.find("/tuning: is required by ftctune run"), std::string::npos) << r.err;
 }
 
-// An interrupt (a cancel, a stopping server) asked between packs ends the run within its
-// iteration, at the iteration before: the same history, trials and optimiser state as a run the
-// observer stopped after that iteration, with the TBB and the serial evaluator alike. Cut short
-// in the first iteration, the run has nothing to keep.
+// An evaluator that asks its interrupt before each batch and counts the batches.
+struct CountingEvaluator final : tune::BatchEvaluator {
+  std::vector<tune::TaskResult> run(const tune::SimulationBatch& batch) override {
+    if (interrupted()) throw tune::Interrupted();
+    ++batches;
+    return inner.run(batch);
+  }
+  int concurrency() const override { return 1; }
+  std::string name() const override { return "counting"; }
+  tune::SerialEvaluator inner;
+  int batches = 0;
+};
+
+// An interrupt (a cancel in the service) asked between packs ends the run within its iteration,
+// at the iteration before: the same history, trials and best as a run the observer stopped
+// after that iteration, with the TBB and the serial evaluator alike. Cut short in the first
+// iteration, the run has nothing to keep.
 TEST(TuningRun, AnInterruptEndsTheRunAtItsLastFinishedIteration) {
   const tune::Job job = short_job();
   tune::RunOptions stop;
@@ -177,19 +191,19 @@ TEST(TuningRun, AnInterruptEndsTheRunAtItsLastFinishedIteration) {
   tune::TbbEvaluator tbb(2);
   tune::SerialEvaluator serial;
   for (tune::BatchEvaluator* e : std::initializer_list<tune::BatchEvaluator*>{&tbb, &serial}) {
-    int finished = 0, asked = 0;
+    std::atomic<int> finished{0}, asked{0};  // asked from worker threads
     tune::RunOptions o;
     o.observer = [&](const tune::HistoryRow&, const tune::Optimizer&,
                      const std::vector<tune::Trial>&) { return ++finished > 0; };
     o.interrupt = [&] {
       ++asked;
-      return finished >= 2;  // during iteration 2, at its first pack
+      return finished.load() >= 2;  // during iteration 2, at its first pack
     };
     const tune::TuningOutcome r = tune::tune(job, *e, o);
     EXPECT_TRUE(r.interrupted) << e->name();
     EXPECT_FALSE(r.completed());
     EXPECT_TRUE(r.comparison.empty());  // nothing compared: the caller decides
-    EXPECT_GT(asked, 0);
+    EXPECT_GT(asked.load(), 0);
     EXPECT_EQ(tune::trials_csv(r), tune::trials_csv(stopped)) << e->name();
     EXPECT_EQ(tune::history_csv(r), tune::history_csv(stopped)) << e->name();
     EXPECT_EQ(r.optimization.best, stopped.optimization.best);
@@ -201,6 +215,42 @@ TEST(TuningRun, AnInterruptEndsTheRunAtItsLastFinishedIteration) {
   EXPECT_TRUE(none.interrupted);
   EXPECT_TRUE(none.optimization.history.empty());
   EXPECT_TRUE(none.trials.empty());
+
+  // An optimiser that scores an iteration in several batches (pagmo's sade, one candidate at a
+  // time) records the trials of the batches before the cut: they are dropped with the iteration.
+  json one_by_one = short_table1_job();
+  one_by_one["tuning"]["algorithm"] = {
+      {"type", "pagmo"}, {"name", "sade"}, {"population", 7}, {"generations", 2}};
+  const tune::Job sade = tune::parse_job(one_by_one, "sade");
+  const tune::TuningOutcome sade_stopped = tuned(sade, 1, std::nullopt, stop);
+  CountingEvaluator counting;
+  int finished = 0, at_cut = 0;
+  tune::RunOptions o;
+  o.observer = [&](const tune::HistoryRow&, const tune::Optimizer&,
+                   const std::vector<tune::Trial>&) {
+    if (++finished == 2) at_cut = counting.batches;
+    return true;
+  };
+  o.interrupt = [&] { return finished >= 2 && counting.batches >= at_cut + 3; };
+  const tune::TuningOutcome cut = tune::tune(sade, counting, o);
+  ASSERT_TRUE(cut.interrupted);
+  EXPECT_EQ(counting.batches, at_cut + 3);  // three batches of iteration 2 ran
+  EXPECT_EQ(tune::trials_csv(cut), tune::trials_csv(sade_stopped));
+  EXPECT_EQ(tune::history_csv(cut), tune::history_csv(sade_stopped));
+
+  // Resumed from a checkpoint and cut in its first iteration: the checkpoint's run, as it was.
+  const json state = checkpoint_after(job, 0);
+  tune::RunOptions resumed;
+  resumed.resume = &state;
+  resumed.interrupt = [] { return true; };
+  const tune::TuningOutcome back = tune::tune(job, serial, resumed);
+  EXPECT_TRUE(back.interrupted);
+  ASSERT_EQ(back.optimization.history.size(), 1u);
+  EXPECT_EQ(back.trials.size(), state["trials"].size());
+  tune::RunOptions stop0;
+  stop0.observer = [&](const tune::HistoryRow&, const tune::Optimizer&,
+                       const std::vector<tune::Trial>&) { return false; };
+  EXPECT_EQ(tune::trials_csv(back), tune::trials_csv(tuned(job, 1, std::nullopt, stop0)));
 }
 
 // A goal a trial could not measure is an empty cell of trials.csv (it was "–", which made a CSV

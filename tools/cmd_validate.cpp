@@ -83,8 +83,8 @@ int run_validate(const ValidateCli& o, const Globals& g) {
       if (cost > static_cast<double>(evals) * static_cast<double>(steps)) {
         char buf[160];
         std::snprintf(buf, sizeof buf,
-                      " (with its faults, a step with f faults costing 1 + f/32 steps: %.3g)",
-                      cost);
+                      " (with its faults, a step with f faults costing 1 + f/%.0f steps: %.3g)",
+                      1.0 / tune::kFaultStepCost, cost);
         priced = buf;
       }
       std::printf(

@@ -76,7 +76,8 @@ double estimated_run_bytes(const Job& job) {
 double estimated_scoring_bytes(const Job& job, double candidates, bool members_listed,
                                bool members_metrics) {
   double listed = static_cast<double>(job.scenarios.size());
-  const double scored = members_listed && !members_metrics ? members(job) : 0.0;
+  // Members scored without their metrics keep a value each per candidate (Evaluation::values).
+  const double scored = members_metrics ? 0.0 : members(job);
   double bytes = kRunBaseBytes + listed_scenario_bytes(job) + members(job) * bytes_per_member(job);
   if (members_listed && job.ensemble) {
     // A member held is a scenario with its faults (no comparison runs on it).
@@ -86,7 +87,6 @@ double estimated_scoring_bytes(const Job& job, double candidates, bool members_l
     bytes += members(job) * (kBytesPerScenario + faults * kBytesPerFault - bytes_per_member(job));
     if (members_metrics) listed += members(job);
   }
-  // Members scored without their metrics keep a value each (kBytesPerMemberValue).
   return bytes + candidates * (kBytesPerCandidate + listed * kBytesPerScoredScenario +
                                scored * kBytesPerMemberValue);
 }

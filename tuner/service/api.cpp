@@ -442,15 +442,16 @@ std::optional<Job> Api::check_job(const httplib::Request& req, httplib::Response
                json::array({{{"path", "/tuning"}, {"message", "is required to tune"}}}));
     return std::nullopt;
   }
-  // Priced by what a step costs: a step with f faults is 1 + f/32 fault-free ones (a job of
-  // 15 000 faults was admitted on its plain step count and took 45 s an iteration).
+  // Priced by what a step costs: a step with f faults is 1 + f·kFaultStepCost fault-free ones
+  // (a job of 15 000 faults was admitted on its plain step count and took 45 s an iteration).
   const double steps = static_cast<double>(job.tuning->algorithm->evaluations()) *
                        job.step_cost_per_evaluation();
   if (steps > opt_.max_steps) {
     send_error(res, 400, "job_too_large",
                "the job needs " + fmt_g(steps) +
                    " simulated steps (evaluations x steps per evaluation, a step with f faults "
-                   "counting as 1 + f/32), " +
+                   "counting as 1 + f/" +
+                   std::to_string(static_cast<int>(1.0 / kFaultStepCost)) + "), " +
                    fmt_g(steps / opt_.max_steps) + " times the server's budget of " +
                    fmt_g(opt_.max_steps),
                json{{{"steps", steps}, {"budget", opt_.max_steps}}});
@@ -642,10 +643,10 @@ void Api::changed(const std::string& id) noexcept {
 // keeps the connection alive; a closed page's stream ends within a quarter of a second. With `job`
 // (/v1/jobs/{id}/events, /v1/events?job=ID): that job's only. Each stream holds one of the server's
 // connection threads, so at most --max-event-streams are open at once; more are answered 503. One
-// client address other than loopback may hold at most
-// --max-event-streams-per-client of them (429 past that), so that one client cannot take them
-// all; without a token the service is on loopback, where every local page shares one address,
-// so there only the global cap applies, and a page of another origin gets no stream (403
+// client address may hold at most half of its --max-connections-per-client in streams, and one
+// other than loopback at most --max-event-streams-per-client (429 past either), so that one
+// client cannot take them all nor lock itself out; without a token the service is on loopback,
+// where every local page shares one address, and a page of another origin gets no stream (403
 // cross_origin: an EventSource of a foreign page would hold a slot).
 void Api::events(const httplib::Request& req, const std::string& job, httplib::Response& res) {
   if (!opt_.token && cross_origin(req)) {
@@ -655,9 +656,6 @@ void Api::events(const httplib::Request& req, const std::string& job, httplib::R
                           (origin.empty() ? std::string("a cross-site page") : origin) +
                           ") is refused: only the service's own dashboard may hold one");
   }
-  // A stream for a job that does not exist (?job=) would hold a slot for nothing.
-  if ((req.has_param("job") || !job.empty()) && !store_.get(job))
-    return send_error(res, 404, "not_found", "no job " + job);
   // Each stream holds one of its address's --max-connections-per-client connections: an address
   // holds at most half of them in streams, so that its other requests (/healthz, the API) still
   // get through (16 streams from one address locked it out). Loopback, where every local page
@@ -687,6 +685,10 @@ void Api::events(const httplib::Request& req, const std::string& job, httplib::R
                           "half of --max-connections): close a page, or reload it later",
                       json{{"limit", hub_.max_streams()}});
   }
+  // A stream for a job that does not exist (?job=) would hold a slot for nothing. Checked once
+  // the stream is open, so that a deletion in between is either seen here or sent to it.
+  if ((req.has_param("job") || !job.empty()) && !store_.get(job))
+    return send_error(res, 404, "not_found", "no job " + job);
   struct State {
     EventHub::Stream stream;
     std::string job;
@@ -732,11 +734,10 @@ void Api::events(const httplib::Request& req, const std::string& job, httplib::R
 }
 
 // The partial results of a running job, from its last checkpoint: history and trials as they
-// stand, and gains.json for its best so far (compared as a finished run's best is). Each is made
-// at most once per checkpoint: kept per running job until its next iteration, made by one
-// request at a time per job (the others of that job wait for it, then take what it made; other
-// jobs' requests do not), and dropped once the job stops running. N requests cost one comparison
-// per job and checkpoint, however they interleave across jobs.
+// stand, and gains.json for its best so far as its trial recorded it (nothing is simulated in a
+// request). Each is made at most once per checkpoint: kept per running job until its next
+// iteration, made by one request at a time per job (the others of that job wait for it, then
+// take what it made; other jobs' requests do not), and dropped once the job stops running.
 void Api::running_result(const httplib::Request& req, httplib::Response& res, const JobRecord& job,
                          const std::string& what) {
   const std::string& id = job.id;

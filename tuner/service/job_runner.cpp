@@ -351,7 +351,9 @@ void JobRunner::run(const JobRecord& rec) {
     ro.checkpoint = CheckpointPolicy::every_iteration;
     ro.max_trajectory_rows = opt_.trajectory_rows;
     ro.on_iteration = [&](const IterationReport&) { return !stopping_ && !cancelled(); };
-    // Within an iteration, a cancel through this server or a stop: before the next pack.
+    // Within an iteration, a cancel through this server: before the next pack. (A stopping
+    // server still lets the iteration end and checkpoints it, so that a job whose iteration is
+    // longer than the server's runs between restarts still gets on.)
     const auto flag = std::make_shared<std::atomic<bool>>(false);
     struct Running {
       JobRunner& runner;
@@ -367,9 +369,7 @@ void JobRunner::run(const JobRecord& rec) {
     }
     // A cancel that came between the claim and now.
     if (cancelled()) flag->store(true);
-    ro.interrupt = [this, flag] {
-      return stopping_.load(std::memory_order_relaxed) || flag->load(std::memory_order_relaxed);
-    };
+    ro.interrupt = [flag] { return flag->load(std::memory_order_relaxed); };
     // A cancelled job keeps its results so far (a stopping server's job goes back to the queue).
     ro.keep_partial = [&] { return storage.too_large.empty() && cancelled(); };
     ro.log = [&id](LogLevel level, const std::string& message) {

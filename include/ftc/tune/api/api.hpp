@@ -129,7 +129,8 @@ struct RunJobOptions {
   std::function<bool(const IterationReport&)> on_iteration;
   // Asked between packs of simulations (RunOptions::interrupt: cheap and thread-safe): true
   // stops the run within its iteration, which ends as if on_iteration had stopped it after the
-  // iteration before (that one's checkpoint is the last). Null: a run stops between iterations.
+  // iteration before (its checkpoint, when it writes them, is the last). Null: a run stops
+  // between iterations only.
   std::function<bool()> interrupt;
   // Asked when the run was stopped (by on_iteration, interrupt or the storage): true
   // keeps its files so far, its best compared as a finished run's best is (compare_best), with

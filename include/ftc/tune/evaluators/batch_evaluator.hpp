@@ -91,7 +91,7 @@ class BatchEvaluator {
   virtual ~BatchEvaluator() = default;
   // One result per task, in task order.
   virtual std::vector<TaskResult> run(const SimulationBatch& batch) = 0;
-  // A stop asked for while a batch runs (a cancelled job, a stopping server): the TBB and
+  // A stop asked for while a batch runs (a cancelled job in the service): the TBB and
   // serial evaluators ask `interrupt` before each pack and, once it says true, start no other
   // pack and throw Interrupted when the running ones end, so a stop waits for a pack (up to W
   // simulations in lanes), not a batch. It is asked from worker threads, often: it must be

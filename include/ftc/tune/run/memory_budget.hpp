@@ -35,10 +35,10 @@ inline constexpr double kBytesPerFaultController = 3072.0;
 inline constexpr double kBytesPerMemberValue = 24.0;
 inline constexpr double kBytesPerTrialObjective = 8.0;
 // A number of a comparison trajectory's row: the double and its text in the trajectory file
-// (MemoryBudget.ALongTrajectoryTakesNoMoreThanItIsCharged: 495 bytes a row of 15 numbers).
+// (MemoryBudget.ALongTrajectoryTakesNoMoreThanItIsCharged: 497 bytes a row of 15 numbers).
 inline constexpr double kBytesPerTrajectoryNumber = 40.0;
 // A trial: its record and its copy in the outcome, its row of trials.csv and its share of the
-// optimiser's history (MemoryBudget.ATrialTakesNoMoreThanItIsCharged: 911 and 1 032 bytes in
+// optimiser's history (MemoryBudget.ATrialTakesNoMoreThanItIsCharged: 911 to 1 037 bytes in
 // two runs, with two parameters), and for each parameter and goal value a number more.
 inline constexpr double kBytesPerTrial = 1280.0;
 inline constexpr double kBytesPerTrialNumber = 32.0;
@@ -77,8 +77,8 @@ void check_memory_budget(const Job& job, double evaluations, double budget,
 
 // A candidate scored outside a run (a landscape's grid point, a Python call's row): its
 // controller, its outcome and its output row, and its metrics of each listed scenario. Measured
-// with `ftctune landscape jobs/table1.json` (one scenario): 61.3 MB peak at 200x200 points,
-// 566 MB at 700x700, 1 147 bytes a point.
+// with `ftctune landscape jobs/table1.json` (one scenario): a peak of 61 344 kB at 200x200
+// points and 565 552 kB at 700x700 (/usr/bin/time, kB of 1024 bytes), 1 147 bytes a point.
 inline constexpr double kBytesPerCandidate = 512.0;
 inline constexpr double kBytesPerScoredScenario = 1024.0;
 // What scoring `candidates` controllers at once on every scenario of the job takes when each
@@ -86,9 +86,9 @@ inline constexpr double kBytesPerScoredScenario = 1024.0;
 // process, the listed scenarios and the members as a run holds them, and for each candidate
 // kBytesPerCandidate and kBytesPerScoredScenario a listed scenario. With `members_listed` (the Python Problem holds the ensemble's members as
 // listed scenarios, so that metrics() has a row for each), each member is charged
-// kBytesPerScenario and kBytesPerFault for each fault of its distribution's largest count, and
-// for each candidate kBytesPerScoredScenario with `members_metrics` (metrics()), else
-// kBytesPerMemberValue (objective()).
+// kBytesPerScenario and kBytesPerFault for each fault of its distribution's largest count. For
+// each candidate a member costs kBytesPerScoredScenario with `members_metrics` (Python's
+// metrics()), else kBytesPerMemberValue (its value in Evaluation::values: a landscape, objective()).
 double estimated_scoring_bytes(const Job& job, double candidates, bool members_listed,
                                bool members_metrics = false);
 // Throws InputError(source, "", ...) when `need` is above `budget`, naming `what` needs it.
