@@ -407,7 +407,10 @@ void add_client_commands(CLI::App& app, const Globals& g, Action& action) {
       const json j = json::parse(body);
       std::printf(
           "%s %s\n", id.c_str(),
-          j["status"] == "cancelled" ? "cancelled" : "will stop after its current iteration");
+          j["status"] == "cancelled"
+              ? "cancelled"
+              : "will stop before its next pack of simulations, keeping its last finished "
+                "iteration's results");
     }
     return 0;
   });

@@ -552,13 +552,13 @@ function jobView(main, id) {
       actions.appendChild(b);
     };
     if (job.status === 'queued' || (job.status === 'running' && !job.cancel_requested))
-      act('Cancel', 'Cancel this job? A running job stops after its current iteration and keeps its results so far.', '',
+      act('Cancel', 'Cancel this job? A running job stops before its next pack of simulations and keeps the results of its finished iterations.', '',
           async () => { job = await apiJson('/v1/jobs/' + id + '/cancel', {method: 'POST'}); renderHeader(); });
     if (isFinished(job.status))
       act('Delete', 'Delete this job and all its results from the service? This cannot be undone.', 'danger',
           async () => { await apiJson('/v1/jobs/' + id, {method: 'DELETE'}); location.hash = '#/'; });
     if (job.cancel_requested && job.status === 'running')
-      actions.appendChild(el('span', {class: 'note', text: 'Cancelling: it stops after its current iteration.'}));
+      actions.appendChild(el('span', {class: 'note', text: 'Cancelling: it stops before its next pack of simulations.'}));
   }
 
   function renderConvergence() {
