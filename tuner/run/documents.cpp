@@ -27,6 +27,12 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// A number cell of trials.csv and history.csv, with its leading comma: round-trip digits, and
+// nothing for an undefined value, so that a CSV reader sees a number column with a gap.
+std::string csv_cell(double v) {
+  return std::isnan(v) ? std::string(",") : "," + detail::format_number(v, "%.17g");
+}
+
 // The tuned parameters in decision-vector order.
 std::vector<std::string> parameter_names(const Job& job) {
   std::vector<std::string> names;
@@ -258,12 +264,7 @@ std::string trials_csv(const TuningOutcome& r) {
     s.append(",goal" + std::to_string(k) + "_" + std::string(r.job.goals[k].metric->name));
   if (!r.job.goals.empty()) s += ",violation,feasible";
   s += '\n';
-  // An undefined value (a goal a trial could not measure) is an empty cell, as history.csv's
-  // are, so that a CSV reader sees a number column with a missing value, not a text column.
-  const auto num = [&](double v) {
-    s.append(",");
-    if (!std::isnan(v)) s.append(detail::format_number(v, "%.17g"));
-  };
+  const auto num = [&](double v) { s += csv_cell(v); };
   for (const Trial& t : r.trials) {
     s.append(std::to_string(t.iteration)).append(",").append(std::to_string(t.index));
     for (double v : t.parameters) num(v);
@@ -301,12 +302,7 @@ std::string history_csv(const TuningOutcome& r) {
   s += ",evaluations";
   if (r.front) s += ",hypervolume";  // of the front so far, against front.json's reference point
   s += "\n";
-  char buf[48];
-  const auto cell = [&](double v) {
-    if (std::isnan(v)) return std::string(",");
-    std::snprintf(buf, sizeof buf, ",%.17g", v);
-    return std::string(buf);
-  };
+  const auto cell = csv_cell;
   for (const HistoryRow& h : r.optimization.history) {
     s += std::to_string(h.iteration) + cell(h.best_fitness);
     for (double v : h.best) s += cell(v);

@@ -78,15 +78,16 @@ double estimated_scoring_bytes(const Job& job, double candidates, bool members_l
   double listed = static_cast<double>(job.scenarios.size());
   // Members scored without their metrics keep a value each per candidate (Evaluation::values).
   const double scored = members_metrics ? 0.0 : members(job);
-  double bytes = kRunBaseBytes + listed_scenario_bytes(job) + members(job) * bytes_per_member(job);
+  double held = bytes_per_member(job);  // a member generated block by block, as a run does
   if (members_listed && job.ensemble) {
     // A member held is a scenario with its faults (no comparison runs on it).
     const double faults =
         job.ensemble->faults ? static_cast<double>(std::max(job.ensemble->faults->count_hi, 0))
                              : static_cast<double>(ensemble_base(job).faults.size());
-    bytes += members(job) * (kBytesPerScenario + faults * kBytesPerFault - bytes_per_member(job));
+    held = kBytesPerScenario + faults * kBytesPerFault;
     if (members_metrics) listed += members(job);
   }
+  const double bytes = kRunBaseBytes + listed_scenario_bytes(job) + members(job) * held;
   return bytes + candidates * (kBytesPerCandidate + listed * kBytesPerScoredScenario +
                                scored * kBytesPerMemberValue);
 }
