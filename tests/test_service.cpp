@@ -1258,6 +1258,61 @@ TEST(Service, ValidateChecksAJobWithoutSubmittingIt) {
       << capped["error"]["message"];
 }
 
+// Jobs are checked on one worker, one at a time, under a deadline: a request whose check is not
+// done in time is answered 503, and one whose client hung up is given up (never run when it was
+// still waiting). Before, each request checked its body on its own thread to the end: a 300 KB
+// body took 54-63 s, and the server kept both cores busy after the client had gone.
+TEST(Service, JobsAreCheckedOneAtATimeUnderADeadlineAndGivenUpWhenTheClientLeaves) {
+  tune::ServiceOptions o;
+  o.check_timeout = 0.3;
+  Service s(o);
+  // 200 000 empty scenarios: 400 000 errors, about 1.3 s to check on this machine.
+  json broken = short_table1_job();
+  broken["scenarios"] = json::array();
+  for (int i = 0; i < 200000; ++i) broken["scenarios"].push_back(json::object());
+  const std::string body = broken.dump();
+  const auto idle = [](const json& h) {
+    return h["checks"]["queued"] == 0 && h["checks"]["running"] == false;
+  };
+
+  auto r = s.client->Post("/v1/validate", body, "application/json");
+  expect_error(r, 503, "check_timeout");
+  EXPECT_EQ(r->get_header_value("Retry-After"), "10");
+  EXPECT_NE(r->body.find("not checked within 0.3 s (--check-timeout"), std::string::npos) << r->body;
+  json h = s.get("/healthz");  // answered while the check runs on
+  EXPECT_EQ(h["checks"]["abandoned"], 1) << h.dump();
+  h = wait_health(s, idle);
+  ASSERT_TRUE(idle(h)) << h.dump();
+  EXPECT_EQ(h["checks"]["skipped"], 0);  // it had started: it ran to its end
+  // A small job is checked in time, by validate and by submit alike.
+  r = s.client->Post("/v1/validate", short_table1_job().dump(), "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200) << r->body;
+  expect_error(s.client->Post("/v1/jobs", body, "application/json"), 503, "check_timeout");
+  EXPECT_EQ(s.get("/v1/jobs")["total"], 0);
+  ASSERT_TRUE(idle(wait_health(s, idle)));
+
+  // Three clients send the body and hang up: one check starts, the others are never run.
+  const std::string request =
+      "POST /v1/validate HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+      "Content-Length: " +
+      std::to_string(body.size()) + "\r\n\r\n" + body;
+  tune::ServiceOptions patient;
+  patient.check_timeout = 600;
+  Service p(patient);
+  for (int i = 0; i < 3; ++i) {
+    const int fd = connect_from("127.0.0.1", p.port);
+    ASSERT_GE(fd, 0);
+    EXPECT_TRUE(send_all(fd, request));
+    ::close(fd);
+  }
+  h = wait_health(p, [](const json& x) { return x["checks"]["abandoned"] == 3; });
+  EXPECT_EQ(h["checks"]["abandoned"], 3) << h.dump();
+  h = wait_health(p, idle);
+  ASSERT_TRUE(idle(h)) << h.dump();
+  EXPECT_GE(h["checks"]["skipped"].get<int>(), 1) << h.dump();
+}
+
 // DELETE removes a finished job with its results; a queued or running one is refused.
 TEST(Service, DeleteRemovesFinishedJobsOnly) {
   Service s;

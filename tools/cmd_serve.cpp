@@ -173,6 +173,10 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
   sub->add_option("--body-timeout", o->service.body_timeout,
                   "Seconds a request's body may take after its headers (default 60)")
       ->check(CLI::Range(0.1, 3600.0));
+  sub->add_option("--check-timeout", o->service.check_timeout,
+                  "Seconds a submitted or validated job may wait for and take its check; the "
+                  "server checks one at a time (default 10)")
+      ->check(CLI::Range(0.01, 3600.0));
   sub->add_option("--max-connections", o->service.max_connections,
                   "Connections served at once (default 64)")
       ->check(CLI::Range(2, 1024));

@@ -334,6 +334,7 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   if (p.size() == 1 && p[0] == "healthz") {
     if (m != "GET") return method_not_allowed(res, "GET");
     const StoreHealth h = runner_.health();
+    const Checker::Counts checks = checker_.counts();
     const bool writable = !h.error && !h.owes();
     return send_json(res, 200,
                      {{"status", writable ? "ok" : "degraded"},
@@ -345,7 +346,12 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
                         {"error", h.error ? json(*h.error) : json(nullptr)},
                         {"unstored_jobs", h.unstored},
                         {"unrecorded_cancels", h.cancels}}},
-                      {"event_streams", hub_.open_streams()}});
+                      {"event_streams", hub_.open_streams()},
+                      {"checks",
+                       {{"queued", checks.queued},
+                        {"running", checks.running},
+                        {"abandoned", checks.abandoned},
+                        {"skipped", checks.skipped}}}});
   }
   if (p.size() == 2 && p[0] == "v1" && p[1] == "events") {
     if (m != "GET") return method_not_allowed(res, "GET");
@@ -412,7 +418,7 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
   send_error(res, 404, "not_found", "no such resource: " + req.path);
 }
 
-std::optional<Job> Api::check_job(const httplib::Request& req, httplib::Response& res) {
+std::optional<Job> Api::check_job(const std::string& text, httplib::Response& res) const {
   const auto bad_request = [&](const char* code, const InputError& e) {
     json details = json::array();
     const std::size_t listed = std::min(e.errors().size(), kMaxReportedErrors);
@@ -425,7 +431,7 @@ std::optional<Job> Api::check_job(const httplib::Request& req, httplib::Response
   };
   json body;
   try {
-    body = json_io::parse_json_text(req.body, "request body");
+    body = json_io::parse_json_text(text, "request body");
   } catch (const InputError& e) {
     bad_request("invalid_json", e);
     return std::nullopt;
@@ -487,10 +493,44 @@ std::optional<Job> Api::check_job(const httplib::Request& req, httplib::Response
   return job;
 }
 
+std::optional<Job> Api::checked_job(const httplib::Request& req, httplib::Response& res) {
+  // Owned by the check, which may outlive this request when it gives up.
+  struct Check {
+    std::string body;
+    httplib::Response res;
+    std::optional<Job> job;
+  };
+  auto check = std::make_shared<Check>();
+  check->body = req.body;
+  const auto deadline =
+      std::chrono::steady_clock::now() +
+      std::chrono::milliseconds(std::llround(opt_.check_timeout * 1000));
+  switch (checker_.run([this, check] { check->job = check_job(check->body, check->res); },
+                       deadline, [] { return GuardedServer::peer_closed(); })) {
+    case Checker::Outcome::done:
+      res.status = check->res.status;
+      res.headers = check->res.headers;
+      res.body = std::move(check->res.body);
+      return std::move(check->job);
+    case Checker::Outcome::timed_out:
+      res.set_header("Retry-After", "10");
+      send_error(res, 503, "check_timeout",
+                 "the job was not checked within " + seconds_text(opt_.check_timeout) +
+                     " (--check-timeout; the server checks one job at a time, in order of "
+                     "arrival): try again later, or send a smaller job");
+      return std::nullopt;
+    case Checker::Outcome::client_left:
+      spdlog::info("{}: the client hung up before its job was checked", req.remote_addr);
+      res.status = 400;  // nobody reads it
+      return std::nullopt;
+  }
+  return std::nullopt;
+}
+
 // The checks of a submission, without submitting: 200 with what the job would be, or the
 // same 400 a submission gets.
 void Api::validate(const httplib::Request& req, httplib::Response& res) {
-  const std::optional<Job> job = check_job(req, res);
+  const std::optional<Job> job = checked_job(req, res);
   if (!job) return;
   json parameters = json::array();
   for (const ParameterBounds& b : job->tuning->parameters) parameters.push_back(b.name);
@@ -507,7 +547,7 @@ void Api::validate(const httplib::Request& req, httplib::Response& res) {
 }
 
 void Api::submit(const httplib::Request& req, httplib::Response& res) {
-  const std::optional<Job> checked = check_job(req, res);
+  const std::optional<Job> checked = checked_job(req, res);
   if (!checked) return;
   const Job& job = *checked;
   // A store that owes finished jobs their results takes no new ones until it has written them.

@@ -16,6 +16,7 @@
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/tune/service/job_store.hpp"
 #include "ftc/tune/service/service.hpp"
+#include "service/checker.hpp"
 #include "service/events.hpp"
 #include "service/httplib.hpp"
 #include "service/job_runner.hpp"
@@ -63,8 +64,12 @@ class Api {
                const httplib::ContentReader& read);
   void method_not_allowed(httplib::Response& res, const char* allow);
   void dispatch(const httplib::Request& req, httplib::Response& res);
-  // The checks a submission passes (JSON, job, size budgets); nullopt after answering 400.
-  std::optional<Job> check_job(const httplib::Request& req, httplib::Response& res);
+  // The checks a submission passes (JSON, job, size budgets) on the body; nullopt after
+  // answering 400 or 413.
+  std::optional<Job> check_job(const std::string& body, httplib::Response& res) const;
+  // check_job on the checker's worker, under the check deadline: nullopt after answering it
+  // (or 503 when the deadline passed), or when the client hung up.
+  std::optional<Job> checked_job(const httplib::Request& req, httplib::Response& res);
   void validate(const httplib::Request& req, httplib::Response& res);
   void submit(const httplib::Request& req, httplib::Response& res);
   void running_result(const httplib::Request& req, httplib::Response& res, const JobRecord& job,
@@ -99,6 +104,8 @@ class Api {
   std::map<std::string, std::weak_ptr<std::mutex>> making_;
   std::shared_ptr<std::mutex> making_mutex(const std::string& id);
   std::map<std::string, std::shared_ptr<const PartialResults>> partial_;  // by running job
+  // Last, so that it stops (and its worker, which reads opt_, ends) before anything else goes.
+  Checker checker_;
 };
 
 }  // namespace ftc::tune::service_detail

@@ -121,6 +121,8 @@ std::vector<FieldError> ServiceOptions::validate() const {
   if (max_event_streams < 0) errs.push_back({"--max-event-streams", "must be >= 0"});
   if (max_event_streams_per_client < 0)
     errs.push_back({"--max-event-streams-per-client", "must be >= 0 (0: no limit)"});
+  if (!(check_timeout >= 0.01 && check_timeout <= 3600))
+    errs.push_back({"--check-timeout", "must be in 0.01..3600 seconds"});
   if (!(store_retry_seconds > 0)) errs.push_back({"store_retry_seconds", "must be > 0"});
   return errs;
 }

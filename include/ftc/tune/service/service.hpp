@@ -57,6 +57,10 @@ struct ServiceOptions {
   int max_event_streams = 32;
   // ... and at most this many from one client address (0: no such limit); more are answered 429.
   int max_event_streams_per_client = 8;
+  // A submitted or validated job is parsed and checked on one worker thread, one job at a time;
+  // a request whose job has not been checked within this many seconds (waiting its turn
+  // included) is answered 503.
+  double check_timeout = 10;
   // How often results the store could not take (a full disk) are tried again.
   double store_retry_seconds = 5;
   // How each job's simulations run; default a TbbEvaluator with `threads` workers.
