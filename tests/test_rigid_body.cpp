@@ -557,6 +557,50 @@ TEST(RigidBody, RecoverabilityOfWheelFaultsCheckedByHand) {
   }
 }
 
+// By hand: the default pyramid's axes are (±1, ±1, 1)/√3, and wheels 2, 3, 4 cancel wheel 1's
+// torque v·â1 only with u = (−v, v, −v): each needs |v| of its own limit. So with every wheel
+// limited to 0.1 N·m, wheel 1 stuck at |v| < 0.1 is recoverable and at 0.1 (or beyond, which
+// its limit cuts to 0.1) it is not, though the three left still span R³. The rank alone said
+// recoverable for every v.
+TEST(RigidBody, AStuckWheelIsRecoverableOnlyWhenTheOthersCanCancelItWithinTheirLimits) {
+  const auto make = [](std::vector<double> max) {
+    RigidBodySpec s;
+    s.preset = "pyramid";
+    s.max = std::move(max);
+    PlantSpec ps;
+    ps.model = "rigid_body";
+    ps.values = to_values(s);
+    return make_plant(ps);
+  };
+  const auto limited = make({0.1});
+  EXPECT_TRUE(recoverable_with(*limited, {wheel_fault(1, FaultType::stuck, 0.09)}));
+  EXPECT_TRUE(recoverable_with(*limited, {wheel_fault(1, FaultType::stuck, -0.095)}));
+  EXPECT_FALSE(recoverable_with(*limited, {wheel_fault(1, FaultType::stuck, 0.1)}));
+  EXPECT_FALSE(recoverable_with(*limited, {wheel_fault(1, FaultType::stuck, 5.0)}));
+  for (int j = 2; j <= 4; ++j) {
+    EXPECT_TRUE(recoverable_with(*limited, {wheel_fault(j, FaultType::stuck, 0.09)})) << j;
+    EXPECT_FALSE(recoverable_with(*limited, {wheel_fault(j, FaultType::stuck, -0.1)})) << j;
+  }
+  // A loss on a wheel that must cancel shrinks its range to (1 − ρ)·0.1: 0.05 with ρ = 0.5.
+  EXPECT_TRUE(recoverable_with(*limited, {wheel_fault(1, FaultType::stuck, 0.04),
+                                          wheel_fault(2, FaultType::loss_of_effectiveness, 0.5)}));
+  EXPECT_FALSE(recoverable_with(*limited, {wheel_fault(1, FaultType::stuck, 0.06),
+                                           wheel_fault(2, FaultType::loss_of_effectiveness, 0.5)}));
+  // Per-wheel limits: wheel 1 may deliver 0.2, more than the others can cancel.
+  const auto strong_first = make({0.2, 0.1, 0.1, 0.1});
+  EXPECT_TRUE(recoverable_with(*strong_first, {wheel_fault(1, FaultType::stuck, 0.09)}));
+  EXPECT_FALSE(recoverable_with(*strong_first, {wheel_fault(1, FaultType::stuck, 0.15)}));
+  // The scenario's saturation limits every wheel, the stuck one's output included.
+  Scenario s = scenario();
+  s.faults = {wheel_fault(1, FaultType::stuck, 0.09)};
+  s.saturation.values = {0.05};
+  EXPECT_FALSE(limited->recoverable(s));
+  s.saturation.values = {0.1, 0.05, 0.1, 0.1};  // wheel 2 cannot give the 0.09 needed
+  EXPECT_FALSE(limited->recoverable(s));
+  // Without limits any stuck torque can be cancelled.
+  EXPECT_TRUE(recoverable_with(*make({}), {wheel_fault(1, FaultType::stuck, 1e6)}));
+}
+
 // By hand: quad_x's rotors hold hover with zero torque only with all four thrusts equal (roll
 // and pitch balance give T1 = T3 and T2 = T4, yaw then T1 = T2), so T = m g / 4 = 3.679 N each,
 // with no freedom. A loss ρ leaves the rotor (1 − ρ)·8 N, enough while ρ < 1 − 3.679/8 = 0.540;

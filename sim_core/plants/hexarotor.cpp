@@ -85,7 +85,7 @@ double Hexarotor::trim_margin(const std::array<bool, 6>& stuck,
                               const std::array<double, 6>& stuck_at,
                               const std::array<double, 6>& lost, const ThrustRange& range) const {
   const InputMatrix A = torque_matrix();
-  return detail::hover_margin(A, params_.mass * params_.gravity, stuck, stuck_at, lost,
+  return detail::hold_margin(A, params_.mass * params_.gravity, stuck, stuck_at, lost,
                               range.floor, range.cap, params_.max_thrust);
 }
 

@@ -130,14 +130,26 @@ RigidBody::ThrustRange RigidBody::thrust_range() const {
 bool RigidBody::trim_feasible(const std::array<bool, MA>& stuck,
                               const std::array<double, MA>& stuck_at,
                               const std::array<double, MA>& lost, const ThrustRange& range) const {
-  if (params_.weight <= 0.0) return true;  // no operating point: zero torque, which any hold
   const int m = params_.actuators;
   const Eigen::MatrixXd A = D_.leftCols(m);
   const auto span = [m](const auto& a) { return std::span(a.data(), static_cast<std::size_t>(m)); };
-  const double scale =
-      *std::max_element(params_.max_thrust.begin(), params_.max_thrust.begin() + m);
-  return detail::hover_margin(A, params_.weight, span(stuck), span(stuck_at), span(lost),
-                              span(range.floor), span(range.cap), scale) > 1e-9 * scale;
+  if (params_.weight > 0.0) {  // rotors: hover
+    const double scale =
+        *std::max_element(params_.max_thrust.begin(), params_.max_thrust.begin() + m);
+    return detail::hold_margin(A, params_.weight, span(stuck), span(stuck_at), span(lost),
+                               span(range.floor), span(range.cap), scale) > 1e-9 * scale;
+  }
+  // Wheels or thrusters: zero torque, which u = 0 gives unless one is stuck; then the others
+  // must cancel its torque strictly within their limits (with none, any torque can be made).
+  if (std::none_of(stuck.begin(), stuck.begin() + m, [](bool s) { return s; })) return true;
+  double scale = 0.0;
+  for (int j = 0; j < m; ++j)
+    for (const double b : {range.floor[static_cast<std::size_t>(j)],
+                           range.cap[static_cast<std::size_t>(j)]})
+      if (std::isfinite(b)) scale = std::max(scale, std::abs(b));
+  if (scale == 0.0) return true;
+  return detail::hold_margin(A, 0.0, span(stuck), span(stuck_at), span(lost), span(range.floor),
+                             span(range.cap), scale) > 1e-9 * scale;
 }
 
 }  // namespace ftc::sim

@@ -106,8 +106,10 @@ class RigidBody final : public Plant<3, kMaxBodyActuators> {
 
   // For recoverability (PlantAdapter::recoverable), as the hexarotor's: each actuator's physical
   // range [floor, cap] and whether the actuators still acting can hold the operating point
-  // strictly inside their ranges. Only a multirotor has an operating point to hold; a rigid
-  // body's is zero torque, which any actuators hold.
+  // strictly inside their ranges. A multirotor's is hover (zero torque and the weight); a rigid
+  // body's is zero torque, which u = 0 gives unless an actuator is stuck: then the others must
+  // cancel its torque within their limits (a wheel stuck at 0.2 N·m beside wheels of 0.1 N·m
+  // that cannot is unrecoverable, whatever the rank of what is left).
   struct ThrustRange {
     std::array<double, kMaxBodyActuators> floor, cap;
   };
