@@ -488,7 +488,9 @@ TEST(Ensemble, MembersScaleThePlantsDeclaredUncertainParameters) {
       SCOPED_TRACE(kind.model + " " + u.parameter);
       ASSERT_NE(kind.offset(u.parameter), std::string_view::npos) << "not a parameter";
       const std::size_t values = kind.parameter_values(kind.defaults(), u.parameter).size();
-      if (u.scaling == sim::Scaling::elementwise)
+      if (u.per_actuator)  // drawn per actuator (below), one slot per actuator the kernels have
+        EXPECT_EQ(values, static_cast<std::size_t>(kind.actuators));
+      else if (u.scaling == sim::Scaling::elementwise)
         EXPECT_LE(values, tune::kParameterFactors) << "more values than an ensemble draws factors";
       else  // a 3×3 tensor, one factor per axis
         EXPECT_EQ(values, tune::kParameterFactors * tune::kParameterFactors);
@@ -544,4 +546,67 @@ TEST(Ensemble, MembersScaleThePlantsDeclaredUncertainParameters) {
       EXPECT_EQ(T[3 * i + k], T[3 * k + i]) << i << k;
       EXPECT_EQ(T[3 * i + k], J[3 * i + k] * (i == k ? f[i] : std::sqrt(f[i] * f[k]))) << i << k;
     }
+}
+
+// SPEC §17: after §12's draws (with faults: 10, the count and 11 per slot), m actuator scales
+// then m misalignments; a member's scale is the base's times its draw, its misalignment the
+// base's plus its draw. The draws are taken whether asked for or not, and a job without the keys
+// expands to the same members as before.
+TEST(Ensemble, ActuatorScalesThenMisalignmentsAreDrawnAfterTheFaults) {
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/smallsat-pyramid.json");
+  json sat = json::parse(in);
+  sat["scenarios"][0]["actuator_scale"] = {1.0, 0.8, 1.0, 1.0};
+  sat["ensemble"] = {{"count", 4},
+                     {"seed", 9},
+                     {"actuator_scale", {{"uniform", {0.7, 1.0}}}},
+                     {"actuator_misalignment", {{"uniform", {-0.05, 0.05}}}},
+                     {"faults", {{"count", {0, 1}}, {"type", {{"stuck", 1}}}}}};
+  const tune::Job job = parse(sat);
+  for (std::int64_t k = 0; k < 4; ++k) {
+    const sim::Scenario m = tune::ensemble_member(job, 9, k);
+    SplitMix64 r = SplitMix64::member(9, static_cast<std::uint64_t>(k));
+    r.skip(3 + 6 + 1 + 1 + 11);  // §12: inertia, state, disturbance, fault count, one slot
+    ASSERT_NE(m.true_value("actuator_scale"), nullptr);
+    ASSERT_NE(m.true_value("actuator_misalignment"), nullptr);
+    const std::vector<double> base_scale{1.0, 0.8, 1.0, 1.0};
+    for (std::size_t j = 0; j < 4; ++j)
+      EXPECT_EQ((*m.true_value("actuator_scale"))[j], base_scale[j] * (0.7 + (1.0 - 0.7) * r.uniform()))
+          << k << " " << j;
+    for (std::size_t j = 0; j < 4; ++j)
+      EXPECT_EQ((*m.true_value("actuator_misalignment"))[j], 0.0 + (-0.05 + 0.1 * r.uniform()))
+          << k << " " << j;
+  }
+  // Without the keys: the base's, untouched; and the members of a job without them are as
+  // before (no per-actuator values written).
+  sat["ensemble"].erase("actuator_scale");
+  sat["ensemble"].erase("actuator_misalignment");
+  const sim::Scenario plain = tune::ensemble_member(parse(sat), 9, 2);
+  EXPECT_EQ(*plain.true_value("actuator_scale"), (std::vector<double>{1.0, 0.8, 1.0, 1.0}));
+  EXPECT_EQ(plain.true_value("actuator_misalignment"), nullptr);
+  sat["scenarios"][0].erase("actuator_scale");
+  const sim::Scenario none = tune::ensemble_member(parse(sat), 9, 2);
+  EXPECT_EQ(none.true_value("actuator_scale"), nullptr);
+  EXPECT_EQ(none.true_values.size(), 1u);  // the inertia, as every member writes it
+
+  // Refused at their paths: a plant without them, a draw that would leave the range.
+  json table1 = robust_job();
+  table1["ensemble"]["actuator_scale"] = {{"uniform", {0.8, 1.0}}};
+  std::vector<FieldError> errs = errors_of(table1);
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_EQ(errs[0].path, "/ensemble/actuator_scale");
+  EXPECT_NE(errs[0].message.find("the spacecraft plant does not declare actuator_scale"),
+            std::string::npos)
+      << errs[0].message;
+  sat["ensemble"]["actuator_misalignment"] = {{"uniform", {0.0, 3.5}}};
+  errs = errors_of(sat);
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_EQ(errs[0].path, "/ensemble/actuator_misalignment");
+  EXPECT_NE(errs[0].message.find("a member drawing 3.5 would have /actuator_misalignment/0"),
+            std::string::npos)
+      << errs[0].message;
+  sat["ensemble"].erase("actuator_misalignment");
+  sat["ensemble"]["actuator_scale"] = {{"uniform", {0.0, 1.0}}};
+  errs = errors_of(sat);
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_EQ(errs[0].path, "/ensemble/actuator_scale/uniform/0");
 }

@@ -343,6 +343,11 @@ TEST(RigidBody, EveryLaneGivesTheScalarBits) {
         // A diagonal true tensor among full ones: each lane takes the form of its own J, so it
         // gives its bits whatever the pack holds beside it.
         if (l % 4 == 3) scenarios[l].set_true_value("inertia", {0.25, 0.30, 0.18});
+        // Actuators of the simulated plant turned and weakened, lane by lane.
+        if (l % 3 == 1) {
+          scenarios[l].set_true_value("actuator_scale", {1.0, 0.9 - 0.01 * l, 1.0, 1.1});
+          scenarios[l].set_true_value("actuator_misalignment", {0.0, 0.0, 0.02 * l, -0.01});
+        }
         options[l].record_every = l == 0 ? 0 : 9;
         tasks.push_back({&configs[l], &scenarios[l], &options[l]});
       }
@@ -506,6 +511,112 @@ TEST(RigidBody, TrueTensorAndItsEnsembleScaling) {
   EXPECT_DOUBLE_EQ(t[3], 0.02);
   EXPECT_DOUBLE_EQ(t[2], -0.005);  // √(4·0.25) · −0.005
   EXPECT_DOUBLE_EQ(t[8], 0.045);
+}
+
+// SPEC §17.1 by hand: a misaligned axis turns right-handedly about â × ẑ (x̂ about −ŷ, toward
+// +z), or about â × x̂ for an axis along ẑ (ẑ about ŷ, toward +x); a scaled one keeps its axis.
+TEST(RigidBody, MisalignedAndScaledActuatorsOfTheSimulatedPlantCheckedByHand) {
+  const double t = 0.3, c = std::cos(t), sn = std::sin(t);
+  const auto x = misaligned_axis({1.0, 0.0, 0.0}, t);
+  EXPECT_NEAR(x[0], c, 1e-15);
+  EXPECT_EQ(x[1], 0.0);
+  EXPECT_NEAR(x[2], sn, 1e-15);
+  const auto z = misaligned_axis({0.0, 0.0, 1.0}, t);
+  EXPECT_NEAR(z[0], sn, 1e-15);
+  EXPECT_EQ(z[1], 0.0);
+  EXPECT_NEAR(z[2], c, 1e-15);
+  const std::array<double, 3> p{0.5, 0.5, std::sqrt(0.5)};
+  EXPECT_EQ(misaligned_axis(p, 0.0), p);
+  const auto q = misaligned_axis(p, t);  // still a unit vector, at angle t from p
+  EXPECT_NEAR(q[0] * q[0] + q[1] * q[1] + q[2] * q[2], 1.0, 1e-15);
+  EXPECT_NEAR(q[0] * p[0] + q[1] * p[1] + q[2] * p[2], c, 1e-15);
+
+  // The orthogonal triad with wheel 1 turned by t and wheel 2 at half effectiveness: at X1 = 0,
+  // G = J⁻¹ D with D's columns (cos t, 0, sin t), (0, 0.5, 0), (0, 0, 1).
+  RigidBodySpec spec;
+  spec.preset = "orthogonal";
+  spec.actuator_misalignment = {t, 0.0, 0.0};
+  spec.actuator_scale = {1.0, 0.5, 1.0};
+  const RigidBody truth(rigid_body_params(spec));
+  const auto G = truth.G(RigidBody::State::Zero());
+  const double J[3] = {0.25, 0.30, 0.20};
+  EXPECT_NEAR(G(0, 0), c / J[0], 1e-14);
+  EXPECT_NEAR(G(2, 0), sn / J[2], 1e-14);
+  EXPECT_EQ(G(1, 0), 0.0);
+  EXPECT_NEAR(G(1, 1), 0.5 / J[1], 1e-14);
+  EXPECT_NEAR(G(2, 2), 1.0 / J[2], 1e-14);
+  // Values out of range, at their paths; the flattened values keep them.
+  spec.actuator_scale = {1.0, -0.5, 1.0};
+  spec.actuator_misalignment = {0.0, 4.0};
+  const std::vector<FieldError> errs = validate(spec, "/s");
+  ASSERT_EQ(errs.size(), 2u);
+  EXPECT_EQ(errs[0].path, "/s/actuator_scale/1");
+  EXPECT_EQ(errs[1].path, "/s/actuator_misalignment");
+  EXPECT_NE(errs[1].message.find("one value per actuator (3), got 2"), std::string::npos);
+  spec.actuator_scale = {1.0, 0.5, 1.0};
+  spec.actuator_misalignment = {t, 0.0, 0.0};
+  const RigidBodySpec back = rigid_body_spec(to_values(spec));
+  EXPECT_EQ(back.actuator_scale, spec.actuator_scale);
+  EXPECT_EQ(back.actuator_misalignment, spec.actuator_misalignment);
+  EXPECT_TRUE(rigid_body_spec(to_values(RigidBodySpec{})).actuator_scale.empty());
+}
+
+// A scenario's actuator_scale and actuator_misalignment are the simulated plant's; the
+// controller keeps the job's model. The model's own values give the same bits as none, and an
+// actuator at half effectiveness flies exactly as one with a 50 % loss from t = 0 (without
+// limits the two are the same products: halving is exact).
+TEST(RigidBody, ActuatorUncertaintyOfAScenarioActsOnTheSimulatedPlantOnly) {
+  RigidBodySpec spec;
+  spec.preset = "pyramid";
+  spec.inertia = {0.25, 0.0, 0.0, 0.0, 0.30, 0.0, 0.0, 0.0, 0.20};
+  PlantSpec ps;
+  ps.model = "rigid_body";
+  ps.values = to_values(spec);
+  const auto plant = make_plant(ps);
+  ControllerConfig ctl = ControllerConfig::table1(ControllerType::pi_fosmc);
+  ctl.switching_gain = 0.05;
+  const Scenario plain = scenario();
+  const SimulationResult r0 = plant->simulate(ctl, plain);
+  Scenario same = plain;
+  same.set_true_value("actuator_scale", {1.0, 1.0, 1.0, 1.0});
+  same.set_true_value("actuator_misalignment", {0.0, 0.0, 0.0, 0.0});
+  const SimulationResult r1 = plant->simulate(ctl, same);
+  EXPECT_EQ(std::bit_cast<std::uint64_t>(r1.metrics.errors.ise), std::bit_cast<std::uint64_t>(r0.metrics.errors.ise));
+  EXPECT_EQ(r1.final_state, r0.final_state);
+
+  Scenario half = plain;
+  half.set_true_value("actuator_scale", {1.0, 0.5, 1.0, 1.0});
+  Scenario lost = plain;
+  Fault f;
+  f.actuator = 2;
+  f.type = FaultType::loss_of_effectiveness;
+  f.fraction = 0.5;
+  f.onset = 0.0;
+  lost.faults = {f};
+  const SimulationResult rh = plant->simulate(ctl, half), rl = plant->simulate(ctl, lost);
+  EXPECT_NE(rh.final_state, r0.final_state);
+  EXPECT_EQ(rh.final_state, rl.final_state);
+  EXPECT_EQ(std::bit_cast<std::uint64_t>(rh.metrics.errors.ise), std::bit_cast<std::uint64_t>(rl.metrics.errors.ise));
+
+  Scenario turned = plain;
+  turned.set_true_value("actuator_misalignment", {0.0, 0.0, 0.1, 0.0});
+  EXPECT_NE(plant->simulate(ctl, turned).final_state, r0.final_state);
+  // Per actuator: the plant's m values, or an error at the key.
+  Scenario wrong = plain;
+  wrong.set_true_value("actuator_scale", {1.0, 1.0});
+  EXPECT_THROW(plant->simulate(ctl, wrong), InputError);
+  const PlantKind& k = *find_plant_kind("rigid_body");
+  const std::vector<FieldError> errs =
+      k.check_true_values(ps.values, {{"actuator_scale", {1.0, 1.0}}}, "/scenarios/0");
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_EQ(errs[0].path, "/scenarios/0/actuator_scale");
+  EXPECT_NE(errs[0].message.find("one value per actuator of the rigid_body (4), got 2"),
+            std::string::npos)
+      << errs[0].message;
+  // The multirotor has actuator_scale (its rotors), not a misalignment.
+  const PlantKind& mr = *find_plant_kind("multirotor");
+  EXPECT_NE(mr.find_uncertain("actuator_scale"), nullptr);
+  EXPECT_EQ(mr.find_uncertain("actuator_misalignment"), nullptr);
 }
 
 namespace {

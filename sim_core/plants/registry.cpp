@@ -177,6 +177,16 @@ std::vector<double> PlantKind::with_true_values(std::vector<double> values,
     const UncertainParameter& u = *find_uncertain(t.parameter);
     for (const PlantParameter& p : parameters)
       if (p.name == t.parameter) {
+        if (u.per_actuator) {
+          // The plant's m values; the slots past m keep theirs (no actuator reads them).
+          const auto m = static_cast<std::size_t>(actuators_of(values));
+          if (t.values.size() != m)
+            throw InputError("plant", where,
+                             "expected one value per actuator of the " + model + " (" +
+                                 std::to_string(m) + "), got " + std::to_string(t.values.size()));
+          std::copy(t.values.begin(), t.values.end(), values.begin() + static_cast<long>(at));
+          continue;
+        }
         if (u.scaling == Scaling::congruence && p.size() == 9 && t.values.size() == 3) {
           // A tensor given by its principal moments: the diagonal one.
           const std::vector<double>& d = t.values;

@@ -98,7 +98,48 @@ double limit_of(const std::vector<double>& max, std::size_t j) {
   return max.size() == 1 ? max[0] : (j < max.size() ? max[j] : 0.0);
 }
 
+// A scenario's per-actuator departures from the model (actuator_scale ≥ 0, misalignment in
+// [−π, π]): none, or one finite value per actuator.
+void check_per_actuator(std::vector<FieldError>& errs, const std::vector<double>& v, int m,
+                        const std::string& path, bool angle) {
+  if (v.empty()) return;
+  if (static_cast<int>(v.size()) != m) {
+    errs.push_back({path, "expected one value per actuator (" + std::to_string(m) + "), got " +
+                              std::to_string(v.size())});
+    return;
+  }
+  constexpr double kPi = 3.14159265358979323846;
+  for (std::size_t j = 0; j < v.size(); ++j) {
+    const bool ok = angle ? std::isfinite(v[j]) && std::abs(v[j]) <= kPi
+                          : std::isfinite(v[j]) && v[j] >= 0.0;
+    if (!ok)
+      errs.push_back({path + "/" + std::to_string(j),
+                      angle ? "a misalignment must be an angle in [-pi, pi] rad (got " +
+                                  num(v[j]) + ")"
+                            : "an actuator's effectiveness must be a finite number >= 0 (got " +
+                                  num(v[j]) + ")"});
+  }
+}
+
 }  // namespace
+
+std::array<double, 3> misaligned_axis(const std::array<double, 3>& a, double angle) {
+  if (angle == 0.0) return a;
+  // k = a × ẑ = (a_y, −a_x, 0), or a × x̂ = (0, a_z, −a_y) for an axis along ẑ.
+  std::array<double, 3> k{a[1], -a[0], 0.0};
+  double n = std::sqrt(k[0] * k[0] + k[1] * k[1]);
+  if (n < 1e-12) {
+    k = {0.0, a[2], -a[1]};
+    n = std::sqrt(k[1] * k[1] + k[2] * k[2]);
+  }
+  for (double& x : k) x /= n;
+  // Rodrigues with k ⊥ a: a cos θ + (k × a) sin θ.
+  const std::array<double, 3> kxa{k[1] * a[2] - k[2] * a[1], k[2] * a[0] - k[0] * a[2],
+                                  k[0] * a[1] - k[1] * a[0]};
+  double s, c;
+  math::sincos(angle, s, c);
+  return {a[0] * c + kxa[0] * s, a[1] * c + kxa[1] * s, a[2] * c + kxa[2] * s};
+}
 
 const std::vector<std::string>& body_presets() {
   static const std::vector<std::string> v = {"orthogonal", "pyramid", "nasa"};
@@ -197,6 +238,8 @@ std::vector<FieldError> validate(const RigidBodySpec& s, const std::string& path
       errs.push_back({std::move(where), "an actuator's limit must be a finite number > 0 (got " +
                                             num(s.max[j]) + ")"});
     }
+  check_per_actuator(errs, s.actuator_scale, m, path + "/actuator_scale", false);
+  check_per_actuator(errs, s.actuator_misalignment, m, path + "/actuator_misalignment", true);
   if (!errs.empty()) return errs;
   // The axes must span R³: D Dᵀ's smallest eigenvalue against its largest.
   Eigen::Matrix3d DDt = Eigen::Matrix3d::Zero();
@@ -261,6 +304,7 @@ std::vector<FieldError> validate(const MultirotorSpec& s, const std::string& pat
       detail::check_positive(errs, p + "/moment_constant", q.moment_constant);
     }
   }
+  check_per_actuator(errs, s.actuator_scale, actuator_count(s), path + "/actuator_scale", false);
   if (!errs.empty()) return errs;
   const std::vector<RotorSpec> r = rotors_of(s);
   Eigen::MatrixXd A(3, static_cast<Eigen::Index>(r.size()));
@@ -307,7 +351,11 @@ RigidBodyParams rigid_body_params(const RigidBodySpec& s) {
   const auto axes = axes_of(s);
   p.actuators = static_cast<int>(axes.size());
   for (std::size_t j = 0; j < axes.size(); ++j) {
-    for (std::size_t k = 0; k < 3; ++k) p.torque[k * MA + j] = axes[j][k];
+    // The simulated plant's axis and effectiveness (the model's: the axis as given, 1).
+    const std::array<double, 3> axis = misaligned_axis(
+        axes[j], s.actuator_misalignment.empty() ? 0.0 : s.actuator_misalignment[j]);
+    const double scale = s.actuator_scale.empty() ? 1.0 : s.actuator_scale[j];
+    for (std::size_t k = 0; k < 3; ++k) p.torque[k * MA + j] = scale * axis[k];
     const double lim = limit_of(s.max, j);
     if (lim > 0.0) {
       p.lo[j] = -lim;
@@ -327,15 +375,16 @@ RigidBodyParams multirotor_params(const MultirotorSpec& s) {
   const std::vector<double> T = hover_thrusts(s);
   p.actuators = static_cast<int>(r.size());
   for (std::size_t i = 0; i < r.size(); ++i) {
-    p.torque[0 * MA + i] = r[i].position[1];
-    p.torque[1 * MA + i] = -r[i].position[0];
-    p.torque[2 * MA + i] = r[i].moment_constant * r[i].spin;
+    const double scale = s.actuator_scale.empty() ? 1.0 : s.actuator_scale[i];
+    p.torque[0 * MA + i] = scale * r[i].position[1];
+    p.torque[1 * MA + i] = scale * -r[i].position[0];
+    p.torque[2 * MA + i] = scale * (r[i].moment_constant * r[i].spin);
     p.u0[i] = T[i];
     p.lo[i] = -T[i];
     p.hi[i] = r[i].max_thrust - T[i];
     p.max_thrust[i] = r[i].max_thrust;
   }
-  if (!s.preset.empty()) {
+  if (!s.preset.empty() && s.actuator_scale.empty()) {
     // A symmetric preset's A Aᵀ = diag(n l²/2, n l²/2, n κ²) exactly; formed as the hexarotor
     // forms its own, (3 l) l and (6 κ) κ.
     const double n = static_cast<double>(r.size());
@@ -350,14 +399,29 @@ RigidBodyParams multirotor_params(const MultirotorSpec& s) {
 // --- flattened values -------------------------------------------------------------------------
 
 namespace {
-// rigid_body: inertia 9, preset, beta_deg, m, axes 8×3, max 8 (0: none).
+// rigid_body: inertia 9, preset, beta_deg, m, axes 8×3, max 8 (0: none), the simulated plant's
+// actuator_scale 8 (1: the model's) and actuator_misalignment 8 (0).
 constexpr std::size_t kRbPreset = 9, kRbBeta = 10, kRbCount = 11, kRbAxes = 12, kRbMax = 36,
-                      kRbSize = 44;
+                      kRbScale = 44, kRbMisalignment = 52, kRbSize = 60;
 // multirotor: inertia 9, mass, gravity, preset, arm_length, max_thrust, moment_constant (a
 // preset's), m, x 8, y 8, spin 8, max_thrust 8, moment_constant 8.
 constexpr std::size_t kMrMass = 9, kMrGravity = 10, kMrPreset = 11, kMrArm = 12, kMrTmax = 13,
                       kMrKappa = 14, kMrCount = 15, kMrX = 16, kMrY = 24, kMrSpin = 32,
-                      kMrRotorTmax = 40, kMrRotorKappa = 48, kMrSize = 56;
+                      kMrRotorTmax = 40, kMrRotorKappa = 48, kMrScale = 56, kMrSize = 64;
+
+// A per-actuator list into its m slots (`fill` elsewhere), and back: empty when every one of
+// the m is `fill` (the model's).
+void put_per_actuator(std::vector<double>& v, std::size_t at, const std::vector<double>& list,
+                      double fill) {
+  for (std::size_t j = 0; j < static_cast<std::size_t>(MA); ++j)
+    v[at + j] = j < list.size() ? list[j] : fill;
+}
+std::vector<double> get_per_actuator(const std::vector<double>& v, std::size_t at, int m,
+                                     double fill) {
+  const auto first = v.begin() + static_cast<long>(at);
+  if (std::all_of(first, first + m, [fill](double x) { return x == fill; })) return {};
+  return {first, first + m};
+}
 }  // namespace
 
 std::vector<double> to_values(const RigidBodySpec& s) {
@@ -371,6 +435,8 @@ std::vector<double> to_values(const RigidBodySpec& s) {
     for (std::size_t k = 0; k < 3; ++k) v[kRbAxes + 3 * j + k] = s.axes[j][k];
   for (std::size_t j = 0; j < static_cast<std::size_t>(std::clamp(m, 0, MA)); ++j)
     v[kRbMax + j] = limit_of(s.max, j);
+  put_per_actuator(v, kRbScale, s.actuator_scale, 1.0);
+  put_per_actuator(v, kRbMisalignment, s.actuator_misalignment, 0.0);
   return v;
 }
 
@@ -400,6 +466,8 @@ RigidBodySpec rigid_body_spec(const std::vector<double>& v) {
     else
       s.max.assign(v.begin() + kRbMax, v.begin() + kRbMax + m);
   }
+  s.actuator_scale = get_per_actuator(v, kRbScale, m, 1.0);
+  s.actuator_misalignment = get_per_actuator(v, kRbMisalignment, m, 0.0);
   return s;
 }
 
@@ -421,6 +489,7 @@ std::vector<double> to_values(const MultirotorSpec& s) {
     v[kMrRotorTmax + i] = r[i].max_thrust;
     v[kMrRotorKappa + i] = r[i].moment_constant;
   }
+  put_per_actuator(v, kMrScale, s.actuator_scale, 1.0);
   return v;
 }
 
@@ -448,6 +517,8 @@ MultirotorSpec multirotor_spec(const std::vector<double>& v) {
       s.rotors.push_back(q);
     }
   }
+  s.actuator_scale =
+      get_per_actuator(v, kMrScale, std::clamp(static_cast<int>(v[kMrCount]), 0, MA), 1.0);
   return s;
 }
 
@@ -490,7 +561,14 @@ PlantKind rigid_body_kind() {
   k.parameters.push_back({"actuator_count", part(11, 1), Range::any(), "", "m"});
   k.parameters.push_back({"axes", part(12, 24), Range::any(), "", "each actuator's axis"});
   k.parameters.push_back({"max", part(36, 8), Range::any(), "N·m", "each actuator's limit"});
-  k.uncertain = {{"inertia", "each body axis of the inertia tensor (S J S)", Scaling::congruence}};
+  k.parameters.push_back({"actuator_scale", part(44, 8), Range::non_negative(), "",
+                          "each actuator's effectiveness in the simulated plant"});
+  k.parameters.push_back({"actuator_misalignment", part(52, 8), Range::any(), "rad",
+                          "the angle each actuator's true axis is turned by"});
+  k.uncertain = {{"inertia", "each body axis of the inertia tensor (S J S)", Scaling::congruence},
+                 {"actuator_scale", "each actuator's effectiveness", Scaling::elementwise, true},
+                 {"actuator_misalignment", "the angle each actuator's axis is turned by",
+                  Scaling::elementwise, true}};
   k.default_initial_state = {0.2, -0.15, 0.1, 0.0, 0.0, 0.0};
   k.positions = "attitude angles";
   k.rates = "Euler angle rates";
@@ -539,7 +617,10 @@ PlantKind multirotor_kind() {
   k.parameters.push_back({"rotor_spin", part(32, 8), Range::any(), "", "+1 cw, -1 ccw"});
   k.parameters.push_back({"rotor_max_thrust", part(40, 8), Range::any(), "N", "each T_max"});
   k.parameters.push_back({"rotor_moment_constant", part(48, 8), Range::any(), "m", "each κ"});
-  k.uncertain = {{"inertia", "each body axis of the inertia tensor (S J S)", Scaling::congruence}};
+  k.parameters.push_back({"actuator_scale", part(56, 8), Range::non_negative(), "",
+                          "each rotor's effectiveness in the simulated plant"});
+  k.uncertain = {{"inertia", "each body axis of the inertia tensor (S J S)", Scaling::congruence},
+                 {"actuator_scale", "each rotor's effectiveness", Scaling::elementwise, true}};
   k.default_initial_state = {0.2, -0.15, 0.1, 0.0, 0.0, 0.0};
   k.positions = "attitude angles";
   k.rates = "angular rates";

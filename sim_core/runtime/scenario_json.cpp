@@ -184,9 +184,9 @@ Ptr<sim::Scenario> make_scenario_shape() {
     const std::string key = k.parameter;
     o->field(
         {key, false,
-         [key](const json& v, const std::string& path, S& s, Errors& e) {
+         [key, k](const json& v, const std::string& path, S& s, Errors& e) {
            std::vector<double> tensor;  // a 3×3 true inertia (rigid_body, multirotor)
-           if (detail::read_tensor_values(v, path, tensor, e)) {
+           if (k.tensor && detail::read_tensor_values(v, path, tensor, e)) {
              if (!tensor.empty()) s.set_true_value(key, std::move(tensor));
              return;
            }
@@ -215,6 +215,7 @@ Ptr<sim::Scenario> make_scenario_shape() {
                {"type", "array"},
                {"items", item},
                {"description", "the true " + k.parameter + " of the simulated plant" + unit +
+                                   (k.per_actuator ? ", one per actuator" : "") +
                                    ", for a plant that declares it uncertain (" + k.models +
                                    "); the controller keeps the job's plant as its "
                                    "model. Absent: the plant's"}};
@@ -250,12 +251,16 @@ const std::vector<UncertainKey>& uncertain_keys() {
         });
         if (known != out.end()) {
           known->models += ", " + kind.model;
+          // A tensor where any plant takes one (the spacecraft's inertia is 3 moments, the
+          // rigid body's a tensor or 3 moments).
+          known->tensor = known->tensor || u.scaling == sim::Scaling::congruence;
           continue;
         }
         const sim::PlantParameter* declared = nullptr;
         for (const sim::PlantParameter& p : kind.parameters)
           if (p.name == u.parameter) declared = &p;
-        out.push_back({u.parameter, kind.model, u.meaning, declared});
+        out.push_back({u.parameter, kind.model, u.meaning, declared, u.per_actuator,
+                       u.scaling == sim::Scaling::congruence});
       }
     return out;
   }();

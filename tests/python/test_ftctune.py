@@ -364,6 +364,17 @@ def test_vehicle_plants_load_simulate_and_refuse_at_the_path(table1_path):
     bad["plant"]["inertia"][0][1] = 0.02
     with pytest.raises(ftctune.InputError, match="/plant/inertia/1/0"):
         ftctune.load_job(bad)
+    # The simulated plant's actuators (SPEC §17.1): the model's values change nothing, a turned
+    # wheel changes the run, and a list of the wrong length is refused at its key.
+    same = json.loads(json.dumps(sat))
+    same["scenarios"][0]["actuator_scale"] = [1, 1, 1, 1]
+    assert ftctune.simulate(same)["objective"] == s["objective"]
+    turned = json.loads(json.dumps(sat))
+    turned["scenarios"][0]["actuator_misalignment"] = [0, 0.05, 0, 0]
+    assert ftctune.simulate(turned)["objective"] != s["objective"]
+    turned["scenarios"][0]["actuator_misalignment"] = [0, 0.05]
+    with pytest.raises(ftctune.InputError, match="/scenarios/0/actuator_misalignment"):
+        ftctune.load_job(turned)
 
 
 def test_ensemble_lists_the_members_of_ftctune_ensemble(cli, robust_dict, tmp_path):

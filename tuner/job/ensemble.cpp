@@ -90,6 +90,7 @@ sim::Scenario scaled_base(const Job& job, const ParameterFactors& parameter_fact
   sim::Scenario s = base;
   // Every uncertain parameter's true values, the base's or the plant's, by its factors.
   for (const sim::UncertainParameter& u : kind.uncertain) {
+    if (u.per_actuator) continue;  // the base's, if it has them (apply_actuator_draws)
     const std::vector<double>* given = base.true_value(u.parameter);
     std::vector<double> values =
         given ? *given : kind.parameter_values(job.plant.values, u.parameter);
@@ -101,6 +102,24 @@ sim::Scenario scaled_base(const Job& job, const ParameterFactors& parameter_fact
     s.initial_state[i] *= state_factor[i];
   for (sim::DisturbanceTerm& t : s.disturbance) t.amplitude *= disturbance_factor;
   return s;
+}
+
+void apply_actuator_draws(const Job& job, sim::Scenario& s, const std::vector<double>& scale_draws,
+                          const std::vector<double>& misalignment_draws) {
+  const EnsembleConfig& e = *job.ensemble;
+  const sim::PlantKind& kind = *sim::find_plant_kind(job.plant.model);
+  const auto m = static_cast<std::size_t>(kind.actuators_of(job.plant.values));
+  for (const auto& [parameter, d, draws, model_value] :
+       {std::tuple{"actuator_scale", &e.actuator_scale, &scale_draws, 1.0},
+        std::tuple{"actuator_misalignment", &e.actuator_misalignment, &misalignment_draws, 0.0}}) {
+    if (!*d || !kind.find_uncertain(parameter)) continue;
+    const std::vector<double>* given = s.true_value(parameter);
+    std::vector<double> v = given && given->size() == m ? *given
+                                                         : std::vector<double>(m, model_value);
+    for (std::size_t j = 0; j < m && j < draws->size(); ++j)
+      v[j] = model_value == 1.0 ? v[j] * (*draws)[j] : v[j] + (*draws)[j];
+    s.set_true_value(parameter, std::move(v));
+  }
 }
 
 sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k) {
@@ -132,45 +151,61 @@ sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k
   sim::Scenario s = scaled_base(job, parameter_factors, state_factor, d);
   s.name = base.name + "-" + std::to_string(k);
 
-  if (!e.faults) return s;
-  const FaultDistribution& fd = *e.faults;
-  const int span = fd.count_hi - fd.count_lo + 1;
-  const int count =
-      std::min(fd.count_hi, fd.count_lo + static_cast<int>(std::floor(r.uniform() * span)));
-  std::vector<int> available = fd.actuators;
-  if (available.empty())
-    for (int j = 1; j <= kind.actuators_of(job.plant.values); ++j) available.push_back(j);
-  s.faults.clear();
-  for (int slot = 0; slot < fd.count_hi; ++slot) {
-    // The slot's 11 draws, in the normative order, all consumed.
-    double u[11];
-    for (double& v : u) v = r.uniform();
-    if (slot >= count) continue;
-    sim::Fault f;
-    const std::size_t pick = std::min(
-        available.size() - 1, static_cast<std::size_t>(std::floor(u[0] * available.size())));
-    f.actuator = available[pick];
-    available.erase(available.begin() + static_cast<long>(pick));
-    f.type = kFaultTypeOrder[fd.type.pick(u[1])];
-    f.onset = fd.onset ? fd.onset->draw(u[2]) : 0.5 * base.duration;
-    f.profile.type = kProfileOrder[fd.profile.pick(u[3])];
-    f.profile.rate = f.profile.type == sim::FaultProfileType::incipient ? fd.rate.draw(u[4]) : 1.0;
-    switch (f.type) {
-      case sim::FaultType::bias:
-        f.offset = fd.offset.draw(u[5]);
-        f.amplitude = fd.amplitude.draw(u[6]);
-        f.frequency = fd.frequency.draw(u[7]);
-        f.phase = fd.phase.draw(u[8]);
-        break;
-      case sim::FaultType::loss_of_effectiveness:
-        f.fraction = std::clamp(fd.fraction.draw(u[9]), 0.0, 1.0);
-        break;
-      case sim::FaultType::stuck:
-        f.value = fd.value.draw(u[10]);
-        break;
+  if (e.faults) {
+    const FaultDistribution& fd = *e.faults;
+    const int span = fd.count_hi - fd.count_lo + 1;
+    const int count =
+        std::min(fd.count_hi, fd.count_lo + static_cast<int>(std::floor(r.uniform() * span)));
+    std::vector<int> available = fd.actuators;
+    if (available.empty())
+      for (int j = 1; j <= kind.actuators_of(job.plant.values); ++j) available.push_back(j);
+    s.faults.clear();
+    for (int slot = 0; slot < fd.count_hi; ++slot) {
+      // The slot's 11 draws, in the normative order, all consumed.
+      double u[11];
+      for (double& v : u) v = r.uniform();
+      if (slot >= count) continue;
+      sim::Fault f;
+      const std::size_t pick = std::min(
+          available.size() - 1, static_cast<std::size_t>(std::floor(u[0] * available.size())));
+      f.actuator = available[pick];
+      available.erase(available.begin() + static_cast<long>(pick));
+      f.type = kFaultTypeOrder[fd.type.pick(u[1])];
+      f.onset = fd.onset ? fd.onset->draw(u[2]) : 0.5 * base.duration;
+      f.profile.type = kProfileOrder[fd.profile.pick(u[3])];
+      f.profile.rate = f.profile.type == sim::FaultProfileType::incipient ? fd.rate.draw(u[4]) : 1.0;
+      switch (f.type) {
+        case sim::FaultType::bias:
+          f.offset = fd.offset.draw(u[5]);
+          f.amplitude = fd.amplitude.draw(u[6]);
+          f.frequency = fd.frequency.draw(u[7]);
+          f.phase = fd.phase.draw(u[8]);
+          break;
+        case sim::FaultType::loss_of_effectiveness:
+          f.fraction = std::clamp(fd.fraction.draw(u[9]), 0.0, 1.0);
+          break;
+        case sim::FaultType::stuck:
+          f.value = fd.value.draw(u[10]);
+          break;
+      }
+      s.faults.push_back(f);
     }
-    s.faults.push_back(f);
   }
+  // SPEC §17: m actuator scales, then m misalignments, for a plant that declares them.
+  const auto m = static_cast<std::size_t>(kind.actuators_of(job.plant.values));
+  std::vector<double> scale_draws, misalignment_draws;
+  if (kind.find_uncertain("actuator_scale"))
+    for (std::size_t j = 0; j < m; ++j) {
+      const double u = r.uniform();
+      scale_draws.push_back(e.actuator_scale ? e.actuator_scale->draw(u) : 1.0);
+    }
+  if (kind.find_uncertain("actuator_misalignment"))
+    for (std::size_t j = 0; j < m; ++j) {
+      const double u = r.uniform();
+      misalignment_draws.push_back(e.actuator_misalignment ? e.actuator_misalignment->draw(u)
+                                                           : 0.0);
+    }
+  apply_actuator_draws(job, s, scale_draws, misalignment_draws);
   return s;
 }
 
@@ -464,6 +499,7 @@ std::shared_ptr<const Obj<EnsembleConfig>> make_ensemble_shape() {
   // One scale per uncertain parameter of the registered plants (the job's plant must declare it,
   // job.cpp's validate_ensemble), on the first 3 draws of a member's stream.
   for (const runtime::UncertainKey& k : runtime::uncertain_keys()) {
+    if (k.per_actuator) continue;  // drawn per actuator under its own name, below
     const std::string key = k.parameter + "_scale";
     const std::string parameter = k.parameter;
     auto shape = std::make_shared<const DistributionShape>(
@@ -497,6 +533,19 @@ std::shared_ptr<const Obj<EnsembleConfig>> make_ensemble_shape() {
                        std::shared_ptr<const schema::Shape<Distribution>>(
                            std::make_shared<DistributionShape>(doc)),
                        "");
+  o->optional_object(
+      "actuator_scale", &E::actuator_scale,
+      std::shared_ptr<const schema::Shape<Distribution>>(std::make_shared<DistributionShape>(
+          "factor on each actuator's effectiveness in the simulated plant (rigid_body, "
+          "multirotor; m draws after the faults' draws)",
+          "an actuator's effectiveness")),
+      "");
+  o->optional_object(
+      "actuator_misalignment", &E::actuator_misalignment,
+      std::shared_ptr<const schema::Shape<Distribution>>(std::make_shared<DistributionShape>(
+          "angle in rad added to each actuator's misalignment in the simulated plant "
+          "(rigid_body; m draws after the actuator scales' draws)")),
+      "");
   o->optional_object("faults", &E::faults,
                      std::shared_ptr<const schema::Shape<FaultDistribution>>(make_faults_shape()),
                      "");

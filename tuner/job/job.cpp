@@ -510,6 +510,25 @@ void validate_scale_ends(const Job& job, const sim::PlantKind& kind, Errors& err
       }
     }
   }
+  // The per-actuator draws at their ends, on every actuator at once.
+  const auto m = static_cast<std::size_t>(kind.actuators_of(job.plant.values));
+  for (const auto& [name, d] : {std::pair{"actuator_scale", &e.actuator_scale},
+                                std::pair{"actuator_misalignment", &e.actuator_misalignment}}) {
+    if (!*d || !kind.find_uncertain(name)) continue;
+    for (const double f : {(*d)->a, (*d)->b}) {
+      sim::Scenario s = scaled_base(job, {}, ones, 1.0);
+      const bool scale = std::string_view(name) == "actuator_scale";
+      apply_actuator_draws(job, s, std::vector<double>(scale ? m : 0, f),
+                           std::vector<double>(scale ? 0 : m, f));
+      const Errors wrong = kind.check_true_values(job.plant.values, s.true_values, "");
+      if (!wrong.empty()) {
+        errs.push_back({"/ensemble/" + std::string(name),
+                        "a member drawing " + json_io::number_text(f) + " would have " +
+                            wrong.front().path + " " + wrong.front().message});
+        break;
+      }
+    }
+  }
 }
 
 // The ensemble against the job: its base, the plant's actuators and inertia, member names.
@@ -531,6 +550,14 @@ void validate_ensemble(const Job& job, const sim::PlantKind& kind, Errors& errs)
                           : "the " + kind.model + " plant does not declare " + p.parameter +
                                 " uncertain (its uncertain parameters: " + kind.uncertain_names() +
                                 ")"});
+  for (const auto& [parameter, d] : {std::pair{"actuator_scale", &e.actuator_scale},
+                                     std::pair{"actuator_misalignment", &e.actuator_misalignment}})
+    if (*d && !kind.find_uncertain(parameter))
+      errs.push_back({"/ensemble/" + std::string(parameter),
+                      "the " + kind.model + " plant does not declare " + parameter +
+                          " uncertain (its uncertain parameters: " + kind.uncertain_names() +
+                          "; rigid_body has actuator_scale and actuator_misalignment, "
+                          "multirotor actuator_scale)"});
   if (e.faults) {
     const FaultDistribution& f = *e.faults;
     const int actuators = kind.actuators_of(job.plant.values);

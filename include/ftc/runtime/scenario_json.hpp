@@ -31,6 +31,8 @@ struct UncertainKey {
   std::string models;                     // the plants that declare it: "spacecraft, hexarotor"
   std::string meaning;                    // the first declaring plant's words
   const sim::PlantParameter* declared{};  // the first declaring plant's parameter (unit, range)
+  bool per_actuator = false;              // one value per actuator (UncertainParameter's)
+  bool tensor = false;                    // a 3×3 tensor or its 3 principal moments
 };
 const std::vector<UncertainKey>& uncertain_keys();
 

@@ -49,6 +49,11 @@ struct UncertainParameter {
   std::string parameter;  // the name of one of the kind's PlantParameters
   std::string meaning;    // what the scale acts on, in words ("each axis's principal moment")
   Scaling scaling = Scaling::elementwise;
+  // One value per actuator (SPEC §17's actuator_scale and actuator_misalignment): a scenario
+  // gives the plant's m of them (the kind's parameter holds kMaxActuators), and an ensemble
+  // draws them under the parameter's own name, one per actuator after SPEC §12's draws, instead
+  // of scaling them with the 3 factors.
+  bool per_actuator = false;
   // At most this many values: the ensemble draws that many factors (SPEC §12's 3).
   static constexpr std::size_t kMaxFactors = 3;
 };

@@ -26,6 +26,12 @@ struct RigidBodySpec {
   double beta_deg = kPyramidBetaDeg;        // pyramid only
   std::vector<std::array<double, 3>> axes;  // without a preset: 3 to 8 axes (any length ≠ 0)
   std::vector<double> max;  // N·m, > 0: none (no limit), one for all, or one per actuator
+  // How the simulated plant departs from this model (a scenario's keys, SPEC §17.1; the job's
+  // plant, the controller's model, never has them): each actuator's effectiveness (its true
+  // torque is actuator_scale_j · u_j along its true axis, ≥ 0) and the angle in rad by which its
+  // true axis is turned (right-handedly about â_j × ẑ normalised, or â_j × x̂ when â_j is along
+  // ẑ). Empty: 1 and 0 for every actuator; else one per actuator.
+  std::vector<double> actuator_scale, actuator_misalignment;
 };
 
 struct RotorSpec {
@@ -47,6 +53,10 @@ struct MultirotorSpec {
   double max_thrust = 8.0;         // N
   double moment_constant = 0.016;  // m
   std::vector<RotorSpec> rotors;   // without a preset: 4 to 8 rotors
+  // The simulated plant's effectiveness of each rotor (as RigidBodySpec's: a scenario's key,
+  // never the model's): rotor i's torque per newton of commanded thrust deviation is
+  // actuator_scale_i times the model's. Empty: 1 for every rotor; else one per rotor, ≥ 0.
+  std::vector<double> actuator_scale;
 };
 
 // The preset names, for messages and the JSON Schema.
@@ -60,6 +70,10 @@ const std::vector<std::string>& rotor_presets();
 std::vector<FieldError> inertia_errors(const std::array<double, 9>& J, const std::string& path);
 std::vector<FieldError> validate(const RigidBodySpec& spec, const std::string& path);
 std::vector<FieldError> validate(const MultirotorSpec& spec, const std::string& path);
+
+// An actuator's true axis: the unit axis `a` turned by `angle` rad right-handedly about a × ẑ
+// normalised (a × x̂ when |a × ẑ| < 1e-12), with ftctune's own sin and cos.
+std::array<double, 3> misaligned_axis(const std::array<double, 3>& a, double angle);
 
 // The actuator count: 3, 4 or the axes' number; the rotors'.
 int actuator_count(const RigidBodySpec& spec);

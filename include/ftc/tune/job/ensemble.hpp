@@ -88,6 +88,12 @@ struct EnsembleConfig {
   // Absent: factor 1 (the draws are consumed all the same). At most one scale per parameter.
   std::vector<ParameterScale> parameter_scales;
   std::optional<Distribution> initial_state_scale, disturbance_scale;
+  // SPEC §17's actuator uncertainty (plants that declare it: rigid_body both, multirotor the
+  // scale), drawn once per actuator after SPEC §12's draws, m scales then m misalignments: a
+  // member's actuator_scale is the base's (else 1) times its draw, its actuator_misalignment the
+  // base's (else 0) plus its draw, in rad. Absent: the base's (the draws are consumed all the
+  // same).
+  std::optional<Distribution> actuator_scale, actuator_misalignment;
   // The scale of one parameter; null when there is none.
   const Distribution* parameter_scale(std::string_view parameter) const;
   std::optional<FaultDistribution> faults;  // absent: members keep the base's faults
@@ -108,6 +114,12 @@ using ParameterFactors = std::vector<std::pair<std::string, std::array<double, k
 // amplitude. A member is this with its drawn factors, then its drawn faults.
 sim::Scenario scaled_base(const Job& job, const ParameterFactors& parameter_factors,
                           const std::vector<double>& state_factor, double disturbance_factor);
+
+// `s` with the actuator draws applied (EnsembleConfig::actuator_scale, actuator_misalignment):
+// the m values of each of the plant's per-actuator uncertain parameters, scale_draws[j] and
+// misalignment_draws[j] being actuator j's drawn values.
+void apply_actuator_draws(const Job& job, sim::Scenario& s, const std::vector<double>& scale_draws,
+                          const std::vector<double>& misalignment_draws);
 
 // Member k (0-based) of the job's ensemble with the given seed, named `<base>-<k>`. The job must
 // be valid (parse_job checked the ensemble against its plant and scenarios).
