@@ -413,6 +413,69 @@ TEST(Front, PickChecksEveryPointAgainstTheRunsOwnFiles) {
   EXPECT_EQ(tune::pick_gains(dir, "knee"), gains);
 }
 
+// A point that a compared controller (the job's own gains, a compare entry) dominates on the soft
+// goals is flagged, in front.json, front.csv, the run's summary and the gains pick writes: taking
+// it gives up something for nothing (issue 41: point 18 of the shipped robust front was dominated
+// by the job's own gains, listed in the same file, and nothing said so).
+TEST(Front, PointsACompareControllerDominatesAreFlaggedAndPickWarnsOfThem) {
+  const tune::Job job = tune::parse_job(front_job(), "front");
+  tune::Front f = tune::make_front(job, {trial(0, 1, 100), trial(0, 2, 50), trial(0, 4, 20)});
+  ASSERT_EQ(f.points.size(), 3u);
+  f.compared = {{"NFTSMC", "compare", {2, 40, 1}, false},  // infeasible: dominates nothing
+                {"PI-FOSMC (job)", "baseline", {1.5, 50, 1}, true},
+                {"FOSMC", "compare", {2, 50, 1}, true}};  // equal to point 1: no better
+  tune::mark_dominated_by_compared(f);
+  EXPECT_FALSE(f.points[0].dominated_by);
+  ASSERT_TRUE(f.points[1].dominated_by);
+  EXPECT_EQ(*f.points[1].dominated_by, "PI-FOSMC (job)");
+  EXPECT_FALSE(f.points[2].dominated_by);
+  const json doc = tune::front_document(job, "sha", 1, f);
+  EXPECT_EQ(doc["points"][1]["dominated_by"], "PI-FOSMC (job)");
+  EXPECT_FALSE(doc["points"][0].contains("dominated_by"));
+  const std::string csv = tune::front_csv(job, f);
+  EXPECT_NE(csv.find(",trial,dominated_by\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",PI-FOSMC (job)\n"), std::string::npos) << csv;
+  EXPECT_EQ(tune::dominated_warning(f, 0), "");
+  EXPECT_EQ(tune::dominated_warning(f, 1).rfind("front point 1 is dominated by PI-FOSMC (job) (", 0),
+            0u)
+      << tune::dominated_warning(f, 1);
+  // Read back, the flag is derived again from the compared controllers, not taken from the file.
+  json tampered = doc;
+  tampered["points"][0]["dominated_by"] = "FOSMC";
+  const tune::Front back = tune::front_from_json(job, tampered, "front.json");
+  EXPECT_FALSE(back.points[0].dominated_by);
+  EXPECT_EQ(back.points[1].dominated_by, f.points[1].dominated_by);
+
+  // Through pick, on a real run whose front.json lists a controller that beats point 0's ISE at
+  // its control TV.
+  const auto files = tune::output_files(tuned(job, 1));
+  json front = json::parse(files.at("front.json"));
+  ASSERT_GE(front["points"].size(), 2u);
+  ASSERT_FALSE(front["compared"].empty());
+  json& better = front["compared"][0];
+  better["feasible"] = true;
+  better["goals"] = front["points"][0]["goals"];
+  better["goals"][0] = 0.5 * front["points"][0]["goals"][0].get<double>();
+  const std::string label = better["label"];
+  const auto dir = fresh_dir("pick-dominated");
+  tune::write_output_files(files, dir);
+  tune::write_file_atomic(dir / "front.json", front.dump());
+  const json g0 = tune::pick_gains(dir, "index:0");
+  EXPECT_EQ(g0["goals"]["front"]["dominated_by"], label);
+  std::size_t said = 0;
+  for (const json& w : g0["warnings"])
+    said += w.get<std::string>().rfind("front point 0 is dominated by " + label, 0) == 0 ? 1 : 0;
+  EXPECT_EQ(said, 1u) << g0["warnings"].dump();
+  const json g1 = tune::pick_gains(dir, "index:1");
+  EXPECT_FALSE(g1["goals"]["front"].contains("dominated_by"));
+  for (const json& w : g1["warnings"])
+    EXPECT_EQ(w.get<std::string>().find(" is dominated by "), std::string::npos) << w;
+  const CliResult r = run_cli("pick '" + dir.string() + "' --rule index:0 --out g.json", dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("[warning] front point 0 is dominated by " + label), std::string::npos)
+      << r.err;
+}
+
 // The held-out front of a job without an ensemble is the run's own front: the same scenarios,
 // the same simulations, so every point's held-out goals are its run values to the bit, and
 // pick on it gives the run's gains (issue 42 item 1).

@@ -38,6 +38,11 @@ void add_pick_command(CLI::App& app, const Globals& g, Action& action) {
       if (held && !g.quiet)
         for (const nlohmann::json& w : (*held)["warnings"])
           std::fprintf(stderr, "[warning] %s\n", w.get<std::string>().c_str());
+      // A point a compared controller (the job's own gains, a compare entry) dominates.
+      if (gains["goals"]["front"].contains("dominated_by") && !g.quiet)
+        for (const nlohmann::json& w : gains["warnings"])
+          if (w.get<std::string>().find(" is dominated by ") != std::string::npos)
+            std::fprintf(stderr, "[warning] %s\n", w.get<std::string>().c_str());
       const std::string text = gains.dump(2) + "\n";
       if (o->out.empty()) {
         std::fputs(text.c_str(), stdout);

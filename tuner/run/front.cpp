@@ -284,6 +284,42 @@ void apply_noise_floor(Front& front,
 
 // The points the knee, min and limit choose among: all, but on a held-out front those its
 // held-out values keep on it.
+void mark_dominated_by_compared(Front& front) {
+  for (FrontPoint& p : front.points) {
+    p.dominated_by.reset();
+    for (const FrontCompared& c : front.compared) {
+      if (!c.feasible || c.goals.size() != p.goals.size()) continue;
+      bool no_worse = true, better = false;
+      for (std::size_t k : front.soft) {
+        no_worse = no_worse && c.goals[k] <= p.goals[k];  // false for NaN
+        better = better || c.goals[k] < p.goals[k];
+      }
+      if (no_worse && better) {
+        p.dominated_by = c.label;
+        break;
+      }
+    }
+  }
+}
+
+std::string dominated_warning(const Front& front, std::size_t i) {
+  if (i >= front.points.size() || !front.points[i].dominated_by) return "";
+  const FrontPoint& p = front.points[i];
+  const std::string& label = *p.dominated_by;
+  std::string values;
+  for (const FrontCompared& c : front.compared)
+    if (c.label == label)
+      for (std::size_t k : front.soft) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "%s%s %.4g against %.4g", values.empty() ? "" : ", ",
+                      front.goals[k].label.c_str(), c.goals[k], p.goals[k]);
+        values += buf;
+      }
+  return "front point " + std::to_string(i) + " is dominated by " + label + " (" + values +
+         "): that controller is no worse on every soft goal and better on one, so these gains "
+         "trade nothing for what they give up; pick another point or keep " + label;
+}
+
 std::vector<std::size_t> on_front(const Front& front) {
   std::vector<std::size_t> on;
   for (std::size_t i = 0; i < front.points.size(); ++i)
@@ -406,6 +442,7 @@ Front held_out_front(const Job& job, Front f, FrontHeldOut where,
   for (const FrontPoint& p : f.points) floors.push_back(p.noise_floor);
   apply_noise_floor(f, floors);
   f.compared = std::move(compared);
+  mark_dominated_by_compared(f);
   return f;
 }
 
@@ -462,6 +499,12 @@ std::string front_summary(const Job& job, const Front& front, const std::filesys
     s += (k == front.soft.front() ? " " : ", ") + front.goals[k].label + " = " + value(p.goals[k]);
   s += "\n  another point: ftctune pick " + out.string() + " --rule min:" +
        std::string(job.goals[front.soft.back()].metric->name) + " (or limit:METRIC<=X, index:N)\n";
+  std::size_t dominated = 0;
+  for (const FrontPoint& x : front.points) dominated += x.dominated_by ? 1 : 0;
+  if (dominated > 0)
+    s += "  " + std::to_string(dominated) + " of the " + std::to_string(front.points.size()) +
+         " points are dominated by a compared controller (dominated_by in front.json and "
+         "front.csv): taking one gives up something for nothing\n";
   return s;
 }
 
@@ -504,6 +547,7 @@ json front_document(const Job& job, const std::string& job_sha256, std::uint64_t
                   {"noise_floor", noise},          {"trial", p.trial},
                   {"within_noise", p.within_noise}};
     if (p.within_noise_of) point["within_noise_of"] = *p.within_noise_of;
+    if (p.dominated_by) point["dominated_by"] = *p.dominated_by;
     if (front.held_out) {
       json in_sample = json::array();
       for (double v : p.in_sample) in_sample.push_back(json_number(v));
@@ -546,7 +590,7 @@ std::string front_csv(const Job& job, const Front& front) {
   for (const std::string& l : labels) s += "," + l;
   s += ",feasible,violation";
   for (const std::string& l : labels) s += "," + l + "_noise_floor";
-  s += ",trial\n";
+  s += ",trial,dominated_by\n";
   const auto num = [](double v) -> std::string {  // exact (round-trip) digits, as history.csv
     if (std::isnan(v)) return "";
     if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
@@ -561,7 +605,18 @@ std::string front_csv(const Job& job, const Front& front) {
     for (double g : p.goals) s += "," + num(g);
     s += std::string(",") + (p.violation > 0 ? "false" : "true") + "," + num(p.violation);
     for (const std::optional<double>& n : p.noise_floor) s += "," + (n ? num(*n) : std::string());
-    s += "," + std::to_string(p.trial) + "\n";
+    s += "," + std::to_string(p.trial) + ",";
+    if (p.dominated_by) {  // RFC 4180: a label with a comma, a quote or a line break is quoted
+      const std::string& l = *p.dominated_by;
+      if (l.find_first_of(",\"\r\n") == std::string::npos) {
+        s += l;
+      } else {
+        s += '"';
+        for (char ch : l) s += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+        s += '"';
+      }
+    }
+    s += "\n";
   }
   return s;
 }
@@ -751,6 +806,7 @@ Front front_from_json(const Job& job, const json& j, const std::string& source) 
       f.compared.push_back(std::move(x));
     }
   }
+  mark_dominated_by_compared(f);  // derived: the file's own field is not trusted
   return f;
 }
 
@@ -1024,6 +1080,17 @@ json pick_gains(const std::filesystem::path& dir, const std::string& rule) {
   goals["rule"] = front_rule_text(front);
   goals["front"] = {
       {"index", i}, {"rule", rule}, {"points", front.points.size()}, {"trial", p.trial}};
+  // The run's warning about its own point's dominance goes; this point's comes.
+  if (g.contains("warnings"))
+    for (std::size_t w = g["warnings"].size(); w-- > 0;)
+      if (g["warnings"][w].is_string() &&
+          g["warnings"][w].get<std::string>().rfind("front point ", 0) == 0 &&
+          g["warnings"][w].get<std::string>().find(" is dominated by ") != std::string::npos)
+        g["warnings"].erase(w);
+  if (const std::string d = dominated_warning(front, i); !d.empty()) {
+    goals["front"]["dominated_by"] = *p.dominated_by;
+    g["warnings"].push_back(d);
+  }
   if (front.held_out) {
     // Each soft goal whose held-out value is worse than the run's by more than the point's
     // noise floor (relative, as the floor is): the point does not hold out of sample there.

@@ -217,11 +217,13 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
   }
   r.simulations += static_cast<std::int64_t>(controllers.size() * problem.scenarios());
   // The front's figures mark the comparison's controllers other than the tuned one.
-  if (r.front)
+  if (r.front) {
     for (const ComparedController& c : r.comparison)
       if (c.role != "tuned")
         r.front->compared.push_back(
             {c.label, c.role, c.outcome.evaluation.goals, c.outcome.evaluation.feasible()});
+    mark_dominated_by_compared(*r.front);
+  }
   // The noise floor: the winner (with a front, every point of it) on R copies of the problem
   // whose initial states are nudged.
   NoiseFloor nf;
@@ -265,6 +267,9 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
   }
   r.warnings = bound_warnings(job, r.optimization.best, inward, nf.relative_spread);
   for (std::string& w : comparison_warnings(r)) r.warnings.push_back(std::move(w));
+  if (r.front)
+    if (std::string w = dominated_warning(*r.front, r.front->picked); !w.empty())
+      r.warnings.push_back(std::move(w));
 }
 
 }  // namespace

@@ -69,6 +69,11 @@ struct FrontPoint {
   // soft goal not finite, or dominated by another point's held-out values).
   std::vector<double> in_sample;
   bool dominated = false;
+  // The label of the first feasible compared controller (Front::compared: a compare entry or the
+  // job's own gains) whose soft goals dominate this point's: the point stays on the front (the
+  // trials' front is the optimiser's), but a user gives up nothing by taking that controller
+  // instead. None when no compared controller does.
+  std::optional<std::string> dominated_by;
   bool feasible() const { return !(violation > 0); }
 };
 
@@ -136,6 +141,12 @@ bool no_trade_off(const Front& front, std::size_t a, std::size_t b);
 // above).
 void apply_noise_floor(Front& front,
                        const std::vector<std::vector<std::optional<double>>>& spreads);
+// Sets each point's dominated_by from front.compared (plain Pareto dominance on the soft goals:
+// no worse on every one, better on one; an infeasible compared controller dominates nothing).
+void mark_dominated_by_compared(Front& front);
+// The warning gains.json carries when its point `i` is dominated by a compared controller ("" when
+// it is not): "front point I is dominated by LABEL: ...".
+std::string dominated_warning(const Front& front, std::size_t i);
 
 // The held-out front of a run's front: `goals[i]` are point i's goal values on the held-out
 // scenarios; `compared` the job's compare entries and its own controller, held out alike.
