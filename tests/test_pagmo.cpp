@@ -137,6 +137,28 @@ TEST(PagmoOptimizer, StoppingToleranceEndsTheRunEarlyAndCountsWhatItSpent) {
   EXPECT_EQ(r.history.back().evaluations, r.history[r.history.size() - 2].evaluations);
 }
 
+// The run says so when the algorithm stops evaluating before its generations end, and its ETA is
+// then 0: a CMA-ES run stood at "240/732 evaluations, ETA 4.0 s" for 41 iterations without a word
+// (issue 41: "ends at 120/132 evaluations although validate said 132").
+TEST(PagmoTuning, ARunSaysWhenTheAlgorithmsOwnStoppingRuleEndsItsEvaluations) {
+  const auto dir = ftc::testing::fresh_dir("pagmo-stalls");
+  json j = ftc::testing::short_table1_job();
+  j["tuning"]["algorithm"] = {
+      {"type", "pagmo"}, {"name", "cmaes"}, {"population", 12}, {"generations", 60}};
+  std::ofstream(dir / "job.json") << j.dump();
+  const ftc::testing::CliResult r = ftc::testing::run_cli(
+      "run '" + (dir / "job.json").string() + "' --out '" + (dir / "out").string() + "'", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::size_t said = r.err.find(": cmaes evaluated no candidate: it met its own stopping rule");
+  ASSERT_NE(said, std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("evaluated no candidate", said + 30), std::string::npos);  // said once
+  EXPECT_NE(r.err.find("of the 732 evaluations its generations allow"), std::string::npos);
+  // Every iteration after it gives an ETA of 0.
+  for (std::size_t at = r.err.find("ETA ", said); at != std::string::npos;
+       at = r.err.find("ETA ", at + 1))
+    EXPECT_EQ(r.err.compare(at, 9, "ETA 0.0 s"), 0) << r.err.substr(at, 20);
+}
+
 TEST(PagmoOptimizer, BatchAlgorithmsEvaluateAGenerationInOneBatch) {
   for (const auto& [name, population] :
        std::vector<std::pair<std::string, int>>{{"pso_gen", 8}, {"gaco", 63}}) {

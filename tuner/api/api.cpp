@@ -218,11 +218,33 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
   // Evaluations done before this process started (one trial each), for the ETA.
   const auto evaluations_before =
       static_cast<std::int64_t>(resumed ? resumed->state.value("trials", json::array()).size() : 0);
+  // An algorithm with a stopping rule of its own (pagmo's cmaes and xnes: ftol, xtol) may stop
+  // evaluating before its generations end: the iterations go on and evaluate nothing, so the
+  // count stays below what `validate` said. Said once, and the ETA is then 0.
+  std::int64_t last_evaluations = evaluations_before;
+  bool stalled = false;
   ro.observer = [&](const HistoryRow& h, const Optimizer& optimizer,
                     const std::vector<Trial>& trials) {
     const double elapsed = std::chrono::duration<double>(clock_type::now() - t0).count();
     const double done = static_cast<double>(h.evaluations - evaluations_before);
-    const double eta = done > 0 ? elapsed * static_cast<double>(total - h.evaluations) / done : 0.0;
+    if (!stalled && h.iteration > 0 && h.evaluations == last_evaluations &&
+        h.evaluations < total) {
+      stalled = true;
+      const json a = job.tuning->algorithm->to_json();
+      const std::string name = a.contains("name") && a["name"].is_string()
+                                   ? a["name"].get<std::string>()
+                                   : job.tuning->algorithm->type();
+      say(log, LogLevel::info,
+          "iteration " + std::to_string(h.iteration) + ": " + name +
+              " evaluated no candidate: it met its own stopping rule (for cmaes and xnes, "
+              "tuning.algorithm.settings' ftol or xtol) after " +
+              std::to_string(h.evaluations) + " of the " + std::to_string(total) +
+              " evaluations its generations allow; the remaining iterations evaluate nothing");
+    }
+    last_evaluations = h.evaluations;
+    const double eta = stalled   ? 0.0
+                       : done > 0 ? elapsed * static_cast<double>(total - h.evaluations) / done
+                                  : 0.0;
     if (!checkpointing && !never && elapsed + eta > o.checkpoint_after_seconds) {
       checkpointing = true;
       say(log, LogLevel::info,
