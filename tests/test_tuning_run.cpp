@@ -440,11 +440,24 @@ TEST(TuningRun, WarnsWhenTheTunedLoopEndsFartherThanItStarted) {
   EXPECT_TRUE(has(r.warnings, "; its commands were at or beyond their limits on 100 % of the "
                               "samples of the objective window): it does not hold the vehicle"))
       << ::testing::PrintToString(r.warnings);
+  // The job's metrics block sets the checks: a drift allowance above where the loop ends
+  // silences that warning; with a settling threshold, a loop that never gets below it after the
+  // fault is warned of.
+  j["metrics"] = {{"drift_warning", 1e6}, {"settling_threshold", 0.01}};
+  const tune::TuningOutcome quiet = tune::tune(tune::parse_job(j, "x"), serial);
+  EXPECT_FALSE(has(quiet.warnings, "ends farther")) << ::testing::PrintToString(quiet.warnings);
+  EXPECT_TRUE(has(quiet.warnings, "scenario paper: the tuned PI-FOSMC loop never settles after "
+                                  "the fault: ‖e‖ is not below the settling threshold of 0.01 rad "
+                                  "(metrics.settling_threshold) at the end of the objective "
+                                  "window [0 s, 5 s)"))
+      << ::testing::PrintToString(quiet.warnings);
 
   json plain = short_table1_job();
   plain["tuning"]["algorithm"]["iterations"] = 1;
+  plain["metrics"] = {{"settling_threshold", 0.01}};  // the paper's loop settles well below it
   const tune::TuningOutcome p = tune::tune(tune::parse_job(plain, "x"), serial);
   EXPECT_FALSE(has(p.warnings, "ends farther")) << ::testing::PrintToString(p.warnings);
+  EXPECT_FALSE(has(p.warnings, "never settles")) << ::testing::PrintToString(p.warnings);
 
   std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/smallsat-pyramid.json");
   json sat = json::parse(in);
@@ -595,6 +608,13 @@ TEST(TuningRun, WarnsWhenAComparedControllerScoresLowerOrTheTunedGainsChatter) {
                       "(beyond the noise floor"),
             std::string::npos)
       << w[1];
+  // The job's metrics block moves the control-TV bar: 3.01 times is within 4.
+  tune::MetricsConfig m;
+  m.control_tv_warning = 4.0;
+  r.job.metrics = m;
+  w = tune::comparison_warnings(r);
+  EXPECT_EQ(w.size(), 2u) << ::testing::PrintToString(w);
+  for (const std::string& x : w) EXPECT_EQ(x.find("control TV"), std::string::npos) << x;
 }
 
 TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {

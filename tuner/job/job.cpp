@@ -294,6 +294,13 @@ Ptr<MetricsConfig> make_metrics_shape() {
   o->optional_number("steady_state_tail", &M::steady_state_tail, schema::Range::positive(),
                      "s: the steady-state error is the mean ‖e‖ over each window's last "
                      "steady_state_tail seconds (the whole window if it is shorter)");
+  o->optional_number("drift_warning", &M::drift_warning, schema::Range::positive(),
+                     "rad (the plant's position unit): run warns when the tuned loop ends a "
+                     "listed scenario farther from the reference than it started and than this "
+                     "(default 0.1)");
+  o->optional_number("control_tv_warning", &M::control_tv_warning, schema::Range::positive(),
+                     "run warns when the tuned gains' control TV on the listed scenarios is more "
+                     "than this many times the job's own gains' (default 3)");
   return o;
 }
 

@@ -411,6 +411,9 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   // it started, by more than kDriftWarningFloor. (Saturation alone is no failure: a controller
   // that keeps commanding a stuck wheel beyond its limit, as smallsat-pyramid's does, counts
   // as saturated on every sample while holding the attitude to about 2e-7 rad.)
+  const double drift_floor = r.job.metrics && r.job.metrics->drift_warning
+                                 ? *r.job.metrics->drift_warning
+                                 : kDriftWarningFloor;
   const std::vector<sim::Metrics>& per = tuned.outcome.evaluation.scenarios;
   for (std::size_t i = 0; i < r.listed_scenarios && i < per.size(); ++i) {
     const sim::Metrics& m = per[i];
@@ -420,6 +423,18 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
                     sc.name.c_str(), tuned.label.c_str(), m.diverged_at);
       out.emplace_back(buf);
       continue;
+    }
+    // Never settles: with a settling threshold, a loop whose error is not below it at the end
+    // of the objective window after the fault (settling_time +inf) has not recovered there.
+    if (std::isinf(m.errors.settling_time) && m.errors.settling_time > 0 && r.job.metrics &&
+        r.job.metrics->settling_threshold) {
+      std::snprintf(buf, sizeof buf,
+                    "scenario %s: the %s loop never settles after the fault: ‖e‖ is not below "
+                    "the settling threshold of %.3g rad (metrics.settling_threshold) at the end "
+                    "of the objective window [%.4g s, %.4g s)",
+                    sc.name.c_str(), tuned.label.c_str(), *r.job.metrics->settling_threshold,
+                    m.window.t0, std::min(m.window.t1, sc.duration));
+      out.emplace_back(buf);
     }
     if (i >= tuned.outcome.trajectories.size() || tuned.outcome.trajectories[i].rows() == 0)
       continue;
@@ -432,7 +447,7 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
     }
     start = std::sqrt(start);
     end = std::sqrt(end);
-    if (!(end > std::max(start, kDriftWarningFloor))) continue;
+    if (!(end > std::max(start, drift_floor))) continue;
     const sim::PlantKind* kind = sim::find_plant_kind(r.job.plant.model);
     const double sat = m.errors.saturation_fraction;
     char why[200] = "";
@@ -495,7 +510,10 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
     return sim::over_scenarios(tv, v);
   };
   const double tv_tuned = listed_tv(tuned), tv_base = listed_tv(base);
-  if (std::isfinite(tv_base) && tv_base > 0 && tv_tuned > kControlTvWarningRatio * tv_base) {
+  const double tv_ratio = r.job.metrics && r.job.metrics->control_tv_warning
+                              ? *r.job.metrics->control_tv_warning
+                              : kControlTvWarningRatio;
+  if (std::isfinite(tv_base) && tv_base > 0 && tv_tuned > tv_ratio * tv_base) {
     std::snprintf(buf, sizeof buf,
                   "The tuned gains raise the control TV (sum of |u_k - u_{k-1}|, a measure of "
                   "chattering) %.3g times over the job's own gains on the listed scenario%s "

@@ -72,6 +72,12 @@ struct ObjectiveConfig {
 struct MetricsConfig {
   std::optional<double> settling_threshold;  // rad: ‖e‖ below it counts as settled
   std::optional<double> steady_state_tail;   // s: the steady-state error's tail of each window
+  // The outcome checks of a run (tuning_run.hpp's comparison_warnings), when not their defaults:
+  // a tuned loop that ends farther from the reference than it started and than drift_warning
+  // (the plant's position unit), and tuned gains whose control TV exceeds control_tv_warning
+  // times the job's own gains', are warned of.
+  std::optional<double> drift_warning;       // default kDriftWarningFloor
+  std::optional<double> control_tv_warning;  // default kControlTvWarningRatio
 };
 
 // A goal of the job (issue 26): a metric in a window, aggregated over the scenarios as the

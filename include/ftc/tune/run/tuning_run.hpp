@@ -156,10 +156,12 @@ std::vector<std::string> bound_warnings(const Job& job, const Decision& values,
 std::optional<double> inward_value(const ParameterBounds& bounds, double x);
 
 // The warnings of a finished comparison. Of the tuned loop on each listed scenario: it left the
-// model's validity, diverged, or ended farther from the reference than it started (|X1| at its
-// last recorded sample above |X1(0)| and kDriftWarningFloor). Then a compared controller whose
-// objective is lower than the tuned one's, and tuned gains whose control TV on the listed
-// scenarios exceeds kControlTvWarningRatio times the job's own gains'.
+// model's validity, diverged, never settled after the fault (settling_time +inf, when the job's
+// metrics block gives a settling threshold), or ended farther from the reference than it started
+// (|X1| at its last recorded sample above |X1(0)| and the job's metrics.drift_warning, default
+// kDriftWarningFloor). Then a compared controller whose objective is lower than the tuned one's,
+// and tuned gains whose control TV on the listed scenarios exceeds metrics.control_tv_warning
+// (default kControlTvWarningRatio) times the job's own gains'.
 inline constexpr double kControlTvWarningRatio = 3.0;
 // A tuned loop that ends a listed scenario farther from the reference than it started, and
 // farther than this (in the plant's position unit, rad for every shipped plant), is warned of.
