@@ -1071,4 +1071,7 @@ TEST(Cli, StatusShowsTheEtaOfARunningJob) {
   j["status"] = "running";
   j["started_at"] = nullptr;  // queued only
   EXPECT_EQ(ftc::cli::eta_text(j), "");
+  // Past its last iteration: what it is doing, not an ETA of 0.
+  j["progress"]["phase"] = "finishing";
+  EXPECT_EQ(ftc::cli::eta_text(j), "  comparing controllers and measuring the noise floor");
 }

@@ -895,6 +895,16 @@ TEST(Front, RunListsItsFrontFilesAndSumsUpTheFront) {
   EXPECT_NE(r.out.find("another point: ftctune pick " + out + " --rule min:control_tv"),
             std::string::npos)
       << r.out;
+  // After the last iteration the log says what the run still evaluates: the comparison of the
+  // two compare entries, the job's own and the tuned, and 8 reruns of each point of the front.
+  const std::size_t points = front["points"].size();
+  EXPECT_NE(r.err.find("iterations done; now " + std::to_string(4 + 8 * points) +
+                       " more evaluations of the 1 scenario: the comparison of 4 controllers and "
+                       "the noise floor (8 reruns of each of the front's " +
+                       std::to_string(points) + " points)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_LT(r.err.find("iteration 1/1: front of "), r.err.find("iterations done"));
 }
 
 TEST(Front, OneSoftGoalRunsWriteNoFront) {

@@ -26,6 +26,7 @@
 #include <sstream>
 #include <thread>
 
+#include "../tools/eta.hpp"
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
@@ -1862,6 +1863,33 @@ struct ReleaseOnExit {
   std::shared_ptr<Gate> gate;
   ~ReleaseOnExit() { gate->release(); }
 };
+
+// A running job past its last iteration is "finishing" (the comparison and the noise floor still
+// run), not at "ETA 0 s" (issue 41): the gate holds a one-iteration job at its comparison, and a
+// longer one inside its iterations.
+TEST(Service, AJobPastItsLastIterationIsFinishingNotDone) {
+  auto gate = std::make_shared<Gate>();
+  tune::ServiceOptions o;
+  o.concurrent_jobs = 2;
+  o.evaluator = [gate]() -> std::unique_ptr<tune::BatchEvaluator> {
+    return std::make_unique<GatedEvaluator>(gate);
+  };
+  Service s(o);
+  ReleaseOnExit release{gate};
+  json short_one = long_job("one-iteration");
+  short_one["tuning"]["algorithm"]["iterations"] = 1;
+  const std::string a = s.submit(short_one)["id"], b = s.submit(long_job("many"))["id"];
+  wait_running(s, a, 1);
+  wait_running(s, b, 1);
+  const json va = s.get("/v1/jobs/" + a), vb = s.get("/v1/jobs/" + b);
+  EXPECT_EQ(va["progress"]["phase"], "finishing") << va.dump();
+  EXPECT_EQ(va["progress"]["evaluations"], va["progress"]["total_evaluations"]) << va.dump();
+  EXPECT_EQ(vb["progress"]["phase"], "tuning") << vb.dump();
+  EXPECT_EQ(ftc::cli::eta_text(va), "  comparing controllers and measuring the noise floor");
+  gate->release();
+  EXPECT_EQ(s.wait_done(a)["status"], "succeeded");
+  EXPECT_FALSE(s.get("/v1/jobs/" + a)["progress"].contains("phase"));  // only while running
+}
 
 // A running job's partial gains and trials come from what the run stored, made once per
 // checkpoint, and nothing is simulated in a request: twenty requests alternating between two

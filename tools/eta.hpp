@@ -29,6 +29,9 @@ inline std::string eta_text(const nlohmann::json& job) {
   if (!job.is_object() || job.value("status", "") != "running" || !job.contains("progress"))
     return "";
   const nlohmann::json& p = job["progress"];
+  // Past its last iteration: the comparison and the noise floor still run.
+  if (p.is_object() && p.value("phase", "") == "finishing")
+    return "  comparing controllers and measuring the noise floor";
   if (!p.is_object() || !p.value("evaluations", nlohmann::json()).is_number() ||
       !p.value("total_evaluations", nlohmann::json()).is_number())
     return "";

@@ -242,9 +242,26 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
               " evaluations its generations allow; the remaining iterations evaluate nothing");
     }
     last_evaluations = h.evaluations;
-    const double eta = stalled   ? 0.0
-                       : done > 0 ? elapsed * static_cast<double>(total - h.evaluations) / done
-                                  : 0.0;
+    // The ETA counts what the run evaluates after its iterations too: the comparison and the
+    // noise floor (issue 41: "1944/1944 · ETA 0.0 s" with half of the job still to run).
+    const std::size_t points =
+        front_objectives(job) >= 2 ? front_trials(job, trials, trials.size()).size() : 0;
+    const std::int64_t finishing = finishing_evaluations(job, points);
+    const double left = static_cast<double>((stalled ? 0 : total - h.evaluations) + finishing);
+    const double eta = done > 0 ? elapsed * left / done : 0.0;
+    // After the last iteration's report: what the run still does.
+    const auto say_finishing = [&] {
+      if (h.iteration != job.tuning->algorithm->iterations()) return;
+      say(log, LogLevel::info,
+          "iterations done; now " + std::to_string(finishing) + " more evaluations of the " +
+              std::to_string(job.scenario_count()) + " scenario" +
+              (job.scenario_count() == 1 ? "" : "s") + ": the comparison of " +
+              std::to_string(job.compare.size() + 2) + " controllers and the noise floor (" +
+              std::to_string(NoiseFloor{}.repeats) + " reruns of " +
+              (points > 0 ? "each of the front's " + std::to_string(points) + " points"
+                          : std::string("the tuned gains")) +
+              ")");
+    };
     if (!checkpointing && !never && elapsed + eta > o.checkpoint_after_seconds) {
       checkpointing = true;
       say(log, LogLevel::info,
@@ -255,12 +272,15 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
       result.stopped = true;
       return false;
     }
-    if (!o.on_iteration) return true;
+    if (!o.on_iteration) {
+      say_finishing();
+      return true;
+    }
     IterationReport report{h, total, job.tuning->algorithm->iterations(), elapsed, eta, {}};
-    if (front_objectives(job) >= 2)
-      report.front_points = front_trials(job, trials, trials.size()).size();
+    if (front_objectives(job) >= 2) report.front_points = points;
     const bool go_on = o.on_iteration(report);
     result.stopped = !go_on;
+    if (go_on) say_finishing();
     return go_on;
   };
   {

@@ -525,6 +525,12 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   return out;
 }
 
+std::int64_t finishing_evaluations(const Job& job, std::size_t front_points) {
+  const auto compared = static_cast<std::int64_t>(job.compare.size()) + 2;
+  return compared + static_cast<std::int64_t>(NoiseFloor{}.repeats) *
+                        static_cast<std::int64_t>(std::max<std::size_t>(1, front_points));
+}
+
 std::int64_t comparison_record_every(const Job& job, std::int64_t max_rows) {
   std::int64_t every = std::max<std::int64_t>(
       1, std::llround(kComparisonRecordInterval / job.scenarios.front().sample_time));

@@ -76,6 +76,10 @@ json job_json_view(const JobRecord& r) {
                    {"total_evaluations", r.total_evaluations},
                    {"best_fitness", r.best_fitness ? json(*r.best_fitness) : json(nullptr)},
                    {"best", r.best}};
+  // A running job past its last iteration still compares the controllers and measures the noise
+  // floor: its evaluations are all done, and it is not about to finish (issue 41).
+  if (r.status == JobStatus::running)
+    progress["phase"] = r.iteration >= r.iterations ? "finishing" : "tuning";
   return {{"id", r.id},
           {"name", r.name},
           {"status", to_string(r.status)},

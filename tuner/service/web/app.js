@@ -68,7 +68,10 @@ function jobDuration(j) {
 // The time left, from the evaluations done since the job started (as `submit --wait` says it).
 function etaText(j) {
   const p = j.progress;
-  if (j.status !== 'running' || !p || !p.evaluations) return '';
+  if (j.status !== 'running' || !p) return '';
+  // Past its last iteration: the comparison and the noise floor, not an ETA of 0.
+  if (p.phase === 'finishing') return 'comparing controllers and measuring the noise floor';
+  if (!p.evaluations) return '';
   const elapsed = Date.now() / 1000 - seconds(j.started_at);
   if (!Number.isFinite(elapsed) || elapsed <= 0) return '';
   return 'ETA ' + duration(elapsed * (p.total_evaluations - p.evaluations) / p.evaluations);

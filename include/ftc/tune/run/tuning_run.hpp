@@ -81,6 +81,13 @@ struct NoiseFloor {
 };
 inline constexpr std::uint64_t kNoiseFloorStream = 1000000;  // member k = 1e6 + r of §12
 
+// What a run evaluates after its last iteration, in candidate evaluations (each on every
+// scenario): the comparison (the compare entries, the job's own controller and the tuned one) and
+// the noise floor (NoiseFloor::repeats reruns of the tuned gains, or of each of the front's
+// `front_points` points). Not counted: the check of a tuned value on a search bound, one more
+// evaluation per such parameter.
+std::int64_t finishing_evaluations(const Job& job, std::size_t front_points = 0);
+
 struct TuningOutcome {
   Job job;
   std::string job_sha256;  // of the canonical JSON of the job as given
