@@ -2409,7 +2409,20 @@ TEST(Service, TwoGoalJobServesTheFrontTheRunWrites) {
   job["tuning"]["algorithm"]["iterations"] = 2;
   Service s;
   const std::string id = s.submit(job)["id"];
-  ASSERT_EQ(s.wait_done(id)["status"], "succeeded");
+  const json done = s.wait_done(id);
+  ASSERT_EQ(done["status"], "succeeded");
+  // Its progress is the front's size and hypervolume, not a J of one corner of it (issue 41).
+  const json front = json::parse(expected_file(job, "front.json"));
+  EXPECT_TRUE(done["progress"]["best_fitness"].is_null()) << done.dump();
+  EXPECT_EQ(done["progress"]["best"]["front"]["points"], front["points"].size()) << done.dump();
+  EXPECT_EQ(done["progress"]["best"]["front"]["hypervolume"], front["hypervolume"]) << done.dump();
+  const CliResult status = run_cli("status " + id + " --server http://127.0.0.1:" +
+                                       std::to_string(s.port),
+                                   s.dir);
+  EXPECT_NE(status.out.find("  front of " + std::to_string(front["points"].size()) + " point"),
+            std::string::npos)
+      << status.out << status.err;
+  EXPECT_EQ(status.out.find("best J"), std::string::npos) << status.out;
   for (const char* name : {"front.json", "front.csv", "history.csv"}) {
     const auto r = s.client->Get(("/v1/jobs/" + id + "/files/" + name).c_str());
     ASSERT_TRUE(r);

@@ -102,7 +102,15 @@ std::string describe(const json& j) {
          std::to_string(p["iterations"].get<int>());
   s += "  " + std::to_string(p["evaluations"].get<long long>()) + "/" +
        std::to_string(p["total_evaluations"].get<long long>()) + " evaluations";
-  if (!p["best_fitness"].is_null()) {
+  if (p["best"].is_object() && p["best"].contains("front")) {
+    // A front's progress: its size and hypervolume, not one corner's J.
+    const json& f = p["best"]["front"];
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "  front of %lld point%s, hypervolume %.4g",
+                  f.value("points", 0LL), f.value("points", 0LL) == 1 ? "" : "s",
+                  f.value("hypervolume", 0.0));
+    s += buf;
+  } else if (!p["best_fitness"].is_null()) {
     char buf[48];
     std::snprintf(buf, sizeof buf, "  best J = %.6g", p["best_fitness"].get<double>());
     s += buf;

@@ -208,6 +208,10 @@ def test_a_two_goal_job_shows_its_front(server, browser):
          == str(len(front["points"])))
     assert "Pareto front: %d tuned points" % len(front["points"]) in \
         browser.find_element(By.CSS_SELECTOR, "#front h3").text
+    # Its progress is the front so far, not a "best J" of one corner of it (issue 41).
+    best = browser.find_element(By.ID, "job-best").text
+    assert best.startswith("front: %d point" % len(front["points"])), best
+    assert "one corner of the front" in browser.find_element(By.ID, "convergence-title").text
     # The page loads the finished job again when its live stream opens: read it once that is done.
     wait(browser, lambda d: d.find_element(By.ID, "live").text == "live"
          and d.execute_script("return document.body.dataset.loading") == "0")

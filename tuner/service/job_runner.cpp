@@ -4,11 +4,13 @@
 
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/api/api.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/front.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::tune::service_detail {
@@ -63,8 +65,16 @@ class JobStoreStorage final : public RunStorage {
   bool save_checkpoint(const std::string&, std::uint64_t, const HistoryRow& h, const Optimizer& o,
                        const std::vector<Trial>& trials) override {
     json best = json::object();
-    for (std::size_t i = 0; i < names_.size() && i < h.best.size(); ++i)
-      best[names_[i]] = h.best[i];
+    double best_fitness = h.best_fitness;
+    if (front_) {
+      // A front has no single best (the row's is one corner of it): its size and hypervolume.
+      const Front f = make_front(*front_, trials);
+      best = {{"front", {{"points", f.points.size()}, {"hypervolume", f.hypervolume}}}};
+      best_fitness = std::numeric_limits<double>::quiet_NaN();
+    } else {
+      for (std::size_t i = 0; i < names_.size() && i < h.best.size(); ++i)
+        best[names_[i]] = h.best[i];
+    }
     const std::string rows = trials_json(trials, stored_trials_).dump();
     const std::string optimizer = o.state().dump();
     const std::uint64_t bytes = trial_bytes_ + rows.size() + optimizer.size();
@@ -76,7 +86,7 @@ class JobStoreStorage final : public RunStorage {
       return false;
     }
     try {
-      store_.record_progress(rec_.id, h.iteration, h.evaluations, h.best_fitness, best, optimizer,
+      store_.record_progress(rec_.id, h.iteration, h.evaluations, best_fitness, best, optimizer,
                              rows);
       wrote_();
       changed_();
@@ -101,8 +111,11 @@ class JobStoreStorage final : public RunStorage {
     files = made;
   }
 
+  // The job the run tunes (it outlives the run): its parameters' names and, for a front, what
+  // the progress records.
   void name_parameters(const Job& job) {
     for (const ParameterBounds& b : job.tuning->parameters) names_.push_back(b.name);
+    if (front_objectives(job) >= 2) front_ = &job;
   }
 
   std::string too_large;                      // why the run was stopped, if its checkpoint was
@@ -116,6 +129,7 @@ class JobStoreStorage final : public RunStorage {
   std::function<void(const StoreError&)> failed_;
   std::function<void()> changed_;
   std::vector<std::string> names_;
+  const Job* front_ = nullptr;  // a job with two or more soft goals
   std::size_t stored_trials_ = 0;
   std::uint64_t trial_bytes_ = 0;  // of the trials checkpointed so far
 };

@@ -318,6 +318,17 @@ function route() {
   else cleanup = jobsView(main);
 }
 
+// A job's best so far: its J, or for a front (two or more soft goals) its size and hypervolume,
+// which one J (a corner of the front) would misname.
+function frontOf(p) {
+  return p && p.best && p.best.front ? p.best.front : null;
+}
+function bestText(p) {
+  const f = frontOf(p);
+  if (f) return 'front: ' + f.points + ' point' + (f.points === 1 ? '' : 's') + ', HV ' + fmt(f.hypervolume, 4);
+  return fmt(p.best_fitness);
+}
+
 function stateBadge(status) {
   return el('span', {class: 'state ' + status, text: status});
 }
@@ -356,7 +367,7 @@ function jobsView(main) {
       el('td', null, el('a', {href: '#/job/' + j.id, class: 'job-link', text: j.name})),
       el('td', null, stateBadge(j.status)),
       el('td', {class: 'progress'}, progressCell(j)),
-      el('td', {class: 'num best', text: fmt(j.progress.best_fitness)}),
+      el('td', {class: 'num best', text: bestText(j.progress)}),
       el('td', {text: whenText(j.created_at)}),
       el('td', {class: 'num', text: j.started_at ? jobDuration(j) : '–'}),
       el('td', null, el('code', {text: j.id})));
@@ -473,7 +484,7 @@ function jobView(main, id) {
 
   main.append(header, actions, message, notes,
     el('div', {class: 'charts'},
-      el('div', null, el('h3', {text: 'Convergence: best J per iteration'}),
+      el('div', null, el('h3', {id: 'convergence-title', text: 'Convergence: best J per iteration'}),
          el('div', {class: 'chart-box'}, convergence)),
       el('div', null, el('h3', {text: 'Trials: parameters coloured by objective'}),
          el('div', {class: 'toolbar'}, 'x ', xSel, ' y ', ySel),
@@ -514,13 +525,20 @@ function jobView(main, id) {
   function renderHeader() {
     clear(header);
     const p = job.progress;
+    // A front has no best J: the history's J is one corner of it (the least first soft goal).
+    if (frontOf(p)) {
+      const title = document.getElementById('convergence-title');
+      if (title) title.textContent = 'Convergence: J of the trial with the least first soft goal ' +
+        '(one corner of the front; history.csv has the hypervolume per iteration)';
+    }
     header.append(
       el('h1', null, job.name + ' ', stateBadge(job.status)),
       el('dl', {class: 'meta'},
         el('dt', {text: 'id'}), el('dd', null, el('code', {text: job.id})),
         el('dt', {text: 'progress'}), el('dd', {id: 'job-progress'}, progressCell(job),
           p.iteration === null ? '' : ' · iteration ' + p.iteration + '/' + p.iterations),
-        el('dt', {text: 'best J'}), el('dd', {id: 'job-best', text: fmt(p.best_fitness) +
+        el('dt', {text: frontOf(p) ? 'front so far' : 'best J'}),
+        el('dd', {id: 'job-best', text: frontOf(p) ? bestText(p) : fmt(p.best_fitness) +
           (p.best && Object.keys(p.best).length ? '  (' + Object.entries(p.best)
             .map(([k, v]) => k + ' = ' + fmt(v, 5)).join(', ') + ')' : '')}),
         el('dt', {text: 'submitted'}), el('dd', {text: whenText(job.created_at)}),
