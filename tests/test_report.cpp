@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
@@ -461,6 +462,42 @@ std::vector<double> column(const std::string& csv, int col) {
 }
 
 }  // namespace
+
+// fig6 shows saturation: the actuators' limits as lines, and with limits every actuator's applied
+// output beside its command; its unit is the plant's command's (N for rotors). It drew commands
+// only, in N·m for every plant (issue 41).
+TEST(Report, ActuatorFigureDrawsTheLimitsTheAppliedOutputsAndThePlantsUnit) {
+  const auto dir = fresh_dir("report-limits");
+  json j = short_table1_job();
+  j["scenarios"][0]["saturation"] = 5;
+  j["tuning"]["algorithm"]["population"] = 3;
+  j["tuning"]["algorithm"]["iterations"] = 1;
+  tune::TbbEvaluator evaluator(2);
+  tune::write_outputs(tune::tune(tune::parse_job(j, "sat"), evaluator), dir / "sat");
+  tune::render_report(dir / "sat", {.html = false});
+  std::string fig6 = figure_script(slurp(dir / "sat" / "figures" / "report.gp"), "fig6-inputs");
+  EXPECT_NE(fig6.find("from graph 0, first -5 to graph 1, first -5 nohead"), std::string::npos)
+      << fig6.substr(0, 2000);
+  EXPECT_NE(fig6.find("from graph 0, first 5 to graph 1, first 5 nohead"), std::string::npos);
+  for (int a = 1; a <= 4; ++a)  // no fault on 3 and 4: drawn for the limits
+    EXPECT_NE(fig6.find("title 'applied u_" + std::to_string(a) + "'"), std::string::npos) << a;
+  EXPECT_NE(fig6.find("actuator output u [N·m]"), std::string::npos);
+
+  std::ifstream in(std::string(FTC_SOURCE_DIR) + "/jobs/quad-x.json");
+  json q = json::parse(in);
+  q["scenarios"][0]["duration"] = 4;
+  q["objective"]["window"] = {3, 4};
+  q["tuning"]["algorithm"]["population"] = 3;
+  q["tuning"]["algorithm"]["iterations"] = 1;
+  tune::write_outputs(tune::tune(tune::parse_job(q, "quad"), evaluator), dir / "quad");
+  tune::render_report(dir / "quad", {.html = false});
+  fig6 = figure_script(slurp(dir / "quad" / "figures" / "report.gp"), "fig6-inputs");
+  EXPECT_NE(fig6.find("actuator output u [N]"), std::string::npos);
+  // A rotor's deviation from hover lies in [-T_h, T_max - T_h] = [-3.679, 4.321] N: every rotor
+  // gets its applied output, whether or not a line is within the drawn range.
+  for (int a = 1; a <= 4; ++a)
+    EXPECT_NE(fig6.find("title 'applied u_" + std::to_string(a) + "'"), std::string::npos) << a;
+}
 
 // SVGs carry what the eye can see: the 30 s run's fig6 was 1.2 MB with every sample.
 TEST(Report, SvgFiguresAreDecimatedToWhatTheEyeCanSee) {

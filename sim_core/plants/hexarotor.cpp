@@ -122,6 +122,7 @@ PlantKind hexarotor_kind() {
   k.default_initial_state = {0.2, -0.15, 0.1, 0.0, 0.0, 0.0};
   k.positions = "attitude angles";
   k.rates = "angular rates";
+  k.command_unit = "N";
   k.axis_names = {"roll", "pitch", "yaw"};
   k.make = [](const std::vector<double>& v) -> std::unique_ptr<AnyPlant> {
     return std::make_unique<PlantAdapter<Hexarotor>>(v, [](const std::vector<double>& w) {

@@ -6,6 +6,7 @@
 // builds its PlantKind with it.
 #include <Eigen/LU>
 #include <functional>
+#include <limits>
 #include <span>
 #include <string>
 #include <utility>
@@ -62,6 +63,22 @@ class PlantAdapter final : public AnyPlant {
     run(lanes, isa);
   }
   int pack_width() const override { return lane_width(active_isa()); }
+
+  std::vector<std::pair<double, double>> command_limits(const Scenario& scenario) const override {
+    const int m = actuator_count();
+    std::vector<std::pair<double, double>> out;
+    for (int j = 0; j < m; ++j) {
+      double lo = -std::numeric_limits<double>::infinity(), hi = -lo;
+      if constexpr (kTrimmed) {
+        const auto t = plant_.actuator_trim();
+        lo = t.lo[j];
+        hi = t.hi[j];
+      }
+      const CommandLimits c = ::ftc::sim::detail::command_limits(scenario.saturation.limit(j), lo, hi);
+      out.emplace_back(c.lo, c.hi);
+    }
+    return out;
+  }
 
   bool recoverable(const Scenario& scenario) const override {
     constexpr int N = P::kAxes, M = P::kActuators;

@@ -624,6 +624,7 @@ PlantKind multirotor_kind() {
   k.default_initial_state = {0.2, -0.15, 0.1, 0.0, 0.0, 0.0};
   k.positions = "attitude angles";
   k.rates = "angular rates";
+  k.command_unit = "N";
   k.axis_names = {"roll", "pitch", "yaw"};
   k.count_actuators = [](const std::vector<double>& v) {
     return actuator_count(multirotor_spec(v));

@@ -426,13 +426,23 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
              "measured) are not real."});
   }
 
-  // Figure 6: commanded (and, on faulted actuators, applied) outputs per controller, every
-  // panel on one y scale so that controllers compare at a glance.
+  // Figure 6: commanded and applied outputs per controller, every panel on one y scale so that
+  // controllers compare at a glance, with the actuators' limits: without them saturation could
+  // not be seen (issue 41). Applied outputs are drawn for the faulted actuators, and for every
+  // actuator when the scenario limits the commands.
   {
     const std::string file = "figures/fig6-inputs" + ext;
     const std::size_t rows = (S + 1) / 2;
+    const std::vector<std::pair<double, double>> limits =
+        sim::make_plant(job.plant)->command_limits(sc0);
+    std::set<double> limit_values;  // each finite limit once
+    for (const auto& [lo, hi] : limits)
+      for (const double v : {lo, hi})
+        if (std::isfinite(v)) limit_values.insert(v);
     std::set<int> faulted;
     for (const sim::Fault& f : sc0.faults) faulted.insert(f.actuator);
+    if (!limit_values.empty())
+      for (int j = 1; j <= m; ++j) faulted.insert(j);
     std::vector<const std::vector<double>*> curves;
     for (std::size_t s = 0; s < S; ++s) {
       for (int j = 0; j < m; ++j)
@@ -450,9 +460,16 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
       << gp(std::string("Actuator outputs") + (paper ? " (paper Fig. 6)" : "") + scen)
       << " font ',13'\n"
       << plot::onset_marks(onsets, true) << range_text(f) << "set xlabel 'time [s]'\n"
-      << "set ylabel 'actuator output u [N·m]'\nset key below horizontal font ',9' maxrows 2 "
-         "enhanced\nset "
-         "bmargin 7\n";
+      << "set ylabel " << gp("actuator output u [" + kind.command_unit + "]")
+      << "\nset key below horizontal font ',9' maxrows 2 enhanced\nset bmargin 7\n";
+    // The limits, as grey dash-dot lines across every panel (those outside the data's range
+    // are not reached, and not drawn).
+    int arrow = 1000;
+    for (const double v : limit_values)
+      if (v >= f.y0 && v <= f.y1)
+        g << "set arrow " << arrow++ << " from graph 0, first " << num(v)
+          << " to graph 1, first " << num(v)
+          << " nohead lc rgb '#777777' lw 1.5 dt (8,4,2,4) back\n";
     for (std::size_t s = 0; s < S; ++s) {
       std::string cmd = "plot ";
       for (int j = 1; j <= m; ++j) {
@@ -470,6 +487,7 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
       g << "set title " << gp(series[s].label) << " noenhanced\n"
         << (s == 0 ? "" : "unset key\n") << cmd.substr(0, cmd.size() - 2) << "\n";
     }
+    for (int a = 1000; a < arrow; ++a) g << "unset arrow " << a << "\n";
     g << "unset multiplot\nunset title\nset autoscale\nunset bmargin\n"
       << plot::controller_styles()
       << "set key default\nset key outside right top vertical box opaque\n";
@@ -477,8 +495,10 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
         {file, "Actuator outputs",
          "Commanded outputs u_d of each controller (each actuator its own colour, dash and "
          "marker) and, thick dotted in the same colour, the applied output of each faulted "
-         "actuator (bias added, effectiveness lost), in N·m. All panels share one scale and "
-         "the legend of the first; the faults are the labelled grey dashed lines."});
+         "actuator (bias added, effectiveness lost), and of every actuator when the scenario "
+         "limits the commands, in " + kind.command_unit + ". The grey dash-dot lines are the "
+         "actuators' limits (a command held at one is saturated). All panels share one scale "
+         "and the legend of the first; the faults are the labelled grey dashed lines."});
   }
 
   // Figure 7: the faulted part, where the controllers differ, on a log scale.

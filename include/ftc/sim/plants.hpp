@@ -13,6 +13,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "ftc/sim/controller_config.hpp"
@@ -96,6 +97,7 @@ struct PlantKind {
   std::vector<std::string> axis_names;  // n names: "roll", "pitch", "yaw"
   std::string position_unit = "rad";
   std::string rate_unit = "rad/s";
+  std::string command_unit = "N·m";  // of a command u_j: "N" for rotor thrusts
   // Builds the plant from validated values (the flattened parameters).
   std::function<std::unique_ptr<AnyPlant>(const std::vector<double>& values)> make;
 
@@ -168,6 +170,11 @@ class AnyPlant {
   // the actuators still acting (not stuck, not wholly lost) leave G, at the scenario's initial
   // state, with full row rank n.
   virtual bool recoverable(const Scenario& scenario) const = 0;
+
+  // Each actuator's range of commands in the scenario, [lo, hi] in the command's coordinates
+  // (the deviation from the operating point for a plant with one): the plant's own range within
+  // ± the scenario's saturation, as the loop limits them (±inf: no limit). For figures.
+  virtual std::vector<std::pair<double, double>> command_limits(const Scenario& scenario) const = 0;
 };
 
 const std::vector<PlantKind>& plant_kinds();
