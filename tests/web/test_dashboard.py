@@ -187,6 +187,12 @@ def test_submitting_table1_through_the_page(server, browser):
     values = [float(c) for c in
               texts(browser, "#trials-table tbody tr td:nth-child(%d)" % (column + 1))[:20]]
     assert values == sorted(values)
+    # Cells show six significant digits (they showed all 17), the exact value in their title.
+    for cell in browser.find_elements(By.CSS_SELECTOR, "#trials-table tbody tr td")[:200]:
+        mantissa = re.sub(r"[^0-9]", "", cell.text.split("e")[0]).lstrip("0")
+        assert len(mantissa) <= 6, cell.text
+        if cell.get_attribute("title"):
+            assert float(cell.get_attribute("title")) == pytest.approx(float(cell.text), rel=1e-5)
 
 
 def test_a_two_goal_job_shows_its_front(server, browser):

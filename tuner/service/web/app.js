@@ -642,8 +642,12 @@ function jobView(main, id) {
     clear(trialBody);
     for (const r of rows.slice(0, TRIAL_ROWS_SHOWN))
       trialBody.appendChild(el('tr', {class: r[accepted] === '1' ? 'accepted' : ''},
-        r.map((c, i) => el('td', {class: 'num',
-          text: bounded.has(i) && c !== '' && capped >= 0 && r[capped] === '1' ? '≥ ' + c : c}))));
+        r.map((c, i) => {
+          // Six significant digits (the file keeps 17; the cell's title has them).
+          const shown = c === '' || Number.isNaN(Number(c)) ? c : fmt(c);
+          return el('td', {class: 'num', title: shown === c ? '' : c,
+            text: bounded.has(i) && c !== '' && capped >= 0 && r[capped] === '1' ? '≥ ' + shown : shown});
+        })));
     trialCount.textContent = rows.length + ' of ' + trials.rows.length + ' trials' +
       (rows.length > TRIAL_ROWS_SHOWN ? ' (the first ' + TRIAL_ROWS_SHOWN + ' shown)' : '');
   }
@@ -690,7 +694,11 @@ function jobView(main, id) {
       el('thead', null, el('tr', null, head.map((h) => el('th', {text: h})))),
       el('tbody', null, (c.controllers || []).map((k) => el('tr', null,
         el('td', {class: 'label', text: k.label}), el('td', {text: k.role}),
-        el('td', {class: 'num', text: fmt(k.objective)}), el('td', {class: 'num', text: fmt(k.fitness)}),
+        el('td', {class: 'num', text: fmt(k.objective)}),
+        // A controller that breaks a hard goal has no fitness to compare (its negative value
+        // only orders the infeasible ones): say so, with its violation.
+        el('td', {class: 'num', text: k.goals && k.goals.feasible === false
+          ? 'infeasible (violation ' + fmt(k.goals.total_violation, 3) + ')' : fmt(k.fitness)}),
         scenarios.map((s, i) => columns.map((m) => el('td', {class: 'num', 'data-metric': m.name,
           text: cell(k.scenarios && k.scenarios[i] ? k.scenarios[i][m.name] : null)})))))))));
   }
