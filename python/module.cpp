@@ -336,8 +336,9 @@ struct Problem {
   }
 
   // Columns of one row per (candidate, scenario): every metric of the metrics record, the
-  // objective window's and each fault segment's (<metric>_segment<k>), per fault
-  // (<metric>_fault<k>), and the scenario's value of the job's metric.
+  // objective window's and each fault segment's (<metric>_segment<k>, its window
+  // segment<k>_t0 and segment<k>_t1 in s), per fault (<metric>_fault<k>), and the scenario's
+  // value of the job's metric. simulate() names its columns alike.
   py::dict metrics(const py::array_t<double, py::array::c_style | py::array::forcecast>& x) {
     const Rows r = rows_of(x, problem);
     const std::vector<tune::CandidateOutcome> out = outcomes(r, true);
@@ -387,6 +388,14 @@ struct Problem {
                     .push_back(k < (m.*f.per_fault).size() ? (m.*f.per_fault)[k] : nan);
               break;
           }
+        }
+        // Each segment's window (s): the segments of members with other fault onsets differ.
+        for (std::size_t k = 0; k < segments; ++k) {
+          const bool has = k < m.extra_windows.size();
+          column("segment" + std::to_string(k + 1) + "_t0")
+              .push_back(has ? m.extra_windows[k].t0 : nan);
+          column("segment" + std::to_string(k + 1) + "_t1")
+              .push_back(has ? m.extra_windows[k].t1 : nan);
         }
         diverged.push_back(m.diverged);
         column("diverged_at").push_back(m.diverged ? m.diverged_at : nan);

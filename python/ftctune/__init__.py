@@ -249,7 +249,8 @@ def simulate(job, gains=None, controller=None, set=None, record_every=None):
 
     gains: a gains file; controller: a type with its Table 1 values; set: {parameter: value}
     over the job's (or that type's) controller; record_every: trajectory interval in seconds
-    (default 0.01). Returns a dict: "metrics" (a DataFrame, one row per scenario),
+    (default 0.01). Returns a dict: "metrics" (a DataFrame, one row per scenario, its columns
+    named as Problem.metrics names them),
     "trajectories" ({scenario: DataFrame}), "objective", "fitness", "controller",
     "scenarios" (the metrics as metrics.json lists them, with "recoverable" and "counted").
     "objective" is None when no scenario counts (every one is unrecoverable).
@@ -266,8 +267,23 @@ def simulate(job, gains=None, controller=None, set=None, record_every=None):
     doc = _json.loads(out["document"])
     rows = []
     for s in doc["scenarios"]:
-        rows.append({"scenario": s["name"]} |
-                    {k: v for k, v in s.items() if k not in ("name", "window", "segments")})
+        # Columns as Problem.metrics names them: a value per fault onset as <metric>_fault<k>,
+        # each fault segment's metrics as <metric>_segment<k> with its window segment<k>_t0/_t1.
+        row = {"scenario": s["name"]}
+        for k, v in s.items():
+            if k in ("name", "window", "segments"):
+                continue
+            if isinstance(v, list):
+                for i, x in enumerate(v):
+                    row["%s_fault%d" % (k, i + 1)] = x
+            else:
+                row[k] = v
+        for i, seg in enumerate(s.get("segments", [])):
+            for k, v in seg.items():
+                if k != "window":
+                    row["%s_segment%d" % (k, i + 1)] = v
+            row["segment%d_t0" % (i + 1)], row["segment%d_t1" % (i + 1)] = seg["window"]
+        rows.append(row)
     frames = {s["name"]: _csv_frame(t) for s, t in zip(doc["scenarios"], out["trajectories"])}
     objective = doc["objective"]
     if objective is None and any(s["counted"] for s in doc["scenarios"]):

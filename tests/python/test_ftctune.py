@@ -312,6 +312,26 @@ def test_simulate_gives_the_metrics_and_trajectories_of_ftctune_simulate(cli, ta
         ftctune.simulate(table1_path, controller="pid")
 
 
+def test_simulate_and_problem_metrics_name_their_columns_alike(table1_path):
+    # A value per fault onset as <metric>_fault<k>, a fault segment's as <metric>_segment<k> with
+    # its window; simulate() had the onsets' values as a list in one cell and no segments.
+    job = json.loads(pathlib.Path(table1_path).read_text())
+    job["objective"]["window"] = [12, 30]  # the run before 12 s is a segment of its own
+    s = ftctune.simulate(job)["metrics"]
+    problem = ftctune.Problem(job)
+    own = [[job["controller"][n] for n in problem.names]]
+    m = problem.metrics(own)
+    assert "peak_error_after_fault_fault1" in s.columns and "peak_error_after_fault_fault2" in s.columns
+    assert "peak_error_after_fault" not in s.columns
+    segment_columns = [c for c in m.columns if "segment" in c]
+    assert segment_columns and "segment1_t0" in segment_columns
+    for c in segment_columns + ["ise", "control_tv", "peak_error_after_fault_fault1"]:
+        assert c in s.columns, c
+        got = s[c].iloc[0]  # a metric not measured there: null in the document, NaN in Problem
+        assert (float("nan") if got is None else got) == pytest.approx(
+            m[c].iloc[0], rel=1e-15, nan_ok=True), c
+
+
 def test_simulate_takes_tuned_gains(table1_path, tmp_path):
     result = ftctune.tune(table1_path)
     s = ftctune.simulate(table1_path, gains=result)
