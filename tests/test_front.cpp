@@ -470,7 +470,8 @@ TEST(Front, PointsACompareControllerDominatesAreFlaggedAndPickWarnsOfThem) {
   EXPECT_FALSE(g1["goals"]["front"].contains("dominated_by"));
   for (const json& w : g1["warnings"])
     EXPECT_EQ(w.get<std::string>().find(" is dominated by "), std::string::npos) << w;
-  const CliResult r = run_cli("pick '" + dir.string() + "' --rule index:0 --out g.json", dir);
+  const CliResult r = run_cli(
+      "pick '" + dir.string() + "' --rule index:0 --out '" + (dir / "g.json").string() + "'", dir);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("[warning] front point 0 is dominated by " + label), std::string::npos)
       << r.err;

@@ -613,6 +613,25 @@ TEST(RigidBody, ActuatorUncertaintyOfAScenarioActsOnTheSimulatedPlantOnly) {
   EXPECT_NE(errs[0].message.find("one value per actuator of the rigid_body (4), got 2"),
             std::string::npos)
       << errs[0].message;
+  // The simulated plant's actuators must still span R³ (a wheel at effectiveness 0 on the
+  // orthogonal triad leaves a plane): refused at the key, not thrown from the simulation.
+  const PlantKind& k3 = *find_plant_kind("rigid_body");
+  RigidBodySpec triad;
+  triad.preset = "orthogonal";
+  const std::vector<FieldError> flat =
+      k3.check_true_values(to_values(triad), {{"actuator_scale", {1.0, 1.0, 0.0}}}, "/scenarios/0");
+  ASSERT_EQ(flat.size(), 1u);
+  EXPECT_EQ(flat[0].path, "/scenarios/0/actuator_scale");
+  EXPECT_NE(flat[0].message.find("no longer span R³"), std::string::npos) << flat[0].message;
+  // Recoverability asks the simulated plant: the pyramid's wheel 1 at effectiveness 0 with
+  // wheel 2 lost leaves two axes, though the model's four wheels less one would span R³.
+  Scenario dead = plain;
+  dead.set_true_value("actuator_scale", {0.0, 1.0, 1.0, 1.0});
+  dead.faults = {f};
+  dead.faults[0].fraction = 1.0;
+  EXPECT_FALSE(plant->recoverable(dead));
+  dead.true_values.clear();
+  EXPECT_TRUE(plant->recoverable(dead));
   // The multirotor has actuator_scale (its rotors), not a misalignment.
   const PlantKind& mr = *find_plant_kind("multirotor");
   EXPECT_NE(mr.find_uncertain("actuator_scale"), nullptr);

@@ -2411,11 +2411,10 @@ TEST(Service, TwoGoalJobServesTheFrontTheRunWrites) {
   const std::string id = s.submit(job)["id"];
   const json done = s.wait_done(id);
   ASSERT_EQ(done["status"], "succeeded");
-  // Its progress is the front's size and hypervolume, not a J of one corner of it (issue 41).
+  // Its progress is the front's size, not a J of one corner of it (issue 41).
   const json front = json::parse(expected_file(job, "front.json"));
   EXPECT_TRUE(done["progress"]["best_fitness"].is_null()) << done.dump();
   EXPECT_EQ(done["progress"]["best"]["front"]["points"], front["points"].size()) << done.dump();
-  EXPECT_EQ(done["progress"]["best"]["front"]["hypervolume"], front["hypervolume"]) << done.dump();
   const CliResult status = run_cli("status " + id + " --server http://127.0.0.1:" +
                                        std::to_string(s.port),
                                    s.dir);

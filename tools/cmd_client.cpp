@@ -103,13 +103,10 @@ std::string describe(const json& j) {
   s += "  " + std::to_string(p["evaluations"].get<long long>()) + "/" +
        std::to_string(p["total_evaluations"].get<long long>()) + " evaluations";
   if (p["best"].is_object() && p["best"].contains("front")) {
-    // A front's progress: its size and hypervolume, not one corner's J.
+    // A front's progress: its size so far, not one corner's J.
     const json& f = p["best"]["front"];
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "  front of %lld point%s, hypervolume %.4g",
-                  f.value("points", 0LL), f.value("points", 0LL) == 1 ? "" : "s",
-                  f.value("hypervolume", 0.0));
-    s += buf;
+    const long long points = f.value("points", 0LL);
+    s += "  front of " + std::to_string(points) + " point" + (points == 1 ? "" : "s") + " so far";
   } else if (!p["best_fitness"].is_null()) {
     char buf[48];
     std::snprintf(buf, sizeof buf, "  best J = %.6g", p["best_fitness"].get<double>());

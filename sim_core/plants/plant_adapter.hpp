@@ -7,6 +7,7 @@
 #include <Eigen/LU>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -99,7 +100,16 @@ class PlantAdapter final : public AnyPlant {
     typename P::State x0 = P::State::Zero();
     if (scenario.initial_state.size() == static_cast<std::size_t>(2 * N))
       x0 = Eigen::Map<const typename P::State>(scenario.initial_state.data());
-    const Mat<N, M> G = plant_.G(x0);
+    // The simulated plant's actuators, not the model's (a wheel at effectiveness 0 acts on
+    // nothing; a true inertia changes no rank).
+    std::optional<P> simulated;
+    if (!scenario.true_values.empty()) try {
+        simulated.emplace(truth(scenario));
+      } catch (const InputError&) {
+        return false;  // reported by validation
+      }
+    const P& plant = simulated ? *simulated : plant_;
+    const Mat<N, M> G = plant.G(x0);
     Eigen::Matrix<double, N, Eigen::Dynamic, 0, N, M> acting(N, 0);
     for (int j = 0; j < m; ++j)
       if (!stuck[j] && lost[j] < 1.0) {
@@ -114,14 +124,14 @@ class PlantAdapter final : public AnyPlant {
     // with what is left, within the limits the loop holds it to: its own range within the
     // scenario's saturation (Hexarotor::trim_feasible).
     if constexpr (requires { plant_.trim_feasible(stuck, stuck_at, lost); }) {
-      auto range = plant_.thrust_range();
-      const auto t = plant_.actuator_trim();
+      auto range = plant.thrust_range();
+      const auto t = plant.actuator_trim();
       for (int j = 0; j < m; ++j) {
         const double u_max = scenario.saturation.limit(j);
         range.floor[j] = std::max(range.floor[j], t.u0[j] - u_max);
         range.cap[j] = std::min(range.cap[j], t.u0[j] + u_max);
       }
-      return plant_.trim_feasible(stuck, stuck_at, lost, range);
+      return plant.trim_feasible(stuck, stuck_at, lost, range);
     }
     return true;
   }

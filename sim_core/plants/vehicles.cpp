@@ -253,6 +253,28 @@ std::vector<FieldError> validate(const RigidBodySpec& s, const std::string& path
                     "the actuator axes must span R³ (torque about every axis), but they lie in "
                     "a plane or on a line: D Dᵀ has eigenvalues " +
                         num(ev[0]) + ", " + num(ev[1]) + ", " + num(ev[2])});
+  // The simulated plant's actuators (a scenario's actuator_scale and actuator_misalignment)
+  // must span R³ as well: a wheel at effectiveness 0, or one turned onto another's axis, can
+  // leave them in a plane, and no plant can be built (simulated) from that.
+  if (errs.empty() && (!s.actuator_scale.empty() || !s.actuator_misalignment.empty())) {
+    const auto axes = axes_of(s);
+    Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
+    for (std::size_t j = 0; j < axes.size(); ++j) {
+      const auto v = misaligned_axis(
+          axes[j], s.actuator_misalignment.empty() ? 0.0 : s.actuator_misalignment[j]);
+      const double k = s.actuator_scale.empty() ? 1.0 : s.actuator_scale[j];
+      const Eigen::Vector3d d(k * v[0], k * v[1], k * v[2]);
+      T += d * d.transpose();
+    }
+    const Eigen::Vector3d tv = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(T).eigenvalues();
+    if (!(tv[0] > 1e-12 * tv[2]))
+      errs.push_back({path + (s.actuator_scale.empty() ? "/actuator_misalignment"
+                                                        : "/actuator_scale"),
+                      "with these values the simulated plant's actuators no longer span R³ "
+                      "(their torques lie in a plane or on a line: D Dᵀ has eigenvalues " +
+                          num(tv[0]) + ", " + num(tv[1]) + ", " + num(tv[2]) +
+                          "); a wholly lost actuator is a loss_of_effectiveness fault"});
+  }
   return errs;
 }
 
@@ -320,6 +342,23 @@ std::vector<FieldError> validate(const MultirotorSpec& s, const std::string& pat
                         std::to_string(lu.rank()) +
                         " dimensions of 3: rotors on a line, or every spin the same)"});
     return errs;
+  }
+  // The simulated plant's rotors (a scenario's actuator_scale) must too.
+  if (!s.actuator_scale.empty()) {
+    Eigen::MatrixXd As = A;
+    for (Eigen::Index i = 0; i < As.cols(); ++i)
+      As.col(i) *= s.actuator_scale[static_cast<std::size_t>(i)];
+    Eigen::FullPivLU<Eigen::MatrixXd> slu(As);
+    slu.setThreshold(1e-9);
+    if (slu.rank() < 3) {
+      errs.push_back({path + "/actuator_scale",
+                      "with these values the simulated plant's rotors no longer make a torque "
+                      "about every axis (their torques span " +
+                          std::to_string(slu.rank()) +
+                          " dimensions of 3); a wholly lost rotor is a loss_of_effectiveness "
+                          "fault"});
+      return errs;
+    }
   }
   const std::vector<double> T = hover_thrusts(s);
   for (std::size_t i = 0; i < r.size(); ++i)

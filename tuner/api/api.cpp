@@ -244,14 +244,18 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
     last_evaluations = h.evaluations;
     // The ETA counts what the run evaluates after its iterations too: the comparison and the
     // noise floor (issue 41: "1944/1944 · ETA 0.0 s" with half of the job still to run).
-    const std::size_t points =
-        front_objectives(job) >= 2 ? front_trials(job, trials, trials.size()).size() : 0;
+    // (The front's size, for its noise floor's reruns: only when reported or said, as finding
+    // the front of every trial so far costs a pass over them.)
+    const bool last = h.iteration == job.tuning->algorithm->iterations();
+    const std::size_t points = front_objectives(job) >= 2 && (o.on_iteration || last)
+                                   ? front_trials(job, trials, trials.size()).size()
+                                   : 0;
     const std::int64_t finishing = finishing_evaluations(job, points);
     const double left = static_cast<double>((stalled ? 0 : total - h.evaluations) + finishing);
     const double eta = done > 0 ? elapsed * left / done : 0.0;
     // After the last iteration's report: what the run still does.
     const auto say_finishing = [&] {
-      if (h.iteration != job.tuning->algorithm->iterations()) return;
+      if (!last) return;
       say(log, LogLevel::info,
           "iterations done; now " + std::to_string(finishing) + " more evaluations of the " +
               std::to_string(job.scenario_count()) + " scenario" +

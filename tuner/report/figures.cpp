@@ -429,7 +429,7 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
   // Figure 6: commanded and applied outputs per controller, every panel on one y scale so that
   // controllers compare at a glance, with the actuators' limits: without them saturation could
   // not be seen (issue 41). Applied outputs are drawn for the faulted actuators, and for every
-  // actuator when the scenario limits the commands.
+  // actuator when the commands have a limit (the scenario's or the plant's).
   {
     const std::string file = "figures/fig6-inputs" + ext;
     const std::size_t rows = (S + 1) / 2;
@@ -495,8 +495,8 @@ std::vector<Figure> draw_run_figures(const fs::path& run_dir, const Job& job, co
         {file, "Actuator outputs",
          "Commanded outputs u_d of each controller (each actuator its own colour, dash and "
          "marker) and, thick dotted in the same colour, the applied output of each faulted "
-         "actuator (bias added, effectiveness lost), and of every actuator when the scenario "
-         "limits the commands, in " + kind.command_unit + ". The grey dash-dot lines are the "
+         "actuator (bias added, effectiveness lost), and of every actuator when the commands "
+         "have a limit, in " + kind.command_unit + ". The grey dash-dot lines are the "
          "actuators' limits (a command held at one is saturated). All panels share one scale "
          "and the legend of the first; the faults are the labelled grey dashed lines."});
   }

@@ -526,7 +526,7 @@ std::optional<Job> Api::checked_job(const httplib::Request& req, httplib::Respon
                        deadline, [] { return GuardedServer::peer_closed(); })) {
     case Checker::Outcome::done:
       res.status = check->res.status;
-      res.headers = check->res.headers;
+      for (const auto& h : check->res.headers) res.headers.insert(h);
       res.body = std::move(check->res.body);
       return std::move(check->job);
     case Checker::Outcome::timed_out:

@@ -67,9 +67,11 @@ class JobStoreStorage final : public RunStorage {
     json best = json::object();
     double best_fitness = h.best_fitness;
     if (front_) {
-      // A front has no single best (the row's is one corner of it): its size and hypervolume.
-      const Front f = make_front(*front_, trials);
-      best = {{"front", {{"points", f.points.size()}, {"hypervolume", f.hypervolume}}}};
+      // A front has no single best (the row's is one corner of it): its size so far. (Not its
+      // hypervolume: against the reference point of the front so far, which moves as the
+      // front does, the figure could fall while the front improves; history.csv's is against
+      // the final front's reference.)
+      best = {{"front", {{"points", front_trials(*front_, trials, trials.size()).size()}}}};
       best_fitness = std::numeric_limits<double>::quiet_NaN();
     } else {
       for (std::size_t i = 0; i < names_.size() && i < h.best.size(); ++i)

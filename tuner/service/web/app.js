@@ -318,14 +318,14 @@ function route() {
   else cleanup = jobsView(main);
 }
 
-// A job's best so far: its J, or for a front (two or more soft goals) its size and hypervolume,
-// which one J (a corner of the front) would misname.
+// A job's best so far: its J, or for a front (two or more soft goals) its size, which one J (a
+// corner of the front) would misname.
 function frontOf(p) {
   return p && p.best && p.best.front ? p.best.front : null;
 }
 function bestText(p) {
   const f = frontOf(p);
-  if (f) return 'front: ' + f.points + ' point' + (f.points === 1 ? '' : 's') + ', HV ' + fmt(f.hypervolume, 4);
+  if (f) return 'front: ' + f.points + ' point' + (f.points === 1 ? '' : 's') + ' so far';
   return fmt(p.best_fitness);
 }
 
@@ -644,7 +644,8 @@ function jobView(main, id) {
       trialBody.appendChild(el('tr', {class: r[accepted] === '1' ? 'accepted' : ''},
         r.map((c, i) => {
           // Six significant digits (the file keeps 17; the cell's title has them).
-          const shown = c === '' || Number.isNaN(Number(c)) ? c : fmt(c);
+          // (An integer, such as an index, as it is.)
+          const shown = c === '' || /^-?[0-9]+$/.test(c) || Number.isNaN(Number(c)) ? c : fmt(c);
           return el('td', {class: 'num', title: shown === c ? '' : c,
             text: bounded.has(i) && c !== '' && capped >= 0 && r[capped] === '1' ? '≥ ' + shown : shown});
         })));
