@@ -220,7 +220,8 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
       static_cast<std::int64_t>(resumed ? resumed->state.value("trials", json::array()).size() : 0);
   // An algorithm with a stopping rule of its own (pagmo's cmaes and xnes: ftol, xtol) may stop
   // evaluating before its generations end: the iterations go on and evaluate nothing, so the
-  // count stays below what `validate` said. Said once, and the ETA is then 0.
+  // count stays below what `validate` said. Said once; the ETA then counts only what the run
+  // evaluates after its iterations.
   std::int64_t last_evaluations = evaluations_before;
   bool stalled = false;
   ro.observer = [&](const HistoryRow& h, const Optimizer& optimizer,
