@@ -9,6 +9,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -33,6 +34,14 @@ namespace {
 
 bool same_bits(double a, double b) {
   return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
+
+// The plant a spec describes, as a job's plant block would build it.
+std::unique_ptr<AnyPlant> plant_of(const RigidBodySpec& s) {
+  return make_plant({"rigid_body", to_values(s)});
+}
+std::unique_ptr<AnyPlant> plant_of(const MultirotorSpec& s) {
+  return make_plant({"multirotor", to_values(s)});
 }
 
 // A full tensor with products of inertia, positive definite.
@@ -314,10 +323,7 @@ TEST(RigidBody, EveryLaneGivesTheScalarBits) {
   RigidBodySpec spec;
   spec.inertia = kTensor;
   spec.max = {0.05, 0.04, 0.05, 0.06};
-  PlantSpec ps;
-  ps.model = "rigid_body";
-  ps.values = to_values(spec);
-  const auto plant = make_plant(ps);
+  const auto plant = plant_of(spec);
   for (ControllerType type : kAllControllerTypes)
     for (Isa isa : supported_isas()) {
       const int n = lane_width(isa) + 1;
@@ -379,10 +385,7 @@ TEST(RigidBody, EveryLaneGivesTheScalarBits) {
 TEST(RigidBody, FlagsARunPastEightyFiveDegreesOfPitch) {
   RigidBodySpec spec;
   spec.max = {0.01};
-  PlantSpec ps;
-  ps.model = "rigid_body";
-  ps.values = to_values(spec);
-  const auto plant = make_plant(ps);
+  const auto plant = plant_of(spec);
   ControllerConfig c = ControllerConfig::table1(ControllerType::pi_fosmc);
   c.switching_gain = 0.01;
   // Pitching up at 0.6 rad/s from 1.2 rad, which the wheels (at most 0.04 rad/s² about pitch)
@@ -569,10 +572,7 @@ TEST(RigidBody, ActuatorUncertaintyOfAScenarioActsOnTheSimulatedPlantOnly) {
   RigidBodySpec spec;
   spec.preset = "pyramid";
   spec.inertia = {0.25, 0.0, 0.0, 0.0, 0.30, 0.0, 0.0, 0.0, 0.20};
-  PlantSpec ps;
-  ps.model = "rigid_body";
-  ps.values = to_values(spec);
-  const auto plant = make_plant(ps);
+  const auto plant = plant_of(spec);
   ControllerConfig ctl = ControllerConfig::table1(ControllerType::pi_fosmc);
   ctl.switching_gain = 0.05;
   const Scenario plain = scenario();
@@ -581,7 +581,7 @@ TEST(RigidBody, ActuatorUncertaintyOfAScenarioActsOnTheSimulatedPlantOnly) {
   same.set_true_value("actuator_scale", {1.0, 1.0, 1.0, 1.0});
   same.set_true_value("actuator_misalignment", {0.0, 0.0, 0.0, 0.0});
   const SimulationResult r1 = plant->simulate(ctl, same);
-  EXPECT_EQ(std::bit_cast<std::uint64_t>(r1.metrics.errors.ise), std::bit_cast<std::uint64_t>(r0.metrics.errors.ise));
+  EXPECT_TRUE(same_bits(r1.metrics.errors.ise, r0.metrics.errors.ise));
   EXPECT_EQ(r1.final_state, r0.final_state);
 
   Scenario half = plain;
@@ -596,7 +596,7 @@ TEST(RigidBody, ActuatorUncertaintyOfAScenarioActsOnTheSimulatedPlantOnly) {
   const SimulationResult rh = plant->simulate(ctl, half), rl = plant->simulate(ctl, lost);
   EXPECT_NE(rh.final_state, r0.final_state);
   EXPECT_EQ(rh.final_state, rl.final_state);
-  EXPECT_EQ(std::bit_cast<std::uint64_t>(rh.metrics.errors.ise), std::bit_cast<std::uint64_t>(rl.metrics.errors.ise));
+  EXPECT_TRUE(same_bits(rh.metrics.errors.ise, rl.metrics.errors.ise));
 
   Scenario turned = plain;
   turned.set_true_value("actuator_misalignment", {0.0, 0.0, 0.1, 0.0});
@@ -607,7 +607,7 @@ TEST(RigidBody, ActuatorUncertaintyOfAScenarioActsOnTheSimulatedPlantOnly) {
   EXPECT_THROW(plant->simulate(ctl, wrong), InputError);
   const PlantKind& k = *find_plant_kind("rigid_body");
   const std::vector<FieldError> errs =
-      k.check_true_values(ps.values, {{"actuator_scale", {1.0, 1.0}}}, "/scenarios/0");
+      k.check_true_values(to_values(spec), {{"actuator_scale", {1.0, 1.0}}}, "/scenarios/0");
   ASSERT_EQ(errs.size(), 1u);
   EXPECT_EQ(errs[0].path, "/scenarios/0/actuator_scale");
   EXPECT_NE(errs[0].message.find("one value per actuator of the rigid_body (4), got 2"),
@@ -666,10 +666,7 @@ TEST(RigidBody, RecoverabilityOfWheelFaultsCheckedByHand) {
   const auto make = [](const std::string& preset) {
     RigidBodySpec s;
     s.preset = preset;
-    PlantSpec ps;
-    ps.model = "rigid_body";
-    ps.values = to_values(s);
-    return make_plant(ps);
+    return plant_of(s);
   };
   const auto pyramid = make("pyramid"), orthogonal = make("orthogonal"), nasa = make("nasa");
   for (int j = 1; j <= 4; ++j) {
@@ -697,10 +694,7 @@ TEST(RigidBody, AStuckWheelIsRecoverableOnlyWhenTheOthersCanCancelItWithinTheirL
     RigidBodySpec s;
     s.preset = "pyramid";
     s.max = std::move(max);
-    PlantSpec ps;
-    ps.model = "rigid_body";
-    ps.values = to_values(s);
-    return make_plant(ps);
+    return plant_of(s);
   };
   const auto limited = make({0.1});
   EXPECT_TRUE(recoverable_with(*limited, {wheel_fault(1, FaultType::stuck, 0.09)}));
@@ -736,10 +730,7 @@ TEST(RigidBody, AStuckWheelIsRecoverableOnlyWhenTheOthersCanCancelItWithinTheirL
 // with no freedom. A loss ρ leaves the rotor (1 − ρ)·8 N, enough while ρ < 1 − 3.679/8 = 0.540;
 // a stuck rotor is recoverable only at exactly the hover thrust; a failed rotor never.
 TEST(Multirotor, RecoverabilityOfQuadRotorFaultsCheckedByHand) {
-  PlantSpec ps;
-  ps.model = "multirotor";
-  ps.values = to_values(MultirotorSpec{});
-  const auto quad = make_plant(ps);
+  const auto quad = plant_of(MultirotorSpec{});
   const double Th = 1.5 * 9.81 / 4.0;
   for (int i = 1; i <= 4; ++i) {
     EXPECT_TRUE(recoverable_with(*quad, {wheel_fault(i, FaultType::loss_of_effectiveness, 0.3)}));
@@ -757,10 +748,7 @@ TEST(Multirotor, RecoverabilityOfQuadRotorFaultsCheckedByHand) {
 TEST(RigidBody, PerActuatorSaturationNamesTheRealActuatorsOnly) {
   RigidBodySpec spec;
   spec.preset = "nasa";
-  PlantSpec ps;
-  ps.model = "rigid_body";
-  ps.values = to_values(spec);
-  const auto plant = make_plant(ps);
+  const auto plant = plant_of(spec);
   ControllerConfig c = ControllerConfig::table1(ControllerType::fosmc);
   c.switching_gain = 0.01;
   Scenario s = scenario(2.0);

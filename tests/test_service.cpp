@@ -1565,7 +1565,7 @@ TEST(Service, JobAboveTheMemoryBudgetIsRefusedWith413) {
 }
 
 // The service holds a copy of a job's result files to store them, which `ftctune run` does not:
-// a job of 6 scenarios of 200 s with 12 controllers peaked `run` at 696 MB and the server at
+// a job of 6 scenarios of 200 s with 12 controllers peaked `run` at 713 MB and the server at
 // 996 MB, while the run's estimate alone was 932 MB. Its estimate now adds the files, at 13 bytes
 // a number (they stored 278.1 MB).
 TEST(Service, TheMemoryEstimateCountsTheResultFilesTheServerHolds) {

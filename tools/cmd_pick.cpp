@@ -41,7 +41,7 @@ void add_pick_command(CLI::App& app, const Globals& g, Action& action) {
       // A point a compared controller (the job's own gains, a compare entry) dominates.
       if (gains["goals"]["front"].contains("dominated_by") && !g.quiet)
         for (const nlohmann::json& w : gains["warnings"])
-          if (w.get<std::string>().find(" is dominated by ") != std::string::npos)
+          if (tune::is_dominated_warning(w.get<std::string>()))
             std::fprintf(stderr, "[warning] %s\n", w.get<std::string>().c_str());
       const std::string text = gains.dump(2) + "\n";
       if (o->out.empty()) {

@@ -6,7 +6,6 @@
 // builds its PlantKind with it.
 #include <Eigen/LU>
 #include <functional>
-#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -66,16 +65,14 @@ class PlantAdapter final : public AnyPlant {
   int pack_width() const override { return lane_width(active_isa()); }
 
   std::vector<std::pair<double, double>> command_limits(const Scenario& scenario) const override {
-    const int m = actuator_count();
+    // The range the loop is given (a trimmed plant's deviation; ±inf without one), within the
+    // saturation, as the lane host forms it.
+    LaneTask lane;
+    trim(plant_, lane);
     std::vector<std::pair<double, double>> out;
-    for (int j = 0; j < m; ++j) {
-      double lo = -std::numeric_limits<double>::infinity(), hi = -lo;
-      if constexpr (kTrimmed) {
-        const auto t = plant_.actuator_trim();
-        lo = t.lo[j];
-        hi = t.hi[j];
-      }
-      const CommandLimits c = ::ftc::sim::detail::command_limits(scenario.saturation.limit(j), lo, hi);
+    for (int j = 0; j < actuator_count(); ++j) {
+      const CommandLimits c =
+          detail::command_limits(scenario.saturation.limit(j), lane.lo[j], lane.hi[j]);
       out.emplace_back(c.lo, c.hi);
     }
     return out;

@@ -93,6 +93,37 @@ std::vector<std::array<double, 3>> axes_of(const RigidBodySpec& s) {
   return a;
 }
 
+// The simulated plant's torque per unit command of each actuator: its axis turned by its
+// misalignment and scaled by its effectiveness (the model's axes when a spec has neither).
+std::vector<std::array<double, 3>> true_axes(const RigidBodySpec& s) {
+  std::vector<std::array<double, 3>> axes = axes_of(s);
+  for (std::size_t j = 0; j < axes.size(); ++j) {
+    axes[j] = misaligned_axis(axes[j],
+                              s.actuator_misalignment.empty() ? 0.0 : s.actuator_misalignment[j]);
+    const double k = s.actuator_scale.empty() ? 1.0 : s.actuator_scale[j];
+    for (double& x : axes[j]) x = k * x;
+  }
+  return axes;
+}
+
+// D Dᵀ's eigenvalues, ascending, of the columns `axes`: the smallest against the largest says
+// whether they span R³.
+Eigen::Vector3d span_eigenvalues(const std::vector<std::array<double, 3>>& axes) {
+  Eigen::Matrix3d DDt = Eigen::Matrix3d::Zero();
+  for (const auto& v : axes) {
+    const Eigen::Vector3d d(v[0], v[1], v[2]);
+    DDt += d * d.transpose();
+  }
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(DDt).eigenvalues();
+}
+
+// The rank of a multirotor's torques per newton (3 × rotors).
+Eigen::Index torque_rank(const Eigen::MatrixXd& A) {
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(A);
+  lu.setThreshold(1e-9);
+  return lu.rank();
+}
+
 double limit_of(const std::vector<double>& max, std::size_t j) {
   if (max.empty()) return 0.0;
   return max.size() == 1 ? max[0] : (j < max.size() ? max[j] : 0.0);
@@ -242,12 +273,7 @@ std::vector<FieldError> validate(const RigidBodySpec& s, const std::string& path
   check_per_actuator(errs, s.actuator_misalignment, m, path + "/actuator_misalignment", true);
   if (!errs.empty()) return errs;
   // The axes must span R³: D Dᵀ's smallest eigenvalue against its largest.
-  Eigen::Matrix3d DDt = Eigen::Matrix3d::Zero();
-  for (const auto& v : axes_of(s)) {
-    const Eigen::Vector3d d(v[0], v[1], v[2]);
-    DDt += d * d.transpose();
-  }
-  const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(DDt).eigenvalues();
+  const Eigen::Vector3d ev = span_eigenvalues(axes_of(s));
   if (!(ev[0] > 1e-12 * ev[2]))
     errs.push_back({s.preset.empty() ? a + "/axes" : a,
                     "the actuator axes must span R³ (torque about every axis), but they lie in "
@@ -257,16 +283,7 @@ std::vector<FieldError> validate(const RigidBodySpec& s, const std::string& path
   // must span R³ as well: a wheel at effectiveness 0, or one turned onto another's axis, can
   // leave them in a plane, and no plant can be built (simulated) from that.
   if (errs.empty() && (!s.actuator_scale.empty() || !s.actuator_misalignment.empty())) {
-    const auto axes = axes_of(s);
-    Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
-    for (std::size_t j = 0; j < axes.size(); ++j) {
-      const auto v = misaligned_axis(
-          axes[j], s.actuator_misalignment.empty() ? 0.0 : s.actuator_misalignment[j]);
-      const double k = s.actuator_scale.empty() ? 1.0 : s.actuator_scale[j];
-      const Eigen::Vector3d d(k * v[0], k * v[1], k * v[2]);
-      T += d * d.transpose();
-    }
-    const Eigen::Vector3d tv = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(T).eigenvalues();
+    const Eigen::Vector3d tv = span_eigenvalues(true_axes(s));
     if (!(tv[0] > 1e-12 * tv[2]))
       errs.push_back({path + (s.actuator_scale.empty() ? "/actuator_misalignment"
                                                         : "/actuator_scale"),
@@ -333,13 +350,11 @@ std::vector<FieldError> validate(const MultirotorSpec& s, const std::string& pat
   for (std::size_t i = 0; i < r.size(); ++i)
     A.col(static_cast<Eigen::Index>(i)) << r[i].position[1], -r[i].position[0],
         r[i].spin * r[i].moment_constant;
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(A);
-  lu.setThreshold(1e-9);
-  if (lu.rank() < 3) {
+  if (const Eigen::Index rank = torque_rank(A); rank < 3) {
     errs.push_back({rp,
                     "the rotors cannot make a torque about every axis (their torques per "
                     "newton span " +
-                        std::to_string(lu.rank()) +
+                        std::to_string(rank) +
                         " dimensions of 3: rotors on a line, or every spin the same)"});
     return errs;
   }
@@ -348,13 +363,11 @@ std::vector<FieldError> validate(const MultirotorSpec& s, const std::string& pat
     Eigen::MatrixXd As = A;
     for (Eigen::Index i = 0; i < As.cols(); ++i)
       As.col(i) *= s.actuator_scale[static_cast<std::size_t>(i)];
-    Eigen::FullPivLU<Eigen::MatrixXd> slu(As);
-    slu.setThreshold(1e-9);
-    if (slu.rank() < 3) {
+    if (const Eigen::Index rank = torque_rank(As); rank < 3) {
       errs.push_back({path + "/actuator_scale",
                       "with these values the simulated plant's rotors no longer make a torque "
                       "about every axis (their torques span " +
-                          std::to_string(slu.rank()) +
+                          std::to_string(rank) +
                           " dimensions of 3); a wholly lost rotor is a loss_of_effectiveness "
                           "fault"});
       return errs;
@@ -387,14 +400,11 @@ RigidBodyParams rigid_body_params(const RigidBodySpec& s) {
   p.model = "rigid_body";
   p.kinematics = BodyKinematics::euler_321;
   p.inertia = s.inertia;
-  const auto axes = axes_of(s);
+  // The simulated plant's axes and effectiveness (the model's: the axes as given, 1).
+  const auto axes = true_axes(s);
   p.actuators = static_cast<int>(axes.size());
   for (std::size_t j = 0; j < axes.size(); ++j) {
-    // The simulated plant's axis and effectiveness (the model's: the axis as given, 1).
-    const std::array<double, 3> axis = misaligned_axis(
-        axes[j], s.actuator_misalignment.empty() ? 0.0 : s.actuator_misalignment[j]);
-    const double scale = s.actuator_scale.empty() ? 1.0 : s.actuator_scale[j];
-    for (std::size_t k = 0; k < 3; ++k) p.torque[k * MA + j] = scale * axis[k];
+    for (std::size_t k = 0; k < 3; ++k) p.torque[k * MA + j] = axes[j][k];
     const double lim = limit_of(s.max, j);
     if (lim > 0.0) {
       p.lo[j] = -lim;

@@ -245,12 +245,12 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
     last_evaluations = h.evaluations;
     // The ETA counts what the run evaluates after its iterations too: the comparison and the
     // noise floor (issue 41: "1944/1944 · ETA 0.0 s" with half of the job still to run).
-    // (The front's size, for its noise floor's reruns: only when reported or said, as finding
-    // the front of every trial so far costs a pass over them.)
+    // The front's size (its noise floor reruns each point): found once per iteration, for the
+    // report, the storage's progress and the ETA.
     const bool last = h.iteration == job.tuning->algorithm->iterations();
-    const std::size_t points = front_objectives(job) >= 2 && (o.on_iteration || last)
-                                   ? front_trials(job, trials, trials.size()).size()
-                                   : 0;
+    const bool front = front_objectives(job) >= 2;
+    const std::size_t points = front ? front_trials(job, trials, trials.size()).size() : 0;
+    if (front) storage.front_so_far(points);
     const std::int64_t finishing = finishing_evaluations(job, points);
     const double left = static_cast<double>((stalled ? 0 : total - h.evaluations) + finishing);
     const double eta = done > 0 ? elapsed * left / done : 0.0;
@@ -282,7 +282,7 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
       return true;
     }
     IterationReport report{h, total, job.tuning->algorithm->iterations(), elapsed, eta, {}};
-    if (front_objectives(job) >= 2) report.front_points = points;
+    if (front) report.front_points = points;
     const bool go_on = o.on_iteration(report);
     result.stopped = !go_on;
     if (go_on) say_finishing();

@@ -109,15 +109,19 @@ void apply_actuator_draws(const Job& job, sim::Scenario& s, const std::vector<do
   const EnsembleConfig& e = *job.ensemble;
   const sim::PlantKind& kind = *sim::find_plant_kind(job.plant.model);
   const auto m = static_cast<std::size_t>(kind.actuators_of(job.plant.values));
-  for (const auto& [parameter, d, draws, model_value] :
-       {std::tuple{"actuator_scale", &e.actuator_scale, &scale_draws, 1.0},
-        std::tuple{"actuator_misalignment", &e.actuator_misalignment, &misalignment_draws, 0.0}}) {
+  // A scale multiplies the base's effectiveness (the model's: 1); an angle adds to its
+  // misalignment (the model's: 0).
+  enum class Combine { multiply, add };
+  for (const auto& [parameter, d, draws, model_value, combine] :
+       {std::tuple{"actuator_scale", &e.actuator_scale, &scale_draws, 1.0, Combine::multiply},
+        std::tuple{"actuator_misalignment", &e.actuator_misalignment, &misalignment_draws, 0.0,
+                   Combine::add}}) {
     if (!*d || !kind.find_uncertain(parameter)) continue;
     const std::vector<double>* given = s.true_value(parameter);
     std::vector<double> v = given && given->size() == m ? *given
                                                          : std::vector<double>(m, model_value);
     for (std::size_t j = 0; j < m && j < draws->size(); ++j)
-      v[j] = model_value == 1.0 ? v[j] * (*draws)[j] : v[j] + (*draws)[j];
+      v[j] = combine == Combine::multiply ? v[j] * (*draws)[j] : v[j] + (*draws)[j];
     s.set_true_value(parameter, std::move(v));
   }
 }

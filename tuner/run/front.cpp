@@ -306,18 +306,36 @@ std::string dominated_warning(const Front& front, std::size_t i) {
   if (i >= front.points.size() || !front.points[i].dominated_by) return "";
   const FrontPoint& p = front.points[i];
   const std::string& label = *p.dominated_by;
+  // Each soft goal's two values, and where the controller is better, by how much against the
+  // point's noise floor there: a difference inside it is no difference.
   std::string values;
   for (const FrontCompared& c : front.compared)
     if (c.label == label)
       for (std::size_t k : front.soft) {
-        char buf[160];
-        std::snprintf(buf, sizeof buf, "%s%s %.4g against %.4g", values.empty() ? "" : ", ",
-                      front.goals[k].label.c_str(), c.goals[k], p.goals[k]);
+        char buf[240];
+        int n = std::snprintf(buf, sizeof buf, "%s%s %.4g against %.4g",
+                              values.empty() ? "" : ", ", front.goals[k].label.c_str(),
+                              c.goals[k], p.goals[k]);
+        if (c.goals[k] < p.goals[k] && k < p.noise_floor.size() && p.noise_floor[k] &&
+            n > 0 && static_cast<std::size_t>(n) < sizeof buf)
+          std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n),
+                        ", %.3g %% better, %s the point's noise floor of %.2g %%",
+                        100 * (p.goals[k] - c.goals[k]) / std::abs(p.goals[k]),
+                        (p.goals[k] - c.goals[k]) / std::abs(p.goals[k]) > *p.noise_floor[k]
+                            ? "beyond"
+                            : "inside",
+                        100 * *p.noise_floor[k]);
         values += buf;
       }
-  return "front point " + std::to_string(i) + " is dominated by " + label + " (" + values +
+  return std::string(kDominatedWarningPrefix) + std::to_string(i) + kDominatedWarningVerb +
+         label + " (" + values +
          "): that controller is no worse on every soft goal and better on one, so these gains "
          "trade nothing for what they give up; pick another point or keep " + label;
+}
+
+bool is_dominated_warning(std::string_view w) {
+  return w.rfind(kDominatedWarningPrefix, 0) == 0 &&
+         w.find(kDominatedWarningVerb) != std::string_view::npos;
 }
 
 std::vector<std::size_t> on_front(const Front& front) {
@@ -1083,9 +1101,7 @@ json pick_gains(const std::filesystem::path& dir, const std::string& rule) {
   // The run's warning about its own point's dominance goes; this point's comes.
   if (g.contains("warnings"))
     for (std::size_t w = g["warnings"].size(); w-- > 0;)
-      if (g["warnings"][w].is_string() &&
-          g["warnings"][w].get<std::string>().rfind("front point ", 0) == 0 &&
-          g["warnings"][w].get<std::string>().find(" is dominated by ") != std::string::npos)
+      if (g["warnings"][w].is_string() && is_dominated_warning(g["warnings"][w].get<std::string>()))
         g["warnings"].erase(w);
   if (const std::string d = dominated_warning(front, i); !d.empty()) {
     goals["front"]["dominated_by"] = *p.dominated_by;

@@ -26,23 +26,26 @@ double trial_scenarios(const Job& job) {
 
 }  // namespace
 
-double listed_scenario_bytes(const Job& job) {
+double comparison_trajectory_numbers(const Job& job, std::int64_t max_rows) {
   if (job.scenarios.empty()) return 0.0;
-  // The comparison's trajectories: a row of one time and 2(n + m) numbers every
-  // comparison_record_every samples, per compared controller (its entries, the job's, the tuned).
   const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
   const double width = kind ? 1.0 + 2.0 * (kind->axes + kind->actuators_of(job.plant.values)) : 1.0;
-  const std::int64_t every = comparison_record_every(job);
+  const std::int64_t every = comparison_record_every(job, max_rows);
   double rows = 0;
   for (const sim::Scenario& s : job.scenarios)
     rows += static_cast<double>((s.samples() + every - 1) / every);
+  return rows * width * (static_cast<double>(job.compare.size()) + 2.0);
+}
+
+double listed_scenario_bytes(const Job& job) {
+  if (job.scenarios.empty()) return 0.0;
   const double controllers = static_cast<double>(job.compare.size()) + 2.0;
   double faults = 0;
   for (const sim::Scenario& s : job.scenarios) faults += static_cast<double>(s.faults.size());
   return static_cast<double>(job.scenarios.size()) *
              (kBytesPerScenario + controllers * kBytesPerScenarioController) +
          faults * (kBytesPerFault + controllers * kBytesPerFaultController) +
-         rows * width * kBytesPerTrajectoryNumber * controllers;
+         comparison_trajectory_numbers(job) * kBytesPerTrajectoryNumber;
 }
 
 double bytes_per_trial(const Job& job) {

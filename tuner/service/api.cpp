@@ -184,35 +184,22 @@ std::string megabytes(double bytes) {
 }
 
 // The numbers in a job's result files: its comparison trajectories (the rows the service
-// records, of one time and 2(n + m) numbers) and trials.csv (a row per evaluation).
+// records) and trials.csv (a row per evaluation).
 double result_numbers(const Job& job, std::int64_t trajectory_rows) {
-  const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
-  const double width = kind ? 1 + 2.0 * (kind->axes + kind->actuators_of(job.plant.values)) : 1;
-  const std::int64_t every = comparison_record_every(job, trajectory_rows);
-  double rows = 0;
-  for (const sim::Scenario& s : job.scenarios)
-    rows += static_cast<double>((s.samples() + every - 1) / every);
-  const double controllers = static_cast<double>(job.compare.size()) + 2;
   // iteration, index, the parameters, objective, fitness, diverged, accepted.
   const double trial_numbers = 6.0 + static_cast<double>(job.tuning->parameters.size());
-  return rows * width * controllers +
+  return comparison_trajectory_numbers(job, trajectory_rows) +
          static_cast<double>(job.tuning->algorithm->evaluations()) * trial_numbers;
 }
 
-// A low estimate of the bytes of a job's result files, at 8 bytes a number, fewer than the ~12
-// a number takes in the Table 1 job's files. It refuses at once a job that could only fail at
-// its end; the runner checks the real size.
-double estimated_result_bytes(const Job& job, std::int64_t trajectory_rows) {
-  return 8.0 * result_numbers(job, trajectory_rows);
-}
-
-// What the service holds of a job's result files besides what the run made: its copy handed to
-// the store. At 13 bytes a number: a job of 6 scenarios of 200 s and 12 controllers stored
-// 278.1 MB for 21.6e6 numbers (12.9 each), and peaked the server 300 MB above `ftctune run`'s
-// 696 MB.
-double held_result_bytes(const Job& job, std::int64_t trajectory_rows) {
-  return 13.0 * result_numbers(job, trajectory_rows);
-}
+// A low estimate of the bytes of a job's result files, fewer than the ~12 a number takes in the
+// Table 1 job's files: it refuses at once a job that could only fail at its end; the runner
+// checks the real size.
+constexpr double kStoredBytesPerNumber = 8.0;
+// What the service holds of a job's result files besides what the run made, its copy handed to
+// the store: a job of 6 scenarios of 200 s and 12 controllers stored 278.1 MB for 21.6e6
+// numbers (12.9 each), and peaked the server 283 MB above `ftctune run`'s 713 MB.
+constexpr double kHeldBytesPerNumber = 13.0;
 
 std::string seconds_text(double s) {
   char buf[32];
@@ -480,7 +467,8 @@ std::optional<Job> Api::check_job(const std::string& text, httplib::Response& re
   }
 
   // Memory by design: what the run would hold, estimated before it is queued.
-  const double held = held_result_bytes(job, opt_.trajectory_rows);
+  const double numbers = result_numbers(job, opt_.trajectory_rows);
+  const double held = kHeldBytesPerNumber * numbers;
   if (const double need = estimated_run_bytes(job) + held;
       need > static_cast<double>(opt_.max_job_memory_bytes)) {
     send_error(
@@ -496,7 +484,7 @@ std::optional<Job> Api::check_job(const std::string& text, httplib::Response& re
         json{{"bytes", need}, {"limit", opt_.max_job_memory_bytes}});
     return std::nullopt;
   }
-  if (const double bytes = estimated_result_bytes(job, opt_.trajectory_rows);
+  if (const double bytes = kStoredBytesPerNumber * numbers;
       bytes > static_cast<double>(opt_.max_stored_bytes)) {
     send_error(res, 400, "job_too_large",
                "the job's results would take at least " + megabytes(bytes) +

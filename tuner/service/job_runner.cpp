@@ -10,7 +10,6 @@
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/api/api.hpp"
 #include "ftc/tune/run/documents.hpp"
-#include "ftc/tune/run/front.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 
 namespace ftc::tune::service_detail {
@@ -71,7 +70,7 @@ class JobStoreStorage final : public RunStorage {
       // hypervolume: against the reference point of the front so far, which moves as the
       // front does, the figure could fall while the front improves; history.csv's is against
       // the final front's reference.)
-      best = {{"front", {{"points", front_trials(*front_, trials, trials.size()).size()}}}};
+      best = {{"front", {{"points", front_points_}}}};
       best_fitness = std::numeric_limits<double>::quiet_NaN();
     } else {
       for (std::size_t i = 0; i < names_.size() && i < h.best.size(); ++i)
@@ -102,6 +101,7 @@ class JobStoreStorage final : public RunStorage {
     }
     return true;
   }
+  void front_so_far(std::size_t points) override { front_points_ = points; }
   void describe(json& run) const override {
     // Not a file: the job's id, when it first started and how often.
     run.erase("job_file");
@@ -113,11 +113,10 @@ class JobStoreStorage final : public RunStorage {
     files = made;
   }
 
-  // The job the run tunes (it outlives the run): its parameters' names and, for a front, what
-  // the progress records.
+  // The job the run tunes: its parameters' names, and whether the progress records a front.
   void name_parameters(const Job& job) {
     for (const ParameterBounds& b : job.tuning->parameters) names_.push_back(b.name);
-    if (front_objectives(job) >= 2) front_ = &job;
+    front_ = front_objectives(job) >= 2;
   }
 
   std::string too_large;                      // why the run was stopped, if its checkpoint was
@@ -131,7 +130,8 @@ class JobStoreStorage final : public RunStorage {
   std::function<void(const StoreError&)> failed_;
   std::function<void()> changed_;
   std::vector<std::string> names_;
-  const Job* front_ = nullptr;  // a job with two or more soft goals
+  bool front_ = false;            // a job with two or more soft goals
+  std::size_t front_points_ = 0;  // its front's size so far (front_so_far)
   std::size_t stored_trials_ = 0;
   std::uint64_t trial_bytes_ = 0;  // of the trials checkpointed so far
 };

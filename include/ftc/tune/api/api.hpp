@@ -99,6 +99,10 @@ class RunStorage {
   virtual bool save_checkpoint(const std::string& job_sha256, std::uint64_t seed,
                                const HistoryRow& h, const Optimizer& optimizer,
                                const std::vector<Trial>& trials) = 0;
+  // For a job with two or more soft goals, before each iteration's save_checkpoint: the size of
+  // the front of the trials so far, which the run has found for its own report (a storage that
+  // records progress need not find it again).
+  virtual void front_so_far(std::size_t /*points*/) {}
   // Its own fields of run.json (the service's job id and attempts), added before it is written.
   virtual void describe(nlohmann::json& run) const { (void)run; }
   // The files of a finished run, or of a stopped one kept partial (RunJobOptions::keep_partial):

@@ -37,6 +37,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ftc/tune/job/job.hpp"
@@ -145,8 +146,13 @@ void apply_noise_floor(Front& front,
 // no worse on every one, better on one; an infeasible compared controller dominates nothing).
 void mark_dominated_by_compared(Front& front);
 // The warning gains.json carries when its point `i` is dominated by a compared controller ("" when
-// it is not): "front point I is dominated by LABEL: ...".
+// it is not): "front point I is dominated by LABEL (...): ...", each soft goal's values and, where
+// the controller is better, whether by more than the point's noise floor. is_dominated_warning
+// tells such a warning among others (pick replaces the run's with its point's).
+inline constexpr const char* kDominatedWarningPrefix = "front point ";
+inline constexpr const char* kDominatedWarningVerb = " is dominated by ";
 std::string dominated_warning(const Front& front, std::size_t i);
+bool is_dominated_warning(std::string_view warning);
 
 // The held-out front of a run's front: `goals[i]` are point i's goal values on the held-out
 // scenarios; `compared` the job's compare entries and its own controller, held out alike.

@@ -47,6 +47,10 @@ inline constexpr double kBytesPerTrialNumber = 32.0;
 // kBytesPerFaultController a fault and the rows of its trajectory (kBytesPerTrajectoryNumber a
 // number).
 double listed_scenario_bytes(const Job& job);
+// The numbers of the comparison's trajectories of the listed scenarios: a row of one time and
+// 2(n + m) numbers every comparison_record_every(job, max_rows) samples, per compared controller
+// (its compare entries, the job's own and the tuned one).
+double comparison_trajectory_numbers(const Job& job, std::int64_t max_rows = 0);
 // The bytes a member takes in a run of the job: kBytesPerMemberValue for each controller scored
 // at once (its population, the incumbent, its compare entries, the job's and the tuned
 // controller), times one plus its goals.
