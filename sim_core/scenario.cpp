@@ -88,6 +88,10 @@ std::vector<FieldError> Scenario::validate(const std::string& path, int axes, in
                             detail::fmt_num(*tau)});
     }
   }
+  if (sensors) {
+    auto e = sensors->validate(path + "/sensors", axes);
+    errs.insert(errs.end(), e.begin(), e.end());
+  }
   return errs;
 }
 

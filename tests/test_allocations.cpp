@@ -104,7 +104,15 @@ Scenario hexarotor_scenario() {
 }
 
 TEST_P(AllocationFree, KernelsAllocateNothingPerSample) {
+  // With sensors (SPEC §18): the noise comes from a table drawn once per scenario and the delayed
+  // measurements from a ring sized once per pack.
+  Scenario sensed = Scenario::paper();
+  sensed.sensors = SensorModel{};
+  sensed.sensors->rate.noise = 1e-3;
+  sensed.sensors->delay = 3;
+  sensed.sensors->acceleration.source = AccelerationSource::differentiated;
   const std::pair<const char*, Scenario> plants[] = {{"spacecraft", Scenario::paper()},
+                                                     {"spacecraft", sensed},
                                                      {"manipulator", arm_scenario()},
                                                      {"hexarotor", hexarotor_scenario()},
                                                      {"rigid_body", hexarotor_scenario()},

@@ -79,6 +79,7 @@ class ClosedLoop {
                             MetricLanes<T, N, M>& metrics)
       : su_(su),
         plant_(plant),
+        sensed_(plant),
         law_(law),
         metrics_(metrics),
         Ts_(su.Ts),
@@ -89,7 +90,12 @@ class ClosedLoop {
         act_(su.actuator),
         act_gain_(row(su.act_gain)),
         act_step_(row(su.act_step)),
-        act_neg_(-act_step_) {
+        act_neg_(-act_step_),
+        delay_(su.delay),
+        differentiated_(su.differentiated),
+        angle_step_(row(su.angle_step)),
+        rate_step_(row(su.rate_step)),
+        lowpass_gain_(row(su.lowpass_gain)) {
     if constexpr (kTrimmed)
       for (int j = 0; j < M; ++j) u0_[j] = row(su.u0[j]);
     for (int i = 0; i < S2; ++i) x0_[i] = row(su.x0[i]);
@@ -100,6 +106,8 @@ class ClosedLoop {
       limit_hi_[j] = row(su.metrics.limit_hi[j]);
     }
     x_ = x0_;
+    rate_prev_.fill(T(0.0));
+    lowpass_.fill(T(0.0));
     u_prev_.fill(T(0.0));
     ua_.fill(T(0.0));
     live_count_ = su.lanes;
@@ -117,9 +125,12 @@ class ClosedLoop {
   // Whether some lane still counts (the others have diverged).
   FTC_HOT_INLINE bool running() const { return live_count_ > 0; }
 
-  // Sample k of every lane, t = k·Ts, `e` its exogenous inputs (sample_stride values):
+  // Sample k of every lane, t = k·Ts, `e` its exogenous inputs (sample_stride values), `nz` its
+  // measurement noise (with sensors: 2N rows of kStride values, PackHost::noise):
   //   a_k = f(X) + G(X)·applied(t, u_{k-1}) + Δ(t)   the acceleration sensor, before the command
   //   u_k = law(X1, X2, a_k, f_model(X), G⁺_model(X))
+  // or with sensors (ftc/sim/sensors.hpp) u_k = law(X1m, X2m, a_k or am, f_model(Xm),
+  // G⁺_model(Xm)), Xm = (X1m, X2m) the measurement the controller reads at sample k.
   //   the metrics of (t, X, u_k)
   //   substeps × RK4 with u_k held; faults and Δ at each stage time
   // With an actuator model (PackSetup::actuator, docs/model.md) the plant is driven by the
@@ -128,26 +139,50 @@ class ClosedLoop {
   // with |X_i| > 1e6, inf or NaN has diverged: it stops counting, restarts from X(0) with a reset
   // controller (so that it takes no slow paths), and its results are those at that step. `o`
   // receives X(t_k), u_k, u_a(t_k) and the lanes that diverged in this step.
-  FTC_HOT_INLINE void step(std::int64_t k, const double* e, SampleLanes<N, M>& o) {
+  // Compiled with and without sensors (Sensed: PackSetup::sensors), so that a loop without them
+  // is today's loop, no test or copy added.
+  template <bool Sensed>
+  FTC_HOT_INLINE void step(std::int64_t k, const double* e, const double* nz,
+                           SampleLanes<N, M>& o) {
+    law::Sample<T, N> m;
+    m.t = static_cast<double>(k) * Ts_;
+    [[maybe_unused]] T G_pinv[M * N];
+    // With sensors the controller's model terms are those at the state it reads, from a copy of
+    // the plant's lane code (sensed_): a plant's scratch (angle trackers, the state input() and
+    // pinv() read) then follows the true state alone, so the truth's bits do not depend on the
+    // measurement.
+    if constexpr (Sensed) {
+      measure(k, nz, m);
+      VS xm;
+      for (int r = 0; r < N; ++r) {
+        xm[r] = m.X1[r];
+        xm[N + r] = m.X2[r];
+      }
+      VN fm, fm_model;
+      sensed_.drift(xm, fm, su_.mismatch ? &fm_model : nullptr);
+      m.f = su_.mismatch ? fm_model : fm;
+      if constexpr (!kConstantInput) sensed_.pinv(xm, G_pinv);
+    }
     VN f, f_model;
-    plant_.drift(x_, f, su_.mismatch ? &f_model : nullptr);
+    plant_.drift(x_, f, su_.mismatch && !Sensed ? &f_model : nullptr);
     if constexpr (requires { plant_.observe(x_, counting_); }) plant_.observe(x_, counting_);
     // The plant's input now: the actuators' output, or the command held since t_{k-1}.
     const VN a = accel(f, forcing(e, act_ ? ua_ : u_prev_));
-    law::Sample<T, N> m;
-    m.t = static_cast<double>(k) * Ts_;
-    for (int r = 0; r < N; ++r) {
-      m.X1[r] = x_[r];
-      m.X2[r] = x_[N + r];
+    if constexpr (!Sensed) {
+      for (int r = 0; r < N; ++r) {
+        m.X1[r] = x_[r];
+        m.X2[r] = x_[N + r];
+      }
+      m.f = su_.mismatch ? f_model : f;
+      m.a = a;
+    } else if (!differentiated_) {
+      m.a = a;
     }
-    m.a = a;
-    m.f = su_.mismatch ? f_model : f;
     VM u;
     if constexpr (kConstantInput) {
       law_.step(m, su_.G_pinv, u);
     } else {
-      T G_pinv[M * N];
-      plant_.pinv(x_, G_pinv);
+      if constexpr (!Sensed) plant_.pinv(x_, G_pinv);
       law_.step(m, static_cast<const T*>(G_pinv), u);
     }
     for (int r = 0; r < S2; ++r) lane::store(x_[r], o.x[r]);
@@ -182,6 +217,7 @@ class ClosedLoop {
     for (int r = 0; r < M; ++r) u_prev_[r] = lane::select(inside, u_prev_[r], T(0.0));
     if (act_)
       for (int r = 0; r < M; ++r) ua_[r] = lane::select(inside, ua_[r], T(0.0));
+    if constexpr (Sensed) reset_sensors(inside);
     law_.reset_lanes(inside);
   }
 
@@ -265,6 +301,70 @@ class ClosedLoop {
     }
     return d;
   }
+  // The sensors (ftc/sim/sensors.hpp): the measurement of sample k, X1m = q_a(X1 + noise), X2m =
+  // q_r(X2 + noise) and, differentiated, am the low-passed difference of X2m; with a delay d,
+  // kept in the ring and read back from sample max(0, k − d). Into m's X1, X2 (and a).
+  FTC_HOT_INLINE static T quantize(const T& x, const T& q) {
+    // q · round(x / q), ties away from zero; x where q = 0. round_to_int rounds ties to even: a
+    // tie it took down (to even) is taken up. |t| ≥ 2^51 is already whole.
+    const T t = x / q;
+    const T a = lane::abs(t);
+    T r = lane::round_to_int(a);
+    r = lane::select(r - a == T(-0.5), r + T(1.0), r);
+    r = lane::select(a >= T(0x1p51), a, r);
+    r = lane::select(t < T(0.0), -r, r);
+    return lane::select(q > T(0.0), q * r, x);
+  }
+  FTC_HOT_INLINE T noise_row(const double* nz, int r) const {
+    if constexpr (SharedInputs)
+      return T(nz[r]);
+    else
+      return lane::load_lanes<T>(nz + r * kStride);
+  }
+  FTC_HOT_INLINE void measure(std::int64_t k, const double* nz, law::Sample<T, N>& m) {
+    std::array<T, 3 * N> now;
+    for (int i = 0; i < N; ++i) {
+      now[i] = quantize(x_[i] + noise_row(nz, i), angle_step_);
+      now[N + i] = quantize(x_[N + i] + noise_row(nz, N + i), rate_step_);
+    }
+    if (differentiated_)
+      for (int i = 0; i < N; ++i) {
+        const T d = k == 0 ? T(0.0) : (now[N + i] - rate_prev_[i]) / T(Ts_);
+        lowpass_[i] = lowpass_[i] + lowpass_gain_ * (d - lowpass_[i]);
+        rate_prev_[i] = now[N + i];
+      }
+    for (int i = 0; i < N; ++i) now[2 * N + i] = lowpass_[i];  // 0 unless differentiated
+    if (delay_ > 0) {
+      const int slots = delay_ + 1;
+      double* ring = su_.ring;
+      for (int r = 0; r < 3 * N; ++r)
+        lane::store(now[r], ring + (static_cast<std::size_t>(k % slots) * 3 * N + r) * kMaxLanes);
+      const std::int64_t from = k < delay_ ? 0 : (k - delay_) % slots;
+      for (int r = 0; r < 3 * N; ++r)
+        now[r] = lane::load_lanes<T>(ring + (static_cast<std::size_t>(from) * 3 * N + r) *
+                                                kMaxLanes);
+    }
+    for (int i = 0; i < N; ++i) {
+      m.X1[i] = now[i];
+      m.X2[i] = now[N + i];
+      m.a[i] = now[2 * N + i];
+    }
+  }
+  // Lanes that restart (not `keep`) start their sensors afresh, their delayed measurements at X(0).
+  void reset_sensors(const Mask& keep) {
+    for (int i = 0; i < N; ++i) {
+      rate_prev_[i] = lane::select(keep, rate_prev_[i], T(0.0));
+      lowpass_[i] = lane::select(keep, lowpass_[i], T(0.0));
+    }
+    if (delay_ == 0) return;
+    for (int slot = 0; slot <= delay_; ++slot)
+      for (int r = 0; r < 3 * N; ++r) {
+        double* p = su_.ring + (static_cast<std::size_t>(slot) * 3 * N + r) * kMaxLanes;
+        const T start = r < 2 * N ? x0_[r] : T(0.0);
+        lane::store(lane::select(keep, lane::load_lanes<T>(p), start), p);
+      }
+  }
+
   // The actuator model's update over a half step, u_a ← u_a + clamp((u_c − u_a)·gain,
   // ±max_step) (ftc/sim/scenario.hpp's ActuatorSteps), towards the command u_c.
   FTC_HOT_INLINE VM lag(const VM& from, const VM& uc) const {
@@ -323,6 +423,7 @@ class ClosedLoop {
 
   const PackSetup<N, M>& su_;
   Plant& plant_;
+  Plant sensed_;  // with sensors: the plant's lane code at the measured state
   Law& law_;
   MetricLanes<T, N, M>& metrics_;
   std::array<T, M> u0_;  // kTrimmed: the operating point
@@ -332,6 +433,10 @@ class ClosedLoop {
   const int S_;
   const bool act_;
   const T act_gain_, act_step_, act_neg_;
+  const int delay_;
+  const bool differentiated_;
+  const T angle_step_, rate_step_, lowpass_gain_;
+  VN rate_prev_, lowpass_;  // differentiated: X2m_{k-1} and y_{k-1}
   VS x0_, x_;
   VM u_prev_, ua_;
   bool live_[W];  // lanes still counting
@@ -359,11 +464,20 @@ void run_closed_loop(const PackSetup<N, M>& su, MakePlant&& make_plant, MakeLaw&
   const int stride = Loop::sample_stride(su.substeps);
   SampleLanes<N, M> out[32];
   const int block = su.block < 32 ? su.block : 32;
+  // A sample's measurement noise: 2N rows of the inputs' stride.
+  const int noise_stride = 2 * N * ExoRows<N, M>::stride(SharedInputs, lane::kWidth<T>);
   std::int64_t k = 0;
   while (k < su.samples && loop.running()) {
     const int n = static_cast<int>(su.samples - k < block ? su.samples - k : block);
     const double* exo = host.inputs(k, n);
-    for (int i = 0; i < n; ++i, ++k) loop.step(k, exo + i * stride, out[i]);
+    if (su.sensors) {
+      const double* noise = host.noise(k, n);
+      for (int i = 0; i < n; ++i, ++k)
+        loop.template step<true>(k, exo + i * stride, noise + i * noise_stride, out[i]);
+    } else {
+      for (int i = 0; i < n; ++i, ++k)
+        loop.template step<false>(k, exo + i * stride, nullptr, out[i]);
+    }
     if (su.want_samples) host.samples(k - n, n, out);
   }
   loop.finish(fin);

@@ -119,6 +119,18 @@ struct PackSetup {
   std::int64_t samples = 0;
   int block = 16;  // samples per exchange with the host
 
+  // Sensors (ftc/sim/sensors.hpp, SPEC §18): every lane of a pack has them or none, with one
+  // delay and one acceleration source. The noise comes from the host (PackHost::noise); per lane
+  // the quantisation steps (0: none) and the low-pass's gain Ts / (τ + Ts); `ring`, host-owned
+  // storage for the delayed measurements, (delay + 1) · 3N · kMaxLanes doubles.
+  bool sensors = false;
+  int delay = 0;
+  bool differentiated = false;
+  double angle_step[kMaxLanes] = {};
+  double rate_step[kMaxLanes] = {};
+  double lowpass_gain[kMaxLanes] = {};
+  double* ring = nullptr;
+
   bool want_samples = false;  // call PackHost::samples (a lane records its trajectory)
   MetricSetup<M> metrics;
 };
@@ -130,6 +142,10 @@ class PackHost {
   // The inputs of samples k0 .. k0 + n - 1: for sample k0 + i, substep j, instant q (0 start,
   // 1 midpoint, 2 end), the ExoRows of instant ((i · substeps) + j) · 3 + q, one after another.
   virtual const double* inputs(std::int64_t k0, int n) = 0;
+  // With sensors (PackSetup::sensors), the measurement noise of samples k0 .. k0 + n - 1 (called
+  // after inputs() for the same samples): for sample k0 + i, 2N rows (the angles' σ_a z, then
+  // the rates' b_k + σ_r z) of `stride` doubles each (ExoRows::stride), one after another.
+  virtual const double* noise(std::int64_t k0, int n) = 0;
   // Samples k0 .. k0 + n - 1 as simulated (lanes that had diverged before are to be ignored).
   virtual void samples(std::int64_t k0, int n, const SampleLanes<N, M>* out) = 0;
 

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "exogenous_inputs.hpp"
+#include "noise_tables.hpp"
 #include "ftc/sim/controller.hpp"
 #include "ftc/sim/disturbance.hpp"
 #include "ftc/sim/faults.hpp"
@@ -86,6 +87,12 @@ Vec<M> applied_output(const FaultEffect<M>& e, const Vec<M>& u_d, const double* 
     u[j] = w > hi[j] ? hi[j] : w;
   }
   return u;
+}
+
+// A scenario's sensors when the controller does not read the exact state (SensorModel::exact):
+// a model whose measurements are exact is no sensors at all, so its loop is the loop without.
+inline const SensorModel* active_sensors(const Scenario& s) {
+  return s.sensors && !s.sensors->exact() ? &*s.sensors : nullptr;
 }
 
 // One recorded sample; out of line, as it is rare and would bloat the loop.
@@ -304,6 +311,17 @@ class Host final : public PackHost<N, M> {
         for (const int l : g.lanes) dists_[g.dist].lanes.push_back(l);
     for (Dist& d : dists_) std::sort(d.lanes.begin(), d.lanes.end());
     done_.assign(lanes_.size(), false);
+    if (setup.sensors) {
+      for (Group& g : groups_) {
+        const Scenario& s = *g.scenario;
+        g.table = noise_table(*s.sensors, N, s.sample_time, setup.samples);
+        if (!g.table) g.noise.emplace(*s.sensors, N, s.sample_time);
+      }
+      noise_.resize(static_cast<std::size_t>(setup.block) * 2 * N *
+                    Exo::stride(setup.shared_inputs, width));
+      ring_.assign(static_cast<std::size_t>(setup.delay + 1) * 3 * N * kMaxLanes, 0.0);
+      setup.ring = ring_.data();
+    }
     buffer_.resize(static_cast<std::size_t>(setup.block) * setup.substeps * 3 * Exo::kCount *
                    Exo::stride(setup.shared_inputs, width));
     metrics_.set(lanes, width, setup.metrics);
@@ -322,6 +340,29 @@ class Host final : public PackHost<N, M> {
           scatter(g.exo.step(k0 + i, j), g.lanes, out, g.dist == Group::kOwn, true);
       }
     return buffer_.data();
+  }
+
+  // Each scenario's measurement noise, from its table (noise_tables.hpp) or drawn sample by
+  // sample from its stream, into its lanes' rows.
+  const double* noise(std::int64_t k0, int n) override {
+    const bool shared = setup_.shared_inputs;
+    const int stride = Exo::stride(shared, width_);
+    double drawn[2 * N];
+    for (int i = 0; i < n; ++i) {
+      double* rows = &noise_[static_cast<std::size_t>(i) * 2 * N * stride];
+      for (Group& g : groups_) {
+        const double* terms = drawn;
+        if (g.table)
+          terms = g.table->data() + static_cast<std::size_t>(k0 + i) * 2 * N;
+        else
+          g.noise->next(drawn, drawn + N);
+        for (const int l : g.lanes) {
+          if (shared && l > 0) break;
+          for (int r = 0; r < 2 * N; ++r) rows[r * stride + l] = terms[r];
+        }
+      }
+    }
+    return noise_.data();
   }
 
   // The recorded rows: every record_every-th sample of a lane that records, with the command
@@ -418,12 +459,17 @@ class Host final : public PackHost<N, M> {
   struct Group {
     static constexpr std::size_t kOwn = static_cast<std::size_t>(-1);
     Group(const Scenario& s, std::size_t d)
-        : dist(d),
+        : scenario(&s),
+          dist(d),
           disturbance(d == kOwn ? Disturbance(s.disturbance) : Disturbance()),
           faults(s.faults, s.saturation),
           exo(disturbance, faults, s.sample_time, s.substeps) {}
+    const Scenario* scenario;
     std::size_t dist;        // its disturbance in dists_, or kOwn
     std::vector<int> lanes;  // in increasing order
+    // With sensors (PackSetup::sensors): the scenario's noise table, else its stream.
+    std::shared_ptr<const NoiseTable> table;
+    std::optional<SensorNoise> noise;
     Disturbance disturbance;
     FaultSet faults;
     ExogenousInputs<N, M> exo;  // refers to the two above: groups never move (deque)
@@ -448,6 +494,8 @@ class Host final : public PackHost<N, M> {
   std::vector<std::size_t> group_of_;
   std::vector<bool> done_;
   std::vector<double> buffer_;  // the inputs of a block (PackHost::inputs)
+  std::vector<double> noise_;   // the measurement noise of a block (PackHost::noise)
+  std::vector<double> ring_;    // the delayed measurements (PackSetup::ring)
   MetricRows<M> metrics_;
 };
 
@@ -463,6 +511,12 @@ PackSetup<N, M> pack_setup(std::span<LaneTask* const> lanes, const Mat<N, M>* G,
   su.substeps = s0.substeps;
   su.samples = s0.samples();
   su.block = std::max(1, 16 / su.substeps);
+  // Sensors: the lanes share one delay and acceleration source (run_lanes' key).
+  if (const SensorModel* sm = active_sensors(s0)) {
+    su.sensors = true;
+    su.delay = sm->delay;
+    su.differentiated = sm->acceleration.source == AccelerationSource::differentiated;
+  }
   if (G && G_pinv)
     for (int i = 0; i < N; ++i)
       for (int j = 0; j < M; ++j) {
@@ -479,6 +533,12 @@ PackSetup<N, M> pack_setup(std::span<LaneTask* const> lanes, const Mat<N, M>* G,
     }
     for (int i = 0; i < 2 * N; ++i) su.x0[i][l] = lane.scenario->initial_state[i];
     for (int j = 0; trimmed && j < M; ++j) su.u0[j][l] = lane.u0[j];
+    if (su.sensors) {
+      const SensorModel& sm = *lane.scenario->sensors;
+      su.angle_step[l] = sm.angle.quantization;
+      su.rate_step[l] = sm.rate.quantization;
+      su.lowpass_gain[l] = su.Ts / (sm.acceleration.time_constant + su.Ts);
+    }
     if (const std::optional<ActuatorModel>& a = lane.scenario->actuator) {
       su.actuator = true;
       const ActuatorSteps st = actuator_steps(*a, 0.5 * (su.Ts / su.substeps));
@@ -534,14 +594,19 @@ template <class P>
 void run_lanes(std::span<LaneTask> lanes, const Mat<P::kAxes, P::kActuators>* G,
                const Mat<P::kActuators, P::kAxes>* G_pinv, bool trimmed, Isa isa) {
   // Lanes can share a pack when their loops have the same shape: sample time, substeps,
-  // samples, control law (and network size), and an actuator model or none. Packs are formed in
+  // samples, control law (and network size), an actuator model or none, and sensors or none. Packs are formed in
   // task order.
-  using Key = std::tuple<double, int, std::int64_t, ControllerType, double, bool>;
+  // With sensors, one delay and acceleration source (−1: none).
+  using Key = std::tuple<double, int, std::int64_t, ControllerType, double, bool, int>;
   const auto key = [](const LaneTask& l) {
     const bool adaptive = controller_info(l.config.type).adaptive;
+    const SensorModel* sm = active_sensors(*l.scenario);
+    const int sensors =
+        sm ? 2 * sm->delay + (sm->acceleration.source == AccelerationSource::differentiated) : -1;
     return Key{l.scenario->sample_time,         l.scenario->substeps,
                l.scenario->samples(),           l.config.type,
-               adaptive ? l.config.nodes : 0.0, l.scenario->actuator.has_value()};
+               adaptive ? l.config.nodes : 0.0, l.scenario->actuator.has_value(),
+               sensors};
   };
   const std::size_t width = static_cast<std::size_t>(lane_width(isa));
   std::vector<bool> taken(lanes.size(), false);

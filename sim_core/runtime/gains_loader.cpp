@@ -165,7 +165,8 @@ std::shared_ptr<const schema::Object<Gains>> make_gains_shape() {
   o->field(informational("noise_floor", "object",
                          "the tuned objective re-evaluated with the initial state nudged by a "
                          "relative 1e-12 (perturbation, repeats, objective_min, objective_max, "
-                         "relative_spread)",
+                         "relative_spread) and, with sensors, with other sensor seeds "
+                         "(sensor_seeds, rounding_spread, sensor_spread)",
                          false));
   return o;
 }

@@ -2,6 +2,7 @@
 #include "ftc/runtime/scenario_json.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string_view>
 
@@ -126,6 +127,133 @@ Ptr<sim::ActuatorModel> actuator_shape() {
   return shape;
 }
 
+// A number (for every actuator or axis) or an array of numbers (one each), kept as a list of one
+// or of several; checked against the plant by the struct's validate().
+template <class T, class Get, class ConstGet>
+typename Obj<T>::Field number_or_list(std::string key, Get get, ConstGet cget, schema::Range range,
+                                      std::string each, std::string doc) {
+  return {key, false,
+          [get, each](const json& v, const std::string& path, T& t, Errors& e) {
+            if (v.is_number()) {
+              double x = 0.0;
+              if (schema::detail::read_number(v, path, x, e)) get(t) = {x};
+              return;
+            }
+            if (!v.is_array() || v.empty()) {
+              e.push_back({path, "expected a number or an array of numbers (one per " + each +
+                                     "), got " + json_io::json_type_name(v)});
+              return;
+            }
+            std::vector<double> x(v.size());
+            for (std::size_t i = 0; i < v.size(); ++i)
+              if (!schema::detail::read_number(v[i], path + "/" + std::to_string(i), x[i], e))
+                return;
+            get(t) = std::move(x);
+          },
+          [](const T&, const std::string&, Errors&) {},  // against the plant: validate()
+          [cget, key](const T& t, json& obj) {
+            const std::vector<double>& x = cget(t);
+            if (x.size() == 1)
+              obj[key] = x[0];
+            else if (x.size() > 1)
+              obj[key] = x;
+          },
+          [range, doc] {
+            json item = {{"type", "number"}};
+            schema::annotate(range, item);
+            return json{{"description", doc},
+                        {"oneOf", json::array({item, {{"type", "array"},
+                                                      {"items", item},
+                                                      {"minItems", 1}}})}};
+          }};
+}
+
+// --- sensors (SPEC §18) ------------------------------------------------------------------------
+
+Ptr<sim::SensorModel> make_sensors_shape() {
+  using M = sim::SensorModel;
+  const schema::Range noise = M::kNoiseRange;
+  auto angle = std::make_shared<Obj<sim::AngleSensor>>("The attitude measurement X1m");
+  angle->number("noise", &sim::AngleSensor::noise, noise, "σ_a, white noise (rad, 1σ)",
+                schema::kOptional, false);
+  angle->number("quantization", &sim::AngleSensor::quantization, noise,
+                "Q_a, the measurement rounded to a multiple of it (rad); 0: none",
+                schema::kOptional, false);
+  using R = sim::RateSensor;
+  auto rate = std::make_shared<Obj<R>>("The rate measurement X2m");
+  rate->number("noise", &R::noise, noise, "σ_r, white noise (rad/s, 1σ)", schema::kOptional,
+               false);
+  rate->field(number_or_list<R>(
+      "bias", [](R& r) -> std::vector<double>& { return r.bias; },
+      [](const R& r) -> const std::vector<double>& { return r.bias; }, schema::Range::any(),
+      "axis", "b_0, the bias at t = 0 (rad/s): one number for every axis or one per axis; "
+              "default 0"));
+  rate->number("bias_walk", &R::bias_walk, noise,
+               "σ_w, the bias's random walk b_{k+1} = b_k + σ_w √Ts z (rad/s/√s)",
+               schema::kOptional, false);
+  rate->number("quantization", &R::quantization, noise,
+               "Q_r, the measurement rounded to a multiple of it (rad/s); 0: none",
+               schema::kOptional, false);
+  using A = sim::AccelerationSensor;
+  auto accel = std::make_shared<schema::Variant<A>>(
+      "source",
+      [](const A& a) {
+        return std::string(a.source == sim::AccelerationSource::ideal ? "ideal"
+                                                                      : "differentiated");
+      },
+      [](A& a, const std::string& name) {
+        a.source = name == "ideal" ? sim::AccelerationSource::ideal
+                                   : sim::AccelerationSource::differentiated;
+      },
+      "The acceleration the controller reads: ideal (the loop's exact a_k, undelayed) or "
+      "differentiated ((X2m_k - X2m_{k-1}) / Ts through a first-order low-pass, delayed as the "
+      "other measurements)");
+  accel->add("ideal", std::make_shared<Obj<A>>());
+  auto diff = std::make_shared<Obj<A>>();
+  diff->number("time_constant", &A::time_constant, noise, "τ of the low-pass (s); 0: none",
+               schema::kOptional, false);
+  accel->add("differentiated", std::move(diff));
+
+  auto o = std::make_shared<Obj<M>>(
+      "What the controller reads (SPEC §18, docs/model.md): noisy, biased, quantised and "
+      "delayed attitude and rates, and the acceleration. The metrics measure the true state. "
+      "Absent: the exact state");
+  o->field({"seed", false,
+            [](const json& v, const std::string& path, M& m, Errors& e) {
+              long long i = 0;
+              if (v.is_number_unsigned())
+                m.seed = v.get<std::uint64_t>();
+              else if (json_io::json_to_int(v, i) && i >= 0)
+                m.seed = static_cast<std::uint64_t>(i);
+              else
+                e.push_back({path, schema::detail::type_error("a non-negative integer", v)});
+            },
+            [](const M&, const std::string&, Errors&) {},
+            [](const M& m, json& obj) {
+              if (m.seed) obj["seed"] = *m.seed;
+            },
+            [] {
+              return json{{"type", "integer"},
+                          {"minimum", 0},
+                          {"maximum", std::numeric_limits<std::uint64_t>::max()},
+                          {"description",
+                           "the noise stream's seed; absent: 1, or the ensemble's seed for "
+                           "its members"}};
+            }});
+  o->object("angle", &M::angle, Ptr<sim::AngleSensor>(angle), "");
+  o->object("rate", &M::rate, Ptr<R>(rate), "");
+  o->integer("delay", &M::delay, {0, M::kMaxDelay},
+             "d: the controller at sample k reads the measurements of sample max(0, k - d)",
+             schema::kOptional, false);
+  o->object("acceleration", &M::acceleration, Ptr<A>(accel), "");
+  return o;
+}
+
+Ptr<sim::SensorModel> sensors_shape() {
+  static const Ptr<sim::SensorModel> shape = make_sensors_shape();
+  return shape;
+}
+
 Ptr<sim::Scenario> make_scenario_shape() {
   using S = sim::Scenario;
   auto o = std::make_shared<Obj<S>>(
@@ -140,44 +268,15 @@ Ptr<sim::Scenario> make_scenario_shape() {
   o->array("disturbance", &S::disturbance, disturbance_shape(), "Δ(t), a sum of sinusoids");
   o->array("faults", &S::faults, fault_shape(), "actuator faults; they add up");
   // A number (every actuator's limit) or one per actuator; checked by Scenario::validate.
-  o->field({"saturation", false,
-            [](const json& v, const std::string& path, S& s, Errors& e) {
-              if (v.is_number()) {
-                double x = 0.0;
-                if (schema::detail::read_number(v, path, x, e)) s.saturation = x;
-                return;
-              }
-              if (!v.is_array() || v.empty()) {
-                e.push_back({path, "expected a number or an array of numbers (one per actuator), "
-                                   "got " + json_io::json_type_name(v)});
-                return;
-              }
-              std::vector<double> x(v.size());
-              for (std::size_t i = 0; i < v.size(); ++i)
-                if (!schema::detail::read_number(v[i], path + "/" + std::to_string(i), x[i], e))
-                  return;
-              s.saturation = std::move(x);
-            },
-            [](const S&, const std::string&, Errors&) {},  // against the plant: validate()
-            [](const S& s, json& obj) {
-              if (s.saturation.values.size() == 1)
-                obj["saturation"] = s.saturation.values[0];
-              else if (s.saturation.per_actuator())
-                obj["saturation"] = s.saturation.values;
-            },
-            [] {
-              json limit = {{"type", "number"}};
-              schema::annotate(S::kSaturationRange, limit);
-              return json{{"description",
-                           "|u_j| <= the actuator's limit, applied to the command and again "
-                           "after the faults (so a weakened actuator delivers at most (1 - "
-                           "fraction) times it): one number for every actuator or one per "
-                           "actuator; absent: the plant's own limits only"},
-                          {"oneOf", json::array({limit, {{"type", "array"},
-                                                         {"items", limit},
-                                                         {"minItems", 1}}})}};
-            }});
+  o->field(number_or_list<S>(
+      "saturation", [](S& s) -> std::vector<double>& { return s.saturation.values; },
+      [](const S& s) -> const std::vector<double>& { return s.saturation.values; },
+      S::kSaturationRange, "actuator",
+      "|u_j| <= the actuator's limit, applied to the command and again after the faults (so a "
+      "weakened actuator delivers at most (1 - fraction) times it): one number for every "
+      "actuator or one per actuator; absent: the plant's own limits only"));
   o->optional_object("actuator", &S::actuator, actuator_shape(), "");
+  o->optional_object("sensors", &S::sensors, sensors_shape(), "");
   // Model mismatch: the true values of each parameter a registered plant declares uncertain,
   // under the parameter's name (the job's plant must declare it: validate_job).
   for (const UncertainKey& k : uncertain_keys()) {

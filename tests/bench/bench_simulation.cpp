@@ -220,4 +220,48 @@ BENCHMARK(BM_ActuatorLanes)
     ->Threads(1)
     ->UseRealTime();
 
+// The paper's scenario with realistic MEMS-gyro sensors (SPEC §18): attitude and rate noise, a
+// bias and its random walk, quantisation, a one-sample delay and the acceleration differentiated
+// from the rates through a 5 ms low-pass. Issue 39 asks for at most 25 % more than BM_Lanes per
+// sample and candidate; BM_RigidBodySensorLanes against BM_RigidBodyLanes adds the model terms
+// at the measured Euler angles.
+static Scenario with_sensors(Scenario s) {
+  SensorModel m;
+  m.angle.noise = 1e-4;
+  m.angle.quantization = 1e-5;
+  m.rate.noise = 1e-3;
+  m.rate.bias = {2e-3};
+  m.rate.bias_walk = 1e-4;
+  m.rate.quantization = 1e-5;
+  m.delay = 1;
+  m.acceleration = {AccelerationSource::differentiated, 0.005};
+  s.sensors = m;
+  return s;
+}
+
+static void BM_SensorLanes(benchmark::State& state) {
+  run_lanes(state, PlantSpec{}, with_sensors(Scenario::paper()));
+}
+
+static void BM_RigidBodySensorLanes(benchmark::State& state) {
+  RigidBodySpec body;
+  body.inertia = {20, 0.5, -0.3, 0.5, 17, 0.4, -0.3, 0.4, 15};
+  PlantSpec spec;
+  spec.model = "rigid_body";
+  spec.values = to_values(body);
+  run_lanes(state, spec, with_sensors(Scenario::paper()));
+}
+
+BENCHMARK(BM_SensorLanes)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2, 3}})
+    ->Unit(benchmark::kMillisecond)
+    ->Threads(1)
+    ->UseRealTime();
+
+BENCHMARK(BM_RigidBodySensorLanes)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2, 3}})
+    ->Unit(benchmark::kMillisecond)
+    ->Threads(1)
+    ->UseRealTime();
+
 BENCHMARK_MAIN();

@@ -332,6 +332,23 @@ def test_simulate_and_problem_metrics_name_their_columns_alike(table1_path):
             m[c].iloc[0], rel=1e-15, nan_ok=True), c
 
 
+def test_a_jobs_sensors_reach_the_loop_and_their_errors_name_the_path(table1_path):
+    job = json.loads(pathlib.Path(table1_path).read_text())
+    exact = ftctune.simulate(job)["metrics"]["ise"].iloc[0]
+    job["scenarios"][0]["sensors"] = {
+        "rate": {"noise": 1e-3}, "delay": 2,
+        "acceleration": {"source": "differentiated", "time_constant": 0.005}}
+    sensed = ftctune.simulate(job)["metrics"]["ise"].iloc[0]
+    assert sensed != exact
+    # Every candidate sees the same measurement noise: Problem scores the job's own gains alike.
+    problem = ftctune.Problem(job)
+    own = [[job["controller"][n] for n in problem.names]]
+    assert problem.metrics(own)["ise"].iloc[0] == pytest.approx(sensed, rel=1e-15)
+    job["scenarios"][0]["sensors"]["delay"] = -1
+    with pytest.raises(ftctune.InputError, match="/scenarios/0/sensors/delay"):
+        ftctune.load_job(job)
+
+
 def test_simulate_takes_tuned_gains(table1_path, tmp_path):
     result = ftctune.tune(table1_path)
     s = ftctune.simulate(table1_path, gains=result)

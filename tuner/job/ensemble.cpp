@@ -15,25 +15,7 @@ namespace ftc::tune {
 using nlohmann::json;
 using schema::Errors;
 
-// --- the stream --------------------------------------------------------------------------------
-
-std::uint64_t SplitMix64::mix(std::uint64_t z) {
-  z ^= z >> 30;
-  z *= 0xBF58476D1CE4E5B9ULL;
-  z ^= z >> 27;
-  z *= 0x94D049BB133111EBULL;
-  z ^= z >> 31;
-  return z;
-}
-
-SplitMix64 SplitMix64::member(std::uint64_t seed, std::uint64_t k) {
-  return SplitMix64(mix(seed ^ mix(k + 1)));
-}
-
-std::uint64_t SplitMix64::next_bits() {
-  s_ += kGamma;
-  return mix(s_);
-}
+// --- the distributions --------------------------------------------------------------------------
 
 double Distribution::draw(double u) const {
   switch (kind) {
@@ -126,6 +108,30 @@ void apply_actuator_draws(const Job& job, sim::Scenario& s, const std::vector<do
   }
 }
 
+// SPEC §18's sensor draws of a member, in SensorDistribution's order.
+void draw_sensors(const SensorDistribution& d, int axes, SplitMix64& r, sim::Scenario& s) {
+  sim::SensorModel m = s.sensors.value_or(sim::SensorModel{});
+  const auto draw = [&](const std::optional<Distribution>& dist, double& value) {
+    const double u = r.uniform();  // consumed whether or not the entry is given
+    if (dist) value = dist->draw(u);
+  };
+  draw(d.angle_noise, m.angle.noise);
+  draw(d.rate_noise, m.rate.noise);
+  std::vector<double> bias(static_cast<std::size_t>(axes));
+  for (int i = 0; i < axes; ++i) {
+    bias[static_cast<std::size_t>(i)] = m.rate.bias_of(i);
+    draw(d.rate_bias, bias[static_cast<std::size_t>(i)]);
+  }
+  if (d.rate_bias) m.rate.bias = std::move(bias);
+  draw(d.bias_walk, m.rate.bias_walk);
+  const double u = r.uniform();
+  if (d.delay) {
+    const auto [lo, hi] = *d.delay;
+    m.delay = std::min(hi, lo + static_cast<int>(std::floor(u * (hi - lo + 1))));
+  }
+  s.sensors = std::move(m);
+}
+
 sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k) {
   const EnsembleConfig& e = *job.ensemble;
   const sim::Scenario& base = ensemble_base(job);
@@ -210,6 +216,13 @@ sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k
                                                            : 0.0);
     }
   apply_actuator_draws(job, s, scale_draws, misalignment_draws);
+  if (e.sensors) draw_sensors(*e.sensors, kind.axes, r, s);
+  // The member's sensor noise (SPEC §18): its own stream, of the base's seed if it gives one,
+  // else of the ensemble's.
+  if (s.sensors) {
+    s.sensors->stream_seed = base.sensors ? base.sensors->seed.value_or(seed) : seed;
+    s.sensors->stream_index = static_cast<std::uint64_t>(k);
+  }
   return s;
 }
 
@@ -233,6 +246,20 @@ const char* kind_name(Distribution::Kind k) {
 }
 
 // A number (constant), {"uniform": [a, b]} or {"log_uniform": [a, b]}.
+// [lo, hi], two integers (clamped to [-1, 1e6], for the range checks to name); false after an
+// error.
+bool read_int_pair(const json& v, const std::string& path, int& lo, int& hi, Errors& e) {
+  long long a = 0, b = 0;
+  if (!v.is_array() || v.size() != 2 || !json_io::json_to_int(v[0], a) ||
+      !json_io::json_to_int(v[1], b)) {
+    e.push_back({path, "expected [lo, hi] (two integers), got " + json_io::json_type_name(v)});
+    return false;
+  }
+  lo = static_cast<int>(std::clamp(a, -1LL, 1000000LL));
+  hi = static_cast<int>(std::clamp(b, -1LL, 1000000LL));
+  return true;
+}
+
 class DistributionShape final : public schema::Shape<Distribution> {
  public:
   // `positive`: what the distribution scales when it must be > 0 ("" = any sign).
@@ -311,6 +338,54 @@ class DistributionShape final : public schema::Shape<Distribution> {
   std::string positive_;
 };
 
+std::shared_ptr<const schema::Shape<SensorDistribution>> make_sensors_shape() {
+  using D = SensorDistribution;
+  auto o = std::make_shared<schema::Object<D>>(
+      "Each member's sensors (SPEC §18), drawn after the actuator draws in this order: "
+      "angle_noise, rate_noise, rate_bias (n draws), bias_walk, delay; absent: the base's");
+  const auto dist = [](const char* doc) {
+    return std::shared_ptr<const schema::Shape<Distribution>>(
+        std::make_shared<DistributionShape>(doc));
+  };
+  o->optional_object("angle_noise", &D::angle_noise, dist("σ_a in rad (1σ), ≥ 0"), "");
+  o->optional_object("rate_noise", &D::rate_noise, dist("σ_r in rad/s (1σ), ≥ 0"), "");
+  o->optional_object("rate_bias", &D::rate_bias, dist("b_0 in rad/s, one draw per axis"), "");
+  o->optional_object("bias_walk", &D::bias_walk, dist("σ_w in rad/s/√s, ≥ 0"), "");
+  o->field({"delay", false,
+            [](const json& v, const std::string& path, D& d, Errors& e) {
+              int lo = 0, hi = 0;
+              if (read_int_pair(v, path, lo, hi, e)) d.delay = std::pair<int, int>(lo, hi);
+            },
+            [](const D& d, const std::string& path, Errors& e) {
+              if (!d.delay) return;
+              const auto [lo, hi] = *d.delay;
+              if (lo < 0 || hi > sim::SensorModel::kMaxDelay || lo > hi)
+                e.push_back({path, "expected 0 <= lo <= hi <= " +
+                                       std::to_string(sim::SensorModel::kMaxDelay) + ", got [" +
+                                       std::to_string(lo) + ", " + std::to_string(hi) + "]"});
+            },
+            [](const D& d, json& obj) {
+              if (d.delay) obj["delay"] = {d.delay->first, d.delay->second};
+            },
+            [] {
+              return json{{"type", "array"},
+                          {"items", {{"type", "integer"}, {"minimum", 0}}},
+                          {"minItems", 2},
+                          {"maxItems", 2},
+                          {"description",
+                           "[lo, hi]: a delay of lo + floor(u (hi - lo + 1)) samples"}};
+            }});
+  o->rule([](const D& d, const std::string& path, Errors& e) {
+    for (const auto& [key, level] : {std::pair{"angle_noise", &d.angle_noise},
+                                     std::pair{"rate_noise", &d.rate_noise},
+                                     std::pair{"bias_walk", &d.bias_walk}})
+      if (*level && (*level)->a < 0)
+        e.push_back({path + "/" + key, "must be >= 0 (a noise level), got a lower end of " +
+                                           json_io::number_text((*level)->a)});
+  });
+  return o;
+}
+
 // name → weight over a canonical list of names.
 class ChoiceShape final : public schema::Shape<Choice> {
  public:
@@ -378,15 +453,7 @@ std::shared_ptr<const Obj<FaultDistribution>> make_faults_shape() {
   auto o = std::make_shared<Obj<F>>("How each member's faults are drawn (they replace the base's)");
   o->field({"count", true,
             [](const json& v, const std::string& path, F& f, Errors& e) {
-              long long lo = 0, hi = 0;
-              if (!v.is_array() || v.size() != 2 || !json_io::json_to_int(v[0], lo) ||
-                  !json_io::json_to_int(v[1], hi)) {
-                e.push_back(
-                    {path, "expected [lo, hi] (two integers), got " + json_io::json_type_name(v)});
-                return;
-              }
-              f.count_lo = static_cast<int>(std::clamp(lo, -1LL, 1000000LL));
-              f.count_hi = static_cast<int>(std::clamp(hi, -1LL, 1000000LL));
+              read_int_pair(v, path, f.count_lo, f.count_hi, e);
             },
             [](const F&, const std::string&, Errors&) {},  // against the actuators: rule below
             [](const F& f, json& obj) {
@@ -553,6 +620,7 @@ std::shared_ptr<const Obj<EnsembleConfig>> make_ensemble_shape() {
   o->optional_object("faults", &E::faults,
                      std::shared_ptr<const schema::Shape<FaultDistribution>>(make_faults_shape()),
                      "");
+  o->optional_object("sensors", &E::sensors, make_sensors_shape(), "");
   o->choice("unrecoverable", &E::unrecoverable,
             {{"exclude", Unrecoverable::exclude}, {"include", Unrecoverable::include}},
             "whether members no gains can control count in the objective");

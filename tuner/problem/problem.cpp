@@ -181,6 +181,7 @@ sim::Scenario TuningProblem::member(std::size_t i) const {
     r.skip(p.held_draws + static_cast<std::uint64_t>(k) * s.initial_state.size());
     for (double& x : s.initial_state) x *= 1.0 + p.eps * (2.0 * r.uniform() - 1.0);
   }
+  if (s.sensors) s.sensors->stream_seed += sensor_shift_;
   return s;
 }
 
@@ -432,6 +433,30 @@ TuningProblem TuningProblem::perturbed(std::uint64_t seed, std::uint64_t k, doub
   p.set_ = std::make_shared<const SimulationSet>(
       set_->with_scenarios(std::move(scenarios), std::move(options)));
   p.perturbations_.push_back({seed, k, eps, draws});  // the members', as they are generated
+  return p;
+}
+
+bool TuningProblem::has_sensors() const {
+  const auto sensed = [](const sim::Scenario& s) { return s.sensors && !s.sensors->exact(); };
+  for (std::size_t i = 0; i < set_->size(); ++i)
+    if (sensed(set_->scenario(i))) return true;
+  return members_ > 0 && sensed(member(set_->size()));
+}
+
+TuningProblem TuningProblem::sensor_reseeded(std::uint64_t shift) const {
+  TuningProblem p = *this;
+  std::vector<sim::Scenario> scenarios;
+  std::vector<sim::SimulationOptions> options;
+  scenarios.reserve(set_->size());
+  options.reserve(set_->size());
+  for (std::size_t i = 0; i < set_->size(); ++i) {
+    scenarios.push_back(set_->scenario(i));
+    options.push_back(set_->options(i));
+    if (scenarios.back().sensors) scenarios.back().sensors->stream_seed += shift;
+  }
+  p.set_ = std::make_shared<const SimulationSet>(
+      set_->with_scenarios(std::move(scenarios), std::move(options)));
+  p.sensor_shift_ += shift;
   return p;
 }
 

@@ -328,8 +328,11 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
 
   for (std::size_t s = 0; s < S; ++s) {
     h << "<h2>Controllers compared"
-      << (S > 1 ? ", scenario " + html_escape(job.scenarios[s].name) : "")
-      << "</h2>\n<table><tr><th>controller</th>";
+      << (S > 1 ? ", scenario " + html_escape(job.scenarios[s].name) : "") << "</h2>\n";
+    if (const auto& sensors = job.scenarios[s].sensors)
+      h << "<p class=\"sensors\">The controller read sensors: " << html_escape(sensors->summary())
+        << ". The metrics measure the true state.</p>\n";
+    h << "<table><tr><th>controller</th>";
     // The columns of comparison.md's table (metrics_markdown_table), from the metrics record's
     // description (ftc/sim/metrics_record.hpp), read back out of comparison.json.
     using sim::MetricScope;

@@ -238,6 +238,11 @@ json gains_document(const TuningOutcome& r) {
                         {"objective_min", json_number(n.objective_min)},
                         {"objective_max", json_number(n.objective_max)},
                         {"relative_spread", json_number(n.relative_spread)}};
+    if (!n.sensor_seeds.empty()) {
+      g["noise_floor"]["sensor_seeds"] = n.sensor_seeds;
+      g["noise_floor"]["rounding_spread"] = json_number(n.rounding_spread);
+      g["noise_floor"]["sensor_spread"] = json_number(n.sensor_spread);
+    }
   }
   // Only when there is something to say: a runtime loader from before this key exists would
   // refuse every file that has it.
@@ -387,6 +392,10 @@ std::string comparison_markdown(const TuningOutcome& r) {
             : std::string())
     << ").\n";
   if (const std::string nf = noise_floor_sentence(r); !nf.empty()) o << "\n" << nf << "\n";
+  // What the controller read, where it was not the exact state (the metrics measure the truth).
+  for (const sim::Scenario& s : job.scenarios)
+    if (s.sensors)
+      o << "\nSensors of scenario " << s.name << ": " << s.sensors->summary() << ".\n";
   if (!job.goals.empty()) {
     o << "\n## Goals\n\nEach goal's value per controller, aggregated over the scenarios as the "
          "search aggregates it; a controller is feasible when it meets every limit.\n\n"

@@ -129,14 +129,13 @@ struct PerturbedExtremes {
   std::vector<double> goal_min, goal_max;
 };
 
-// `controllers` on R copies of the problem whose initial states are nudged (streams
-// kNoiseFloorStream + k, relative size nf.perturbation): one batch per copy, so the evaluator
-// fills its lanes, threads and ranks, and each controller's results come back by its index,
-// whatever else the batch holds.
+// `controllers` on `repeats` copies of the problem, copy k made by `copy(k)`: one batch per copy,
+// so the evaluator fills its lanes, threads and ranks, and each controller's results come back by
+// its index, whatever else the batch holds.
+template <class Copy>
 std::vector<PerturbedExtremes> perturbed_extremes(
-    const TuningProblem& problem, std::uint64_t seed,
-    std::span<const sim::ControllerConfig> controllers, const NoiseFloor& nf,
-    BatchEvaluator& evaluator) {
+    const TuningProblem& problem, int repeats, Copy&& copy,
+    std::span<const sim::ControllerConfig> controllers, BatchEvaluator& evaluator) {
   const std::size_t goals = problem.job().goals.size();
   std::vector<PerturbedExtremes> ex(controllers.size());
   for (PerturbedExtremes& e : ex) {
@@ -146,9 +145,8 @@ std::vector<PerturbedExtremes> perturbed_extremes(
   // In groups of as many controllers as the run scores at once (the memory budget's count): each
   // controller's result depends on its own tasks only, so the grouping changes no bit.
   const std::size_t group = std::max<std::size_t>(1, controllers_at_once(problem.job()));
-  for (int k = 0; k < nf.repeats; ++k) {
-    const TuningProblem p =
-        problem.perturbed(seed, kNoiseFloorStream + static_cast<std::uint64_t>(k), nf.perturbation);
+  for (int k = 0; k < repeats; ++k) {
+    const TuningProblem p = copy(k);
     for (std::size_t from = 0; from < controllers.size(); from += group) {
       const std::size_t n = std::min(group, controllers.size() - from);
       const std::vector<CandidateOutcome> out =
@@ -168,6 +166,20 @@ std::vector<PerturbedExtremes> perturbed_extremes(
   return ex;
 }
 
+// Each controller's extremes over both sets of runs.
+std::vector<PerturbedExtremes> merged(std::vector<PerturbedExtremes> a,
+                                      const std::vector<PerturbedExtremes>& b) {
+  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) {
+    a[i].objective_min = std::min(a[i].objective_min, b[i].objective_min);
+    a[i].objective_max = std::max(a[i].objective_max, b[i].objective_max);
+    for (std::size_t g = 0; g < a[i].goal_min.size() && g < b[i].goal_min.size(); ++g) {
+      a[i].goal_min[g] = std::min(a[i].goal_min[g], b[i].goal_min[g]);
+      a[i].goal_max[g] = std::max(a[i].goal_max[g], b[i].goal_max[g]);
+    }
+  }
+  return a;
+}
+
 // Each goal's relative spread (max - min)/|value| at a point whose goal values are `at`; none
 // where the value is 0 or not finite or a re-run's value is not finite.
 std::vector<std::optional<double>> goal_spreads(const PerturbedExtremes& ex,
@@ -178,6 +190,16 @@ std::vector<std::optional<double>> goal_spreads(const PerturbedExtremes& ex,
         std::isfinite(at[g]))
       spread[g] = (ex.goal_max[g] - ex.goal_min[g]) / std::abs(at[g]);
   return spread;
+}
+
+// The sensor seed of the first scenario with sensors (the noise floor lists the seeds it moved
+// it to).
+std::uint64_t first_sensor_seed(const TuningProblem& problem) {
+  for (std::size_t i = 0; i < problem.scenarios(); ++i) {
+    const sim::Scenario s = problem.scenario(i);
+    if (s.sensors && !s.sensors->exact()) return s.sensors->stream_seed;
+  }
+  return 0;
 }
 
 // The controllers of a front's points, in its order.
@@ -234,8 +256,34 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
     tuned_at = r.front->picked;
     probed[tuned_at] = r.tuned_controller;
   }
-  const std::vector<PerturbedExtremes> ex =
-      perturbed_extremes(problem, r.seed, probed, nf, evaluator);
+  // The nudged initial states (streams kNoiseFloorStream + k, relative size nf.perturbation)
+  // give the rounding's share; with sensors, the other sensor seeds (each scenario's seed + 1
+  // ... + repeats, SPEC §18) the noise's, and the floor is the spread over both.
+  const std::vector<PerturbedExtremes> nudged = perturbed_extremes(
+      problem, nf.repeats,
+      [&](int k) {
+        return problem.perturbed(r.seed, kNoiseFloorStream + static_cast<std::uint64_t>(k),
+                                 nf.perturbation);
+      },
+      probed, evaluator);
+  std::vector<PerturbedExtremes> ex = nudged;
+  const double own = r.best().outcome.evaluation.objective;
+  const auto spread = [&](const PerturbedExtremes& e) {
+    return (e.objective_max - e.objective_min) / own;
+  };
+  if (problem.has_sensors()) {
+    const std::vector<PerturbedExtremes> sensed = perturbed_extremes(
+        problem, nf.repeats,
+        [&](int k) { return problem.sensor_reseeded(static_cast<std::uint64_t>(k) + 1); }, probed,
+        evaluator);
+    const std::uint64_t first = first_sensor_seed(problem);
+    for (int k = 1; k <= nf.repeats; ++k) nf.sensor_seeds.push_back(first + k);
+    nf.rounding_spread = spread(nudged[tuned_at]);
+    nf.sensor_spread = spread(sensed[tuned_at]);
+    ex = merged(nudged, sensed);
+    r.simulations += static_cast<std::int64_t>(nf.repeats) *
+                     static_cast<std::int64_t>(probed.size() * problem.scenarios());
+  }
   nf.objective_min = ex[tuned_at].objective_min;
   nf.objective_max = ex[tuned_at].objective_max;
   if (r.front && !r.front->points.empty()) {
@@ -246,8 +294,7 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
   }
   r.simulations += static_cast<std::int64_t>(nf.repeats) *
                    static_cast<std::int64_t>(probed.size() * problem.scenarios());
-  nf.relative_spread =
-      (nf.objective_max - nf.objective_min) / r.best().outcome.evaluation.objective;
+  nf.relative_spread = spread(ex[tuned_at]);
   r.noise_floor = nf;
   // A parameter on its bound: does the objective change there by more than the noise? The tuned
   // controller with that parameter moved 1 % of its range inward says.
@@ -527,7 +574,12 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
 
 std::int64_t finishing_evaluations(const Job& job, std::size_t front_points) {
   const auto compared = static_cast<std::int64_t>(job.compare.size()) + 2;
-  return compared + static_cast<std::int64_t>(NoiseFloor{}.repeats) *
+  // With sensors the noise floor runs twice as many: nudged states, then other sensor seeds.
+  const bool sensed = std::any_of(job.scenarios.begin(), job.scenarios.end(),
+                                  [](const sim::Scenario& s) {
+                                    return s.sensors && !s.sensors->exact();
+                                  });
+  return compared + (sensed ? 2 : 1) * static_cast<std::int64_t>(NoiseFloor{}.repeats) *
                         static_cast<std::int64_t>(std::max<std::size_t>(1, front_points));
 }
 
@@ -651,10 +703,21 @@ std::string noise_floor_sentence(const TuningOutcome& r) {
     std::snprintf(amount, sizeof amount,
                   "The job's own controller's objective is %.3g %% %s the tuned one's",
                   100 * std::abs(margin), margin >= 0 ? "above" : "below");
+  const NoiseFloor& nf = *r.noise_floor;
+  if (!nf.sensor_seeds.empty()) {
+    std::snprintf(buf, sizeof buf,
+                  "%s; nudging the initial state by a relative %.0e moves the tuned objective by "
+                  "up to %.2g %% and other sensor seeds by up to %.2g %% (%d runs each; %.2g %% "
+                  "over both), so the %s is %s the noise floor.",
+                  amount, nf.perturbation, 100 * nf.rounding_spread, 100 * nf.sensor_spread,
+                  nf.repeats, 100 * spread, margin >= 0 ? "improvement" : "difference",
+                  outside ? "larger than" : "inside (not merit)");
+    return buf;
+  }
   std::snprintf(buf, sizeof buf,
                 "%s; nudging the initial state by a relative %.0e moves the tuned objective by up "
                 "to %.2g %% (%d runs), so the %s is %s the noise floor.",
-                amount, r.noise_floor->perturbation, 100 * spread, r.noise_floor->repeats,
+                amount, nf.perturbation, 100 * spread, nf.repeats,
                 margin >= 0 ? "improvement" : "difference",
                 outside ? "larger than" : "inside (not merit)");
   return buf;

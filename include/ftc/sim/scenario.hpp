@@ -12,6 +12,7 @@
 #include "ftc/sim/faults.hpp"
 #include "ftc/sim/fields.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/sensors.hpp"
 
 namespace ftc::sim {
 
@@ -57,6 +58,9 @@ struct Scenario {
   // actuator or one per actuator; none = no limit but the plant's own.
   Saturation saturation;
   std::optional<ActuatorModel> actuator;  // absent: the command drives the plant directly
+  // What the controller reads (ftc/sim/sensors.hpp, SPEC §18); absent: the exact state and
+  // acceleration.
+  std::optional<SensorModel> sensors;
   // The true values of plant parameters the plant declares uncertain (PlantKind::uncertain),
   // when the simulated plant differs from the model the controller is given (model mismatch);
   // empty = the plant's own. Each overrides the plant parameter it names.

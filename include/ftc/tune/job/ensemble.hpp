@@ -12,28 +12,14 @@
 #include <utility>
 #include <vector>
 
+#include "ftc/sim/random_stream.hpp"
 #include "ftc/sim/scenario.hpp"
 #include "ftc/tune/job/job.hpp"
 
 namespace ftc::tune {
 
-// SplitMix64: mix(z) is the finaliser, next() the stream of SPEC §12.
-class SplitMix64 {
- public:
-  static std::uint64_t mix(std::uint64_t z);
-  // The stream of member k of an ensemble seeded `seed`: s0 = mix(seed XOR mix(k + 1)).
-  static SplitMix64 member(std::uint64_t seed, std::uint64_t k);
-
-  explicit SplitMix64(std::uint64_t state) : s_(state) {}
-  std::uint64_t next_bits();
-  double uniform() { return static_cast<double>(next_bits() >> 11) * 0x1.0p-53; }  // [0, 1)
-  // Moves the stream on by n draws, as n calls of next_bits() would (the state is a counter).
-  void skip(std::uint64_t n) { s_ += n * kGamma; }
-
- private:
-  static constexpr std::uint64_t kGamma = 0x9E3779B97F4A7C15ULL;
-  std::uint64_t s_;
-};
+// SplitMix64 (SPEC §12): ftc/sim/random_stream.hpp.
+using sim::SplitMix64;
 
 // A random variable: a constant, U(a, b), or log-uniform on [a, b] (0 < a).
 struct Distribution {
@@ -81,6 +67,16 @@ struct ParameterScale {
   Distribution distribution;
 };
 
+// The sensors of a member (SPEC §18), drawn after SPEC §17's draws when the ensemble has the
+// key, in this order, each draw consumed whether or not its entry is given: angle_noise,
+// rate_noise, rate_bias (n draws, one per axis), bias_walk, delay. An absent entry keeps the
+// base's value (the base's sensors block, or exact sensors without one).
+struct SensorDistribution {
+  std::optional<Distribution> angle_noise, rate_noise, rate_bias, bias_walk;
+  // The delay in samples: lo + floor(u (hi - lo + 1)); absent: the base's.
+  std::optional<std::pair<int, int>> delay;
+};
+
 struct EnsembleConfig {
   std::int64_t count = 1;
   std::uint64_t seed = 0;
@@ -97,6 +93,7 @@ struct EnsembleConfig {
   // The scale of one parameter; null when there is none.
   const Distribution* parameter_scale(std::string_view parameter) const;
   std::optional<FaultDistribution> faults;  // absent: members keep the base's faults
+  std::optional<SensorDistribution> sensors;  // absent: members keep the base's sensors
   Unrecoverable unrecoverable = Unrecoverable::exclude;
 };
 

@@ -232,6 +232,11 @@ class TuningProblem {
   // scenario order then component order: the noise-floor probe of SPEC §14. (A generated
   // member takes its draws where the stream stands after the scenarios before it.)
   TuningProblem perturbed(std::uint64_t seed, std::uint64_t k, double eps) const;
+  // Whether some scenario's controller reads sensors that are not exact (ftc/sim/sensors.hpp).
+  bool has_sensors() const;
+  // A copy whose scenarios' sensor noise streams have their seeds moved on by `shift` (a
+  // generated member's too): the noise floor's other sensor seeds (SPEC §18).
+  TuningProblem sensor_reseeded(std::uint64_t shift) const;
 
  private:
   // What a candidate's scoring holds while its tasks' results come in, by scenario index.
@@ -265,6 +270,7 @@ class TuningProblem {
   std::size_t members_ = 0;                   // generated ones after them
   std::uint64_t member_seed_ = 0;
   std::vector<Perturbation> perturbations_;
+  std::uint64_t sensor_shift_ = 0;  // sensor_reseeded(): added to the members' sensor seeds
   std::vector<bool> recoverable_, counted_;
   std::size_t listed_ = 0;
   SearchSpace space_;

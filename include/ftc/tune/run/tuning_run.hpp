@@ -78,6 +78,11 @@ struct NoiseFloor {
   int repeats = 8;
   double objective_min = 0.0, objective_max = 0.0;
   double relative_spread = 0.0;  // (max - min) / the winner's objective
+  // With sensors (SPEC §18): the repeats also run with other sensor seeds, listed here, and the
+  // spread has two parts, each (max - min) / the winner's objective over its own runs: the
+  // nudged initial states' (rounding) and the sensor seeds' (measurement noise).
+  std::vector<std::uint64_t> sensor_seeds;
+  double rounding_spread = 0.0, sensor_spread = 0.0;
 };
 inline constexpr std::uint64_t kNoiseFloorStream = 1000000;  // member k = 1e6 + r of §12
 
