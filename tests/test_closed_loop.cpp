@@ -92,7 +92,7 @@ SimulationResult step_by_step(const Plant<3, 4>& plant, Controller<3, 4>& contro
       loop(su, plant_lanes, law, metrics);
   detail::SampleLanes<3, 4> out;
   for (std::int64_t k = 0; k < su.samples && loop.running(); ++k) {
-    loop.step<false>(k, host.inputs(k, 1), nullptr, out);
+    loop.step(k, host.inputs(k, 1), nullptr, out);
     host.samples(k, 1, &out);
   }
   loop.finish(fin);

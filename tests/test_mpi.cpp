@@ -125,6 +125,31 @@ TEST(Mpi, ActuatorModelReachesEveryRank) {
   EXPECT_NE(slurp(dir / "ideal" / "history.csv"), slurp(dir / "three" / "history.csv"));
 }
 
+// Sensor noise (SPEC §18) is each scenario's own stream, resolved from the job (the seed and the
+// scenario's index, which its JSON does not carry): every rank draws what rank 0 would, for a
+// second listed scenario as for the first and for ensemble members.
+TEST(Mpi, SensorNoiseIsTheSameOnEveryRank) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-sensors");
+  json j = ftc::testing::short_ensemble_job();
+  j["scenarios"][0]["sensors"] = {{"rate", {{"noise", 1e-3}, {"bias_walk", 1e-4}}},
+                                  {"delay", 1},
+                                  {"acceleration", {{"source", "differentiated"}}}};
+  json second = j["scenarios"][0];
+  second["name"] = "second";
+  j["scenarios"].push_back(second);
+  j["ensemble"]["sensors"] = {{"angle_noise", {{"uniform", {0, 2e-4}}}}};
+  const fs::path job = write_job(dir, j);
+  const auto plain =
+      run_cli("run '" + job.string() + "' -q --out '" + (dir / "plain").string() + "'", dir);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto three = mpirun_cli(
+      3, "run '" + job.string() + "' -q --threads 1 --out '" + (dir / "three").string() + "'", dir);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  expect_same_run(dir / "plain", dir / "three");
+  EXPECT_NE(slurp(dir / "three" / "gains.json").find("sensor_seeds"), std::string::npos);
+}
+
 TEST(Mpi, FrontIsByteIdenticalForAPlainRunAndThreeRanks) {
   REQUIRE_MPI();
   // Two soft goals (the Pareto Bat algorithm), 4 bats x 2 iterations on the short Table 1 job.

@@ -465,6 +465,8 @@ TEST(Sensors, EnsembleMembersDrawTheirSensorsLast) {
     EXPECT_EQ(with.sensors->delay, static_cast<int>(std::floor(r.uniform() * 5)));
     EXPECT_EQ(with.sensors->stream_seed, 7u);
     EXPECT_EQ(with.sensors->stream_index, static_cast<std::uint64_t>(k));
+    // Written out with its seed: listed k-th in a scenarios file, it draws the same noise.
+    EXPECT_EQ(ftc::runtime::to_json(with)["sensors"]["seed"], 7);
   }
   e["ensemble"]["sensors"] = {{"rate_noise", {{"uniform", {-1, 1}}}}, {"delay", {3, 1}}};
   try {

@@ -91,6 +91,7 @@ class ClosedLoop {
         act_gain_(row(su.act_gain)),
         act_step_(row(su.act_step)),
         act_neg_(-act_step_),
+        sensors_(su.sensors),
         delay_(su.delay),
         differentiated_(su.differentiated),
         angle_step_(row(su.angle_step)),
@@ -139,52 +140,47 @@ class ClosedLoop {
   // with |X_i| > 1e6, inf or NaN has diverged: it stops counting, restarts from X(0) with a reset
   // controller (so that it takes no slow paths), and its results are those at that step. `o`
   // receives X(t_k), u_k, u_a(t_k) and the lanes that diverged in this step.
-  // Compiled with and without sensors (Sensed: PackSetup::sensors), so that a loop without them
-  // is today's loop, no test or copy added.
-  template <bool Sensed>
   FTC_HOT_INLINE void step(std::int64_t k, const double* e, const double* nz,
                            SampleLanes<N, M>& o) {
+    VN f, f_model{};
+    plant_.drift(x_, f, su_.mismatch && !sensors_ ? &f_model : nullptr);
+    if constexpr (requires { plant_.observe(x_, counting_); }) plant_.observe(x_, counting_);
+    // The plant's input now: the actuators' output, or the command held since t_{k-1}.
+    const VN a = accel(f, forcing(e, act_ ? ua_ : u_prev_));
     law::Sample<T, N> m;
     m.t = static_cast<double>(k) * Ts_;
     [[maybe_unused]] T G_pinv[M * N];
-    // With sensors the controller's model terms are those at the state it reads, from a copy of
-    // the plant's lane code (sensed_): a plant's scratch (angle trackers, the state input() and
-    // pinv() read) then follows the true state alone, so the truth's bits do not depend on the
-    // measurement.
-    if constexpr (Sensed) {
+    if (sensors_) [[unlikely]] {
+      // What the controller reads, and its model terms at that state, from a copy of the
+      // plant's lane code (sensed_): a plant's scratch (angle trackers, the state input() and
+      // pinv() read) follows the true state alone, so the truth's bits do not depend on the
+      // measurement. A branch per sample rather than a second copy of the loop: the copy
+      // doubled the kernels' compile time for no measurable speed.
       measure(k, nz, m);
+      if (!differentiated_) m.a = a;
       VS xm;
       for (int r = 0; r < N; ++r) {
         xm[r] = m.X1[r];
         xm[N + r] = m.X2[r];
       }
-      VN fm, fm_model;
+      VN fm, fm_model{};
       sensed_.drift(xm, fm, su_.mismatch ? &fm_model : nullptr);
       m.f = su_.mismatch ? fm_model : fm;
       if constexpr (!kConstantInput) sensed_.pinv(xm, G_pinv);
-    }
-    VN f, f_model;
-    plant_.drift(x_, f, su_.mismatch && !Sensed ? &f_model : nullptr);
-    if constexpr (requires { plant_.observe(x_, counting_); }) plant_.observe(x_, counting_);
-    // The plant's input now: the actuators' output, or the command held since t_{k-1}.
-    const VN a = accel(f, forcing(e, act_ ? ua_ : u_prev_));
-    if constexpr (!Sensed) {
+    } else {
       for (int r = 0; r < N; ++r) {
         m.X1[r] = x_[r];
         m.X2[r] = x_[N + r];
       }
+      m.a = a;
       m.f = su_.mismatch ? f_model : f;
-      m.a = a;
-    } else if (!differentiated_) {
-      m.a = a;
+      if constexpr (!kConstantInput) plant_.pinv(x_, G_pinv);
     }
     VM u;
-    if constexpr (kConstantInput) {
+    if constexpr (kConstantInput)
       law_.step(m, su_.G_pinv, u);
-    } else {
-      if constexpr (!Sensed) plant_.pinv(x_, G_pinv);
+    else
       law_.step(m, static_cast<const T*>(G_pinv), u);
-    }
     for (int r = 0; r < S2; ++r) lane::store(x_[r], o.x[r]);
     for (int r = 0; r < M; ++r) lane::store(u[r], o.u[r]);
     metrics_.sample(counting_, k, Ts_, x_, u, u_prev_);
@@ -217,7 +213,7 @@ class ClosedLoop {
     for (int r = 0; r < M; ++r) u_prev_[r] = lane::select(inside, u_prev_[r], T(0.0));
     if (act_)
       for (int r = 0; r < M; ++r) ua_[r] = lane::select(inside, ua_[r], T(0.0));
-    if constexpr (Sensed) reset_sensors(inside);
+    if (sensors_) reset_sensors(inside);
     law_.reset_lanes(inside);
   }
 
@@ -433,6 +429,7 @@ class ClosedLoop {
   const int S_;
   const bool act_;
   const T act_gain_, act_step_, act_neg_;
+  const bool sensors_;
   const int delay_;
   const bool differentiated_;
   const T angle_step_, rate_step_, lowpass_gain_;
@@ -470,14 +467,9 @@ void run_closed_loop(const PackSetup<N, M>& su, MakePlant&& make_plant, MakeLaw&
   while (k < su.samples && loop.running()) {
     const int n = static_cast<int>(su.samples - k < block ? su.samples - k : block);
     const double* exo = host.inputs(k, n);
-    if (su.sensors) {
-      const double* noise = host.noise(k, n);
-      for (int i = 0; i < n; ++i, ++k)
-        loop.template step<true>(k, exo + i * stride, noise + i * noise_stride, out[i]);
-    } else {
-      for (int i = 0; i < n; ++i, ++k)
-        loop.template step<false>(k, exo + i * stride, nullptr, out[i]);
-    }
+    const double* noise = su.sensors ? host.noise(k, n) : nullptr;
+    for (int i = 0; i < n; ++i, ++k)
+      loop.step(k, exo + i * stride, noise ? noise + i * noise_stride : nullptr, out[i]);
     if (su.want_samples) host.samples(k - n, n, out);
   }
   loop.finish(fin);

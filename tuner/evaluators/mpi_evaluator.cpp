@@ -263,6 +263,10 @@ std::vector<char> set_message(const SimulationSet& set) {
     w.put_vector(o.extra_windows);
     w.put(o.record_every);
     w.put(o.metrics);
+    // The sensors' noise stream, resolved from the job (not part of the scenario's JSON).
+    const std::optional<sim::SensorModel>& sensors = set.scenario(i).sensors;
+    w.put<std::uint64_t>(sensors ? sensors->stream_seed : 0);
+    w.put<std::uint64_t>(sensors ? sensors->stream_index : 0);
   }
   return w.bytes();
 }
@@ -281,6 +285,12 @@ SimulationSet set_from_message(const std::vector<char>& bytes) {
     options[i].extra_windows = r.get_vector<sim::Window>();
     options[i].record_every = r.get<std::int64_t>();
     options[i].metrics = r.get<sim::MetricSettings>();
+    const auto stream_seed = r.get<std::uint64_t>();
+    const auto stream_index = r.get<std::uint64_t>();
+    if (std::optional<sim::SensorModel>& sensors = scenarios[i].sensors) {
+      sensors->stream_seed = stream_seed;
+      sensors->stream_index = stream_index;
+    }
   }
   return SimulationSet(std::move(plant), std::move(scenarios), std::move(options));
 }

@@ -218,9 +218,11 @@ sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k
   apply_actuator_draws(job, s, scale_draws, misalignment_draws);
   if (e.sensors) draw_sensors(*e.sensors, kind.axes, r, s);
   // The member's sensor noise (SPEC §18): its own stream, of the base's seed if it gives one,
-  // else of the ensemble's.
+  // else of the ensemble's. The seed is written out with the member, so that the members listed
+  // in a scenarios file (`ftctune ensemble`), k-th at index k, draw the same noise.
   if (s.sensors) {
     s.sensors->stream_seed = base.sensors ? base.sensors->seed.value_or(seed) : seed;
+    s.sensors->seed = s.sensors->stream_seed;
     s.sensors->stream_index = static_cast<std::uint64_t>(k);
   }
   return s;
