@@ -38,7 +38,7 @@ std::size_t bytes_of(const NoiseTable& t) { return t.size() * sizeof(double); }
 std::shared_ptr<const NoiseTable> noise_table(const SensorModel& model, int axes,
                                               double sample_time, std::int64_t samples) {
   const std::size_t bytes =
-      static_cast<std::size_t>(samples) * 2 * static_cast<std::size_t>(axes) * sizeof(double);
+      static_cast<std::size_t>(samples) * 3 * static_cast<std::size_t>(axes) * sizeof(double);
   if (samples <= 0 || bytes > kNoiseCacheBytes / 4) return nullptr;
   const Key key = key_of(model, axes, sample_time, samples);
   {
@@ -53,8 +53,8 @@ std::shared_ptr<const NoiseTable> noise_table(const SensorModel& model, int axes
   auto table = std::make_shared<NoiseTable>(bytes / sizeof(double));
   SensorNoise noise(model, axes, sample_time);
   for (std::int64_t k = 0; k < samples; ++k) {
-    double* row = table->data() + k * 2 * axes;
-    noise.next(row, row + axes);
+    double* row = table->data() + k * 3 * axes;
+    noise.next(row, row + axes, row + 2 * axes);
   }
   const std::lock_guard lock(mutex);
   for (const Entry& e : entries)

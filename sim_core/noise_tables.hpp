@@ -13,7 +13,8 @@
 
 namespace ftc::sim::detail {
 
-// Sample k's 2n terms (the angles' σ_a z, then the rates' b_k + σ_r z) at [k · 2n, (k + 1) · 2n).
+// Sample k's 3n terms (SensorNoise::next: the angles' σ_a z, the rates' b_k, their σ_r z) at
+// [k · 3n, (k + 1) · 3n).
 using NoiseTable = std::vector<double>;
 
 inline constexpr std::size_t kNoiseCacheBytes = std::size_t{256} << 20;

@@ -101,12 +101,13 @@ double SensorNoise::normal() {
   return r * c;
 }
 
-void SensorNoise::next(double* angle, double* rate) {
+void SensorNoise::next(double* angle, double* bias, double* rate) {
   const std::size_t n = bias_.size();
   for (double& z : z_) z = normal();  // angle noise, rate noise, bias walk: each n axes
   for (std::size_t i = 0; i < n; ++i) {
     angle[i] = sa_ * z_[i];
-    rate[i] = bias_[i] + sr_ * z_[n + i];
+    bias[i] = bias_[i];
+    rate[i] = sr_ * z_[n + i];
     bias_[i] = bias_[i] + sw_ * z_[2 * n + i];
   }
 }

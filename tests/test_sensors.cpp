@@ -143,20 +143,21 @@ TEST(Sensors, EachSampleDrawsAngleThenRateThenWalkNoiseOnEveryAxis) {
   SensorNoise z(resolved({}), 3, Ts);  // the same stream: its normals
   double bias[3] = {0.01, -0.02, 0.03};
   for (int k = 0; k < 20; ++k) {
-    double angle[3], rate[3], want_z[9];
-    noise.next(angle, rate);
+    double angle[3], b[3], rate[3], want_z[9];
+    noise.next(angle, b, rate);
     for (double& v : want_z) v = z.normal();  // consumed even where σ is 0
     for (int i = 0; i < 3; ++i) {
       EXPECT_TRUE(same_bits(angle[i], 1e-3 * want_z[i])) << k << " " << i;
-      EXPECT_TRUE(same_bits(rate[i], bias[i] + 2e-3 * want_z[3 + i])) << k << " " << i;
+      EXPECT_TRUE(same_bits(b[i], bias[i])) << k << " " << i;
+      EXPECT_TRUE(same_bits(rate[i], 2e-3 * want_z[3 + i])) << k << " " << i;
       bias[i] = bias[i] + (0.5 * std::sqrt(Ts)) * want_z[6 + i];
     }
   }
   // σ = 0 still draws: a model without noise consumes the stream as one with it.
   SensorNoise quiet(resolved({}), 3, Ts), loud(resolved(m), 3, Ts);
-  double a[3], r[3];
-  quiet.next(a, r);
-  loud.next(a, r);
+  double a[3], b[3], r[3];
+  quiet.next(a, b, r);
+  loud.next(a, b, r);
   EXPECT_TRUE(same_bits(quiet.normal(), loud.normal()));
 }
 
@@ -178,11 +179,12 @@ TEST(Sensors, ControllerReadsTheQuantisedNoisyStateAndTheMetricsTheTrueOne) {
     for (int i = 0; i < 6; ++i) ASSERT_TRUE(same_bits(got.x[k][i], truth.x[k][i]));
   SensorNoise noise(*s.sensors, 3, s.sample_time);
   for (std::size_t k = 0; k < got.seen.size(); ++k) {
-    double angle[3], rate[3];
-    noise.next(angle, rate);
+    double angle[3], bias[3], rate[3];
+    noise.next(angle, bias, rate);
     for (int i = 0; i < 3; ++i) {
       EXPECT_TRUE(same_bits(got.seen[k].X1[i], got.x[k][i] + angle[i])) << k;
-      EXPECT_TRUE(same_bits(got.seen[k].X2[i], got.x[k][3 + i] + rate[i])) << k;
+      // §18's order: (X2 + b) + σ_r z.
+      EXPECT_TRUE(same_bits(got.seen[k].X2[i], (got.x[k][3 + i] + bias[i]) + rate[i])) << k;
       // The ideal acceleration is the exact one.
       EXPECT_TRUE(same_bits(got.seen[k].a[i], truth.seen[k].a[i])) << k;
     }
@@ -391,10 +393,16 @@ TEST(Sensors, ListedScenariosAndMembersHaveStreamsOfTheirOwn) {
   json t = s;
   t["name"] = "second";
   j["scenarios"] = {s, t};
+  j["scenarios"].push_back(t);
+  j["scenarios"][2]["name"] = "third";
+  j["scenarios"][2]["sensors"]["stream"] = 7;
+  j["scenarios"][2]["sensors"]["seed"] = 3;
   const ftc::tune::Job job = ftc::tune::parse_job(j, "job.json");
   EXPECT_EQ(job.scenarios[0].sensors->stream_seed, 1u);
   EXPECT_EQ(job.scenarios[0].sensors->stream_index, 0u);
   EXPECT_EQ(job.scenarios[1].sensors->stream_index, 1u);
+  EXPECT_EQ(job.scenarios[2].sensors->stream_seed, 3u);  // as given
+  EXPECT_EQ(job.scenarios[2].sensors->stream_index, 7u);
 
   json e = ftc::testing::short_ensemble_job();
   e["scenarios"][0]["sensors"] = {{"rate", {{"noise", 1e-3}}}};
@@ -465,8 +473,13 @@ TEST(Sensors, EnsembleMembersDrawTheirSensorsLast) {
     EXPECT_EQ(with.sensors->delay, static_cast<int>(std::floor(r.uniform() * 5)));
     EXPECT_EQ(with.sensors->stream_seed, 7u);
     EXPECT_EQ(with.sensors->stream_index, static_cast<std::uint64_t>(k));
-    // Written out with its seed: listed k-th in a scenarios file, it draws the same noise.
-    EXPECT_EQ(ftc::runtime::to_json(with)["sensors"]["seed"], 7);
+    // Written out with its seed and stream: replayed alone, it draws the same noise.
+    const json written = ftc::runtime::to_json(with);
+    EXPECT_EQ(written["sensors"]["seed"], 7);
+    EXPECT_EQ(written["sensors"]["stream"], k);
+    const Scenario replayed = ftc::runtime::scenario_from_json(written, "member");
+    EXPECT_EQ(replayed.sensors->stream_seed, 7u);
+    EXPECT_EQ(replayed.sensors->stream_index, static_cast<std::uint64_t>(k));
   }
   e["ensemble"]["sensors"] = {{"rate_noise", {{"uniform", {-1, 1}}}}, {"delay", {3, 1}}};
   try {

@@ -127,13 +127,13 @@ class ClosedLoop {
   FTC_HOT_INLINE bool running() const { return live_count_ > 0; }
 
   // Sample k of every lane, t = k·Ts, `e` its exogenous inputs (sample_stride values), `nz` its
-  // measurement noise (with sensors: 2N rows of kStride values, PackHost::noise):
+  // measurement noise (with sensors: 3N rows of kStride values, PackHost::noise):
   //   a_k = f(X) + G(X)·applied(t, u_{k-1}) + Δ(t)   the acceleration sensor, before the command
   //   u_k = law(X1, X2, a_k, f_model(X), G⁺_model(X))
-  // or with sensors (ftc/sim/sensors.hpp) u_k = law(X1m, X2m, a_k or am, f_model(Xm),
-  // G⁺_model(Xm)), Xm = (X1m, X2m) the measurement the controller reads at sample k.
   //   the metrics of (t, X, u_k)
   //   substeps × RK4 with u_k held; faults and Δ at each stage time
+  // With sensors (ftc/sim/sensors.hpp) u_k = law(X1m, X2m, a_k or am, f_model(Xm), G⁺_model(Xm)),
+  // Xm = (X1m, X2m) the measurement the controller reads at sample k; the metrics keep X.
   // With an actuator model (PackSetup::actuator, docs/model.md) the plant is driven by the
   // actuators' output u_a instead of the held command: u_a(t_k) in a_k and at each stage, u_a
   // stepped on the half-step grid towards the command clamped to the actuator's range. A lane
@@ -154,8 +154,8 @@ class ClosedLoop {
       // What the controller reads, and its model terms at that state, from a copy of the
       // plant's lane code (sensed_): a plant's scratch (angle trackers, the state input() and
       // pinv() read) follows the true state alone, so the truth's bits do not depend on the
-      // measurement. A branch per sample rather than a second copy of the loop: the copy
-      // doubled the kernels' compile time for no measurable speed.
+      // measurement. A branch per sample rather than a second compiled copy of the loop: the
+      // copy took a kernel's compile from 24.5 to 54 s (28 s with the branch).
       measure(k, nz, m);
       if (!differentiated_) m.a = a;
       VS xm;
@@ -301,13 +301,14 @@ class ClosedLoop {
   // q_r(X2 + noise) and, differentiated, am the low-passed difference of X2m; with a delay d,
   // kept in the ring and read back from sample max(0, k − d). Into m's X1, X2 (and a).
   FTC_HOT_INLINE static T quantize(const T& x, const T& q) {
-    // q · round(x / q), ties away from zero; x where q = 0. round_to_int rounds ties to even: a
-    // tie it took down (to even) is taken up. |t| ≥ 2^51 is already whole.
+    // q · round(x / q), ties away from zero; x where q = 0. For 0 ≤ a < 2^52, (a + 2^52) − 2^52
+    // is a rounded to a whole number, ties to even (the ulp of the sum is 1): a tie it took down
+    // is taken up. a ≥ 2^52 is whole already.
     const T t = x / q;
     const T a = lane::abs(t);
-    T r = lane::round_to_int(a);
+    T r = (a + T(0x1p52)) - T(0x1p52);
     r = lane::select(r - a == T(-0.5), r + T(1.0), r);
-    r = lane::select(a >= T(0x1p51), a, r);
+    r = lane::select(a >= T(0x1p52), a, r);
     r = lane::select(t < T(0.0), -r, r);
     return lane::select(q > T(0.0), q * r, x);
   }
@@ -321,7 +322,9 @@ class ClosedLoop {
     std::array<T, 3 * N> now;
     for (int i = 0; i < N; ++i) {
       now[i] = quantize(x_[i] + noise_row(nz, i), angle_step_);
-      now[N + i] = quantize(x_[N + i] + noise_row(nz, N + i), rate_step_);
+      // §18's order: (X2 + b_k) + σ_r z.
+      now[N + i] = quantize((x_[N + i] + noise_row(nz, N + i)) + noise_row(nz, 2 * N + i),
+                            rate_step_);
     }
     if (differentiated_)
       for (int i = 0; i < N; ++i) {
@@ -346,10 +349,11 @@ class ClosedLoop {
       m.a[i] = now[2 * N + i];
     }
   }
-  // Lanes that restart (not `keep`) start their sensors afresh, their delayed measurements at X(0).
+  // Lanes that restart (not `keep`) from X(0) restart their sensors there: the last rate and the
+  // delayed measurements X(0), the low-pass 0 (so no spike from a rate of 0 before X2(0)).
   void reset_sensors(const Mask& keep) {
     for (int i = 0; i < N; ++i) {
-      rate_prev_[i] = lane::select(keep, rate_prev_[i], T(0.0));
+      rate_prev_[i] = lane::select(keep, rate_prev_[i], x0_[N + i]);
       lowpass_[i] = lane::select(keep, lowpass_[i], T(0.0));
     }
     if (delay_ == 0) return;
@@ -461,8 +465,8 @@ void run_closed_loop(const PackSetup<N, M>& su, MakePlant&& make_plant, MakeLaw&
   const int stride = Loop::sample_stride(su.substeps);
   SampleLanes<N, M> out[32];
   const int block = su.block < 32 ? su.block : 32;
-  // A sample's measurement noise: 2N rows of the inputs' stride.
-  const int noise_stride = 2 * N * ExoRows<N, M>::stride(SharedInputs, lane::kWidth<T>);
+  // A sample's measurement noise: 3N rows of the inputs' stride.
+  const int noise_stride = 3 * N * ExoRows<N, M>::stride(SharedInputs, lane::kWidth<T>);
   std::int64_t k = 0;
   while (k < su.samples && loop.running()) {
     const int n = static_cast<int>(su.samples - k < block ? su.samples - k : block);

@@ -143,8 +143,8 @@ class PackHost {
   // 1 midpoint, 2 end), the ExoRows of instant ((i · substeps) + j) · 3 + q, one after another.
   virtual const double* inputs(std::int64_t k0, int n) = 0;
   // With sensors (PackSetup::sensors), the measurement noise of samples k0 .. k0 + n - 1 (called
-  // after inputs() for the same samples): for sample k0 + i, 2N rows (the angles' σ_a z, then
-  // the rates' b_k + σ_r z) of `stride` doubles each (ExoRows::stride), one after another.
+  // after inputs() for the same samples): for sample k0 + i, 3N rows (the angles' σ_a z, the
+  // rates' bias b_k, their σ_r z) of `stride` doubles each (ExoRows::stride), one after another.
   virtual const double* noise(std::int64_t k0, int n) = 0;
   // Samples k0 .. k0 + n - 1 as simulated (lanes that had diverged before are to be ignored).
   virtual void samples(std::int64_t k0, int n, const SampleLanes<N, M>* out) = 0;

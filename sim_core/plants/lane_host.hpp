@@ -317,7 +317,7 @@ class Host final : public PackHost<N, M> {
         g.table = noise_table(*s.sensors, N, s.sample_time, setup.samples);
         if (!g.table) g.noise.emplace(*s.sensors, N, s.sample_time);
       }
-      noise_.resize(static_cast<std::size_t>(setup.block) * 2 * N *
+      noise_.resize(static_cast<std::size_t>(setup.block) * 3 * N *
                     Exo::stride(setup.shared_inputs, width));
       ring_.assign(static_cast<std::size_t>(setup.delay + 1) * 3 * N * kMaxLanes, 0.0);
       setup.ring = ring_.data();
@@ -347,18 +347,18 @@ class Host final : public PackHost<N, M> {
   const double* noise(std::int64_t k0, int n) override {
     const bool shared = setup_.shared_inputs;
     const int stride = Exo::stride(shared, width_);
-    double drawn[2 * N];
+    double drawn[3 * N];
     for (int i = 0; i < n; ++i) {
-      double* rows = &noise_[static_cast<std::size_t>(i) * 2 * N * stride];
+      double* rows = &noise_[static_cast<std::size_t>(i) * 3 * N * stride];
       for (Group& g : groups_) {
         const double* terms = drawn;
         if (g.table)
-          terms = g.table->data() + static_cast<std::size_t>(k0 + i) * 2 * N;
+          terms = g.table->data() + static_cast<std::size_t>(k0 + i) * 3 * N;
         else
-          g.noise->next(drawn, drawn + N);
+          g.noise->next(drawn, drawn + N, drawn + 2 * N);
         for (const int l : g.lanes) {
           if (shared && l > 0) break;
-          for (int r = 0; r < 2 * N; ++r) rows[r * stride + l] = terms[r];
+          for (int r = 0; r < 3 * N; ++r) rows[r * stride + l] = terms[r];
         }
       }
     }

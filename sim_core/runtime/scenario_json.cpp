@@ -168,6 +168,32 @@ typename Obj<T>::Field number_or_list(std::string key, Get get, ConstGet cget, s
           }};
 }
 
+// An optional non-negative integer of up to 64 bits.
+template <class T>
+typename Obj<T>::Field optional_count(std::string key, std::optional<std::uint64_t> T::*m,
+                                      std::string doc) {
+  return {key, false,
+          [m](const json& v, const std::string& path, T& t, Errors& e) {
+            long long i = 0;
+            if (v.is_number_unsigned())
+              t.*m = v.get<std::uint64_t>();
+            else if (json_io::json_to_int(v, i) && i >= 0)
+              t.*m = static_cast<std::uint64_t>(i);
+            else
+              e.push_back({path, schema::detail::type_error("a non-negative integer", v)});
+          },
+          [](const T&, const std::string&, Errors&) {},
+          [m, key](const T& t, json& obj) {
+            if (t.*m) obj[key] = *(t.*m);
+          },
+          [doc] {
+            return json{{"type", "integer"},
+                        {"minimum", 0},
+                        {"maximum", std::numeric_limits<std::uint64_t>::max()},
+                        {"description", doc}};
+          }};
+}
+
 // --- sensors (SPEC §18) ------------------------------------------------------------------------
 
 Ptr<sim::SensorModel> make_sensors_shape() {
@@ -218,28 +244,14 @@ Ptr<sim::SensorModel> make_sensors_shape() {
       "What the controller reads (SPEC §18, docs/model.md): noisy, biased, quantised and "
       "delayed attitude and rates, and the acceleration. The metrics measure the true state. "
       "Absent: the exact state");
-  o->field({"seed", false,
-            [](const json& v, const std::string& path, M& m, Errors& e) {
-              long long i = 0;
-              if (v.is_number_unsigned())
-                m.seed = v.get<std::uint64_t>();
-              else if (json_io::json_to_int(v, i) && i >= 0)
-                m.seed = static_cast<std::uint64_t>(i);
-              else
-                e.push_back({path, schema::detail::type_error("a non-negative integer", v)});
-            },
-            [](const M&, const std::string&, Errors&) {},
-            [](const M& m, json& obj) {
-              if (m.seed) obj["seed"] = *m.seed;
-            },
-            [] {
-              return json{{"type", "integer"},
-                          {"minimum", 0},
-                          {"maximum", std::numeric_limits<std::uint64_t>::max()},
-                          {"description",
-                           "the noise stream's seed; absent: 1, or the ensemble's seed for "
-                           "its members"}};
-            }});
+  o->field(optional_count<M>("seed", &M::seed,
+                             "the noise stream's seed; absent: 1, or the ensemble's seed for "
+                             "its members"));
+  o->field(optional_count<M>(
+      "stream", &M::stream,
+      "the noise stream's index i (SPEC §18's s0 = mix(seed XOR mix(0x53454E53 + i + 1))); "
+      "absent: the scenario's index among the job's scenarios. An ensemble member is written "
+      "with its own, so that it draws its noise when replayed alone"));
   o->object("angle", &M::angle, Ptr<sim::AngleSensor>(angle), "");
   o->object("rate", &M::rate, Ptr<R>(rate), "");
   o->integer("delay", &M::delay, {0, M::kMaxDelay},
@@ -337,6 +349,8 @@ sim::Scenario scenario_from_json(const json& j, const std::string& source) {
   Errors errs;
   schema::read(*scenario_shape(), j, "", s, errs);
   throw_if_errors(source, std::move(errs));
+  // Read alone, a scenario's noise stream is its own seed (default 1) and index (default 0).
+  if (s.sensors) s.sensors->resolve(1, 0);
   return s;
 }
 

@@ -217,13 +217,13 @@ sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k
     }
   apply_actuator_draws(job, s, scale_draws, misalignment_draws);
   if (e.sensors) draw_sensors(*e.sensors, kind.axes, r, s);
-  // The member's sensor noise (SPEC §18): its own stream, of the base's seed if it gives one,
-  // else of the ensemble's. The seed is written out with the member, so that the members listed
-  // in a scenarios file (`ftctune ensemble`), k-th at index k, draw the same noise.
+  // The member's sensor noise (SPEC §18): stream k, of the base's seed if it gives one, else of
+  // the ensemble's. Both are written out with the member, so that it draws the same noise
+  // replayed alone or listed in a scenarios file (`ftctune ensemble`, evaluate's worst members).
   if (s.sensors) {
-    s.sensors->stream_seed = base.sensors ? base.sensors->seed.value_or(seed) : seed;
-    s.sensors->seed = s.sensors->stream_seed;
-    s.sensors->stream_index = static_cast<std::uint64_t>(k);
+    s.sensors->seed = base.sensors && base.sensors->seed ? *base.sensors->seed : seed;
+    s.sensors->stream = static_cast<std::uint64_t>(k);
+    s.sensors->resolve(seed, static_cast<std::uint64_t>(k));
   }
   return s;
 }
@@ -247,7 +247,6 @@ const char* kind_name(Distribution::Kind k) {
   return k == Distribution::Kind::uniform ? "uniform" : "log_uniform";
 }
 
-// A number (constant), {"uniform": [a, b]} or {"log_uniform": [a, b]}.
 // [lo, hi], two integers (clamped to [-1, 1e6], for the range checks to name); false after an
 // error.
 bool read_int_pair(const json& v, const std::string& path, int& lo, int& hi, Errors& e) {
@@ -262,6 +261,7 @@ bool read_int_pair(const json& v, const std::string& path, int& lo, int& hi, Err
   return true;
 }
 
+// A number (constant), {"uniform": [a, b]} or {"log_uniform": [a, b]}.
 class DistributionShape final : public schema::Shape<Distribution> {
  public:
   // `positive`: what the distribution scales when it must be > 0 ("" = any sign).

@@ -1204,12 +1204,10 @@ Job parse_job(const json& j_in, const std::string& source,
     for (sim::Scenario& s : job.scenarios)
       if (s.initial_state.empty()) s.initial_state = kind->default_initial_state;
   }
-  // Each listed scenario's sensor noise stream (SPEC §18): its seed (default 1) and its index.
+  // Each listed scenario's sensor noise stream (SPEC §18): its seed (default 1) and its index
+  // (default its place in the list).
   for (std::size_t i = 0; i < job.scenarios.size(); ++i)
-    if (std::optional<sim::SensorModel>& m = job.scenarios[i].sensors) {
-      m->stream_seed = m->seed.value_or(1);
-      m->stream_index = i;
-    }
+    if (std::optional<sim::SensorModel>& m = job.scenarios[i].sensors) m->resolve(1, i);
   Errors range;
   job_shape().validate(job, "", range);
   // Without its scenarios file the job has no scenarios: say why once, not what follows from it.

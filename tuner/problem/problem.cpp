@@ -437,10 +437,14 @@ TuningProblem TuningProblem::perturbed(std::uint64_t seed, std::uint64_t k, doub
 }
 
 bool TuningProblem::has_sensors() const {
-  const auto sensed = [](const sim::Scenario& s) { return s.sensors && !s.sensors->exact(); };
-  for (std::size_t i = 0; i < set_->size(); ++i)
-    if (sensed(set_->scenario(i))) return true;
-  return members_ > 0 && sensed(member(set_->size()));
+  // The members copy their base's sensors (a listed scenario) or draw them: generating every
+  // member to look would cost a pass over the ensemble.
+  if (members_ > 0 && job_->ensemble->sensors) return true;
+  for (std::size_t i = 0; i < set_->size(); ++i) {
+    const sim::Scenario& s = set_->scenario(i);
+    if (s.sensors && !s.sensors->exact()) return true;
+  }
+  return false;
 }
 
 TuningProblem TuningProblem::sensor_reseeded(std::uint64_t shift) const {

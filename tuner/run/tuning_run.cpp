@@ -11,6 +11,7 @@
 #include "ftc/sim/elementary.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/sha256.hpp"
+#include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
 
@@ -574,8 +575,10 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
 
 std::int64_t finishing_evaluations(const Job& job, std::size_t front_points) {
   const auto compared = static_cast<std::int64_t>(job.compare.size()) + 2;
-  // With sensors the noise floor runs twice as many: nudged states, then other sensor seeds.
-  const bool sensed = std::any_of(job.scenarios.begin(), job.scenarios.end(),
+  // With sensors the noise floor runs twice as many: nudged states, then other sensor seeds
+  // (TuningProblem::has_sensors; an ensemble that draws sensors gives its members some).
+  const bool sensed = (job.ensemble && job.ensemble->sensors) ||
+                      std::any_of(job.scenarios.begin(), job.scenarios.end(),
                                   [](const sim::Scenario& s) {
                                     return s.sensors && !s.sensors->exact();
                                   });
@@ -684,8 +687,9 @@ std::string noise_floor_sentence(const TuningOutcome& r) {
   if (!std::isfinite(base)) {
     std::snprintf(buf, sizeof buf,
                   "The job's own controller diverges; the tuned one does not (its objective moves "
-                  "by %.2g %% when the initial state is nudged by a relative %.0e).",
-                  100 * spread, r.noise_floor->perturbation);
+                  "by %.2g %% when the initial state is nudged by a relative %.0e%s).",
+                  100 * spread, r.noise_floor->perturbation,
+                  r.noise_floor->sensor_seeds.empty() ? "" : " or the sensor seed changes");
     return buf;
   }
   // The decision compares like with like: the margin and the spread relative to the winner.

@@ -62,10 +62,20 @@ struct SensorModel {
   int delay = 0;  // d, whole samples
   AccelerationSensor acceleration;
 
-  // The stream, resolved when the job is read (SPEC §18): its seed and the scenario's index i.
-  // Not part of the scenario's JSON.
+  // The stream's index i as the job gives it (`stream`); absent: the scenario's index among the
+  // listed ones (0 for a scenario read alone). An ensemble member is written with its own, so
+  // that a member replayed alone, or listed in a scenarios file, draws its noise.
+  std::optional<std::uint64_t> stream;
+
+  // The stream as resolved (SPEC §18; resolve()): its seed and the index i.
   std::uint64_t stream_seed = 1;
   std::uint64_t stream_index = 0;
+  // Sets stream_seed to `seed`, else `default_seed`, and stream_index to `stream`, else
+  // `default_index`.
+  void resolve(std::uint64_t default_seed, std::uint64_t default_index) {
+    stream_seed = seed.value_or(default_seed);
+    stream_index = stream.value_or(default_index);
+  }
 
   static constexpr Range kNoiseRange = Range::non_negative();
   static constexpr int kMaxDelay = 1000;
@@ -81,14 +91,15 @@ struct SensorModel {
   std::vector<FieldError> validate(const std::string& path, int axes) const;
 };
 
-// The measurement noise of one scenario, sample after sample (the stream above): the additive
-// terms σ_a z of the angles and b_k + σ_r z of the rates; quantisation, delay and the
-// acceleration are the loop's (lanes/closed_loop.hpp), as they act on the state.
+// The measurement noise of one scenario, sample after sample (the stream above): the terms σ_a z
+// of the angles, the rates' bias b_k and their σ_r z, kept apart so that the loop adds them in
+// §18's order, (X2 + b_k) + σ_r z; quantisation, delay and the acceleration are the loop's
+// (lanes/closed_loop.hpp), as they act on the state.
 class SensorNoise {
  public:
   SensorNoise(const SensorModel& model, int axes, double sample_time);
-  // The next sample's terms: angle[0..n), rate[0..n).
-  void next(double* angle, double* rate);
+  // The next sample's terms: angle[0..n), bias[0..n), rate[0..n).
+  void next(double* angle, double* bias, double* rate);
   // The next standard normal of the stream (Box–Muller: r = sqrt(−2 ln(1 − u1)), z = r cos(2π
   // u2), then r sin(2π u2) for the next request).
   double normal();
