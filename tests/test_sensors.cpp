@@ -103,6 +103,13 @@ Recorded record(const Scenario& s) {
   return out;
 }
 
+// Every "path: message" of an input error, one a line.
+std::string every_error(const ftc::InputError& e) {
+  std::string all;
+  for (const ftc::FieldError& f : e.errors()) all += f.path + ": " + f.message + "\n";
+  return all;
+}
+
 SensorModel resolved(SensorModel m, std::uint64_t seed = 1, std::uint64_t index = 0) {
   m.stream_seed = seed;
   m.stream_index = index;
@@ -361,8 +368,7 @@ TEST(Sensors, BadFieldsAreRefusedAtTheirJsonPath) {
     ftc::tune::parse_job(j, "job.json");
     FAIL() << "accepted";
   } catch (const ftc::InputError& e) {
-    std::string all;
-    for (const ftc::FieldError& f : e.errors()) all += f.path + ": " + f.message + "\n";
+    const std::string all = every_error(e);
     for (const char* path :
          {"/scenarios/0/sensors/angle/noise", "/scenarios/0/sensors/rate/bias",
           "/scenarios/0/sensors/rate/quantization", "/scenarios/0/sensors/delay",
@@ -486,8 +492,7 @@ TEST(Sensors, EnsembleMembersDrawTheirSensorsLast) {
     ftc::tune::parse_job(e, "job.json");
     FAIL() << "accepted";
   } catch (const ftc::InputError& err) {
-    std::string all;
-    for (const ftc::FieldError& f : err.errors()) all += f.path + ": " + f.message + "\n";
+    const std::string all = every_error(err);
     EXPECT_NE(all.find("/ensemble/sensors/rate_noise: must be >= 0"), std::string::npos) << all;
     EXPECT_NE(all.find("/ensemble/sensors/delay: expected 0 <= lo <= hi"), std::string::npos)
         << all;

@@ -255,7 +255,16 @@ std::vector<char> set_message(const SimulationSet& set) {
   w.put_string(set.plant_spec().model);
   w.put_vector(set.plant_spec().values);
   json scenarios = json::array();
-  for (std::size_t i = 0; i < set.size(); ++i) scenarios.push_back(runtime::to_json(set.scenario(i)));
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    // A sensed scenario travels with its resolved noise stream as its own `seed` and `stream`,
+    // which the worker's reading resolves back (the job's list index is not in its JSON).
+    sim::Scenario s = set.scenario(i);
+    if (s.sensors) {
+      s.sensors->seed = s.sensors->stream_seed;
+      s.sensors->stream = s.sensors->stream_index;
+    }
+    scenarios.push_back(runtime::to_json(s));
+  }
   w.put_string(scenarios.dump());
   for (std::size_t i = 0; i < set.size(); ++i) {
     const sim::SimulationOptions& o = set.options(i);
@@ -263,10 +272,6 @@ std::vector<char> set_message(const SimulationSet& set) {
     w.put_vector(o.extra_windows);
     w.put(o.record_every);
     w.put(o.metrics);
-    // The sensors' noise stream, resolved from the job (not part of the scenario's JSON).
-    const std::optional<sim::SensorModel>& sensors = set.scenario(i).sensors;
-    w.put<std::uint64_t>(sensors ? sensors->stream_seed : 0);
-    w.put<std::uint64_t>(sensors ? sensors->stream_index : 0);
   }
   return w.bytes();
 }
@@ -285,12 +290,6 @@ SimulationSet set_from_message(const std::vector<char>& bytes) {
     options[i].extra_windows = r.get_vector<sim::Window>();
     options[i].record_every = r.get<std::int64_t>();
     options[i].metrics = r.get<sim::MetricSettings>();
-    const auto stream_seed = r.get<std::uint64_t>();
-    const auto stream_index = r.get<std::uint64_t>();
-    if (std::optional<sim::SensorModel>& sensors = scenarios[i].sensors) {
-      sensors->stream_seed = stream_seed;
-      sensors->stream_index = stream_index;
-    }
   }
   return SimulationSet(std::move(plant), std::move(scenarios), std::move(options));
 }
