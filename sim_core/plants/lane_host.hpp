@@ -89,12 +89,6 @@ Vec<M> applied_output(const FaultEffect<M>& e, const Vec<M>& u_d, const double* 
   return u;
 }
 
-// A scenario's sensors when the controller does not read the exact state (SensorModel::exact):
-// a model whose measurements are exact is no sensors at all, so its loop is the loop without.
-inline const SensorModel* active_sensors(const Scenario& s) {
-  return s.sensors && !s.sensors->exact() ? &*s.sensors : nullptr;
-}
-
 // One recorded sample; out of line, as it is rare and would bloat the loop.
 template <int N, int M>
 [[gnu::noinline]] void append_row(Trajectory& tr, double t, const StateOf<N>& x, const Vec<M>& u_d,
@@ -512,7 +506,7 @@ PackSetup<N, M> pack_setup(std::span<LaneTask* const> lanes, const Mat<N, M>* G,
   su.samples = s0.samples();
   su.block = std::max(1, 16 / su.substeps);
   // Sensors: the lanes share one delay and acceleration source (run_lanes' key).
-  if (const SensorModel* sm = active_sensors(s0)) {
+  if (const SensorModel* sm = s0.active_sensors()) {
     su.sensors = true;
     su.delay = sm->delay;
     su.differentiated = sm->acceleration.source == AccelerationSource::differentiated;
@@ -600,7 +594,7 @@ void run_lanes(std::span<LaneTask> lanes, const Mat<P::kAxes, P::kActuators>* G,
   using Key = std::tuple<double, int, std::int64_t, ControllerType, double, bool, int>;
   const auto key = [](const LaneTask& l) {
     const bool adaptive = controller_info(l.config.type).adaptive;
-    const SensorModel* sm = active_sensors(*l.scenario);
+    const SensorModel* sm = l.scenario->active_sensors();
     const int sensors =
         sm ? 2 * sm->delay + (sm->acceleration.source == AccelerationSource::differentiated) : -1;
     return Key{l.scenario->sample_time,         l.scenario->substeps,

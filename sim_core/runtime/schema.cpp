@@ -1,6 +1,7 @@
 #include "ftc/runtime/schema.hpp"
 
 #include <cmath>
+#include <limits>
 #include <string_view>
 #include <unordered_set>
 #include <vector>
@@ -50,6 +51,26 @@ bool read_number(const json& v, const std::string& path, double& out, Errors& er
   }
   out = v.get<double>();
   return true;
+}
+
+bool read_uint64(const json& v, const std::string& path, std::uint64_t& out, Errors& errs) {
+  long long i = 0;
+  if (v.is_number_unsigned())
+    out = v.get<std::uint64_t>();
+  else if (json_io::json_to_int(v, i) && i >= 0)
+    out = static_cast<std::uint64_t>(i);
+  else {
+    errs.push_back({path, type_error("a non-negative integer", v)});
+    return false;
+  }
+  return true;
+}
+
+json uint64_schema(const std::string& doc) {
+  return {{"type", "integer"},
+          {"minimum", 0},
+          {"maximum", std::numeric_limits<std::uint64_t>::max()},
+          {"description", doc}};
 }
 
 json number_schema(const std::string& doc, const Range& r) {

@@ -441,8 +441,7 @@ bool TuningProblem::has_sensors() const {
   // member to look would cost a pass over the ensemble.
   if (members_ > 0 && job_->ensemble->sensors) return true;
   for (std::size_t i = 0; i < set_->size(); ++i) {
-    const sim::Scenario& s = set_->scenario(i);
-    if (s.sensors && !s.sensors->exact()) return true;
+    if (set_->scenario(i).active_sensors()) return true;
   }
   return false;
 }

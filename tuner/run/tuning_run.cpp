@@ -194,11 +194,16 @@ std::vector<std::optional<double>> goal_spreads(const PerturbedExtremes& ex,
 }
 
 // The sensor seed of the first scenario with sensors (the noise floor lists the seeds it moved
-// it to).
+// it to). Every ensemble member has the same seed, so the first member tells it (generating
+// every member until one reads sensors would cost a pass over the ensemble).
 std::uint64_t first_sensor_seed(const TuningProblem& problem) {
-  for (std::size_t i = 0; i < problem.scenarios(); ++i) {
+  for (std::size_t i = 0; i < problem.listed_scenarios(); ++i) {
     const sim::Scenario s = problem.scenario(i);
-    if (s.sensors && !s.sensors->exact()) return s.sensors->stream_seed;
+    if (s.active_sensors()) return s.sensors->stream_seed;
+  }
+  if (problem.scenarios() > problem.listed_scenarios()) {
+    const sim::Scenario member = problem.scenario(problem.listed_scenarios());
+    if (member.sensors) return member.sensors->stream_seed;
   }
   return 0;
 }
@@ -577,11 +582,10 @@ std::int64_t finishing_evaluations(const Job& job, std::size_t front_points) {
   const auto compared = static_cast<std::int64_t>(job.compare.size()) + 2;
   // With sensors the noise floor runs twice as many: nudged states, then other sensor seeds
   // (TuningProblem::has_sensors; an ensemble that draws sensors gives its members some).
-  const bool sensed = (job.ensemble && job.ensemble->sensors) ||
-                      std::any_of(job.scenarios.begin(), job.scenarios.end(),
-                                  [](const sim::Scenario& s) {
-                                    return s.sensors && !s.sensors->exact();
-                                  });
+  const bool sensed =
+      (job.ensemble && job.ensemble->sensors) ||
+      std::any_of(job.scenarios.begin(), job.scenarios.end(),
+                  [](const sim::Scenario& s) { return s.active_sensors() != nullptr; });
   return compared + (sensed ? 2 : 1) * static_cast<std::int64_t>(NoiseFloor{}.repeats) *
                         static_cast<std::int64_t>(std::max<std::size_t>(1, front_points));
 }

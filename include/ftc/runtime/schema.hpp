@@ -71,6 +71,9 @@ namespace detail {
 std::string type_error(const char* expected, const json& v);
 std::string choice_error(const std::vector<std::string>& names, const std::string& got);
 bool read_number(const json& v, const std::string& path, double& out, Errors& errs);
+// A non-negative integer of up to 64 bits; false (and an error) for anything else.
+bool read_uint64(const json& v, const std::string& path, std::uint64_t& out, Errors& errs);
+json uint64_schema(const std::string& doc);
 json number_schema(const std::string& doc, const Range& r);
 void dedupe_append(Errors& to, Errors from);
 }  // namespace detail
@@ -189,24 +192,28 @@ class Object final : public Shape<T> {
     const std::uint64_t dflt = T{}.*m;
     return field({key, p == kRequired,
                   [m](const json& v, const std::string& path, T& out, Errors& e) {
-                    long long i = 0;
-                    if (v.is_number_unsigned())
-                      out.*m = v.get<std::uint64_t>();
-                    else if (json_io::json_to_int(v, i) && i >= 0)
-                      out.*m = static_cast<std::uint64_t>(i);
-                    else
-                      e.push_back({path, detail::type_error("a non-negative integer", v)});
+                    detail::read_uint64(v, path, out.*m, e);
                   },
                   [](const T&, const std::string&, Errors&) {},
                   [m, key](const T& t, json& o) { o[key] = t.*m; },
                   [doc, dflt, p] {
-                    json s = {{"type", "integer"},
-                              {"minimum", 0},
-                              {"maximum", std::numeric_limits<std::uint64_t>::max()},
-                              {"description", doc}};
+                    json s = detail::uint64_schema(doc);
                     if (p == kOptional) s["default"] = dflt;
                     return s;
                   }});
+  }
+  // A non-negative integer of up to 64 bits that may be absent (and is then not written).
+  Object& optional_uint64(std::string key, std::optional<std::uint64_t> T::*m, std::string doc) {
+    return field({key, false,
+                  [m](const json& v, const std::string& path, T& out, Errors& e) {
+                    std::uint64_t u = 0;
+                    if (detail::read_uint64(v, path, u, e)) out.*m = u;
+                  },
+                  [](const T&, const std::string&, Errors&) {},
+                  [m, key](const T& t, json& o) {
+                    if (t.*m) o[key] = *(t.*m);
+                  },
+                  [doc] { return detail::uint64_schema(doc); }});
   }
   // A string; `check` (optional) returns a message for an invalid value.
   Object& string(std::string key, std::string T::*m, std::string doc, Presence p = kOptional,

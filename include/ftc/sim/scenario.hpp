@@ -68,6 +68,12 @@ struct Scenario {
 
   // The true values of one parameter; null when the scenario gives none.
   const std::vector<double>* true_value(std::string_view parameter) const;
+  // The sensors the controller reads through; null when it reads the exact state and
+  // acceleration (no block, or one whose measurements are exact: SensorModel::exact), whose loop
+  // is the loop without sensors, bit for bit.
+  const SensorModel* active_sensors() const {
+    return sensors && !sensors->exact() ? &*sensors : nullptr;
+  }
   // Sets (or replaces) the true values of one parameter.
   void set_true_value(const std::string& parameter, std::vector<double> values);
 
