@@ -112,4 +112,38 @@ void SensorNoise::next(double* angle, double* bias, double* rate) {
   }
 }
 
+double quantize(double x, double step) {
+  // std::round rounds half away from zero and is exact, as the lanes' quantiser is.
+  return step > 0 ? step * std::round(x / step) : x;
+}
+
+SensorReadout::SensorReadout(const SensorModel& model, int axes, double sample_time)
+    : noise_(model, axes, sample_time),
+      axes_(axes),
+      delay_(model.delay),
+      angle_step_(model.angle.quantization),
+      rate_step_(model.rate.quantization),
+      angle_(static_cast<std::size_t>(axes)),
+      bias_(static_cast<std::size_t>(axes)),
+      rate_(static_cast<std::size_t>(axes)),
+      ring_(static_cast<std::size_t>(model.delay + 1) * 2 * static_cast<std::size_t>(axes)) {}
+
+void SensorReadout::measure(const double* X1, const double* X2, double* X1m, double* X2m) {
+  noise_.next(angle_.data(), bias_.data(), rate_.data());
+  const auto n = static_cast<std::size_t>(axes_);
+  const auto slots = static_cast<long long>(delay_) + 1;
+  double* now = ring_.data() + static_cast<std::size_t>(k_ % slots) * 2 * n;
+  for (std::size_t i = 0; i < n; ++i) {
+    now[i] = quantize(X1[i] + angle_[i], angle_step_);
+    now[n + i] = quantize((X2[i] + bias_[i]) + rate_[i], rate_step_);  // (X2 + b_k) + σ_r z
+  }
+  const long long from = k_ < delay_ ? 0 : (k_ - delay_) % slots;
+  const double* read = ring_.data() + static_cast<std::size_t>(from) * 2 * n;
+  for (std::size_t i = 0; i < n; ++i) {
+    X1m[i] = read[i];
+    X2m[i] = read[n + i];
+  }
+  ++k_;
+}
+
 }  // namespace ftc::sim

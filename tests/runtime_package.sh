@@ -43,24 +43,49 @@ case "$out" in
   *) echo "unexpected output"; exit 1 ;;
 esac
 case "$out" in
-  *"ISE over [0, 1) s = "*"control TV "*"(acceleration: exact, noise 0 rad/s^2, delay 0 samples)"*) ;;
+  *"ISE over [0, 1) s = "*"control TV "*"(acceleration: ideal; sensors: exact)"*) ;;
   *) echo "no ISE line"; exit 1 ;;
 esac
-# The step() loop with the acceleration from differentiated rates, noisy and late: it still runs,
-# and it is not the exact acceleration's loop.
-out2=$("$tmp/example/runtime_example" "$tmp/run/gains.json" --accel rates --noise 0.01 --delay 2)
+# The step() loop with the rates differentiated, a noisy gyro and measurements 2 samples late
+# (the tuner's sensor model): it still runs, and it is not the exact loop.
+out2=$("$tmp/example/runtime_example" "$tmp/run/gains.json" --accel differentiated --noise 0.01 --delay 2)
 echo "$out2"
 case "$out2" in
-  *"(acceleration: rates, noise 0.01 rad/s^2, delay 2 samples)"*) ;;
-  *) echo "unexpected output with --accel rates"; exit 1 ;;
+  *"(acceleration: differentiated (tau 0 s); sensors: rate noise 0.01 rad/s, delay 2 samples, acceleration differentiated, noise seed 1, stream 0)"*) ;;
+  *) echo "unexpected output with --accel differentiated"; exit 1 ;;
 esac
-[ "$(echo "$out" | tail -1 | cut -d'(' -f1)" != "$(echo "$out2" | tail -1 | cut -d'(' -f1)" ] ||
-  { echo "the noisy, late acceleration changed nothing"; exit 1; }
+[ "$(echo "$out" | sed -n 2p | cut -d'(' -f1)" != "$(echo "$out2" | sed -n 2p | cut -d'(' -f1)" ] ||
+  { echo "the noisy, late sensors changed nothing"; exit 1; }
 set +e
-"$tmp/example/runtime_example" "$tmp/run/gains.json" --accel gyro >/dev/null 2>&1
+"$tmp/example/runtime_example" "$tmp/run/gains.json" --accel rates >/dev/null 2>&1
 status=$?
 set -e
-[ "$status" -eq 2 ] || { echo "exit $status for --accel gyro"; exit 1; }
+[ "$status" -eq 2 ] || { echo "exit $status for --accel rates"; exit 1; }
+
+# A job tuned with sensors: its gains file records the differentiated acceleration, and the
+# example, reading the job's scenario through the same sensors and forming the acceleration with
+# the runtime's estimator, replays the tuned objective inside the run's noise floor.
+sed -e 's|"name": "table1"|"name": "table1-sensed"|' \
+    -e 's|"substeps": 1,|"substeps": 1, "sensors": {"angle": {"noise": 1e-4}, "rate": {"noise": 1e-3, "bias": 2e-3, "bias_walk": 1e-4, "quantization": 1e-5}, "delay": 1, "acceleration": {"source": "differentiated", "time_constant": 0.005}},|' \
+    "$src/jobs/table1.json" >"$tmp/sensed.json"
+"$cli" run "$tmp/sensed.json" --out "$tmp/sensed" --threads 2 -q
+grep -q '"source": "differentiated"' "$tmp/sensed/gains.json" ||
+  { echo "the gains file does not record the differentiated acceleration"; exit 1; }
+out3=$("$tmp/example/runtime_example" "$tmp/sensed/gains.json" --scenario "$tmp/sensed/job.json")
+echo "$out3"
+case "$out3" in
+  *"(acceleration: differentiated (tau 0.005 s); sensors: angle noise 0.0001 rad, rate noise 0.001 rad/s"*) ;;
+  *) echo "the replay did not read the job's sensors"; exit 1 ;;
+esac
+echo "$out3" | tail -1 | awk '{
+  for (i = 1; i <= NF; ++i) { if ($i == "%" && $(i + 1) == "from") d = $(i - 1); if ($i == "floor") f = $(i + 1) }
+  if (d == "" || f == "") { print "no comparison line"; exit 1 }
+  if (d < 0) d = -d
+  if (!(d < f)) { print "the replay is " d " % from the recorded objective, beyond the noise floor " f " %"; exit 1 }
+}'
+# Another noise seed is another draw of the same sensors: no longer the recorded run's bits.
+out4=$("$tmp/example/runtime_example" "$tmp/sensed/gains.json" --scenario "$tmp/sensed/job.json" --seed 2)
+[ "$(echo "$out3" | tail -1)" != "$(echo "$out4" | tail -1)" ] || { echo "--seed changed nothing"; exit 1; }
 # A file of another format is refused with exit 2 and the loader's message.
 sed 's|"ftctune.gains/1"|"ftctune.gains/9"|' "$tmp/run/gains.json" >"$tmp/other.json"
 set +e

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "ftc/runtime/acceleration.hpp"
+#include "ftc/runtime/gains.hpp"
 #include "ftc/runtime/scenario_json.hpp"
 #include "ftc/sim/elementary.hpp"
 #include "ftc/sim/isa.hpp"
@@ -283,6 +285,52 @@ TEST(Sensors, DifferentiatedAccelerationPassesAFirstOrderLowPass) {
   EXPECT_LT(filtered, 0.2 * raw);
 }
 
+// Flight software's side: the sensors read sample by sample (SensorReadout, what the runtime
+// example's plant uses) and the runtime's AccelerationEstimator fed the rates the controller
+// reads give what the tuner's loop gave the controller, bit for bit, delay included.
+TEST(Sensors, RuntimeReadoutAndEstimatorReplayWhatTheLoopGaveTheController) {
+  Scenario s = two_seconds();
+  SensorModel m;
+  m.angle = {2e-4, 1e-5};
+  m.rate.noise = 1e-3;
+  m.rate.bias = {2e-3, -1e-3, 0.0};
+  m.rate.bias_walk = 1e-4;
+  m.rate.quantization = 1e-5;
+  m.delay = 3;
+  m.acceleration = {AccelerationSource::differentiated, 0.005};
+  s.sensors = resolved(m, 9, 2);
+  const Recorded got = record(s);  // the recorder commands nothing: got.x is the true state
+  SensorReadout readout(*s.sensors, 3, s.sample_time);
+  ftc::runtime::AccelerationEstimator estimate(m.acceleration, s.sample_time, 3);
+  ASSERT_EQ(got.seen.size(), got.x.size());
+  for (std::size_t k = 0; k < got.seen.size(); ++k) {
+    Vec<3> X1m, X2m;
+    readout.measure(got.x[k].data(), got.x[k].data() + 3, X1m.data(), X2m.data());
+    const Vec<3> a = estimate.update<3>(X2m);
+    for (int i = 0; i < 3; ++i) {
+      ASSERT_TRUE(same_bits(X1m[i], got.seen[k].X1[i])) << k;
+      ASSERT_TRUE(same_bits(X2m[i], got.seen[k].X2[i])) << k;
+      ASSERT_TRUE(same_bits(a[i], got.seen[k].a[i])) << k;
+    }
+  }
+  // reset() starts over: the first acceleration is 0 again.
+  estimate.reset();
+  EXPECT_EQ(estimate.update<3>(Vec<3>(1.0, 2.0, 3.0)), Vec<3>::Zero());
+  // An ideal acceleration is measured, not estimated; the refusal says which is.
+  try {
+    ftc::runtime::AccelerationEstimator ideal(AccelerationSensor{}, 1e-3, 3);
+    FAIL() << "accepted";
+  } catch (const ftc::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("only \"differentiated\" is estimated"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(quantize(-0.625, 0.25), -0.75);  // -2.5 steps: ties away from zero
+  EXPECT_EQ(quantize(0.375, 0.25), 0.5);
+  EXPECT_EQ(quantize(0.6, 0.25), 0.5);
+  EXPECT_EQ(quantize(0.123, 0.0), 0.123);
+}
+
 TEST(Sensors, ExactSensorsAreTheLoopWithoutThemAndNoiseChangesIt) {
   const auto plant = make_plant(PlantSpec{});
   Scenario s = two_seconds();
@@ -390,6 +438,24 @@ TEST(Sensors, BadFieldsAreRefusedAtTheirJsonPath) {
   const json written = ftc::runtime::to_json(job.scenarios[0]);
   EXPECT_EQ(written["sensors"]["acceleration"]["source"], "differentiated");
   EXPECT_EQ(ftc::runtime::to_json(ftc::runtime::scenario_from_json(written, "w")), written);
+
+  // A tuned job's gains file records one acceleration path, so its scenarios agree on it.
+  json mixed = ok;
+  mixed["scenarios"].push_back(mixed["scenarios"][0]);
+  mixed["scenarios"][1]["name"] = "second";
+  mixed["scenarios"][1]["sensors"]["acceleration"]["time_constant"] = 0.02;
+  try {
+    ftc::tune::parse_job(mixed, "job.json");
+    FAIL() << "accepted";
+  } catch (const ftc::InputError& e) {
+    EXPECT_EQ(every_error(e),
+              "/scenarios/1/sensors/acceleration: is differentiated (time_constant 0.02 s) but "
+              "/scenarios/0/sensors/acceleration is differentiated (time_constant 0.01 s): the "
+              "scenarios of a tuned job read one acceleration path, the one its gains file "
+              "records for flight software\n");
+  }
+  mixed["scenarios"][1].erase("sensors");  // a scenario with exact sensors reads no path
+  EXPECT_EQ(ftc::tune::parse_job(mixed, "job.json").tuned_acceleration()->time_constant, 0.01);
 }
 
 TEST(Sensors, ListedScenariosAndMembersHaveStreamsOfTheirOwn) {
@@ -444,11 +510,18 @@ TEST(Sensors, NoiseFloorAddsOtherSensorSeedsAndRunsAreThreadIndependent) {
   EXPECT_EQ(files_a, files_b);
   const json gains = json::parse(files_a.at("gains.json"));
   EXPECT_EQ(gains["noise_floor"]["sensor_seeds"], json({6, 7, 8, 9, 10, 11, 12, 13}));
+  // The gains file records the acceleration path the gains were tuned with, and the runtime's
+  // loader reads it back; a job without sensors records none.
+  EXPECT_EQ(gains["acceleration"], json({{"source", "differentiated"}, {"time_constant", 0.0}}));
+  const ftc::runtime::Gains loaded = ftc::runtime::parse_gains(gains, "gains.json");
+  ASSERT_TRUE(loaded.acceleration);
+  EXPECT_EQ(ftc::runtime::acceleration_path(loaded).source, AccelerationSource::differentiated);
   EXPECT_NE(files_a.at("comparison.md").find("other sensor seeds"), std::string::npos);
   // Different from the run without sensors: the loop did read them.
   json plain = ftc::testing::short_table1_job();
   const ftc::tune::TuningOutcome c = ftc::tune::tune(ftc::tune::parse_job(plain, "job.json"), one);
   EXPECT_TRUE(c.noise_floor->sensor_seeds.empty());
+  EXPECT_FALSE(json::parse(ftc::tune::output_files(c).at("gains.json")).contains("acceleration"));
   EXPECT_NE(c.best().outcome.evaluation.objective, a.best().outcome.evaluation.objective);
 }
 

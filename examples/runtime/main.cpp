@@ -1,33 +1,53 @@
-// runtime_example GAINS_FILE [--duration S] [--accel exact|rates|model] [--noise SIGMA]
-//                 [--delay N] [--seed S]
+// runtime_example GAINS_FILE [--scenario FILE [--index I]] [--duration S]
+//                 [--accel ideal|differentiated|model] [--tau S]
+//                 [--noise SIGMA] [--angle-noise SIGMA] [--delay N] [--seed S]
 // Loads a gains file as flight software would and runs the tuned controller's step() loop in
-// closed loop with a plant of its own: the spacecraft's equations integrated here (RK4 over each
-// sample, the command held), under the paper's disturbance and faults. Prints the attitude error
-// at the end, the ISE over the run and after the first fault, and the control TV. Links
-// ftctune::runtime only (Eigen and nlohmann-json underneath).
+// closed loop with a plant of its own: the spacecraft's equations integrated here (RK4, the
+// command held over each sample), under a scenario's disturbance and faults, read through its
+// sensors. Prints the attitude error at the end, the ISE over the run, after the first fault and
+// over the gains file's objective window (beside the value the file records), and the control
+// TV. Links ftctune::runtime only (Eigen and nlohmann-json underneath).
 //
-// step(t, X1, X2, a) needs the angular acceleration a = dX2/dt as a measurement. Where it comes
-// from is the flight software's choice, and this program tries the usual ones:
-//   exact  the true dX2/dt = f(X) + G u + Δ(t), with the actuators' real (faulted) outputs of the
-//          command last applied: what `ftctune run` and `simulate` feed the controller;
-//   rates  the gyro rates differentiated, (X2_k − X2_{k−1}) / Ts: the mean acceleration over the
-//          last sample, half a sample late;
-//   model  f(X) + G u_{k−1} from the model alone: it sees neither the disturbance nor the faults.
-// --noise adds white Gaussian noise of SIGMA rad/s² to each axis of a (after the choice above),
-// --delay hands the controller the acceleration of N samples before.
+// The world: the paper's scenario, the first 1 s of it by default, or the scenario of FILE (a
+// scenario's JSON, what `ftctune ensemble` and `evaluate` write, or a job or scenarios file whose
+// `scenarios` list holds it at index I, default 0; then the whole scenario by default). Its
+// `sensors` block (docs/model.md "Sensors in the loop") is the sensor hardware: noise, bias,
+// quantisation and delay of the attitude and rates the controller reads, drawn from the
+// scenario's noise stream as the tuner drew it (ftc::sim::SensorReadout). The options change it:
+//   --noise SIGMA        the rate gyro's white noise σ_r, rad/s (1σ)
+//   --angle-noise SIGMA  the attitude's white noise σ_a, rad (1σ)
+//   --delay N            the measurements reach the controller N samples late
+//   --seed S             the noise stream's seed
+//
+// step(t, X1, X2, a) also needs the angular acceleration a = dX2/dt. Where it comes from is the
+// flight software's part, as the gains file says it was tuned (its `acceleration`, default
+// ideal), or as --accel says:
+//   ideal           the true dX2/dt = f(X) + G u + Δ(t), with the actuators' real (faulted)
+//                   outputs of the command last applied: a perfect angular accelerometer, what
+//                   the tuner feeds the controller without sensors;
+//   differentiated  the rates the controller reads differentiated, (X2m_k − X2m_{k−1}) / Ts,
+//                   through a first-order low-pass of time constant --tau (default the gains
+//                   file's, else 0): ftc::runtime::AccelerationEstimator, the tuner's own
+//                   arithmetic;
+//   model           f(Xm) + G u_{k−1} from the model alone: it sees neither the disturbance nor
+//                   the faults.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
-#include <deque>
-#include <random>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
+#include "ftc/runtime/acceleration.hpp"
 #include "ftc/runtime/gains.hpp"
+#include "ftc/runtime/json_reader.hpp"
+#include "ftc/runtime/scenario_json.hpp"
 #include "ftc/sim/disturbance.hpp"
 #include "ftc/sim/faults.hpp"
 #include "ftc/sim/scenario.hpp"
+#include "ftc/sim/sensors.hpp"
 #include "ftc/sim/spacecraft.hpp"
 
 namespace {
@@ -35,56 +55,131 @@ namespace {
 using ftc::sim::Vec3;
 using ftc::sim::Vec4;
 using State = ftc::sim::Vec<6>;
+using nlohmann::json;
 
 int usage(const char* argv0) {
   std::fprintf(stderr,
-               "usage: %s GAINS_FILE [--duration S] [--accel exact|rates|model] [--noise SIGMA] "
-               "[--delay N] [--seed S]\n",
+               "usage: %s GAINS_FILE [--scenario FILE [--index I]] [--duration S] "
+               "[--accel ideal|differentiated|model] [--tau S] [--noise SIGMA] "
+               "[--angle-noise SIGMA] [--delay N] [--seed S]\n",
                argv0);
   return 2;
+}
+
+json read_json(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw ftc::InputError(file, "", "cannot be read");
+  try {
+    return json::parse(in);
+  } catch (const json::exception& e) {
+    throw ftc::InputError(file, "", std::string("is not JSON: ") + e.what());
+  }
+}
+
+// The scenario of FILE: the file's own, or entry `index` of its `scenarios` list (a job or a
+// scenarios file), whose noise stream is then its index there, as in the tuner.
+ftc::sim::Scenario read_scenario(const std::string& file, std::size_t index) {
+  json j = read_json(file);
+  if (j.contains("scenarios")) {
+    if (!j["scenarios"].is_array())
+      throw ftc::InputError(file, "/scenarios",
+                            "is not a list (a job whose scenarios are in a file of their own: "
+                            "give that file)");
+    if (index >= j["scenarios"].size())
+      throw ftc::InputError(file, "/scenarios",
+                            "has " + std::to_string(j["scenarios"].size()) +
+                                " scenarios, no index " + std::to_string(index));
+    json s = j["scenarios"][index];
+    if (s.is_object() && s.contains("sensors") && s["sensors"].is_object() &&
+        !s["sensors"].contains("stream"))
+      s["sensors"]["stream"] = index;
+    return ftc::runtime::scenario_from_json(s, file + " scenario " + std::to_string(index));
+  }
+  return ftc::runtime::scenario_from_json(j, file);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) return usage(argv[0]);
-  double duration = 1.0, noise = 0.0;
-  int delay = 0;
-  unsigned long long seed = 1;
-  std::string accel = "exact";
+  std::optional<double> duration, tau, noise, angle_noise;
+  std::optional<int> delay;
+  std::optional<unsigned long long> seed;
+  std::optional<std::string> accel, scenario_file;
+  std::size_t index = 0;
   for (int i = 2; i < argc; ++i) {
     const std::string opt = argv[i];
     if (i + 1 >= argc) return usage(argv[0]);
     const char* v = argv[++i];
-    if (opt == "--duration")
-      duration = std::atof(v);
-    else if (opt == "--accel")
+    char* end = nullptr;
+    const double number = std::strtod(v, &end);
+    const bool numeric = end != v && *end == '\0' && std::isfinite(number);
+    if (opt == "--accel")
       accel = v;
-    else if (opt == "--noise")
-      noise = std::atof(v);
-    else if (opt == "--delay")
-      delay = std::atoi(v);
-    else if (opt == "--seed")
-      seed = std::strtoull(v, nullptr, 10);
+    else if (opt == "--scenario")
+      scenario_file = v;
+    else if (!numeric)
+      return usage(argv[0]);
+    else if (opt == "--duration" && number > 0)
+      duration = number;
+    else if (opt == "--tau" && number >= 0)
+      tau = number;
+    else if (opt == "--noise" && number >= 0)
+      noise = number;
+    else if (opt == "--angle-noise" && number >= 0)
+      angle_noise = number;
+    else if (opt == "--delay" && number >= 0 && number <= ftc::sim::SensorModel::kMaxDelay &&
+             number == std::floor(number))
+      delay = static_cast<int>(number);
+    else if (opt == "--seed" && number >= 0 && number == std::floor(number))
+      seed = static_cast<unsigned long long>(number);
+    else if (opt == "--index" && number >= 0 && number == std::floor(number))
+      index = static_cast<std::size_t>(number);
     else
       return usage(argv[0]);
   }
-  if (!(duration > 0) || noise < 0 || delay < 0 ||
-      (accel != "exact" && accel != "rates" && accel != "model"))
+  if (accel && *accel != "ideal" && *accel != "differentiated" && *accel != "model")
     return usage(argv[0]);
   try {
-    // The file says what it was tuned for: the controller, the sample time and the plant.
+    // The file says what it was tuned for: the controller, the sample time, the plant and the
+    // acceleration path.
     const ftc::runtime::Gains gains = ftc::runtime::read_gains(argv[1]);
     const ftc::sim::Spacecraft plant(ftc::sim::spacecraft_params(gains.plant));
     // Refuses gains tuned for another sample time than the one the loop runs at.
     const auto controller = ftc::runtime::make_controller(gains, plant, gains.sample_time);
     const double Ts = gains.sample_time;
 
-    // The world the flight computer does not see: the paper's disturbance and faults.
-    const ftc::sim::Scenario scenario = ftc::sim::Scenario::paper();
+    // The world the flight computer does not see: the scenario's disturbance and faults, and
+    // its sensors as the options change them.
+    ftc::sim::Scenario scenario = ftc::sim::Scenario::paper();
+    if (scenario_file) scenario = read_scenario(*scenario_file, index);
+    if (scenario.actuator || !scenario.true_values.empty())
+      throw ftc::InputError("scenario", "",
+                            "has actuator dynamics or true plant values, which this example's "
+                            "plant does not model (`ftctune simulate` does)");
+    if (noise || angle_noise || delay || seed) {
+      ftc::sim::SensorModel& m = scenario.sensors ? *scenario.sensors : scenario.sensors.emplace();
+      if (noise) m.rate.noise = *noise;
+      if (angle_noise) m.angle.noise = *angle_noise;
+      if (delay) m.delay = *delay;
+      if (seed) m.seed = *seed;
+      m.resolve(1, m.stream.value_or(index));
+    }
+    const double run = duration.value_or(scenario_file ? scenario.duration : 1.0);
+    ftc::sim::AccelerationSensor path = ftc::runtime::acceleration_path(gains);
+    if (accel == "ideal") path.source = ftc::sim::AccelerationSource::ideal;
+    if (accel == "differentiated") path.source = ftc::sim::AccelerationSource::differentiated;
+    if (tau) path.time_constant = *tau;
+    const std::string source = accel ? *accel
+                               : path.source == ftc::sim::AccelerationSource::differentiated
+                                   ? "differentiated"
+                                   : "ideal";
+
     const ftc::sim::Disturbance disturbance(scenario.disturbance);
     const ftc::sim::FaultSet faults(scenario.faults, scenario.saturation);
-    State x = Eigen::Map<const State>(scenario.initial_state.data());
+    State x = scenario.initial_state.empty()
+                  ? State(Eigen::Map<const State>(ftc::sim::Scenario::paper().initial_state.data()))
+                  : State(Eigen::Map<const State>(scenario.initial_state.data()));
     // dX/dt with the command u_d held over the sample.
     const auto deriv = [&](double t, const State& s, const Vec4& u_d) {
       State d;
@@ -93,42 +188,61 @@ int main(int argc, char** argv) {
       return d;
     };
 
-    std::mt19937_64 rng(seed);
-    std::normal_distribution<double> gauss(0.0, 1.0);
-    std::deque<Vec3> sensed;  // the last delay + 1 accelerations, newest at the back
+    // The sensor hardware (exact without a block) and the flight software's estimator; the
+    // block names the acceleration this loop reads.
+    if (scenario.sensors && source != "model") scenario.sensors->acceleration = path;
+    std::optional<ftc::sim::SensorReadout> sensors;
+    if (scenario.sensors) sensors.emplace(*scenario.sensors, 3, Ts);
+    std::optional<ftc::runtime::AccelerationEstimator> estimator;
+    if (source == "differentiated") estimator.emplace(path, Ts, 3);
+
+    // The gains file's objective window, when its metric is the ISE (the value it records is
+    // its job's aggregate over all of its scenarios: one scenario's job replays it).
+    const json file = read_json(argv[1]);
+    const json objective = file.value("objective", json::object());
+    const bool ise_objective = objective.value("metric", "") == "ise" &&
+                               objective.contains("window") && objective["window"].is_array() &&
+                               objective["window"].size() == 2;
+    const double w0 = ise_objective ? objective["window"][0].get<double>() : 0.0;
+    const double w1 = ise_objective ? objective["window"][1].get<double>() : 0.0;
+
     Vec4 u_prev = Vec4::Zero();
-    Vec3 X2_prev = x.tail<3>();
-    double ise = 0.0, ise_after = 0.0, tv = 0.0;  // after the first fault; Σ‖u_k − u_{k−1}‖
-    double first_fault = duration;
+    double ise = 0.0, ise_after = 0.0, ise_window = 0.0, tv = 0.0;  // tv = Σ‖u_k − u_{k−1}‖
+    double first_fault = run;
     for (const ftc::sim::Fault& f : scenario.faults) first_fault = std::min(first_fault, f.onset);
-    const auto samples = static_cast<long long>(std::llround(duration / Ts));
+    const auto samples = static_cast<long long>(std::llround(run / Ts));
+    const int substeps = std::max(1, scenario.substeps);
+    const double h = Ts / substeps;
     controller->reset();
     for (long long k = 0; k < samples; ++k) {
       const double t = static_cast<double>(k) * Ts;
       const Vec3 X1 = x.head<3>(), X2 = x.tail<3>();
-      // The acceleration measurement, as the flight software forms it.
+      // What the controller reads.
+      Vec3 X1m = X1, X2m = X2;
+      if (sensors) sensors->measure(X1.data(), X2.data(), X1m.data(), X2m.data());
+      State xm;
+      xm << X1m, X2m;
       Vec3 a;
-      if (accel == "exact")
+      if (source == "ideal")
         a = deriv(t, x, u_prev).tail<3>();
-      else if (accel == "rates")
-        a = k == 0 ? Vec3(deriv(t, x, u_prev).tail<3>()) : Vec3((X2 - X2_prev) / Ts);
+      else if (source == "differentiated")
+        a = estimator->update<3>(X2m);
       else
-        a = plant.f(x) + plant.G(x) * u_prev;
-      if (noise > 0)
-        for (int i = 0; i < 3; ++i) a[i] += noise * gauss(rng);
-      sensed.push_back(a);
-      if (static_cast<int>(sensed.size()) > delay + 1) sensed.pop_front();
+        a = plant.f(xm) + plant.G(xm) * u_prev;
 
-      const Vec4 u = controller->step(t, X1, X2, sensed.front());
+      const Vec4 u = controller->step(t, X1m, X2m, a);
       ise += Ts * X1.squaredNorm();
       if (t >= first_fault) ise_after += Ts * X1.squaredNorm();
+      if (ise_objective && t >= w0 && t < w1) ise_window += Ts * X1.squaredNorm();
       if (k > 0) tv += (u - u_prev).norm();
 
       // The plant over one sample: RK4 with the command held.
-      const State k1 = deriv(t, x, u), k2 = deriv(t + Ts / 2, x + Ts / 2 * k1, u),
-                  k3 = deriv(t + Ts / 2, x + Ts / 2 * k2, u), k4 = deriv(t + Ts, x + Ts * k3, u);
-      x += Ts / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
-      X2_prev = X2;
+      for (int j = 0; j < substeps; ++j) {
+        const double s = t + j * h;
+        const State k1 = deriv(s, x, u), k2 = deriv(s + h / 2, x + h / 2 * k1, u),
+                    k3 = deriv(s + h / 2, x + h / 2 * k2, u), k4 = deriv(s + h, x + h * k3, u);
+        x += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+      }
       u_prev = u;
       if (!x.allFinite() || x.head<3>().cwiseAbs().maxCoeff() > 1e3) {
         std::printf("diverged at t = %.3f s\n", t + Ts);
@@ -139,12 +253,25 @@ int main(int argc, char** argv) {
     const Vec3 X1 = x.head<3>();
     std::printf("%s from job %s, Ts = %g s: after %.1f s the attitude error is %.6g rad\n",
                 ftc::sim::to_string(gains.controller.type), gains.job_name.c_str(),
-                gains.sample_time, duration, X1.norm());
+                gains.sample_time, run, X1.norm());
+    std::string accel_text = source;
+    if (source == "differentiated")
+      accel_text += " (tau " + ftc::json_io::number_text(path.time_constant) + " s)";
     std::printf(
         "ISE over [0, %g) s = %.6g rad^2 s, over [%g, %g) s = %.6g; control TV %.6g "
-        "(acceleration: %s, noise %g rad/s^2, delay %d sample%s)\n",
-        duration, ise, first_fault, duration, ise_after, tv, accel.c_str(), noise, delay,
-        delay == 1 ? "" : "s");
+        "(acceleration: %s; sensors: %s)\n",
+        run, ise, first_fault, run, ise_after, tv, accel_text.c_str(),
+        scenario.sensors ? scenario.sensors->summary().c_str() : "exact");
+    if (ise_objective && w1 <= run + Ts / 2) {
+      const double recorded = objective.value("value", std::nan(""));
+      const json floor = file.value("noise_floor", json::object());
+      const double spread = floor.value("relative_spread", std::nan(""));
+      std::printf(
+          "ISE over [%g, %g) s = %.6g; the gains file records %.6g for its job (%s over its "
+          "scenarios), %+.3g %% from it, noise floor %.3g %%\n",
+          w0, w1, ise_window, recorded, objective.value("aggregate", "mean").c_str(),
+          100 * (ise_window - recorded) / recorded, 100 * spread);
+    }
     return 0;
   } catch (const ftc::InputError& e) {
     std::fprintf(stderr, "runtime_example: %s\n", e.what());

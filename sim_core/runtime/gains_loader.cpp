@@ -5,6 +5,7 @@
 #include "ftc/runtime/gains.hpp"
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/runtime/plant_json.hpp"
+#include "ftc/runtime/scenario_json.hpp"
 #include "ftc/runtime/schema.hpp"
 
 namespace ftc::runtime {
@@ -87,6 +88,11 @@ std::shared_ptr<const schema::Object<Gains>> make_gains_shape() {
   o->number("sample_time", &Gains::sample_time, schema::Range::positive(),
             "the sample time Ts the gains were tuned for (s)", kRequired);
   o->object("plant", &Gains::plant, plant_shape(), "the plant as simulated", kRequired);
+  o->optional_object("acceleration", &Gains::acceleration, acceleration_shape(),
+                     "the acceleration the controller read in tuning, written when the job's "
+                     "scenarios have sensors: ideal, or the measured rates differentiated "
+                     "through a low-pass of time constant τ (s), which flight software must "
+                     "reproduce (ftc/runtime/acceleration.hpp); absent: the exact acceleration");
   o->field(informational("objective", "object", "metric, window, aggregate and the value reached"));
   o->field(informational("goals", "object",
                          "a job with goals: each goal with the value reached, the total "

@@ -168,33 +168,38 @@ typename Obj<T>::Field number_or_list(std::string key, Get get, ConstGet cget, s
           }};
 }
 
-// An optional non-negative integer of up to 64 bits.
-template <class T>
-typename Obj<T>::Field optional_count(std::string key, std::optional<std::uint64_t> T::*m,
-                                      std::string doc) {
-  return {key, false,
-          [m](const json& v, const std::string& path, T& t, Errors& e) {
-            long long i = 0;
-            if (v.is_number_unsigned())
-              t.*m = v.get<std::uint64_t>();
-            else if (json_io::json_to_int(v, i) && i >= 0)
-              t.*m = static_cast<std::uint64_t>(i);
-            else
-              e.push_back({path, schema::detail::type_error("a non-negative integer", v)});
-          },
-          [](const T&, const std::string&, Errors&) {},
-          [m, key](const T& t, json& obj) {
-            if (t.*m) obj[key] = *(t.*m);
-          },
-          [doc] {
-            return json{{"type", "integer"},
-                        {"minimum", 0},
-                        {"maximum", std::numeric_limits<std::uint64_t>::max()},
-                        {"description", doc}};
-          }};
+// --- sensors (SPEC §18) ------------------------------------------------------------------------
+
+Ptr<sim::AccelerationSensor> make_acceleration_shape() {
+  using A = sim::AccelerationSensor;
+  auto accel = std::make_shared<schema::Variant<A>>(
+      "source",
+      [](const A& a) {
+        return std::string(a.source == sim::AccelerationSource::ideal ? "ideal" : "differentiated");
+      },
+      [](A& a, const std::string& name) {
+        a.source = name == "ideal" ? sim::AccelerationSource::ideal
+                                   : sim::AccelerationSource::differentiated;
+      },
+      "The acceleration the controller reads: ideal (the loop's exact a_k, undelayed) or "
+      "differentiated ((X2m_k - X2m_{k-1}) / Ts through a first-order low-pass, delayed as the "
+      "other measurements)");
+  accel->add("ideal", std::make_shared<Obj<A>>());
+  auto diff = std::make_shared<Obj<A>>();
+  diff->number("time_constant", &A::time_constant, sim::SensorModel::kNoiseRange,
+               "τ of the low-pass (s); 0: none", schema::kOptional, false);
+  accel->add("differentiated", std::move(diff));
+  return accel;
 }
 
-// --- sensors (SPEC §18) ------------------------------------------------------------------------
+}  // namespace
+
+Ptr<sim::AccelerationSensor> acceleration_shape() {
+  static const Ptr<sim::AccelerationSensor> shape = make_acceleration_shape();
+  return shape;
+}
+
+namespace {
 
 Ptr<sim::SensorModel> make_sensors_shape() {
   using M = sim::SensorModel;
@@ -220,44 +225,25 @@ Ptr<sim::SensorModel> make_sensors_shape() {
   rate->number("quantization", &R::quantization, noise,
                "Q_r, the measurement rounded to a multiple of it (rad/s); 0: none",
                schema::kOptional, false);
-  using A = sim::AccelerationSensor;
-  auto accel = std::make_shared<schema::Variant<A>>(
-      "source",
-      [](const A& a) {
-        return std::string(a.source == sim::AccelerationSource::ideal ? "ideal"
-                                                                      : "differentiated");
-      },
-      [](A& a, const std::string& name) {
-        a.source = name == "ideal" ? sim::AccelerationSource::ideal
-                                   : sim::AccelerationSource::differentiated;
-      },
-      "The acceleration the controller reads: ideal (the loop's exact a_k, undelayed) or "
-      "differentiated ((X2m_k - X2m_{k-1}) / Ts through a first-order low-pass, delayed as the "
-      "other measurements)");
-  accel->add("ideal", std::make_shared<Obj<A>>());
-  auto diff = std::make_shared<Obj<A>>();
-  diff->number("time_constant", &A::time_constant, noise, "τ of the low-pass (s); 0: none",
-               schema::kOptional, false);
-  accel->add("differentiated", std::move(diff));
 
   auto o = std::make_shared<Obj<M>>(
       "What the controller reads (SPEC §18, docs/model.md): noisy, biased, quantised and "
       "delayed attitude and rates, and the acceleration. The metrics measure the true state. "
       "Absent: the exact state");
-  o->field(optional_count<M>("seed", &M::seed,
-                             "the noise stream's seed; absent: 1, or the ensemble's seed for "
-                             "its members"));
-  o->field(optional_count<M>(
+  o->optional_uint64("seed", &M::seed,
+                     "the noise stream's seed; absent: 1, or the ensemble's seed for its "
+                     "members");
+  o->optional_uint64(
       "stream", &M::stream,
       "the noise stream's index i (SPEC §18's s0 = mix(seed XOR mix(0x53454E53 + i + 1))); "
       "absent: the scenario's index among the job's scenarios. An ensemble member is written "
-      "with its own, so that it draws its noise when replayed alone"));
+      "with its own, so that it draws its noise when replayed alone");
   o->object("angle", &M::angle, Ptr<sim::AngleSensor>(angle), "");
   o->object("rate", &M::rate, Ptr<R>(rate), "");
   o->integer("delay", &M::delay, {0, M::kMaxDelay},
              "d: the controller at sample k reads the measurements of sample max(0, k - d)",
              schema::kOptional, false);
-  o->object("acceleration", &M::acceleration, Ptr<A>(accel), "");
+  o->object("acceleration", &M::acceleration, acceleration_shape(), "");
   return o;
 }
 

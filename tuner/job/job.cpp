@@ -707,6 +707,48 @@ void check_window(const Job& job, const sim::Window& w, WindowFrom from, const s
   }
 }
 
+// Every scenario with sensors, and the ensemble's members when they draw theirs, with its JSON
+// path: the acceleration paths a tuned controller reads.
+std::vector<std::pair<std::string, sim::AccelerationSensor>> acceleration_paths(const Job& job) {
+  std::vector<std::pair<std::string, sim::AccelerationSensor>> paths;
+  for (std::size_t i = 0; i < job.scenarios.size(); ++i)
+    if (job.scenarios[i].sensors)
+      paths.emplace_back("/scenarios/" + std::to_string(i) + "/sensors/acceleration",
+                         job.scenarios[i].sensors->acceleration);
+  if (job.ensemble && job.ensemble->sensors) {
+    // Members copy their base's block, or draw noise on exact sensors (the ideal acceleration).
+    const auto base =
+        std::find_if(job.scenarios.begin(), job.scenarios.end(), [&](const sim::Scenario& s) {
+          return job.ensemble->base.empty() || s.name == job.ensemble->base;
+        });
+    if (base != job.scenarios.end() && !base->sensors)
+      paths.emplace_back("/ensemble/sensors", sim::AccelerationSensor{});
+  }
+  return paths;
+}
+
+std::string acceleration_text(const sim::AccelerationSensor& a) {
+  if (a.source == sim::AccelerationSource::ideal) return "ideal";
+  return "differentiated (time_constant " + json_io::number_text(a.time_constant) + " s)";
+}
+
+// A gains file records one acceleration path for flight software, so a tuned job's scenarios
+// with sensors read the same one.
+void validate_acceleration(const Job& job, Errors& errs) {
+  const auto paths = acceleration_paths(job);
+  for (std::size_t k = 1; k < paths.size(); ++k) {
+    const sim::AccelerationSensor &a = paths[k].second, &first = paths[0].second;
+    if (a.source == first.source &&
+        (a.source == sim::AccelerationSource::ideal || a.time_constant == first.time_constant))
+      continue;
+    errs.push_back({paths[k].first, "is " + acceleration_text(a) + " but " + paths[0].first +
+                                        " is " + acceleration_text(first) +
+                                        ": the scenarios of a tuned job read one acceleration "
+                                        "path, the one its gains file records for flight "
+                                        "software"});
+  }
+}
+
 // pagmo's multi-objective algorithms search fronts only: a job of one objective (or of one soft
 // goal) cannot run them.
 void validate_front_only(const Job& job, Errors& errs) {
@@ -860,6 +902,7 @@ void validate_job(const Job& job, Errors& errs) {
                       "must equal the first scenario's sample_time " +
                           json_io::number_text(job.scenarios[0].sample_time) +
                           " when the job is tuned"});
+  validate_acceleration(job, errs);
   if (job.tuning->parameters.empty())
     errs.push_back({"/tuning/parameters", "must name at least one controller parameter"});
   for (const ParameterBounds& b : job.tuning->parameters) {
@@ -1088,6 +1131,12 @@ double Job::step_cost_per_evaluation() const {
 
 std::size_t Job::scenario_count() const {
   return scenarios.size() + (ensemble ? static_cast<std::size_t>(ensemble->count) : 0);
+}
+
+std::optional<sim::AccelerationSensor> Job::tuned_acceleration() const {
+  const auto paths = acceleration_paths(*this);
+  if (paths.empty()) return std::nullopt;
+  return paths.front().second;
 }
 
 Job parse_job(const json& j_in, const std::string& source,

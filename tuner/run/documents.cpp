@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "ftc/runtime/controller_json.hpp"
+#include "ftc/runtime/scenario_json.hpp"
 #include "ftc/sim/controllers.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/tune/io/files.hpp"
@@ -167,6 +168,8 @@ json gains_document(const TuningOutcome& r) {
   for (const auto& [name, value] : r.tuned) g["tuned"][name] = value;
   g["sample_time"] = job.scenarios.front().sample_time;
   g["plant"] = to_json(job.plant);
+  if (const auto a = job.tuned_acceleration())
+    g["acceleration"] = runtime::acceleration_shape()->write(*a);
   json objective = to_json(job.objective);
   objective["value"] = json_number(best_objective);
   if (job.ensemble)  // what the value is taken over

@@ -26,6 +26,7 @@
 #include "ftc/sim/controller_config.hpp"
 #include "ftc/sim/plant.hpp"
 #include "ftc/sim/plants.hpp"
+#include "ftc/sim/sensors.hpp"
 
 namespace ftc::runtime {
 
@@ -36,6 +37,11 @@ struct Gains {
   std::vector<std::pair<std::string, double>> tuned;  // name → value
   double sample_time = 0.0;                           // Ts the gains were tuned for, s
   sim::PlantSpec plant;                               // the plant they were tuned on
+  // The acceleration the controller read in tuning, when the job's scenarios have sensors
+  // (ftc/sim/sensors.hpp): `differentiated` means flight software must feed step() the gyro
+  // rates differentiated through the same low-pass (AccelerationEstimator,
+  // ftc/runtime/acceleration.hpp). Absent: tuned on the exact acceleration (an ideal sensor).
+  std::optional<sim::AccelerationSensor> acceleration;
   std::optional<double> fitness;  // > 0: the loader refuses a null or 0 (all candidates diverged)
   std::string job_name;
   std::string job_sha256;

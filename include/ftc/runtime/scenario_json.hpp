@@ -16,6 +16,9 @@
 namespace ftc::runtime {
 
 std::shared_ptr<const schema::Shape<sim::Scenario>> scenario_shape();
+// A sensors block's `acceleration` ({"source": "ideal"} or {"source": "differentiated",
+// "time_constant": τ}), also the acceleration path a gains file records.
+std::shared_ptr<const schema::Shape<sim::AccelerationSensor>> acceleration_shape();
 
 // A scenario's resolved JSON form (every default filled in, keys sorted).
 nlohmann::json to_json(const sim::Scenario& s);

@@ -113,4 +113,29 @@ class SensorNoise {
   bool have_spare_ = false;
 };
 
+// §18's q(x) = Q · round(x / Q), ties away from zero; x when Q = 0.
+double quantize(double x, double step);
+
+// A scenario's sensors for a loop written sample by sample (the runtime example's plant, tests):
+// what the controller reads of the true attitude and rates, as the tuner's loop gives them —
+// the noise of the scenario's stream, the quantisers and the delay. The differentiated
+// acceleration is the flight software's part (ftc/runtime/acceleration.hpp, on the rates this
+// returns); the ideal one is the loop's exact a_k.
+class SensorReadout {
+ public:
+  // `model` resolved (SensorModel::resolve).
+  SensorReadout(const SensorModel& model, int axes, double sample_time);
+  // Sample k's true X1 and X2 (axes values each), for k = 0, 1, ... in order: writes the
+  // measurement of sample max(0, k − d) the controller reads at sample k.
+  void measure(const double* X1, const double* X2, double* X1m, double* X2m);
+
+ private:
+  SensorNoise noise_;
+  int axes_, delay_;
+  double angle_step_, rate_step_;
+  std::vector<double> angle_, bias_, rate_;  // one sample's noise terms
+  std::vector<double> ring_;                 // delay + 1 samples of (X1m, X2m)
+  long long k_ = 0;
+};
+
 }  // namespace ftc::sim

@@ -166,6 +166,11 @@ struct Job {
   double step_cost_per_evaluation() const;
   // Scenarios a candidate is simulated on: the listed ones and the ensemble's members.
   std::size_t scenario_count() const;
+  // The acceleration the controller reads in the scenarios with sensors (a listed scenario's
+  // `sensors` block, an ensemble's members that draw theirs): what the gains file records for
+  // flight software (ftc/runtime/acceleration.hpp). None when no scenario has sensors. A tuned
+  // job's scenarios must agree on it (validate()); otherwise this is the first one's.
+  std::optional<sim::AccelerationSensor> tuned_acceleration() const;
 };
 
 // Parses and validates; throws InputError(source, every error). A scenario file named by the job
