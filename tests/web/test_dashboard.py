@@ -347,6 +347,29 @@ def test_a_hostile_compare_label_stays_text(server, browser):
         browser.switch_to.alert.text
 
 
+def test_a_job_with_sensors_shows_what_its_controller_read(server, browser):
+    job = table1()
+    job["name"] = "sensed"
+    job["scenarios"][0]["sensors"] = {"rate": {"noise": 1e-3}, "delay": 2,
+                                      "acceleration": {"source": "differentiated",
+                                                       "time_constant": 0.005}}
+    job["tuning"]["algorithm"]["iterations"] = 1
+    job["tuning"]["algorithm"]["population"] = 2
+    job_id = server.api("/v1/jobs", job)["id"]
+    assert server.wait_done(job_id)["status"] == "succeeded"
+    open_job(browser, server, job_id)
+    wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#job-notes .sensors"))
+    assert texts(browser, "#job-notes .sensors") == [
+        "Sensors of scenario paper: rate noise 0.001 rad/s, delay 2 samples, acceleration "
+        "differentiated (τ = 0.005 s), noise seed 1, stream 0."]
+    # A job without sensors shows none.
+    plain = server.api("/v1/jobs", dict(table1(), name="plain"))["id"]
+    assert server.wait_done(plain)["status"] == "succeeded"
+    open_job(browser, server, plain)
+    wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table tbody tr"))
+    assert not browser.find_elements(By.CSS_SELECTOR, "#job-notes .sensors")
+
+
 def test_page_headers_forbid_inline_script_and_sniffing(server):
     with urllib.request.urlopen(server.url + "/", timeout=10) as r:
         policy = r.headers["Content-Security-Policy"]

@@ -338,6 +338,9 @@ json comparison_document(const TuningOutcome& r) {
   doc["objective"]["label"] = objective_label(r.job);
   doc["scenarios"] = json::array();
   for (const sim::Scenario& s : r.job.scenarios) doc["scenarios"].push_back(s.name);
+  // What each listed scenario's controller read (SensorModel::summary), when any has sensors.
+  for (const sim::Scenario& s : r.job.scenarios)
+    if (s.sensors) doc["sensors"][s.name] = s.sensors->summary();
   doc["controllers"] = json::array();
   for (const ComparedController& c : r.comparison) {
     json cj;

@@ -685,6 +685,10 @@ function jobView(main, id) {
     for (const w of (gains && gains.warnings) || [])
       notes.appendChild(el('div', {class: 'note bound-warning', text: w}));
     const scenarios = c.scenarios || [];
+    // What the controller read in each scenario with sensors (noise, bias, delay, acceleration).
+    for (const s of scenarios)
+      if (c.sensors && c.sensors[s])
+        notes.appendChild(el('p', {class: 'sensors', text: 'Sensors of scenario ' + s + ': ' + c.sensors[s] + '.'}));
     // One column per tabled metric and scenario; a fault metric's cell holds one value per onset.
     const columns = recorded.filter((m) => m.in_tables);
     const cell = (v) => (Array.isArray(v) ? v.map((x) => fmt(x)).join(' / ') : fmt(v));
