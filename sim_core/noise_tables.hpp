@@ -17,7 +17,7 @@ namespace ftc::sim::detail {
 // [k · 3n, (k + 1) · 3n).
 using NoiseTable = std::vector<double>;
 
-inline constexpr std::size_t kNoiseCacheBytes = std::size_t{256} << 20;
+using sim::kNoiseCacheBytes;
 
 // The table of `samples` samples of the model's stream; null when it would be larger than a
 // quarter of kNoiseCacheBytes. Thread-safe.

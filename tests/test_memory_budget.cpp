@@ -171,3 +171,32 @@ TEST(MemoryBudget, ALongTrajectoryTakesNoMoreThanItIsCharged) {
   // 4 scenarios x 4 controllers (2 compared, the job's, the tuned) x 4 000 rows of 10 ms more.
   expect_charged(small_job, large_job, 4 * 4 * 4000.0, "a trajectory row");
 }
+
+// Issue 39: a sensed scenario's noise tables (3n doubles a sample, drawn once for the run's seed
+// and once for each of the noise floor's 8 other sensor seeds, kept in the simulator's cache).
+TEST(MemoryBudget, SensorNoiseTablesTakeNoMoreThanTheyAreCharged) {
+  if (const char* why = ftc::testing::why_no_peak()) GTEST_SKIP() << why;
+  json plain = ftc::testing::tiny_job("sensed");
+  json base = plain["scenarios"][0];
+  base["duration"] = 21.0;
+  plain["scenarios"] = json::array();
+  for (int i = 0; i < 2; ++i) {
+    base["name"] = "sensed-" + std::to_string(i);
+    plain["scenarios"].push_back(base);
+  }
+  plain["objective"]["window"] = {0, 21.0};
+  plain["tuning"]["algorithm"]["iterations"] = 0;
+  json sensed = plain;
+  for (json& s : sensed["scenarios"]) s["sensors"] = {{"rate", {{"noise", 1e-3}}}};
+  const tune::Job job = tune::parse_job(sensed, "sensed.json");
+  EXPECT_EQ(tune::noise_table_bytes(job), 2 * (21000.0 * 9 * 8 + tune::kBytesPerNoiseTable) * 9);
+  EXPECT_EQ(tune::noise_table_bytes(tune::parse_job(plain, "plain.json")), 0.0);
+  // 2 scenarios x 9 seeds x 21 000 samples of 9 doubles.
+  expect_charged(plain, sensed, 2 * 9 * 21000.0, "a sample of noise (9 doubles)");
+  // No more than the cache holds, however many members draw theirs.
+  json many = ftc::testing::short_ensemble_job();
+  many["ensemble"]["count"] = 100000;
+  many["scenarios"][0]["sensors"] = {{"rate", {{"noise", 1e-3}}}};
+  EXPECT_EQ(tune::noise_table_bytes(tune::parse_job(many, "many.json")),
+            static_cast<double>(ftc::sim::kNoiseCacheBytes));
+}

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -48,6 +49,24 @@ double listed_scenario_bytes(const Job& job) {
          comparison_trajectory_numbers(job) * kBytesPerTrajectoryNumber;
 }
 
+double noise_table_bytes(const Job& job) {
+  const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
+  if (!kind) return 0.0;
+  const double cache = static_cast<double>(sim::kNoiseCacheBytes);
+  const auto table = [&](const sim::Scenario& s) {
+    const double bytes = static_cast<double>(s.samples()) * 3.0 * kind->axes * sizeof(double);
+    return bytes > cache / 4 ? 0.0 : bytes + kBytesPerNoiseTable;
+  };
+  double bytes = 0;
+  for (const sim::Scenario& s : job.scenarios)
+    if (s.active_sensors()) bytes += table(s);
+  // Members copy their base's sensors or draw their own, and its run length.
+  if (job.ensemble && (job.ensemble->sensors || ensemble_base(job).active_sensors()))
+    bytes += members(job) * table(ensemble_base(job));
+  // The noise floor reruns the tuned gains with as many other sensor seeds: other tables.
+  return std::min(bytes * (1.0 + NoiseFloor{}.repeats), cache);
+}
+
 double bytes_per_trial(const Job& job) {
   const double numbers =
       static_cast<double>((job.tuning ? job.tuning->parameters.size() : 0) + job.goals.size());
@@ -68,7 +87,7 @@ double bytes_per_member(const Job& job) {
 
 double estimated_run_bytes(const Job& job, double evaluations) {
   return kRunBaseBytes + listed_scenario_bytes(job) + members(job) * bytes_per_member(job) +
-         evaluations * bytes_per_trial(job);
+         evaluations * bytes_per_trial(job) + noise_table_bytes(job);
 }
 
 double estimated_run_bytes(const Job& job) {
@@ -90,7 +109,8 @@ double estimated_scoring_bytes(const Job& job, double candidates, bool members_l
     held = kBytesPerScenario + faults * kBytesPerFault;
     if (members_metrics) listed += members(job);
   }
-  const double bytes = kRunBaseBytes + listed_scenario_bytes(job) + members(job) * held;
+  const double bytes =
+      kRunBaseBytes + listed_scenario_bytes(job) + members(job) * held + noise_table_bytes(job);
   return bytes + candidates * (kBytesPerCandidate + listed * kBytesPerScoredScenario +
                                scored * kBytesPerMemberValue);
 }

@@ -20,6 +20,7 @@
 // scenarios (an ensemble member's index among the members), normals by Box–Muller from one
 // continuous stream of pairs, drawn per sample in the order angle noise axes 1..n, rate noise
 // axes 1..n, bias walk axes 1..n, each drawn whether its σ is 0 or not.
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -112,6 +113,11 @@ class SensorNoise {
   double spare_ = 0.0;
   bool have_spare_ = false;
 };
+
+// The simulator keeps a scenario's noise once drawn, 3n doubles a sample, in a process-wide cache
+// of at most this many bytes (least recently used out); a table larger than a quarter of it is
+// not kept but drawn as its pack runs. The memory budget charges it (tune/run/memory_budget.hpp).
+inline constexpr std::size_t kNoiseCacheBytes = std::size_t{256} << 20;
 
 // §18's q(x) = Q · round(x / Q), ties away from zero; x when Q = 0.
 double quantize(double x, double step);
