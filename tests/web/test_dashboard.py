@@ -160,6 +160,12 @@ def test_submitting_table1_through_the_page(server, browser):
          == str(evaluations))
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table tbody tr"))
     wait(browser, lambda d: "noise" in d.find_element(By.CSS_SELECTOR, ".noise-floor").text)
+    # A run that succeeded with warnings in its gains file says so in its state (issue 41).
+    gains = server.api("/v1/jobs/" + job_id + "/gains")
+    assert gains["warnings"], "table1's gains file has warnings (a tuned value at its bound)"
+    wait(browser, lambda d: texts(d, "h1 .state") == ["succeeded with warnings"])
+    assert str(len(gains["warnings"])) in \
+        browser.find_element(By.CSS_SELECTOR, "h1 .state.warned").get_attribute("title")
     # The comparison's columns are the metrics the service lists as tabulated (GET /v1/metrics),
     # per scenario, by label and unit; a metric per fault onset shows every onset's value.
     recorded = [m for m in server.api("/v1/metrics")["metrics"] if m["in_tables"]]
@@ -253,6 +259,12 @@ def test_a_two_goal_job_shows_its_front(server, browser):
     # One button per file, though the page loaded the finished job twice.
     buttons = texts(browser, "#downloads button")
     assert sorted(buttons) == sorted(set(buttons)) and "gains.json" in buttons, buttons
+    # The front's own files are offered too (issue 41).
+    assert "front.json" in buttons and "front.csv" in buttons, buttons
+    # Its state names its warnings only when its gains file has some.
+    warned = bool(server.api("/v1/jobs/" + job_id + "/gains")["warnings"])
+    assert texts(browser, "h1 .state") == [
+        "succeeded with warnings" if warned else "succeeded"]
     browser.execute_script("document.getElementById('front').scrollIntoView()")
     screenshot(browser, "dashboard-front.png")
 

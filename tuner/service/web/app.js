@@ -329,7 +329,12 @@ function bestText(p) {
   return fmt(p.best_fitness);
 }
 
-function stateBadge(status) {
+// A finished run's state; a run that succeeded with warnings in its gains file (a tuned value at
+// a bound, a loop that saturates or never settles, a margin inside the noise floor) says so.
+function stateBadge(status, warnings) {
+  if (status === 'succeeded' && warnings > 0)
+    return el('span', {class: 'state succeeded warned', title: warnings + ' warning' +
+      (warnings === 1 ? '' : 's') + ': see the notes under Results', text: 'succeeded with warnings'});
   return el('span', {class: 'state ' + status, text: status});
 }
 
@@ -460,6 +465,7 @@ function rowFilter(text, columns) {
 function jobView(main, id) {
   const charts = [];
   let job = null;
+  let warnings = 0;  // the finished run's gains.json warnings, once its results are loaded
   let trials = {columns: [], rows: []};
   let sort = {col: -1, dir: 1};
   let history = [];
@@ -532,7 +538,7 @@ function jobView(main, id) {
         '(one corner of the front; history.csv has the hypervolume per iteration)';
     }
     header.append(
-      el('h1', null, job.name + ' ', stateBadge(job.status)),
+      el('h1', null, job.name + ' ', stateBadge(job.status, warnings)),
       el('dl', {class: 'meta'},
         el('dt', {text: 'id'}), el('dd', null, el('code', {text: job.id})),
         el('dt', {text: 'progress'}), el('dd', {id: 'job-progress'}, progressCell(job),
@@ -840,6 +846,11 @@ function jobView(main, id) {
     clear(frontBox);
     clear(downloads);
     renderComparison(c, gains, recorded);
+    const warned = (gains && gains.warnings && gains.warnings.length) || 0;
+    if (warned !== warnings) {
+      warnings = warned;
+      renderHeader();
+    }
     const items = [['gains.json', '/gains'], ['trials.csv', '/trials'], ['history.csv', '/history']];
     if (c) items.push(['comparison.md', '/comparison?format=md'], ['report.html', '/report']);
     if (job.progress.iteration !== null && (c || job.status === 'running'))
@@ -852,6 +863,11 @@ function jobView(main, id) {
     try {
       const list = await apiJson('/v1/jobs/' + id + '/files');
       if (stale()) return;
+      // A front's files, to pick another point offline (ftctune pick) or plot it.
+      for (const name of ['front.json', 'front.csv'])
+        if (list.files.some((f) => f.name === name))
+          downloads.appendChild(el('button', {text: name, 'data-file': name, onclick: () =>
+            download('/v1/jobs/' + id + '/files/' + name, name).catch((e) => showError(message, e))}));
       if (list.files.some((f) => f.name === 'front.json')) {
         const front = await apiJson('/v1/jobs/' + id + '/files/front.json');
         if (stale()) return;
