@@ -153,21 +153,29 @@ TEST(MemoryBudget, ATrialTakesNoMoreThanItIsCharged) {
 
 // A long trajectory: the comparison's rows, as numbers and as the text of their files (6
 // scenarios of 200 s with 10 controllers were charged 212 MB and took 583 MB).
+namespace {
+
+// The tiny job with `n` copies of its scenario lasting `duration` s, scored over all of it, and
+// no iteration.
+json copies(const std::string& name, int n, double duration) {
+  json j = ftc::testing::tiny_job(name);
+  json base = j["scenarios"][0];
+  base["duration"] = duration;
+  j["scenarios"] = json::array();
+  for (int i = 0; i < n; ++i) {
+    base["name"] = name + "-" + std::to_string(i);
+    j["scenarios"].push_back(base);
+  }
+  j["objective"]["window"] = {0, duration};
+  j["tuning"]["algorithm"]["iterations"] = 0;
+  return j;
+}
+
+}  // namespace
+
 TEST(MemoryBudget, ALongTrajectoryTakesNoMoreThanItIsCharged) {
   if (const char* why = ftc::testing::why_no_peak()) GTEST_SKIP() << why;
-  json small_job = ftc::testing::tiny_job("long"), large_job = small_job;
-  for (json* j : {&small_job, &large_job}) {
-    const double duration = j == &small_job ? 2.0 : 42.0;
-    json base = (*j)["scenarios"][0];
-    base["duration"] = duration;
-    (*j)["scenarios"] = json::array();
-    for (int i = 0; i < 4; ++i) {
-      base["name"] = "long-" + std::to_string(i);
-      (*j)["scenarios"].push_back(base);
-    }
-    (*j)["objective"]["window"] = {0, duration};
-    (*j)["tuning"]["algorithm"]["iterations"] = 0;
-  }
+  const json small_job = copies("long", 4, 2.0), large_job = copies("long", 4, 42.0);
   // 4 scenarios x 4 controllers (2 compared, the job's, the tuned) x 4 000 rows of 10 ms more.
   expect_charged(small_job, large_job, 4 * 4 * 4000.0, "a trajectory row");
 }
@@ -176,16 +184,7 @@ TEST(MemoryBudget, ALongTrajectoryTakesNoMoreThanItIsCharged) {
 // and once for each of the noise floor's 8 other sensor seeds, kept in the simulator's cache).
 TEST(MemoryBudget, SensorNoiseTablesTakeNoMoreThanTheyAreCharged) {
   if (const char* why = ftc::testing::why_no_peak()) GTEST_SKIP() << why;
-  json plain = ftc::testing::tiny_job("sensed");
-  json base = plain["scenarios"][0];
-  base["duration"] = 21.0;
-  plain["scenarios"] = json::array();
-  for (int i = 0; i < 2; ++i) {
-    base["name"] = "sensed-" + std::to_string(i);
-    plain["scenarios"].push_back(base);
-  }
-  plain["objective"]["window"] = {0, 21.0};
-  plain["tuning"]["algorithm"]["iterations"] = 0;
+  const json plain = copies("sensed", 2, 21.0);
   json sensed = plain;
   for (json& s : sensed["scenarios"]) s["sensors"] = {{"rate", {{"noise", 1e-3}}}};
   const tune::Job job = tune::parse_job(sensed, "sensed.json");

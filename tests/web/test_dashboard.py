@@ -341,15 +341,27 @@ def test_cancelling_a_job(server, browser):
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#downloads button[data-file]"))
 
 
-def test_a_hostile_compare_label_stays_text(server, browser):
+def quick(name):
+    """Table 1 with one iteration of two bats: a job that finishes at once."""
     job = table1()
-    job["name"] = "hostile"
-    job["compare"][0]["label"] = HOSTILE
+    job["name"] = name
     job["tuning"]["algorithm"]["iterations"] = 1
     job["tuning"]["algorithm"]["population"] = 2
+    return job
+
+
+def open_finished(server, browser, job):
+    """Submits `job`, waits for its success and opens its page; its id."""
     job_id = server.api("/v1/jobs", job)["id"]
     assert server.wait_done(job_id)["status"] == "succeeded"
     open_job(browser, server, job_id)
+    return job_id
+
+
+def test_a_hostile_compare_label_stays_text(server, browser):
+    job = quick("hostile")
+    job["compare"][0]["label"] = HOSTILE
+    open_finished(server, browser, job)
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table td.label"))
     labels = [t.strip() for t in texts(browser, "#comparison-table td.label")]
     assert HOSTILE in labels
@@ -360,24 +372,17 @@ def test_a_hostile_compare_label_stays_text(server, browser):
 
 
 def test_a_job_with_sensors_shows_what_its_controller_read(server, browser):
-    job = table1()
-    job["name"] = "sensed"
+    job = quick("sensed")
     job["scenarios"][0]["sensors"] = {"rate": {"noise": 1e-3}, "delay": 2,
                                       "acceleration": {"source": "differentiated",
                                                        "time_constant": 0.005}}
-    job["tuning"]["algorithm"]["iterations"] = 1
-    job["tuning"]["algorithm"]["population"] = 2
-    job_id = server.api("/v1/jobs", job)["id"]
-    assert server.wait_done(job_id)["status"] == "succeeded"
-    open_job(browser, server, job_id)
+    open_finished(server, browser, job)
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#job-notes .sensors"))
     assert texts(browser, "#job-notes .sensors") == [
         "Sensors of scenario paper: rate noise 0.001 rad/s, delay 2 samples, acceleration "
         "differentiated (τ = 0.005 s), noise seed 1, stream 0."]
     # A job without sensors shows none.
-    plain = server.api("/v1/jobs", dict(table1(), name="plain"))["id"]
-    assert server.wait_done(plain)["status"] == "succeeded"
-    open_job(browser, server, plain)
+    open_finished(server, browser, quick("plain"))
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#comparison-table tbody tr"))
     assert not browser.find_elements(By.CSS_SELECTOR, "#job-notes .sensors")
 
