@@ -113,8 +113,12 @@ void SensorNoise::next(double* angle, double* bias, double* rate) {
 }
 
 double quantize(double x, double step) {
-  // std::round rounds half away from zero and is exact, as the lanes' quantiser is.
-  return step > 0 ? step * std::round(x / step) : x;
+  // The lanes' quantiser's steps (lanes/closed_loop.hpp): |x / Q| rounded half away from zero
+  // (std::round is exact), its sign put back only where x / Q < 0, so that −0 gives +0 there too.
+  if (!(step > 0)) return x;
+  const double t = x / step;
+  const double r = std::round(std::abs(t));
+  return step * (t < 0 ? -r : r);
 }
 
 SensorReadout::SensorReadout(const SensorModel& model, int axes, double sample_time)

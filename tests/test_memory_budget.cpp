@@ -188,14 +188,16 @@ TEST(MemoryBudget, SensorNoiseTablesTakeNoMoreThanTheyAreCharged) {
   json sensed = plain;
   for (json& s : sensed["scenarios"]) s["sensors"] = {{"rate", {{"noise", 1e-3}}}};
   const tune::Job job = tune::parse_job(sensed, "sensed.json");
-  EXPECT_EQ(tune::noise_table_bytes(job), 2 * (21000.0 * 9 * 8 + tune::kBytesPerNoiseTable) * 9);
-  EXPECT_EQ(tune::noise_table_bytes(tune::parse_job(plain, "plain.json")), 0.0);
+  const double table = 21000.0 * 9 * 8 + tune::kBytesPerNoiseTable;
+  EXPECT_EQ(tune::noise_table_bytes(job, true), 2 * table * 9);
+  EXPECT_EQ(tune::noise_table_bytes(job, false), 2 * table);  // scoring alone: no noise floor
+  EXPECT_EQ(tune::noise_table_bytes(tune::parse_job(plain, "plain.json"), true), 0.0);
   // 2 scenarios x 9 seeds x 21 000 samples of 9 doubles.
   expect_charged(plain, sensed, 2 * 9 * 21000.0, "a sample of noise (9 doubles)");
   // No more than the cache holds, however many members draw theirs.
   json many = ftc::testing::short_ensemble_job();
   many["ensemble"]["count"] = 100000;
   many["scenarios"][0]["sensors"] = {{"rate", {{"noise", 1e-3}}}};
-  EXPECT_EQ(tune::noise_table_bytes(tune::parse_job(many, "many.json")),
+  EXPECT_EQ(tune::noise_table_bytes(tune::parse_job(many, "many.json"), true),
             static_cast<double>(ftc::sim::kNoiseCacheBytes));
 }

@@ -328,6 +328,8 @@ TEST(Sensors, RuntimeReadoutAndEstimatorReplayWhatTheLoopGaveTheController) {
   EXPECT_EQ(quantize(-0.625, 0.25), -0.75);  // -2.5 steps: ties away from zero
   EXPECT_EQ(quantize(0.375, 0.25), 0.5);
   EXPECT_EQ(quantize(0.6, 0.25), 0.5);
+  EXPECT_FALSE(std::signbit(quantize(-0.0, 0.25)));  // as the lanes: −0 / Q is not < 0
+  EXPECT_TRUE(std::signbit(quantize(-0.1, 0.25)));   // −0.4 steps: −0, as the lanes
   EXPECT_EQ(quantize(0.123, 0.0), 0.123);
 }
 

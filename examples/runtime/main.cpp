@@ -32,6 +32,7 @@
 //   model           f(Xm) + G u_{k−1} from the model alone: it sees neither the disturbance nor
 //                   the faults.
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -90,6 +91,9 @@ ftc::sim::Scenario read_scenario(const std::string& file, std::size_t index) {
                             "has " + std::to_string(j["scenarios"].size()) +
                                 " scenarios, no index " + std::to_string(index));
     json s = j["scenarios"][index];
+    // A scenarios file (`ftctune ensemble`) says whether each member is recoverable: not a
+    // scenario's key.
+    if (s.is_object()) s.erase("recoverable");
     if (s.is_object() && s.contains("sensors") && s["sensors"].is_object() &&
         !s["sensors"].contains("stream"))
       s["sensors"]["stream"] = index;
@@ -114,6 +118,10 @@ int main(int argc, char** argv) {
     char* end = nullptr;
     const double number = std::strtod(v, &end);
     const bool numeric = end != v && *end == '\0' && std::isfinite(number);
+    // Seeds and indices as whole numbers of up to 64 bits, exactly (a double would round them).
+    errno = 0;
+    const unsigned long long whole = std::strtoull(v, &end, 10);
+    const bool integral = *v >= '0' && *v <= '9' && end != v && *end == '\0' && errno == 0;
     if (opt == "--accel")
       accel = v;
     else if (opt == "--scenario")
@@ -131,14 +139,15 @@ int main(int argc, char** argv) {
     else if (opt == "--delay" && number >= 0 && number <= ftc::sim::SensorModel::kMaxDelay &&
              number == std::floor(number))
       delay = static_cast<int>(number);
-    else if (opt == "--seed" && number >= 0 && number == std::floor(number))
-      seed = static_cast<unsigned long long>(number);
-    else if (opt == "--index" && number >= 0 && number == std::floor(number))
-      index = static_cast<std::size_t>(number);
+    else if (opt == "--seed" && integral)
+      seed = whole;
+    else if (opt == "--index" && integral)
+      index = static_cast<std::size_t>(whole);
     else
       return usage(argv[0]);
   }
-  if (accel && *accel != "ideal" && *accel != "differentiated" && *accel != "model")
+  if ((accel && *accel != "ideal" && *accel != "differentiated" && *accel != "model") ||
+      (index > 0 && !scenario_file))
     return usage(argv[0]);
   try {
     // The file says what it was tuned for: the controller, the sample time, the plant and the
@@ -153,6 +162,15 @@ int main(int argc, char** argv) {
     // its sensors as the options change them.
     ftc::sim::Scenario scenario = ftc::sim::Scenario::paper();
     if (scenario_file) scenario = read_scenario(*scenario_file, index);
+    // Checked against the spacecraft (3 axes, 4 actuators) and the gains' sample time, whose
+    // bias walk per sample the tuner drew with.
+    if (const auto errors = scenario.validate("", 3, 4); !errors.empty())
+      throw ftc::InputError(scenario_file.value_or("scenario"), errors);
+    if (std::abs(scenario.sample_time - Ts) > 1e-12 * Ts)
+      throw ftc::InputError(
+          scenario_file.value_or("scenario"), "/sample_time",
+          "is " + ftc::json_io::number_text(scenario.sample_time) +
+              " s, but the gains were tuned for Ts = " + ftc::json_io::number_text(Ts) + " s");
     if (scenario.actuator || !scenario.true_values.empty())
       throw ftc::InputError("scenario", "",
                             "has actuator dynamics or true plant values, which this example's "
@@ -196,15 +214,30 @@ int main(int argc, char** argv) {
     std::optional<ftc::runtime::AccelerationEstimator> estimator;
     if (source == "differentiated") estimator.emplace(path, Ts, 3);
 
-    // The gains file's objective window, when its metric is the ISE (the value it records is
-    // its job's aggregate over all of its scenarios: one scenario's job replays it).
+    // The gains file's objective, to replay: its window (from the first fault when its
+    // window_from says so, cut at the run's end) when its metric is the ISE and its value is
+    // taken over listed scenarios only (an ensemble's members are not this one scenario).
     const json file = read_json(argv[1]);
     const json objective = file.value("objective", json::object());
-    const bool ise_objective = objective.value("metric", "") == "ise" &&
-                               objective.contains("window") && objective["window"].is_array() &&
-                               objective["window"].size() == 2;
-    const double w0 = ise_objective ? objective["window"][0].get<double>() : 0.0;
-    const double w1 = ise_objective ? objective["window"][1].get<double>() : 0.0;
+    const auto number_at = [](const json& j, const char* key) {
+      return j.is_object() && j.contains(key) && j[key].is_number() ? j[key].get<double>()
+                                                                    : std::nan("");
+    };
+    const json window = objective.value("window", json::array());
+    const bool replayable = objective.value("metric", json()) == "ise" &&
+                            !objective.contains("scenarios") && window.is_array() &&
+                            window.size() == 2 && window[0].is_number() &&
+                            std::isfinite(number_at(objective, "value"));
+    double w0 = replayable ? window[0].get<double>() : 0.0;
+    double w1 = replayable && window[1].is_number() ? window[1].get<double>() : run;
+    if (objective.value("window_from", json()) == "first_fault" && !scenario.faults.empty()) {
+      double first = scenario.faults.front().onset;
+      for (const ftc::sim::Fault& f : scenario.faults) first = std::min(first, f.onset);
+      w0 += first;
+      w1 += first;
+    }
+    // A run shorter than the window measures another objective: no replay then.
+    const bool whole_window = w1 <= run + Ts / 2;
 
     Vec4 u_prev = Vec4::Zero();
     double ise = 0.0, ise_after = 0.0, ise_window = 0.0, tv = 0.0;  // tv = Σ‖u_k − u_{k−1}‖
@@ -233,7 +266,7 @@ int main(int argc, char** argv) {
       const Vec4 u = controller->step(t, X1m, X2m, a);
       ise += Ts * X1.squaredNorm();
       if (t >= first_fault) ise_after += Ts * X1.squaredNorm();
-      if (ise_objective && t >= w0 && t < w1) ise_window += Ts * X1.squaredNorm();
+      if (replayable && t >= w0 && t < w1) ise_window += Ts * X1.squaredNorm();
       if (k > 0) tv += (u - u_prev).norm();
 
       // The plant over one sample: RK4 with the command held.
@@ -257,23 +290,37 @@ int main(int argc, char** argv) {
     std::string accel_text = source;
     if (source == "differentiated")
       accel_text += " (tau " + ftc::json_io::number_text(path.time_constant) + " s)";
+    // The sensors as this loop read them (a model-only acceleration reads none of theirs).
+    std::string sensors_text = scenario.sensors ? scenario.sensors->summary() : "exact";
+    if (const auto at = sensors_text.find(", acceleration ");
+        source == "model" && at != std::string::npos)
+      sensors_text.erase(at, sensors_text.find(", noise seed", at) - at);
     std::printf(
         "ISE over [0, %g) s = %.6g rad^2 s, over [%g, %g) s = %.6g; control TV %.6g "
         "(acceleration: %s; sensors: %s)\n",
-        run, ise, first_fault, run, ise_after, tv, accel_text.c_str(),
-        scenario.sensors ? scenario.sensors->summary().c_str() : "exact");
-    if (ise_objective && w1 <= run + Ts / 2) {
-      const double recorded = objective.value("value", std::nan(""));
+        run, ise, first_fault, run, ise_after, tv, accel_text.c_str(), sensors_text.c_str());
+    if (replayable && whole_window && w1 > w0) {
+      const double recorded = number_at(objective, "value");
       const json floor = file.value("noise_floor", json::object());
-      const double spread = floor.value("relative_spread", std::nan(""));
+      const json how = objective.value("aggregate", json("mean"));
+      const std::string aggregate = how.is_string() ? how.get<std::string>() : "aggregated";
       std::printf(
           "ISE over [%g, %g) s = %.6g; the gains file records %.6g for its job (%s over its "
-          "scenarios), %+.3g %% from it, noise floor %.3g %%\n",
-          w0, w1, ise_window, recorded, objective.value("aggregate", "mean").c_str(),
-          100 * (ise_window - recorded) / recorded, 100 * spread);
+          "listed scenarios: one scenario's job replays it), %+.3g %% from it, noise floor "
+          "%.3g %%",
+          w0, w1, ise_window, recorded, aggregate.c_str(), 100 * (ise_window - recorded) / recorded,
+          100 * number_at(floor, "relative_spread"));
+      // With sensors the floor has two parts; the rounding part is what a replay of the same
+      // noise can differ by.
+      if (floor.contains("rounding_spread"))
+        std::printf(" (rounding alone %.3g %%)", 100 * number_at(floor, "rounding_spread"));
+      std::printf("\n");
     }
     return 0;
   } catch (const ftc::InputError& e) {
+    std::fprintf(stderr, "runtime_example: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {  // a gains file's field of an unexpected kind
     std::fprintf(stderr, "runtime_example: %s\n", e.what());
     return 2;
   }

@@ -57,12 +57,18 @@ std::int64_t ensemble_count(const Job& job, std::optional<std::int64_t> count) {
   return n;
 }
 
-const sim::Scenario& ensemble_base(const Job& job) {
+const sim::Scenario* find_ensemble_base(const Job& job) {
   const std::string& base = job.ensemble->base;
-  if (base.empty()) return job.scenarios.front();
+  if (base.empty()) return job.scenarios.empty() ? nullptr : &job.scenarios.front();
   for (const sim::Scenario& s : job.scenarios)
-    if (s.name == base) return s;
-  throw InputError("job " + job.name, "/ensemble/base", "no scenario is named \"" + base + "\"");
+    if (s.name == base) return &s;
+  return nullptr;
+}
+
+const sim::Scenario& ensemble_base(const Job& job) {
+  if (const sim::Scenario* base = find_ensemble_base(job)) return *base;
+  throw InputError("job " + job.name, "/ensemble/base",
+                   "no scenario is named \"" + job.ensemble->base + "\"");
 }
 
 sim::Scenario scaled_base(const Job& job, const ParameterFactors& parameter_factors,

@@ -711,18 +711,19 @@ void check_window(const Job& job, const sim::Window& w, WindowFrom from, const s
 // path: the acceleration paths a tuned controller reads.
 std::vector<std::pair<std::string, sim::AccelerationSensor>> acceleration_paths(const Job& job) {
   std::vector<std::pair<std::string, sim::AccelerationSensor>> paths;
+  // A block whose measurements are exact is no sensors (Scenario::active_sensors): its loop is
+  // the one without, whatever its acceleration says.
   for (std::size_t i = 0; i < job.scenarios.size(); ++i)
-    if (job.scenarios[i].sensors)
+    if (const sim::SensorModel* m = job.scenarios[i].active_sensors())
       paths.emplace_back("/scenarios/" + std::to_string(i) + "/sensors/acceleration",
-                         job.scenarios[i].sensors->acceleration);
+                         m->acceleration);
   if (job.ensemble && job.ensemble->sensors) {
-    // Members copy their base's block, or draw noise on exact sensors (the ideal acceleration).
-    const auto base =
-        std::find_if(job.scenarios.begin(), job.scenarios.end(), [&](const sim::Scenario& s) {
-          return job.ensemble->base.empty() || s.name == job.ensemble->base;
-        });
-    if (base != job.scenarios.end() && !base->sensors)
-      paths.emplace_back("/ensemble/sensors", sim::AccelerationSensor{});
+    // Members copy their base's block (listed above when it reads sensors) or draw noise on
+    // exact sensors, whose acceleration is the ideal one.
+    const sim::Scenario* base = find_ensemble_base(job);
+    if (base && !base->active_sensors())
+      paths.emplace_back("/ensemble/sensors",
+                         base->sensors ? base->sensors->acceleration : sim::AccelerationSensor{});
   }
   return paths;
 }
@@ -1131,6 +1132,12 @@ double Job::step_cost_per_evaluation() const {
 
 std::size_t Job::scenario_count() const {
   return scenarios.size() + (ensemble ? static_cast<std::size_t>(ensemble->count) : 0);
+}
+
+bool Job::reads_sensors() const {
+  return (ensemble && ensemble->sensors) ||
+         std::any_of(scenarios.begin(), scenarios.end(),
+                     [](const sim::Scenario& s) { return s.active_sensors() != nullptr; });
 }
 
 std::optional<sim::AccelerationSensor> Job::tuned_acceleration() const {

@@ -49,7 +49,7 @@ double listed_scenario_bytes(const Job& job) {
          comparison_trajectory_numbers(job) * kBytesPerTrajectoryNumber;
 }
 
-double noise_table_bytes(const Job& job) {
+double noise_table_bytes(const Job& job, bool with_noise_floor) {
   const sim::PlantKind* kind = sim::find_plant_kind(job.plant.model);
   if (!kind) return 0.0;
   const double cache = static_cast<double>(sim::kNoiseCacheBytes);
@@ -61,10 +61,12 @@ double noise_table_bytes(const Job& job) {
   for (const sim::Scenario& s : job.scenarios)
     if (s.active_sensors()) bytes += table(s);
   // Members copy their base's sensors or draw their own, and its run length.
-  if (job.ensemble && (job.ensemble->sensors || ensemble_base(job).active_sensors()))
-    bytes += members(job) * table(ensemble_base(job));
+  const sim::Scenario* base = job.ensemble ? find_ensemble_base(job) : nullptr;
+  if (base && (job.ensemble->sensors || base->active_sensors()))
+    bytes += members(job) * table(*base);
   // The noise floor reruns the tuned gains with as many other sensor seeds: other tables.
-  return std::min(bytes * (1.0 + NoiseFloor{}.repeats), cache);
+  if (with_noise_floor) bytes *= 1.0 + NoiseFloor{}.repeats;
+  return std::min(bytes, cache);
 }
 
 double bytes_per_trial(const Job& job) {
@@ -87,7 +89,7 @@ double bytes_per_member(const Job& job) {
 
 double estimated_run_bytes(const Job& job, double evaluations) {
   return kRunBaseBytes + listed_scenario_bytes(job) + members(job) * bytes_per_member(job) +
-         evaluations * bytes_per_trial(job) + noise_table_bytes(job);
+         evaluations * bytes_per_trial(job) + noise_table_bytes(job, job.tuning.has_value());
 }
 
 double estimated_run_bytes(const Job& job) {
@@ -109,8 +111,8 @@ double estimated_scoring_bytes(const Job& job, double candidates, bool members_l
     held = kBytesPerScenario + faults * kBytesPerFault;
     if (members_metrics) listed += members(job);
   }
-  const double bytes =
-      kRunBaseBytes + listed_scenario_bytes(job) + members(job) * held + noise_table_bytes(job);
+  const double bytes = kRunBaseBytes + listed_scenario_bytes(job) + members(job) * held +
+                       noise_table_bytes(job, false);
   return bytes + candidates * (kBytesPerCandidate + listed * kBytesPerScoredScenario +
                                scored * kBytesPerMemberValue);
 }

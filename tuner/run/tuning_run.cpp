@@ -202,6 +202,7 @@ std::uint64_t first_sensor_seed(const TuningProblem& problem) {
     if (s.active_sensors()) return s.sensors->stream_seed;
   }
   if (problem.scenarios() > problem.listed_scenarios()) {
+    // Its block, exact or not: a member whose draws gave it no noise still has the seed.
     const sim::Scenario member = problem.scenario(problem.listed_scenarios());
     if (member.sensors) return member.sensors->stream_seed;
   }
@@ -581,12 +582,9 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
 std::int64_t finishing_evaluations(const Job& job, std::size_t front_points) {
   const auto compared = static_cast<std::int64_t>(job.compare.size()) + 2;
   // With sensors the noise floor runs twice as many: nudged states, then other sensor seeds
-  // (TuningProblem::has_sensors; an ensemble that draws sensors gives its members some).
-  const bool sensed =
-      (job.ensemble && job.ensemble->sensors) ||
-      std::any_of(job.scenarios.begin(), job.scenarios.end(),
-                  [](const sim::Scenario& s) { return s.active_sensors() != nullptr; });
-  return compared + (sensed ? 2 : 1) * static_cast<std::int64_t>(NoiseFloor{}.repeats) *
+  // (TuningProblem::has_sensors).
+  return compared + (job.reads_sensors() ? 2 : 1) *
+                        static_cast<std::int64_t>(NoiseFloor{}.repeats) *
                         static_cast<std::int64_t>(std::max<std::size_t>(1, front_points));
 }
 

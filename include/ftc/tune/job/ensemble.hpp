@@ -138,5 +138,7 @@ std::int64_t ensemble_count(const Job& job, std::optional<std::int64_t> count);
 
 // The base scenario of the job's ensemble.
 const sim::Scenario& ensemble_base(const Job& job);
+// The same, or null when the job names no such scenario (for checks that report, not throw).
+const sim::Scenario* find_ensemble_base(const Job& job);
 
 }  // namespace ftc::tune

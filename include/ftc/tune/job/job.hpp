@@ -171,6 +171,9 @@ struct Job {
   // flight software (ftc/runtime/acceleration.hpp). None when no scenario has sensors. A tuned
   // job's scenarios must agree on it (validate()); otherwise this is the first one's.
   std::optional<sim::AccelerationSensor> tuned_acceleration() const;
+  // Whether a controller of the job reads sensors: a listed scenario's (not exact) or the
+  // ensemble's members', which draw theirs.
+  bool reads_sensors() const;
 };
 
 // Parses and validates; throws InputError(source, every error). A scenario file named by the job

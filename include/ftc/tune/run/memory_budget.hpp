@@ -56,14 +56,16 @@ double comparison_trajectory_numbers(const Job& job, std::int64_t max_rows = 0);
 // controller), times one plus its goals.
 double bytes_per_member(const Job& job);
 // A noise table's own bytes beyond its samples: the cache's entry and key, the scenario's copy
-// with its sensor seed moved (MemoryBudget.SensorNoiseTablesTakeNoMoreThanTheyAreCharged: 0.05 %
-// over the samples' bytes for 18 tables of 21 000 samples, about 800 bytes a table).
-inline constexpr double kBytesPerNoiseTable = 4096.0;
+// with its sensor seed moved, and the allocator's slack around a table of megabytes
+// (MemoryBudget.SensorNoiseTablesTakeNoMoreThanTheyAreCharged, 18 tables of 21 000 samples:
+// 0.05 % to 0.9 % over the samples' bytes from run to run, up to 14 kB a table).
+inline constexpr double kBytesPerNoiseTable = 65536.0;
 // The bytes of the sensors' noise tables a run of the job draws (sim::kNoiseCacheBytes): 3n
 // doubles a sample of each scenario whose controller reads sensors, listed or member (but not a
-// table larger than a quarter of the cache: drawn as it goes), once for the run's own seed and
-// once for each of the noise floor's other sensor seeds, and at most the cache's size.
-double noise_table_bytes(const Job& job);
+// table larger than a quarter of the cache: drawn as it goes), once for the run's own seed and,
+// `with_noise_floor` (a tuning run), once for each of the noise floor's other sensor seeds; at
+// most the cache's size.
+double noise_table_bytes(const Job& job, bool with_noise_floor);
 // The bytes a trial takes: kBytesPerTrial, kBytesPerTrialNumber for each parameter and goal,
 // and kBytesPerTrialObjective for each scenario whose objective a trial keeps (those of a job
 // without an ensemble).
