@@ -82,6 +82,21 @@ void expect_same_run(const fs::path& a, const fs::path& b) {
   }
 }
 
+// Runs `job` in one process and on 3 ranks of `threads` threads each, into dir/plain and
+// dir/three, and expects the same run files.
+void expect_three_ranks_run_as_one_process(const fs::path& dir, const fs::path& job, int threads) {
+  const auto plain =
+      run_cli("run '" + job.string() + "' -q --out '" + (dir / "plain").string() + "'", dir);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto three =
+      mpirun_cli(3,
+                 "run '" + job.string() + "' -q --threads " + std::to_string(threads) + " --out '" +
+                     (dir / "three").string() + "'",
+                 dir);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  expect_same_run(dir / "plain", dir / "three");
+}
+
 TEST(Mpi, GainsAreByteIdenticalForOneProcessOneRankAndThreeRanks) {
   REQUIRE_MPI();
   const fs::path dir = fresh_dir("mpi-same");
@@ -139,14 +154,7 @@ TEST(Mpi, SensorNoiseIsTheSameOnEveryRank) {
   second["name"] = "second";
   j["scenarios"].push_back(second);
   j["ensemble"]["sensors"] = {{"angle_noise", {{"uniform", {0, 2e-4}}}}};
-  const fs::path job = write_job(dir, j);
-  const auto plain =
-      run_cli("run '" + job.string() + "' -q --out '" + (dir / "plain").string() + "'", dir);
-  ASSERT_EQ(plain.exit_code, 0) << plain.err;
-  const auto three = mpirun_cli(
-      3, "run '" + job.string() + "' -q --threads 1 --out '" + (dir / "three").string() + "'", dir);
-  ASSERT_EQ(three.exit_code, 0) << three.err;
-  expect_same_run(dir / "plain", dir / "three");
+  ASSERT_NO_FATAL_FAILURE(expect_three_ranks_run_as_one_process(dir, write_job(dir, j), 1));
   EXPECT_NE(slurp(dir / "three" / "gains.json").find("sensor_seeds"), std::string::npos);
 }
 
@@ -214,13 +222,7 @@ TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {
   j["tuning"]["algorithm"]["population"] = 4;
   j["tuning"]["algorithm"]["iterations"] = 3;
   const fs::path job = write_job(dir, j);
-  const auto plain =
-      run_cli("run '" + job.string() + "' -q --out '" + (dir / "plain").string() + "'", dir);
-  ASSERT_EQ(plain.exit_code, 0) << plain.err;
-  const auto three = mpirun_cli(
-      3, "run '" + job.string() + "' -q --threads 2 --out '" + (dir / "three").string() + "'", dir);
-  ASSERT_EQ(three.exit_code, 0) << three.err;
-  expect_same_run(dir / "plain", dir / "three");
+  ASSERT_NO_FATAL_FAILURE(expect_three_ranks_run_as_one_process(dir, job, 2));
   // A capped row ends with accepted 0, capped 1 and fewer than the 12 scenarios simulated.
   EXPECT_TRUE(
       std::regex_search(slurp(dir / "three" / "trials.csv"), std::regex(",0,1,([0-9]|1[01])\n")))

@@ -36,7 +36,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -67,14 +66,12 @@ int usage(const char* argv0) {
   return 2;
 }
 
+// A JSON file read as the tool reads its inputs (ftc/runtime/json_reader.hpp: strict, with the
+// same messages).
 json read_json(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw ftc::InputError(file, "", "cannot be read");
-  try {
-    return json::parse(in);
-  } catch (const json::exception& e) {
-    throw ftc::InputError(file, "", std::string("is not JSON: ") + e.what());
-  }
+  const std::optional<std::string> text = ftc::json_io::read_file(file);
+  if (!text) throw ftc::InputError(file, "", "cannot be read");
+  return ftc::json_io::parse_json_text(*text, file);
 }
 
 // The scenario of FILE: the file's own, or entry `index` of its `scenarios` list (a job or a

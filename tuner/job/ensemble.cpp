@@ -114,6 +114,12 @@ void apply_actuator_draws(const Job& job, sim::Scenario& s, const std::vector<do
   }
 }
 
+// A whole number in [lo, hi] from a uniform draw u in [0, 1): lo + floor(u (hi − lo + 1)),
+// hi at most (the faults' count and the sensors' delay).
+static int uniform_int(double u, int lo, int hi) {
+  return std::min(hi, lo + static_cast<int>(std::floor(u * (hi - lo + 1))));
+}
+
 // SPEC §18's sensor draws of a member, in SensorDistribution's order.
 void draw_sensors(const SensorDistribution& d, int axes, SplitMix64& r, sim::Scenario& s) {
   sim::SensorModel m = s.sensors.value_or(sim::SensorModel{});
@@ -133,7 +139,7 @@ void draw_sensors(const SensorDistribution& d, int axes, SplitMix64& r, sim::Sce
   const double u = r.uniform();
   if (d.delay) {
     const auto [lo, hi] = *d.delay;
-    m.delay = std::min(hi, lo + static_cast<int>(std::floor(u * (hi - lo + 1))));
+    m.delay = uniform_int(u, lo, hi);
   }
   s.sensors = std::move(m);
 }
@@ -169,9 +175,7 @@ sim::Scenario ensemble_member(const Job& job, std::uint64_t seed, std::int64_t k
 
   if (e.faults) {
     const FaultDistribution& fd = *e.faults;
-    const int span = fd.count_hi - fd.count_lo + 1;
-    const int count =
-        std::min(fd.count_hi, fd.count_lo + static_cast<int>(std::floor(r.uniform() * span)));
+    const int count = uniform_int(r.uniform(), fd.count_lo, fd.count_hi);
     std::vector<int> available = fd.actuators;
     if (available.empty())
       for (int j = 1; j <= kind.actuators_of(job.plant.values); ++j) available.push_back(j);
