@@ -57,10 +57,12 @@ inline std::filesystem::path fresh_dir(const std::string& name) {
   return d;
 }
 
-// `args` is a shell-quoted argument string; runs from the source directory.
-inline CliResult run_cli(const std::string& args, const std::filesystem::path& scratch) {
+// `args` is a shell-quoted argument string; runs from the source directory, with the variables
+// `env` sets ("NAME=value ...") in its environment.
+inline CliResult run_cli(const std::string& args, const std::filesystem::path& scratch,
+                         const std::string& env = "") {
   const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string cmd = "cd '" FTC_SOURCE_DIR "' && '" FTC_CLI "' " + args + " >'" +
+  const std::string cmd = "cd '" FTC_SOURCE_DIR "' && " + env + " '" FTC_CLI "' " + args + " >'" +
                           out.string() + "' 2>'" + err.string() + "'";
   const int status = std::system(cmd.c_str());
   CliResult r;

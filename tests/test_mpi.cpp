@@ -82,16 +82,17 @@ void expect_same_run(const fs::path& a, const fs::path& b) {
   }
 }
 
-// Runs `job` in one process and on 3 ranks of `threads` threads each, into dir/plain and
-// dir/three, and expects the same run files.
-void expect_three_ranks_run_as_one_process(const fs::path& dir, const fs::path& job, int threads) {
-  const auto plain =
-      run_cli("run '" + job.string() + "' -q --out '" + (dir / "plain").string() + "'", dir);
+// Runs `job` (with the options `args`) in one process and on 3 ranks of `threads` threads each,
+// into dir/plain and dir/three, and expects the same run files.
+void expect_three_ranks_run_as_one_process(const fs::path& dir, const fs::path& job, int threads,
+                                           const std::string& args = "") {
+  const auto plain = run_cli(
+      "run '" + job.string() + "' -q " + args + " --out '" + (dir / "plain").string() + "'", dir);
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
   const auto three =
       mpirun_cli(3,
-                 "run '" + job.string() + "' -q --threads " + std::to_string(threads) + " --out '" +
-                     (dir / "three").string() + "'",
+                 "run '" + job.string() + "' -q " + args + " --threads " + std::to_string(threads) +
+                     " --out '" + (dir / "three").string() + "'",
                  dir);
   ASSERT_EQ(three.exit_code, 0) << three.err;
   expect_same_run(dir / "plain", dir / "three");
@@ -156,6 +157,35 @@ TEST(Mpi, SensorNoiseIsTheSameOnEveryRank) {
   j["ensemble"]["sensors"] = {{"angle_noise", {{"uniform", {0, 2e-4}}}}};
   ASSERT_NO_FATAL_FAILURE(expect_three_ranks_run_as_one_process(dir, write_job(dir, j), 1));
   EXPECT_NE(slurp(dir / "three" / "gains.json").find("sensor_seeds"), std::string::npos);
+}
+
+// A plugin plant (examples/plant-plugin): every rank loads it from its plant search path, and
+// a rank whose library is not rank 0's (another build of the same name) ends the job with a
+// message instead of simulating another plant.
+TEST(Mpi, PluginPlantRunsAsOneProcessAndEveryRankChecksItsLibrary) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-plugin");
+  const fs::path job = fs::path(FTC_SOURCE_DIR) / "examples/plant-plugin/job.json";
+  ASSERT_NO_FATAL_FAILURE(
+      expect_three_ranks_run_as_one_process(dir, job, 1, "--plant-path '" FTC_PLUGIN_DIR "'"));
+  // Ranks 1 and 2 find a copy with one byte more at its end: it loads, but it is not the same.
+  const std::string lib = "ftctune_plant_reaction_wheel_pendulum.so";
+  fs::create_directories(dir / "other");
+  fs::copy_file(fs::path(FTC_PLUGIN_DIR) / lib, dir / "other" / lib);
+  std::ofstream(dir / "other" / lib, std::ios::app | std::ios::binary) << '\0';
+  const std::string cmd =
+      "cd '" FTC_SOURCE_DIR "' && " + kAsRoot + no_leak_check() +
+      " mpirun -np 3 --oversubscribe --bind-to none sh -c 'if [ \"$OMPI_COMM_WORLD_RANK\" = 0 ]; "
+      "then d=" FTC_PLUGIN_DIR "; else d=" +
+      (dir / "other").string() + "; fi; exec " FTC_CLI " run " + job.string() +
+      " -q --threads 1 --plant-path $d --out " + (dir / "mixed").string() + "' >'" +
+      (dir / "out.txt").string() + "' 2>'" + (dir / "err.txt").string() + "'";
+  const int status = std::system(cmd.c_str());
+  EXPECT_NE(status, 0);
+  const std::string err = slurp(dir / "err.txt");
+  EXPECT_NE(err.find("plugin:reaction_wheel_pendulum here is not rank 0's"), std::string::npos)
+      << err;
+  EXPECT_FALSE(fs::exists(dir / "mixed" / "gains.json"));
 }
 
 TEST(Mpi, FrontIsByteIdenticalForAPlainRunAndThreeRanks) {

@@ -1210,6 +1210,51 @@ TEST(Service, DashboardIsServedWithAStrictPolicy) {
 }
 
 // POST /v1/validate checks a job as a submission would, and submits nothing.
+// Plant plugins: the server runs the ones it was started with (serve --plugin) and no other,
+// whatever a job names and wherever the plant search path points; nothing a job says makes it
+// load a library.
+TEST(Service, RunsOnlyThePlantPluginsItWasStartedWith) {
+  const std::filesystem::path lib =
+      std::filesystem::path(FTC_PLUGIN_DIR) / "ftctune_plant_reaction_wheel_pendulum.so";
+  ::setenv("FTCTUNE_PLANT_PATH", FTC_PLUGIN_DIR "/broken", 1);
+  tune::ServiceOptions o;
+  o.plugins = {lib};
+  Service s(o);
+  json job =
+      json::parse(slurp(std::filesystem::path(FTC_SOURCE_DIR) / "examples/plant-plugin/job.json"));
+  job["tuning"]["algorithm"]["iterations"] = 2;
+  const json view = s.wait_done(s.submit(job)["id"]);
+  EXPECT_EQ(view["status"], "succeeded") << view.dump();
+  // A library the search path holds, and one that is nowhere: both refused, 422, at /plant/model.
+  for (const char* other : {"plugin:throws", "plugin:not_anywhere"}) {
+    json j = job;
+    j["plant"] = {{"model", other}};
+    for (const char* route : {"/v1/jobs", "/v1/validate"}) {
+      const auto r = s.client->Post(route, j.dump(), "application/json");
+      ASSERT_TRUE(r);
+      EXPECT_EQ(r->status, 422) << r->body;
+      const json e = json::parse(r->body)["error"];
+      EXPECT_EQ(e["code"], "plugin_not_loaded");
+      EXPECT_EQ(e["details"][0]["path"], "/plant/model");
+      EXPECT_NE(e["message"].get<std::string>().find(
+                    "is not one of the plugins this server was started with "
+                    "(plugin:reaction_wheel_pendulum); a job cannot make it load a library"),
+                std::string::npos)
+          << e.dump();
+    }
+  }
+  ::unsetenv("FTCTUNE_PLANT_PATH");
+}
+
+TEST(Service, APluginOfAnotherAbiStopsTheServerFromStarting) {
+  const std::string lib = FTC_PLUGIN_DIR "/broken/ftctune_plant_wrong_abi.so";
+  const auto dir = fresh_dir("plugin-abi");
+  const CliResult r = run_cli("serve --port 0 --store store --plugin '" + lib + "'", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("was built for plant ABI 2"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("rebuild it with ftctune_add_plant"), std::string::npos) << r.err;
+}
+
 TEST(Service, ValidateChecksAJobWithoutSubmittingIt) {
   Service s;
   auto r = s.client->Post("/v1/validate", short_table1_job().dump(), "application/json");

@@ -18,6 +18,8 @@ namespace ftc::cli {
 struct Globals {
   bool quiet = false;
   bool verbose = false;
+  // --plant-path: directories searched for a job's plant plugins before FTCTUNE_PLANT_PATH's.
+  std::vector<std::string> plant_path;
 };
 
 using Action = std::function<int()>;
@@ -33,6 +35,7 @@ void add_study_command(CLI::App& app, const Globals& g, Action& action);
 void add_ensemble_command(CLI::App& app, const Globals& g, Action& action);
 void add_evaluate_command(CLI::App& app, const Globals& g, Action& action);
 void add_pick_command(CLI::App& app, const Globals& g, Action& action);
+void add_plant_command(CLI::App& app, const Globals& g, Action& action);
 
 // The MPI ranks and the evaluator of a command's simulations: the run API's (api/api.hpp).
 using tune::make_evaluator;

@@ -5,6 +5,7 @@
 
 #include "cli.hpp"
 #include "ftc/runtime/gains.hpp"
+#include "ftc/sim/plant_plugin.hpp"
 #include "ftc/tune/job/job.hpp"
 
 namespace ftc::cli {
@@ -18,9 +19,12 @@ void add_schema_command(CLI::App& app, const Globals&, Action& action) {
       ->check(CLI::IsMember({"job", "gains"}));
   sub->footer(
       "Examples:\n  ftctune schema job > job.schema.json\n"
-      "  python3 -m jsonschema -i jobs/table1.json job.schema.json   (python3-jsonschema)");
+      "  python3 -m jsonschema -i jobs/table1.json job.schema.json   (python3-jsonschema)\n"
+      "  ftctune schema job --plant-path build/tests/plugins   (with the plugins there)");
   sub->callback([&action, which] {
     action = [which] {
+      // The plugins on the plant search path (--plant-path, FTCTUNE_PLANT_PATH) are plants too.
+      if (*which == "job") sim::load_plant_plugins_on_search_path();
       const nlohmann::json s =
           *which == "job" ? tune::job_json_schema() : runtime::gains_json_schema();
       std::printf("%s\n", s.dump(2).c_str());

@@ -140,6 +140,10 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
   sub->add_option("--concurrent-jobs", o->service.concurrent_jobs, "Jobs run at once (default 1)");
   sub->add_option("--threads", o->service.threads, "Threads per job (default: all cores)")
       ->check(CLI::Range(0, 4096));
+  sub->add_option("--plugin", o->service.plugins,
+                  "A plant plugin (ftctune_plant_NAME.so) jobs may name as plugin:NAME; "
+                  "repeatable. The server loads no other library, whatever a job names")
+      ->check(CLI::ExistingFile);
   sub->add_option("--token-file", o->token_file,
                   "File holding the bearer token every request must carry");
   sub->add_option("--max-body-kib", o->max_body_kib,

@@ -17,6 +17,7 @@
 #include "cli.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/isa.hpp"
+#include "ftc/sim/plant_plugin.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/version.hpp"
 
@@ -48,6 +49,9 @@ const std::map<std::string, std::string> kExamples = {
      "  ftctune jobs\n  ftctune jobs --status running --limit 5\n  ftctune jobs --prune 30"},
     {"delete", "  ftctune delete 3f9c0a7d12e4b6a1"},
     {"help", "  ftctune help\n  ftctune help simulate"},
+    {"plant",
+     "  ftctune plant check build/ftctune_plant_reaction_wheel_pendulum.so\n"
+     "  ftctune plant check ftctune_plant_NAME.so --against model.py"},
 };
 
 }  // namespace
@@ -74,6 +78,11 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", globals.verbose,
                "More detail on stderr; under mpirun, every rank logs (else rank 0 only)");
 
+  app.add_option("--plant-path", globals.plant_path,
+                 "A directory of plant plugins (ftctune_plant_NAME.so) for the jobs that name "
+                 "plugin:NAME, searched before FTCTUNE_PLANT_PATH's; repeatable")
+      ->type_name("DIR");
+
   ftc::cli::Action action;
   ftc::cli::add_run_command(app, globals, action);
   ftc::cli::add_simulate_command(app, globals, action);
@@ -84,6 +93,7 @@ int main(int argc, char** argv) {
   ftc::cli::add_ensemble_command(app, globals, action);
   ftc::cli::add_evaluate_command(app, globals, action);
   ftc::cli::add_pick_command(app, globals, action);
+  ftc::cli::add_plant_command(app, globals, action);
   ftc::cli::add_serve_command(app, globals, action);
   ftc::cli::add_client_commands(app, globals, action);
 
@@ -127,6 +137,11 @@ int main(int argc, char** argv) {
       where = "ftctune " + sub->get_name() + " --help";
     std::fprintf(stderr, "ftctune: error: %s (see %s)\n", e.what(), where.c_str());
     return 2;
+  }
+
+  {
+    std::vector<std::filesystem::path> dirs(globals.plant_path.begin(), globals.plant_path.end());
+    ftc::sim::set_plant_search_path(std::move(dirs));
   }
 
   auto logger = spdlog::stderr_color_mt("ftctune");

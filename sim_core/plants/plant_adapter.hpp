@@ -107,7 +107,9 @@ class PlantAdapter final : public AnyPlant {
       }
     const P& plant = simulated ? *simulated : plant_;
     const Mat<N, M> G = plant.G(x0);
-    Eigen::Matrix<double, N, Eigen::Dynamic, 0, N, M> acting(N, 0);
+    // (A plant of one axis makes it a row vector, which Eigen stores row-major.)
+    Eigen::Matrix<double, N, Eigen::Dynamic, N == 1 ? Eigen::RowMajor : Eigen::ColMajor, N, M>
+        acting(N, 0);
     for (int j = 0; j < m; ++j)
       if (!stuck[j] && lost[j] < 1.0) {
         acting.conservativeResize(Eigen::NoChange, acting.cols() + 1);

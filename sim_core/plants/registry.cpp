@@ -8,6 +8,7 @@
 
 #include "ftc/sim/hexarotor.hpp"
 #include "ftc/sim/manipulator.hpp"
+#include "ftc/sim/plant_plugin.hpp"
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/rigid_body.hpp"
 #include "ftc/sim/spacecraft.hpp"
@@ -78,6 +79,11 @@ FTC_SHAPE(3, 8)
 const PlantKind* find_plant_kind(std::string_view model) {
   for (const PlantKind& k : plant_kinds())
     if (k.model == model) return &k;
+  if (model.rfind(kPluginPrefix, 0) == 0) try {
+      return find_plant_plugin(model).kind;
+    } catch (const InputError&) {
+      return nullptr;  // make_plant and the job's reader say why
+    }
   return nullptr;
 }
 
@@ -100,12 +106,14 @@ void AnyPlant::simulate_pack(std::span<const PackTask> tasks, std::span<Simulati
 
 std::string plant_model_names() {
   std::string s;
-  for (const PlantKind& k : plant_kinds()) s += (s.empty() ? "" : ", ") + k.model;
-  return s;
+  for (const PlantKind* k : all_plant_kinds()) s += (s.empty() ? "" : ", ") + k->model;
+  return s + ", or plugin:NAME for a plant plugin";
 }
 
 std::unique_ptr<AnyPlant> make_plant(const PlantSpec& spec) {
-  const PlantKind* kind = find_plant_kind(spec.model);
+  const PlantKind* kind = spec.model.rfind(kPluginPrefix, 0) == 0
+                              ? find_plant_plugin(spec.model).kind
+                              : find_plant_kind(spec.model);
   if (!kind)
     throw InputError(
         "plant", "/model",

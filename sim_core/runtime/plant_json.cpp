@@ -1,8 +1,10 @@
 #include "ftc/runtime/plant_json.hpp"
 
+#include <mutex>
 #include <nlohmann/json.hpp>
 
 #include "ftc/runtime/json_reader.hpp"
+#include "ftc/sim/plant_plugin.hpp"
 #include "vehicle_json.hpp"
 
 namespace ftc::runtime {
@@ -77,7 +79,8 @@ Ptr<sim::PlantSpec> make_plant_shape() {
       [](const std::string& model) {
         return "unknown plant model '" + model + "' (known: " + sim::plant_model_names() + ")";
       });
-  for (const sim::PlantKind& k : sim::plant_kinds()) {
+  for (const sim::PlantKind* kp : sim::all_plant_kinds()) {
+    const sim::PlantKind& k = *kp;
     std::shared_ptr<schema::Object<sim::PlantSpec>> o = detail::structured_plant_object(k);
     if (o) {
       o->rule([&k](const sim::PlantSpec& c, const std::string& path, Errors& e) {
@@ -102,13 +105,59 @@ Ptr<sim::PlantSpec> make_plant_shape() {
   return v;
 }
 
-Ptr<sim::PlantSpec> cached_plant_shape() {
-  static const Ptr<sim::PlantSpec> shape = make_plant_shape();
-  return shape;
-}
+// The plant's shape over the kinds a job can name now: the shipped ones and the plugins loaded so
+// far, rebuilt when a plugin is loaded. A job naming plugin:NAME loads it first (or gets, at
+// /model, why it cannot).
+class PlantShape final : public schema::Shape<sim::PlantSpec> {
+ public:
+  // A model no kind has stays in `out` (the job's checks then know the plant's shape is
+  // unknown and do not guess it).
+  void read(const json& j, const std::string& path, sim::PlantSpec& out,
+            Errors& errs) const override {
+    std::string model;
+    if (j.is_object())
+      if (const auto it = j.find("model"); it != j.end() && it->is_string())
+        model = it->get<std::string>();
+    if (model.rfind(sim::kPluginPrefix, 0) == 0) try {
+        sim::find_plant_plugin(model);
+      } catch (const InputError& e) {
+        errs.push_back({path + "/model", e.errors().front().message});
+        out.model = model;
+        out.values.clear();
+        return;
+      }
+    current()->read(j, path, out, errs);
+    if (!model.empty() && !sim::find_plant_kind(model)) {
+      out.model = model;
+      out.values.clear();
+    }
+  }
+  void validate(const sim::PlantSpec& value, const std::string& path, Errors& errs) const override {
+    current()->validate(value, path, errs);
+  }
+  json write(const sim::PlantSpec& value) const override { return current()->write(value); }
+  json json_schema() const override { return current()->json_schema(); }
+
+ private:
+  Ptr<sim::PlantSpec> current() const {
+    std::lock_guard lock(mutex_);
+    const std::uint64_t g = sim::plant_kinds_generation();
+    if (!shape_ || g != generation_) {
+      shape_ = make_plant_shape();
+      generation_ = g;
+    }
+    return shape_;
+  }
+  mutable std::mutex mutex_;
+  mutable Ptr<sim::PlantSpec> shape_;
+  mutable std::uint64_t generation_ = 0;
+};
 
 }  // namespace
 
-std::shared_ptr<const schema::Shape<sim::PlantSpec>> plant_shape() { return cached_plant_shape(); }
+std::shared_ptr<const schema::Shape<sim::PlantSpec>> plant_shape() {
+  static const auto shape = std::make_shared<const PlantShape>();
+  return shape;
+}
 
 }  // namespace ftc::runtime

@@ -31,16 +31,20 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 #include <type_traits>
 
-#include "ftc/sim/metrics_record.hpp"
-#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/runtime/scenario_json.hpp"
+#include "ftc/sim/metrics_record.hpp"
+#include "ftc/sim/plant_plugin.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/io/sha256.hpp"
 
 namespace ftc::tune::mpi {
 namespace {
@@ -248,12 +252,27 @@ std::string host_name() {
   return buf;
 }
 
-// A simulation set as a worker rebuilds it: the plant's spec, every scenario as JSON (resolved,
+// For a plugin plant, the SHA-256 of the library this rank loaded ("" for a shipped plant): every
+// rank must run the same plant, and a plugin of the same name elsewhere on a rank's search path
+// may be another build.
+std::string plugin_digest(const std::string& model) {
+  if (model.rfind(sim::kPluginPrefix, 0) != 0) return "";
+  const sim::PlantPlugin& p = sim::find_plant_plugin(model);
+  if (p.file.empty()) return "compiled in";
+  std::ifstream in(p.file, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return sha256_hex(bytes.str());
+}
+
+// A simulation set as a worker rebuilds it: the plant's spec (with its plugin's digest), every
+// scenario as JSON (resolved,
 // so a slice, an ensemble member or a perturbed copy travels as it is) and each one's options.
 std::vector<char> set_message(const SimulationSet& set) {
   Writer w;
   w.put_string(set.plant_spec().model);
   w.put_vector(set.plant_spec().values);
+  w.put_string(plugin_digest(set.plant_spec().model));
   json scenarios = json::array();
   for (std::size_t i = 0; i < set.size(); ++i) {
     // A sensed scenario travels with its resolved noise stream as its own `seed` and `stream`,
@@ -281,6 +300,13 @@ SimulationSet set_from_message(const std::vector<char>& bytes) {
   sim::PlantSpec plant;
   plant.model = r.get_string();
   plant.values = r.get_vector<double>();
+  const std::string digest = r.get_string();
+  if (const std::string mine = plugin_digest(plant.model); mine != digest)
+    throw std::runtime_error(
+        plant.model + " here is not rank 0's: this rank loaded " +
+        sim::find_plant_plugin(plant.model).file.string() + " (SHA-256 " + mine.substr(0, 16) +
+        "), rank 0's has SHA-256 " + digest.substr(0, 16) +
+        "; give every rank the same library (--plant-path or FTCTUNE_PLANT_PATH)");
   const json list = json::parse(r.get_string());
   std::vector<sim::Scenario> scenarios;
   std::vector<sim::SimulationOptions> options(list.size());

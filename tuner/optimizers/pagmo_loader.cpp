@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/loadable.hpp"
 #include "ftc/tune/optimizers/hypervolume.hpp"
 #include "ftc/tune/optimizers/pagmo.hpp"
 #include "optimizers/pagmo_plugin.hpp"
@@ -22,22 +23,6 @@ namespace ftc::tune {
 namespace {
 
 namespace fs = std::filesystem;
-
-// The file this code was linked into: the ftctune executable, or the Python module (where
-// /proc/self/exe would be the interpreter).
-fs::path this_image() {
-  Dl_info info{};
-  if (::dladdr(reinterpret_cast<const void*>(&this_image), &info) == 0 || !info.dli_fname)
-    return {};
-  std::error_code ec;
-  fs::path p = fs::canonical(info.dli_fname, ec);
-  if (ec) {
-    // dladdr names the main program by argv[0], which may be relative to a changed directory.
-    p = fs::read_symlink("/proc/self/exe", ec);
-    if (ec) return {};
-  }
-  return p;
-}
 
 // Where the module may be: $FTCTUNE_PLUGIN_DIR, beside an installed binary
 // (<prefix>/<bindir>/../<libdir>/ftctune) or an installed Python module
@@ -66,14 +51,9 @@ const pagmo_plugin::Api& api() {
   static std::once_flag once;
   std::call_once(once, [] {
     std::string tried;
-    const fs::path image = this_image();
-    // The module takes the tuner's symbols from the global scope: an executable exports them
-    // (--export-dynamic), but a shared object opened with RTLD_LOCAL, as Python opens its
-    // extension modules, keeps them to itself until it is made global (never closed: the module
-    // stays as long as the process).
-    std::error_code exe_error;
-    if (!image.empty() && image != fs::read_symlink("/proc/self/exe", exe_error))
-      ::dlopen(image.c_str(), RTLD_NOW | RTLD_NOLOAD | RTLD_GLOBAL);
+    const fs::path image = sim::this_image();
+    // The module takes the tuner's symbols from the global scope (ftc/sim/loadable.hpp).
+    sim::share_symbols_with_modules();
     for (const fs::path& f : candidates(image)) {
       std::error_code ec;
       if (!fs::exists(f, ec)) {

@@ -19,6 +19,7 @@
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/metrics_record.hpp"
+#include "ftc/sim/plant_plugin.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/report.hpp"
@@ -438,6 +439,20 @@ std::optional<Job> Api::check_job(const std::string& text, httplib::Response& re
     bad_request("invalid_json", e);
     return std::nullopt;
   }
+  // A job may name only the plant plugins the server was started with (serve --plugin): any
+  // other is refused as such, 422, before anything else of the job is read.
+  if (body.is_object() && body.contains("plant") && body["plant"].is_object())
+    if (const auto it = body["plant"].find("model");
+        it != body["plant"].end() && it->is_string() &&
+        it->get<std::string>().rfind(sim::kPluginPrefix, 0) == 0)
+      try {
+        sim::find_plant_plugin(it->get<std::string>());
+      } catch (const InputError& e) {
+        const std::string message = e.errors().front().message;
+        send_error(res, 422, "plugin_not_loaded", "request body: /plant/model: " + message,
+                   json::array({{{"path", "/plant/model"}, {"message", message}}}));
+        return std::nullopt;
+      }
   Job job;
   try {
     job = parse_job(body, "request body");

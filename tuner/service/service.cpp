@@ -13,6 +13,7 @@
 #include <cstring>
 #include <thread>
 
+#include "ftc/sim/plant_plugin.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/service/job_store.hpp"
 #include "service/api.hpp"
@@ -171,6 +172,12 @@ struct TuningService::Impl {
 
 TuningService::TuningService(ServiceOptions options) {
   throw_if_errors("ftctune serve", options.validate());
+  // Its plugins now, and no other library later (ftc/sim/plant_plugin.hpp).
+  for (const std::filesystem::path& lib : options.plugins) {
+    const sim::PlantPlugin& p = sim::load_plant_plugin(lib);
+    spdlog::info("plant plugin plugin:{} from {}", p.name, p.file.string());
+  }
+  sim::lock_plant_plugins();
   impl_ = std::make_unique<Impl>(std::move(options));
 }
 

@@ -63,6 +63,10 @@ struct ServiceOptions {
   double check_timeout = 10;
   // How often results the store could not take (a full disk) are tried again.
   double store_retry_seconds = 5;
+  // The plant plugins (ftctune_plant_NAME.so) its jobs may name as "plugin:NAME": loaded when the
+  // service is made, after which this process loads no other library (a job naming another
+  // plugin is refused at /plant/model, 422). Nothing a job says can make the server load code.
+  std::vector<std::filesystem::path> plugins;
   // How each job's simulations run; default a TbbEvaluator with `threads` workers.
   std::function<std::unique_ptr<BatchEvaluator>()> evaluator;
 
