@@ -33,18 +33,18 @@
 #include "ftc/sim/controllers.hpp"
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/metrics_record.hpp"
+#include "ftc/sim/plant_plugin.hpp"
 #include "ftc/sim/plants.hpp"
+#include "ftc/tune/api/api.hpp"
+#include "ftc/tune/api/run_directory.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/problem/problem.hpp"
-#include "ftc/tune/run/memory_budget.hpp"
-#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
-#include "ftc/tune/api/run_directory.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/version.hpp"
 
@@ -716,6 +716,10 @@ PYBIND11_MODULE(_core, m) {
       .def("to_json", [](const Job& j) { return tune::to_json(j.job).dump(); })
       .def("sha256", [](const Job& j) { return tune::canonical_job_sha256(j.job); });
   m.def("load_job", &load_job, py::arg("path_or_dict"));
+  // The plant search path's own directories (--plant-path's; FTCTUNE_PLANT_PATH's follow).
+  m.def("set_plant_path", [](const std::vector<std::string>& dirs) {
+    sim::set_plant_search_path(std::vector<std::filesystem::path>(dirs.begin(), dirs.end()));
+  });
 
   py::class_<Problem> problem_class(m, "Problem");
   made_by_functions(problem_class);

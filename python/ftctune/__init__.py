@@ -63,8 +63,15 @@ class Job:
         return f"ftctune.Job({self.name!r} from {self.source!r})"
 
 
-def load_job(path_or_dict):
-    """Reads and validates a job file (a path) or a job given as a dict."""
+def load_job(path_or_dict, plant_path=None):
+    """Reads and validates a job file (a path) or a job given as a dict.
+
+    A job whose plant is a plugin ("plugin:NAME", docs/plugins.md) finds ftctune_plant_NAME.so in
+    plant_path (a directory or a list of them; kept for later calls, as `--plant-path` is for a
+    command) or in the environment's FTCTUNE_PLANT_PATH."""
+    if plant_path is not None:
+        dirs = [plant_path] if isinstance(plant_path, (str, _os.PathLike)) else list(plant_path)
+        _core.set_plant_path([_os.fspath(d) for d in dirs])
     if isinstance(path_or_dict, Job):
         return path_or_dict
     return Job(_core.load_job(path_or_dict))

@@ -607,3 +607,22 @@ def test_a_front_runs_callback_gets_the_fronts_size(table1_path):
     assert [r["iteration"] for r in rows] == [0, 1]
     assert all(r["front_points"] >= 1 for r in rows)
     assert rows[-1]["front_points"] == result.gains["goals"]["front"]["points"]
+
+
+def test_load_job_reads_a_plugin_plant_and_tunes_as_the_cli_does(cli, root, tmp_path):
+    """A job naming plugin:reaction_wheel_pendulum (examples/plant-plugin), found through
+    plant_path: the module loads the library into the interpreter and tunes to the bytes of
+    `ftctune run` with the same plugin."""
+    plugins = pathlib.Path(cli).resolve().parents[1] / "tests" / "plugins"
+    path = str(root / "examples" / "plant-plugin" / "job.json")
+    ftctune._core.set_plant_path([])
+    with pytest.raises(ftctune.InputError, match="is not on the plant search path"):
+        ftctune.load_job(json.loads(pathlib.Path(path).read_text().replace(
+            "reaction_wheel_pendulum", "no_such_plant")))
+    job = ftctune.load_job(path, plant_path=plugins)
+    assert job.to_dict()["plant"]["model"] == "plugin:reaction_wheel_pendulum"
+    result = ftctune.tune(job, threads=2)
+    out = tmp_path / "cli"
+    subprocess.run([cli, "run", path, "--plant-path", str(plugins), "--out", str(out), "-q"],
+                   check=True)
+    assert result.gains == json.loads((out / "gains.json").read_text())
