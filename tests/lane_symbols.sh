@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The SIMD kernels (<build>/sim_core/kernels/<plant>_kernel_<isa>.cpp) are compiled for their own instruction set.
+# The SIMD kernels (<build>/sim_core/kernels/ftc_sim/<plant>_lanes_<isa>.cpp, and a plant plugin's
+# <build>/.../kernels/<target>/<lanes>_<isa>.cpp) are compiled for their own instruction set.
 # Any inline function they instantiate outside their own namespace would be a weak symbol that
 # the linker may pick for the whole program, and an AVX-512 copy of it would crash the scalar
 # code on a CPU without AVX-512. So every weak (or unique) symbol a kernel object defines must lie
@@ -10,11 +11,11 @@ status=0
 for obj in "$@"; do
   base=$(basename "$obj")
   case "$base" in
-    *_kernel_sse2.cpp.o | *_kernel_avx2.cpp.o | *_kernel_avx512.cpp.o) ;;
+    *_sse2.cpp.o | *_avx2.cpp.o | *_avx512.cpp.o) ;;
     *) continue ;;
   esac
-  isa=${base##*_kernel_}
-  isa=${isa%.cpp.o}
+  isa=${base%.cpp.o}
+  isa=${isa##*_}
   checked=$((checked + 1))
   # Weak (W, V, w, v) and unique global (u) definitions, less the exception-handling reference
   # every C++ object has.

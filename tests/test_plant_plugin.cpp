@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "cli_runner.hpp"
@@ -53,7 +54,7 @@ TEST(PlantPlugin, LoadsTheExampleWithTheShapeAndParametersItDeclares) {
   ASSERT_EQ(k.parameters.size(), 5u);
   EXPECT_EQ(k.parameters[0].name, "inertia");
   EXPECT_EQ(k.parameters[0].unit, "kg·m²");
-  EXPECT_EQ(k.uncertain_names(), "inertia");
+  EXPECT_EQ(k.uncertain_names(), "inertia, mass_length");
   EXPECT_EQ(ftc::sim::find_plant_kind("plugin:reaction_wheel_pendulum"), &k);
   // Its plant simulates like any other: θ0 = 0.1 rad balanced by the default PI-FOSMC.
   ftc::sim::Scenario s;
@@ -126,6 +127,37 @@ TEST(PlantPlugin, AJobFindsItOnTheSearchPathOrSaysWhereItLooked) {
   bad.replace(bad.find("\"inertia\": 0.04"), 15, "\"inertia\": -1");
   const std::string e = input_error([&] { ftc::tune::parse_job_text(bad, "job.json"); });
   EXPECT_NE(e.find("/plant/inertia: must be"), std::string::npos) << e;
+  ftc::sim::set_plant_search_path({});
+}
+
+// Its own uncertain parameter (mass_length, which no shipped plant has): a scenario's true value
+// (model mismatch) and an ensemble's scale, as for a shipped plant's.
+TEST(PlantPlugin, ItsUncertainParametersTakeTrueValuesAndEnsembleScales) {
+  ftc::sim::set_plant_search_path({kDir});
+  nlohmann::json j = nlohmann::json::parse(ftc::testing::slurp(kJob));
+  j["scenarios"][0]["mass_length"] = {0.15};
+  j["ensemble"] = {{"count", 4}, {"seed", 3}, {"mass_length_scale", {{"uniform", {0.8, 1.2}}}}};
+  const ftc::tune::Job job = ftc::tune::parse_job(j, "job.json");
+  ASSERT_EQ(job.scenarios[0].true_values.size(), 1u);
+  EXPECT_EQ(job.scenarios[0].true_values[0].parameter, "mass_length");
+  ASSERT_TRUE(job.ensemble);
+  // The simulated pendulum is the truer one: another run than with the model's m ℓ.
+  const auto plant = ftc::sim::make_plant(job.plant);
+  ftc::sim::Scenario nominal = job.scenarios[0];
+  nominal.true_values.clear();
+  const auto a = plant->simulate(ftc::sim::ControllerConfig{}, job.scenarios[0]);
+  const auto b = plant->simulate(ftc::sim::ControllerConfig{}, nominal);
+  EXPECT_NE(a.metrics.errors.ise, b.metrics.errors.ise);
+  // A parameter it does not declare uncertain is refused with its path.
+  j["scenarios"][0].erase("mass_length");
+  j["scenarios"][0]["actuator_scale"] = {1.0, 0.5};  // a rigid body's
+  j.erase("ensemble");
+  const std::string e = input_error([&] { ftc::tune::parse_job(j, "job.json"); });
+  EXPECT_NE(e.find("/scenarios/0/actuator_scale"), std::string::npos) << e;
+  EXPECT_NE(e.find("does not declare actuator_scale uncertain (its uncertain parameters: inertia, "
+                   "mass_length)"),
+            std::string::npos)
+      << e;
   ftc::sim::set_plant_search_path({});
 }
 

@@ -20,6 +20,9 @@ struct Globals {
   bool verbose = false;
   // --plant-path: directories searched for a job's plant plugins before FTCTUNE_PLANT_PATH's.
   std::vector<std::string> plant_path;
+  // serve --plugin: the plugins a server loads on every MPI rank before anything else, after
+  // which no rank loads a library by name.
+  std::vector<std::string> plugins;
 };
 
 using Action = std::function<int()>;
@@ -27,7 +30,7 @@ using Action = std::function<int()>;
 void add_simulate_command(CLI::App& app, const Globals& g, Action& action);
 void add_run_command(CLI::App& app, const Globals& g, Action& action);
 void add_validate_command(CLI::App& app, const Globals& g, Action& action);
-void add_serve_command(CLI::App& app, const Globals& g, Action& action);
+void add_serve_command(CLI::App& app, Globals& g, Action& action);
 void add_client_commands(CLI::App& app, const Globals& g, Action& action);
 void add_report_commands(CLI::App& app, const Globals& g, Action& action);
 void add_schema_command(CLI::App& app, const Globals& g, Action& action);

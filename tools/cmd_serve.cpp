@@ -130,7 +130,7 @@ int run_serve(ServeOptions o) {
 
 }  // namespace
 
-void add_serve_command(CLI::App& app, const Globals&, Action& action) {
+void add_serve_command(CLI::App& app, Globals& g, Action& action) {
   auto o = std::make_shared<ServeOptions>();
   CLI::App* sub =
       app.add_subcommand("serve", "Run the tuning service (HTTP API, durable job store)");
@@ -140,7 +140,7 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
   sub->add_option("--concurrent-jobs", o->service.concurrent_jobs, "Jobs run at once (default 1)");
   sub->add_option("--threads", o->service.threads, "Threads per job (default: all cores)")
       ->check(CLI::Range(0, 4096));
-  sub->add_option("--plugin", o->service.plugins,
+  sub->add_option("--plugin", g.plugins,
                   "A plant plugin (ftctune_plant_NAME.so) jobs may name as plugin:NAME; "
                   "repeatable. The server loads no other library, whatever a job names")
       ->check(CLI::ExistingFile);
@@ -195,8 +195,9 @@ void add_serve_command(CLI::App& app, const Globals&, Action& action) {
                   "Live-update streams one address may hold at once; more get 429 (default 8, "
                   "0: no limit)")
       ->check(CLI::Range(0, 1023));
-  sub->callback([&action, o, sub] {
+  sub->callback([&action, o, sub, &g] {
     o->event_streams_given = sub->count("--max-event-streams") > 0;
+    o->service.plugins.assign(g.plugins.begin(), g.plugins.end());
     action = [o] { return run_serve(*o); };
   });
 }

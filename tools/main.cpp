@@ -143,6 +143,15 @@ int main(int argc, char** argv) {
     std::vector<std::filesystem::path> dirs(globals.plant_path.begin(), globals.plant_path.end());
     ftc::sim::set_plant_search_path(std::move(dirs));
   }
+  // A server's plugins, on every rank (under mpirun the other ranks never run the service, but
+  // they simulate its jobs): loaded now, and then no library by name.
+  if (!globals.plugins.empty()) try {
+      for (const std::string& lib : globals.plugins) ftc::sim::load_plant_plugin(lib);
+      ftc::sim::lock_plant_plugins();
+    } catch (const ftc::InputError& e) {
+      std::fprintf(stderr, "ftctune: error: %s\n", e.what());
+      return 2;
+    }
 
   auto logger = spdlog::stderr_color_mt("ftctune");
   spdlog::set_default_logger(logger);

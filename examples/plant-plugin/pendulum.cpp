@@ -54,7 +54,8 @@ ftc::sim::PlantKind kind() {
        Range::non_negative(),
        "",
        "k_1, k_2: the share of the commanded torque each wheel's motor gives"}};
-  k.uncertain = {{"inertia", "the pendulum's moment of inertia J"}};
+  k.uncertain = {{"inertia", "the pendulum's moment of inertia J"},
+                 {"mass_length", "the pendulum's unbalance m ℓ"}};
   k.default_initial_state = {0.1, 0.0};
   k.positions = "angle from upright";
   k.rates = "angular rate";

@@ -21,8 +21,8 @@
 //   G⁺   = Gᵀ / (G Gᵀ) = Gᵀ / (g_1² + g_2²)         (one wheel's torque is enough: m = 2 > n = 1)
 //
 // The wheels' own speeds do not enter θ's equation (they only matter to a wheel's speed limit,
-// which this model leaves out). The inertia J is declared uncertain: a scenario can give a true
-// J (model mismatch) and an ensemble scales it member by member.
+// which this model leaves out). J and m ℓ are declared uncertain: a scenario can give their true
+// values (model mismatch) and an ensemble scales them member by member.
 #include <array>
 #include <string>
 

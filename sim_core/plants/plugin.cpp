@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <deque>
+#include <fstream>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -14,6 +16,7 @@
 #include "ftc/sim/input_error.hpp"
 #include "ftc/sim/loadable.hpp"
 #include "ftc/sim/plant_plugin.hpp"
+#include "lanes/pack.hpp"
 #include "plant_abi.hpp"
 
 namespace ftc::sim {
@@ -89,34 +92,61 @@ void check_kind(const PlantKind& k, const std::string& expected_model, const std
 
 }  // namespace
 
+// FNV-1a, 64 bits, of the library's bytes as loaded: what MPI ranks compare (another build of
+// the same name is another digest; nothing here is adversarial: the ranks are the operator's).
+std::string digest_of(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError("plugin", "", file.string() + ": cannot be read");
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  char buf[65536];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      h ^= static_cast<unsigned char>(buf[i]);
+      h *= 0x100000001b3ULL;
+    }
+    if (!in) break;
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
+
 std::string plant_plugin_file_name(std::string_view name) {
   return "ftctune_plant_" + std::string(name) + ".so";
 }
 
 const PlantPlugin& load_plant_plugin(const fs::path& file) {
   Registry& r = registry();
-  std::lock_guard lock(r.mutex);
+  // One load at a time; the registry's own mutex is not held while the library's code runs (its
+  // static initialisers, entry point and kind() may look plants up).
+  static std::mutex loading;
+  std::lock_guard load_lock(loading);
   std::error_code ec;
   const fs::path canonical = fs::canonical(file, ec);
   if (ec) throw InputError("plugin", "", file.string() + ": no such file");
-  for (const auto& p : r.plugins)
-    if (p->file == canonical) return *p;
   const std::string where = canonical.string();
   const std::string stem = canonical.filename().string();
   const std::string prefix = "ftctune_plant_", suffix = ".so";
-  if (stem.size() <= prefix.size() + suffix.size() || stem.rfind(prefix, 0) != 0 ||
-      stem.compare(stem.size() - suffix.size(), suffix.size(), suffix) != 0)
+  const bool named = stem.size() > prefix.size() + suffix.size() && stem.rfind(prefix, 0) == 0 &&
+                     stem.compare(stem.size() - suffix.size(), suffix.size(), suffix) == 0;
+  const std::string name =
+      named ? stem.substr(prefix.size(), stem.size() - prefix.size() - suffix.size()) : "";
+  if (!named || !valid_name(name))
     throw InputError("plugin", "",
                      where +
-                         ": a plant plugin's file is named ftctune_plant_NAME.so "
-                         "(ftctune_add_plant(NAME ...) builds it so)");
-  const std::string name = stem.substr(prefix.size(), stem.size() - prefix.size() - suffix.size());
-  if (loaded(r, name))
-    throw InputError("plugin", "",
-                     where + ": a plant named plugin:" + name + " is loaded already (from " +
-                         (loaded(r, name)->file.empty() ? std::string("this program")
-                                                        : loaded(r, name)->file.string()) +
-                         ")");
+                         ": a plant plugin's file is named ftctune_plant_NAME.so, NAME of "
+                         "letters, digits and _ (ftctune_add_plant(NAME ...) builds it so)");
+  {
+    std::lock_guard lock(r.mutex);
+    for (const auto& p : r.plugins)
+      if (p->file == canonical) return *p;
+    if (const PlantPlugin* other = loaded(r, name))
+      throw InputError(
+          "plugin", "",
+          where + ": a plant named plugin:" + name + " is loaded already (from " +
+              (other->file.empty() ? std::string("this program") : other->file.string()) + ")");
+  }
+  const std::string digest = digest_of(canonical);
   share_symbols_with_modules();
   // Never closed: the plants it makes live as long as the process.
   void* h = ::dlopen(canonical.c_str(), RTLD_NOW | RTLD_LOCAL);
@@ -163,8 +193,10 @@ const PlantPlugin& load_plant_plugin(const fs::path& file) {
   auto plugin = std::make_unique<PlantPlugin>();
   plugin->name = name;
   plugin->file = canonical;
+  plugin->digest = digest;
   plugin->kind = kind.get();
   plugin->api = api;
+  std::lock_guard lock(r.mutex);
   r.kinds.push_back(std::move(kind));
   r.plugins.push_back(std::move(plugin));
   ++r.generation;
@@ -294,6 +326,7 @@ void register_plant_kind(PlantKind kind) {
   auto k = std::make_unique<PlantKind>(std::move(kind));
   auto plugin = std::make_unique<PlantPlugin>();
   plugin->name = name;
+  plugin->digest = "compiled in";
   plugin->kind = k.get();
   r.kinds.push_back(std::move(k));
   r.plugins.push_back(std::move(plugin));

@@ -15,6 +15,7 @@
 // plugin::kind_of<P>(kind, build) and register_plant_kind() instead.
 #include <exception>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -28,8 +29,18 @@
 namespace ftc::sim::plugin {
 
 // The kind with `make` set: a PlantAdapter<P> of the values, built by `build`.
+// Throws std::invalid_argument when the kind's n and m are not P's, or when a plant P builds calls
+// itself by another model name than the kind's (the loader reports it as the plugin's error).
 template <class P, class Build>
 PlantKind kind_of(PlantKind kind, Build build) {
+  if (kind.axes != P::kAxes || kind.actuators != P::kActuators)
+    throw std::invalid_argument("the kind declares n = " + std::to_string(kind.axes) +
+                                ", m = " + std::to_string(kind.actuators) +
+                                " but the class is a Plant<" + std::to_string(P::kAxes) + ", " +
+                                std::to_string(P::kActuators) + ">");
+  if (const std::string m = build(kind.defaults()).model(); m != kind.model)
+    throw std::invalid_argument("the kind's model is '" + kind.model +
+                                "' but its plant's model() is '" + m + "'");
   kind.make = [build](const std::vector<double>& values) -> std::unique_ptr<AnyPlant> {
     return std::make_unique<detail::PlantAdapter<P>>(
         values, [build](const std::vector<double>& v) { return P(build(v)); });

@@ -44,11 +44,34 @@ function(ftctune_kernel_copies target lanes include_as)
 endfunction()
 
 function(ftctune_plant_kernels target)
+  # The installed package says which compiler and libraries ftctune was built with: a plugin
+  # built otherwise would not share its types or its bits (ftctune's own tree sets none of these).
+  if(FTCTUNE_PLANT_CXX_COMPILER AND NOT FTCTUNE_PLANT_CXX_COMPILER STREQUAL
+     "${CMAKE_CXX_COMPILER_ID} ${CMAKE_CXX_COMPILER_VERSION}")
+    message(FATAL_ERROR "ftctune_add_plant: ftctune was built with ${FTCTUNE_PLANT_CXX_COMPILER}, "
+            "this project uses ${CMAKE_CXX_COMPILER_ID} ${CMAKE_CXX_COMPILER_VERSION}: build the "
+            "plugin with the same compiler (CMAKE_CXX_COMPILER)")
+  endif()
+  if(FTCTUNE_PLANT_EIGEN_VERSION AND NOT FTCTUNE_PLANT_EIGEN_VERSION STREQUAL Eigen3_VERSION)
+    message(FATAL_ERROR "ftctune_add_plant: ftctune was built with Eigen ${FTCTUNE_PLANT_EIGEN_VERSION}, "
+            "this project finds Eigen ${Eigen3_VERSION}")
+  endif()
+  set(vector_isas ${FTCTUNE_PLANT_ISAS})
+  list(REMOVE_ITEM vector_isas scalar)
+  if(vector_isas AND NOT FTCTUNE_PLANT_XSIMD_INCLUDE)
+    find_package(xsimd REQUIRED)
+    if(FTCTUNE_PLANT_XSIMD_VERSION AND NOT FTCTUNE_PLANT_XSIMD_VERSION STREQUAL xsimd_VERSION)
+      message(FATAL_ERROR "ftctune_add_plant: ftctune was built with xsimd "
+              "${FTCTUNE_PLANT_XSIMD_VERSION}, this project finds xsimd ${xsimd_VERSION}")
+    endif()
+    get_target_property(FTCTUNE_PLANT_XSIMD_INCLUDE xsimd INTERFACE_INCLUDE_DIRECTORIES)
+  endif()
   target_include_directories(${target} PRIVATE ${FTCTUNE_PLANT_INCLUDE_DIRS})
   target_link_libraries(${target} PRIVATE Eigen3::Eigen)
   target_compile_features(${target} PRIVATE cxx_std_20)
-  # The loop's bits do not depend on the compiler's freedom: no contraction into FMA.
-  target_compile_options(${target} PRIVATE -ffp-contract=off -fno-math-errno)
+  # The loop's bits do not depend on the compiler's freedom: no contraction into FMA, no
+  # fast-math whatever the project's flags say (the last option wins).
+  target_compile_options(${target} PRIVATE -fno-fast-math -ffp-contract=off -fno-math-errno)
   target_compile_definitions(${target} PRIVATE FTC_PLANT_ABI_ID="${FTCTUNE_PLANT_ABI_ID}")
   foreach(isa IN LISTS FTCTUNE_PLANT_ISAS)
     if(NOT isa STREQUAL "scalar")

@@ -1,6 +1,5 @@
 #include "ftc/runtime/plant_json.hpp"
 
-#include <mutex>
 #include <nlohmann/json.hpp>
 
 #include "ftc/runtime/json_reader.hpp"
@@ -106,12 +105,11 @@ Ptr<sim::PlantSpec> make_plant_shape() {
 }
 
 // The plant's shape over the kinds a job can name now: the shipped ones and the plugins loaded so
-// far, rebuilt when a plugin is loaded. A job naming plugin:NAME loads it first (or gets, at
-// /model, why it cannot).
+// far (rebuilt when one is loaded). A job naming plugin:NAME loads it first (or gets, at /model,
+// why it cannot); a model no kind has stays in `out`, so that the job's checks know the plant's
+// shape is unknown and do not guess it.
 class PlantShape final : public schema::Shape<sim::PlantSpec> {
  public:
-  // A model no kind has stays in `out` (the job's checks then know the plant's shape is
-  // unknown and do not guess it).
   void read(const json& j, const std::string& path, sim::PlantSpec& out,
             Errors& errs) const override {
     std::string model;
@@ -126,31 +124,20 @@ class PlantShape final : public schema::Shape<sim::PlantSpec> {
         out.values.clear();
         return;
       }
-    current()->read(j, path, out, errs);
+    shape_.read(j, path, out, errs);
     if (!model.empty() && !sim::find_plant_kind(model)) {
       out.model = model;
       out.values.clear();
     }
   }
   void validate(const sim::PlantSpec& value, const std::string& path, Errors& errs) const override {
-    current()->validate(value, path, errs);
+    shape_.validate(value, path, errs);
   }
-  json write(const sim::PlantSpec& value) const override { return current()->write(value); }
-  json json_schema() const override { return current()->json_schema(); }
+  json write(const sim::PlantSpec& value) const override { return shape_.write(value); }
+  json json_schema() const override { return shape_.json_schema(); }
 
  private:
-  Ptr<sim::PlantSpec> current() const {
-    std::lock_guard lock(mutex_);
-    const std::uint64_t g = sim::plant_kinds_generation();
-    if (!shape_ || g != generation_) {
-      shape_ = make_plant_shape();
-      generation_ = g;
-    }
-    return shape_;
-  }
-  mutable std::mutex mutex_;
-  mutable Ptr<sim::PlantSpec> shape_;
-  mutable std::uint64_t generation_ = 0;
+  schema::Regenerated<sim::PlantSpec> shape_{make_plant_shape, sim::plant_kinds_generation};
 };
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/plant_plugin.hpp"
 #include "vehicle_json.hpp"
 
 namespace ftc::runtime {
@@ -324,7 +325,10 @@ Ptr<sim::Scenario> make_scenario_shape() {
 }  // namespace
 
 Ptr<sim::Scenario> scenario_shape() {
-  static const Ptr<sim::Scenario> shape = make_scenario_shape();
+  // Its true values' keys are the uncertain parameters of the plants a job can name now.
+  static const Ptr<sim::Scenario> shape =
+      std::make_shared<const schema::Regenerated<sim::Scenario>>(make_scenario_shape,
+                                                                 sim::plant_kinds_generation);
   return shape;
 }
 
@@ -340,30 +344,29 @@ sim::Scenario scenario_from_json(const json& j, const std::string& source) {
   return s;
 }
 
-const std::vector<UncertainKey>& uncertain_keys() {
-  static const std::vector<UncertainKey> keys = [] {
-    std::vector<UncertainKey> out;
-    for (const sim::PlantKind& kind : sim::plant_kinds())
-      for (const sim::UncertainParameter& u : kind.uncertain) {
-        const auto known = std::find_if(out.begin(), out.end(), [&](const UncertainKey& k) {
-          return k.parameter == u.parameter;
-        });
-        if (known != out.end()) {
-          known->models += ", " + kind.model;
-          // A tensor where any plant takes one (the spacecraft's inertia is 3 moments, the
-          // rigid body's a tensor or 3 moments).
-          known->tensor = known->tensor || u.scaling == sim::Scaling::congruence;
-          continue;
-        }
-        const sim::PlantParameter* declared = nullptr;
-        for (const sim::PlantParameter& p : kind.parameters)
-          if (p.name == u.parameter) declared = &p;
-        out.push_back({u.parameter, kind.model, u.meaning, declared, u.per_actuator,
-                       u.scaling == sim::Scaling::congruence});
+std::vector<UncertainKey> uncertain_keys() {
+  std::vector<UncertainKey> out;
+  for (const sim::PlantKind* kp : sim::all_plant_kinds()) {
+    const sim::PlantKind& kind = *kp;
+    for (const sim::UncertainParameter& u : kind.uncertain) {
+      const auto known = std::find_if(out.begin(), out.end(), [&](const UncertainKey& k) {
+        return k.parameter == u.parameter;
+      });
+      if (known != out.end()) {
+        known->models += ", " + kind.model;
+        // A tensor where any plant takes one (the spacecraft's inertia is 3 moments, the
+        // rigid body's a tensor or 3 moments).
+        known->tensor = known->tensor || u.scaling == sim::Scaling::congruence;
+        continue;
       }
-    return out;
-  }();
-  return keys;
+      const sim::PlantParameter* declared = nullptr;
+      for (const sim::PlantParameter& p : kind.parameters)
+        if (p.name == u.parameter) declared = &p;
+      out.push_back({u.parameter, kind.model, u.meaning, declared, u.per_actuator,
+                     u.scaling == sim::Scaling::congruence});
+    }
+  }
+  return out;
 }
 
 }  // namespace ftc::runtime

@@ -10,7 +10,7 @@ namespace {
 
 using ftc::sim::PlantKind;
 
-PlantKind kind() {
+[[maybe_unused]] PlantKind kind() {
 #if defined(FTC_BROKEN_THROWS)
   throw std::runtime_error("this plant's parameters file is missing");
 #else
@@ -23,10 +23,11 @@ PlantKind kind() {
 #endif
 }
 
-bool evaluate(const std::vector<double>&, const double*, double*, double*, double*, std::string*) {
+[[maybe_unused]] bool evaluate(const std::vector<double>&, const double*, double*, double*, double*,
+                               std::string*) {
   return false;
 }
-bool trim(const std::vector<double>&, double*, double*, double*) { return false; }
+[[maybe_unused]] bool trim(const std::vector<double>&, double*, double*, double*) { return false; }
 
 }  // namespace
 

@@ -152,9 +152,11 @@ with open(sys.argv[3], "w") as fh:
                                            values.begin() + static_cast<long>(at + p.size()));
     at += p.size();
   }
-  const fs::path dir =
-      fs::temp_directory_path() / ("ftctune-plant-check-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  // A directory of its own (mkdtemp: 0700, a name nobody could have made first).
+  std::string tmpl = (fs::temp_directory_path() / "ftctune-plant-check-XXXXXX").string();
+  if (!::mkdtemp(tmpl.data()))
+    throw InputError("--against", "", "cannot make a temporary directory: " + tmpl);
+  const fs::path dir = tmpl;
   struct Cleanup {
     fs::path d;
     ~Cleanup() {

@@ -31,11 +31,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <thread>
 #include <type_traits>
@@ -44,7 +42,6 @@
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/sim/plant_plugin.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
-#include "ftc/tune/io/sha256.hpp"
 
 namespace ftc::tune::mpi {
 namespace {
@@ -252,17 +249,12 @@ std::string host_name() {
   return buf;
 }
 
-// For a plugin plant, the SHA-256 of the library this rank loaded ("" for a shipped plant): every
+// For a plugin plant, the digest of the library this rank loaded ("" for a shipped plant): every
 // rank must run the same plant, and a plugin of the same name elsewhere on a rank's search path
 // may be another build.
 std::string plugin_digest(const std::string& model) {
   if (model.rfind(sim::kPluginPrefix, 0) != 0) return "";
-  const sim::PlantPlugin& p = sim::find_plant_plugin(model);
-  if (p.file.empty()) return "compiled in";
-  std::ifstream in(p.file, std::ios::binary);
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return sha256_hex(bytes.str());
+  return sim::find_plant_plugin(model).digest;
 }
 
 // A simulation set as a worker rebuilds it: the plant's spec (with its plugin's digest), every
@@ -304,8 +296,8 @@ SimulationSet set_from_message(const std::vector<char>& bytes) {
   if (const std::string mine = plugin_digest(plant.model); mine != digest)
     throw std::runtime_error(
         plant.model + " here is not rank 0's: this rank loaded " +
-        sim::find_plant_plugin(plant.model).file.string() + " (SHA-256 " + mine.substr(0, 16) +
-        "), rank 0's has SHA-256 " + digest.substr(0, 16) +
+        sim::find_plant_plugin(plant.model).file.string() + " (digest " + mine +
+        "), rank 0's has digest " + digest +
         "; give every rank the same library (--plant-path or FTCTUNE_PLANT_PATH)");
   const json list = json::parse(r.get_string());
   std::vector<sim::Scenario> scenarios;

@@ -7,6 +7,7 @@
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/runtime/schema.hpp"
 #include "ftc/sim/elementary.hpp"
+#include "ftc/sim/plant_plugin.hpp"
 #include "ftc/sim/plants.hpp"
 #include "job/shapes.hpp"
 
@@ -650,7 +651,10 @@ const Distribution* EnsembleConfig::parameter_scale(std::string_view parameter) 
 namespace job_detail {
 
 std::shared_ptr<const schema::Shape<EnsembleConfig>> ensemble_shape() {
-  static const std::shared_ptr<const Obj<EnsembleConfig>> shape = make_ensemble_shape();
+  // Its scales are the uncertain parameters of the plants a job can name now.
+  static const auto shape = std::make_shared<const schema::Regenerated<EnsembleConfig>>(
+      [] { return std::shared_ptr<const schema::Shape<EnsembleConfig>>(make_ensemble_shape()); },
+      sim::plant_kinds_generation);
   return shape;
 }
 

@@ -37,7 +37,7 @@ struct UncertainKey {
   bool per_actuator = false;              // one value per actuator (UncertainParameter's)
   bool tensor = false;                    // a 3×3 tensor or its 3 principal moments
 };
-const std::vector<UncertainKey>& uncertain_keys();
+std::vector<UncertainKey> uncertain_keys();
 
 // A name that can name a file: 1-100 letters, digits, `_ - .`, not starting with `.`.
 inline constexpr const char* kNamePattern = "^[A-Za-z0-9_-][A-Za-z0-9_.-]{0,99}$";

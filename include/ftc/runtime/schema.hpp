@@ -16,6 +16,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -578,6 +579,44 @@ class Variant final : public Shape<T> {
   std::string fallback_;
   std::function<std::string(const std::string&)> unknown_;
   std::vector<Case> cases_;
+};
+
+// A shape built by `make` again whenever `generation()` changes: what depends on the plant kinds
+// a job can name (the plant, a scenario's true values, an ensemble's scales), which grow when a
+// plant plugin is loaded. It is the one object its holders keep; each call reads the current
+// build. Thread-safe.
+template <class T>
+class Regenerated final : public Shape<T> {
+ public:
+  Regenerated(std::function<std::shared_ptr<const Shape<T>>()> make,
+              std::function<std::uint64_t()> generation)
+      : make_(std::move(make)), generation_(std::move(generation)) {}
+
+  void read(const json& j, const std::string& path, T& out, Errors& errs) const override {
+    current()->read(j, path, out, errs);
+  }
+  void validate(const T& value, const std::string& path, Errors& errs) const override {
+    current()->validate(value, path, errs);
+  }
+  json write(const T& value) const override { return current()->write(value); }
+  json json_schema() const override { return current()->json_schema(); }
+
+  std::shared_ptr<const Shape<T>> current() const {
+    std::lock_guard lock(mutex_);
+    const std::uint64_t g = generation_();
+    if (!shape_ || g != built_) {
+      shape_ = make_();
+      built_ = g;
+    }
+    return shape_;
+  }
+
+ private:
+  std::function<std::shared_ptr<const Shape<T>>()> make_;
+  std::function<std::uint64_t()> generation_;
+  mutable std::mutex mutex_;
+  mutable std::shared_ptr<const Shape<T>> shape_;
+  mutable std::uint64_t built_ = 0;
 };
 
 template <class T>

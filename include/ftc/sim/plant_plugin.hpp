@@ -58,6 +58,7 @@ const char* plant_abi_id();
 struct PlantPlugin {
   std::string name;            // NAME of "plugin:NAME"
   std::filesystem::path file;  // the library, canonical (empty for a registered kind)
+  std::string digest;          // of the library's bytes when loaded (MPI ranks compare it)
   const PlantKind* kind = nullptr;
   const PlantPluginApi* api = nullptr;
 };
@@ -86,7 +87,9 @@ void set_plant_search_path(std::vector<std::filesystem::path> dirs);
 // --plant-path's then FTCTUNE_PLANT_PATH's directories, in search order.
 std::vector<std::filesystem::path> plant_search_path();
 
-// From now on no library is loaded by name: a job may only name plugins loaded already.
+// From now on no library is loaded by name: a job may only name plugins loaded already. (The
+// program itself may still call load_plant_plugin: what it loads is its operator's choice, never a
+// job's.)
 void lock_plant_plugins();
 bool plant_plugins_locked();
 
