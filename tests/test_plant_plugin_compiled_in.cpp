@@ -17,11 +17,6 @@
 #include "ftc/tune/job/job.hpp"
 #include "plants/plugin_entry.hpp"
 
-namespace pendulum {
-ftc::sim::PlantKind kind();
-Pendulum build(const std::vector<double>& values);
-}  // namespace pendulum
-
 namespace {
 
 namespace fs = std::filesystem;

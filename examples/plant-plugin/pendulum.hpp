@@ -25,9 +25,11 @@
 // values (model mismatch) and an ensemble scales them member by member.
 #include <array>
 #include <string>
+#include <vector>
 
 #include "ftc/sim/elementary.hpp"
 #include "ftc/sim/plant.hpp"
+#include "ftc/sim/plants.hpp"
 
 namespace pendulum {
 
@@ -73,5 +75,11 @@ class Pendulum final : public ftc::sim::Plant<1, 2> {
  private:
   double a_, c_, g1_, g2_;
 };
+
+// The plant as job files know it (its parameters in the order build() reads them), and a plant
+// made from those values; FTCTUNE_PLANT_PLUGIN in pendulum.cpp gives both to ftctune, and a
+// program that compiles the plant in (tests) registers them itself.
+ftc::sim::PlantKind kind();
+Pendulum build(const std::vector<double>& values);
 
 }  // namespace pendulum

@@ -7,18 +7,17 @@
 #include <benchmark/benchmark.h>
 
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "../examples/plant-plugin/pendulum.hpp"
+#include "ftc/runtime/controller_json.hpp"
+#include "ftc/runtime/json_reader.hpp"
+#include "ftc/runtime/scenario_json.hpp"
 #include "ftc/sim/isa.hpp"
 #include "ftc/sim/plant_plugin.hpp"
 #include "plants/plugin_entry.hpp"
-
-namespace pendulum {
-ftc::sim::PlantKind kind();
-Pendulum build(const std::vector<double>& values);
-}  // namespace pendulum
 
 using namespace ftc::sim;
 
@@ -44,29 +43,20 @@ void BM_Pendulum(benchmark::State& state) {
     return;
   }
   const std::unique_ptr<AnyPlant> p = plant(static_cast<int>(state.range(0)));
-  // The example job's scenario: 10 s at 2 ms, wheel 1 stuck at 4 s.
-  Scenario s;
-  s.name = "wheel-1-stuck";
-  s.duration = 10.0;
-  s.sample_time = 0.002;
-  s.initial_state = {0.1, 0.0};
-  s.saturation.values = {0.4};
-  Fault f;
-  f.actuator = 1;
-  f.type = FaultType::stuck;
-  f.onset = 4.0;
-  f.value = 0.05;
-  s.faults = {f};
+  // The example job's scenario and controller, from its file; the lanes' candidates differ in Kp,
+  // Ki and the switching gain, as a tuning batch's do.
+  const nlohmann::json job = ftc::json_io::parse_json_text(
+      *ftc::json_io::read_file(FTC_SOURCE_DIR "/examples/plant-plugin/job.json"), "job.json");
+  const Scenario s = ftc::runtime::scenario_from_json(job["scenarios"][0], "job.json");
+  std::vector<ftc::FieldError> errors_in_job;
+  const ControllerConfig own =
+      ftc::runtime::parse_controller(job["controller"], "/controller", errors_in_job);
   const int width = lane_width(isa);
-  std::vector<ControllerConfig> c(width);
+  std::vector<ControllerConfig> c(width, own);
   for (int l = 0; l < width; ++l) {
-    c[l].c1 = 8;
-    c[l].c2 = 6;
-    c[l].alpha2 = 0.6;
-    c[l].theta = 200;
-    c[l].Kp = 1 + l;
-    c[l].Ki = 2 + 0.5 * l;
-    c[l].switching_gain = 2 + 0.25 * l;
+    c[l].Kp = own.Kp + l;
+    c[l].Ki = own.Ki + 0.5 * l;
+    c[l].switching_gain = own.switching_gain + 0.25 * l;
   }
   const SimulationOptions o;
   std::vector<PackTask> tasks;

@@ -16,6 +16,7 @@
 #include "ftc/sim/plant_plugin.hpp"
 #include "ftc/tune/io/files.hpp"
 #include "ftc/tune/optimizers/rng.hpp"
+#include "io/text.hpp"
 
 namespace ftc::tune {
 
@@ -24,11 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-std::string fmt(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.3g", v);
-  return b;
-}
+std::string fmt(double v) { return detail::format_number(v, "%.3g"); }
 
 bool same_bits(double a, double b) {
   return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
