@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
@@ -658,7 +660,7 @@ TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {
   std::string line;
   std::getline(trials, line);
   EXPECT_EQ(line,
-            "iteration,index,Kp,Ki,objective,fitness,diverged,accepted,capped,simulated,"
+            "iteration,index,Kp,Ki,objective,fitness,diverged,accepted,capped,simulated,cached,"
             "objective_paper");
   int rows = 0, accepted = 0;
   while (std::getline(trials, line)) {
@@ -666,11 +668,11 @@ TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {
     std::vector<std::string> cells;
     std::stringstream cs(line);
     for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
-    ASSERT_EQ(cells.size(), 11u) << line;
+    ASSERT_EQ(cells.size(), 12u) << line;
     accepted += cells[7] == "1";
-    // One scenario: nothing to cap, every trial simulated it.
+    // One scenario: nothing to cap; every trial simulated it but those the cache served.
     EXPECT_EQ(cells[8], "0") << line;
-    EXPECT_EQ(cells[9], "1") << line;
+    EXPECT_EQ(cells[9], cells[10] == "1" ? "0" : "1") << line;
   }
   EXPECT_EQ(rows, 9);  // 3 bats x (1 + 2 iterations): one row per evaluation
   EXPECT_GE(accepted, 1);
@@ -833,6 +835,9 @@ CappingComparison compare_capping(const json& j, const std::string& algorithm) {
     for (const bool capping : {false, true}) {
       tune::RunOptions o;
       o.capping = capping;
+      // Capping alone: with the cache a candidate capped once and proposed again runs again,
+      // while without capping the cache serves it (TuningRun.CacheChangesNothingBut... has both).
+      o.cache = false;
       o.observer = [&](const tune::HistoryRow&, const tune::Optimizer& opt,
                        const std::vector<tune::Trial>&) {
         states[capping].push_back(opt.state().dump());
@@ -894,8 +899,8 @@ TEST(TuningRun, CappingChangesNothingButTheCappedTrialsRows) {
     const CappingComparison r = compare_capping(j, algorithm);
     EXPECT_FALSE(r.capped.empty()) << algorithm << ": nothing was capped, the test would prove nothing";
     // The columns: capped, simulated; a capped row says after how many scenarios it stopped.
-    EXPECT_NE(r.csv.find(",accepted,capped,simulated\n"), std::string::npos) << r.csv;
-    EXPECT_NE(r.csv.find(",0,0,12\n"), std::string::npos) << r.csv;
+    EXPECT_NE(r.csv.find(",accepted,capped,simulated,cached\n"), std::string::npos) << r.csv;
+    EXPECT_NE(r.csv.find(",0,0,12,0\n"), std::string::npos) << r.csv;
   }
 }
 
@@ -920,10 +925,10 @@ TEST(TuningRun, CappingWithGoalsChangesNothingButTheCappedTrialsRows) {
       EXPECT_TRUE(std::isnan(t.goals[3])) << "steady_state_error has no lower bound";
     }
     EXPECT_GT(on_limits, 0) << algorithm << ": no candidate stopped on its limits";
-    // A capped row: capped 1, the members it ran, the goals' bounds (the steady-state error's
-    // empty), the violation's bound and feasible 0 (broken) or empty (not known).
+    // A capped row: capped 1, the members it ran, cached 0, the goals' bounds (the steady-state
+    // error's empty), the violation's bound and feasible 0 (broken) or empty (not known).
     EXPECT_TRUE(
-        std::regex_search(r.csv, std::regex(",1,[0-9]+,[^,\n]+,[^,\n]+,[^,\n]+,,[^,\n]+,0\n")))
+        std::regex_search(r.csv, std::regex(",1,[0-9]+,0,[^,\n]+,[^,\n]+,[^,\n]+,,[^,\n]+,0\n")))
         << r.csv;
   }
 }
@@ -939,9 +944,10 @@ TEST(TuningRun, ResumedCappedRunWritesTheSameTrials) {
     const tune::Job job = tune::parse_job(j, "x");
     const tune::TuningOutcome whole = tuned(job, 2);
     const json state = checkpoint_after(job, 2);
-    bool any_capped = false;  // a capped row has one more element: 9 (11 with goals)
+    bool any_capped = false;  // a capped row has one more element, a count: the 9th (11th with goals)
+    const std::size_t base = job.goals.empty() ? 8u : 10u;
     for (const json& row : state["trials"])
-      any_capped = any_capped || row.size() == (job.goals.empty() ? 9u : 11u);
+      any_capped = any_capped || (row.size() > base && row[base].is_number_unsigned());
     EXPECT_TRUE(any_capped) << "no capped trial before the checkpoint: the test proves less";
     tune::RunOptions resume;
     resume.resume = &state;
@@ -989,6 +995,218 @@ TEST(Cli, RunWithoutCappingWritesTheSameGainsAndNoCappedTrial) {
   EXPECT_EQ(capped_rows(slurp(dir / "off" / "trials.csv")), 0);
   EXPECT_GT(json::parse(slurp(dir / "off" / "run.json"))["simulations"].get<std::int64_t>(),
             json::parse(slurp(dir / "on" / "run.json"))["simulations"].get<std::int64_t>());
+}
+
+namespace {
+
+// How many of a run's trials the cache served.
+std::size_t cached_trials(const tune::TuningOutcome& r) {
+  return static_cast<std::size_t>(std::count_if(r.trials.begin(), r.trials.end(),
+                                                [](const tune::Trial& t) { return t.cached; }));
+}
+
+}  // namespace
+
+// The cache (issue 43): a decision vector proposed again is not simulated again. A batch of
+// candidates x, y, x and then y, z: the fitness is the bits of the uncached evaluation's, the
+// second x and the second y are copies of the first ones' trials (never accepted), and only three
+// candidates were simulated.
+TEST(ProblemFitness, ServesADecisionVectorProposedAgainFromItsFirstTrial) {
+  const tune::TuningProblem problem(short_job());
+  tune::TbbEvaluator evaluator(2);
+  const tune::Decision x{2.0, 1.0}, y{3.0, 5.0}, z{4.0, 5.0};
+  std::vector<double> fitness[2];
+  std::int64_t simulations[2];
+  std::vector<tune::Trial> trials[2];
+  for (const bool cache : {false, true}) {
+    tune::ProblemFitness f(problem, evaluator);
+    f.set_cache(cache);
+    fitness[cache] = f({x, y, x});
+    for (double J : f({y, z})) fitness[cache].push_back(J);
+    simulations[cache] = f.simulations();
+    trials[cache] = f.trials();
+    EXPECT_EQ(f.cached(), cache ? 2 : 0);
+  }
+  ASSERT_EQ(fitness[1].size(), 5u);
+  for (std::size_t i = 0; i < 5; ++i)
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(fitness[1][i]),
+              std::bit_cast<std::uint64_t>(fitness[0][i]))
+        << i;
+  EXPECT_EQ(simulations[0], 5);  // one scenario a candidate
+  EXPECT_EQ(simulations[1], 3);
+  const std::vector<bool> expected{false, false, true, true, false};
+  for (std::size_t i = 0; i < 5; ++i) {
+    const tune::Trial& on = trials[1][i];
+    const tune::Trial& off = trials[0][i];
+    EXPECT_EQ(on.cached, expected[i]) << i;
+    EXPECT_FALSE(off.cached) << i;
+    EXPECT_EQ(on.index, off.index);
+    EXPECT_EQ(on.parameters, off.parameters);
+    EXPECT_EQ(on.objective, off.objective) << i;
+    EXPECT_EQ(on.scenario_objectives, off.scenario_objectives) << i;
+    EXPECT_EQ(on.accepted, off.accepted) << i;
+    if (on.cached) {
+      EXPECT_FALSE(on.accepted) << i;
+    }
+  }
+}
+
+namespace {
+
+// Runs the job with the cache on and off, on 1 and 2 threads, and checks what must hold: the
+// same gains file, history, front and optimiser state after every iteration; as many trials;
+// a cached trial has the parameters of the uncached run's trial and, where neither is capped,
+// its values to the bit; the cached run simulated less, and its trials.csv is the same for 1 and
+// 2 threads. Returns the cached run's trials.csv on 2 threads.
+std::string compare_cache(const json& j, const std::string& label) {
+  const tune::Job job = tune::parse_job(j, "x");
+  std::string one_thread;
+  for (const int threads : {1, 2}) {
+    std::vector<std::string> states[2];
+    tune::TuningOutcome runs[2];
+    for (const bool cache : {false, true}) {
+      tune::RunOptions o;
+      o.cache = cache;
+      o.observer = [&](const tune::HistoryRow&, const tune::Optimizer& opt,
+                       const std::vector<tune::Trial>&) {
+        states[cache].push_back(opt.state().dump());
+        return true;
+      };
+      runs[cache] = tuned(job, threads, std::nullopt, o);
+    }
+    const tune::TuningOutcome& off = runs[0];
+    const tune::TuningOutcome& on = runs[1];
+    EXPECT_GT(cached_trials(on), 0u) << label << ": nothing was cached, the test would prove nothing";
+    EXPECT_EQ(cached_trials(off), 0u) << label;
+    // Every file of the run but trials.csv: gains, history, comparison, front, ...
+    std::map<std::string, std::string> files[2] = {tune::output_files(off),
+                                                   tune::output_files(on)};
+    EXPECT_EQ(files[1].count("front.json"), tune::front_objectives(job) >= 2 ? 1u : 0u) << label;
+    files[0].erase("trials.csv");
+    files[1].erase("trials.csv");
+    EXPECT_EQ(files[1], files[0]) << label;
+    EXPECT_EQ(states[1], states[0]) << label;
+    EXPECT_LT(on.simulations, off.simulations) << label;
+    EXPECT_EQ(on.trials.size(), off.trials.size()) << label;
+    for (std::size_t i = 0; i < on.trials.size() && i < off.trials.size(); ++i) {
+      const tune::Trial& a = on.trials[i];
+      const tune::Trial& b = off.trials[i];
+      EXPECT_EQ(a.parameters, b.parameters) << label << " " << i;
+      if (a.capped || b.capped) continue;  // where capping stopped depends on the rounds' size
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(a.objective), std::bit_cast<std::uint64_t>(b.objective))
+          << label << " " << i;
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(a.fitness), std::bit_cast<std::uint64_t>(b.fitness))
+          << label << " " << i;
+      EXPECT_EQ(a.scenario_objectives, b.scenario_objectives) << label << " " << i;
+      EXPECT_EQ(a.diverged, b.diverged) << label << " " << i;
+      EXPECT_EQ(a.goals.size(), b.goals.size()) << label << " " << i;
+      for (std::size_t k = 0; k < a.goals.size() && k < b.goals.size(); ++k)
+        EXPECT_TRUE(std::bit_cast<std::uint64_t>(a.goals[k]) ==
+                        std::bit_cast<std::uint64_t>(b.goals[k]) ||
+                    (std::isnan(a.goals[k]) && std::isnan(b.goals[k])))
+            << label << " " << i << " " << k;
+      EXPECT_EQ(a.accepted, b.accepted) << label << " " << i;
+    }
+    const std::string csv = tune::trials_csv(on);
+    if (threads == 2) {
+      EXPECT_EQ(csv, one_thread) << label << ": what the cache served depends on threads";
+    }
+    one_thread = csv;
+  }
+  return one_thread;
+}
+
+}  // namespace
+
+// The cache (issue 43) with the Bat algorithm (whose bats pile up on the bounds of a narrow box)
+// on an ensemble job with capping, on a job with goals, and on a job of a Pareto front: the same
+// gains, history, front and optimiser states with the cache on and off; trials.csv marks the rows
+// served (cached 1, simulated 0).
+TEST(TuningRun, CacheChangesNothingButTheCachedTrialsRows) {
+  json ensemble = short_ensemble_job();
+  ensemble["ensemble"]["count"] = 11;
+  json goals = goal_ensemble_job(1000, 30, true);
+  json front = front_job();
+  for (json* j : {&ensemble, &goals, &front}) {
+    (*j)["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 6}, {"iterations", 4}};
+    // A box narrow enough for the bats to fly out of it, onto its bounds and corners.
+    (*j)["tuning"]["parameters"] = {{"Kp", {5, 6}}, {"Ki", {1, 1.5}}};
+  }
+  front["tuning"]["parameters"] = {{"Kp", {5, 6}},
+                                   {"switching_gain", {{"bounds", {2, 3}}, {"scale", "log"}}}};
+  const std::string csv = compare_cache(ensemble, "ensemble");
+  EXPECT_NE(csv.find(",accepted,capped,simulated,cached\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",0,0,1\n"), std::string::npos) << csv;  // a cached row
+  compare_cache(goals, "goals");
+  compare_cache(front, "front");
+}
+
+// A run stopped after an iteration with cached trials before it and resumed serves what the
+// uninterrupted run served: the same trials.csv, cached rows included, and the same gains.
+TEST(TuningRun, ResumedRunServesFromTheCacheAsTheUninterruptedRun) {
+  json j = short_ensemble_job();
+  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 6}, {"iterations", 4}};
+  j["tuning"]["parameters"] = {{"Kp", {5, 6}}, {"Ki", {1, 1.5}}};
+  const tune::Job job = tune::parse_job(j, "x");
+  const tune::TuningOutcome whole = tuned(job, 2);
+  const json state = checkpoint_after(job, 2);
+  std::size_t cached_before = 0;  // a cached row ends with true
+  for (const json& row : state["trials"])
+    cached_before += row.back().is_boolean() && row.back().get<bool>() ? 1 : 0;
+  EXPECT_GT(cached_before, 0u) << "no cached trial before the checkpoint: the test proves less";
+  EXPECT_GT(cached_trials(whole), cached_before) << "none after it: the test proves less";
+  tune::RunOptions resume;
+  resume.resume = &state;
+  const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
+  EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
+  EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+}
+
+// `ftctune run --no-cache` simulates a candidate each time it is proposed: the same gains.json
+// and history.csv as the default, no cached row in its trials.csv, more simulations in run.json
+// and no "cached_trials".
+TEST(Cli, RunWithoutCacheWritesTheSameGainsAndNoCachedTrial) {
+  const auto dir = fresh_dir("run-no-cache");
+  json j = short_ensemble_job();
+  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 6}, {"iterations", 4}};
+  j["tuning"]["parameters"] = {{"Kp", {5, 6}}, {"Ki", {1, 1.5}}};
+  tune::write_file_atomic(dir / "job.json", j.dump(2));
+  const std::string job = std::string("'").append((dir / "job.json").string()).append("'");
+  const CliResult a = run_cli("run " + job + " --out '" + (dir / "on").string() + "'", dir);
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const CliResult b =
+      run_cli("run " + job + " -q --no-cache --out '" + (dir / "off").string() + "'", dir);
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_EQ(slurp(dir / "on" / "gains.json"), slurp(dir / "off" / "gains.json"));
+  EXPECT_EQ(slurp(dir / "on" / "history.csv"), slurp(dir / "off" / "history.csv"));
+  const json on = json::parse(slurp(dir / "on" / "run.json"));
+  const json off = json::parse(slurp(dir / "off" / "run.json"));
+  EXPECT_GT(on["cached_trials"].get<std::int64_t>(), 0);
+  EXPECT_EQ(off["cached_trials"].get<std::int64_t>(), 0);
+  EXPECT_GT(off["simulations"].get<std::int64_t>(), on["simulations"].get<std::int64_t>());
+  // The summary says how many candidates the cache served.
+  EXPECT_NE(a.out.find(std::to_string(on["cached_trials"].get<std::int64_t>()) +
+                       " candidates proposed again took their earlier results"),
+            std::string::npos)
+      << a.out;
+  // The rows whose cached column is 1.
+  const auto cached_rows = [](const std::string& csv) {
+    std::istringstream in(csv);
+    std::string line;
+    std::getline(in, line);
+    std::vector<std::string> header;
+    for (std::stringstream cs(line); std::getline(cs, line, ',');) header.push_back(line);
+    const auto column = std::find(header.begin(), header.end(), "cached") - header.begin();
+    int n = 0;
+    while (std::getline(in, line)) {
+      std::vector<std::string> cells;
+      for (std::stringstream cs(line); std::getline(cs, line, ',');) cells.push_back(line);
+      n += column < static_cast<std::ptrdiff_t>(cells.size()) && cells[column] == "1" ? 1 : 0;
+    }
+    return n;
+  };
+  EXPECT_EQ(cached_rows(slurp(dir / "on" / "trials.csv")), on["cached_trials"].get<int>());
+  EXPECT_EQ(cached_rows(slurp(dir / "off" / "trials.csv")), 0);
 }
 
 // A checkpoint's trials keep a goal of +inf (a diverged member's) apart from NaN (no scenario

@@ -24,6 +24,7 @@ struct RunCliOptions {
   bool report = false;
   bool baseline = false;
   bool no_capping = false;  // evaluate every candidate on every scenario (issue 27)
+  bool no_cache = false;    // simulate a decision vector again when it comes again (issue 43)
   bool force = false;
   bool checkpoint = false;     // after every iteration, from the first
   bool no_checkpoint = false;  // never (else: once the run looks like taking over a minute)
@@ -78,6 +79,7 @@ int run_tuning(const RunCliOptions& o, const Globals& g) {
   ro.seed = o.seed;
   ro.baseline = o.baseline;
   ro.capping = !o.no_capping;
+  ro.cache = !o.no_cache;
   ro.force = o.force;
   ro.resume = o.resume;
   ro.checkpoint = o.no_checkpoint ? tune::CheckpointPolicy::never
@@ -188,6 +190,10 @@ void add_run_command(CLI::App& app, const Globals& g, Action& action) {
   sub->add_flag("--no-capping", opts->no_capping,
                 "Simulate every candidate on every scenario (default: stop a candidate once it "
                 "cannot change the search; the same gains and history, trials.csv marks it)");
+  sub->add_flag("--no-cache", opts->no_cache,
+                "Simulate a candidate again when the search proposes the same parameter values "
+                "again (default: take its earlier results; the same gains, history and front, "
+                "trials.csv marks the rows served so)");
   sub->add_flag("--report", opts->report, "Then draw the figures and report.html (ftctune report)");
   sub->add_flag("--strict", opts->strict,
                 "Exit 4 when the run gives warnings (a failed or drifting loop, a parameter on its "

@@ -210,6 +210,7 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
   ro.seed = o.seed;
   ro.max_trajectory_rows = o.max_trajectory_rows;
   ro.capping = o.capping;
+  ro.cache = o.cache;
   ro.interrupt = o.interrupt;
   if (resumed) ro.resume = &resumed->state;
   // Checkpoints: asked for, continuing one, or once the run looks like taking over a minute.
@@ -362,6 +363,7 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
     rr.seed = o.seed;
     rr.compare = false;
     rr.capping = o.capping;
+    rr.cache = o.cache;
     result.random_baseline = tune(random, *evaluator.use, rr);
     say(log, LogLevel::info,
         "random search with the same budget: best J = " +

@@ -1,8 +1,11 @@
 #include "ftc/tune/problem/problem.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -680,12 +683,63 @@ std::vector<double> ProblemFitness::operator()(const std::vector<Decision>& batc
   return run(batch, nullptr);
 }
 
+namespace {
+
+// FNV-1a over the bits of the values: equal bits, equal hash.
+std::uint64_t bits_hash(const Decision& x) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (double v : x) {
+    std::uint64_t b = 0;
+    std::memcpy(&b, &v, sizeof b);
+    for (int k = 0; k < 8; ++k) {
+      h ^= (b >> (8 * k)) & 0xffu;
+      h *= 1099511628211ull;
+    }
+  }
+  return h;
+}
+
+bool same_bits(const Decision& a, const Decision& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+}  // namespace
+
+ProblemFitness::Served ProblemFitness::serve(const std::vector<Decision>& batch) const {
+  Served s;
+  const std::size_t n = batch.size();
+  s.parameters.reserve(n);
+  s.trial.assign(n, std::nullopt);
+  s.candidate.assign(n, std::nullopt);
+  // The batch's own candidates by hash (first of equal parameters), to find duplicates in it.
+  std::unordered_multimap<std::uint64_t, std::size_t> in_batch;
+  for (std::size_t i = 0; i < n; ++i) {
+    s.parameters.push_back(problem_.to_parameters(batch[i]));
+    const Decision& x = s.parameters.back();
+    if (!cache_) {
+      s.simulate.push_back(i);
+      continue;
+    }
+    const std::uint64_t h = bits_hash(x);
+    for (auto [it, last] = by_parameters_.equal_range(h); it != last && !s.trial[i]; ++it)
+      if (same_bits(trials_[it->second].parameters, x)) s.trial[i] = it->second;
+    for (auto [it, last] = in_batch.equal_range(h); it != last && !s.trial[i] && !s.candidate[i];
+         ++it)
+      if (same_bits(s.parameters[it->second], x)) s.candidate[i] = it->second;
+    if (s.trial[i] || s.candidate[i]) continue;
+    in_batch.emplace(h, i);
+    s.simulate.push_back(i);
+  }
+  return s;
+}
+
 std::vector<double> ProblemFitness::run(const std::vector<Decision>& batch,
                                         std::vector<ObjectiveVector>* vectors) {
+  const Served s = serve(batch);
   std::vector<sim::ControllerConfig> controllers;
-  controllers.reserve(batch.size());
-  for (const Decision& x : batch) controllers.push_back(problem_.controller_for(x));
-  return record(batch, problem_.evaluate(controllers, evaluator_, 0, false), vectors);
+  controllers.reserve(s.simulate.size());
+  for (std::size_t i : s.simulate) controllers.push_back(problem_.controller_with(s.parameters[i]));
+  return record(s, problem_.evaluate(controllers, evaluator_, 0, false), vectors);
 }
 
 std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>& batch,
@@ -711,26 +765,63 @@ std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>&
   std::vector<bool> counted(problem_.scenarios());
   for (std::size_t s = 0; s < counted.size(); ++s) counted[s] = problem_.counted(s);
   const std::vector<std::size_t> order = hardest_first(incumbent_, counted);
+  const Served served = serve(batch);
+  // A candidate simulated for its duplicates in the batch too runs with the least of their caps
+  // (kNoCap, the least, when one has none): if it is capped, its fitness bound is below every
+  // one of their caps, so each would have been capped.
+  std::vector<double> cap(batch.size());
+  for (std::size_t i = 0; i < batch.size(); ++i)
+    cap[served.candidate[i].value_or(i)] = served.candidate[i]
+                                               ? std::min(cap[*served.candidate[i]], caps[i])
+                                               : caps[i];
   std::vector<sim::ControllerConfig> controllers;
-  controllers.reserve(batch.size());
-  for (const Decision& x : batch) controllers.push_back(problem_.controller_for(x));
-  return record(batch, problem_.evaluate_capped(controllers, caps, order, evaluator_));
+  std::vector<double> simulated_caps;
+  controllers.reserve(served.simulate.size());
+  simulated_caps.reserve(served.simulate.size());
+  for (std::size_t i : served.simulate) {
+    controllers.push_back(problem_.controller_with(served.parameters[i]));
+    simulated_caps.push_back(cap[i]);
+  }
+  return record(served,
+                problem_.evaluate_capped(controllers, simulated_caps, order, evaluator_));
 }
 
-std::vector<double> ProblemFitness::record(const std::vector<Decision>& batch,
-                                           std::vector<CandidateOutcome> out,
+std::vector<double> ProblemFitness::record(const Served& s, std::vector<CandidateOutcome> out,
                                            std::vector<ObjectiveVector>* vectors) {
-  std::vector<double> J(batch.size());
+  const std::size_t n = s.parameters.size();
+  std::vector<double> J(n);
   const bool per_scenario = !problem_.job().ensemble;
-  for (std::size_t i = 0; i < batch.size(); ++i) {
-    const Evaluation& e = out[i].evaluation;
+  const std::size_t first = trials_.size();  // candidate i's trial is trials_[first + i]
+  std::size_t next = 0;                      // into out, in s.simulate order
+  for (std::size_t i = 0; i < n; ++i) {
+    if (s.trial[i] || s.candidate[i]) {
+      // A copy of an earlier trial: no simulation, never accepted (its fitness was there to
+      // beat). trials_ grows below, so the source is copied before the push.
+      Trial t = trials_[s.trial[i] ? *s.trial[i] : first + *s.candidate[i]];
+      t.iteration = iteration_;
+      t.index = index_++;
+      t.accepted = false;
+      t.cached = true;
+      ++cached_;
+      J[i] = t.fitness;
+      if (vectors) {
+        Evaluation e;
+        e.goals = t.goals;
+        e.violation = t.violation;
+        vectors->push_back(objective_vector(problem_.job(), e));
+      }
+      trials_.push_back(std::move(t));
+      continue;
+    }
+    assert(next < s.simulate.size() && s.simulate[next] == i);
+    const Evaluation& e = out[next++].evaluation;
     simulations_ += static_cast<std::int64_t>(e.simulated);
     J[i] = e.fitness;
     if (vectors) vectors->push_back(objective_vector(problem_.job(), e));
     Trial t;
     t.iteration = iteration_;
     t.index = index_++;
-    t.parameters = problem_.to_parameters(batch[i]);
+    t.parameters = s.parameters[i];
     t.objective = e.objective;
     t.fitness = e.fitness;
     t.diverged = e.diverged_count;
@@ -746,14 +837,24 @@ std::vector<double> ProblemFitness::record(const std::vector<Decision>& batch,
       incumbent_ = e.values;
     }
     trials_.push_back(std::move(t));
+    if (cache_ && !trials_.back().capped) index_trial(trials_.size() - 1);
   }
   return J;
 }
 
+void ProblemFitness::index_trial(std::size_t i) {
+  by_parameters_.emplace(bits_hash(trials_[i].parameters), i);
+}
+
 void ProblemFitness::resume_trials(std::vector<Trial> before) {
   trials_ = std::move(before);
-  for (const Trial& t : trials_)
+  by_parameters_.clear();
+  for (std::size_t i = 0; i < trials_.size(); ++i) {
+    const Trial& t = trials_[i];
     if (!t.capped) best_ = std::max(best_, t.fitness);
+    // The run that was interrupted served from its first uncapped trial of each parameter set.
+    if (cache_ && !t.capped && !t.cached) index_trial(i);
+  }
   incumbent_.clear();
 }
 

@@ -265,7 +265,7 @@ std::string trials_csv(const TuningOutcome& r) {
   const std::vector<std::string> names = parameter_names(r.job);
   std::string s = "iteration,index";
   for (const std::string& n : names) s.append(",").append(n);
-  s += ",objective,fitness,diverged,accepted,capped,simulated";
+  s += ",objective,fitness,diverged,accepted,capped,simulated,cached";
   if (!r.job.ensemble)
     for (const sim::Scenario& sc : r.job.scenarios) s.append(",objective_").append(sc.name);
   for (std::size_t k = 0; k < r.job.goals.size(); ++k)
@@ -281,8 +281,13 @@ std::string trials_csv(const TuningOutcome& r) {
     s.append(",").append(std::to_string(t.diverged)).append(t.accepted ? ",1" : ",0");
     // Capping (issue 27): a capped trial's objective is a lower bound (its fitness an upper
     // one) after `simulated` of the candidate's scenarios; the values it has not are empty.
+    // The cache (issue 43): a cached row simulated nothing; its values are those of the first
+    // row with the same parameters.
     s.append(t.capped ? ",1," : ",0,")
-        .append(std::to_string(t.capped ? t.simulated : r.job.scenario_count()));
+        .append(std::to_string(t.cached   ? 0
+                               : t.capped ? t.simulated
+                                          : r.job.scenario_count()))
+        .append(t.cached ? ",1" : ",0");
     if (t.capped && !r.job.ensemble) s.append(r.job.scenarios.size(), ',');
     for (double v : t.scenario_objectives) num(v);
     if (!r.job.goals.empty()) {
@@ -530,6 +535,14 @@ std::string run_summary(const json& gains, const json& comparison, const json& r
                 run.value("simulations", 0LL), threads, threads == 1 ? "" : "s",
                 run.value("wall_seconds", 0.0), where.c_str());
   out += buf;
+  if (const long long cached = run.value("cached_trials", 0LL); cached > 0) {
+    std::snprintf(buf, sizeof buf,
+                  "  %lld candidate%s proposed again took %s earlier results (the cache; "
+                  "trials.csv marks %s)\n",
+                  cached, cached == 1 ? "" : "s", cached == 1 ? "its" : "their",
+                  cached == 1 ? "it" : "them");
+    out += buf;
+  }
   return out;
 }
 
@@ -542,6 +555,9 @@ json run_metadata(const TuningOutcome& r, double wall_seconds) {
           {"evaluator", r.evaluator},
           {"wall_seconds", wall_seconds},
           {"simulations", r.simulations},
+          // Trials served by the cache (issue 43): candidates not simulated again.
+          {"cached_trials", std::count_if(r.trials.begin(), r.trials.end(),
+                                          [](const Trial& t) { return t.cached; })},
           {"max_rss_kib", max_rss_kib},
           {"seed", r.seed},
           {"generator", {{"name", kToolName}, {"version", kVersion}}}};

@@ -25,7 +25,8 @@ namespace {
 
 // A trial as a compact row: [iteration, index, [parameters], objective, fitness, diverged,
 // [objective per scenario], accepted]; a diverged objective (inf) is null. A capped trial
-// (issue 27) has one more element at the end: how many scenarios it simulated.
+// (issue 27) has one more element: how many scenarios it simulated; a cached one (issue 43) has
+// true at the end.
 nlohmann::json trial_json(const Trial& t) {
   nlohmann::json scen = nlohmann::json::array();
   for (double v : t.scenario_objectives) scen.push_back(json_io::json_number(v));
@@ -42,13 +43,14 @@ nlohmann::json trial_json(const Trial& t) {
     row.push_back(json_io::json_number(t.violation));
   }
   if (t.capped) row.push_back(t.simulated);
+  if (t.cached) row.push_back(true);
   return row;
 }
 
 }  // namespace
 
 // A job with n goals has rows of 10 with n goal values, one without goals rows of 8; a capped
-// trial's row one more, its count of scenarios simulated.
+// trial's row one more, its count of scenarios simulated, and a cached one's one more, true.
 std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goals) {
   const auto bad = [] {
     return InputError("checkpoint", "/trials", "is not a list of trials written by ftctune");
@@ -57,8 +59,11 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goal
   std::vector<Trial> out;
   for (const nlohmann::json& r : rows) {
     const std::size_t base = goals ? 10u : 8u;
-    if (!r.is_array() || (r.size() != base && r.size() != base + 1) ||
-        (r.size() == base + 1 && !r[base].is_number_unsigned()) || !r[0].is_number_integer() ||
+    const bool cached = r.is_array() && r.size() > base && r.back().is_boolean() &&
+                        r.back().get<bool>();
+    const std::size_t size = r.is_array() ? r.size() - (cached ? 1 : 0) : 0;
+    if (!r.is_array() || (size != base && size != base + 1) ||
+        (size == base + 1 && !r[base].is_number_unsigned()) || !r[0].is_number_integer() ||
         !r[1].is_number_integer() || !r[2].is_array() || !r[4].is_number() ||
         !r[5].is_number_integer() || !r[6].is_array() || !r[7].is_boolean())
       throw bad();
@@ -76,10 +81,11 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goal
       t.scenario_objectives.push_back(
           json_io::json_number_or(v, std::numeric_limits<double>::infinity()));
     t.accepted = r[7].get<bool>();
-    if (r.size() == base + 1) {
+    if (size == base + 1) {
       t.capped = true;
       t.simulated = r[base].get<std::size_t>();
     }
+    t.cached = cached;
     if (goals) {
       if (!r[8].is_array() || r[8].size() != goals || !(r[9].is_number() || r[9].is_null()))
         throw bad();
@@ -368,6 +374,7 @@ TuningOutcome tune(const TuningProblem& problem, Optimizer& optimizer, Algorithm
   };
   ProblemFitness fitness(problem, evaluator);
   fitness.set_capping(options.capping);
+  fitness.set_cache(options.cache);
   // With an interrupt: the optimiser's state and the trial count after each iteration, to go
   // back to when an iteration is cut short.
   std::optional<nlohmann::json> last_state;

@@ -120,6 +120,7 @@ struct RunJobOptions {
   std::optional<std::uint64_t> seed;  // instead of the job's tuning.seed
   bool baseline = false;              // also random search with the same budget
   bool capping = true;                // exact capping of hopeless candidates (issue 27)
+  bool cache = true;                  // no decision vector simulated twice (issue 43)
   bool force = false;                 // replace the run `out` holds
   bool resume = false;                // continue the run in `out` from its checkpoint
   // false: no output directory at all (no lock, checkpoint or file); write_run() writes the

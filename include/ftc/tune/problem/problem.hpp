@@ -21,6 +21,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "ftc/sim/controller_config.hpp"
@@ -306,6 +307,11 @@ struct Trial {
   // and violation lower bounds (NaN for a goal without one).
   bool capped = false;
   std::size_t simulated = 0;  // only for a capped trial
+  // The cache (issue 43): a candidate whose parameters have the same bits as an earlier trial's
+  // is not simulated again; its row takes that trial's results, which simulating it would give
+  // to the last bit (a trial's results are a function of its parameters). It is never accepted
+  // (its fitness was already there to beat).
+  bool cached = false;
 };
 
 // The problem as an optimiser sees it: the fitness of a batch of decision vectors, simulated
@@ -324,6 +330,16 @@ class ProblemFitness final : public BatchFitness {
                                       const std::vector<double>& caps) override;
   void set_capping(bool on) { capping_ = on; }
   bool capping() const { return capping_; }
+  // The cache (issue 43), on by default: a candidate whose parameter values have the same bits
+  // as an earlier uncapped trial's takes that trial's results (Trial::cached), and candidates of
+  // one batch with the same bits are simulated once. The optimiser gets the fitness it would
+  // have got, so the gains, history and front are the same bytes either way. With capping, the
+  // duplicates of a batch are simulated once with the least of their caps: capped then, each
+  // would have been. The cache is an index into the trials, which the run keeps anyway: a few
+  // dozen bytes a distinct trial.
+  void set_cache(bool on) { cache_ = on; }
+  bool cache() const { return cache_; }
+  std::int64_t cached() const { return cached_; }  // trials served from the cache
   // A job with two or more soft goals: their values and the violation of its hard goals.
   std::size_t objectives() const override;
   std::vector<ObjectiveVector> objective_vectors(const std::vector<Decision>& batch) override;
@@ -353,8 +369,26 @@ class ProblemFitness final : public BatchFitness {
   // The incumbent's value per scenario (the job's metric), for the order of capped runs; empty
   // until a trial is accepted (or, after a resume, until the incumbent is simulated again).
   std::vector<double> incumbent_;
-  std::vector<double> record(const std::vector<Decision>& batch, std::vector<CandidateOutcome> out,
+  // Which candidates of a batch are simulated, and where the others take their results from.
+  struct Served {
+    std::vector<Decision> parameters;   // per candidate, in values
+    std::vector<std::size_t> simulate;  // the candidates simulated, in batch order
+    // Per candidate not simulated: the earlier trial it copies (an index into trials_), or the
+    // earlier candidate of the batch (simulated) whose trial it copies once that is recorded.
+    std::vector<std::optional<std::size_t>> trial, candidate;
+  };
+  Served serve(const std::vector<Decision>& batch) const;
+  // Records a batch's trials: the simulated candidates' outcomes (in s.simulate order) and the
+  // others' copies.
+  std::vector<double> record(const Served& s, std::vector<CandidateOutcome> out,
                              std::vector<ObjectiveVector>* vectors = nullptr);
+  void index_trial(std::size_t i);  // makes trials_[i] (uncapped) one the cache serves from
+
+  bool cache_ = true;
+  std::int64_t cached_ = 0;
+  // Uncapped trials by a hash of their parameters' bits (trials_ indices; the first of equal
+  // parameters only).
+  std::unordered_multimap<std::uint64_t, std::size_t> by_parameters_;
 };
 
 }  // namespace ftc::tune

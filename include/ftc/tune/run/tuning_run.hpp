@@ -39,6 +39,10 @@ struct RunOptions {
   // Exact capping of hopeless candidates (issue 27, ProblemFitness::evaluate_capped): the same
   // gains, history and checkpointed optimiser state either way; trials.csv marks capped trials.
   bool capping = true;
+  // The cache (issue 43, ProblemFitness::set_cache): a decision vector already simulated is not
+  // simulated again; the same gains, history and front either way; trials.csv marks the rows it
+  // served.
+  bool cache = true;
   // A stop within an iteration (BatchEvaluator::set_interrupt: asked between packs, from worker
   // threads, so an atomic flag): the run ends at its last completed iteration, as if the
   // observer had stopped it there (the optimiser's state and trials as they were then), and the
