@@ -233,9 +233,9 @@ TEST(Mpi, CappedGoalJobIsByteIdenticalToAPlainRun) {
   expect_same_run(dir / "plain", dir / "three");
   for (const char* f : {"gains.json", "history.csv"})
     EXPECT_EQ(slurp(dir / "plain" / f), slurp(dir / "off" / f)) << f;
-  // A capped row stopped on its limits: capped 1, under 12 members, feasible 0.
+  // A capped row stopped on its limits: capped 1, under 12 members, cached 0, feasible 0.
   EXPECT_TRUE(std::regex_search(slurp(dir / "three" / "trials.csv"),
-                                std::regex(",1,([0-9]|1[01]),[^,\n]+,[^,\n]+,[^,\n]+,[^,\n]+,0\n")))
+                                std::regex(",1,([0-9]|1[01]),0,[^,\n]+,[^,\n]+,[^,\n]+,[^,\n]+,0\n")))
       << "no trial capped on its limits: the comparison proves less";
 }
 
@@ -253,9 +253,9 @@ TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {
   j["tuning"]["algorithm"]["iterations"] = 3;
   const fs::path job = write_job(dir, j);
   ASSERT_NO_FATAL_FAILURE(expect_three_ranks_run_as_one_process(dir, job, 2));
-  // A capped row ends with accepted 0, capped 1 and fewer than the 12 scenarios simulated.
+  // A capped row: accepted 0, capped 1, fewer than the 12 scenarios simulated, cached 0.
   EXPECT_TRUE(
-      std::regex_search(slurp(dir / "three" / "trials.csv"), std::regex(",0,1,([0-9]|1[01])\n")))
+      std::regex_search(slurp(dir / "three" / "trials.csv"), std::regex(",0,1,([0-9]|1[01]),0\n")))
       << "no capped trial: the comparison proves less";
   // Out-of-sample evaluation spreads its slices over the ranks as well.
   const auto e_plain = run_cli("evaluate '" + job.string() + "' -q --gains '" +

@@ -770,10 +770,11 @@ std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>&
   // (kNoCap, the least, when one has none): if it is capped, its fitness bound is below every
   // one of their caps, so each would have been capped.
   std::vector<double> cap(batch.size());
-  for (std::size_t i = 0; i < batch.size(); ++i)
-    cap[served.candidate[i].value_or(i)] = served.candidate[i]
-                                               ? std::min(cap[*served.candidate[i]], caps[i])
-                                               : caps[i];
+  for (std::size_t i = 0; i < batch.size(); ++i) {
+    const double c = caps[i] > kNoCap ? caps[i] : kNoCap;  // NaN: no cap, as evaluate_capped reads it
+    const std::size_t to = served.candidate[i].value_or(i);
+    cap[to] = served.candidate[i] ? std::min(cap[to], c) : c;
+  }
   std::vector<sim::ControllerConfig> controllers;
   std::vector<double> simulated_caps;
   controllers.reserve(served.simulate.size());
@@ -849,8 +850,10 @@ void ProblemFitness::index_trial(std::size_t i) {
 void ProblemFitness::resume_trials(std::vector<Trial> before) {
   trials_ = std::move(before);
   by_parameters_.clear();
+  cached_ = 0;
   for (std::size_t i = 0; i < trials_.size(); ++i) {
     const Trial& t = trials_[i];
+    cached_ += t.cached ? 1 : 0;
     if (!t.capped) best_ = std::max(best_, t.fitness);
     // The run that was interrupted served from its first uncapped trial of each parameter set.
     if (cache_ && !t.capped && !t.cached) index_trial(i);

@@ -63,6 +63,7 @@ std::vector<Trial> trials_from_json(const nlohmann::json& rows, std::size_t goal
                         r.back().get<bool>();
     const std::size_t size = r.is_array() ? r.size() - (cached ? 1 : 0) : 0;
     if (!r.is_array() || (size != base && size != base + 1) ||
+        (cached && r[7].is_boolean() && r[7].get<bool>()) ||  // a cached trial is never accepted
         (size == base + 1 && !r[base].is_number_unsigned()) || !r[0].is_number_integer() ||
         !r[1].is_number_integer() || !r[2].is_array() || !r[4].is_number() ||
         !r[5].is_number_integer() || !r[6].is_array() || !r[7].is_boolean())

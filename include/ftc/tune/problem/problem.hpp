@@ -333,10 +333,11 @@ class ProblemFitness final : public BatchFitness {
   // The cache (issue 43), on by default: a candidate whose parameter values have the same bits
   // as an earlier uncapped trial's takes that trial's results (Trial::cached), and candidates of
   // one batch with the same bits are simulated once. The optimiser gets the fitness it would
-  // have got, so the gains, history and front are the same bytes either way. With capping, the
-  // duplicates of a batch are simulated once with the least of their caps: capped then, each
-  // would have been. The cache is an index into the trials, which the run keeps anyway: a few
-  // dozen bytes a distinct trial.
+  // have got (a capped candidate's bound aside, which may stop elsewhere: no decision reads it),
+  // so the gains, history, front and optimiser states are the same bytes either way. With
+  // capping, the duplicates of a batch are simulated once with the least of their caps: capped
+  // then, each would have been. The cache is an index into the trials, which the run keeps
+  // anyway: a few dozen bytes a distinct trial. Set before resume_trials(), which rebuilds it.
   void set_cache(bool on) { cache_ = on; }
   bool cache() const { return cache_; }
   std::int64_t cached() const { return cached_; }  // trials served from the cache
