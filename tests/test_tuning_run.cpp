@@ -27,6 +27,21 @@ using nlohmann::json;
 using namespace ftc;
 using namespace ftc::testing;
 
+namespace {
+
+// The run of `job` on 2 threads resumed from `state` writes the gains file and trials.csv of the
+// uninterrupted run `whole`.
+void expect_resumed_run_writes_the_same(const tune::Job& job, const json& state,
+                                        const tune::TuningOutcome& whole) {
+  tune::RunOptions resume;
+  resume.resume = &state;
+  const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
+  EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
+  EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+}
+
+}  // namespace
+
 TEST(TuningRun, FinishesWhenSomeCandidatesDiverge) {
   json j = short_table1_job();
   // c2 above about 9e4 diverges at 1 ms sampling (ftctune simulate --set c2=...: 6e4 gives
@@ -781,11 +796,7 @@ TEST(TuningRun, ResumedConstrainedRunKeepsTheGoalsOfEveryTrial) {
   const tune::TuningOutcome whole = tuned(job, 2);
   for (const tune::Trial& t : whole.trials) ASSERT_GT(t.violation, 0.0);
   const json state = checkpoint_after(job, 1);
-  tune::RunOptions resume;
-  resume.resume = &state;
-  const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
-  EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
-  EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+  expect_resumed_run_writes_the_same(job, state, whole);
   EXPECT_EQ(tune::gains_document(whole)["goals"]["feasible"], false);
 }
 
@@ -814,6 +825,28 @@ TEST(Cli, RunExitsTwoForAFrontOfAnAlgorithmOfOneObjectiveAndThreeWhenNoCandidate
 
 namespace {
 
+// A job run twice with a switch of RunOptions off, then on: the outcomes, and the optimiser's
+// state after every iteration of each.
+struct TwoRuns {
+  tune::TuningOutcome runs[2];
+  std::vector<std::string> states[2];
+};
+TwoRuns run_with_and_without(const tune::Job& job, int threads, bool tune::RunOptions::*option,
+                             const tune::RunOptions& base = {}) {
+  TwoRuns r;
+  for (const bool on : {false, true}) {
+    tune::RunOptions o = base;
+    o.*option = on;
+    o.observer = [&](const tune::HistoryRow&, const tune::Optimizer& opt,
+                     const std::vector<tune::Trial>&) {
+      r.states[on].push_back(opt.state().dump());
+      return true;
+    };
+    r.runs[on] = tuned(job, threads, std::nullopt, o);
+  }
+  return r;
+}
+
 // A job run with capping on and off (issue 27), on 1 and 2 threads: the capped trials and the
 // trials.csv of the capped run on 2 threads, and the feasibility of the uncapped trials.
 struct CappingComparison {
@@ -832,23 +865,15 @@ CappingComparison compare_capping(const json& j, const std::string& algorithm) {
   std::string one_thread;
   const tune::Job job = tune::parse_job(j, "x");
   for (const int threads : {1, 2}) {
-    std::vector<std::string> states[2];
-    tune::TuningOutcome runs[2];
-    for (const bool capping : {false, true}) {
-      tune::RunOptions o;
-      o.capping = capping;
-      // Capping alone: with the cache a candidate capped once and proposed again runs again,
-      // while without capping the cache serves it (TuningRun.CacheChangesNothingBut... has both).
-      o.cache = false;
-      o.observer = [&](const tune::HistoryRow&, const tune::Optimizer& opt,
-                       const std::vector<tune::Trial>&) {
-        states[capping].push_back(opt.state().dump());
-        return true;
-      };
-      runs[capping] = tuned(job, threads, std::nullopt, o);
-    }
-    const tune::TuningOutcome& off = runs[0];
-    const tune::TuningOutcome& on = runs[1];
+    // Capping alone: with the cache a candidate capped once and proposed again runs again,
+    // while without capping the cache serves it (TuningRun.CacheChangesNoFileButTrialsCsv has
+    // both).
+    tune::RunOptions no_cache;
+    no_cache.cache = false;
+    const TwoRuns two = run_with_and_without(job, threads, &tune::RunOptions::capping, no_cache);
+    const auto& states = two.states;
+    const tune::TuningOutcome& off = two.runs[0];
+    const tune::TuningOutcome& on = two.runs[1];
     EXPECT_EQ(tune::gains_document(on).dump(), tune::gains_document(off).dump()) << algorithm;
     EXPECT_EQ(tune::history_csv(on), tune::history_csv(off)) << algorithm;
     EXPECT_EQ(states[1], states[0]) << algorithm;
@@ -946,18 +971,35 @@ TEST(TuningRun, ResumedCappedRunWritesTheSameTrials) {
     const tune::Job job = tune::parse_job(j, "x");
     const tune::TuningOutcome whole = tuned(job, 2);
     const json state = checkpoint_after(job, 2);
-    bool any_capped = false;  // a capped row has one more element, a count: the 9th (11th with goals)
+    // A capped row has one more element, a count: the 9th (11th with goals).
+    bool any_capped = false;
     const std::size_t base = job.goals.empty() ? 8u : 10u;
     for (const json& row : state["trials"])
       any_capped = any_capped || (row.size() > base && row[base].is_number_unsigned());
     EXPECT_TRUE(any_capped) << "no capped trial before the checkpoint: the test proves less";
-    tune::RunOptions resume;
-    resume.resume = &state;
-    const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
-    EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
-    EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+    expect_resumed_run_writes_the_same(job, state, whole);
   }
 }
+
+namespace {
+
+// `ftctune run` of the job j (written to dir/job.json) into dir/on, then with `flag` into
+// dir/off: both succeed and write the same gains.json and history.csv. Returns the first run.
+CliResult run_with_and_without_flag(const std::filesystem::path& dir, const json& j,
+                                    const std::string& flag) {
+  tune::write_file_atomic(dir / "job.json", j.dump(2));
+  const std::string job = std::string("'").append((dir / "job.json").string()).append("'");
+  CliResult a = run_cli("run " + job + " --out '" + (dir / "on").string() + "'", dir);
+  EXPECT_EQ(a.exit_code, 0) << a.err;
+  const CliResult b =
+      run_cli("run " + job + " -q " + flag + " --out '" + (dir / "off").string() + "'", dir);
+  EXPECT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_EQ(slurp(dir / "on" / "gains.json"), slurp(dir / "off" / "gains.json"));
+  EXPECT_EQ(slurp(dir / "on" / "history.csv"), slurp(dir / "off" / "history.csv"));
+  return a;
+}
+
+}  // namespace
 
 // `ftctune run --no-capping` simulates every candidate on every scenario: the same gains.json
 // and history.csv as the default (capping), and no capped trial in its trials.csv.
@@ -966,15 +1008,7 @@ TEST(Cli, RunWithoutCappingWritesTheSameGainsAndNoCappedTrial) {
   json j = short_ensemble_job();
   j["ensemble"]["count"] = 11;
   j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
-  tune::write_file_atomic(dir / "job.json", j.dump(2));
-  const std::string job = std::string("'").append((dir / "job.json").string()).append("'");
-  const CliResult a = run_cli("run " + job + " -q --out '" + (dir / "on").string() + "'", dir);
-  ASSERT_EQ(a.exit_code, 0) << a.err;
-  const CliResult b =
-      run_cli("run " + job + " -q --no-capping --out '" + (dir / "off").string() + "'", dir);
-  ASSERT_EQ(b.exit_code, 0) << b.err;
-  EXPECT_EQ(slurp(dir / "on" / "gains.json"), slurp(dir / "off" / "gains.json"));
-  EXPECT_EQ(slurp(dir / "on" / "history.csv"), slurp(dir / "off" / "history.csv"));
+  ASSERT_EQ(run_with_and_without_flag(dir, j, "--no-capping").exit_code, 0);
   // The capped column of every row (after objective, fitness, diverged, accepted).
   const auto capped_rows = [](const std::string& csv) {
     int n = 0;
@@ -1109,20 +1143,10 @@ std::string compare_cache(const json& j, const std::string& label) {
   const tune::Job job = tune::parse_job(j, "x");
   std::string one_thread;
   for (const int threads : {1, 2}) {
-    std::vector<std::string> states[2];
-    tune::TuningOutcome runs[2];
-    for (const bool cache : {false, true}) {
-      tune::RunOptions o;
-      o.cache = cache;
-      o.observer = [&](const tune::HistoryRow&, const tune::Optimizer& opt,
-                       const std::vector<tune::Trial>&) {
-        states[cache].push_back(opt.state().dump());
-        return true;
-      };
-      runs[cache] = tuned(job, threads, std::nullopt, o);
-    }
-    const tune::TuningOutcome& off = runs[0];
-    const tune::TuningOutcome& on = runs[1];
+    const TwoRuns two = run_with_and_without(job, threads, &tune::RunOptions::cache);
+    const auto& states = two.states;
+    const tune::TuningOutcome& off = two.runs[0];
+    const tune::TuningOutcome& on = two.runs[1];
     EXPECT_GT(cached_trials(on), 0u) << label << ": nothing was cached, the test would prove nothing";
     EXPECT_EQ(cached_trials(off), 0u) << label;
     // Every file of the run but trials.csv: gains, history, comparison, front, ...
@@ -1235,11 +1259,7 @@ TEST(TuningRun, ResumedRunServesFromTheCacheAsTheUninterruptedRun) {
     for (std::size_t k = 0; k < resumed_at && whole.trials[i].cached; ++k)
       across = across || whole.trials[k].parameters == whole.trials[i].parameters;
   EXPECT_TRUE(across) << "no trial after the checkpoint repeats one before it: the test proves less";
-  tune::RunOptions resume;
-  resume.resume = &state;
-  const tune::TuningOutcome resumed = tuned(job, 2, std::nullopt, resume);
-  EXPECT_EQ(tune::gains_document(resumed).dump(), tune::gains_document(whole).dump());
-  EXPECT_EQ(tune::trials_csv(resumed), tune::trials_csv(whole));
+  expect_resumed_run_writes_the_same(job, state, whole);
 }
 
 // `ftctune run --no-cache` simulates a candidate each time it is proposed: the same gains.json
@@ -1250,15 +1270,8 @@ TEST(Cli, RunWithoutCacheWritesTheSameGainsAndNoCachedTrial) {
   json j = short_ensemble_job();
   j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 6}, {"iterations", 4}};
   j["tuning"]["parameters"] = {{"Kp", {5, 6}}, {"Ki", {1, 1.5}}};
-  tune::write_file_atomic(dir / "job.json", j.dump(2));
-  const std::string job = std::string("'").append((dir / "job.json").string()).append("'");
-  const CliResult a = run_cli("run " + job + " --out '" + (dir / "on").string() + "'", dir);
-  ASSERT_EQ(a.exit_code, 0) << a.err;
-  const CliResult b =
-      run_cli("run " + job + " -q --no-cache --out '" + (dir / "off").string() + "'", dir);
-  ASSERT_EQ(b.exit_code, 0) << b.err;
-  EXPECT_EQ(slurp(dir / "on" / "gains.json"), slurp(dir / "off" / "gains.json"));
-  EXPECT_EQ(slurp(dir / "on" / "history.csv"), slurp(dir / "off" / "history.csv"));
+  const CliResult a = run_with_and_without_flag(dir, j, "--no-cache");
+  ASSERT_EQ(a.exit_code, 0);
   const json on = json::parse(slurp(dir / "on" / "run.json"));
   const json off = json::parse(slurp(dir / "off" / "run.json"));
   EXPECT_GT(on["cached_trials"].get<std::int64_t>(), 0);
