@@ -739,8 +739,7 @@ TEST(Front, TwoGoalRunWritesANonDominatedFeasibleFrontTheSameOnOneAndTwoThreads)
     EXPECT_EQ(one.noise_floor->objective_min, objective_lo);
     EXPECT_EQ(one.noise_floor->objective_max, objective_hi);
     // The trials the cache served (issue 43) ran nothing.
-    const auto served = std::count_if(one.trials.begin(), one.trials.end(),
-                                      [](const tune::Trial& t) { return t.cached; });
+    const auto served = static_cast<std::size_t>(tune::cached_trials(one.trials));
     const auto listed = static_cast<std::int64_t>(one.trials.size() - served +
                                                   one.comparison.size() +
                                                   one.noise_floor->repeats * points.size());

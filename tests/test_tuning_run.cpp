@@ -97,8 +97,7 @@ TEST(TuningRun, TunedFitnessIsReproducedByComparison) {
   int at_bound = 0;
   for (std::size_t j = 0; j < r.job.tuning->parameters.size(); ++j)
     at_bound += tune::inward_value(r.job.tuning->parameters[j], r.optimization.best[j]) ? 1 : 0;
-  const auto served = std::count_if(r.trials.begin(), r.trials.end(),
-                                    [](const tune::Trial& t) { return t.cached; });
+  const auto served = tune::cached_trials(r.trials);
   EXPECT_EQ(r.simulations, 9 - served + 4 + 8 + at_bound);
   ASSERT_TRUE(r.noise_floor.has_value());
   EXPECT_LE(r.noise_floor->objective_min, r.noise_floor->objective_max);
@@ -1033,16 +1032,6 @@ TEST(Cli, RunWithoutCappingWritesTheSameGainsAndNoCappedTrial) {
             json::parse(slurp(dir / "on" / "run.json"))["simulations"].get<std::int64_t>());
 }
 
-namespace {
-
-// How many of a run's trials the cache served.
-std::size_t cached_trials(const tune::TuningOutcome& r) {
-  return static_cast<std::size_t>(std::count_if(r.trials.begin(), r.trials.end(),
-                                                [](const tune::Trial& t) { return t.cached; }));
-}
-
-}  // namespace
-
 // The cache (issue 43): a decision vector proposed again is not simulated again. A batch of
 // candidates x, y, x and then y, z: the fitness is the bits of the uncached evaluation's, the
 // second x and the second y are copies of the first ones' trials (never accepted), and only three
@@ -1147,8 +1136,9 @@ std::string compare_cache(const json& j, const std::string& label) {
     const auto& states = two.states;
     const tune::TuningOutcome& off = two.runs[0];
     const tune::TuningOutcome& on = two.runs[1];
-    EXPECT_GT(cached_trials(on), 0u) << label << ": nothing was cached, the test would prove nothing";
-    EXPECT_EQ(cached_trials(off), 0u) << label;
+    EXPECT_GT(tune::cached_trials(on.trials), 0)
+        << label << ": nothing was cached, the test would prove nothing";
+    EXPECT_EQ(tune::cached_trials(off.trials), 0) << label;
     // Every file of the run but trials.csv: gains, history, comparison, front, ...
     std::map<std::string, std::string> files[2] = {tune::output_files(off),
                                                    tune::output_files(on)};

@@ -321,10 +321,8 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
       files.push_back("history-random.csv");
       run["simulations"] =
           run["simulations"].get<std::int64_t>() + result.random_baseline->simulations;
-      const std::vector<Trial>& trials = result.random_baseline->trials;
       run["cached_trials"] =
-          run["cached_trials"].get<std::int64_t>() +
-          std::count_if(trials.begin(), trials.end(), [](const Trial& t) { return t.cached; });
+          run["cached_trials"].get<std::int64_t>() + cached_trials(result.random_baseline->trials);
     }
     files.push_back("run.json");
     run["files"] = files;

@@ -709,8 +709,8 @@ ProblemFitness::Served ProblemFitness::serve(const std::vector<Decision>& batch)
   Served s;
   const std::size_t n = batch.size();
   s.parameters.reserve(n);
-  s.trial.assign(n, std::nullopt);
-  s.candidate.assign(n, std::nullopt);
+  s.source.assign(n, std::nullopt);
+  s.first = trials_.size();
   // The batch's own candidates by hash (first of equal parameters), to find duplicates in it.
   std::unordered_multimap<std::uint64_t, std::size_t> in_batch;
   for (std::size_t i = 0; i < n; ++i) {
@@ -721,12 +721,11 @@ ProblemFitness::Served ProblemFitness::serve(const std::vector<Decision>& batch)
       continue;
     }
     const std::uint64_t h = bits_hash(x);
-    for (auto [it, last] = by_parameters_.equal_range(h); it != last && !s.trial[i]; ++it)
-      if (same_bits(trials_[it->second].parameters, x)) s.trial[i] = it->second;
-    for (auto [it, last] = in_batch.equal_range(h); it != last && !s.trial[i] && !s.candidate[i];
-         ++it)
-      if (same_bits(s.parameters[it->second], x)) s.candidate[i] = it->second;
-    if (s.trial[i] || s.candidate[i]) continue;
+    for (auto [it, last] = by_parameters_.equal_range(h); it != last && !s.source[i]; ++it)
+      if (same_bits(trials_[it->second].parameters, x)) s.source[i] = it->second;
+    for (auto [it, last] = in_batch.equal_range(h); it != last && !s.source[i]; ++it)
+      if (same_bits(s.parameters[it->second], x)) s.source[i] = s.first + it->second;
+    if (s.source[i]) continue;
     in_batch.emplace(h, i);
     s.simulate.push_back(i);
   }
@@ -772,8 +771,11 @@ std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>&
   std::vector<double> cap(batch.size());
   for (std::size_t i = 0; i < batch.size(); ++i) {
     const double c = caps[i] > kNoCap ? caps[i] : kNoCap;  // NaN: no cap, as evaluate_capped reads it
-    const std::size_t to = served.candidate[i].value_or(i);
-    cap[to] = served.candidate[i] ? std::min(cap[to], c) : c;
+    const std::optional<std::size_t>& from = served.source[i];
+    if (!from)
+      cap[i] = c;
+    else if (*from >= served.first)  // a duplicate of candidate *from - first of this batch
+      cap[*from - served.first] = std::min(cap[*from - served.first], c);
   }
   std::vector<sim::ControllerConfig> controllers;
   std::vector<double> simulated_caps;
@@ -792,18 +794,17 @@ std::vector<double> ProblemFitness::record(const Served& s, std::vector<Candidat
   const std::size_t n = s.parameters.size();
   std::vector<double> J(n);
   const bool per_scenario = !problem_.job().ensemble;
-  const std::size_t first = trials_.size();  // candidate i's trial is trials_[first + i]
-  std::size_t next = 0;                      // into out, in s.simulate order
+  assert(s.first == trials_.size());
+  std::size_t next = 0;  // into out, in s.simulate order
   for (std::size_t i = 0; i < n; ++i) {
-    if (s.trial[i] || s.candidate[i]) {
+    if (s.source[i]) {
       // A copy of an earlier trial: no simulation, never accepted (its fitness was there to
       // beat). trials_ grows below, so the source is copied before the push.
-      Trial t = trials_[s.trial[i] ? *s.trial[i] : first + *s.candidate[i]];
+      Trial t = trials_[*s.source[i]];
       t.iteration = iteration_;
       t.index = index_++;
       t.accepted = false;
       t.cached = true;
-      ++cached_;
       J[i] = t.fitness;
       if (vectors) {
         Evaluation e;
@@ -843,6 +844,10 @@ std::vector<double> ProblemFitness::record(const Served& s, std::vector<Candidat
   return J;
 }
 
+std::int64_t cached_trials(const std::vector<Trial>& trials) {
+  return std::count_if(trials.begin(), trials.end(), [](const Trial& t) { return t.cached; });
+}
+
 void ProblemFitness::index_trial(std::size_t i) {
   by_parameters_.emplace(bits_hash(trials_[i].parameters), i);
 }
@@ -850,10 +855,8 @@ void ProblemFitness::index_trial(std::size_t i) {
 void ProblemFitness::resume_trials(std::vector<Trial> before) {
   trials_ = std::move(before);
   by_parameters_.clear();
-  cached_ = 0;
   for (std::size_t i = 0; i < trials_.size(); ++i) {
     const Trial& t = trials_[i];
-    cached_ += t.cached ? 1 : 0;
     if (!t.capped) best_ = std::max(best_, t.fitness);
     // The run that was interrupted served from its first uncapped trial of each parameter set.
     if (cache_ && !t.capped && !t.cached) index_trial(i);

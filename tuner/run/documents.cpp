@@ -556,8 +556,7 @@ json run_metadata(const TuningOutcome& r, double wall_seconds) {
           {"wall_seconds", wall_seconds},
           {"simulations", r.simulations},
           // Trials served by the cache (issue 43): candidates not simulated again.
-          {"cached_trials", std::count_if(r.trials.begin(), r.trials.end(),
-                                          [](const Trial& t) { return t.cached; })},
+          {"cached_trials", cached_trials(r.trials)},
           {"max_rss_kib", max_rss_kib},
           {"seed", r.seed},
           {"generator", {{"name", kToolName}, {"version", kVersion}}}};

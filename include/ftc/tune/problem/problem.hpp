@@ -313,6 +313,8 @@ struct Trial {
   // (its fitness was already there to beat).
   bool cached = false;
 };
+// How many of the trials the cache served.
+std::int64_t cached_trials(const std::vector<Trial>& trials);
 
 // The problem as an optimiser sees it: the fitness of a batch of decision vectors, simulated
 // through an evaluator. Counts the simulations it ran and keeps a record of every trial.
@@ -340,7 +342,7 @@ class ProblemFitness final : public BatchFitness {
   // anyway: a few dozen bytes a distinct trial. Set before resume_trials(), which rebuilds it.
   void set_cache(bool on) { cache_ = on; }
   bool cache() const { return cache_; }
-  std::int64_t cached() const { return cached_; }  // trials served from the cache
+  std::int64_t cached() const { return cached_trials(trials_); }  // trials the cache served
   // A job with two or more soft goals: their values and the violation of its hard goals.
   std::size_t objectives() const override;
   std::vector<ObjectiveVector> objective_vectors(const std::vector<Decision>& batch) override;
@@ -374,9 +376,10 @@ class ProblemFitness final : public BatchFitness {
   struct Served {
     std::vector<Decision> parameters;   // per candidate, in values
     std::vector<std::size_t> simulate;  // the candidates simulated, in batch order
-    // Per candidate not simulated: the earlier trial it copies (an index into trials_), or the
-    // earlier candidate of the batch (simulated) whose trial it copies once that is recorded.
-    std::vector<std::optional<std::size_t>> trial, candidate;
+    // Per candidate not simulated: the trial it copies, an index into trials_ as they will be
+    // once the batch is recorded (candidate j of the batch is trials_[first + j]).
+    std::vector<std::optional<std::size_t>> source;
+    std::size_t first = 0;  // trials_.size() when the batch was served
   };
   Served serve(const std::vector<Decision>& batch) const;
   // Records a batch's trials: the simulated candidates' outcomes (in s.simulate order) and the
@@ -386,7 +389,6 @@ class ProblemFitness final : public BatchFitness {
   void index_trial(std::size_t i);  // makes trials_[i] (uncapped) one the cache serves from
 
   bool cache_ = true;
-  std::int64_t cached_ = 0;
   // Uncapped trials by a hash of their parameters' bits (trials_ indices; the first of equal
   // parameters only).
   std::unordered_multimap<std::uint64_t, std::size_t> by_parameters_;
