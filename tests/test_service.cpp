@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
+#include <sqlite3.h>
 #include <sys/mount.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -29,10 +30,11 @@
 #include "../tools/eta.hpp"
 #include "cli_runner.hpp"
 #include "ftc/runtime/gains.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/io/files.hpp"
-#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/front.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/tune/service/job_store.hpp"
 #include "ftc/tune/service/service.hpp"
@@ -873,6 +875,14 @@ TEST(Cli, ClientCommandsTalkToTheService) {
   r = run_cli("status " + id + server, dir);
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("succeeded"), std::string::npos) << r.out;
+  // Its J named by what it measures, and its gains file's warnings counted (issue 41).
+  EXPECT_NE(r.out.find("  (J: " + label + ")"), std::string::npos) << r.out;
+  const std::size_t warned =
+      json::parse(slurp(dir / "gains.json")).value("warnings", json::array()).size();
+  EXPECT_EQ(
+      r.out.find("succeeded with " + std::to_string(warned) + " warning") != std::string::npos,
+      warned > 0)
+      << r.out;
   r = run_cli("jobs --json" + server, dir);
   EXPECT_EQ(json::parse(r.out)["total"], 1);
   r = run_cli("fetch " + id + " -o '" + (dir / "again.json").string() + "'" + server, dir);
@@ -2481,6 +2491,81 @@ TEST(Service, TwoGoalJobServesTheFrontTheRunWrites) {
     ASSERT_EQ(r->status, 200) << name << ": " << r->body;
     EXPECT_EQ(r->body, expected_file(job, name)) << name;
   }
+  // What its J measures, by which the jobs list groups it, and its gains file's warnings, which
+  // the list's badge counts (issue 41).
+  const json gains = s.get("/v1/jobs/" + id + "/gains");
+  EXPECT_EQ(done["objective"], "front of ISE[0 s, 0.05 s] and control TV") << done.dump();
+  EXPECT_EQ(done["warnings"], gains.value("warnings", json::array()).size()) << done.dump();
+  EXPECT_EQ(s.get("/v1/jobs?limit=5")["jobs"][0]["objective"], done["objective"]);
+  // Another point of the front, picked over HTTP (the dashboard's click), is the gains file
+  // `ftctune pick` writes from the same run's files.
+  const auto run = fresh_dir("service-pick");
+  tune::TbbEvaluator evaluator(2);
+  for (const auto& [name, content] :
+       tune::output_files(tune::tune(tune::parse_job(job, "expected"), evaluator)))
+    tune::write_file_atomic(run / name, content);
+  const std::size_t last = front["points"].size() - 1;
+  for (const std::string rule :
+       {std::string("index:0"), "index:" + std::to_string(last), std::string("min:control_tv")})
+    EXPECT_EQ(s.get("/v1/jobs/" + id + "/gains?pick=" + rule), tune::pick_gains(run, rule)) << rule;
+  const auto nothing = s.client->Get(("/v1/jobs/" + id + "/gains?pick=index:99").c_str());
+  ASSERT_TRUE(nothing);
+  EXPECT_EQ(nothing->status, 400);
+  EXPECT_EQ(
+      json::parse(nothing->body)["error"]["message"],
+      "pick=index:99: index 99 is not a point of the front (0.." + std::to_string(last) + ")");
+  // The stored job, canonical: what the dashboard reads its parameters' scales from.
+  EXPECT_EQ(s.get("/v1/jobs/" + id + "/job"), tune::to_json(tune::parse_job(job, "two-goals")));
+}
+
+// A store written by a server from before the jobs list's measure and warnings columns opens,
+// gains them, and lists its jobs with an unknown measure and no warning until they finish again.
+TEST(JobStore, AStoreWithoutTheNewerColumnsGainsThem) {
+  const auto dir = fresh_dir("store-columns");
+  std::string id;
+  {
+    tune::JobStore store(dir / "store");
+    tune::Submission sub;
+    sub.job_json = tiny_job("old").dump();
+    sub.name = "old";
+    sub.objective = "ISE[0 s, 0.05 s]";
+    sub.iterations = 1;
+    sub.total_evaluations = 4;
+    id = store.submit(sub).record.id;
+  }
+  {  // as an older server made it: without the two columns
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "store" / "ftctune.db").c_str(), &db), SQLITE_OK);
+    for (const char* sql :
+         {"ALTER TABLE jobs DROP COLUMN objective", "ALTER TABLE jobs DROP COLUMN warnings"})
+      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    sqlite3_close(db);
+  }
+  tune::JobStore store(dir / "store");
+  const std::vector<tune::JobRecord> jobs = store.list(std::nullopt, 10, 0, "");
+  ASSERT_EQ(jobs.size(), 1u);
+  EXPECT_EQ(jobs[0].id, id);
+  EXPECT_EQ(jobs[0].objective, "");
+  EXPECT_EQ(jobs[0].warnings, 0);
+  ASSERT_EQ(store.claim_next()->id, id);
+  store.finish_succeeded(id, {{"gains.json", "{}"}}, "", 3);
+  EXPECT_EQ(store.get(id)->warnings, 3);
+}
+
+// A job without a front has no other point to pick; its J is the objective's measure.
+TEST(Service, PickingAPointOfAJobWithoutAFrontIsRefused) {
+  Service s;
+  const std::string id = s.submit(tiny_job("one-goal"))["id"];
+  const json done = s.wait_done(id);
+  ASSERT_EQ(done["status"], "succeeded");
+  EXPECT_EQ(done["objective"], tune::fitness_label(tune::parse_job(tiny_job("one-goal"), "j")));
+  const auto r = s.client->Get(("/v1/jobs/" + id + "/gains?pick=knee").c_str());
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  EXPECT_NE(r->body.find("has no front (a job with two or more soft goals has one)"),
+            std::string::npos)
+      << r->body;
+  EXPECT_EQ(s.client->Get("/v1/jobs/0123456789abcdef/job")->status, 404);
 }
 
 // Requests on a kept-alive connection (the dashboard's) are answered at once: with Nagle's

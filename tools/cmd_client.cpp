@@ -97,6 +97,9 @@ std::string describe(const json& j) {
   const json& p = j["progress"];
   std::string s = j["id"].get<std::string>() + "  " + j["name"].get<std::string>() + "  " +
                   j["status"].get<std::string>();
+  // A succeeded run whose gains file warns (a saturated or unsettled loop, a value at a bound).
+  if (const long long w = j.value("warnings", 0LL); w > 0)
+    s += " with " + std::to_string(w) + " warning" + (w == 1 ? "" : "s");
   if (!p["iteration"].is_null())
     s += "  iteration " + std::to_string(p["iteration"].get<int>()) + "/" +
          std::to_string(p["iterations"].get<int>());
@@ -115,6 +118,9 @@ std::string describe(const json& j) {
       std::snprintf(buf, sizeof buf, " %s = %.5g", it.key().c_str(), it.value().get<double>());
       s += buf;
     }
+    // What J measures (a server older than this field does not say).
+    if (const std::string what = j.value("objective", ""); !what.empty())
+      s += "  (J: " + what + ")";
   }
   s += eta_text(j);  // a running job's: at the rate so far
   if (!j["error"].is_null()) s += "\n  error: " + j["error"].get<std::string>();

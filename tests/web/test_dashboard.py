@@ -22,6 +22,7 @@ from selenium import webdriver
 from selenium.common.exceptions import (NoAlertPresentException, NoSuchElementException,
                                         StaleElementReferenceException)
 from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.common.action_chains import ActionChains
 from selenium.webdriver.common.by import By
 from selenium.webdriver.support import expected_conditions as EC
 from selenium.webdriver.support.ui import WebDriverWait
@@ -91,6 +92,9 @@ def server(request):
     s.stop()
 
 
+DOWNLOADS = tempfile.mkdtemp(prefix="ftctune-dashboard-downloads-")
+
+
 @pytest.fixture(scope="module")
 def browser():
     options = webdriver.ChromeOptions()
@@ -99,8 +103,29 @@ def browser():
                 "--window-size=1400,1000", "--no-first-run", "--disable-extensions"):
         options.add_argument(arg)
     driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+    # Downloads land in DOWNLOADS, where a test reads them.
+    driver.execute_cdp_cmd("Browser.setDownloadBehavior",
+                           {"behavior": "allow", "downloadPath": DOWNLOADS})
     yield driver
     driver.quit()
+    shutil.rmtree(DOWNLOADS, ignore_errors=True)
+
+
+def downloaded(name, timeout=20):
+    """The JSON of file `name` once the browser has saved it in DOWNLOADS (removed after)."""
+    path = os.path.join(DOWNLOADS, name)
+    end = time.time() + timeout
+    while time.time() < end:
+        if os.path.exists(path):
+            try:
+                with open(path) as f:
+                    data = json.load(f)
+                os.remove(path)
+                return data
+            except ValueError:
+                pass  # still being written
+        time.sleep(0.05)
+    raise AssertionError("the browser saved no " + name + " in " + DOWNLOADS)
 
 
 def wait(driver, condition, timeout=30):
@@ -212,6 +237,7 @@ def test_a_two_goal_job_shows_its_front(server, browser):
                     {"metric": "control_tv", "minimize": True}]
     job["tuning"]["algorithm"]["population"] = 4
     job["tuning"]["algorithm"]["iterations"] = 2
+    job["tuning"]["parameters"]["Kp"] = {"bounds": [1, 50], "scale": "log"}
     job_id = server.api("/v1/jobs", job)["id"]
     assert server.wait_done(job_id)["status"] == "succeeded"
     front = server.api("/v1/jobs/" + job_id + "/files/front.json")
@@ -254,7 +280,8 @@ def test_a_two_goal_job_shows_its_front(server, browser):
             else:
                 shown = float(cells[3 + 2 * g].removesuffix(" %"))
                 assert abs(shown - 100 * f) <= 0.05 * 100 * f, (k, g, cells, f)
-        assert cells[-1] == ", ".join("point %d" % i for i in partners[k]), (k, cells)
+        assert cells[-2] == ", ".join("point %d" % i for i in partners[k]), (k, cells)
+        assert cells[-1] == "gains-point-%d.json" % k, (k, cells)
     assert "picked" in rows[front["picked"]["index"]].get_attribute("class")
     # One button per file, though the page loaded the finished job twice.
     buttons = texts(browser, "#downloads button")
@@ -265,8 +292,53 @@ def test_a_two_goal_job_shows_its_front(server, browser):
     warned = bool(server.api("/v1/jobs/" + job_id + "/gains")["warnings"])
     assert texts(browser, "h1 .state") == [
         "succeeded with warnings" if warned else "succeeded"]
+    # A parameter searched on a log scale is drawn on a log axis, and the colours have a scale
+    # (issue 41).
+    wait(browser, lambda d: d.find_element(By.ID, "scatter").get_attribute("data-x-scale")
+         == "logarithmic")
+    assert browser.find_element(By.ID, "scatter").get_attribute("data-y-scale") == "linear"
+    assert "(log scale)" in browser.execute_script(
+        "return Chart.getChart('scatter').options.scales.x.title.text")
+    objectives = [float(r.split(",")[heads_of(server, job_id).index("objective")])
+                  for r in trial_rows(server, job_id)]
+    finite = [v for v in objectives if v > 0]
+    bar = browser.find_element(By.ID, "scatter-scale-bar")
+    assert float(bar.get_attribute("data-lo")) == min(finite)
+    assert float(bar.get_attribute("data-hi")) == max(finite)
+    assert "lowest blue" in browser.find_element(By.ID, "scatter-scale").text
+    # A point of the front picked on the chart downloads its gains file, as pick writes it
+    # (issue 41): clicked where Chart.js drew it; then another by its row's button.
     browser.execute_script("document.getElementById('front').scrollIntoView()")
+    k = len(points) - 1
+    x, y, w, h = browser.execute_script(
+        "const c = Chart.getChart('front-chart');"
+        "const e = c.getDatasetMeta(0).data.find((d, i) => c.data.datasets[0].data[i].point"
+        " === arguments[0]);"
+        "const r = c.canvas.getBoundingClientRect();"
+        "return [e.x, e.y, r.width, r.height];", k)
+    chart = browser.find_element(By.ID, "front-chart")
+    ActionChains(browser).move_to_element_with_offset(chart, x - w / 2, y - h / 2).click().perform()
+    assert downloaded("gains-point-%d.json" % k) == \
+        server.api("/v1/jobs/%s/gains?pick=index:%d" % (job_id, k))
+    assert browser.find_element(By.ID, "front").get_attribute("data-picked") == str(k)
+    picked = server.api("/v1/jobs/%s/gains?pick=index:0" % job_id)
+    assert picked["tuned"] == points[0]["parameters"]
+    browser.find_element(By.CSS_SELECTOR, "#front-points button.pick[data-point='0']").click()
+    assert downloaded("gains-point-0.json") == picked
     screenshot(browser, "dashboard-front.png")
+
+
+def heads_of(server, job_id):
+    return trial_text(server, job_id).split("\n")[0].split(",")
+
+
+def trial_rows(server, job_id):
+    return [r for r in trial_text(server, job_id).split("\n")[1:] if r]
+
+
+def trial_text(server, job_id):
+    with urllib.request.urlopen(server.url + "/v1/jobs/%s/trials" % job_id, timeout=30) as r:
+        return r.read().decode()
 
 
 def test_progress_updates_without_a_reload(server, browser):
@@ -294,21 +366,41 @@ def test_progress_updates_without_a_reload(server, browser):
 def test_jobs_list_is_live_and_filterable(server, browser):
     browser.get(server.url + "/#/")
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, "#jobs-table tbody tr"))
-    before = len(browser.find_elements(By.CSS_SELECTOR, "#jobs-table tbody tr"))
+    jobs = "#jobs-table tbody tr[data-id]"
+    before = len(browser.find_elements(By.CSS_SELECTOR, jobs))
     job_id = server.api("/v1/jobs", longer("listed", 2))["id"]
     row = "#jobs-table tbody tr[data-id='%s']" % job_id
     wait(browser, lambda d: d.find_elements(By.CSS_SELECTOR, row))  # appears without a reload
-    server.wait_done(job_id)
+    done = server.wait_done(job_id)
     wait(browser, lambda d: "succeeded" in d.find_element(By.CSS_SELECTOR, row).text)
-    assert len(browser.find_elements(By.CSS_SELECTOR, "#jobs-table tbody tr")) == before + 1
+    assert len(browser.find_elements(By.CSS_SELECTOR, jobs)) == before + 1
+    # Its badge names its gains file's warnings, as its own page does (issue 41).
+    warned = len(server.api("/v1/jobs/" + job_id + "/gains").get("warnings", []))
+    assert done["warnings"] == warned
+    wait(browser, lambda d: d.find_element(By.CSS_SELECTOR, row + " .state").text
+         == ("succeeded with warnings" if warned else "succeeded"))
+    # Jobs are grouped by what their J measures: each row sits under its measure's header, and
+    # the two-goal job's front apart from Table 1's ISE (issue 41).
+    groups = browser.execute_script(
+        "const out = []; let g = null;"
+        "for (const r of document.querySelectorAll('#jobs-table tbody tr')) {"
+        "  if (r.classList.contains('group')) { g = r.dataset.objective; out.push([g, []]); }"
+        "  else out[out.length - 1][1].push(r.dataset.id); }"
+        "return out;")
+    listed = {j["id"]: j["objective"] for j in server.api("/v1/jobs?limit=50")["jobs"]}
+    assert len({g for g, _ in groups}) == len(groups), groups  # one header per measure
+    for objective, ids in groups:
+        assert ids and all(listed[i] == objective for i in ids), (objective, ids)
+    assert "ISE[0 s, 30 s]" in [g for g, _ in groups], groups
+    assert any(g.startswith("front of ") for g, _ in groups), groups
     box = browser.find_element(By.ID, "filter-name")
     box.send_keys("listed")
-    wait(browser, lambda d: len(d.find_elements(By.CSS_SELECTOR, "#jobs-table tbody tr")) == 1)
+    wait(browser, lambda d: len(d.find_elements(By.CSS_SELECTOR, jobs)) == 1)
     box.clear()
     box.send_keys(" ")  # an input event with the box emptied again
     browser.execute_script("arguments[0].value=''; arguments[0].dispatchEvent(new Event('input'));",
                            box)
-    wait(browser, lambda d: len(d.find_elements(By.CSS_SELECTOR, "#jobs-table tbody tr")) > 1)
+    wait(browser, lambda d: len(d.find_elements(By.CSS_SELECTOR, jobs)) > 1)
     screenshot(browser, "dashboard-jobs.png")
 
 

@@ -86,6 +86,19 @@ std::string objective_label(const Job& job) {
                        true);
 }
 
+std::string fitness_label(const Job& job) {
+  if (job.goals.empty()) return objective_label(job);
+  std::string soft;
+  std::size_t n = 0;
+  for (const GoalConfig& g : job.goals)
+    if (g.soft()) {
+      soft +=
+          (n++ ? " and " : "") + measure_label(job.scenario_count(), sim::plain_label(*g.metric),
+                                               g.measure(), g.windowed());
+    }
+  return n >= 2 ? "front of " + soft : soft;
+}
+
 std::string goal_label(const Job& job, std::size_t k, std::size_t scenarios) {
   const GoalConfig& g = job.goals.at(k);
   // The metric's label, as the front and the objective word it ("control TV", "peak command

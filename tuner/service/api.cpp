@@ -24,6 +24,7 @@
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/report.hpp"
 #include "ftc/tune/run/documents.hpp"
+#include "ftc/tune/run/front.hpp"
 #include "ftc/tune/run/memory_budget.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/version.hpp"
@@ -57,9 +58,28 @@ void send_json(httplib::Response& res, int status, const json& body) {
 
 json nullable(const std::string& s) { return s.empty() ? json(nullptr) : json(s); }
 
+// A job's stored files written out as the run directory they came from, for the library's
+// readers of run directories (report.html, pick); removed with the object.
+struct RunDirectory {
+  std::filesystem::path path;
+  RunDirectory(JobStore& store, const std::string& id, int serial)
+      : path(std::filesystem::temp_directory_path() /
+             ("ftctune-run-" + id + "-" + std::to_string(::getpid()) + "-" +
+              std::to_string(serial))) {
+    for (const auto& [name, content] : store.artifacts(id)) write_file_atomic(path / name, content);
+  }
+  RunDirectory(const RunDirectory&) = delete;
+  RunDirectory& operator=(const RunDirectory&) = delete;
+  ~RunDirectory() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+};
+
 json job_links(const std::string& id) {
   const std::string base = "/v1/jobs/" + id;
   return {{"self", base},
+          {"job", base + "/job"},
           {"gains", base + "/gains"},
           {"history", base + "/history"},
           {"trials", base + "/trials"},
@@ -92,6 +112,10 @@ json job_json_view(const JobRecord& r) {
           {"cancel_requested", r.cancel_requested},
           {"attempts", r.attempts},
           {"error", nullable(r.error)},
+          // What J measures (a jobs list compares J within one measure), and how many warnings a
+          // succeeded run's gains file lists (the dashboard's "succeeded with warnings").
+          {"objective", r.objective},
+          {"warnings", r.warnings},
           // Results so far (gains, history, trials) of a job that ran an iteration but did not
           // finish it all: running, or cancelled.
           {"partial", r.iteration >= 0 &&
@@ -413,6 +437,13 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
     for (std::size_t i = 4; i < p.size(); ++i) name += (name.empty() ? "" : "/") + p[i];
     return files(id, name, res);
   }
+  if (p.size() == 4 && p[3] == "job") {
+    // The job as the server validated and stored it (canonical JSON): its search space's scales
+    // for the dashboard's axes, or a file to submit again.
+    if (m != "GET") return method_not_allowed(res, "GET");
+    if (!store_.get(id)) return send_error(res, 404, "not_found", "no job " + id);
+    return res.set_content(store_.job_json(id), "application/json");
+  }
   if (p.size() == 4 && (p[3] == "gains" || p[3] == "history" || p[3] == "trials" ||
                         p[3] == "comparison" || p[3] == "report")) {
     if (m != "GET") return method_not_allowed(res, "GET");
@@ -578,6 +609,7 @@ void Api::submit(const httplib::Request& req, httplib::Response& res) {
   s.client = req.remote_addr;
   s.job_json = to_json(job).dump();
   s.name = job.name;
+  s.objective = fitness_label(job);
   s.iterations = job.tuning->algorithm->iterations();
   s.total_evaluations = job.tuning->algorithm->evaluations();
   const std::string key = req.get_header_value("Idempotency-Key");
@@ -932,7 +964,24 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
                                  "gains, history and trials so far are served)"));
   if (partial) res.set_header("Ftctune-Partial", "true");
   const std::string format = req.has_param("format") ? req.get_param_value("format") : "";
-  if (what == "gains") {
+  if (what == "gains" && req.has_param("pick")) {
+    // Another point of the front, as `ftctune pick RUN --rule RULE` writes its gains file.
+    const std::string rule = req.get_param_value("pick");
+    if (!store_.artifact_sizes(id).count("front.json"))
+      return send_error(
+          res, 400, "invalid_parameter",
+          "pick: job " + id + " has no front (a job with two or more soft goals has one)");
+    try {
+      const RunDirectory dir(store_, id, report_counter_++);
+      return send_json(res, 200, pick_gains(dir.path, rule));
+    } catch (const InputError& e) {
+      // The rule's own message, never the temporary directory's file names.
+      return send_error(
+          res, 400, "invalid_parameter",
+          "pick=" + rule + ": " +
+              (e.errors().empty() ? std::string(e.what()) : e.errors().front().message));
+    }
+  } else if (what == "gains") {
     res.set_content(store_.artifact(id, "gains.json").value_or(""), "application/json");
   } else if (what == "report") {
     res.set_content(report(id), "text/html; charset=utf-8");
@@ -961,19 +1010,8 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
 // request, then kept.
 std::string Api::report(const std::string& id) {
   if (auto cached = store_.artifact(id, "report.html")) return *cached;
-  namespace fs = std::filesystem;
-  const fs::path dir =
-      fs::temp_directory_path() / ("ftctune-report-" + id + "-" + std::to_string(::getpid()) + "-" +
-                                   std::to_string(report_counter_++));
-  struct Cleanup {
-    fs::path dir;
-    ~Cleanup() {
-      std::error_code ec;
-      fs::remove_all(dir, ec);
-    }
-  } cleanup{dir};
-  for (const auto& [name, content] : store_.artifacts(id)) write_file_atomic(dir / name, content);
-  const ReportResult r = render_report(dir, ReportOptions{});
+  const RunDirectory dir(store_, id, report_counter_++);
+  const ReportResult r = render_report(dir.path, ReportOptions{});
   const std::string html = read_file(r.html).value_or("");
   try {
     store_.put_artifact(id, "report.html", html);

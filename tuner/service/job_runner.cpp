@@ -236,7 +236,7 @@ void JobRunner::write(const std::string& id, Held& h) {
   try {
     switch (h.state.status) {
       case JobStatus::succeeded:
-        store_.finish_succeeded(id, h.files, h.state.finished_at);
+        store_.finish_succeeded(id, h.files, h.state.finished_at, h.state.warnings);
         break;
       case JobStatus::cancelled:
         store_.finish_cancelled(id, h.state.finished_at, h.files);
@@ -429,7 +429,8 @@ void JobRunner::run(const JobRecord& rec) {
                " per job (--max-stored-mib): ask for fewer evaluations, scenarios or compared "
                "controllers");
       } else {
-        outcome = Held{{JobStatus::succeeded, "", JobStore::timestamp(), bytes},
+        outcome = Held{{JobStatus::succeeded, "", JobStore::timestamp(), bytes,
+                        static_cast<int>(r.outcome.warnings.size())},
                        std::move(storage.files)};
         spdlog::info("job {} succeeded in {:.2f} s: J = {:.6g}", id, r.wall_seconds,
                      r.outcome.optimization.best_fitness);

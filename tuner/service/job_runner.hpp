@@ -42,6 +42,7 @@ struct Unstored {
   std::string error;        // failed: why
   std::string finished_at;  // when it finished (UTC ISO 8601)
   std::uint64_t bytes = 0;  // of its result files
+  int warnings = 0;         // succeeded: those its gains file lists
 };
 
 // What the store owes: for /healthz and the answers to submissions.

@@ -64,7 +64,9 @@ CREATE TABLE IF NOT EXISTS jobs (
   cancel_requested  INTEGER NOT NULL DEFAULT 0,
   attempts          INTEGER NOT NULL DEFAULT 0,
   checkpoint        TEXT,
-  client            TEXT NOT NULL DEFAULT ''
+  client            TEXT NOT NULL DEFAULT '',
+  objective         TEXT NOT NULL DEFAULT '',
+  warnings          INTEGER NOT NULL DEFAULT 0
 );
 CREATE INDEX IF NOT EXISTS jobs_by_status ON jobs(status, seq);
 -- The trials of a running job, one row per iteration, appended beside its checkpoint.
@@ -90,7 +92,7 @@ CREATE TABLE IF NOT EXISTS artifacts (
 constexpr const char* kColumns =
     "id, seq, name, status, created_at, started_at, finished_at, updated_at, iteration, "
     "iterations, evaluations, total_evaluations, best_fitness, best, error, cancel_requested, "
-    "attempts";
+    "attempts, objective, warnings";
 
 }  // namespace
 
@@ -205,6 +207,8 @@ class JobStore::Statement {
     r.error = text(14);
     r.cancel_requested = integer(15) != 0;
     r.attempts = static_cast<int>(integer(16));
+    r.objective = text(17);
+    r.warnings = static_cast<int>(integer(18));
     return r;
   }
 
@@ -255,13 +259,21 @@ JobStore::JobStore(const std::filesystem::path& directory) {
   exec("PRAGMA journal_mode=WAL");
   exec("PRAGMA synchronous=FULL");
   exec(kSchema);
-  // Stores made before the queue quota have no client column.
-  bool has_client = false;
-  {
-    Statement q(db_, "SELECT 1 FROM pragma_table_info('jobs') WHERE name = 'client'");
-    has_client = q.step();
+  // Columns a store made by an older server lacks: the client (before the queue quota), what J
+  // measures and the finished run's warnings (before the jobs list grouped and badged them).
+  for (const auto& [column, definition] :
+       {std::pair<const char*, const char*>{"client", "TEXT NOT NULL DEFAULT ''"},
+        {"objective", "TEXT NOT NULL DEFAULT ''"},
+        {"warnings", "INTEGER NOT NULL DEFAULT 0"}}) {
+    bool has = false;
+    {
+      Statement q(db_, "SELECT 1 FROM pragma_table_info('jobs') WHERE name = ?");
+      q.bind(1, std::string(column));
+      has = q.step();
+    }
+    if (!has)
+      exec((std::string("ALTER TABLE jobs ADD COLUMN ") + column + " " + definition).c_str());
   }
-  if (!has_client) exec("ALTER TABLE jobs ADD COLUMN client TEXT NOT NULL DEFAULT ''");
 }
 
 JobStore::~JobStore() {
@@ -344,15 +356,15 @@ Submitted JobStore::submit(const Submission& s, const QueueQuota& quota) {
     const std::string id = new_id();
     Statement ins(db_,
                   "INSERT INTO jobs (id, name, status, job_json, idempotency_key, created_at, "
-                  "updated_at, iterations, total_evaluations, client) "
-                  "VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?, ?)");
+                  "updated_at, iterations, total_evaluations, client, objective) "
+                  "VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?, ?, ?)");
     ins.bind(1, id).bind(2, s.name).bind(3, s.job_json);
     if (s.idempotency_key)
       ins.bind(4, *s.idempotency_key);
     else
       ins.bind_null(4);
     ins.bind(5, now).bind(6, now).bind(7, std::int64_t{s.iterations}).bind(8, s.total_evaluations);
-    ins.bind(9, s.client);
+    ins.bind(9, s.client).bind(10, s.objective);
     ins.step();
     out.record = *select_job(id);
     out.created = true;
@@ -503,10 +515,13 @@ std::optional<std::string> JobStore::checkpoint(const std::string& id) {
 
 void JobStore::finish_succeeded(const std::string& id,
                                 const std::map<std::string, std::string>& artifacts,
-                                const std::string& finished_at) {
+                                const std::string& finished_at, int warnings) {
   transaction([&] {
     for (const auto& [name, content] : artifacts) insert_artifact(id, name, content);
     set_finished(id, JobStatus::succeeded, "", finished_at);
+    Statement u(db_, "UPDATE jobs SET warnings = ? WHERE id = ?");
+    u.bind(1, std::int64_t{warnings}).bind(2, id);
+    u.step();
   });
 }
 

@@ -357,9 +357,10 @@ function jobsView(main) {
   const next = el('button', {text: 'older ›', id: 'page-next'});
   const count = el('span', {id: 'jobs-count'});
   const tbody = el('tbody');
-  const table = el('table', {id: 'jobs-table'},
-    el('thead', null, el('tr', null, ['Name', 'State', 'Progress', 'Best J', 'Submitted', 'Duration', 'Id']
-      .map((h) => el('th', {text: h})))), tbody);
+  const COLUMNS = ['Name', 'State', 'Progress', 'Best J (or front)', 'Submitted', 'Duration', 'Id'];
+  const table =
+      el('table', {id: 'jobs-table'},
+         el('thead', null, el('tr', null, COLUMNS.map((h) => el('th', {text: h})))), tbody);
   const message = el('div');
   main.append(el('h1', {text: 'Jobs'}),
               el('div', {class: 'toolbar'}, name, status, prev, next, count), message, table);
@@ -369,13 +370,13 @@ function jobsView(main) {
     shown.set(j.id, j);
     clear(row);
     row.append(
-      el('td', null, el('a', {href: '#/job/' + j.id, class: 'job-link', text: j.name})),
-      el('td', null, stateBadge(j.status)),
-      el('td', {class: 'progress'}, progressCell(j)),
-      el('td', {class: 'num best', text: bestText(j.progress)}),
-      el('td', {text: whenText(j.created_at)}),
-      el('td', {class: 'num', text: j.started_at ? jobDuration(j) : '–'}),
-      el('td', null, el('code', {text: j.id})));
+        el('td', null, el('a', {href: '#/job/' + j.id, class: 'job-link', text: j.name})),
+        el('td', null, stateBadge(j.status, j.warnings)),
+        el('td', {class: 'progress'}, progressCell(j)),
+        el('td', {class: 'num best', text: bestText(j.progress)}),
+        el('td', {text: whenText(j.created_at)}),
+        el('td', {class: 'num', text: j.started_at ? jobDuration(j) : '–'}),
+        el('td', null, el('code', {text: j.id})));
   }
 
   async function load() {
@@ -388,11 +389,30 @@ function jobsView(main) {
       rows = new Map();
       shown.clear();
       clear(tbody);
+      // Grouped by what J measures, each group under its measure, in the order of its newest
+      // job: a J of the post-fault ISE and one of a CVaR over an ensemble are not set side by
+      // side as if they compared.
+      const groups = new Map();
       for (const j of page.jobs) {
-        const row = el('tr', {'data-id': j.id});
-        fill(row, j);
-        rows.set(j.id, row);
-        tbody.appendChild(row);
+        const key = j.objective || '';
+        if (!groups.has(key)) groups.set(key, []);
+        groups.get(key).push(j);
+      }
+      for (const [objective, jobs] of groups) {
+        tbody.appendChild(el(
+            'tr', {class: 'group', 'data-objective': objective},
+            el('td', {colspan: COLUMNS.length},
+               objective ? 'J = ' + objective : 'J: not recorded (a job stored by an older server)',
+               el('span', {
+                 class: 'group-count',
+                 text: ' · ' + jobs.length + ' job' + (jobs.length === 1 ? '' : 's')
+               }))));
+        for (const j of jobs) {
+          const row = el('tr', {'data-id': j.id});
+          fill(row, j);
+          rows.set(j.id, row);
+          tbody.appendChild(row);
+        }
       }
       count.textContent = page.total === 0 ? 'no jobs'
         : (offset + 1) + '–' + (offset + page.jobs.length) + ' of ' + page.total;
@@ -477,6 +497,12 @@ function jobView(main, id) {
   const scatter = el('canvas', {id: 'scatter', 'data-points': 0});
   const xSel = el('select', {id: 'scatter-x'});
   const ySel = el('select', {id: 'scatter-y'});
+  // The colour scale of the trial scatter: the objective's lowest (blue) to highest (red) on a
+  // log scale, as colour() maps them.
+  const scaleBar = el('canvas', {id: 'scatter-scale-bar', width: 220, height: 12});
+  const scaleLo = el('span', {id: 'scatter-scale-lo'}),
+        scaleHi = el('span', {id: 'scatter-scale-hi'});
+  const scaleText = el('span', {id: 'scatter-scale-text'});
   const trialFilter = el('input', {type: 'search', id: 'trials-filter', size: 40,
                                    placeholder: 'Kp>10, diverged=0  or any text'});
   const trialCount = el('span', {id: 'trials-count'});
@@ -488,20 +514,21 @@ function jobView(main, id) {
   const downloads = el('div', {class: 'toolbar', id: 'downloads'});
   const message = el('div');
 
-  main.append(header, actions, message, notes,
-    el('div', {class: 'charts'},
-      el('div', null, el('h3', {id: 'convergence-title', text: 'Convergence: best J per iteration'}),
-         el('div', {class: 'chart-box'}, convergence)),
-      el('div', null, el('h3', {text: 'Trials: parameters coloured by objective'}),
-         el('div', {class: 'toolbar'}, 'x ', xSel, ' y ', ySel),
-         el('div', {class: 'chart-box'}, scatter))),
-    el('h3', {text: 'Trials'}),
-    el('div', {class: 'toolbar'}, trialFilter, trialCount),
-    el('div', {class: 'scroll'}, el('table', {id: 'trials-table'}, trialHead, trialBody)),
-    el('h3', {text: 'Comparison'}), comparison,
-    frontBox,
-    figures,
-    el('h3', {text: 'Downloads'}), downloads);
+  main.append(
+      header, actions, message, notes,
+      el('div', {class: 'charts'},
+         el('div', null,
+            el('h3', {id: 'convergence-title', text: 'Convergence: best J per iteration'}),
+            el('div', {class: 'chart-box'}, convergence)),
+         el('div', null, el('h3', {text: 'Trials: parameters coloured by objective'}),
+            el('div', {class: 'toolbar'}, 'x ', xSel, ' y ', ySel),
+            el('div', {class: 'chart-box'}, scatter),
+            el('div', {class: 'toolbar colour-scale', id: 'scatter-scale'}, scaleText, scaleLo,
+               scaleBar, scaleHi))),
+      el('h3', {text: 'Trials'}), el('div', {class: 'toolbar'}, trialFilter, trialCount),
+      el('div', {class: 'scroll'}, el('table', {id: 'trials-table'}, trialHead, trialBody)),
+      el('h3', {text: 'Comparison'}), comparison, frontBox, figures, el('h3', {text: 'Downloads'}),
+      downloads);
 
   let convChart = null, scatterChart = null;
   const makeCharts = (Chart) => {
@@ -597,6 +624,37 @@ function jobView(main, id) {
     convergence.setAttribute('data-points', points.length);
   }
 
+  // The search space's scales (the stored job's tuning parameters): a parameter searched on a log
+  // scale is drawn on a log axis.
+  let scales = {};
+  async function loadScales() {
+    try {
+      const stored = await apiJson('/v1/jobs/' + id + '/job');
+      const params = (stored.tuning && stored.tuning.parameters) || {};
+      scales = {};
+      for (const [n, v] of Object.entries(params))
+        scales[n] = v && !Array.isArray(v) && v.scale === 'log' ? 'log' : 'linear';
+      renderScatter();
+    } catch (e) { /* linear axes */
+    }
+  }
+
+  function drawScaleBar(lo, hi) {
+    const ctx = scaleBar.getContext('2d');
+    const w = scaleBar.width, h = scaleBar.height;
+    for (let i = 0; i < w; ++i) {
+      ctx.fillStyle = colour(Math.pow(10, i / (w - 1)), 1, 10);
+      ctx.fillRect(i, 0, 1, h);
+    }
+    const shown = Number.isFinite(lo) && Number.isFinite(hi);
+    scaleLo.textContent = shown ? fmt(lo, 3) : '';
+    scaleHi.textContent = shown ? fmt(hi, 3) : '';
+    scaleText.textContent =
+        shown ? 'colour: objective J (log scale, lowest blue, highest red; grey: none)' : '';
+    scaleBar.dataset.lo = shown ? String(lo) : '';
+    scaleBar.dataset.hi = shown ? String(hi) : '';
+  }
+
   function renderScatter() {
     if (!scatterChart) return;
     const xi = trials.columns.indexOf(xSel.value), yi = trials.columns.indexOf(ySel.value);
@@ -607,10 +665,18 @@ function jobView(main, id) {
     const data = trials.rows.map((r) => ({x: Number(r[xi]), y: Number(r[yi]), objective: Number(r[oi])}));
     scatterChart.data.datasets[0].data = data;
     scatterChart.data.datasets[0].pointBackgroundColor = data.map((d) => colour(d.objective, lo, hi));
-    scatterChart.options.scales.x.title.text = xSel.value;
-    scatterChart.options.scales.y.title.text = ySel.value;
+    const axis = (name) => (scales[name] === 'log' ? 'logarithmic' : 'linear');
+    scatterChart.options.scales.x.type = axis(xSel.value);
+    scatterChart.options.scales.y.type = axis(ySel.value);
+    scatterChart.options.scales.x.title.text =
+        xSel.value + (axis(xSel.value) === 'logarithmic' ? ' (log scale)' : '');
+    scatterChart.options.scales.y.title.text =
+        ySel.value + (axis(ySel.value) === 'logarithmic' ? ' (log scale)' : '');
     scatterChart.update('none');
     scatter.setAttribute('data-points', data.length);
+    scatter.dataset.xScale = axis(xSel.value);
+    scatter.dataset.yScale = axis(ySel.value);
+    drawScaleBar(lo, hi);
   }
 
   function renderTrials() {
@@ -720,7 +786,8 @@ function jobView(main, id) {
   // its nudged copies) as a band of width f·|v| centred on the value on each axis, and a dashed
   // link between two points that are no trade-off (each point's within_noise partners, by the
   // run's rule). A table lists every point with its floors and partners. The goals are named by
-  // front.json's labels and units. Log axes where every value is positive.
+  // front.json's labels and units. Log axes where every value is positive and they span a decade.
+  // A click on a point (or its row's button) downloads its gains file (pickPoint).
   let frontChart = null;
   function renderFront(front) {
     clear(frontBox);
@@ -733,14 +800,28 @@ function jobView(main, id) {
     const name = (g) => (g.label || g.metric) + (g.unit ? ' [' + g.unit + ']' : '');
     const finite = (v) => typeof v === 'number' && Number.isFinite(v);
     const drawable = (g) => finite(g[a]) && finite(g[b]);
-    const points = front.points.filter((p) => drawable(p.goals)).map((p) => ({x: p.goals[a], y: p.goals[b]}));
+    // Each drawn point keeps its index in front.json (the rule index:K picks it).
+    const points = front.points.map((p, k) => ({x: p.goals[a], y: p.goals[b], point: k}))
+                       .filter((p) => finite(p.x) && finite(p.y));
     const all = points.concat(front.compared.filter((c) => drawable(c.goals)).map((c) => ({x: c.goals[a], y: c.goals[b]})));
-    const logX = all.every((p) => p.x > 0), logY = all.every((p) => p.y > 0);
+    // A log axis where every value is positive and they span a decade or more; within less, a
+    // log axis has no tick to read and is nearly linear anyway.
+    const logAxis = (values) =>
+        values.every((v) => v > 0) && Math.max(...values) >= 10 * Math.min(...values);
+    const logX = logAxis(all.map((p) => p.x)), logY = logAxis(all.map((p) => p.y));
     const canvas = el('canvas', {id: 'front-chart', 'data-points': points.length});
-    frontBox.append(el('h3', {text: 'Pareto front: ' + front.points.length + ' tuned points' +
-                                  (soft.length > 2 ? ' (first two of ' + soft.length + ' soft goals)' : '') +
-                                  ', hypervolume ' + fmt(front.hypervolume, 4)}),
-                    el('div', {class: 'chart-box'}, canvas));
+    frontBox.append(
+        el('h3', {
+          text: 'Pareto front: ' + front.points.length + ' tuned points' +
+              (soft.length > 2 ? ' (first two of ' + soft.length + ' soft goals)' : '') +
+              ', hypervolume ' + fmt(front.hypervolume, 4)
+        }),
+        el('p', {
+          class: 'hint',
+          text:
+              'Click a point of the front (or its row\'s button below) to download its gains file, as ftctune pick --rule index:K writes it.'
+        }),
+        el('div', {class: 'chart-box tall'}, canvas));
     // A front without a feasible point: nothing to draw, and no point picked.
     if (!front.points.length || !front.picked) {
       frontBox.append(el('h3', {text: 'Pareto front: empty (no trial met the hard goals)'}));
@@ -800,28 +881,93 @@ function jobView(main, id) {
     chartJs().then((Chart) => {
       if (!canvas.isConnected) return;
       frontChart = new Chart(canvas, {
-        type: 'scatter', data: {datasets},
-        options: {animation: false, maintainAspectRatio: false, parsing: false,
-                  scales: {x: {type: logX ? 'logarithmic' : 'linear', title: {display: true, text: name(front.goals[a])}},
-                           y: {type: logY ? 'logarithmic' : 'linear', title: {display: true, text: name(front.goals[b])}}},
-                  plugins: {legend: {display: true, position: 'bottom'}}},
+        type: 'scatter',
+        data: {datasets},
+        options: {
+          animation: false,
+          maintainAspectRatio: false,
+          parsing: false,
+          scales: {
+            x: {
+              type: logX ? 'logarithmic' : 'linear',
+              grace: '5%',
+              title: {display: true, text: name(front.goals[a]) + (logX ? ' (log scale)' : '')}
+            },
+            y: {
+              type: logY ? 'logarithmic' : 'linear',
+              grace: '5%',
+              title: {display: true, text: name(front.goals[b]) + (logY ? ' (log scale)' : '')}
+            }
+          },
+          plugins: {
+            legend: {display: true, position: 'bottom'},
+            tooltip: {
+              callbacks: {
+                label: (c) => c.datasetIndex === 0 ? 'point ' + c.raw.point + ': ' +
+                        fmt(c.raw.x, 4) + ', ' + fmt(c.raw.y, 4) + ' (click: its gains)' :
+                                                     c.dataset.label
+              }
+            }
+          },
+          // A click on a point of the front downloads that point's gains file.
+          // (Every item under the pointer, not the nearest only: the picked ring, a band
+          // or a compared controller may lie over the point.)
+          onClick: (event) => {
+            const hit = frontHits(event)[0];
+            if (hit) pickPoint(points[hit.index].point);
+          },
+          onHover: (event) => {
+            canvas.style.cursor = frontHits(event).length ? 'pointer' : 'default';
+          }
+        },
       });
       charts.push(frontChart);
+      // The points of the front under the pointer, the nearest first.
+      function frontHits(event) {
+        const d = (e) => Math.hypot(e.element.x - event.x, e.element.y - event.y);
+        return frontChart.getElementsAtEventForMode(event, 'point', {intersect: true}, false)
+            .filter((e) => e.datasetIndex === 0)
+            .sort((p, q) => d(p) - d(q));
+      }
     }).catch((e) => showError(message, e));
     // Every point: its soft goals with their floors (the spread, as the report prints it), and
     // the points it is no trade-off with.
     const softName = soft.map((i) => name(front.goals[i]));
     const percent = (f) => (finite(f) ? fmt(100 * f, 2) + ' %' : '–');
-    frontBox.append(el('div', {class: 'scroll'}, el('table', {id: 'front-points'},
-      el('thead', null, el('tr', null, ['point', 'trial'].concat(
-        ...softName.map((n) => [n, 'noise floor (spread)']), ['feasible', 'no trade-off with']).map(
-        (h) => el('th', {text: h})))),
-      el('tbody', null, front.points.map((p, k) => el('tr', {class: k === front.picked.index ? 'picked' : ''},
-        el('td', {class: 'num', text: String(k)}), el('td', {class: 'num', text: String(p.trial)}),
-        soft.map((i) => [el('td', {class: 'num', text: fmt(p.goals[i])}),
-                         el('td', {class: 'num', text: percent((p.noise_floor || [])[i])})]),
-        el('td', {text: p.feasible ? 'yes' : 'no'}),
-        el('td', {text: partners[k].map((i) => 'point ' + i).join(', ')})))))));
+    frontBox.append(el(
+        'div', {class: 'scroll'},
+        el('table', {id: 'front-points'},
+           el('thead', null,
+              el('tr', null,
+                 ['point', 'trial']
+                     .concat(
+                         ...softName.map((n) => [n, 'noise floor (spread)']),
+                         ['feasible', 'no trade-off with', 'gains'])
+                     .map((h) => el('th', {text: h})))),
+           el('tbody', null,
+              front.points.map(
+                  (p, k) => el(
+                      'tr', {class: k === front.picked.index ? 'picked' : ''},
+                      el('td', {class: 'num', text: String(k)}),
+                      el('td', {class: 'num', text: String(p.trial)}),
+                      soft.map((i) => [el('td', {class: 'num', text: fmt(p.goals[i])}), el('td', {
+                                         class: 'num',
+                                         text: percent((p.noise_floor || [])[i])
+                                       })]),
+                      el('td', {text: p.feasible ? 'yes' : 'no'}),
+                      el('td', {text: partners[k].map((i) => 'point ' + i).join(', ')}),
+                      el('td', null, el('button', {
+                           class: 'pick',
+                           'data-point': k,
+                           text: 'gains-point-' + k + '.json',
+                           onclick: () => pickPoint(k)
+                         }))))))));
+  }
+  // Point k's gains file (GET .../gains?pick=index:K, the library's pick), downloaded.
+  function pickPoint(k) {
+    const name = 'gains-point-' + k + '.json';
+    frontBox.dataset.picked = String(k);
+    download('/v1/jobs/' + id + '/gains?pick=index:' + k, name).catch((e) => showError(message, e));
   }
 
   // The page opens a job and its live stream reopens it, so two loads can overlap: the newer one
@@ -929,6 +1075,7 @@ function jobView(main, id) {
     lastStatus = job.status;
   });
   loadJob().then(() => { lastStatus = job && job.status; });
+  loadScales();
   let gone = false;
   chartJs().then((Chart) => { if (!gone) makeCharts(Chart); }).catch((e) => showError(message, e));
   const tick = setInterval(() => { if (job && job.status === 'running') renderHeader(); }, 1000);

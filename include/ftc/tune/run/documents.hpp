@@ -27,6 +27,11 @@ std::string measure_label(std::size_t n, const std::string& metric, const Object
 // Every place that shows the value labels it with this (run's summary, comparison.md,
 // report.html, the figures).
 std::string objective_label(const Job& job);
+// What a run's fitness J measures, in words, so that only values of the same measure are set side
+// by side (the service's jobs list groups by it): objective_label without goals; with goals, the
+// one soft goal's measure (its hard goals constrain which J are feasible, not what J is); with two
+// or more soft goals, "front of " and each soft goal's measure, joined by " and ".
+std::string fitness_label(const Job& job);
 // Goal k of the job in words, as comparison.md's goals table heads it: measure_label with the
 // metric's name in capitals, its window when it has one, the aggregate over several scenarios
 // (`scenarios` of them, default the job's), then "minimized" or "<= limit".

@@ -44,6 +44,10 @@ struct JobRecord {
   std::string error;
   bool cancel_requested = false;
   int attempts = 0;  // how many times a worker started it
+  // What its J measures (documents.hpp's fitness_label), so that a list shows side by side only
+  // values that compare; "" in a store older than this field.
+  std::string objective;
+  int warnings = 0;  // of a succeeded run: the warnings its gains file lists
 };
 
 struct Submission {
@@ -53,6 +57,7 @@ struct Submission {
   std::int64_t total_evaluations = 0;
   std::optional<std::string> idempotency_key;
   std::string client;  // who submitted it (the peer address), for the per-client queue quota
+  std::string objective;  // JobRecord::objective
 };
 
 // How many jobs may wait in the queue, in all and per client; 0: no limit.
@@ -126,9 +131,9 @@ class JobStore {
   std::optional<Checkpoint> checkpoint_with_trials(const std::string& id);
 
   // The final state; `finished_at` (UTC ISO 8601) is when the job ended, "" for now (a result
-  // the store could not take at once is written later).
+  // the store could not take at once is written later). `warnings`: how many its gains file has.
   void finish_succeeded(const std::string& id, const std::map<std::string, std::string>& artifacts,
-                        const std::string& finished_at = "");
+                        const std::string& finished_at = "", int warnings = 0);
   void finish_failed(const std::string& id, const std::string& error,
                      const std::string& finished_at = "");
   // A cancelled job keeps the partial results of the iterations it ran (`artifacts`, may be
