@@ -927,6 +927,36 @@ TEST(FrontReport, PanelPerPairOfSoftGoalsAndLinearAxisForZeroValues) {
   EXPECT_NE(gp.find("reference point (1.25, 4.5, 0.5)"), std::string::npos);
 }
 
+// Two compared controllers far off the scale at one edge, their values close: their labels, each
+// on its marker's row beside the edge, would print one over the other (docs/figures/robust-pareto-
+// front.png did); they are set a row apart or more, in their markers' order, the upper one's
+// above. A label with room keeps its place.
+TEST(FrontReport, LabelsOfNearbyControllersAreSetApartInTheirMarkersOrder) {
+  const auto dir = fresh_dir("front-labels");
+  nlohmann::ordered_json j = front_fixture();
+  j["compared"][0]["goals"] = {1000, 1090, 12};    // ISE far right of the front's 0.125..8
+  j["compared"][1]["goals"] = {500, 1018, 19.25};  // TV 7 % lower: a third of a row on the axis
+  const tune::Front front = front_of(j);
+  write_text(dir / "history.csv", kFrontHistory);
+  tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::svg);
+  const std::string gp = slurp(dir / "figures" / "front.gp");
+  // The vertical offset (rows) of a label: "set label 'TEXT' at X,Y right offset -1,ROWS".
+  const auto rows_of = [&](const std::string& text) -> double {
+    const std::size_t at = gp.find("set label '" + text + "' at ");
+    EXPECT_NE(at, std::string::npos) << text << "\n" << gp;
+    if (at == std::string::npos) return NAN;
+    const std::string line = gp.substr(at, gp.find('\n', at) - at);
+    EXPECT_NE(line.find(" right offset -1,"), std::string::npos) << line;
+    return std::stod(line.substr(line.rfind(',') + 1));
+  };
+  const double upper = rows_of("Table 1 (off scale: 1000, 1090)");
+  const double lower = rows_of("job''s gains: PI-FOSMC (job) (infeasible) (off scale: 500, 1018)");
+  EXPECT_EQ(upper, 0) << gp;  // on its marker's row, as nothing is in its way
+  EXPECT_LE(lower, upper - 1) << gp;
+  // The picked point's label is where it always is.
+  EXPECT_NE(gp.find("set label 'picked' at 0.5,2500 offset 1.6,-1.2"), std::string::npos);
+}
+
 // A front of another job (stale beside a re-run) is not this run's; a damaged front.json is
 // refused by `report` at its JSON path (front_from_json's checks: test_front.cpp); a front without
 // its history column is an error, not an empty plot.
@@ -982,12 +1012,18 @@ TEST(FrontReport, PageHoldsTheFrontTableAndBothFigures) {
        {"<h2>Pareto front</h2>", "not a proven optimum", "alt=\"Pareto front\"",
         "alt=\"Hypervolume\"", "reference point (1.25, 4.5), is 2.375",
         "gains.json holds point #2, picked by the rule <code>knee</code>",
-        "<th>#</th><th>Kp</th><th>Ki</th><th>ISE[first fault, +4 s] [rad²·s] (min)</th>",
-        "<th>peak command[0 s, end] [command's unit] ≤ 17.9</th><th>feasible</th>",
-        "<tr class=\"picked\"><td>2 ★</td><td>20</td><td>1.5</td><td>0.5</td><td>2500</td>"
-        "<td>15</td><td>yes</td><td>0</td><td>5 %</td><td>1 %</td><td>–</td><td>5</td>"
-        "<td>picked (knee)</td></tr>",
-        "<td>within the noise floor of #1</td>", "<td>within the noise floor of #0</td>",
+        "<li>ISE[first fault, +4 s] [rad²·s], minimized</li>",
+        "<li>peak command[0 s, end] [command's unit] ≤ 17.9</li></ol>",
+        "<th>#</th><th>note</th><th>Kp</th><th>Ki</th>"
+        "<th title=\"ISE[first fault, +4 s]\">goal 1 (min)</th>",
+        "<th title=\"peak command[0 s, end]\">goal 3 ≤ 17.9</th><th title=\"yes, or no with the "
+        "total violation of the hard goals\">feasible</th><th title=\"the noise floor of goal 1\">",
+        "<th title=\"the noise floor of goal 3\">floor 3</th><th>trial</th></tr>",
+        "<tr class=\"picked\"><td>2 ★</td><td class=\"note\">picked (knee)</td><td>20</td>"
+        "<td>1.5</td><td>0.5</td><td>2500</td><td>15</td><td>yes</td><td>5 %</td>"
+        "<td>1 %</td><td>–</td><td>5</td></tr>",
+        "<td class=\"note\">within the noise floor of #1</td>",
+        "<td class=\"note\">within the noise floor of #0</td>",
         "2 point(s) differ from another by no more than the noise floor of one of the two on "
         "every soft goal",
         "<tr class=\"compared\"><td>Table 1</td>", "<td>PI-FOSMC (job) (job's gains)</td>"})

@@ -169,6 +169,76 @@ std::string reference_text(const Front& front) {
   return s;
 }
 
+// Where a panel's text labels go, so that none covers another: each label is a box of one text
+// row, its width estimated from its characters, placed at an offset (in character cells, as
+// gnuplot's `offset`) from its anchor. The fixed boxes first, then the others from the top down
+// (so that labels keep their markers' order); a label whose box would overlap one already placed
+// is moved by a row and a fifth at a time, nearest first (below, then above), staying inside the
+// panel where it can. Sizes are estimates of the PNG terminal's default font, in the
+// panel's pixels: a label a few pixels off is still read, two on one line are not.
+struct LabelBox {
+  double fx = 0, fy = 0;  // the anchor, as a fraction of the plot area (0..1 from bottom left)
+  std::size_t chars = 0;  // the text's length in characters (UTF-8 continuation bytes not counted)
+  bool right = false;     // right-aligned at the anchor (text to its left)
+  double dx = 1, dy = 0;  // the wanted offset in character cells
+  bool fixed = false;     // placed where asked (the picked point's label)
+};
+
+std::size_t text_chars(const std::string& s) {
+  std::size_t n = 0;
+  for (unsigned char c : s) n += (c & 0xC0) != 0x80;
+  return n;
+}
+
+// The vertical offsets (in rows) at which the labels do not overlap, in the order given.
+std::vector<double> place_labels(const std::vector<LabelBox>& labels, double plot_w,
+                                 double plot_h) {
+  constexpr double kRow = 16, kChar = 7.5;  // px of one text row and one character
+  struct Box {
+    double x0, x1, y;
+  };
+  std::vector<Box> placed;
+  std::vector<double> rows(labels.size());
+  std::vector<std::size_t> order(labels.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (labels[a].fixed != labels[b].fixed) return labels[a].fixed;
+    return labels[a].fy * plot_h + labels[a].dy * kRow >
+           labels[b].fy * plot_h + labels[b].dy * kRow;
+  });
+  const auto box = [&](const LabelBox& l, double dy) {
+    const double x = l.fx * plot_w + l.dx * kChar, w = static_cast<double>(l.chars) * kChar;
+    return Box{l.right ? x - w : x, l.right ? x : x + w, l.fy * plot_h + dy * kRow};
+  };
+  const auto clear_of = [&](const Box& b) {
+    for (const Box& o : placed)
+      if (b.x0 < o.x1 && o.x0 < b.x1 && std::fabs(b.y - o.y) < 1.05 * kRow) return false;
+    return true;
+  };
+  for (std::size_t i : order) {
+    const LabelBox& l = labels[i];
+    double dy = l.dy;
+    if (!l.fixed) {
+      // The wanted offset, then a row and a fifth further each way, below first; inside the
+      // panel if possible.
+      bool found = false;
+      for (int pass = 0; pass < 2 && !found; ++pass)
+        for (int k = 0; k <= 12 && !found; ++k) {
+          const double step = 1.2 * ((k + 1) / 2) * (k % 2 ? -1 : 1);
+          const Box b = box(l, l.dy + step);
+          const bool inside = b.y >= 0.5 * kRow && b.y <= plot_h - 0.5 * kRow;
+          if ((inside || pass == 1) && clear_of(b)) {
+            dy = l.dy + step;
+            found = true;
+          }
+        }
+    }
+    placed.push_back(box(l, dy));
+    rows[i] = dy;
+  }
+  return rows;
+}
+
 }  // namespace
 
 std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& front,
@@ -211,6 +281,10 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       if (a < b) noise_pairs.emplace_back(a, b);
   any_noise_pair = !noise_pairs.empty();
 
+  // A panel's plot area in pixels, about: the panel less the axes' tics and titles, the key
+  // below it (8 rows) and the title.
+  const double panel_w = static_cast<double>(width) / static_cast<double>(cols) - 110,
+               panel_h = static_cast<double>(height - 60) / static_cast<double>(rows) - 8 * 16 - 70;
   g << plot::terminal(fmt, width, height) << "set output " << gp(scatter) << "\n"
     << "set multiplot layout " << rows << "," << cols << " title "
     << gp("Pareto front of the tuned points (" + std::to_string(front.points.size()) +
@@ -246,6 +320,11 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       << "set xlabel " << gp(axis_label(front.goals[x])) << " noenhanced\nset ylabel "
       << gp(axis_label(front.goals[y])) << " noenhanced\n";
     const Axis ax = axis_of(front, x, log_x), ay = axis_of(front, y, log_y);
+    // The panel's labels, as boxes in its plot area (place_labels).
+    std::vector<LabelBox> boxes;
+    const auto frac = [](const Axis& a, double v) {
+      return a.hi > a.lo ? (a.to(v) - a.lo) / (a.hi - a.lo) : 0.5;
+    };
     g << "set xrange " << ax.range() << "\nset yrange " << ay.range() << "\n"
       << log_tics("x", ax) << log_tics("y", ay);
     std::string cmd = "plot ";
@@ -270,8 +349,15 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
                gp(text) + ", ";
         g << "set label " << gp("picked") << " at " << num(p.goals[x]) << "," << num(p.goals[y])
           << " offset 1.6,-1.2 textcolor rgb '" << picked_colour << "' front\n";
+        boxes.push_back({frac(ax, p.goals[x]), frac(ay, p.goals[y]), 6, false, 1.6, -1.2, true});
       }
     }
+    struct Pending {
+      std::string text;
+      double px, py;
+      bool right;
+    };
+    std::vector<Pending> pending;
     for (std::size_t c = 0; c < front.compared.size(); ++c) {
       const FrontCompared& k = front.compared[c];
       const double vx = k.goals[x], vy = k.goals[y];
@@ -290,12 +376,24 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
              std::to_string(kComparedMarks[c % 5] - (off ? 1 : 0)) + " ps 1.8 lc rgb '" + colour +
              "' title " + gp(name) + ", ";
       // Labels staggered, so that controllers close together stay readable; right-aligned at
-      // the right edge.
+      // the right edge; then moved apart where they would still cover one another.
       static const double kRaise[] = {0.9, -1.3, 2.0};
       const bool right = off && ax.to(px) >= ax.hi, top = off && ay.to(py) >= ay.hi;
-      g << "set label " << gp(text) << " at " << num(px) << "," << num(py)
-        << (right ? " right offset -1," : " offset 1,") << num(top ? -1.3 : kRaise[c % 3])
-        << " noenhanced front\n";
+      // (One off the scale sits on its marker's row, beside it, so that several at one edge
+      // keep their markers' order.)
+      boxes.push_back({frac(ax, px), frac(ay, py), text_chars(text), right, right ? -1.0 : 1.0,
+                       top   ? -1.3
+                       : off ? 0.0
+                             : kRaise[c % 3],
+                       false});
+      pending.push_back({text, px, py, right});
+    }
+    const std::vector<double> rows_at = place_labels(boxes, panel_w, panel_h);
+    for (std::size_t k = 0; k < pending.size(); ++k) {
+      const Pending& l = pending[k];
+      g << "set label " << gp(l.text) << " at " << num(l.px) << "," << num(l.py)
+        << (l.right ? " right offset -1," : " offset 1,")
+        << num(rows_at[boxes.size() - pending.size() + k]) << " noenhanced front\n";
     }
     g << cmd.substr(0, cmd.size() - 2) << "\n";
   }

@@ -220,48 +220,63 @@ void front_section(const fs::path& run_dir, const Job& job, const Front& front,
          "not a trade-off.";
   else
     h << "no two points differ by less than the noise floor of one of them on every soft goal.";
-  h << "</p>\n<table class=\"front\"><tr><th>#</th>";
-  for (const std::string& n : param_names) h << "<th>" << html_escape(n) << "</th>";
+  // The goals named once, above the table, and its columns by number: with each goal's label
+  // in two headers (its value and its floor) the table was 1 485 px wide and its notes ran off
+  // the page. The notes come second, where they stay in sight.
+  h << "</p>\n<p>The goals (the columns \"goal k\" hold their values, \"floor k\" their noise "
+       "floors):</p>\n<ol class=\"goals\">";
   for (const FrontGoal& g : front.goals)
-    h << "<th>" << html_escape(g.label) << " [" << html_escape(g.unit) << "]"
-      << (g.soft() ? " (min)" : " ≤ " + value(*g.at_most)) << "</th>";
-  h << "<th>feasible</th><th>violation</th>";
-  for (const FrontGoal& g : front.goals) h << "<th>noise floor " << html_escape(g.label) << "</th>";
-  h << "<th>trial</th><th>note</th></tr>\n";
+    h << "<li>" << html_escape(g.label) << " [" << html_escape(g.unit) << "]"
+      << (g.soft() ? ", minimized" : " ≤ " + value(*g.at_most)) << "</li>";
+  h << "</ol>\n<div class=\"wide\"><table class=\"front\"><tr><th>#</th><th>note</th>";
+  for (const std::string& n : param_names) {
+    // A line may break after an underscore of a long name (switching_gain).
+    std::string name = html_escape(n);
+    for (std::size_t at = 0; (at = name.find('_', at)) != std::string::npos; at += 6)
+      name.insert(at + 1, "<wbr>");
+    h << "<th>" << name << "</th>";
+  }
+  for (std::size_t g = 0; g < G; ++g)
+    h << "<th title=\"" << html_escape(front.goals[g].label) << "\">goal " << g + 1
+      << (front.goals[g].soft() ? " (min)" : " ≤ " + value(*front.goals[g].at_most)) << "</th>";
+  h << "<th title=\"yes, or no with the total violation of the hard goals\">feasible</th>";
+  for (std::size_t g = 0; g < G; ++g)
+    h << "<th title=\"the noise floor of goal " << g + 1 << "\">floor " << g + 1 << "</th>";
+  h << "<th>trial</th></tr>\n";
   for (std::size_t i = 0; i < front.points.size(); ++i) {
     const FrontPoint& p = front.points[i];
     const bool picked = front.picked == i;
     h << "<tr" << (picked ? " class=\"picked\"" : "") << "><td>" << i << (picked ? " ★" : "")
       << "</td>";
-    for (std::size_t k = 0; k < param_names.size(); ++k)
-      h << "<td>" << value(k < p.parameters.size() ? p.parameters[k] : NAN) << "</td>";
-    for (std::size_t g = 0; g < G; ++g) h << "<td>" << value(p.goals[g]) << "</td>";
-    h << "<td>" << (p.feasible() ? "yes" : "no") << "</td><td>" << value(p.violation) << "</td>";
-    for (std::size_t g = 0; g < G; ++g) {
-      const double f = p.noise_floor[g].value_or(NAN);
-      h << "<td>"
-        << (std::isfinite(f) ? detail::format_number(100 * f, "%.2g") + " %" : std::string("–"))
-        << "</td>";
-    }
-    h << "<td>" << p.trial << "</td><td>";
     std::string note = picked ? "picked (" + front.rule + ")" : "";
     if (!p.within_noise.empty()) {
       std::string list;
       for (std::size_t t : p.within_noise) list += (list.empty() ? "#" : ", #") + std::to_string(t);
       note += (note.empty() ? "" : "; ") + std::string("within the noise floor of ") + list;
     }
-    h << html_escape(note) << "</td></tr>\n";
+    h << "<td class=\"note\">" << html_escape(note) << "</td>";
+    for (std::size_t k = 0; k < param_names.size(); ++k)
+      h << "<td>" << value(k < p.parameters.size() ? p.parameters[k] : NAN) << "</td>";
+    for (std::size_t g = 0; g < G; ++g) h << "<td>" << value(p.goals[g]) << "</td>";
+    h << "<td>" << (p.feasible() ? "yes" : "no (violation " + value(p.violation) + ")") << "</td>";
+    for (std::size_t g = 0; g < G; ++g) {
+      const double f = p.noise_floor[g].value_or(NAN);
+      h << "<td>"
+        << (std::isfinite(f) ? detail::format_number(100 * f, "%.2g") + " %" : std::string("–"))
+        << "</td>";
+    }
+    h << "<td>" << p.trial << "</td></tr>\n";
   }
   for (const FrontCompared& c : front.compared) {
     h << "<tr class=\"compared\"><td>" << html_escape(c.label)
-      << (c.role == "baseline" ? " (job's gains)" : "") << "</td>";
+      << (c.role == "baseline" ? " (job's gains)" : "") << "</td><td class=\"note\">compared</td>";
     for (std::size_t k = 0; k < param_names.size(); ++k) h << "<td></td>";
     for (std::size_t g = 0; g < G; ++g) h << "<td>" << value(c.goals[g]) << "</td>";
-    h << "<td>" << (c.feasible ? "yes" : "no") << "</td><td></td>";
+    h << "<td>" << (c.feasible ? "yes" : "no") << "</td>";
     for (std::size_t g = 0; g < G; ++g) h << "<td></td>";
-    h << "<td></td><td>compared</td></tr>\n";
+    h << "<td></td></tr>\n";
   }
-  h << "</table>\n";
+  h << "</table></div>\n";
   for (const Figure& f : figures)
     h << "<figure><img alt=\"" << html_escape(f.title) << "\" src=\"data:image/png;base64,"
       << base64(figure_bytes(run_dir / f.file)) << "\"><figcaption>" << html_escape(f.caption)
@@ -287,7 +302,12 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
        ".settings td{text-align:left;font-family:monospace}"
        "img{max-width:100%;border:1px solid #eee}pre{background:#f7f7f7;padding:1em;overflow:auto}"
        "figcaption{color:#555;margin-bottom:2em}tr.picked td{background:#fff4c2;font-weight:bold}"
-       "tr.compared td{background:#f7f7f7}</style></head><body>\n";
+       "tr.compared td{background:#f7f7f7}.wide{overflow-x:auto}"
+       "table.front td.note{text-align:left;white-space:normal;min-width:9em}"
+       "table.front td,table.front th{padding:3px 5px}table.front td{white-space:nowrap}"
+       "table.front td:first-child{white-space:normal;min-width:4em}table.front "
+       "th:nth-child(2){text-align:left}"
+       "</style></head><body>\n";
   h << "<h1>" << html_escape(title) << "</h1>\n";
   h << "<h2>Tuned gains</h2>\n<table><tr><th>parameter</th><th>tuned</th><th>job's "
        "value</th></tr>\n";
