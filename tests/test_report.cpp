@@ -955,6 +955,17 @@ TEST(FrontReport, LabelsOfNearbyControllersAreSetApartInTheirMarkersOrder) {
   EXPECT_LE(lower, upper - 1) << gp;
   // The picked point's label is where it always is.
   EXPECT_NE(gp.find("set label 'picked' at 0.5,2500 offset 1.6,-1.2"), std::string::npos);
+  // Off the top near the right edge: the label's text would run past the edge, so it ends at
+  // its marker instead of starting there.
+  j["compared"][0]["goals"] = {6, 1e6, 12};
+  const tune::Front top = front_of(j);
+  tune::report_detail::draw_front_figures(dir, top, tune::FigureFormat::svg);
+  const std::string again = slurp(dir / "figures" / "front.gp");
+  const std::size_t at = again.find("set label 'Table 1 (off scale: 6, 1e+06)' at ");
+  ASSERT_NE(at, std::string::npos) << again;
+  EXPECT_NE(again.substr(at, again.find('\n', at) - at).find(" right offset -1,"),
+            std::string::npos)
+      << again.substr(at, 120);
 }
 
 // A front of another job (stale beside a re-run) is not this run's; a damaged front.json is

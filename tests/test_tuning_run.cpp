@@ -633,6 +633,27 @@ TEST(TuningRun, WarnsWhenAComparedControllerScoresLowerOrTheTunedGainsChatter) {
   w = tune::comparison_warnings(r);
   EXPECT_EQ(w.size(), 2u) << ::testing::PrintToString(w);
   for (const std::string& x : w) EXPECT_EQ(x.find("control TV"), std::string::npos) << x;
+  // A job with a goal on the control TV prices it (issue 41): the warning does not say that it
+  // does not; a hard goal caps it, and nothing is said.
+  r.job.metrics.reset();
+  tune::GoalConfig tv_goal;
+  tv_goal.metric = &sim::kMetricFields[sim::metric_index("control_tv")];
+  tv_goal.minimize = true;
+  r.job.goals = {tune::GoalConfig{}, tv_goal};
+  r.job.goals[0].minimize = true;
+  w = tune::comparison_warnings(r);
+  ASSERT_EQ(w.size(), 3u) << ::testing::PrintToString(w);
+  EXPECT_NE(w[2].find("3.01 times over the job's own gains"), std::string::npos) << w[2];
+  EXPECT_NE(w[2].find("the job minimizes the control TV as a goal, so this is the trade-off its "
+                      "picked point makes"),
+            std::string::npos)
+      << w[2];
+  EXPECT_EQ(w[2].find("does not price"), std::string::npos) << w[2];
+  r.job.goals[1].minimize = false;
+  r.job.goals[1].at_most = 1000;
+  w = tune::comparison_warnings(r);
+  EXPECT_EQ(w.size(), 2u) << ::testing::PrintToString(w);
+  for (const std::string& x : w) EXPECT_EQ(x.find("control TV"), std::string::npos) << x;
 }
 
 TEST(Cli, RunNeverWritesSilentlyOverAnEarlierRun) {

@@ -176,6 +176,8 @@ std::string reference_text(const Front& front) {
 // is moved by a row and a fifth at a time, nearest first (below, then above), staying inside the
 // panel where it can. Sizes are estimates of the PNG terminal's default font, in the
 // panel's pixels: a label a few pixels off is still read, two on one line are not.
+constexpr double kLabelChar = 7.5;  // px of a label's character, about, in the PNG terminal
+
 struct LabelBox {
   double fx = 0, fy = 0;  // the anchor, as a fraction of the plot area (0..1 from bottom left)
   std::size_t chars = 0;  // the text's length in characters (UTF-8 continuation bytes not counted)
@@ -193,7 +195,7 @@ std::size_t text_chars(const std::string& s) {
 // The vertical offsets (in rows) at which the labels do not overlap, in the order given.
 std::vector<double> place_labels(const std::vector<LabelBox>& labels, double plot_w,
                                  double plot_h) {
-  constexpr double kRow = 16, kChar = 7.5;  // px of one text row and one character
+  constexpr double kRow = 16, kChar = kLabelChar;  // px of one text row and one character
   struct Box {
     double x0, x1, y;
   };
@@ -378,7 +380,12 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       // Labels staggered, so that controllers close together stay readable; right-aligned at
       // the right edge; then moved apart where they would still cover one another.
       static const double kRaise[] = {0.9, -1.3, 2.0};
-      const bool right = off && ax.to(px) >= ax.hi, top = off && ay.to(py) >= ay.hi;
+      // Right-aligned at the right edge, and wherever the text would run past it.
+      const bool right =
+          (off && ax.to(px) >= ax.hi) ||
+          frac(ax, px) * panel_w + (static_cast<double>(text_chars(text)) + 1) * kLabelChar >
+              panel_w;
+      const bool top = off && ay.to(py) >= ay.hi;
       // (One off the scale sits on its marker's row, beside it, so that several at one edge
       // keep their markers' order.)
       boxes.push_back({frac(ax, px), frac(ay, py), text_chars(text), right, right ? -1.0 : 1.0,

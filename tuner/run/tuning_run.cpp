@@ -575,13 +575,24 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   const double tv_ratio = r.job.metrics && r.job.metrics->control_tv_warning
                               ? *r.job.metrics->control_tv_warning
                               : kControlTvWarningRatio;
-  if (std::isfinite(tv_base) && tv_base > 0 && tv_tuned > tv_ratio * tv_base) {
+  // A job with a goal on the control TV prices it: a hard goal caps it (the tuned gains meet the
+  // cap, or are infeasible and say so), and a soft goal trades it against the others by the
+  // job's choice; then "the objective does not price control activity" would be false.
+  const GoalConfig* tv_goal = nullptr;
+  for (const GoalConfig& g : r.job.goals)
+    if (g.metric == &tv && (!tv_goal || g.at_most)) tv_goal = &g;
+  if (std::isfinite(tv_base) && tv_base > 0 && tv_tuned > tv_ratio * tv_base &&
+      !(tv_goal && tv_goal->at_most)) {
     std::snprintf(buf, sizeof buf,
                   "The tuned gains raise the control TV (sum of |u_k - u_{k-1}|, a measure of "
                   "chattering) %.3g times over the job's own gains on the listed scenario%s "
-                  "(%.4g against %.4g): the objective does not price control activity, so check "
-                  "actuator wear and bandwidth before using them.",
-                  tv_tuned / tv_base, r.listed_scenarios == 1 ? "" : "s", tv_tuned, tv_base);
+                  "(%.4g against %.4g): %s",
+                  tv_tuned / tv_base, r.listed_scenarios == 1 ? "" : "s", tv_tuned, tv_base,
+                  tv_goal ? "the job minimizes the control TV as a goal, so this is the trade-off "
+                            "its picked point makes (other points of the front make others); "
+                            "check actuator wear and bandwidth before using them."
+                          : "the objective does not price control activity, so check actuator "
+                            "wear and bandwidth before using them.");
     out.emplace_back(buf);
   }
   return out;
