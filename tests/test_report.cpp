@@ -5,8 +5,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
-#include "ftc/tune/evaluators/tbb_evaluator.hpp"
 #include "ftc/tune/api/api.hpp"
+#include "ftc/tune/evaluators/tbb_evaluator.hpp"
+#include "ftc/tune/report/evaluation.hpp"
 #include "ftc/tune/report/report.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/evaluate.hpp"
@@ -966,6 +967,37 @@ TEST(FrontReport, LabelsOfNearbyControllersAreSetApartInTheirMarkersOrder) {
   EXPECT_NE(again.substr(at, again.find('\n', at) - at).find(" right offset -1,"),
             std::string::npos)
       << again.substr(at, 120);
+}
+
+// A held-out front (`evaluate --front`) is drawn with each point where the run put it and where
+// the held-out members put it, joined by a line; the points that drop off the held-out front are
+// drawn apart, the held-out knee ringed, and the title counts the points that stay (issue 42).
+TEST(FrontReport, HeldOutFigureJoinsEachPointInSampleToHeldOut) {
+  const auto dir = fresh_dir("front-held-out");
+  tune::Front front = front_of(front_fixture());
+  EXPECT_TRUE(tune::draw_held_out_front(front, dir).empty());  // not a held-out front
+  front.held_out = tune::FrontHeldOut{"run", 8, 100, 2.375};
+  for (tune::FrontPoint& p : front.points) {
+    p.in_sample = p.goals;
+    for (double& v : p.goals) v *= 2;
+  }
+  front.points[4].dominated = true;
+  const std::filesystem::path figure =
+      tune::draw_held_out_front(front, dir, tune::FigureFormat::svg);
+  EXPECT_EQ(figure, dir / "front-held-out.svg");
+  EXPECT_TRUE(tune::figure_is_whole(figure));
+  const std::string gp = slurp(dir / "front-held-out.gp");
+  EXPECT_NE(gp.find("on 100 held-out members (seed 8): 4 of 5 points stay on it"),
+            std::string::npos)
+      << gp;
+  EXPECT_NE(gp.find("0.125,9000\n0.25,18000\n\n"), std::string::npos);  // point 0's link
+  EXPECT_NE(gp.find("8,400\n16,800\n\n"), std::string::npos);           // point 4's
+  // Point 4 off the held-out front: its held-out mark alone in the crosses' block.
+  const std::size_t crosses = gp.find("'held out, off the front (dominated or infeasible)'");
+  ASSERT_NE(crosses, std::string::npos);
+  EXPECT_NE(gp.find("EOD\n$d4 << EOD\n16,800\nEOD\n"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("'held-out knee, #2'"), std::string::npos);
+  EXPECT_NE(gp.find("'Table 1, held out'"), std::string::npos);
 }
 
 // A front of another job (stale beside a re-run) is not this run's; a damaged front.json is

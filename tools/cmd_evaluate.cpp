@@ -86,6 +86,10 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
     }
     files.push_back("worst");
     if (result.front) files.push_back("front.json");
+    if (!result.front_figure.empty()) {
+      files.push_back("front-held-out.gp");
+      files.push_back(result.front_figure.filename().string());
+    }
     json controllers = json::array();
     for (const tune::EvaluatedController& c : r.controllers)
       controllers.push_back({{"label", c.label},
@@ -129,9 +133,11 @@ int run_evaluate(const EvaluateCliOptions& o, const Globals& g) {
   std::printf("  %lld simulations on %d thread%s in %.2f s\n",
               static_cast<long long>(r.simulations), result.threads, result.threads == 1 ? "" : "s",
               elapsed());
-  std::printf("  wrote %s/{evaluation.json, evaluation.csv%s%s, worst/}\n", out.c_str(),
-              figure.empty() ? "" : (", " + figure.filename().string()).c_str(),
-              result.front ? ", front.json" : "");
+  std::printf(
+      "  wrote %s/{evaluation.json, evaluation.csv%s%s%s, worst/}\n", out.c_str(),
+      figure.empty() ? "" : (", " + figure.filename().string()).c_str(),
+      result.front ? ", front.json" : "",
+      result.front_figure.empty() ? "" : (", " + result.front_figure.filename().string()).c_str());
   if (result.front) std::fputs(tune::front_summary(job, *result.front, out).c_str(), stdout);
   return 0;
 }

@@ -476,7 +476,10 @@ EvaluateJobResult evaluate_job(const Job& job, const EvaluateJobOptions& o) {
                               .dump(2) +
                           "\n");
   }
-  if (o.figure) result.figure = draw_evaluation(result.evaluation, result.out);
+  if (o.figure) {
+    result.figure = draw_evaluation(result.evaluation, result.out);
+    if (result.front) result.front_figure = draw_held_out_front(*result.front, result.out);
+  }
   return result;
 }
 

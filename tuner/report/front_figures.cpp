@@ -8,6 +8,7 @@
 
 #include "ftc/sim/input_error.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/report/evaluation.hpp"
 #include "io/decimal.hpp"
 #include "io/text.hpp"
 #include "report/gnuplot.hpp"
@@ -130,6 +131,18 @@ std::string log_tics(const char* axis, const Axis& a) {
   return s + ")\n";
 }
 
+// The axis over [lo, hi] (log10 on a log axis) with a margin either side.
+Axis padded(bool log, double lo, double hi) {
+  Axis a;
+  a.log = log;
+  const double pad = log ? std::max(0.1, 0.08 * (hi - lo))
+                         : (hi > lo ? 0.08 * (hi - lo) : std::max(1e-12, 0.1 * std::fabs(hi)));
+  a.lo = lo - pad;
+  a.hi = hi + pad;
+  if (!log && lo >= 0 && a.lo < 0) a.lo = 0;  // a goal is not negative
+  return a;
+}
+
 Axis axis_of(const Front& front, std::size_t g, bool log) {
   Axis a;
   a.log = log;
@@ -150,12 +163,7 @@ Axis axis_of(const Front& front, std::size_t g, bool log) {
         hi = std::max(hi, t);
       }
     }
-  const double pad = log ? std::max(0.1, 0.08 * (hi - lo))
-                         : (hi > lo ? 0.08 * (hi - lo) : std::max(1e-12, 0.1 * std::fabs(hi)));
-  a.lo = lo - pad;
-  a.hi = hi + pad;
-  if (!log && lo >= 0 && a.lo < 0) a.lo = 0;  // a goal is not negative
-  return a;
+  return padded(log, lo, hi);
 }
 
 // What the soft goals' log10 space and its reference point are, in words.
@@ -466,3 +474,113 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
 }
 
 }  // namespace ftc::tune::report_detail
+
+namespace ftc::tune {
+
+std::filesystem::path draw_held_out_front(const Front& front, const std::filesystem::path& dir,
+                                          FigureFormat fmt) {
+  using namespace report_detail;
+  if (!front.held_out || front.points.empty() || front.soft.size() < 2) return {};
+  const std::size_t x = front.soft[0], y = front.soft[1];
+  const std::string ext = plot::extension(fmt);
+  const std::filesystem::path figure = dir / ("front-held-out" + ext);
+  // Both clouds and the compared controllers set the axes: log where every value is positive.
+  std::vector<double> xs, ys;
+  for (const FrontPoint& p : front.points) {
+    for (const std::vector<double>* g : {&p.goals, &p.in_sample})
+      if (g->size() > std::max(x, y) && std::isfinite((*g)[x]) && std::isfinite((*g)[y])) {
+        xs.push_back((*g)[x]);
+        ys.push_back((*g)[y]);
+      }
+  }
+  for (const FrontCompared& c : front.compared)
+    if (std::isfinite(c.goals[x]) && std::isfinite(c.goals[y])) {
+      xs.push_back(c.goals[x]);
+      ys.push_back(c.goals[y]);
+    }
+  if (xs.empty()) return {};
+  const auto axis = [](const std::vector<double>& v) {
+    Axis a;
+    a.log = std::all_of(v.begin(), v.end(), [](double t) { return t > 0; });
+    double lo = INFINITY, hi = -INFINITY;
+    for (double t : v) {
+      lo = std::min(lo, a.to(t));
+      hi = std::max(hi, a.to(t));
+    }
+    return padded(a.log, lo, hi);
+  };
+  const Axis ax = axis(xs), ay = axis(ys);
+  const std::string front_colour = plot::viridis(0.0), picked_colour = plot::viridis(0.6);
+  std::string links, in_sample, kept, dropped;
+  std::size_t on = 0;
+  for (const FrontPoint& p : front.points) {
+    const bool held = std::isfinite(p.goals[x]) && std::isfinite(p.goals[y]);
+    const bool ran = p.in_sample.size() > std::max(x, y) && std::isfinite(p.in_sample[x]) &&
+                     std::isfinite(p.in_sample[y]);
+    if (ran) in_sample += num(p.in_sample[x]) + "," + num(p.in_sample[y]) + "\n";
+    if (held) (p.dominated ? dropped : kept) += num(p.goals[x]) + "," + num(p.goals[y]) + "\n";
+    if (held && ran)
+      links += num(p.in_sample[x]) + "," + num(p.in_sample[y]) + "\n" + num(p.goals[x]) + "," +
+               num(p.goals[y]) + "\n\n";
+    on += p.dominated ? 0 : 1;
+  }
+  std::ostringstream g;
+  int blocks = 0;
+  const auto block = [&](const std::string& rows) {
+    const std::string name = "$d" + std::to_string(++blocks);
+    g << name << " << EOD\n" << rows << "EOD\n";
+    return name;
+  };
+  const FrontHeldOut& h = *front.held_out;
+  g << plot::styles(0) << plot::terminal(fmt, 1000, 700) << "set output "
+    << gp(figure.filename().string()) << "\nset title "
+    << gp("The run's front in sample and on " + std::to_string(h.count) +
+          " held-out members (seed " + std::to_string(h.seed) + "): " + std::to_string(on) +
+          " of " + std::to_string(front.points.size()) + " points stay on it")
+    << " font ',12' noenhanced\nset key below horizontal maxrows 3 box opaque noenhanced "
+       "font ',9'\nset bmargin 7\n"
+    << (ax.log ? "set logscale x\n" : "unset logscale x\n")
+    << (ay.log ? "set logscale y\n" : "unset logscale y\n")
+    << "set format x '%g'\nset format y '%g'\nset xlabel " << gp(axis_label(front.goals[x]))
+    << " noenhanced\nset ylabel " << gp(axis_label(front.goals[y])) << " noenhanced\nset xrange "
+    << ax.range() << "\nset yrange " << ay.range() << "\n"
+    << log_tics("x", ax) << log_tics("y", ay);
+  std::string cmd = "plot ";
+  if (!links.empty())
+    cmd += block(links) + " using 1:2 with lines lw 1 lc rgb 'gray60' title " +
+           gp("a point in sample to held out") + ", ";
+  if (!in_sample.empty())
+    cmd += block(in_sample) + " using 1:2 with points pt 6 ps 1.1 lc rgb 'gray35' title " +
+           gp("in sample (the run's front)") + ", ";
+  if (!kept.empty())
+    cmd += block(kept) + " using 1:2 with points pt 7 ps 1.1 lc rgb '" + front_colour + "' title " +
+           gp("held out, still on the front") + ", ";
+  if (!dropped.empty())
+    cmd += block(dropped) + " using 1:2 with points pt 2 ps 1.2 lc rgb '" + front_colour +
+           "' title " + gp("held out, off the front (dominated or infeasible)") + ", ";
+  if (on > 0) {
+    const FrontPoint& k = front.points[front.picked];
+    if (std::isfinite(k.goals[x]) && std::isfinite(k.goals[y]))
+      cmd += block(num(k.goals[x]) + "," + num(k.goals[y]) + "\n") +
+             " using 1:2 with points pt 6 ps 3 lw 2.5 lc rgb '" + picked_colour + "' title " +
+             gp("held-out knee, #" + std::to_string(front.picked)) + ", ";
+  }
+  static const int kComparedMarks[] = {5, 9, 13, 11, 15};
+  for (std::size_t c = 0; c < front.compared.size(); ++c) {
+    const FrontCompared& k = front.compared[c];
+    if (!std::isfinite(k.goals[x]) || !std::isfinite(k.goals[y])) continue;
+    const std::string colour = plot::viridis(
+        0.25 + 0.6 * static_cast<double>(c) / std::max<std::size_t>(1, front.compared.size()));
+    cmd += block(num(k.goals[x]) + "," + num(k.goals[y]) + "\n") + " using 1:2 with points pt " +
+           std::to_string(kComparedMarks[c % 5]) + " ps 1.8 lc rgb '" + colour + "' title " +
+           gp((k.role == "baseline" ? "job's gains: " : "") + k.label +
+              (k.feasible ? "" : " (infeasible)") + ", held out") +
+           ", ";
+  }
+  g << cmd.substr(0, cmd.size() - 2) << "\n";
+  write_file_atomic(dir / ("front-held-out.gp"), g.str());
+  run_gnuplot(dir, "front-held-out.gp");
+  return figure;
+}
+
+}  // namespace ftc::tune

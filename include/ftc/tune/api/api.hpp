@@ -259,6 +259,7 @@ struct EvaluateJobResult {
   std::filesystem::path out, figure;  // figure: empty without one
   int threads = 0;                    // the evaluator's concurrency
   std::optional<Front> front;         // with EvaluateJobOptions::front: the held-out front
+  std::filesystem::path front_figure;  // its figure (draw_held_out_front); empty without one
 };
 
 // The directory `ftctune evaluate` writes into when none is given (logs which run it chose).
