@@ -1000,6 +1000,42 @@ TEST(FrontReport, HeldOutFigureJoinsEachPointInSampleToHeldOut) {
   EXPECT_NE(gp.find("'Table 1, held out'"), std::string::npos);
 }
 
+// evaluate --front's held-out front in the run's evaluation/ is shown on the page: each point's
+// soft goals in sample and held out, their ratio beside the point's noise floor, whether it stays
+// on the held-out front, and the held-out knee (issue 42).
+TEST(FrontReport, PageShowsTheHeldOutFrontBesideTheRunsValues) {
+  const auto run = finished_run("front-held-out-html");
+  const json gains = json::parse(slurp(run / "gains.json"));
+  nlohmann::ordered_json j = front_fixture();
+  j["job_sha256"] = gains["job"]["sha256"].get<std::string>();
+  write_text(run / "front.json", j.dump(2));
+  write_text(run / "job.json", front_job_json(j).dump(2));
+  add_hypervolume_column(run / "history.csv");
+  EXPECT_EQ(slurp(tune::render_report(run).html).find("The front held out"), std::string::npos);
+  nlohmann::ordered_json held = j;
+  held["held_out"] = {
+      {"run", run.string()}, {"seed", 8}, {"count", 100}, {"in_sample_hypervolume", 2.375}};
+  for (auto& p : held["points"]) {
+    p["in_sample"] = p["goals"];
+    for (auto& v : p["goals"]) v = v.get<double>() * 2;
+    p["dominated"] = false;
+  }
+  held["points"][4]["dominated"] = true;
+  write_text(run / "evaluation" / "front.json", held.dump(2));
+  const std::string html = slurp(tune::render_report(run).html);
+  for (const char* text :
+       {"<h3>The front held out</h3>", "on 100 held-out members (seed 8); 4 stay on the front",
+        "in sample 2.375, against the run's reference point. The held-out knee is point 2.",
+        "<tr class=\"picked\"><td>2 ★</td><td class=\"note\">on the front (knee)</td>"
+        "<td>0.5</td><td>1</td><td>2× (5 %)</td><td>2500</td><td>5000</td><td>2× (1 %)</td></tr>",
+        "<td>4</td><td class=\"note\">off the front</td><td>8</td><td>16</td><td>2×</td>"})
+    EXPECT_NE(html.find(text), std::string::npos) << text;
+  // Another job's held-out front is not this run's.
+  held["job_sha256"] = std::string(64, '0');
+  write_text(run / "evaluation" / "front.json", held.dump(2));
+  EXPECT_EQ(slurp(tune::render_report(run).html).find("The front held out"), std::string::npos);
+}
+
 // A front of another job (stale beside a re-run) is not this run's; a damaged front.json is
 // refused by `report` at its JSON path (front_from_json's checks: test_front.cpp); a front without
 // its history column is an error, not an empty plot.

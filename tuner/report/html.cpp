@@ -135,18 +135,84 @@ void goals_table(const json& controllers, const Job& job, std::size_t scenarios,
   h << "</table>\n";
 }
 
+// The held-out front in `dir` (`ftctune evaluate --front RUN`, evaluation/front.json) when it is
+// one of this job: every point's soft goals in sample and held out, side by side, whether it
+// stays on the held-out front, and the figure that joins the two (front-held-out.png). An
+// in-sample front is not called robust until this says which points hold.
+void held_out_front_section(const fs::path& dir, const Job& job, const std::string& job_sha256,
+                            bool heading, std::ostringstream& h) {
+  std::optional<Front> front;
+  try {
+    front = read_front(dir, job, job_sha256);
+  } catch (const InputError& e) {
+    h << "<p>evaluation/front.json cannot be read: " << html_escape(e.what()) << "</p>\n";
+    return;
+  }
+  if (!front || !front->held_out || front->points.empty()) return;
+  const FrontHeldOut& where = *front->held_out;
+  const auto value = [](double v) { return detail::format_number(v, "%.4g"); };
+  std::size_t on = 0;
+  for (const FrontPoint& p : front->points) on += p.dominated ? 0 : 1;
+  if (heading) h << "<h2>Out-of-sample evaluation</h2>\n";
+  h << "<h3>The front held out</h3>\n<p>From <code>ftctune evaluate --front</code> "
+       "(evaluation/front.json): the run's "
+    << front->points.size() << " front points on " << where.count << " held-out members (seed "
+    << where.seed << "); " << on
+    << " stay on the front there (not dominated by another point's held-out values, feasible)."
+    << " Hypervolume held out " << value(front->hypervolume) << ", in sample "
+    << value(where.in_sample_hypervolume) << ", against the run's reference point.";
+  if (on > 0) h << " The held-out knee is point " << front->picked << ".";
+  h << "</p>\n<div class=\"wide\"><table class=\"front\"><tr><th>#</th><th>held out</th>";
+  for (std::size_t s : front->soft)
+    h << "<th title=\"" << html_escape(front->goals[s].label) << "\">goal " << s + 1
+      << " in sample</th><th>goal " << s + 1
+      << " held out</th><th>held out / in sample (the point's noise floor)</th>";
+  h << "</tr>\n";
+  for (std::size_t i = 0; i < front->points.size(); ++i) {
+    const FrontPoint& p = front->points[i];
+    const bool knee = on > 0 && front->picked == i;
+    h << "<tr" << (knee ? " class=\"picked\"" : "") << "><td>" << i << (knee ? " ★" : "")
+      << "</td><td class=\"note\">"
+      << (p.dominated ? "off the front"
+          : knee      ? "on the front (knee)"
+                      : "on the front")
+      << "</td>";
+    for (std::size_t s : front->soft) {
+      const double in = s < p.in_sample.size() ? p.in_sample[s] : NAN, out = p.goals[s];
+      const double floor = s < p.noise_floor.size() ? p.noise_floor[s].value_or(NAN) : NAN;
+      h << "<td>" << value(in) << "</td><td>" << value(out) << "</td><td>"
+        << (std::isfinite(in) && std::isfinite(out) && in != 0 ? value(out / in) + "×"
+                                                               : std::string("–"))
+        << (std::isfinite(floor) ? " (" + detail::format_number(100 * floor, "%.2g") + " %)"
+                                 : std::string())
+        << "</td>";
+    }
+    h << "</tr>\n";
+  }
+  h << "</table></div>\n";
+  std::error_code ec;
+  if (const std::optional<std::string> png = fs::is_regular_file(dir / "front-held-out.png", ec)
+                                                 ? read_file(dir / "front-held-out.png")
+                                                 : std::nullopt)
+    h << "<figure><img alt=\"held-out front\" src=\"data:image/png;base64," << base64(*png)
+      << "\"><figcaption>evaluation/front-held-out.png: each point in sample (open) and held "
+         "out (filled; a cross when it drops off the held-out front), joined.</figcaption>"
+         "</figure>\n";
+}
+
 // The run's evaluation/ (`ftctune evaluate`'s default place), when there is one: its table of
 // aggregates over the held-out members, and its figure.
-void evaluation_section(const fs::path& run_dir, const Job& job, std::ostringstream& h) {
+void evaluation_section(const fs::path& run_dir, const Job& job, const std::string& job_sha256,
+                        std::ostringstream& h) {
   const fs::path dir = run_dir / "evaluation";
   std::error_code ec;
-  if (!fs::is_regular_file(dir / "evaluation.json", ec)) return;
-  const std::optional<std::string> text = read_file(dir / "evaluation.json");
-  if (!text) return;
-  const json e = json::parse(*text, nullptr, false);
+  const std::optional<std::string> text = fs::is_regular_file(dir / "evaluation.json", ec)
+                                              ? read_file(dir / "evaluation.json")
+                                              : std::nullopt;
+  const json e = text ? json::parse(*text, nullptr, false) : json();
   if (e.is_discarded() || !e.is_object() || !e.contains("controllers") ||
       !e["controllers"].is_array())
-    return;
+    return held_out_front_section(dir, job, job_sha256, true, h);  // a front alone, if any
   const auto num = [](const json& j) { return detail::format_number(json_number_or(j, NAN)); };
   h << "<h2>Out-of-sample evaluation</h2>\n<p>From <code>ftctune evaluate</code> "
        "(evaluation/evaluation.json): "
@@ -181,6 +247,7 @@ void evaluation_section(const fs::path& run_dir, const Job& job, std::ostringstr
                                                  : std::nullopt)
     h << "<figure><img alt=\"out-of-sample evaluation\" src=\"data:image/png;base64,"
       << base64(*png) << "\"><figcaption>evaluation/evaluation.png</figcaption></figure>\n";
+  held_out_front_section(dir, job, job_sha256, false, h);
 }
 
 // The Pareto front (front.json): what it is, a table of its points with the picked one marked
@@ -423,7 +490,10 @@ std::string report_html(const fs::path& run_dir, const Job& job, const std::stri
     break;
   }
 
-  evaluation_section(run_dir, job, h);
+  {
+    const json sha = gains.value(json::json_pointer("/job/sha256"), json(""));
+    evaluation_section(run_dir, job, sha.is_string() ? sha.get<std::string>() : std::string(), h);
+  }
 
   h << "<h2>Run</h2>\n<table>\n";
   for (auto it = run.begin(); it != run.end(); ++it)
