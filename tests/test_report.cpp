@@ -824,6 +824,19 @@ void add_hypervolume_column(const std::filesystem::path& history) {
   write_text(history, out);
 }
 
+// Makes a finished run a run of the fixture's front: its front.json (with the run's job sha256),
+// the front's job (the run's, with the fixture's goals) and a hypervolume column. Returns the
+// front.json written.
+nlohmann::ordered_json give_front(const std::filesystem::path& run) {
+  const json gains = json::parse(slurp(run / "gains.json"));
+  nlohmann::ordered_json j = front_fixture();
+  j["job_sha256"] = gains["job"]["sha256"].get<std::string>();
+  write_text(run / "front.json", j.dump(2));
+  write_text(run / "job.json", front_job_json(j).dump(2));
+  add_hypervolume_column(run / "history.csv");
+  return j;
+}
+
 }  // namespace
 
 // The scatter marks the front, its noise bands, the picked point, the job's gains and the
@@ -1005,12 +1018,7 @@ TEST(FrontReport, HeldOutFigureJoinsEachPointInSampleToHeldOut) {
 // on the held-out front, and the held-out knee (issue 42).
 TEST(FrontReport, PageShowsTheHeldOutFrontBesideTheRunsValues) {
   const auto run = finished_run("front-held-out-html");
-  const json gains = json::parse(slurp(run / "gains.json"));
-  nlohmann::ordered_json j = front_fixture();
-  j["job_sha256"] = gains["job"]["sha256"].get<std::string>();
-  write_text(run / "front.json", j.dump(2));
-  write_text(run / "job.json", front_job_json(j).dump(2));
-  add_hypervolume_column(run / "history.csv");
+  const nlohmann::ordered_json j = give_front(run);
   EXPECT_EQ(slurp(tune::render_report(run).html).find("The front held out"), std::string::npos);
   nlohmann::ordered_json held = j;
   held["held_out"] = {
@@ -1071,13 +1079,7 @@ TEST(FrontReport, PageHoldsTheFrontTableAndBothFigures) {
   const auto run = finished_run("front-html");
   std::string html = slurp(tune::render_report(run).html);
   EXPECT_EQ(html.find("Pareto front"), std::string::npos);
-  const json gains = json::parse(slurp(run / "gains.json"));
-  nlohmann::ordered_json j = front_fixture();
-  j["job_sha256"] = gains["job"]["sha256"].get<std::string>();
-  write_text(run / "front.json", j.dump(2));
-  // The front's job: the run's, with the fixture's goals.
-  write_text(run / "job.json", front_job_json(j).dump(2));
-  add_hypervolume_column(run / "history.csv");
+  give_front(run);
   const tune::ReportResult r = tune::render_report(run);
   EXPECT_EQ(r.figures.size(), 7u);
   EXPECT_TRUE(tune::figure_is_whole(run / "figures" / "front-pareto.png"));
