@@ -953,33 +953,40 @@ TEST(FrontReport, LabelsOfNearbyControllersAreSetApartInTheirMarkersOrder) {
   const tune::Front front = front_of(j);
   write_text(dir / "history.csv", kFrontHistory);
   tune::report_detail::draw_front_figures(dir, front, tune::FigureFormat::svg);
-  const std::string gp = slurp(dir / "figures" / "front.gp");
-  // The vertical offset (rows) of a label: "set label 'TEXT' at X,Y right offset -1,ROWS".
-  const auto rows_of = [&](const std::string& text) -> double {
+  std::string gp = slurp(dir / "figures" / "front.gp");
+  // A label's line of the script, "set label 'TEXT' at X,Y [right ]offset DX,ROWS ...", and its
+  // vertical offset in rows.
+  const auto line_of = [&](const std::string& text) {
     const std::size_t at = gp.find("set label '" + text + "' at ");
     EXPECT_NE(at, std::string::npos) << text << "\n" << gp;
-    if (at == std::string::npos) return NAN;
-    const std::string line = gp.substr(at, gp.find('\n', at) - at);
-    EXPECT_NE(line.find(" right offset -1,"), std::string::npos) << line;
-    return std::stod(line.substr(line.rfind(',') + 1));
+    return at == std::string::npos ? std::string() : gp.substr(at, gp.find('\n', at) - at);
   };
-  const double upper = rows_of("Table 1 (off scale: 1000, 1090)");
-  const double lower = rows_of("job''s gains: PI-FOSMC (job) (infeasible) (off scale: 500, 1018)");
+  const auto rows_of = [&](const std::string& text) -> double {
+    const std::string line = line_of(text);
+    return line.empty() ? NAN : std::stod(line.substr(line.rfind(',') + 1));
+  };
+  const std::string table1 = "Table 1 (off scale: 1000, 1090)",
+                    job = "job''s gains: PI-FOSMC (job) (infeasible) (off scale: 500, 1018)";
+  for (const std::string& text : {table1, job})
+    EXPECT_NE(line_of(text).find(" right offset -1,"), std::string::npos) << text;
+  const double upper = rows_of(table1), lower = rows_of(job);
   EXPECT_EQ(upper, 0) << gp;  // on its marker's row, as nothing is in its way
   EXPECT_LE(lower, upper - 1) << gp;
   // The picked point's label is where it always is.
   EXPECT_NE(gp.find("set label 'picked' at 0.5,2500 offset 1.6,-1.2"), std::string::npos);
+  // Two inside the scale, close together: the upper marker's label stays above the lower's.
+  j["compared"][0]["goals"] = {1.0, 1200, 12};
+  j["compared"][1]["goals"] = {1.05, 1150, 19.25};
+  tune::report_detail::draw_front_figures(dir, front_of(j), tune::FigureFormat::svg);
+  gp = slurp(dir / "figures" / "front.gp");
+  // 1200 and 1150 are a fifth of a row apart on this axis: the lower label a row below.
+  EXPECT_LE(rows_of("job''s gains: PI-FOSMC (job) (infeasible)"), rows_of("Table 1") - 1) << gp;
   // Off the top near the right edge: the label's text would run past the edge, so it ends at
   // its marker instead of starting there.
   j["compared"][0]["goals"] = {6, 1e6, 12};
-  const tune::Front top = front_of(j);
-  tune::report_detail::draw_front_figures(dir, top, tune::FigureFormat::svg);
-  const std::string again = slurp(dir / "figures" / "front.gp");
-  const std::size_t at = again.find("set label 'Table 1 (off scale: 6, 1e+06)' at ");
-  ASSERT_NE(at, std::string::npos) << again;
-  EXPECT_NE(again.substr(at, again.find('\n', at) - at).find(" right offset -1,"),
-            std::string::npos)
-      << again.substr(at, 120);
+  tune::report_detail::draw_front_figures(dir, front_of(j), tune::FigureFormat::svg);
+  gp = slurp(dir / "figures" / "front.gp");
+  EXPECT_NE(line_of("Table 1 (off scale: 6, 1e+06)").find(" right offset -1,"), std::string::npos);
 }
 
 // A held-out front (`evaluate --front`) is drawn with each point where the run put it and where

@@ -38,6 +38,7 @@
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/tune/service/job_store.hpp"
 #include "ftc/tune/service/service.hpp"
+#include "io/text.hpp"
 #include "server_process.hpp"
 #include "service/events.hpp"
 #include "service/httplib.hpp"
@@ -2508,6 +2509,12 @@ TEST(Service, TwoGoalJobServesTheFrontTheRunWrites) {
   for (const std::string rule :
        {std::string("index:0"), "index:" + std::to_string(last), std::string("min:control_tv")})
     EXPECT_EQ(s.get("/v1/jobs/" + id + "/gains?pick=" + rule), tune::pick_gains(run, rule)) << rule;
+  // A rule with '<=' goes URL-encoded, as a browser sends it.
+  double most_tv = 0;
+  for (const json& p : front["points"]) most_tv = std::max(most_tv, p["goals"][1].get<double>());
+  const std::string limit = tune::detail::format_number(most_tv, "%.17g");
+  EXPECT_EQ(s.get("/v1/jobs/" + id + "/gains?pick=limit%3Acontrol_tv%3C%3D" + limit),
+            tune::pick_gains(run, "limit:control_tv<=" + limit));
   const auto nothing = s.client->Get(("/v1/jobs/" + id + "/gains?pick=index:99").c_str());
   ASSERT_TRUE(nothing);
   EXPECT_EQ(nothing->status, 400);
@@ -2546,10 +2553,33 @@ TEST(JobStore, AStoreWithoutTheNewerColumnsGainsThem) {
   ASSERT_EQ(jobs.size(), 1u);
   EXPECT_EQ(jobs[0].id, id);
   EXPECT_EQ(jobs[0].objective, "");
-  EXPECT_EQ(jobs[0].warnings, 0);
+  EXPECT_EQ(jobs[0].warnings, -1);  // not counted
   ASSERT_EQ(store.claim_next()->id, id);
   store.finish_succeeded(id, {{"gains.json", "{}"}}, "", 3);
   EXPECT_EQ(store.get(id)->warnings, 3);
+}
+
+// A run whose loop fails (jobs/stuck-wheel-small-limits.json: it saturates, never settles and
+// drifts off) succeeds with warnings: the job's view, the list and `status` count them as its
+// gains file lists them (issue 41).
+TEST(Service, ARunWithWarningsIsListedAsSucceededWithThem) {
+  json job = json::parse(
+      slurp(std::filesystem::path(FTC_SOURCE_DIR) / "jobs" / "stuck-wheel-small-limits.json"));
+  job["tuning"]["algorithm"]["population"] = 4;
+  job["tuning"]["algorithm"]["iterations"] = 1;
+  Service s;
+  const std::string id = s.submit(job)["id"];
+  const json done = s.wait_done(id);
+  ASSERT_EQ(done["status"], "succeeded");
+  const std::size_t warned = s.get("/v1/jobs/" + id + "/gains")["warnings"].size();
+  EXPECT_GE(warned, 2u);  // never settles, ends farther off than it started
+  EXPECT_EQ(done["warnings"], warned);
+  EXPECT_EQ(s.get("/v1/jobs")["jobs"][0]["warnings"], warned);
+  const CliResult status =
+      run_cli("status " + id + " --server http://127.0.0.1:" + std::to_string(s.port), s.dir);
+  EXPECT_NE(status.out.find("succeeded with " + std::to_string(warned) + " warnings"),
+            std::string::npos)
+      << status.out;
 }
 
 // A job without a front has no other point to pick; its J is the objective's measure.

@@ -644,8 +644,8 @@ TEST(TuningRun, WarnsWhenAComparedControllerScoresLowerOrTheTunedGainsChatter) {
   w = tune::comparison_warnings(r);
   ASSERT_EQ(w.size(), 3u) << ::testing::PrintToString(w);
   EXPECT_NE(w[2].find("3.01 times over the job's own gains"), std::string::npos) << w[2];
-  EXPECT_NE(w[2].find("the job minimizes the control TV as a goal, so this is the trade-off its "
-                      "picked point makes"),
+  EXPECT_NE(w[2].find("the job minimizes the control TV as a goal, so this is a trade-off its "
+                      "goals chose"),
             std::string::npos)
       << w[2];
   EXPECT_EQ(w[2].find("does not price"), std::string::npos) << w[2];

@@ -98,8 +98,9 @@ std::string describe(const json& j) {
   std::string s = j["id"].get<std::string>() + "  " + j["name"].get<std::string>() + "  " +
                   j["status"].get<std::string>();
   // A succeeded run whose gains file warns (a saturated or unsettled loop, a value at a bound).
-  if (const long long w = j.value("warnings", 0LL); w > 0)
-    s += " with " + std::to_string(w) + " warning" + (w == 1 ? "" : "s");
+  if (j.contains("warnings") && j["warnings"].is_number_integer())
+    if (const long long w = j["warnings"].get<long long>(); w > 0)
+      s += " with " + std::to_string(w) + " warning" + (w == 1 ? "" : "s");
   if (!p["iteration"].is_null())
     s += "  iteration " + std::to_string(p["iteration"].get<int>()) + "/" +
          std::to_string(p["iterations"].get<int>());

@@ -179,11 +179,11 @@ std::string reference_text(const Front& front) {
 
 // Where a panel's text labels go, so that none covers another: each label is a box of one text
 // row, its width estimated from its characters, placed at an offset (in character cells, as
-// gnuplot's `offset`) from its anchor. The fixed boxes first, then the others from the top down
-// (so that labels keep their markers' order); a label whose box would overlap one already placed
-// is moved by a row and a fifth at a time, nearest first (below, then above), staying inside the
-// panel where it can. Sizes are estimates of the PNG terminal's default font, in the
-// panel's pixels: a label a few pixels off is still read, two on one line are not.
+// gnuplot's `offset`) from its anchor. The fixed boxes first, then the others from the highest
+// marker down (so that labels keep their markers' order); a label whose box would overlap one
+// already placed is moved by a row and a fifth at a time, nearest first (below, then above),
+// staying inside the panel where it can. Sizes are estimates of the PNG terminal's default font, in
+// the panel's pixels: a label a few pixels off is still read, two on one line are not.
 constexpr double kLabelChar = 7.5;  // px of a label's character, about, in the PNG terminal
 
 struct LabelBox {
@@ -211,10 +211,11 @@ std::vector<double> place_labels(const std::vector<LabelBox>& labels, double plo
   std::vector<double> rows(labels.size());
   std::vector<std::size_t> order(labels.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  // By the markers' height, not the labels' wanted one: a label wanted above its marker must not
+  // take the place of a higher marker's label.
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     if (labels[a].fixed != labels[b].fixed) return labels[a].fixed;
-    return labels[a].fy * plot_h + labels[a].dy * kRow >
-           labels[b].fy * plot_h + labels[b].dy * kRow;
+    return labels[a].fy > labels[b].fy;
   });
   const auto box = [&](const LabelBox& l, double dy) {
     const double x = l.fx * plot_w + l.dx * kChar, w = static_cast<double>(l.chars) * kChar;
@@ -385,21 +386,19 @@ std::vector<Figure> draw_front_figures(const fs::path& run_dir, const Front& fro
       cmd += block(num(px) + "," + num(py) + "\n") + " using 1:2 with points pt " +
              std::to_string(kComparedMarks[c % 5] - (off ? 1 : 0)) + " ps 1.8 lc rgb '" + colour +
              "' title " + gp(name) + ", ";
-      // Labels staggered, so that controllers close together stay readable; right-aligned at
-      // the right edge; then moved apart where they would still cover one another.
-      static const double kRaise[] = {0.9, -1.3, 2.0};
-      // Right-aligned at the right edge, and wherever the text would run past it.
+      // Each label a little above and right of its marker (right-aligned at the right edge, and
+      // wherever the text would run past it); place_labels then moves apart those that would
+      // cover one another, keeping their markers' order. One off the scale sits on its marker's
+      // row, beside it, so that several at one edge keep that order too.
       const bool right =
           (off && ax.to(px) >= ax.hi) ||
           frac(ax, px) * panel_w + (static_cast<double>(text_chars(text)) + 1) * kLabelChar >
               panel_w;
       const bool top = off && ay.to(py) >= ay.hi;
-      // (One off the scale sits on its marker's row, beside it, so that several at one edge
-      // keep their markers' order.)
       boxes.push_back({frac(ax, px), frac(ay, py), text_chars(text), right, right ? -1.0 : 1.0,
                        top   ? -1.3
                        : off ? 0.0
-                             : kRaise[c % 3],
+                             : 0.9,
                        false});
       pending.push_back({text, px, py, right});
     }

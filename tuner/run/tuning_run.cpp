@@ -588,9 +588,8 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
                   "chattering) %.3g times over the job's own gains on the listed scenario%s "
                   "(%.4g against %.4g): %s",
                   tv_tuned / tv_base, r.listed_scenarios == 1 ? "" : "s", tv_tuned, tv_base,
-                  tv_goal ? "the job minimizes the control TV as a goal, so this is the trade-off "
-                            "its picked point makes (other points of the front make others); "
-                            "check actuator wear and bandwidth before using them."
+                  tv_goal ? "the job minimizes the control TV as a goal, so this is a trade-off "
+                            "its goals chose; check actuator wear and bandwidth before using them."
                           : "the objective does not price control activity, so check actuator "
                             "wear and bandwidth before using them.");
     out.emplace_back(buf);

@@ -12,6 +12,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <new>
@@ -59,14 +60,38 @@ void send_json(httplib::Response& res, int status, const json& body) {
 json nullable(const std::string& s) { return s.empty() ? json(nullptr) : json(s); }
 
 // A job's stored files written out as the run directory they came from, for the library's
-// readers of run directories (report.html, pick); removed with the object.
+// readers of run directories (report.html, pick): in a fresh directory only this process can
+// read (mkdtemp, 0700), removed with the object, or if writing them fails. `names`: only these
+// files (all when empty). A stored name is the run's own (safe_name'd job and scenario names),
+// and one that would leave the directory is refused all the same.
 struct RunDirectory {
   std::filesystem::path path;
-  RunDirectory(JobStore& store, const std::string& id, int serial)
-      : path(std::filesystem::temp_directory_path() /
-             ("ftctune-run-" + id + "-" + std::to_string(::getpid()) + "-" +
-              std::to_string(serial))) {
-    for (const auto& [name, content] : store.artifacts(id)) write_file_atomic(path / name, content);
+  RunDirectory(JobStore& store, const std::string& id, const std::vector<std::string>& names = {}) {
+    std::string pattern = (std::filesystem::temp_directory_path() / "ftctune-run-XXXXXX").string();
+    if (!::mkdtemp(pattern.data()))
+      throw std::runtime_error("cannot make a temporary directory: " +
+                               std::string(std::strerror(errno)));
+    path = pattern;
+    try {
+      const auto write = [&](const std::string& name, const std::string& content) {
+        const std::filesystem::path rel(name);
+        for (const auto& part : rel)
+          if (part == ".." || rel.is_absolute())
+            throw std::runtime_error("job " + id + " has a stored file named " + name);
+        write_file_atomic(path / rel, content);
+      };
+      if (names.empty()) {
+        for (const auto& [name, content] : store.artifacts(id)) write(name, content);
+      } else {
+        for (const std::string& name : names)
+          if (const std::optional<std::string> content = store.artifact(id, name))
+            write(name, *content);
+      }
+    } catch (...) {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+      throw;
+    }
   }
   RunDirectory(const RunDirectory&) = delete;
   RunDirectory& operator=(const RunDirectory&) = delete;
@@ -113,9 +138,10 @@ json job_json_view(const JobRecord& r) {
           {"attempts", r.attempts},
           {"error", nullable(r.error)},
           // What J measures (a jobs list compares J within one measure), and how many warnings a
-          // succeeded run's gains file lists (the dashboard's "succeeded with warnings").
+          // succeeded run's gains file lists (the dashboard's "succeeded with warnings"; null:
+          // not counted, a job finished under an older server).
           {"objective", r.objective},
-          {"warnings", r.warnings},
+          {"warnings", r.warnings >= 0 ? json(r.warnings) : json(nullptr)},
           // Results so far (gains, history, trials) of a job that ran an iteration but did not
           // finish it all: running, or cancelled.
           {"partial", r.iteration >= 0 &&
@@ -441,8 +467,10 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
     // The job as the server validated and stored it (canonical JSON): its search space's scales
     // for the dashboard's axes, or a file to submit again.
     if (m != "GET") return method_not_allowed(res, "GET");
-    if (!store_.get(id)) return send_error(res, 404, "not_found", "no job " + id);
-    return res.set_content(store_.job_json(id), "application/json");
+    // (Read once: a job deleted meanwhile has none.)
+    const std::string text = store_.job_json(id);
+    if (text.empty()) return send_error(res, 404, "not_found", "no job " + id);
+    return res.set_content(text, "application/json");
   }
   if (p.size() == 4 && (p[3] == "gains" || p[3] == "history" || p[3] == "trials" ||
                         p[3] == "comparison" || p[3] == "report")) {
@@ -943,6 +971,12 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
                  const std::string& what) {
   const auto job = store_.get(id);
   if (!job) return send_error(res, 404, "not_found", "no job " + id);
+  // Another point of a front: of a finished run only (a running job's front is not final, and
+  // its best so far is no point of it).
+  if (what == "gains" && req.has_param("pick") && job->status != JobStatus::succeeded)
+    return send_error(res, 409, "not_ready",
+                      "pick: job " + id + " is " + to_string(job->status) +
+                          "; a point of its front can be picked once it has succeeded");
   if (job->status == JobStatus::running) {
     if (runner_.unstored(id))
       return send_error(res, 409, "not_ready",
@@ -972,7 +1006,8 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
           res, 400, "invalid_parameter",
           "pick: job " + id + " has no front (a job with two or more soft goals has one)");
     try {
-      const RunDirectory dir(store_, id, report_counter_++);
+      // What pick_gains reads, not the trajectories.
+      const RunDirectory dir(store_, id, {"front.json", "job.json", "gains.json", "trials.csv"});
       return send_json(res, 200, pick_gains(dir.path, rule));
     } catch (const InputError& e) {
       // The rule's own message, never the temporary directory's file names.
@@ -1010,7 +1045,7 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
 // request, then kept.
 std::string Api::report(const std::string& id) {
   if (auto cached = store_.artifact(id, "report.html")) return *cached;
-  const RunDirectory dir(store_, id, report_counter_++);
+  const RunDirectory dir(store_, id);
   const ReportResult r = render_report(dir.path, ReportOptions{});
   const std::string html = read_file(r.html).value_or("");
   try {

@@ -90,7 +90,6 @@ class Api {
   JobStore& store_;
   JobRunner& runner_;
   EventHub hub_;
-  std::atomic<int> report_counter_{0};
   // A running job's partial results, made from its checkpoint of `iteration`: trials.csv,
   // history.csv, the history as JSON, and gains.json once asked for (a comparison).
   struct PartialResults {

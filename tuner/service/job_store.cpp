@@ -264,7 +264,8 @@ JobStore::JobStore(const std::filesystem::path& directory) {
   for (const auto& [column, definition] :
        {std::pair<const char*, const char*>{"client", "TEXT NOT NULL DEFAULT ''"},
         {"objective", "TEXT NOT NULL DEFAULT ''"},
-        {"warnings", "INTEGER NOT NULL DEFAULT 0"}}) {
+        // -1: not counted (its gains file says; the dashboard's job page counts them there).
+        {"warnings", "INTEGER NOT NULL DEFAULT -1"}}) {
     bool has = false;
     {
       Statement q(db_, "SELECT 1 FROM pragma_table_info('jobs') WHERE name = ?");
@@ -356,8 +357,8 @@ Submitted JobStore::submit(const Submission& s, const QueueQuota& quota) {
     const std::string id = new_id();
     Statement ins(db_,
                   "INSERT INTO jobs (id, name, status, job_json, idempotency_key, created_at, "
-                  "updated_at, iterations, total_evaluations, client, objective) "
-                  "VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?, ?, ?)");
+                  "updated_at, iterations, total_evaluations, client, objective, warnings) "
+                  "VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?, ?, ?, 0)");
     ins.bind(1, id).bind(2, s.name).bind(3, s.job_json);
     if (s.idempotency_key)
       ins.bind(4, *s.idempotency_key);

@@ -674,8 +674,6 @@ function jobView(main, id) {
         ySel.value + (axis(ySel.value) === 'logarithmic' ? ' (log scale)' : '');
     scatterChart.update('none');
     scatter.setAttribute('data-points', data.length);
-    scatter.dataset.xScale = axis(xSel.value);
-    scatter.dataset.yScale = axis(ySel.value);
     drawScaleBar(lo, hi);
   }
 
@@ -912,20 +910,20 @@ function jobView(main, id) {
           // A click on a point of the front downloads that point's gains file.
           // (Every item under the pointer, not the nearest only: the picked ring, a band
           // or a compared controller may lie over the point.)
-          onClick: (event) => {
-            const hit = frontHits(event)[0];
+          onClick: (event, elements, chart) => {
+            const hit = frontHits(chart, event)[0];
             if (hit) pickPoint(points[hit.index].point);
           },
-          onHover: (event) => {
-            canvas.style.cursor = frontHits(event).length ? 'pointer' : 'default';
+          onHover: (event, elements, chart) => {
+            canvas.style.cursor = frontHits(chart, event).length ? 'pointer' : 'default';
           }
         },
       });
       charts.push(frontChart);
       // The points of the front under the pointer, the nearest first.
-      function frontHits(event) {
+      function frontHits(chart, event) {
         const d = (e) => Math.hypot(e.element.x - event.x, e.element.y - event.y);
-        return frontChart.getElementsAtEventForMode(event, 'point', {intersect: true}, false)
+        return chart.getElementsAtEventForMode(event, 'point', {intersect: true}, false)
             .filter((e) => e.datasetIndex === 0)
             .sort((p, q) => d(p) - d(q));
       }

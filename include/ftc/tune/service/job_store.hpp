@@ -44,10 +44,12 @@ struct JobRecord {
   std::string error;
   bool cancel_requested = false;
   int attempts = 0;  // how many times a worker started it
-  // What its J measures (documents.hpp's fitness_label), so that a list shows side by side only
-  // values that compare; "" in a store older than this field.
+  // What its J measures (documents.hpp's fitness_label: the metric, window and aggregate, not
+  // the plant), by which a list groups J values; "" in a store older than this field.
   std::string objective;
-  int warnings = 0;  // of a succeeded run: the warnings its gains file lists
+  // Of a succeeded run: the warnings its gains file lists; -1 for a job that finished under a
+  // server older than this field (not counted).
+  int warnings = 0;
 };
 
 struct Submission {
