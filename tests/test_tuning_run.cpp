@@ -619,6 +619,12 @@ TEST(TuningRun, WarnsWhenAComparedControllerScoresLowerOrTheTunedGainsChatter) {
                       "3.01 times over the job's own gains"),
             std::string::npos)
       << w[1];
+  // One that breaks a hard goal is not the better controller, whatever it scores.
+  r.comparison[0].outcome.evaluation.violation = 0.5;
+  w = tune::comparison_warnings(r);
+  ASSERT_EQ(w.size(), 1u) << ::testing::PrintToString(w);
+  EXPECT_EQ(w[0].find("NFTSMC"), std::string::npos) << w[0];
+  r.comparison[0].outcome.evaluation.violation = 0;
   set(1, 0.5, 100);
   w = tune::comparison_warnings(r);
   ASSERT_EQ(w.size(), 3u);

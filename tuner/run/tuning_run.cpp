@@ -532,8 +532,9 @@ std::vector<std::string> comparison_warnings(const TuningOutcome& r) {
   const std::string label = objective_label(r.job);  // metric, window and aggregate
   // "Tuned" is the best of one controller type within the search bounds, not the best
   // controller: a compared controller that scores lower says so.
+  // (Not one that breaks the job's hard goals: the job does not allow it, whatever it scores.)
   for (const ComparedController& c : r.comparison) {
-    if (c.role != "compare") continue;
+    if (c.role != "compare" || !c.outcome.evaluation.feasible()) continue;
     const double v = c.outcome.evaluation.objective;
     if (!(v < best) || !std::isfinite(best)) continue;
     const double margin = (best - v) / best;
