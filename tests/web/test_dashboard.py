@@ -299,8 +299,9 @@ def test_a_two_goal_job_shows_its_front(server, browser):
     assert browser.execute_script("return Chart.getChart('scatter').scales.y.type") == "linear"
     assert "(log scale)" in browser.execute_script(
         "return Chart.getChart('scatter').options.scales.x.title.text")
-    column = heads_of(server, job_id).index("objective")
-    cells = [r.split(",")[column] for r in trial_rows(server, job_id)]
+    heads, rows = trials_of(server, job_id)
+    column = heads.index("objective")
+    cells = [r.split(",")[column] for r in rows]
     finite = [float(c) for c in cells if c and float(c) > 0]
     bar = browser.find_element(By.ID, "scatter-scale-bar")
     assert float(bar.get_attribute("data-lo")) == min(finite)
@@ -328,17 +329,11 @@ def test_a_two_goal_job_shows_its_front(server, browser):
     screenshot(browser, "dashboard-front.png")
 
 
-def heads_of(server, job_id):
-    return trial_text(server, job_id).split("\n")[0].split(",")
-
-
-def trial_rows(server, job_id):
-    return [r for r in trial_text(server, job_id).split("\n")[1:] if r]
-
-
-def trial_text(server, job_id):
+def trials_of(server, job_id):
+    """trials.csv of a job: its header's columns, and its rows as text."""
     with urllib.request.urlopen(server.url + "/v1/jobs/%s/trials" % job_id, timeout=30) as r:
-        return r.read().decode()
+        lines = [l for l in r.read().decode().split("\n") if l]
+    return lines[0].split(","), lines[1:]
 
 
 def test_progress_updates_without_a_reload(server, browser):
