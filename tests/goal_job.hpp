@@ -27,4 +27,15 @@ inline nlohmann::json goal_ensemble_job(double tv_limit, double peak_limit, bool
   return j;
 }
 
+// A front (issue 42) on the same ensemble: post-fault ISE (CVaR) against the median control TV,
+// under a limit on the peak command that some candidates break.
+inline nlohmann::json front_ensemble_job() {
+  nlohmann::json j = goal_ensemble_job(1000, 30, false);
+  j["name"] = "front-ensemble";
+  j["goals"][1] = {
+      {"metric", "control_tv"}, {"aggregate", "quantile"}, {"q", 0.5}, {"minimize", true}};
+  j["goals"][2] = {{"metric", "peak_command"}, {"aggregate", "max"}, {"at_most", 30}};
+  return j;
+}
+
 }  // namespace ftc::testing

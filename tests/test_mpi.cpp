@@ -213,6 +213,23 @@ TEST(Mpi, FrontIsByteIdenticalForAPlainRunAndThreeRanks) {
   }
 }
 
+// The job j run in dir/plain, with --no-capping in dir/off and on three ranks in dir/three; plain
+// and three hold the same files. False when a run failed.
+bool run_plain_uncapped_and_on_three_ranks(const fs::path& dir, const json& j) {
+  const std::string job = "run '" + write_job(dir, j).string() + "' -q ";
+  const auto out = [&](const char* name) { return "--out '" + (dir / name).string() + "'"; };
+  for (const std::string& args : {job + out("plain"), job + "--no-capping " + out("off")}) {
+    const auto r = run_cli(args, dir);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    if (r.exit_code != 0) return false;
+  }
+  const auto three = mpirun_cli(3, job + "--threads 1 " + out("three"), dir);
+  EXPECT_EQ(three.exit_code, 0) << three.err;
+  if (three.exit_code != 0) return false;
+  expect_same_run(dir / "plain", dir / "three");
+  return true;
+}
+
 // Capping with goals (issue 27): a job of one soft goal and hard goals on the short ensemble,
 // capped plain and under three ranks, writes the same files, trials.csv (where each candidate
 // stopped, the bounds of its goals) included; with --no-capping the same gains and history.
@@ -222,21 +239,32 @@ TEST(Mpi, CappedGoalJobIsByteIdenticalToAPlainRun) {
   json j = ftc::testing::goal_ensemble_job(1000, 30, false);
   j["tuning"]["algorithm"]["population"] = 4;
   j["tuning"]["algorithm"]["iterations"] = 3;
-  const std::string job = "run '" + write_job(dir, j).string() + "' -q ";
-  const auto out = [&](const char* name) { return "--out '" + (dir / name).string() + "'"; };
-  for (const std::string& args : {job + out("plain"), job + "--no-capping " + out("off")}) {
-    const auto r = run_cli(args, dir);
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-  }
-  const auto three = mpirun_cli(3, job + "--threads 1 " + out("three"), dir);
-  ASSERT_EQ(three.exit_code, 0) << three.err;
-  expect_same_run(dir / "plain", dir / "three");
+  ASSERT_TRUE(run_plain_uncapped_and_on_three_ranks(dir, j));
   for (const char* f : {"gains.json", "history.csv"})
     EXPECT_EQ(slurp(dir / "plain" / f), slurp(dir / "off" / f)) << f;
   // A capped row stopped on its limits: capped 1, under 12 members, cached 0, feasible 0.
   EXPECT_TRUE(std::regex_search(slurp(dir / "three" / "trials.csv"),
                                 std::regex(",1,([0-9]|1[01]),0,[^,\n]+,[^,\n]+,[^,\n]+,[^,\n]+,0\n")))
       << "no trial capped on its limits: the comparison proves less";
+}
+
+// Capping a front (issue 42): the Pareto Bat's candidates stop on the same rounds under three
+// ranks, and front.json, front.csv and every other file are the plain run's, and without
+// capping the same gains, history and front.
+TEST(Mpi, CappedFrontJobIsByteIdenticalToAPlainRun) {
+  REQUIRE_MPI();
+  const fs::path dir = fresh_dir("mpi-front");
+  json j = ftc::testing::front_ensemble_job();
+  j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 6}, {"iterations", 3}};
+  ASSERT_TRUE(run_plain_uncapped_and_on_three_ranks(dir, j));
+  for (const char* f : {"gains.json", "history.csv", "front.json", "front.csv"}) {
+    EXPECT_EQ(slurp(dir / "plain" / f), slurp(dir / "three" / f)) << f;
+    EXPECT_EQ(slurp(dir / "plain" / f), slurp(dir / "off" / f)) << f;
+  }
+  // A capped row: capped 1, under 12 members, cached 0.
+  EXPECT_TRUE(
+      std::regex_search(slurp(dir / "three" / "trials.csv"), std::regex(",1,([0-9]|1[01]),0,")))
+      << "no trial capped: the comparison proves less";
 }
 
 TEST(Mpi, EnsembleGainsAreByteIdenticalToAPlainRun) {

@@ -51,6 +51,29 @@ TEST(ParetoDominance, FeasibleBeatsInfeasibleLessViolationWinsElseParetoOrder) {
   EXPECT_FALSE(pareto::dominates(pt(1, nan), pt(1, 2)));
 }
 
+// Capping a front (issue 42): a candidate may stop on lower bounds L only when neither its bat
+// can move to it nor the archive take it, whatever its true vector at least L.
+TEST(ParetoDominance, FrontCapStopsOnlyWhereNoDecisionCanChange) {
+  using ftc::tune::FrontCap;
+  const double inf = std::numeric_limits<double>::infinity();
+  const auto archive = std::make_shared<const std::vector<ObjectiveVector>>(
+      std::vector<ObjectiveVector>{pt(1, 4), pt(2, 2), pt(4, 1)});
+  const FrontCap no_move{false, {}, archive};
+  EXPECT_TRUE(no_move.stops(pt(3, 3)));        // (2, 2) dominates it
+  EXPECT_FALSE(no_move.stops(pt(2, 2)));       // equal to a member, not dominated: it may be equal
+  EXPECT_FALSE(no_move.stops(pt(1.5, 3)));     // on the front for all the bounds say
+  EXPECT_FALSE(no_move.stops(pt(0.5, -inf)));  // a goal without a bound is no bound at all
+  EXPECT_TRUE(no_move.stops(pt(0.5, 0.5, 0.1)));  // infeasible: never offered
+  // Its bat may move: stops only where the bat dominates the bounds too.
+  EXPECT_TRUE((FrontCap{true, pt(2.5, 2.5), archive}.stops(pt(3, 3))));
+  EXPECT_FALSE((FrontCap{true, pt(3.5, 2.5), archive}.stops(pt(3, 3))));
+  EXPECT_TRUE((FrontCap{true, pt(9, 9), archive}.stops(pt(0.5, 0.5, 0.1))));  // feasible bat
+  EXPECT_FALSE((FrontCap{true, pt(1, 1, 0.2), archive}.stops(pt(0.5, 0.5, 0.1))));
+  // Without an archive (one that may lose points) every feasible candidate may enter.
+  EXPECT_FALSE((FrontCap{false, {}, nullptr}.stops(pt(3, 3))));
+  EXPECT_TRUE((FrontCap{false, {}, nullptr}.stops(pt(3, 3, 1))));
+}
+
 TEST(ParetoSorting, FrontsOfHandMadePoints) {
   const std::vector<ObjectiveVector> p = {pt(4, 4), pt(1, 4), pt(3, 3), pt(2, 2),
                                           pt(4, 1), pt(5, 5), pt(0.5, 0.5, 1.0)};

@@ -928,6 +928,14 @@ CappingComparison compare_capping(const json& j, const std::string& algorithm) {
       EXPECT_FALSE(b.accepted) << "a capped candidate became the best: " << i;
       EXPECT_EQ(a.parameters, b.parameters);
     }
+    EXPECT_EQ(on.front.has_value(), off.front.has_value()) << algorithm;
+    if (on.front && off.front) {  // a job of a front: front.json and front.csv too
+      EXPECT_EQ(tune::front_document(job, "", 1, *on.front).dump(),
+                tune::front_document(job, "", 1, *off.front).dump())
+          << algorithm;
+      EXPECT_EQ(tune::front_csv(job, *on.front), tune::front_csv(job, *off.front)) << algorithm;
+      EXPECT_EQ(on.hypervolume, off.hypervolume) << algorithm;
+    }
     const std::string csv = tune::trials_csv(on);
     if (threads == 2) {
       EXPECT_EQ(csv, one_thread) << algorithm << ": where stops depend on threads";
@@ -986,14 +994,34 @@ TEST(TuningRun, CappingWithGoalsChangesNothingButTheCappedTrialsRows) {
   }
 }
 
+// Capping of fronts (issue 42): the Pareto Bat (on its FrontCap rules) and random search (on the
+// run's front) stop candidates, and the gains, history, front.json, front.csv, hypervolumes and
+// optimiser states are the same bytes as without capping, on 1 and 2 threads.
+TEST(TuningRun, CappingAFrontChangesNothingButTheCappedTrialsRows) {
+  for (const char* algorithm : {"bat", "random"}) {
+    json j = front_ensemble_job();
+    j["tuning"]["algorithm"] = {{"type", algorithm}, {"population", 6}, {"iterations", 4}};
+    const CappingComparison r = compare_capping(j, algorithm);
+    EXPECT_FALSE(r.capped.empty())
+        << algorithm << ": nothing was capped, the test would prove nothing";
+    EXPECT_GT(r.feasible, 0) << algorithm;
+  }
+}
+
 // A capped run stopped after an iteration and resumed writes the uninterrupted run's trials
 // (the incumbent's values, which order the scenarios, are simulated again on resume).
 TEST(TuningRun, ResumedCappedRunWritesTheSameTrials) {
   json objective = short_ensemble_job();
   objective["ensemble"]["count"] = 11;
   // A job with goals too: its capped rows carry the goals' bounds (null where none) across.
-  for (json j : {objective, goal_ensemble_job(1000, 30, true)}) {
-    j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
+  // And a front's (issue 42): the run's front, which caps random search, is rebuilt from them.
+  json front = front_ensemble_job();
+  front["tuning"]["algorithm"] = {{"type", "random"}, {"population", 6}, {"iterations", 4}};
+  json pareto = front_ensemble_job();
+  pareto["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 6}, {"iterations", 4}};
+  for (json j : {objective, goal_ensemble_job(1000, 30, true), front, pareto}) {
+    if (j["name"] != "front-ensemble")
+      j["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 3}};
     const tune::Job job = tune::parse_job(j, "x");
     const tune::TuningOutcome whole = tuned(job, 2);
     const json state = checkpoint_after(job, 2);

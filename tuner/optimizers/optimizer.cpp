@@ -283,7 +283,13 @@ std::vector<double> GenerationalOptimizer::evaluate(BatchFitness& fitness,
 
 std::vector<ObjectiveVector> GenerationalOptimizer::evaluate_objectives(
     BatchFitness& fitness, const std::vector<Decision>& batch) {
-  std::vector<ObjectiveVector> F = fitness.objective_vectors(batch);
+  return evaluate_objectives(fitness, batch, {});
+}
+
+std::vector<ObjectiveVector> GenerationalOptimizer::evaluate_objectives(
+    BatchFitness& fitness, const std::vector<Decision>& batch, const std::vector<FrontCap>& caps) {
+  std::vector<ObjectiveVector> F = caps.empty() ? fitness.objective_vectors(batch)
+                                                : fitness.objective_vectors_capped(batch, caps);
   if (F.size() != batch.size())
     throw std::logic_error("objective vectors of a wrong-sized batch");
   for (const ObjectiveVector& f : F)

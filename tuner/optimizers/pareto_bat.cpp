@@ -92,6 +92,14 @@ std::vector<double> crowding_distance(const std::vector<ObjectiveVector>& p,
 
 }  // namespace pareto
 
+bool FrontCap::stops(const ObjectiveVector& lower) const {
+  if (may_move && !pareto::dominates(bat, lower)) return false;
+  if (!lower.feasible()) return true;
+  return archive && std::any_of(archive->begin(), archive->end(), [&](const ObjectiveVector& a) {
+           return pareto::dominates(a, lower);
+         });
+}
+
 namespace {
 
 // The scalar fitness of a point, for the history: as constrained_fitness(fitness_of(f1), V).
@@ -191,12 +199,27 @@ void ParetoBatAlgorithm::iterate(BatchFitness& fitness) {
     candidates.push_back(b.candidate(settings_, space_, rng_, leader, mean_loudness));
   }
 
-  const std::vector<ObjectiveVector> F = evaluate_objectives(fitness, candidates);
+  // The loudness tests are drawn before the evaluation (the same draws in the same order as
+  // after it: nothing draws in between), so that the fitness may stop a candidate whose value
+  // can change no decision (FrontCap). The archive it is given is this one: while it cannot
+  // overflow during the offers below, a point of it that leaves is dominated by one that stays.
+  std::vector<double> loud(bats_.size());
+  for (double& u : loud) u = rng_.uniform();
+  std::shared_ptr<const std::vector<ObjectiveVector>> archive;
+  if (archive_.size() + bats_.size() <= capacity_) {
+    auto points = std::make_shared<std::vector<ObjectiveVector>>();
+    for (const Member& m : archive_) points->push_back(m.f);
+    archive = std::move(points);
+  }
+  std::vector<FrontCap> caps(bats_.size());
+  for (std::size_t i = 0; i < bats_.size(); ++i)
+    caps[i] = {loud[i] < bats_[i].loudness, bats_[i].f, archive};
+  const std::vector<ObjectiveVector> F = evaluate_objectives(fitness, candidates, caps);
 
   const double pulse = bat_pulse_rate(settings_, t);
   for (std::size_t i = 0; i < bats_.size(); ++i) {
     Bat& b = bats_[i];
-    if (rng_.uniform() < b.loudness && !pareto::dominates(b.f, F[i])) {
+    if (loud[i] < b.loudness && !pareto::dominates(b.f, F[i])) {
       b.accept(candidates[i], settings_, pulse);
       b.f = F[i];
     }

@@ -13,6 +13,7 @@
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/elementary.hpp"
 #include "ftc/tune/job/ensemble.hpp"
+#include "ftc/tune/optimizers/pareto_bat.hpp"
 
 namespace ftc::tune {
 namespace {
@@ -512,9 +513,22 @@ std::vector<CandidateOutcome> TuningProblem::evaluate(
 std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
     std::span<const sim::ControllerConfig> controllers, std::span<const double> caps,
     std::span<const std::size_t> order, BatchEvaluator& evaluator) const {
-  const std::size_t n = controllers.size(), S = scenarios();
-  if (caps.size() != n || order.size() != S)
+  if (caps.size() != controllers.size())
     throw std::invalid_argument("evaluate_capped: a cap per candidate, an order of every scenario");
+  std::vector<bool> may_stop(caps.size());
+  for (std::size_t c = 0; c < caps.size(); ++c) may_stop[c] = caps[c] > kNoCap;
+  return evaluate_capped(
+      controllers, may_stop,
+      [&](std::size_t c, const PartialBounds& b) { return b.fitness < caps[c]; }, order, evaluator);
+}
+
+std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
+    std::span<const sim::ControllerConfig> controllers, const std::vector<bool>& may_stop,
+    const StopRule& stop, std::span<const std::size_t> order, BatchEvaluator& evaluator) const {
+  const std::size_t n = controllers.size(), S = scenarios();
+  if (may_stop.size() != n || order.size() != S)
+    throw std::invalid_argument(
+        "evaluate_capped: a rule per candidate, an order of every scenario");
   std::vector<Tally> tally;  // by scenario: each candidate's come in its order
   tally.reserve(n);
   for (std::size_t c = 0; c < n; ++c) tally.push_back(new_tally(0, S));
@@ -548,7 +562,7 @@ std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
         running[c] = false;
         continue;
       }
-      if (!(caps[c] > kNoCap)) continue;
+      if (!may_stop[c]) continue;
       // The counted values in scenario order, as score() aggregates them; a task that failed
       // makes the candidate's objective +inf.
       std::vector<double> values;
@@ -581,7 +595,7 @@ std::vector<CandidateOutcome> TuningProblem::evaluate_capped(
       const double most = !error(c).empty() && has_limits(*job_)
                               ? -1.0
                               : fitness_upper_bound(bound[c], violation_bound[c]);
-      if (most < caps[c]) {
+      if (stop(c, {bound[c], most, violation_bound[c], goal_bound[c]})) {
         capped[c] = true;
         running[c] = false;
         upper[c] = most;
@@ -744,9 +758,36 @@ std::vector<double> ProblemFitness::run(const std::vector<Decision>& batch,
 std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>& batch,
                                                     const std::vector<double>& caps) {
   const bool any = std::any_of(caps.begin(), caps.end(), [](double c) { return c > kNoCap; });
-  if (!capping_ || !any || front_objectives(problem_.job()) > 0 || problem_.scenarios() < 2 ||
-      caps.size() != batch.size())
+  if (!capping_ || !any || problem_.scenarios() < 2 || caps.size() != batch.size())
     return (*this)(batch);
+  return run_capped(batch, &caps, nullptr, nullptr);
+}
+
+std::vector<ObjectiveVector> ProblemFitness::objective_vectors_capped(
+    const std::vector<Decision>& batch, const std::vector<FrontCap>& caps) {
+  if (!capping_ || objectives() < 2 || problem_.scenarios() < 2 || caps.size() != batch.size())
+    return objective_vectors(batch);
+  std::vector<ObjectiveVector> out;
+  run_capped(batch, nullptr, &caps, &out);
+  return out;
+}
+
+namespace {
+
+// A front candidate's objective vector of lower bounds (FrontCap::stops reads it).
+ObjectiveVector lower_objective_vector(const Job& job, const TuningProblem::PartialBounds& b) {
+  ObjectiveVector o;
+  for (std::size_t k = 0; k < job.goals.size() && k < b.goals.size(); ++k)
+    if (job.goals[k].soft())  // a goal without a bound is at least -inf
+      o.values.push_back(std::isnan(b.goals[k]) ? -std::numeric_limits<double>::infinity()
+                                                : b.goals[k]);
+  o.violation = b.violation;
+  return o;
+}
+
+}  // namespace
+
+std::vector<std::size_t> ProblemFitness::capping_order() {
   // After a resume the incumbent's values are not in the checkpoint: simulate it again (the
   // same bits as when it was found), so that the order is the uninterrupted run's.
   if (incumbent_.empty()) {
@@ -763,30 +804,56 @@ std::vector<double> ProblemFitness::evaluate_capped(const std::vector<Decision>&
   }
   std::vector<bool> counted(problem_.scenarios());
   for (std::size_t s = 0; s < counted.size(); ++s) counted[s] = problem_.counted(s);
-  const std::vector<std::size_t> order = hardest_first(incumbent_, counted);
+  return hardest_first(incumbent_, counted);
+}
+
+std::vector<double> ProblemFitness::run_capped(const std::vector<Decision>& batch,
+                                               const std::vector<double>* caps,
+                                               const std::vector<FrontCap>* front_caps,
+                                               std::vector<ObjectiveVector>* vectors) {
+  const Job& job = problem_.job();
+  const bool front = objectives() >= 2;
+  const std::vector<std::size_t> order = capping_order();
   const Served served = serve(batch);
-  // A candidate simulated for its duplicates in the batch too runs with the least of their caps
-  // (kNoCap, the least, when one has none): if it is capped, its fitness bound is below every
-  // one of their caps, so each would have been capped.
-  std::vector<double> cap(batch.size());
+  // A candidate simulated for its duplicates in the batch too stops only where each of them
+  // would have: capped then, each would have been.
+  std::vector<std::vector<std::size_t>> askers(batch.size());
   for (std::size_t i = 0; i < batch.size(); ++i) {
-    const double c = caps[i] > kNoCap ? caps[i] : kNoCap;  // NaN: no cap, as evaluate_capped reads it
     const std::optional<std::size_t>& from = served.source[i];
     if (!from)
-      cap[i] = c;
+      askers[i].push_back(i);
     else if (*from >= served.first)  // a duplicate of candidate *from - first of this batch
-      cap[*from - served.first] = std::min(cap[*from - served.first], c);
+      askers[*from - served.first].push_back(i);
   }
+  // Random search over a front (scalar caps) keeps every trial it ran: a candidate may stop
+  // only if it cannot enter the run's front, that is if some trial on it dominates the
+  // candidate's bounds. The run's front is a front optimiser's archive without a capacity.
+  const FrontCap run_front{false, {}, front_};
   std::vector<sim::ControllerConfig> controllers;
-  std::vector<double> simulated_caps;
+  std::vector<bool> may_stop;
+  std::vector<const std::vector<std::size_t>*> rules;
   controllers.reserve(served.simulate.size());
-  simulated_caps.reserve(served.simulate.size());
   for (std::size_t i : served.simulate) {
     controllers.push_back(problem_.controller_with(served.parameters[i]));
-    simulated_caps.push_back(cap[i]);
+    bool may = true;
+    for (std::size_t a : askers[i]) may = may && (!caps || (*caps)[a] > kNoCap);
+    may_stop.push_back(may);
+    rules.push_back(&askers[i]);
   }
-  return record(served,
-                problem_.evaluate_capped(controllers, simulated_caps, order, evaluator_));
+  // A front's trial must not be one "best so far" either (trials.csv's accepted): its fitness
+  // is at most that of the best trial at the batch's start, which only grows.
+  const double best = best_;
+  const auto stop = [&](std::size_t c, const TuningProblem::PartialBounds& b) {
+    if (front && !(b.fitness <= best)) return false;
+    const ObjectiveVector lower = front ? lower_objective_vector(job, b) : ObjectiveVector{};
+    return std::all_of(rules[c]->begin(), rules[c]->end(), [&](std::size_t a) {
+      if (caps && !(b.fitness < (*caps)[a])) return false;
+      if (!front) return true;
+      return (front_caps ? (*front_caps)[a] : run_front).stops(lower);
+    });
+  };
+  return record(served, problem_.evaluate_capped(controllers, may_stop, stop, order, evaluator_),
+                vectors);
 }
 
 std::vector<double> ProblemFitness::record(const Served& s, std::vector<CandidateOutcome> out,
@@ -840,8 +907,22 @@ std::vector<double> ProblemFitness::record(const Served& s, std::vector<Candidat
     }
     trials_.push_back(std::move(t));
     if (cache_ && !trials_.back().capped) index_trial(trials_.size() - 1);
+    if (!e.capped) offer_to_front(objective_vector(problem_.job(), e));
   }
   return J;
+}
+
+void ProblemFitness::offer_to_front(const ObjectiveVector& o) {
+  if (objectives() < 2 || !o.feasible() ||
+      !std::all_of(o.values.begin(), o.values.end(), [](double v) { return std::isfinite(v); }))
+    return;
+  for (const ObjectiveVector& m : *front_)
+    if (m.values == o.values || pareto::dominates(m, o)) return;
+  auto next = std::make_shared<std::vector<ObjectiveVector>>();
+  for (const ObjectiveVector& m : *front_)
+    if (!pareto::dominates(o, m)) next->push_back(m);
+  next->push_back(o);
+  front_ = std::move(next);
 }
 
 std::int64_t cached_trials(const std::vector<Trial>& trials) {
@@ -855,8 +936,15 @@ void ProblemFitness::index_trial(std::size_t i) {
 void ProblemFitness::resume_trials(std::vector<Trial> before) {
   trials_ = std::move(before);
   by_parameters_.clear();
+  front_ = std::make_shared<const std::vector<ObjectiveVector>>();
   for (std::size_t i = 0; i < trials_.size(); ++i) {
     const Trial& t = trials_[i];
+    if (!t.capped) {
+      Evaluation e;
+      e.goals = t.goals;
+      e.violation = t.violation;
+      offer_to_front(objective_vector(problem_.job(), e));
+    }
     if (!t.capped) best_ = std::max(best_, t.fitness);
     // The run that was interrupted served from its first uncapped trial of each parameter set.
     if (cache_ && !t.capped && !t.cached) index_trial(i);

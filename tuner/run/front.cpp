@@ -147,16 +147,19 @@ std::vector<double> log_soft_goals(const std::vector<double>& goals,
 
 namespace {
 
-// The non-dominated set of the feasible trials offered so far whose soft goals are all finite,
-// one trial per distinct vector of soft goals (the first offered), ordered by the vector
-// (lexicographic). Offering a trial costs one pass over the set: a trial dominated by a member,
-// or equal to one, is not kept; the members it dominates leave (a trial they dominated is
-// dominated by it too, so no trial that left ever returns).
+// The non-dominated set of the feasible uncapped trials offered so far whose soft goals are all
+// finite, one trial per distinct vector of soft goals (the first offered), ordered by the vector
+// (lexicographic). A capped trial's goals are bounds; capping stopped it only because an earlier
+// trial dominates it (issue 42), so leaving it out changes nothing. Offering a trial costs one pass
+// over the set: a trial dominated by a member, or equal to one, is not kept; the members it
+// dominates leave (a trial they dominated is dominated by it too, so no trial that left ever
+// returns).
 class NonDominated {
  public:
   explicit NonDominated(std::vector<std::size_t> soft) : soft_(std::move(soft)) {}
 
   void offer(const std::vector<Trial>& trials, std::size_t i) {
+    if (trials[i].capped) return;
     ObjectiveVector o = soft_vector(trials[i], soft_);
     if (!o.feasible() ||
         !std::all_of(o.values.begin(), o.values.end(), [](double v) { return std::isfinite(v); }))

@@ -39,6 +39,21 @@ struct ObjectiveVector {
   bool feasible() const { return !(violation > 0); }
 };
 
+// What a front optimiser does with one candidate's objective vector F, as a rule on lower bounds
+// (issue 42): its bat moves to it (may_move, and `bat` does not dominate F), and it is offered
+// to an archive, which it enters unless it is infeasible or some point of `archive` dominates
+// it. stops(L) says that neither can happen for any F at least L: then F's exact value changes
+// no decision. Both tests are monotone: a point dominating L dominates every F at least L, and
+// an infeasible L has an infeasible F. An archive point that left the archive since is dominated
+// by one still in it (dominance is transitive), so the optimiser may pass the archive as it was
+// when the batch began, as long as nothing else (a capacity limit) takes points out of it.
+struct FrontCap {
+  bool may_move = true;
+  ObjectiveVector bat;                                          // read when may_move
+  std::shared_ptr<const std::vector<ObjectiveVector>> archive;  // none: every candidate enters
+  bool stops(const ObjectiveVector& lower) const;  // under pareto::dominates (pareto_bat.hpp)
+};
+
 // What an optimiser needs from the outside world: one fitness per decision vector, in order; a
 // candidate that cannot be evaluated gets 0. Never throws for a candidate.
 class BatchFitness {
@@ -66,6 +81,15 @@ class BatchFitness {
   // candidate; std::logic_error when the problem has no front (objectives() < 2).
   virtual std::vector<ObjectiveVector> objective_vectors(const std::vector<Decision>& /*batch*/) {
     throw std::logic_error("this problem has one objective: it has no objective vectors");
+  }
+  // Capping of a front (issue 42): the same batch, where the optimiser decides the same for every
+  // objective vector of candidate i that caps[i].stops() on (FrontCap). A fitness function may
+  // stop evaluating a candidate once lower bounds L of its objective vector (every value and the
+  // violation at most the candidate's) satisfy caps[i].stops(L), and return a vector that is at
+  // least L instead. The default evaluates all.
+  virtual std::vector<ObjectiveVector> objective_vectors_capped(
+      const std::vector<Decision>& batch, const std::vector<FrontCap>& /*caps*/) {
+    return objective_vectors(batch);
   }
 };
 
@@ -347,6 +371,10 @@ class GenerationalOptimizer : public Optimizer {
   // fitness.objectives() values.
   std::vector<ObjectiveVector> evaluate_objectives(BatchFitness& fitness,
                                                    const std::vector<Decision>& batch);
+  // The same with a rule per candidate (BatchFitness::objective_vectors_capped).
+  std::vector<ObjectiveVector> evaluate_objectives(BatchFitness& fitness,
+                                                   const std::vector<Decision>& batch,
+                                                   const std::vector<FrontCap>& caps);
   // Appends the history row of iteration t_ with the algorithm's extra figures.
   void record(std::vector<std::pair<std::string, double>> extras = {});
   // The common part of a checkpoint, tagged with the algorithm's name, and its inverse (which

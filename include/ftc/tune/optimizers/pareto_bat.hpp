@@ -20,8 +20,11 @@
 //   per bat i (in order): two draws k1, k2 = floor(U n) into the leader pool of n points; the
 //     leader L_i is the one of larger crowding distance (k1 on a tie); then f_i (β), the pulse
 //     test and (if taken) ε as in bat.hpp, with L_i in place of x*;
-//   all candidates are evaluated as one batch (BatchFitness::objective_vectors);
-//   per bat i (in order): the loudness test, acceptance as above (A_i *= decay, r_i = r(t));
+//   per bat i (in order): the loudness draw U_i, drawn before the evaluation so that the
+//     fitness may cap the candidates whose value changes nothing (FrontCap, issue 42);
+//   all candidates are evaluated as one batch (BatchFitness::objective_vectors_capped);
+//   per bat i (in order): the loudness test U_i < A_i, acceptance as above (A_i *= decay,
+//     r_i = r(t));
 //     then the candidate enters the archive (in bat order) if it is feasible, finite and not
 //     dominated by (or equal to) a member; members it dominates leave; above the capacity
 //     max(100, M) the member of least crowding distance (the first such) leaves.

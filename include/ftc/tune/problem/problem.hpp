@@ -17,6 +17,7 @@
 // controller with the tuned fields set from x, simulated on the calling thread.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -222,6 +223,23 @@ class TuningProblem {
                                                 std::span<const double> caps,
                                                 std::span<const std::size_t> order,
                                                 BatchEvaluator& evaluator) const;
+  // What that knows of a candidate after a round: lower bounds of its objective, of its hard
+  // goals' total violation and of each goal (NaN for a goal without one), and the upper bound of
+  // its fitness they give.
+  struct PartialBounds {
+    double objective = 0, fitness = 0, violation = 0;
+    const std::vector<double>& goals;
+  };
+  // Whether candidate c stops on these bounds.
+  using StopRule = std::function<bool(std::size_t c, const PartialBounds&)>;
+  // The same with a rule in place of a cap (a front's, issue 42): candidate c, when may_stop[c],
+  // stops after a round once stop(c, its bounds) holds. The caps above are the rule
+  // "fitness bound below caps[c]".
+  std::vector<CandidateOutcome> evaluate_capped(std::span<const sim::ControllerConfig> controllers,
+                                                const std::vector<bool>& may_stop,
+                                                const StopRule& stop,
+                                                std::span<const std::size_t> order,
+                                                BatchEvaluator& evaluator) const;
 
   // The objective (minimised) of the parameter values x (natural units, in space().names
   // order), simulated on the calling thread. Throws InputError, before simulating anything,
@@ -326,10 +344,18 @@ class ProblemFitness final : public BatchFitness {
   // With capping on (the default), runs the candidates with caps through
   // TuningProblem::evaluate_capped, each one's scenarios hardest first for the incumbent (the
   // best trial so far, uncapped by construction) as it was when the batch began. A job of one
-  // soft goal and hard goals is capped on the bounds of its goals; a job of a Pareto front is
-  // not (docs/performance.md says why). Capped trials are recorded so.
+  // soft goal and hard goals is capped on the bounds of its goals. Capped trials are recorded
+  // so.
   std::vector<double> evaluate_capped(const std::vector<Decision>& batch,
                                       const std::vector<double>& caps) override;
+  // A job of a front (issue 42) is capped on its optimiser's rules (FrontCap): the Pareto Bat's
+  // through objective_vectors_capped; an optimiser of one objective run on it (random search)
+  // through the caps above, where a candidate also stops only if the run's front (of every
+  // uncapped trial so far) dominates its bounds, so that front.json and the hypervolumes,
+  // built from every trial, keep their bytes. Either way a front's candidate stops only if it
+  // cannot be trials.csv's best so far.
+  std::vector<ObjectiveVector> objective_vectors_capped(const std::vector<Decision>& batch,
+                                                        const std::vector<FrontCap>& caps) override;
   void set_capping(bool on) { capping_ = on; }
   bool capping() const { return capping_; }
   // The cache (issue 43), on by default: a candidate whose parameter values have the same bits
@@ -357,6 +383,16 @@ class ProblemFitness final : public BatchFitness {
   void resume_trials(std::vector<Trial> before);
 
  private:
+  // The scenarios' order for capping: hardest first for the incumbent.
+  std::vector<std::size_t> capping_order();
+  // Simulates a batch with caps (scalar ones, or a front optimiser's rules) and records it.
+  std::vector<double> run_capped(const std::vector<Decision>& batch,
+                                 const std::vector<double>* caps,
+                                 const std::vector<FrontCap>* front_caps,
+                                 std::vector<ObjectiveVector>* vectors);
+  // A job of a front: the run's front gains an uncapped trial's vector unless a member
+  // dominates it or has its values.
+  void offer_to_front(const ObjectiveVector& o);
   // Simulates and scores a batch, recording its trials: the fitness of each candidate, and its
   // objective vector appended to `vectors` when given.
   std::vector<double> run(const std::vector<Decision>& batch,
@@ -388,6 +424,10 @@ class ProblemFitness final : public BatchFitness {
                              std::vector<ObjectiveVector>* vectors = nullptr);
   void index_trial(std::size_t i);  // makes trials_[i] (uncapped) one the cache serves from
 
+  // A job of a front: the non-dominated objective vectors of the feasible uncapped trials with
+  // finite goals (one per distinct vector), shared with the caps of a batch.
+  std::shared_ptr<const std::vector<ObjectiveVector>> front_ =
+      std::make_shared<const std::vector<ObjectiveVector>>();
   bool cache_ = true;
   // Uncapped trials by a hash of their parameters' bits (trials_ indices; the first of equal
   // parameters only).
