@@ -650,6 +650,33 @@ TEST(JobGoals, ParseWriteBackCanonicallyAndGiveTheObjective) {
   EXPECT_EQ(job.goals[0].violation(1e9), 0.0);  // soft: never violated
 }
 
+// tuning.noise_floor (issue 42): "every_point" (the default, left out of the canonical form so
+// that jobs written before the key keep their sha256) or "picked"; anything else is refused at
+// its path, naming both.
+TEST(JobLoader, NoiseFloorOfAFrontIsEveryPointOrThePickedOne) {
+  json j = table1();
+  EXPECT_EQ(tune::parse_job(j, "t").tuning->noise_floor, tune::FrontNoiseFloor::every_point);
+  EXPECT_FALSE(tune::to_json(tune::parse_job(j, "t"))["tuning"].contains("noise_floor"));
+  j["tuning"]["noise_floor"] = "every_point";
+  EXPECT_FALSE(tune::to_json(tune::parse_job(j, "t"))["tuning"].contains("noise_floor"));
+  j["tuning"]["noise_floor"] = "picked";
+  const tune::Job picked = tune::parse_job(j, "t");
+  EXPECT_EQ(picked.tuning->noise_floor, tune::FrontNoiseFloor::picked);
+  EXPECT_EQ(tune::to_json(picked)["tuning"]["noise_floor"], "picked");
+  EXPECT_EQ(tune::to_json(tune::parse_job(tune::to_json(picked), "again")).dump(),
+            tune::to_json(picked).dump());
+  j["tuning"]["noise_floor"] = "knee";
+  try {
+    tune::parse_job(j, "t");
+    FAIL() << "a noise floor of \"knee\" was accepted";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("/tuning/noise_floor"), std::string::npos) << m;
+    EXPECT_NE(m.find("every_point"), std::string::npos) << m;
+    EXPECT_NE(m.find("picked"), std::string::npos) << m;
+  }
+}
+
 // A scenario's saturation: one number for every actuator, or one per actuator; written back as
 // it was given; anything else refused at its path, saying what is accepted.
 TEST(JobLoader, SaturationIsOneNumberOrOnePerActuator) {

@@ -271,6 +271,35 @@ TEST(TuningRun, AnInterruptEndsTheRunAtItsLastFinishedIteration) {
   EXPECT_EQ(tune::trials_csv(back), tune::trials_csv(tuned(job, 1, std::nullopt, stop0)));
 }
 
+// "noise_floor": "picked" (issue 42): a front's noise floor is measured at the picked point only,
+// the same values there as when every point is probed, the other points' floors unknown, and
+// 8 × (points - 1) × scenarios simulations fewer; nothing else changes.
+TEST(TuningRun, AFrontsNoiseFloorAtThePickedPointOnlyCostsOnePointsReruns) {
+  json j = front_job();
+  const tune::TuningOutcome every = tuned(tune::parse_job(j, "front"), 1);
+  j["tuning"]["noise_floor"] = "picked";
+  const tune::TuningOutcome picked = tuned(tune::parse_job(j, "front"), 1);
+  ASSERT_TRUE(every.front && picked.front);
+  const std::size_t n = every.front->points.size(), k = every.front->picked;
+  ASSERT_GE(n, 2u) << "a front of one point would prove nothing";
+  ASSERT_EQ(picked.front->points.size(), n);
+  EXPECT_EQ(picked.front->picked, k);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& floor = picked.front->points[i].noise_floor;
+    if (i == k) {
+      EXPECT_EQ(floor, every.front->points[i].noise_floor);
+      EXPECT_TRUE(floor[0].has_value());
+    } else {
+      for (const auto& f : floor) EXPECT_FALSE(f.has_value()) << i;
+    }
+  }
+  EXPECT_EQ(tune::gains_document(picked)["noise_floor"],
+            tune::gains_document(every)["noise_floor"]);
+  EXPECT_EQ(tune::gains_document(picked)["tuned"], tune::gains_document(every)["tuned"]);
+  EXPECT_EQ(every.simulations - picked.simulations,
+            static_cast<std::int64_t>(8 * (n - 1) * every.scenarios));
+}
+
 // A goal a trial could not measure is an empty cell of trials.csv (it was "–", which made a CSV
 // reader take the whole column for text); pick reads it back as the NaN it was.
 TEST(TuningRun, TrialsCsvLeavesAnUndefinedValueEmpty) {

@@ -264,8 +264,11 @@ RunJobResult run_job(const Job& job, const RunJobOptions& o) {
               (job.scenario_count() == 1 ? "" : "s") + ": the comparison of " +
               std::to_string(job.compare.size() + 2) + " controllers and the noise floor (" +
               std::to_string(NoiseFloor{}.repeats) + " reruns of " +
-              (points > 0 ? "each of the front's " + std::to_string(points) + " points"
-                          : std::string("the tuned gains")) +
+              (points == 0 ? std::string("the tuned gains")
+               : job.tuning->noise_floor == FrontNoiseFloor::picked
+                   ? "the picked point of the front's " + std::to_string(points) +
+                         " (\"noise_floor\": \"picked\")"
+                   : "each of the front's " + std::to_string(points) + " points") +
               ")");
     };
     if (!checkpointing && !never && elapsed + eta > o.checkpoint_after_seconds) {

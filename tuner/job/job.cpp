@@ -430,6 +430,12 @@ Ptr<TuningConfig> make_tuning_shape() {
                            "algorithm with the paper's Table 1 settings"}};
             }});
   o->uint64("seed", &T::seed, "seed of the optimiser's random numbers");
+  o->choice("noise_floor", &T::noise_floor,
+            {{"every_point", FrontNoiseFloor::every_point}, {"picked", FrontNoiseFloor::picked}},
+            "a front's noise floor (8 nudged reruns on every scenario): at every point of the "
+            "front, or at the picked point only (a job of one objective measures it at its "
+            "tuned gains either way)",
+            schema::kUnwrittenAtDefault);
   return o;
 }
 

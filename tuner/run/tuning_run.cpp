@@ -265,7 +265,8 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
   NoiseFloor nf;
   std::vector<sim::ControllerConfig> probed{r.tuned_controller};
   std::size_t tuned_at = 0;
-  if (r.front && !r.front->points.empty()) {
+  const bool every_point = !job.tuning || job.tuning->noise_floor == FrontNoiseFloor::every_point;
+  if (r.front && !r.front->points.empty() && every_point) {
     probed = front_controllers(problem, *r.front);
     tuned_at = r.front->picked;
     probed[tuned_at] = r.tuned_controller;
@@ -301,9 +302,13 @@ void compare_with(const TuningProblem& problem, TuningOutcome& r, BatchEvaluator
   nf.objective_min = ex[tuned_at].objective_min;
   nf.objective_max = ex[tuned_at].objective_max;
   if (r.front && !r.front->points.empty()) {
+    // "noise_floor": "picked": the other points' floors are unknown.
     std::vector<std::vector<std::optional<double>>> spreads;
     for (std::size_t i = 0; i < r.front->points.size(); ++i)
-      spreads.push_back(goal_spreads(ex[i], r.front->points[i].goals));
+      spreads.push_back(
+          every_point || i == r.front->picked
+              ? goal_spreads(ex[every_point ? i : 0], r.front->points[i].goals)
+              : std::vector<std::optional<double>>(r.front->points[i].goals.size(), std::nullopt));
     apply_noise_floor(*r.front, spreads);
   }
   r.simulations += static_cast<std::int64_t>(nf.repeats) *
@@ -602,6 +607,7 @@ std::int64_t finishing_evaluations(const Job& job, std::size_t front_points) {
   const auto compared = static_cast<std::int64_t>(job.compare.size()) + 2;
   // With sensors the noise floor runs twice as many: nudged states, then other sensor seeds
   // (TuningProblem::has_sensors).
+  if (job.tuning && job.tuning->noise_floor == FrontNoiseFloor::picked) front_points = 1;
   return compared + (job.reads_sensors() ? 2 : 1) *
                         static_cast<std::int64_t>(NoiseFloor{}.repeats) *
                         static_cast<std::int64_t>(std::max<std::size_t>(1, front_points));

@@ -33,9 +33,12 @@ namespace ftc::schema {
 using json = nlohmann::json;
 using Errors = std::vector<FieldError>;
 
-enum class Presence { optional, required };
+enum class Presence { optional, required, optional_unwritten_at_default };
 inline constexpr Presence kOptional = Presence::optional;
 inline constexpr Presence kRequired = Presence::required;
+// Optional, and left out of the written form while it holds its default: a key added after
+// files were written, whose canonical form (and its sha256) must not change (choice() only).
+inline constexpr Presence kUnwrittenAtDefault = Presence::optional_unwritten_at_default;
 
 using ftc::Range;
 // JSON Schema keywords of a range (minimum, exclusiveMinimum, ...).
@@ -260,13 +263,14 @@ class Object final : public Shape<T> {
                     e.push_back({path, detail::choice_error(names, s)});
                   },
                   [](const T&, const std::string&, Errors&) {},
-                  [m, key, values](const T& t, json& o) {
+                  [m, key, values, dflt, p](const T& t, json& o) {
+                    if (p == kUnwrittenAtDefault && t.*m == dflt) return;
                     for (const auto& [n, val] : values)
                       if (val == t.*m) o[key] = n;
                   },
                   [doc, names, values, dflt, p] {
                     json s = {{"type", "string"}, {"enum", names}, {"description", doc}};
-                    if (p == kOptional)
+                    if (p != kRequired)
                       for (const auto& [n, val] : values)
                         if (val == dflt) s["default"] = n;
                     return s;

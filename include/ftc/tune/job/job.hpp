@@ -118,10 +118,16 @@ struct ParameterBounds {
   Scale scale = Scale::linear;  // log: the optimiser searches ln x uniformly (0 < lower)
 };
 
+// Where a front's noise floor (SPEC §14's R nudged reruns) is measured: at every point of the
+// front, or at the picked point only (R × scenarios simulations instead of R × points ×
+// scenarios, for fronts over large ensembles; the other points' floors are then unknown).
+enum class FrontNoiseFloor { every_point, picked };
+
 struct TuningConfig {
   std::vector<ParameterBounds> parameters;
   AlgorithmPtr algorithm = default_algorithm();  // the Bat algorithm with Table 1 settings
   std::uint64_t seed = 1;
+  FrontNoiseFloor noise_floor = FrontNoiseFloor::every_point;
 
   static AlgorithmPtr default_algorithm();
 };
