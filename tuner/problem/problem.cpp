@@ -826,8 +826,9 @@ std::vector<double> ProblemFitness::run_capped(const std::vector<Decision>& batc
       askers[*from - served.first].push_back(i);
   }
   // Random search over a front (scalar caps) keeps every trial it ran: a candidate may stop
-  // only if it cannot enter the run's front, that is if some trial on it dominates the
-  // candidate's bounds. The run's front is a front optimiser's archive without a capacity.
+  // only if it cannot enter the run's front, that is if its bounds are infeasible or some
+  // trial on that front dominates them. The run's front is a front optimiser's archive without
+  // a capacity (offer_to_front keeps it by NonDominated's rule in run/front.cpp).
   const FrontCap run_front{false, {}, front_};
   std::vector<sim::ControllerConfig> controllers;
   std::vector<bool> may_stop;

@@ -350,10 +350,11 @@ class ProblemFitness final : public BatchFitness {
                                       const std::vector<double>& caps) override;
   // A job of a front (issue 42) is capped on its optimiser's rules (FrontCap): the Pareto Bat's
   // through objective_vectors_capped; an optimiser of one objective run on it (random search)
-  // through the caps above, where a candidate also stops only if the run's front (of every
-  // uncapped trial so far) dominates its bounds, so that front.json and the hypervolumes,
-  // built from every trial, keep their bytes. Either way a front's candidate stops only if it
-  // cannot be trials.csv's best so far.
+  // through the caps above, where a candidate also stops only if it cannot join the run's
+  // front (of every uncapped trial so far): its violation's bound is above 0, or a point of
+  // that front dominates its bounds; so front.json and the hypervolumes, built from every
+  // uncapped trial, keep their bytes. Either way a front's candidate stops only if it cannot
+  // be trials.csv's best so far.
   std::vector<ObjectiveVector> objective_vectors_capped(const std::vector<Decision>& batch,
                                                         const std::vector<FrontCap>& caps) override;
   void set_capping(bool on) { capping_ = on; }
