@@ -36,8 +36,9 @@ struct RunOptions {
   // At most this many rows per comparison trajectory (0: no limit): a longer scenario is
   // recorded at a coarser interval than kComparisonRecordInterval. The metrics do not change.
   std::int64_t max_trajectory_rows = 0;
-  // Exact capping of hopeless candidates (issue 27, ProblemFitness::evaluate_capped): the same
-  // gains, history and checkpointed optimiser state either way; trials.csv marks capped trials.
+  // Exact capping of hopeless candidates (issue 27, ProblemFitness::evaluate_capped; fronts,
+  // issue 42: objective_vectors_capped): the same gains, history, front and checkpointed
+  // optimiser state either way; trials.csv marks capped trials.
   bool capping = true;
   // The cache (issue 43, ProblemFitness::set_cache): a decision vector already simulated is not
   // simulated again; the same gains, history and front either way; trials.csv marks the rows it
