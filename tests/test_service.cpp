@@ -38,6 +38,7 @@
 #include "ftc/tune/run/tuning_run.hpp"
 #include "ftc/tune/service/job_store.hpp"
 #include "ftc/tune/service/service.hpp"
+#include "goal_job.hpp"
 #include "io/text.hpp"
 #include "server_process.hpp"
 #include "service/events.hpp"
@@ -2523,6 +2524,64 @@ TEST(Service, TwoGoalJobServesTheFrontTheRunWrites) {
       "pick=index:99: index 99 is not a point of the front (0.." + std::to_string(last) + ")");
   // The stored job, canonical: what the dashboard reads its parameters' scales from.
   EXPECT_EQ(s.get("/v1/jobs/" + id + "/job"), tune::to_json(tune::parse_job(job, "two-goals")));
+}
+
+// The held-out check of a front (issue 42): GET .../held-out?count=N&seed=S is the front.json
+// `ftctune evaluate JOB --front RUN --count N --seed S` writes from the same run (its run named
+// by the job, not the server's temporary directory), kept and served again; a bad count, a
+// price above the server's budget and a job without a front are refused.
+TEST(Service, HeldOutFrontIsWhatEvaluateWritesAndIsKept) {
+  json job = ftc::testing::front_ensemble_job();
+  job["tuning"]["algorithm"] = {{"type", "bat"}, {"population", 4}, {"iterations", 1}};
+  Service s;
+  const std::string id = s.submit(job)["id"];
+  ASSERT_EQ(s.wait_done(id)["status"], "succeeded");
+  const auto run = fresh_dir("service-held-out");
+  tune::TbbEvaluator evaluator(2);
+  for (const auto& [name, content] :
+       tune::output_files(tune::tune(tune::parse_job(job, "expected"), evaluator)))
+    tune::write_file_atomic(run / name, content);
+  tune::EvaluateJobOptions o;
+  o.front = run;
+  o.count = 5;
+  o.seed = 3;
+  o.out = run / "held-out";
+  o.figure = false;
+  o.threads = 2;
+  const tune::EvaluateJobResult r = tune::evaluate_job(tune::parse_job(job, "expected"), o);
+  json expected = json::parse(slurp(r.out / "front.json"));
+  ASSERT_TRUE(expected["held_out"].contains("run"));
+  expected["held_out"]["run"] = "job " + id;
+  const json held = s.get("/v1/jobs/" + id + "/held-out?count=5&seed=3");
+  EXPECT_EQ(held, expected);
+  EXPECT_EQ(held["held_out"]["count"], 5);
+  // Kept: the same document again, and among the job's files (the dashboard draws it on open).
+  EXPECT_EQ(s.get("/v1/jobs/" + id + "/held-out?count=5&seed=3"), held);
+  EXPECT_EQ(s.get("/v1/jobs/" + id + "/files/held-out.json"), held);
+  const auto refused = [&](const std::string& query, int status, const std::string& says) {
+    const auto res = s.client->Get(("/v1/jobs/" + id + "/held-out" + query).c_str());
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, status) << query << ": " << res->body;
+    EXPECT_NE(res->body.find(says), std::string::npos) << query << ": " << res->body;
+  };
+  refused("?count=0", 400, "count must be an integer in [1, 1000000], got");
+  refused("?count=5&seed=x", 400, "seed must be an integer");
+  refused("?count=1000000", 400, "times the server's budget");
+  const std::string plain = s.submit(tiny_job("one-goal"))["id"];
+  ASSERT_EQ(s.wait_done(plain)["status"], "succeeded");
+  const auto none = s.client->Get(("/v1/jobs/" + plain + "/held-out").c_str());
+  ASSERT_TRUE(none);
+  EXPECT_EQ(none->status, 400);
+  EXPECT_NE(none->body.find("has no front"), std::string::npos) << none->body;
+  // A front tuned on every scenario it has (no ensemble) has no members to hold out.
+  json listed = front_job();
+  listed["tuning"]["algorithm"]["iterations"] = 1;
+  const std::string own = s.submit(listed)["id"];
+  ASSERT_EQ(s.wait_done(own)["status"], "succeeded");
+  const auto mine = s.client->Get(("/v1/jobs/" + own + "/held-out").c_str());
+  ASSERT_TRUE(mine);
+  EXPECT_EQ(mine->status, 400);
+  EXPECT_NE(mine->body.find("has no ensemble"), std::string::npos) << mine->body;
 }
 
 // A store written by a server from before the jobs list's measure and warnings columns opens,

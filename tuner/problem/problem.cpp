@@ -941,12 +941,12 @@ void ProblemFitness::resume_trials(std::vector<Trial> before) {
   for (std::size_t i = 0; i < trials_.size(); ++i) {
     const Trial& t = trials_[i];
     if (!t.capped) {
+      best_ = std::max(best_, t.fitness);
       Evaluation e;
       e.goals = t.goals;
       e.violation = t.violation;
       offer_to_front(objective_vector(problem_.job(), e));
     }
-    if (!t.capped) best_ = std::max(best_, t.fitness);
     // The run that was interrupted served from its first uncapped trial of each parameter set.
     if (cache_ && !t.capped && !t.cached) index_trial(i);
   }

@@ -149,11 +149,11 @@ namespace {
 
 // The non-dominated set of the feasible uncapped trials offered so far whose soft goals are all
 // finite, one trial per distinct vector of soft goals (the first offered), ordered by the vector
-// (lexicographic). A capped trial's goals are bounds; capping stopped it only because an earlier
-// trial dominates it (issue 42), so leaving it out changes nothing. Offering a trial costs one pass
-// over the set: a trial dominated by a member, or equal to one, is not kept; the members it
-// dominates leave (a trial they dominated is dominated by it too, so no trial that left ever
-// returns).
+// (lexicographic). A capped trial's goals are bounds; capping stopped it only because it is
+// infeasible or an earlier trial dominates it (issue 42), so leaving it out changes nothing.
+// Offering a trial costs one pass over the set: a trial dominated by a member, or equal to one, is
+// not kept; the members it dominates leave (a trial they dominated is dominated by it too, so no
+// trial that left ever returns).
 class NonDominated {
  public:
   explicit NonDominated(std::vector<std::size_t> soft) : soft_(std::move(soft)) {}

@@ -21,7 +21,9 @@
 #include "ftc/runtime/json_reader.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/sim/plant_plugin.hpp"
+#include "ftc/tune/api/api.hpp"
 #include "ftc/tune/io/files.hpp"
+#include "ftc/tune/job/ensemble.hpp"
 #include "ftc/tune/job/job.hpp"
 #include "ftc/tune/report/report.hpp"
 #include "ftc/tune/run/documents.hpp"
@@ -471,6 +473,10 @@ void Api::dispatch(const httplib::Request& req, httplib::Response& res) {
     const std::string text = store_.job_json(id);
     if (text.empty()) return send_error(res, 404, "not_found", "no job " + id);
     return res.set_content(text, "application/json");
+  }
+  if (p.size() == 4 && p[3] == "held-out") {
+    if (m != "GET") return method_not_allowed(res, "GET");
+    return held_out(req, res, id);
   }
   if (p.size() == 4 && (p[3] == "gains" || p[3] == "history" || p[3] == "trials" ||
                         p[3] == "comparison" || p[3] == "report")) {
@@ -1041,6 +1047,106 @@ void Api::result(const httplib::Request& req, httplib::Response& res, const std:
   }
 }
 
+// The front of a succeeded job evaluated on held-out members (issue 42), as `ftctune evaluate JOB
+// --front RUN --count N --seed S` writes its front.json: each point's goals held out beside its
+// in-sample ones (`in_sample`), the held-out knee, the compared controllers. count: 1..1 000 000
+// (default the ensemble's); seed: default the ensemble's + 1, as evaluate's. Priced like a job
+// (the points and compared controllers on every member, within the server's step budget), run
+// on the request's thread, and kept: the latest one per job (held-out.json), served again while
+// its seed and count are asked for.
+void Api::held_out(const httplib::Request& req, httplib::Response& res, const std::string& id) {
+  const auto record = store_.get(id);
+  if (!record) return send_error(res, 404, "not_found", "no job " + id);
+  if (record->status != JobStatus::succeeded)
+    return send_error(res, 409, "conflict",
+                      "job " + id + " is " + std::string(to_string(record->status)) +
+                          ": its front is evaluated held out once it has succeeded");
+  if (!store_.artifact_sizes(id).count("front.json"))
+    return send_error(
+        res, 400, "invalid_parameter",
+        "held-out: job " + id + " has no front (a job with two or more soft goals has one)");
+  const Job job = parse_job(json::parse(store_.job_json(id)), "job " + id);
+  if (!job.ensemble)
+    return send_error(res, 400, "invalid_parameter",
+                      "held-out: job " + id +
+                          " has no ensemble: it was tuned on all of its scenarios, so there are "
+                          "no other members to draw (a job with an ensemble has them)");
+  const auto number = [&](const char* key, std::uint64_t lo, std::uint64_t hi,
+                          std::uint64_t fallback) -> std::optional<std::uint64_t> {
+    if (!req.has_param(key)) return fallback;
+    const std::string v = req.get_param_value(key);
+    std::uint64_t n = 0;
+    const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+    if (ec != std::errc() || end != v.data() + v.size() || n < lo || n > hi) {
+      send_error(res, 400, "invalid_parameter",
+                 std::string(key) + " must be an integer in [" + std::to_string(lo) + ", " +
+                     std::to_string(hi) + "], got \"" + v + "\"");
+      return std::nullopt;
+    }
+    return n;
+  };
+  const auto count = number("count", 1, 1000000, static_cast<std::uint64_t>(job.ensemble->count));
+  if (!count) return;
+  const auto seed =
+      number("seed", 0, std::numeric_limits<std::uint64_t>::max(), job.ensemble->seed + 1);
+  if (!seed) return;
+  // The price: every point and compared controller (and the job's own) on every held-out member
+  // and listed scenario, at the job's cost of a scenario.
+  const json stored = json::parse(store_.artifact(id, "front.json").value_or("{}"));
+  const double evaluations =
+      static_cast<double>(stored.value("points", json::array()).size() + job.compare.size() + 1);
+  const double per_scenario = job.step_cost_per_evaluation() /
+                              static_cast<double>(std::max<std::size_t>(1, job.scenario_count()));
+  const double steps =
+      evaluations * per_scenario * static_cast<double>(*count + job.scenarios.size());
+  if (steps > opt_.max_steps)
+    return send_error(
+        res, 400, "job_too_large",
+        "held-out: " + fmt_g(evaluations) + " controllers on " + std::to_string(*count) +
+            " members need " + fmt_g(steps) + " simulated steps, " + fmt_g(steps / opt_.max_steps) +
+            " times the server's budget of " + fmt_g(opt_.max_steps) + ": ask for fewer members",
+        json{{{"steps", steps}, {"budget", opt_.max_steps}}});
+  if (const auto kept = store_.artifact(id, "held-out.json")) {
+    const json k = json::parse(*kept);
+    if (k["held_out"].value("seed", std::uint64_t{0}) == *seed &&
+        k["held_out"].value("count", std::uint64_t{0}) == *count)
+      return res.set_content(*kept, "application/json");
+  }
+  const RunDirectory dir(store_, id, {"front.json", "job.json", "gains.json", "trials.csv"});
+  EvaluateJobOptions o;
+  o.front = dir.path;
+  o.count = static_cast<std::int64_t>(*count);
+  o.seed = *seed;
+  o.out = dir.path / "held-out";
+  o.threads = opt_.threads;
+  o.figure = false;
+  EvaluateJobResult r;
+  try {
+    r = evaluate_job(job, o);
+  } catch (const InputError& e) {
+    // The message only: a file name would be the server's temporary directory's.
+    return send_error(
+        res, 400, "invalid_parameter",
+        "held-out: " + (e.errors().empty() ? std::string(e.what()) : e.errors().front().message));
+  }
+  json doc = json::parse(read_file(r.out / "front.json").value_or("{}"));
+  doc["held_out"]["run"] = "job " + id;  // not the server's temporary directory
+  const std::string text = doc.dump(2) + "\n";
+  keep(id, "held-out.json", text);
+  res.set_content(text, "application/json");
+}
+
+void Api::keep(const std::string& id, const std::string& name, const std::string& content) {
+  try {
+    store_.put_artifact(id, name, content);
+    runner_.store_wrote();
+  } catch (const StoreError& e) {
+    // Served all the same; made again on the next request.
+    if (e.transient()) runner_.store_failed(e);
+    spdlog::warn("job {}: {} not kept: {}", id, name, e.what());
+  }
+}
+
 // report.html of a succeeded (or cancelled, partial) job: drawn from its stored files on first
 // request, then kept.
 std::string Api::report(const std::string& id) {
@@ -1048,14 +1154,7 @@ std::string Api::report(const std::string& id) {
   const RunDirectory dir(store_, id);
   const ReportResult r = render_report(dir.path, ReportOptions{});
   const std::string html = read_file(r.html).value_or("");
-  try {
-    store_.put_artifact(id, "report.html", html);
-    runner_.store_wrote();
-  } catch (const StoreError& e) {
-    // Served all the same; drawn again on the next request.
-    if (e.transient()) runner_.store_failed(e);
-    spdlog::warn("job {}: report not kept: {}", id, e.what());
-  }
+  keep(id, "report.html", html);
   return html;
 }
 

@@ -82,6 +82,11 @@ class Api {
   void result(const httplib::Request& req, httplib::Response& res, const std::string& id,
               const std::string& what);
   std::string report(const std::string& id);
+  // Stores a file made from a job's stored ones (report.html, held-out.json), which is served
+  // all the same when the store cannot take it.
+  void keep(const std::string& id, const std::string& name, const std::string& content);
+  // GET /v1/jobs/{id}/held-out?count=N[&seed=S]: the job's front on held-out members.
+  void held_out(const httplib::Request& req, httplib::Response& res, const std::string& id);
   nlohmann::json view(const JobRecord& r);
   // 507: the store cannot write (`why`), with what it owes.
   void insufficient_storage(httplib::Response& res, const std::string& why);

@@ -788,6 +788,7 @@ function jobView(main, id) {
   // A click on a point (or its row's button) downloads its gains file (pickPoint).
   let frontChart = null;
   function renderFront(front) {
+    heldOutView = null;
     clear(frontBox);
     if (frontChart) { frontChart.destroy(); frontChart = null; }
     const soft = front.goals.map((g, i) => (g.minimize ? i : -1)).filter((i) => i >= 0);
@@ -876,8 +877,8 @@ function jobView(main, id) {
                        data: [{x: c.goals[a], y: c.goals[b]}], pointStyle: styles[i % styles.length],
                        pointRadius: 7, backgroundColor: colour(i + 1, 1, front.compared.length + 1)});
     });
-    chartJs().then((Chart) => {
-      if (!canvas.isConnected) return;
+    const chartReady = chartJs().then((Chart) => {
+      if (!canvas.isConnected) return null;
       frontChart = new Chart(canvas, {
         type: 'scatter',
         data: {datasets},
@@ -927,7 +928,9 @@ function jobView(main, id) {
             .filter((e) => e.datasetIndex === 0)
             .sort((p, q) => d(p) - d(q));
       }
-    }).catch((e) => showError(message, e));
+      return frontChart;
+    });
+    chartReady.catch((e) => showError(message, e));
     // Every point: its soft goals with their floors (the spread, as the report prints it), and
     // the points it is no trade-off with.
     const softName = soft.map((i) => name(front.goals[i]));
@@ -960,7 +963,114 @@ function jobView(main, id) {
                            text: 'gains-point-' + k + '.json',
                            onclick: () => pickPoint(k)
                          }))))))));
+    // The held-out check (issue 42): the front evaluated on members the run never saw (GET
+    // .../held-out, what ftctune evaluate --front writes), each point's in-sample value joined
+    // to its held-out one on the chart, and a table of both. The server keeps the latest.
+    const count = el('input', {id: 'held-out-count', type: 'number', min: '1', step: '1', value: '1000'});
+    const seed = el('input', {id: 'held-out-seed', type: 'number', min: '0', step: '1', value: '0'});
+    const status = el('span', {id: 'held-out-status', class: 'hint'});
+    const heldBox = el('div', {id: 'held-out'});
+    const heldOutSection = el('div', {id: 'held-out-section', hidden: true});
+    apiJson('/v1/jobs/' + id + '/job').then((stored) => {
+      // Only a job with an ensemble has members it was not tuned on; evaluate's defaults: the
+      // ensemble's count, its seed + 1.
+      const e = stored.ensemble;
+      if (!e) return;
+      count.value = String(e.count);
+      seed.value = String((e.seed || 0) + 1);
+      heldOutSection.hidden = false;
+    }).catch(() => {});
+    const evaluateButton = el('button', {
+      id: 'held-out-run',
+      text: 'Evaluate the front on held-out members',
+      onclick: async () => {
+        evaluateButton.disabled = true;
+        status.textContent = 'simulating every point on ' + count.value + ' held-out members…';
+        try {
+          showHeldOut(await apiJson('/v1/jobs/' + id + '/held-out?count=' +
+                                    encodeURIComponent(count.value) + '&seed=' +
+                                    encodeURIComponent(seed.value)));
+          status.textContent = '';
+        } catch (e) {
+          status.textContent = '';
+          showError(message, e);
+        } finally {
+          evaluateButton.disabled = false;
+        }
+      }
+    });
+    frontBox.append(heldOutSection);
+    heldOutSection.append(
+        el('h3', {text: 'Held-out check'}),
+        el('p', {
+          class: 'hint',
+          text: 'A front is tuned on its ensemble\'s members; before picking a point, see how each ' +
+              'point does on members the run never saw (another seed). In-sample values are ' +
+              'the run\'s, held-out ones come from the same simulations as ftctune evaluate --front.'
+        }),
+        el('div', {class: 'toolbar'}, 'members ', count, ' seed ', seed, ' ', evaluateButton, ' ', status),
+        heldBox);
+    heldOutView = showHeldOut;
+    function showHeldOut(held) {
+      clear(heldBox);
+      const on = held.points.filter((p) => !p.dominated).length;
+      const knee = held.picked ? held.picked.index : null;
+      heldBox.append(el('p', {
+        id: 'held-out-summary',
+        text: 'On ' + held.held_out.count + ' held-out members (seed ' + held.held_out.seed + '): ' +
+            on + ' of ' + held.points.length + ' points stay on the front; hypervolume ' +
+            fmt(held.hypervolume, 4) + ' (in sample ' + fmt(held.held_out.in_sample_hypervolume, 4) +
+            ', the run\'s reference point)' +
+            (knee === null ? '; no point meets the hard goals held out.' :
+                             '; the held-out knee is point ' + knee + '.')
+      }));
+      const ratio = (h, i) => (finite(h) && finite(i) && i !== 0 ? fmt(h / i, 3) + '×' : '–');
+      heldBox.append(el(
+          'div', {class: 'scroll'},
+          el('table', {id: 'held-out-points'},
+             el('thead', null,
+                el('tr', null,
+                   ['point']
+                       .concat(...softName.map((n) => [n + ' in sample', 'held out', 'held out / in sample']),
+                               ['feasible held out', 'on the held-out front'])
+                       .map((h) => el('th', {text: h})))),
+             el('tbody', null,
+                held.points.map((p, k) => el(
+                    'tr', {class: k === knee ? 'picked' : ''},
+                    el('td', {class: 'num', text: String(k)}),
+                    soft.map((i) => [el('td', {class: 'num', text: fmt(p.in_sample[i])}),
+                                     el('td', {class: 'num', text: fmt(p.goals[i])}),
+                                     el('td', {class: 'num', text: ratio(p.goals[i], p.in_sample[i])})]),
+                    el('td', {text: p.feasible ? 'yes' : 'no'}),
+                    el('td', {text: p.dominated ? 'no' : 'yes'})))))));
+      chartReady.then((chart) => {
+        if (!chart) return;
+        chart.data.datasets = chart.data.datasets.filter((d) => !d.heldOut);
+        const shown = held.points.filter((p) => drawable(p.goals));
+        const joins = [];
+        for (const p of held.points)
+          if (drawable(p.goals) && drawable(p.in_sample))
+            joins.push({x: p.in_sample[a], y: p.in_sample[b]}, {x: p.goals[a], y: p.goals[b]}, gap);
+        chart.data.datasets.push(
+            {label: 'held out (' + held.held_out.count + ' members)', heldOut: true,
+             data: shown.map((p) => ({x: p.goals[a], y: p.goals[b]})), pointRadius: 4,
+             pointStyle: 'triangle', backgroundColor: '#fd9a44'},
+            {label: 'in sample → held out', heldOut: true, data: joins, showLine: true,
+             spanGaps: false, pointRadius: 0, borderColor: '#fd9a44', borderWidth: 1});
+        // Log axes stay log only while every value, held out too, allows one.
+        const xs = all.map((q) => q.x).concat(shown.map((p) => p.goals[a]));
+        const ys = all.map((q) => q.y).concat(shown.map((p) => p.goals[b]));
+        if (chart.options.scales.x.type === 'logarithmic' && !xs.every((v) => v > 0))
+          chart.options.scales.x.type = 'linear';
+        if (chart.options.scales.y.type === 'logarithmic' && !ys.every((v) => v > 0))
+          chart.options.scales.y.type = 'linear';
+        chart.update('none');
+        canvas.dataset.heldOut = String(shown.length);
+      }).catch((e) => showError(message, e));
+    }
   }
+  // The held-out view of the front drawn last (renderFront sets it), for a kept held-out.json.
+  let heldOutView = null;
   // Point k's gains file (GET .../gains?pick=index:K, the library's pick), downloaded.
   function pickPoint(k) {
     const name = 'gains-point-' + k + '.json';
@@ -1016,6 +1126,12 @@ function jobView(main, id) {
         const front = await apiJson('/v1/jobs/' + id + '/files/front.json');
         if (stale()) return;
         renderFront(front);
+        // A held-out check asked for before (the server keeps the latest).
+        if (list.files.some((f) => f.name === 'held-out.json')) {
+          const held = await apiJson('/v1/jobs/' + id + '/files/held-out.json');
+          if (stale()) return;
+          if (heldOutView) heldOutView(held);
+        }
       }
       const images = list.files.filter((f) => /\.(png|svg)$/.test(f.name));
       if (images.length) figures.appendChild(el('h3', {text: 'Figures'}));
