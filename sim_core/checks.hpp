@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "ftc/sim/input_error.hpp"
+#include "ftc/sim/range.hpp"
 
 namespace ftc::sim::detail {
 
@@ -19,6 +20,11 @@ bool check_finite(std::vector<FieldError>& errs, const std::string& path, double
 void check_positive(std::vector<FieldError>& errs, const std::string& path, double v);
 void check_non_negative(std::vector<FieldError>& errs, const std::string& path, double v);
 void check_int_range(std::vector<FieldError>& errs, const std::string& path, int v, int lo, int hi);
+// Records r's message when v is outside r.
+inline void check_range(std::vector<FieldError>& errs, const std::string& path, const Range& r,
+                        double v) {
+  if (std::string msg = r.check(v); !msg.empty()) errs.push_back({path, std::move(msg)});
+}
 
 }  // namespace ftc::sim::detail
 

@@ -10,7 +10,7 @@ namespace ftc::sim {
 namespace {
 
 using D = DisturbanceTerm;
-constexpr NumberField<DisturbanceTerm> kNumberFields[] = {
+constexpr NumberField<DisturbanceTerm> kTermFields[] = {
     {"amplitude", &D::amplitude, Range::any(), "rad/s²", "amplitude, added to the acceleration"},
     {"frequency", &D::frequency, Range::any(), "rad/s", "angular frequency"},
     {"phase", &D::phase, Range::any(), "rad", "phase"}};
@@ -20,14 +20,14 @@ constexpr IntegerField<DisturbanceTerm> kAxis = {"axis", &D::axis, 1, kMaxAxes,
 }  // namespace
 
 std::span<const NumberField<DisturbanceTerm>> DisturbanceTerm::number_fields() {
-  return kNumberFields;
+  return kTermFields;
 }
 const IntegerField<DisturbanceTerm>& DisturbanceTerm::axis_field() { return kAxis; }
 
 std::vector<FieldError> DisturbanceTerm::validate(const std::string& path, int axes) const {
   std::vector<FieldError> errs;
   detail::check_int_range(errs, path + "/axis", axis, 1, axes);
-  for (const NumberField<DisturbanceTerm>& f : kNumberFields)
+  for (const NumberField<DisturbanceTerm>& f : kTermFields)
     if (std::string msg = f.range.check(this->*f.member); !msg.empty())
       errs.push_back({path + "/" + f.name, std::move(msg)});
   return errs;

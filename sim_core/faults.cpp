@@ -42,10 +42,6 @@ constexpr IntegerField<Fault> kActuator = {"actuator", &F::actuator, 1, kMaxActu
 constexpr NumberField<FaultProfile> kRate = {"rate", &FaultProfile::rate, Range::positive(), "1/s",
                                              "β of ρ = 1 - exp(-β (t - t_f))"};
 
-void check(std::vector<FieldError>& errs, const std::string& path, const Range& r, double v) {
-  if (std::string msg = r.check(v); !msg.empty()) errs.push_back({path, std::move(msg)});
-}
-
 }  // namespace
 
 std::span<const NumberField<Fault>> Fault::common_fields() { return kCommon; }
@@ -67,11 +63,11 @@ std::vector<FieldError> Fault::validate(const std::string& path, int actuators) 
   std::vector<FieldError> errs;
   detail::check_int_range(errs, path + "/actuator", actuator, 1, actuators);
   for (const NumberField<Fault>& f : kCommon)
-    check(errs, path + "/" + f.name, f.range, this->*f.member);
+    detail::check_range(errs, path + "/" + f.name, f.range, this->*f.member);
   if (profile.type == FaultProfileType::incipient)
-    check(errs, path + "/profile/rate", kRate.range, profile.rate);
+    detail::check_range(errs, path + "/profile/rate", kRate.range, profile.rate);
   for (const NumberField<Fault>& f : type_fields(type))
-    check(errs, path + "/" + f.name, f.range, this->*f.member);
+    detail::check_range(errs, path + "/" + f.name, f.range, this->*f.member);
   return errs;
 }
 

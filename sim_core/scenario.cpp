@@ -9,7 +9,7 @@ namespace ftc::sim {
 
 namespace {
 
-constexpr NumberField<Scenario> kNumberFields[] = {
+constexpr NumberField<Scenario> kScenarioFields[] = {
     {"duration", &Scenario::duration, Range::positive(), "s",
      "length T of the run, a whole multiple of sample_time"},
     {"sample_time", &Scenario::sample_time, Range::positive(), "s",
@@ -18,20 +18,16 @@ constexpr NumberField<Scenario> kNumberFields[] = {
 constexpr IntegerField<Scenario> kSubsteps = {"substeps", &Scenario::substeps, 1, 1000,
                                               "RK4 steps per sample, h = Ts / substeps"};
 
-void check(std::vector<FieldError>& errs, const std::string& path, const Range& r, double v) {
-  if (std::string msg = r.check(v); !msg.empty()) errs.push_back({path, std::move(msg)});
-}
-
 }  // namespace
 
-std::span<const NumberField<Scenario>> Scenario::number_fields() { return kNumberFields; }
+std::span<const NumberField<Scenario>> Scenario::number_fields() { return kScenarioFields; }
 const IntegerField<Scenario>& Scenario::substeps_field() { return kSubsteps; }
 
 std::vector<FieldError> Scenario::validate(const std::string& path, int axes, int actuators) const {
   std::vector<FieldError> errs;
   if (name.empty()) errs.push_back({path + "/name", "must not be empty"});
-  for (const NumberField<Scenario>& f : kNumberFields)
-    check(errs, path + "/" + f.name, f.range, this->*f.member);
+  for (const NumberField<Scenario>& f : kScenarioFields)
+    detail::check_range(errs, path + "/" + f.name, f.range, this->*f.member);
   if (std::isfinite(duration) && std::isfinite(sample_time) && duration > 0 && sample_time > 0) {
     const double n = std::round(duration / sample_time);
     if (n < 1 || std::abs(n * sample_time - duration) > 1e-9 * duration)
@@ -49,7 +45,8 @@ std::vector<FieldError> Scenario::validate(const std::string& path, int axes, in
                                                  std::to_string(axes) + " axes), got " +
                                                  std::to_string(initial_state.size())});
   for (std::size_t i = 0; i < initial_state.size(); ++i)
-    check(errs, path + "/initial_state/" + std::to_string(i), Range::any(), initial_state[i]);
+    detail::check_range(errs, path + "/initial_state/" + std::to_string(i), Range::any(),
+                        initial_state[i]);
   for (std::size_t i = 0; i < disturbance.size(); ++i) {
     auto e = disturbance[i].validate(path + "/disturbance/" + std::to_string(i), axes);
     errs.insert(errs.end(), e.begin(), e.end());
@@ -59,7 +56,7 @@ std::vector<FieldError> Scenario::validate(const std::string& path, int axes, in
     errs.insert(errs.end(), e.begin(), e.end());
   }
   if (saturation.values.size() == 1) {
-    check(errs, path + "/saturation", kSaturationRange, saturation.values[0]);
+    detail::check_range(errs, path + "/saturation", kSaturationRange, saturation.values[0]);
   } else if (saturation.per_actuator()) {
     if (saturation.values.size() != static_cast<std::size_t>(actuators))
       errs.push_back({path + "/saturation",
@@ -67,18 +64,19 @@ std::vector<FieldError> Scenario::validate(const std::string& path, int axes, in
                           " (one per actuator of the plant's " + std::to_string(actuators) +
                           "), got " + std::to_string(saturation.values.size())});
     for (std::size_t j = 0; j < saturation.values.size(); ++j)
-      check(errs, path + "/saturation/" + std::to_string(j), kSaturationRange,
-            saturation.values[j]);
+      detail::check_range(errs, path + "/saturation/" + std::to_string(j), kSaturationRange,
+                          saturation.values[j]);
   }
   if (actuator) {
     const std::string a = path + "/actuator";
     if (!actuator->time_constant && !actuator->rate_limit)
       errs.push_back({a, "give time_constant, rate_limit or both"});
     if (actuator->rate_limit)
-      check(errs, a + "/rate_limit", ActuatorModel::kRateLimitRange, *actuator->rate_limit);
+      detail::check_range(errs, a + "/rate_limit", ActuatorModel::kRateLimitRange,
+                          *actuator->rate_limit);
     if (const auto& tau = actuator->time_constant) {
       const std::size_t before = errs.size();
-      check(errs, a + "/time_constant", ActuatorModel::kTimeConstantRange, *tau);
+      detail::check_range(errs, a + "/time_constant", ActuatorModel::kTimeConstantRange, *tau);
       const double h = sample_time / substeps;
       if (errs.size() == before && std::isfinite(h) && h > 0 &&
           !(*tau >= ActuatorModel::kMinSteps * h))

@@ -13,12 +13,13 @@
 #include <vector>
 
 #include "checks.hpp"
+#include "ftc/sim/hexarotor.hpp"
 #include "ftc/sim/isa.hpp"
+#include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/metrics_record.hpp"
 #include "ftc/sim/plants.hpp"
-#include "ftc/sim/hexarotor.hpp"
-#include "ftc/sim/manipulator.hpp"
 #include "ftc/sim/spacecraft.hpp"
+#include "same_bits.hpp"
 
 using namespace ftc::sim;
 
@@ -61,9 +62,7 @@ std::vector<SimulationResult> run_alone(const std::vector<Task>& tasks, const Pl
   return out;
 }
 
-bool same_bits(double a, double b) {
-  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
-}
+using ftc::testing::same_bits;
 
 void expect_same(const SimulationResult& a, const SimulationResult& b, const std::string& what) {
   const auto eq = [&](double x, double y, const char* field) {

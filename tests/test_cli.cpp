@@ -646,7 +646,7 @@ TEST(Cli, ForcedRunStoppedByAFullDiskLeavesTheEarlierRunWhole) {
 
 namespace {
 
-std::map<std::string, std::string> files_under(const std::filesystem::path& dir) {
+std::map<std::string, std::string> entries_under(const std::filesystem::path& dir) {
   std::map<std::string, std::string> m;
   for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
     m[e.path().lexically_relative(dir).string()] = e.is_regular_file() ? slurp(e.path()) : "";
@@ -663,7 +663,7 @@ TEST(Cli, ForcedRunFailingInTheMovePhaseKeepsTheEarlierRun) {
   const std::string job = "'" + (dir / "job.json").string() + "'";
   const auto out = dir / "out";
   ASSERT_EQ(run_cli("run -q --seed 1 " + job + " --out '" + out.string() + "'", dir).exit_code, 0);
-  const auto before = files_under(out);
+  const auto before = entries_under(out);
   std::filesystem::copy(out, dir / "pristine", std::filesystem::copy_options::recursive);
   const auto forced = [&](int step) {
     ::setenv("FTCTUNE_FAIL_IO", std::to_string(step).c_str(), 1);
@@ -686,7 +686,7 @@ TEST(Cli, ForcedRunFailingInTheMovePhaseKeepsTheEarlierRun) {
     } else {
       lo = mid;
     }
-    ASSERT_EQ(files_under(out), before) << "step " << mid << ": " << r.err;
+    ASSERT_EQ(entries_under(out), before) << "step " << mid << ": " << r.err;
   }
   // The last steps are the moves: each entry of the earlier run set aside, each of the new one
   // moved in.
@@ -698,7 +698,7 @@ TEST(Cli, ForcedRunFailingInTheMovePhaseKeepsTheEarlierRun) {
     EXPECT_EQ(r.exit_code, 2) << step << ": " << r.err;
     EXPECT_NE(r.err.find("cannot move into place: No space left on device"), std::string::npos)
         << step << ": " << r.err;
-    EXPECT_EQ(files_under(out), before) << "step " << step << ": " << r.err;
+    EXPECT_EQ(entries_under(out), before) << "step " << step << ": " << r.err;
   }
   EXPECT_EQ(moves, static_cast<int>(2 * entries));
 }

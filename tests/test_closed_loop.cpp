@@ -18,6 +18,7 @@
 #include "lanes/closed_loop.hpp"
 #include "plants/lane_host.hpp"
 #include "plants/spacecraft_dynamics.hpp"
+#include "same_bits.hpp"
 
 using namespace ftc::sim;
 namespace detail = ftc::sim::detail;
@@ -26,7 +27,7 @@ namespace {
 
 // The spacecraft seen only through the Plant interface: the loop calls its f and G through
 // ObjectPlantLanes. Its f keeps one angle tracker per angle, as the spacecraft's own does.
-class OpaqueSpacecraft final : public Plant<3, 4> {
+class SpacecraftThroughPlant final : public Plant<3, 4> {
  public:
   Vec3 f(const State& x) const override { return sc_.f(x, ws_); }
   Mat34 G(const State& x) const override { return sc_.G(x); }
@@ -100,16 +101,14 @@ SimulationResult step_by_step(const Plant<3, 4>& plant, Controller<3, 4>& contro
   return r;
 }
 
-bool same_bits(double a, double b) {
-  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
-}
+using ftc::testing::same_bits;
 
 }  // namespace
 
 // Stepped by hand, one sample's inputs at a time, the loop gives sim::simulate's bits: the final
 // state, every field of the metrics record, the recorded trajectory.
 TEST(ClosedLoop, StepsCalledOneByOneGiveTheRun) {
-  const OpaqueSpacecraft plant;
+  const SpacecraftThroughPlant plant;
   Scenario s = Scenario::paper();
   s.duration = 12.0;
   s.faults[0].onset = 2.0;

@@ -30,8 +30,8 @@ json robust_job() {
 
 tune::Job parse(const json& j) { return tune::parse_job(j, "job.json"); }
 
-std::vector<FieldError> errors_of(const json& j,
-                                  const std::optional<std::filesystem::path>& dir = {}) {
+std::vector<FieldError> ensemble_errors(const json& j,
+                                        const std::optional<std::filesystem::path>& dir = {}) {
   try {
     tune::parse_job(j, "job.json", dir);
   } catch (const InputError& e) {
@@ -238,7 +238,7 @@ TEST(Ensemble, EveryMalformedEnsembleIsReportedWithItsPath) {
   for (const Case& c : cases) {
     json j = robust_job();
     c.mutate(j);
-    const std::vector<FieldError> errs = errors_of(j);
+    const std::vector<FieldError> errs = ensemble_errors(j);
     const bool found = std::any_of(errs.begin(), errs.end(), [&](const FieldError& e) {
       return e.path == c.path && e.message.find(c.message) != std::string::npos;
     });
@@ -249,7 +249,7 @@ TEST(Ensemble, EveryMalformedEnsembleIsReportedWithItsPath) {
   j["ensemble"]["count"] = 0;
   j["ensemble"]["base"] = "nope";
   j["ensemble"]["faults"]["count"] = {3, 1};
-  EXPECT_GE(errors_of(j).size(), 3u);
+  EXPECT_GE(ensemble_errors(j).size(), 3u);
 }
 
 TEST(Ensemble, ScenariosFileMustExistAndBeAScenariosFile) {
@@ -257,12 +257,12 @@ TEST(Ensemble, ScenariosFileMustExistAndBeAScenariosFile) {
   std::ofstream(dir / "job-schema.json") << R"({"schema": "ftctune.job/1"})";
   json j = robust_job();
   j["scenarios"] = {{"file", "missing.json"}};
-  std::vector<FieldError> errs = errors_of(j, dir);
+  std::vector<FieldError> errs = ensemble_errors(j, dir);
   ASSERT_EQ(errs.size(), 1u) << to_string(errs[0]);  // and not what follows from it
   EXPECT_EQ(errs[0].path, "/scenarios/file");
   EXPECT_NE(errs[0].message.find("cannot open"), std::string::npos);
   j["scenarios"] = {{"file", "job-schema.json"}};
-  errs = errors_of(j, dir);
+  errs = ensemble_errors(j, dir);
   ASSERT_EQ(errs.size(), 1u);
   EXPECT_NE(errs[0].message.find("not a scenarios file (ftctune.scenarios/1)"), std::string::npos);
 }
@@ -295,7 +295,7 @@ TEST(Ensemble, CommandWritesMembersThatAJobLoadsBack) {
   json edited = doc;
   edited["scenarios"][0]["recoverable"] = !doc["scenarios"][0]["recoverable"].get<bool>();
   std::ofstream(dir / "members.json") << edited.dump();
-  const std::vector<FieldError> errs = errors_of(j, dir);
+  const std::vector<FieldError> errs = ensemble_errors(j, dir);
   ASSERT_EQ(errs.size(), 1u);
   EXPECT_EQ(errs[0].path, "/scenarios/0/recoverable");
 }
@@ -324,9 +324,9 @@ TEST(Ensemble, MemberNamesLongerThanAScenarioNameAreRefused) {
   j["scenarios"][0]["name"] = base;
   j["ensemble"]["base"] = base;
   j["ensemble"]["count"] = 10;  // the longest member is <base>-9: 100 characters
-  EXPECT_TRUE(errors_of(j).empty());
+  EXPECT_TRUE(ensemble_errors(j).empty());
   j["ensemble"]["count"] = 11;  // <base>-10: 101
-  std::vector<FieldError> errs = errors_of(j);
+  std::vector<FieldError> errs = ensemble_errors(j);
   ASSERT_EQ(errs.size(), 1u);
   EXPECT_EQ(errs[0].path, "/ensemble/base");
   EXPECT_NE(errs[0].message.find("\"" + base + "-10\" would be longer than 100 characters"),
@@ -334,7 +334,7 @@ TEST(Ensemble, MemberNamesLongerThanAScenarioNameAreRefused) {
       << errs[0].message;
   // Without a base the first scenario is it; a --count above the job's is checked the same way.
   j["ensemble"].erase("base");
-  errs = errors_of(j);
+  errs = ensemble_errors(j);
   ASSERT_EQ(errs.size(), 1u);
   EXPECT_EQ(errs[0].path, "/scenarios/0/name");
   j["ensemble"]["count"] = 10;
@@ -348,12 +348,12 @@ TEST(Ensemble, MemberNamesLongerThanAScenarioNameAreRefused) {
 // refused.
 TEST(Ensemble, ScalesThatWouldTakeAMemberOutOfRangeAreRefused) {
   const auto only_error = [](const json& j) {
-    const std::vector<FieldError> errs = errors_of(j);
+    const std::vector<FieldError> errs = ensemble_errors(j);
     return errs.size() == 1 ? errs[0] : FieldError{"", std::to_string(errs.size()) + " errors"};
   };
   json j = robust_job();
   j["scenarios"][0]["disturbance"][1]["amplitude"] = 1e300;
-  EXPECT_TRUE(errors_of(j).empty());  // unscaled, 1e300 is a valid amplitude
+  EXPECT_TRUE(ensemble_errors(j).empty());  // unscaled, 1e300 is a valid amplitude
   j["ensemble"]["disturbance_scale"] = {{"uniform", {0.5, 1.8446744073709552e19}}};
   FieldError e = only_error(j);
   EXPECT_EQ(e.path, "/ensemble/disturbance_scale");
@@ -376,7 +376,7 @@ TEST(Ensemble, ScalesThatWouldTakeAMemberOutOfRangeAreRefused) {
   EXPECT_EQ(e.path, "/ensemble/faults/offset/uniform");
   EXPECT_NE(e.message.find("too wide"), std::string::npos) << e.message;
   j["ensemble"]["faults"]["offset"] = {{"uniform", {-1e307, 1e307}}};
-  EXPECT_TRUE(errors_of(j).empty());
+  EXPECT_TRUE(ensemble_errors(j).empty());
 }
 
 TEST(Ensemble, CommandRefusesAJobWithoutEnsemble) {
@@ -591,14 +591,14 @@ TEST(Ensemble, ActuatorScalesThenMisalignmentsAreDrawnAfterTheFaults) {
   // Refused at their paths: a plant without them, a draw that would leave the range.
   json table1 = robust_job();
   table1["ensemble"]["actuator_scale"] = {{"uniform", {0.8, 1.0}}};
-  std::vector<FieldError> errs = errors_of(table1);
+  std::vector<FieldError> errs = ensemble_errors(table1);
   ASSERT_EQ(errs.size(), 1u);
   EXPECT_EQ(errs[0].path, "/ensemble/actuator_scale");
   EXPECT_NE(errs[0].message.find("the spacecraft plant does not declare actuator_scale"),
             std::string::npos)
       << errs[0].message;
   sat["ensemble"]["actuator_misalignment"] = {{"uniform", {0.0, 3.5}}};
-  errs = errors_of(sat);
+  errs = ensemble_errors(sat);
   ASSERT_EQ(errs.size(), 1u);
   EXPECT_EQ(errs[0].path, "/ensemble/actuator_misalignment");
   EXPECT_NE(errs[0].message.find("a member drawing 3.5 would have /actuator_misalignment/0"),
@@ -606,7 +606,7 @@ TEST(Ensemble, ActuatorScalesThenMisalignmentsAreDrawnAfterTheFaults) {
       << errs[0].message;
   sat["ensemble"].erase("actuator_misalignment");
   sat["ensemble"]["actuator_scale"] = {{"uniform", {0.0, 1.0}}};
-  errs = errors_of(sat);
+  errs = ensemble_errors(sat);
   ASSERT_EQ(errs.size(), 1u);
   EXPECT_EQ(errs[0].path, "/ensemble/actuator_scale/uniform/0");
 }

@@ -23,6 +23,7 @@
 #include "ftc/sim/plants.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "ftc/tune/job/job.hpp"
+#include "same_bits.hpp"
 
 using namespace ftc;
 using namespace ftc::sim;
@@ -53,9 +54,7 @@ Fault rotor_loss(int rotor, double fraction, double onset) {
   return f;
 }
 
-bool same_bits(double a, double b) {
-  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
-}
+using ftc::testing::same_bits;
 
 }  // namespace
 

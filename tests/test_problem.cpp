@@ -439,7 +439,7 @@ TEST(Capping, CappedCandidatesStopBelowTheirCapAndTheOthersScoreExactly) {
 
 namespace {
 
-bool same_bits(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+bool same_or_both_nan(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
 
 }  // namespace
 
@@ -566,7 +566,8 @@ TEST(Capping, GoalJobsAreCappedOnlyWhereNoDecisionChanges) {
       EXPECT_EQ(c.objective, e.objective) << i;
       EXPECT_EQ(c.fitness, e.fitness) << i;
       EXPECT_EQ(c.violation, e.violation) << i;
-      for (std::size_t k = 0; k < 4; ++k) EXPECT_TRUE(same_bits(c.goals[k], e.goals[k])) << i;
+      for (std::size_t k = 0; k < 4; ++k)
+        EXPECT_TRUE(same_or_both_nan(c.goals[k], e.goals[k])) << i;
       continue;
     }
     ++stopped;

@@ -25,6 +25,7 @@
 #include "ftc/sim/rigid_body.hpp"
 #include "ftc/sim/simulation.hpp"
 #include "ftc/sim/vehicles.hpp"
+#include "same_bits.hpp"
 
 using namespace ftc;
 using namespace ftc::sim;
@@ -32,9 +33,7 @@ using nlohmann::json;
 
 namespace {
 
-bool same_bits(double a, double b) {
-  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
-}
+using ftc::testing::same_bits;
 
 // The plant a spec describes, as a job's plant block would build it.
 std::unique_ptr<AnyPlant> plant_of(const RigidBodySpec& s) {
@@ -62,7 +61,7 @@ RigidBody::State state(double a, double b, double c, double d, double e, double 
   return x;
 }
 
-std::vector<FieldError> errors_of(const json& plant) {
+std::vector<FieldError> plant_errors(const json& plant) {
   sim::PlantSpec spec;
   schema::Errors errs;
   schema::read(*runtime::plant_shape(), plant, "/plant", spec, errs);
@@ -418,7 +417,7 @@ TEST(RigidBodyJob, ReadsWritesAndRefusesAtThePath) {
       {"actuators",
        {{"axes", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}, {1, -1, 0}}},
         {"max", {0.1, 0.1, 0.1, 0.2, 0.2}}}}};
-  EXPECT_TRUE(errors_of(good).empty()) << listed(errors_of(good));
+  EXPECT_TRUE(plant_errors(good).empty()) << listed(plant_errors(good));
   PlantSpec spec;
   schema::Errors errs;
   schema::read(*runtime::plant_shape(), good, "", spec, errs);
@@ -433,40 +432,45 @@ TEST(RigidBodyJob, ReadsWritesAndRefusesAtThePath) {
 
   json j = good;
   j["inertia"][0][1] = 0.02;
-  EXPECT_TRUE(has(errors_of(j), "/plant/inertia/1/0", "must be symmetric")) << listed(errors_of(j));
+  EXPECT_TRUE(has(plant_errors(j), "/plant/inertia/1/0", "must be symmetric"))
+      << listed(plant_errors(j));
   j = good;
   j["inertia"] = {{1, 2, 0}, {2, 1, 0}, {0, 0, 1}};
-  EXPECT_TRUE(has(errors_of(j), "/plant/inertia", "leading 2×2 minor is -3"))
-      << listed(errors_of(j));
+  EXPECT_TRUE(has(plant_errors(j), "/plant/inertia", "leading 2×2 minor is -3"))
+      << listed(plant_errors(j));
   j = good;
   j["inertia"] = {1, -2, 3};
-  EXPECT_TRUE(has(errors_of(j), "/plant/inertia/1", "must be > 0")) << listed(errors_of(j));
+  EXPECT_TRUE(has(plant_errors(j), "/plant/inertia/1", "must be > 0")) << listed(plant_errors(j));
   j = good;
   j["actuators"] = {{"axes", {{1, 0, 0}, {0, 1, 0}, {1, 1, 0}}}};
-  EXPECT_TRUE(has(errors_of(j), "/plant/actuators/axes", "must span R³")) << listed(errors_of(j));
+  EXPECT_TRUE(has(plant_errors(j), "/plant/actuators/axes", "must span R³"))
+      << listed(plant_errors(j));
   j["actuators"] = {{"axes", json::array({{1, 0, 0}, {0, 1, 0}})}};
-  EXPECT_TRUE(has(errors_of(j), "/plant/actuators/axes", "expected 3 to 8 actuator axes, got 2"));
+  EXPECT_TRUE(
+      has(plant_errors(j), "/plant/actuators/axes", "expected 3 to 8 actuator axes, got 2"));
   j["actuators"] = {{"axes", {{1, 0, 0}, {0, 0, 0}, {0, 1, 0}, {0, 0, 1}}}};
-  EXPECT_TRUE(has(errors_of(j), "/plant/actuators/axes/1", "non-zero")) << listed(errors_of(j));
+  EXPECT_TRUE(has(plant_errors(j), "/plant/actuators/axes/1", "non-zero"))
+      << listed(plant_errors(j));
   j["actuators"] = {{"preset", "pyramidd"}};
-  EXPECT_TRUE(has(errors_of(j), "/plant/actuators/preset", "supported: orthogonal, pyramid, nasa"));
+  EXPECT_TRUE(
+      has(plant_errors(j), "/plant/actuators/preset", "supported: orthogonal, pyramid, nasa"));
   j["actuators"] = {{"preset", "pyramid"}, {"max", {1, 2}}};
-  EXPECT_TRUE(has(errors_of(j), "/plant/actuators/max", "one per actuator (4), got 2"));
+  EXPECT_TRUE(has(plant_errors(j), "/plant/actuators/max", "one per actuator (4), got 2"));
   j["actuators"] = {{"preset", "pyramid"}, {"max", {1, 2, -1, 3}}};
-  EXPECT_TRUE(has(errors_of(j), "/plant/actuators/max/2", "> 0 (got -1)"));
+  EXPECT_TRUE(has(plant_errors(j), "/plant/actuators/max/2", "> 0 (got -1)"));
   j["actuators"] = {{"preset", "nasa"}, {"beta_deg", 30}};
-  EXPECT_TRUE(has(errors_of(j), "/plant/actuators/beta_deg", "pyramid preset only"));
+  EXPECT_TRUE(has(plant_errors(j), "/plant/actuators/beta_deg", "pyramid preset only"));
   j["actuators"] = {{"preset", "pyramid"}, {"beta_deg", 0}};
-  EXPECT_TRUE(has(errors_of(j), "/plant/actuators/beta_deg", "strictly between 0 and 90"));
+  EXPECT_TRUE(has(plant_errors(j), "/plant/actuators/beta_deg", "strictly between 0 and 90"));
   // The principal-moment plants say what they take.
   EXPECT_TRUE(
-      has(errors_of({{"model", "spacecraft"}, {"inertia", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}}),
+      has(plant_errors({{"model", "spacecraft"}, {"inertia", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}}),
           "/plant/inertia", "use the rigid_body or multirotor plant"));
 }
 
 TEST(MultirotorJob, ReadsAListOrAPresetAndRefusesAtThePath) {
   const json quad = {{"model", "multirotor"}, {"rotors", {{"preset", "quad_x"}}}};
-  EXPECT_TRUE(errors_of(quad).empty()) << listed(errors_of(quad));
+  EXPECT_TRUE(plant_errors(quad).empty()) << listed(plant_errors(quad));
   json list = {
       {"model", "multirotor"},
       {"mass", 1.2},
@@ -479,18 +483,18 @@ TEST(MultirotorJob, ReadsAListOrAPresetAndRefusesAtThePath) {
          {"spin", "cw"},
          {"max_thrust", 7},
          {"moment_constant", 0.015}}}}};
-  EXPECT_TRUE(errors_of(list).empty()) << listed(errors_of(list));
+  EXPECT_TRUE(plant_errors(list).empty()) << listed(plant_errors(list));
   PlantSpec spec;
   schema::Errors errs;
   schema::read(*runtime::plant_shape(), list, "", spec, errs);
   EXPECT_EQ(make_plant(spec)->actuators(), 5);
   list["rotors"][4]["spin"] = "left";
-  EXPECT_TRUE(has(errors_of(list), "/plant/rotors/4/spin", "\"cw\" or \"ccw\""));
+  EXPECT_TRUE(has(plant_errors(list), "/plant/rotors/4/spin", "\"cw\" or \"ccw\""));
   list["rotors"][4].erase("spin");
-  EXPECT_TRUE(has(errors_of(list), "/plant/rotors/4/spin", "is required"));
-  EXPECT_TRUE(has(errors_of({{"model", "multirotor"}, {"rotors", {{"preset", "tri"}}}}),
+  EXPECT_TRUE(has(plant_errors(list), "/plant/rotors/4/spin", "is required"));
+  EXPECT_TRUE(has(plant_errors({{"model", "multirotor"}, {"rotors", {{"preset", "tri"}}}}),
                   "/plant/rotors/preset", "quad_x, quad_plus, hexa_x, octa_x"));
-  EXPECT_TRUE(has(errors_of({{"model", "multirotor"}, {"mass", 9}}), "/plant/rotors/max_thrust",
+  EXPECT_TRUE(has(plant_errors({{"model", "multirotor"}, {"mass", 9}}), "/plant/rotors/max_thrust",
                   "cannot hover"));
 }
 

@@ -28,6 +28,7 @@
 #include "ftc/tune/problem/problem.hpp"
 #include "ftc/tune/run/documents.hpp"
 #include "ftc/tune/run/tuning_run.hpp"
+#include "same_bits.hpp"
 #include "short_job.hpp"
 
 using namespace ftc::sim;
@@ -35,9 +36,7 @@ using nlohmann::json;
 
 namespace {
 
-bool same_bits(double a, double b) {
-  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
-}
+using ftc::testing::same_bits;
 
 // SPEC §12's SplitMix64 written out, apart from the library's.
 struct SpecStream {

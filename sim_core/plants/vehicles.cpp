@@ -20,7 +20,6 @@ namespace ftc::sim {
 
 namespace {
 
-constexpr int MA = kMaxBodyActuators;
 constexpr double kHalfSqrt2 = 0.7071067811865476;  // sin 45°, correctly rounded
 constexpr double kSin22 = 0.3826834323650898;      // sin 22.5°
 constexpr double kCos22 = 0.9238795325112867;      // cos 22.5°
@@ -248,9 +247,9 @@ std::vector<FieldError> validate(const RigidBodySpec& s, const std::string& path
                         num(s.beta_deg) + ")"});
   const int m = actuator_count(s);
   if (s.preset.empty()) {
-    if (m < 3 || m > MA)
-      errs.push_back({a + "/axes", "expected 3 to " + std::to_string(MA) + " actuator axes, got " +
-                                       std::to_string(m)});
+    if (m < 3 || m > kMaxBodyActuators)
+      errs.push_back({a + "/axes", "expected 3 to " + std::to_string(kMaxBodyActuators) +
+                                       " actuator axes, got " + std::to_string(m)});
     for (std::size_t j = 0; j < s.axes.size(); ++j) {
       const auto& v = s.axes[j];
       const double n2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
@@ -329,9 +328,9 @@ std::vector<FieldError> validate(const MultirotorSpec& s, const std::string& pat
     detail::check_positive(errs, rp + "/moment_constant", s.moment_constant);
   } else {
     const int m = actuator_count(s);
-    if (m < 4 || m > MA)
-      errs.push_back(
-          {rp, "expected 4 to " + std::to_string(MA) + " rotors, got " + std::to_string(m)});
+    if (m < 4 || m > kMaxBodyActuators)
+      errs.push_back({rp, "expected 4 to " + std::to_string(kMaxBodyActuators) + " rotors, got " +
+                              std::to_string(m)});
     for (std::size_t i = 0; i < s.rotors.size(); ++i) {
       const std::string p = rp + "/" + std::to_string(i);
       const RotorSpec& q = s.rotors[i];
@@ -404,7 +403,7 @@ RigidBodyParams rigid_body_params(const RigidBodySpec& s) {
   const auto axes = true_axes(s);
   p.actuators = static_cast<int>(axes.size());
   for (std::size_t j = 0; j < axes.size(); ++j) {
-    for (std::size_t k = 0; k < 3; ++k) p.torque[k * MA + j] = axes[j][k];
+    for (std::size_t k = 0; k < 3; ++k) p.torque[k * kMaxBodyActuators + j] = axes[j][k];
     const double lim = limit_of(s.max, j);
     if (lim > 0.0) {
       p.lo[j] = -lim;
@@ -425,9 +424,9 @@ RigidBodyParams multirotor_params(const MultirotorSpec& s) {
   p.actuators = static_cast<int>(r.size());
   for (std::size_t i = 0; i < r.size(); ++i) {
     const double scale = s.actuator_scale.empty() ? 1.0 : s.actuator_scale[i];
-    p.torque[0 * MA + i] = scale * r[i].position[1];
-    p.torque[1 * MA + i] = scale * -r[i].position[0];
-    p.torque[2 * MA + i] = scale * (r[i].moment_constant * r[i].spin);
+    p.torque[0 * kMaxBodyActuators + i] = scale * r[i].position[1];
+    p.torque[1 * kMaxBodyActuators + i] = scale * -r[i].position[0];
+    p.torque[2 * kMaxBodyActuators + i] = scale * (r[i].moment_constant * r[i].spin);
     p.u0[i] = T[i];
     p.lo[i] = -T[i];
     p.hi[i] = r[i].max_thrust - T[i];
@@ -462,7 +461,7 @@ constexpr std::size_t kMrMass = 9, kMrGravity = 10, kMrPreset = 11, kMrArm = 12,
 // the m is `fill` (the model's).
 void put_per_actuator(std::vector<double>& v, std::size_t at, const std::vector<double>& list,
                       double fill) {
-  for (std::size_t j = 0; j < static_cast<std::size_t>(MA); ++j)
+  for (std::size_t j = 0; j < static_cast<std::size_t>(kMaxBodyActuators); ++j)
     v[at + j] = j < list.size() ? list[j] : fill;
 }
 std::vector<double> get_per_actuator(const std::vector<double>& v, std::size_t at, int m,
@@ -480,9 +479,9 @@ std::vector<double> to_values(const RigidBodySpec& s) {
   v[kRbBeta] = s.beta_deg;
   const int m = actuator_count(s);
   v[kRbCount] = m;
-  for (std::size_t j = 0; j < s.axes.size() && j < static_cast<std::size_t>(MA); ++j)
+  for (std::size_t j = 0; j < s.axes.size() && j < static_cast<std::size_t>(kMaxBodyActuators); ++j)
     for (std::size_t k = 0; k < 3; ++k) v[kRbAxes + 3 * j + k] = s.axes[j][k];
-  for (std::size_t j = 0; j < static_cast<std::size_t>(std::clamp(m, 0, MA)); ++j)
+  for (std::size_t j = 0; j < static_cast<std::size_t>(std::clamp(m, 0, kMaxBodyActuators)); ++j)
     v[kRbMax + j] = limit_of(s.max, j);
   put_per_actuator(v, kRbScale, s.actuator_scale, 1.0);
   put_per_actuator(v, kRbMisalignment, s.actuator_misalignment, 0.0);
@@ -496,7 +495,7 @@ RigidBodySpec rigid_body_spec(const std::vector<double>& v) {
   const int code = static_cast<int>(v[kRbPreset]);
   s.preset = code >= 1 && code <= 3 ? body_presets()[static_cast<std::size_t>(code - 1)] : "";
   s.beta_deg = v[kRbBeta];
-  const int m = std::clamp(static_cast<int>(v[kRbCount]), 0, MA);
+  const int m = std::clamp(static_cast<int>(v[kRbCount]), 0, kMaxBodyActuators);
   s.axes.clear();
   if (s.preset.empty())
     for (int j = 0; j < m; ++j) {
@@ -531,7 +530,7 @@ std::vector<double> to_values(const MultirotorSpec& s) {
   v[kMrKappa] = s.moment_constant;
   const std::vector<RotorSpec> r = rotors_of(s);
   v[kMrCount] = static_cast<double>(r.size());
-  for (std::size_t i = 0; i < r.size() && i < static_cast<std::size_t>(MA); ++i) {
+  for (std::size_t i = 0; i < r.size() && i < static_cast<std::size_t>(kMaxBodyActuators); ++i) {
     v[kMrX + i] = r[i].position[0];
     v[kMrY + i] = r[i].position[1];
     v[kMrSpin + i] = r[i].spin;
@@ -555,7 +554,7 @@ MultirotorSpec multirotor_spec(const std::vector<double>& v) {
   s.moment_constant = v[kMrKappa];
   s.rotors.clear();
   if (s.preset.empty()) {
-    const int m = std::clamp(static_cast<int>(v[kMrCount]), 0, MA);
+    const int m = std::clamp(static_cast<int>(v[kMrCount]), 0, kMaxBodyActuators);
     for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i) {
       RotorSpec q;
       q.position = {v[kMrX + i], v[kMrY + i]};
@@ -566,8 +565,8 @@ MultirotorSpec multirotor_spec(const std::vector<double>& v) {
       s.rotors.push_back(q);
     }
   }
-  s.actuator_scale =
-      get_per_actuator(v, kMrScale, std::clamp(static_cast<int>(v[kMrCount]), 0, MA), 1.0);
+  s.actuator_scale = get_per_actuator(
+      v, kMrScale, std::clamp(static_cast<int>(v[kMrCount]), 0, kMaxBodyActuators), 1.0);
   return s;
 }
 

@@ -30,10 +30,6 @@ namespace {
 
 using clock_type = std::chrono::steady_clock;
 
-void say(const RunLog& log, LogLevel level, const std::string& message) {
-  if (log) log(level, message);
-}
-
 std::string utc_now() {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};

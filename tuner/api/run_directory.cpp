@@ -22,14 +22,6 @@ namespace ftc::tune {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-namespace {
-
-void say(const RunLog& log, LogLevel level, const std::string& message) {
-  if (log) log(level, message);
-}
-
-}  // namespace
-
 fs::path default_out_dir(const std::string& job_name) { return fs::path("out") / job_name; }
 
 fs::path latest_run_dir(const Job& job, std::string* why) {

@@ -24,10 +24,6 @@ namespace {
 
 using nlohmann::json;
 
-void say(const RunLog& log, const std::string& message) {
-  if (log) log(LogLevel::info, message);
-}
-
 // A parameter "on a bound" ended within this fraction of its range from the bound: the optimum
 // may lie outside the range the job gives.
 constexpr double kOnBound = 0.001;
@@ -247,9 +243,10 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
     owned = make_evaluator(o.threads);
     evaluator = owned.get();
   }
-  say(o.log, "study of job " + job.name + ": " + std::to_string(names.size()) + " algorithm(s) x " +
-                 std::to_string(seeds.size()) + " seed(s), " + std::to_string(o.budget) +
-                 " evaluations each, " + std::to_string(evaluator->concurrency()) + " thread(s)");
+  say(o.log, LogLevel::info,
+      "study of job " + job.name + ": " + std::to_string(names.size()) + " algorithm(s) x " +
+          std::to_string(seeds.size()) + " seed(s), " + std::to_string(o.budget) +
+          " evaluations each, " + std::to_string(evaluator->concurrency()) + " thread(s)");
   std::vector<StudyRun>& runs = result.runs;
   const std::size_t total = names.size() * seeds.size();
   for (std::size_t a = 0; a < names.size(); ++a)
@@ -276,11 +273,12 @@ StudyResult run_study(const Job& job, const StudyOptions& o) {
       std::string params;
       for (std::size_t j = 0; j < space.dimension(); ++j)
         params += (j ? ", " : "") + space.names[j] + " = " + num(run.best[j], "%.5g");
-      say(o.log, "[" + std::to_string(runs.size() + 1) + "/" + std::to_string(total) + "] " +
-                     run.algorithm + " seed " + std::to_string(seed) + ": " +
-                     std::string(job.objective.metric->name) + " = " + num(run.objective) + " (" +
-                     params + "), " + std::to_string(run.evaluations) + " evaluations, " +
-                     num(run.wall, "%.2f") + " s");
+      say(o.log, LogLevel::info,
+          "[" + std::to_string(runs.size() + 1) + "/" + std::to_string(total) + "] " +
+              run.algorithm + " seed " + std::to_string(seed) + ": " +
+              std::string(job.objective.metric->name) + " = " + num(run.objective) + " (" + params +
+              "), " + std::to_string(run.evaluations) + " evaluations, " + num(run.wall, "%.2f") +
+              " s");
       runs.push_back(std::move(run));
     }
 

@@ -18,6 +18,7 @@ namespace ftc::tune::report_detail {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using plot::gp;
+using plot::num;
 using plot::Series;
 
 namespace {
@@ -26,8 +27,6 @@ std::string capitalised(std::string s) {
   if (!s.empty()) s[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(s[0])));
   return s;
 }
-
-constexpr auto num = &detail::g9_string;  // %.9g, as every number of the gnuplot scripts
 
 // A trajectory CSV, column by column.
 using Columns = std::vector<std::vector<double>>;

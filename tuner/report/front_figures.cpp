@@ -17,10 +17,9 @@ namespace ftc::tune::report_detail {
 
 namespace fs = std::filesystem;
 using plot::gp;
+using plot::num;
 
 namespace {
-
-constexpr auto num = &detail::g9_string;  // %.9g, as every number of the gnuplot scripts
 
 // A goal's noise floor at a point, relative; NaN where the run measured none.
 double floor_at(const FrontPoint& p, std::size_t g) { return p.noise_floor[g].value_or(NAN); }

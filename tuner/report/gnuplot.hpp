@@ -5,8 +5,12 @@
 #include <vector>
 
 #include "ftc/tune/report/report.hpp"
+#include "io/decimal.hpp"
 
 namespace ftc::tune::plot {
+
+// A number as every number of the gnuplot scripts is written: %.9g.
+constexpr auto num = &detail::g9_string;
 
 // A string literal for gnuplot (single quotes; a quote inside is doubled).
 std::string gp(const std::string& s);

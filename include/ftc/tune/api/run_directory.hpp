@@ -16,6 +16,10 @@ namespace ftc::tune {
 // Where the run API's messages for people go (the CLI logs them; a library user may drop them).
 enum class LogLevel { info, warn };
 using RunLog = std::function<void(LogLevel, const std::string&)>;
+// Passes a message to the log when there is one.
+inline void say(const RunLog& log, LogLevel level, const std::string& message) {
+  if (log) log(level, message);
+}
 
 // Default output directory of a job: out/<job name>.
 std::filesystem::path default_out_dir(const std::string& job_name);
