@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# The SIMD kernels (<build>/sim_core/kernels/ftc_sim/<plant>_lanes_<isa>.cpp, and a plant plugin's
-# <build>/.../kernels/<target>/<lanes>_<isa>.cpp) are compiled for their own instruction set.
-# Any inline function they instantiate outside their own namespace would be a weak symbol that
-# the linker may pick for the whole program, and an AVX-512 copy of it would crash the scalar
-# code on a CPU without AVX-512. So every weak (or unique) symbol a kernel object defines must lie
-# in its namespace isa_<isa> (lanes/lane.hpp). Arguments: object files (the others are ignored).
+# The SIMD kernels (<build>/sim_core/kernels/ftc_sim_kernels/<plant>_lanes_<isa>.cpp, and a plant
+# plugin's <build>/.../kernels/<target>/<lanes>_<isa>.cpp) are compiled for their own instruction
+# set. Any inline function they instantiate outside their own namespace would be a weak symbol that
+# the linker may pick for the whole program, and an AVX-512 copy of it would crash the scalar code
+# on a CPU without AVX-512. So every weak (or unique) symbol a kernel object defines must lie in its
+# namespace isa_<isa> (lanes/lane.hpp). Arguments: object files (the others are ignored).
 set -euo pipefail
 checked=0
 status=0
