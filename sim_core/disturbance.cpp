@@ -28,8 +28,7 @@ std::vector<FieldError> DisturbanceTerm::validate(const std::string& path, int a
   std::vector<FieldError> errs;
   detail::check_int_range(errs, path + "/axis", axis, 1, axes);
   for (const NumberField<DisturbanceTerm>& f : kTermFields)
-    if (std::string msg = f.range.check(this->*f.member); !msg.empty())
-      errs.push_back({path + "/" + f.name, std::move(msg)});
+    detail::check_range(errs, path + "/" + f.name, f.range, this->*f.member);
   return errs;
 }
 

@@ -10,8 +10,7 @@ namespace ftc::sim {
 namespace {
 
 void check(std::vector<FieldError>& errs, const std::string& path, double v) {
-  if (std::string msg = SensorModel::kNoiseRange.check(v); !msg.empty())
-    errs.push_back({path, std::move(msg)});
+  detail::check_range(errs, path, SensorModel::kNoiseRange, v);
 }
 
 }  // namespace
@@ -66,8 +65,7 @@ std::vector<FieldError> SensorModel::validate(const std::string& path, int axes)
   for (std::size_t i = 0; i < rate.bias.size(); ++i) {
     std::string at = path + "/rate/bias";
     if (rate.bias.size() > 1) at.append("/").append(std::to_string(i));
-    if (std::string msg = Range::any().check(rate.bias[i]); !msg.empty())
-      errs.push_back({std::move(at), std::move(msg)});
+    detail::check_range(errs, at, Range::any(), rate.bias[i]);
   }
   detail::check_int_range(errs, path + "/delay", delay, 0, kMaxDelay);
   if (acceleration.source == AccelerationSource::differentiated)
