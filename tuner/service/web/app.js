@@ -1064,6 +1064,12 @@ function jobView(main, id) {
           chart.options.scales.x.type = 'linear';
         if (chart.options.scales.y.type === 'logarithmic' && !ys.every((v) => v > 0))
           chart.options.scales.y.type = 'linear';
+        // The goals' labels name the run's aggregate (its members); the triangles are the same
+        // measure over the held-out members, which the axis titles say too.
+        const title = (g, axis) => name(g) + (axis.type === 'logarithmic' ? ' (log scale)' : '') +
+            '; triangles: over ' + held.held_out.count + ' held-out members';
+        chart.options.scales.x.title.text = title(front.goals[a], chart.options.scales.x);
+        chart.options.scales.y.title.text = title(front.goals[b], chart.options.scales.y);
         chart.update('none');
         canvas.dataset.heldOut = String(shown.length);
       }).catch((e) => showError(message, e));
