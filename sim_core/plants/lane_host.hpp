@@ -325,8 +325,7 @@ class Host final : public PackHost<N, M> {
   const double* inputs(std::int64_t k0, int n) override {
     const int S = setup_.substeps;
     // With one scenario one value per row (PackSetup::shared_inputs), else one per lane.
-    const bool shared = setup_.shared_inputs;
-    if (shared) {
+    if (setup_.shared_inputs) {
       // One scenario, so one group with its own disturbance, and one value per row: the rows
       // of an instant are its entry's values in order. The general path below writes the same
       // values through lane lists and strides: 314 instructions a sample, here 91 (callgrind,
@@ -338,17 +337,11 @@ class Host final : public PackHost<N, M> {
       for (int i = 0; i < n; ++i)
         for (int j = 0; j < S; ++j) {
           const auto* e = exo.step(k0 + i, j);
-          for (int q = 0; q < 3; ++q, out += Exo::kCount) {
-            for (int r = 0; r < N; ++r) out[Exo::kDist + r] = e[q].disturbance[r];
-            for (int r = 0; r < M; ++r) {
-              out[Exo::kGain + r] = e[q].fault.gain[r];
-              out[Exo::kOffset + r] = e[q].fault.offset[r];
-            }
-          }
+          for (int q = 0; q < 3; ++q, out += Exo::kCount) rows_of(e[q], out);
         }
       return buffer_.data();
     }
-    const int stride = Exo::stride(shared, width_);
+    const int stride = width_;  // one value per lane
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < S; ++j) {
         double* out = &buffer_[(static_cast<std::size_t>(i) * S + j) * 3 * Exo::kCount * stride];
@@ -449,6 +442,15 @@ class Host final : public PackHost<N, M> {
   }
 
  private:
+  // An instant's inputs as the kCount values of its rows, in ExoRows' order.
+  static void rows_of(const typename ExogenousInputs<N, M>::Entry& e, double* v) {
+    for (int r = 0; r < N; ++r) v[Exo::kDist + r] = e.disturbance[r];
+    for (int r = 0; r < M; ++r) {
+      v[Exo::kGain + r] = e.fault.gain[r];
+      v[Exo::kOffset + r] = e.fault.offset[r];
+    }
+  }
+
   // Writes a table's three entries (a substep's start, midpoint and end) into the rows of its
   // lanes, in a pack whose lanes have inputs of their own (inputs() writes a shared pack's rows
   // itself): Δ's rows when `disturbance`, the faults' gain and offset rows when `faults`.
@@ -462,11 +464,7 @@ class Host final : public PackHost<N, M> {
       // of eight scenarios, AVX2): 52.6 million instructions in inputs() before, 41.9 after
       // (callgrind); a row loop over a range chosen at run time took 74.2.
       double v[Exo::kCount];
-      for (int r = 0; r < N; ++r) v[Exo::kDist + r] = e[q].disturbance[r];
-      for (int r = 0; r < M; ++r) {
-        v[Exo::kGain + r] = e[q].fault.gain[r];
-        v[Exo::kOffset + r] = e[q].fault.offset[r];
-      }
+      rows_of(e[q], v);
       double* rows = out + q * Exo::kCount * stride;
       for (const int l : lanes) {
         double* column = rows + l;

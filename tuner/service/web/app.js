@@ -451,6 +451,11 @@ function jobsView(main) {
   return () => { off(); clearInterval(tick); };
 }
 
+// An axis title: its label, and whether the axis is logarithmic.
+function axisTitle(label, logarithmic) {
+  return label + (logarithmic ? ' (log scale)' : '');
+}
+
 // A colour for an objective between lo and hi (log scale): blue for the best, red for the worst.
 function colour(v, lo, hi) {
   if (!Number.isFinite(v)) return 'rgba(120,120,120,0.5)';
@@ -669,9 +674,9 @@ function jobView(main, id) {
     scatterChart.options.scales.x.type = axis(xSel.value);
     scatterChart.options.scales.y.type = axis(ySel.value);
     scatterChart.options.scales.x.title.text =
-        xSel.value + (axis(xSel.value) === 'logarithmic' ? ' (log scale)' : '');
+        axisTitle(xSel.value, axis(xSel.value) === 'logarithmic');
     scatterChart.options.scales.y.title.text =
-        ySel.value + (axis(ySel.value) === 'logarithmic' ? ' (log scale)' : '');
+        axisTitle(ySel.value, axis(ySel.value) === 'logarithmic');
     scatterChart.update('none');
     scatter.setAttribute('data-points', data.length);
     drawScaleBar(lo, hi);
@@ -890,12 +895,12 @@ function jobView(main, id) {
             x: {
               type: logX ? 'logarithmic' : 'linear',
               grace: '5%',
-              title: {display: true, text: name(front.goals[a]) + (logX ? ' (log scale)' : '')}
+              title: {display: true, text: axisTitle(name(front.goals[a]), logX)}
             },
             y: {
               type: logY ? 'logarithmic' : 'linear',
               grace: '5%',
-              title: {display: true, text: name(front.goals[b]) + (logY ? ' (log scale)' : '')}
+              title: {display: true, text: axisTitle(name(front.goals[b]), logY)}
             }
           },
           plugins: {
@@ -1066,7 +1071,7 @@ function jobView(main, id) {
           chart.options.scales.y.type = 'linear';
         // The goals' labels name the run's aggregate (its members); the triangles are the same
         // measure over the held-out members, which the axis titles say too.
-        const title = (g, axis) => name(g) + (axis.type === 'logarithmic' ? ' (log scale)' : '') +
+        const title = (g, axis) => axisTitle(name(g), axis.type === 'logarithmic') +
             '; triangles: over ' + held.held_out.count + ' held-out members';
         chart.options.scales.x.title.text = title(front.goals[a], chart.options.scales.x);
         chart.options.scales.y.title.text = title(front.goals[b], chart.options.scales.y);
